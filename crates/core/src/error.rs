@@ -1,0 +1,122 @@
+//! The one error type shared by every limpid crate.
+//!
+//! Messages are lowercase, one line, and say where (file, row, column) and
+//! what was expected versus found. Rows are counted as in a spreadsheet or
+//! text editor: the header is row 1, the first sample is row 2.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong between a file on disk and an estimate.
+#[non_exhaustive]
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The file could not be opened or read.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not a table of the expected format.
+    #[error("{path}: {message}")]
+    Format { path: PathBuf, message: String },
+    /// The file has no content at all.
+    #[error("{path}: the file is empty; expected a header row and samples")]
+    Empty { path: PathBuf },
+    /// The file has a header but no sample.
+    #[error("{path}: the file has a header row but no samples")]
+    HeaderOnly { path: PathBuf },
+    /// A column name appears twice in the header.
+    #[error("{path}: row 1, column {column}: duplicate column name (columns {first} and {second})")]
+    DuplicateColumn {
+        path: PathBuf,
+        column: String,
+        first: usize,
+        second: usize,
+    },
+    /// A required column is absent.
+    #[error("{path}: missing required column {column} ({why}); found columns: {found}")]
+    MissingColumn {
+        path: PathBuf,
+        column: String,
+        why: String,
+        found: String,
+    },
+    /// A cell does not hold a number.
+    #[error("{path}: row {row}, column {column}: expected a number, found {found:?}")]
+    NotANumber {
+        path: PathBuf,
+        row: usize,
+        column: String,
+        found: String,
+    },
+    /// A cell holds NaN or an infinity.
+    #[error("{path}: row {row}, column {column}: expected a finite number, found {found}")]
+    NotFinite {
+        path: PathBuf,
+        row: usize,
+        column: String,
+        found: String,
+    },
+    /// A row has more or fewer cells than the header.
+    #[error("{path}: row {row}: expected {expected} cells like the header, found {found}")]
+    RaggedRow {
+        path: PathBuf,
+        row: usize,
+        expected: usize,
+        found: usize,
+    },
+    /// Time goes backwards or stands still.
+    #[error("{path}: row {row}, column t: time must be strictly increasing, found {found} after {previous}")]
+    TimeNotIncreasing {
+        path: PathBuf,
+        row: usize,
+        previous: f64,
+        found: f64,
+    },
+    /// One sampling interval differs from the typical one by more than 1 %.
+    #[error("{path}: row {row}, column t: non-uniform sampling, interval {found_s:.6} s differs from the median {median_s:.6} s by more than 1 %")]
+    NonUniformSampling {
+        path: PathBuf,
+        row: usize,
+        found_s: f64,
+        median_s: f64,
+    },
+    /// Not enough samples for what was asked.
+    #[error("{path}: {found} samples usable for {what}, but at least {needed} are needed")]
+    TooFewSamples {
+        path: PathBuf,
+        what: String,
+        needed: usize,
+        found: usize,
+    },
+    /// A perturbation starts without a rest period before it.
+    #[error("{path}: row {row}, column {column}: trial {trial} has no rest before its perturbation onset (found {rest_samples} rest samples, need {needed}); start each trial at rest")]
+    NoRestBeforeOnset {
+        path: PathBuf,
+        row: usize,
+        column: String,
+        trial: i64,
+        rest_samples: usize,
+        needed: usize,
+    },
+    /// A parameter given by the user is out of range.
+    #[error("invalid {name}: {message}")]
+    InvalidParameter { name: String, message: String },
+    /// The numerical problem cannot be solved (e.g. a singular regressor).
+    #[error("{path}: {message}")]
+    Numerical { path: PathBuf, message: String },
+}
+
+/// Result with limpid's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    /// Shorthand for [`Error::InvalidParameter`].
+    pub fn invalid(name: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::InvalidParameter {
+            name: name.into(),
+            message: message.into(),
+        }
+    }
+}

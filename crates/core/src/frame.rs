@@ -1,0 +1,105 @@
+//! Frame changes of positions and forces (seed 000 eq. (1); seed 001 "Data
+//! Processing": homogeneous transform robot base -> human-centred frame).
+//!
+//! A transform maps coordinates in the recording's frame to the frame in
+//! which impedance is reported: p' = R p + t for positions, f' = R f for
+//! forces. Impedance matrices transform as Z' = R Z R^T.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::error::{Error, Result};
+use crate::recording::Recording;
+
+/// A rigid (homogeneous) transform: rotation `rotation` and translation `translation` (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameTransform {
+    pub rotation: Matrix3<f64>,
+    pub translation: Vector3<f64>,
+}
+
+impl FrameTransform {
+    /// No change.
+    pub fn identity() -> Self {
+        FrameTransform {
+            rotation: Matrix3::identity(),
+            translation: Vector3::zeros(),
+        }
+    }
+
+    /// Seed 000 eq. (1): robot axes [X_R Y_R Z_R] = [-Y_H Z_H -X_H].
+    ///
+    /// Coordinates measured along the robot axes map to the human frame as
+    /// x_H = -z_R, y_H = -x_R, z_H = y_R.
+    pub fn seed000_robot_to_human() -> Self {
+        FrameTransform {
+            rotation: Matrix3::new(0.0, 0.0, -1.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0),
+            translation: Vector3::zeros(),
+        }
+    }
+
+    /// A general transform from 12 numbers: the rotation row by row, then the translation.
+    /// The rotation must be orthonormal with determinant +1 (to 1e-6).
+    pub fn from_values(v: &[f64]) -> Result<Self> {
+        if v.len() != 12 {
+            return Err(Error::invalid(
+                "transform",
+                format!("expected 12 numbers (r11..r33, tx, ty, tz), found {}", v.len()),
+            ));
+        }
+        let rotation = Matrix3::from_row_slice(&v[..9]);
+        let err = (rotation * rotation.transpose() - Matrix3::identity()).norm();
+        if err > 1e-6 || (rotation.determinant() - 1.0).abs() > 1e-6 {
+            return Err(Error::invalid(
+                "transform",
+                "the rotation part must be orthonormal with determinant +1",
+            ));
+        }
+        Ok(FrameTransform {
+            rotation,
+            translation: Vector3::new(v[9], v[10], v[11]),
+        })
+    }
+
+    /// Apply to the `x,y,z` and `fx,fy,fz` columns of a recording (both must be present).
+    pub fn apply(&self, rec: &mut Recording) -> Result<()> {
+        for (names, translate) in [(["x", "y", "z"], true), (["fx", "fy", "fz"], false)] {
+            let cols: Vec<Vec<f64>> = names
+                .iter()
+                .map(|n| rec.require(n, "a 3-D frame change").map(<[f64]>::to_vec))
+                .collect::<Result<_>>()?;
+            let mut out = vec![vec![0.0; rec.len()]; 3];
+            for i in 0..rec.len() {
+                let p = self.rotation * Vector3::new(cols[0][i], cols[1][i], cols[2][i]);
+                let p = if translate { p + self.translation } else { p };
+                for k in 0..3 {
+                    out[k][i] = p[k];
+                }
+            }
+            for (name, col) in names.iter().zip(out) {
+                rec.set_column(name, col)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seed000_permutation_is_a_right_handed_rotation() {
+        let r = FrameTransform::seed000_robot_to_human().rotation;
+        assert!((r.determinant() - 1.0).abs() < 1e-12);
+        // a robot-x displacement is a negative human-y displacement
+        let p = r * Vector3::new(1.0, 0.0, 0.0);
+        assert_eq!(p, Vector3::new(0.0, -1.0, 0.0));
+    }
+
+    #[test]
+    fn improper_rotation_refused() {
+        let mut v = vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0];
+        v.extend([0.0; 3]);
+        assert!(FrameTransform::from_values(&v).is_err());
+    }
+}

@@ -1,0 +1,16 @@
+//! limpid-core: the recording every method reads (FORMAT.md v1), its trials,
+//! frame changes, and the shared error type.
+//!
+//! Conventions pinned here for the whole workspace: SI units; force is the
+//! force applied **to the limb** (FORMAT.md sign convention), so the model is
+//! `M x'' + B x' + K (x - x_eq) = f`; matrices are row-major `[row][col]`.
+
+pub mod error;
+pub mod frame;
+pub mod recording;
+pub mod trial;
+
+pub use error::{Error, Result};
+pub use frame::FrameTransform;
+pub use recording::Recording;
+pub use trial::Window;

@@ -1,0 +1,195 @@
+//! Trials: the windows a recording is cut into before estimation.
+//!
+//! FORMAT.md: consecutive samples with the same `trial` id form one
+//! perturbation window that starts at rest. Without a `trial` column the
+//! windows are found from the motion (seed 000 §II-B: a centre-out motion
+//! starts from rest at the start point), or the recording is one continuous
+//! window (stochastic data, seed 004).
+//!
+//! Onset detection: the position noise σ of each coordinate is estimated from
+//! the median absolute second difference (robust to smooth motion); the onset
+//! is the first sample whose displacement from the initial rest exceeds 6σ on
+//! any coordinate for three samples in a row, walked back to where it last was
+//! within 2σ. Choice made here, not in the seeds.
+
+use std::ops::Range;
+
+use crate::error::{Error, Result};
+use crate::recording::Recording;
+
+/// One estimation window: samples `range` (indices into the recording).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Window {
+    /// Trial id (from the `trial` column, or counted from 1).
+    pub id: i64,
+    /// Sample indices of the window.
+    pub range: Range<usize>,
+    /// Absolute index of the perturbation onset; `None` for a continuous window.
+    pub onset: Option<usize>,
+}
+
+impl Window {
+    /// Samples of rest before the onset (0 for a continuous window).
+    pub fn rest_len(&self) -> usize {
+        self.onset.map_or(0, |o| o - self.range.start)
+    }
+}
+
+/// Robust noise standard deviation of a smooth signal from its second differences.
+pub fn noise_sigma(x: &[f64]) -> f64 {
+    if x.len() < 3 {
+        return 0.0;
+    }
+    let mut d2: Vec<f64> = x
+        .windows(3)
+        .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs())
+        .collect();
+    let mid = d2.len() / 2;
+    let med = *d2.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
+    // second difference of white noise has variance 6 sigma^2; MAD -> sigma factor 0.6745
+    med / (0.6745 * 6f64.sqrt())
+}
+
+/// Split the recording by its integer `trial` column into consecutive runs.
+pub fn windows_from_trial_column(rec: &Recording, column: &str) -> Result<Vec<Window>> {
+    let ids = rec.require(column, "trial ids")?;
+    let mut out: Vec<Window> = Vec::new();
+    let mut start = 0;
+    for i in 0..=ids.len() {
+        if i < ids.len() && ids[i].fract() != 0.0 {
+            return Err(Error::NotANumber {
+                path: rec.path().to_path_buf(),
+                row: rec.row_of(i),
+                column: column.into(),
+                found: format!("{} (trial ids must be integers)", ids[i]),
+            });
+        }
+        if i == ids.len() || ids[i] != ids[start] {
+            out.push(Window {
+                id: ids[start] as i64,
+                range: start..i,
+                onset: None,
+            });
+            start = i;
+        }
+    }
+    Ok(out)
+}
+
+/// Threshold settings of onset detection, in multiples of the noise σ.
+const ONSET_SIGMA: f64 = 6.0;
+const WALK_BACK_SIGMA: f64 = 2.0;
+
+/// Find the perturbation onset inside `range` (absolute index), or `None` if nothing moves.
+///
+/// `floor` is the smallest displacement (m or rad) that counts as motion, so
+/// that noiseless synthetic data still has a finite threshold.
+pub fn detect_onset(coords: &[&[f64]], range: Range<usize>, sigmas: &[f64], floor: f64) -> Option<usize> {
+    let n = range.len();
+    if n < 4 {
+        return None;
+    }
+    let k0 = 3.min(n);
+    let base: Vec<f64> = coords
+        .iter()
+        .map(|c| c[range.start..range.start + k0].iter().sum::<f64>() / k0 as f64)
+        .collect();
+    let over = |i: usize, m: f64| {
+        coords.iter().zip(&base).zip(sigmas).any(|((c, b), s)| {
+            (c[i] - b).abs() > (m * s).max(floor)
+        })
+    };
+    let mut run = 0;
+    for i in range.clone() {
+        if over(i, ONSET_SIGMA) {
+            run += 1;
+            if run == 3 {
+                let mut onset = i - 2;
+                while onset > range.start && over(onset - 1, WALK_BACK_SIGMA) {
+                    onset -= 1;
+                }
+                return Some(onset);
+            }
+        } else {
+            run = 0;
+        }
+    }
+    None
+}
+
+/// Find perturbation windows in a recording without a `trial` column.
+///
+/// A window starts with a still period at the home position (the position of
+/// the first still period) and ends where the motion stops again. Returns an
+/// empty list when fewer than two such windows exist (then the data is
+/// treated as continuous).
+pub fn detect_windows(coords: &[&[f64]], fs: f64, min_rest: usize) -> Vec<Window> {
+    let n = coords.first().map_or(0, |c| c.len());
+    let sigmas: Vec<f64> = coords.iter().map(|c| noise_sigma(c)).collect();
+    let lag = ((0.02 * fs).round() as usize).max(1);
+    if n <= lag + min_rest {
+        return Vec::new();
+    }
+    // still[i]: no coordinate moved more than the noise allows over the last `lag` samples
+    let still: Vec<bool> = (0..n)
+        .map(|i| {
+            i >= lag
+                && coords.iter().zip(&sigmas).all(|(c, s)| {
+                    (c[i] - c[i - lag]).abs() <= (ONSET_SIGMA * std::f64::consts::SQRT_2 * s).max(1e-12)
+                })
+        })
+        .collect();
+    // runs of still samples
+    let mut runs: Vec<Range<usize>> = Vec::new();
+    let mut i = 0;
+    while i < n {
+        if still[i] {
+            let s = i;
+            while i < n && still[i] {
+                i += 1;
+            }
+            runs.push(s.saturating_sub(lag)..i);
+        } else {
+            i += 1;
+        }
+    }
+    let runs: Vec<Range<usize>> = runs.into_iter().filter(|r| r.len() >= min_rest).collect();
+    let Some(home_run) = runs.first() else {
+        return Vec::new();
+    };
+    let home: Vec<f64> = coords
+        .iter()
+        .map(|c| c[home_run.clone()].iter().sum::<f64>() / home_run.len() as f64)
+        .collect();
+    let max_exc: Vec<f64> = coords
+        .iter()
+        .zip(&home)
+        .map(|(c, h)| c.iter().fold(0.0f64, |m, v| m.max((v - h).abs())))
+        .collect();
+    let at_home = |r: &Range<usize>| {
+        coords.iter().zip(&home).zip(&max_exc).all(|((c, h), m)| {
+            let mean = c[r.clone()].iter().sum::<f64>() / r.len() as f64;
+            (mean - h).abs() <= 0.25 * m + 1e-12
+        })
+    };
+    let mut out = Vec::new();
+    for (k, r) in runs.iter().enumerate() {
+        if !at_home(r) || r.end >= n {
+            continue;
+        }
+        let end = runs.get(k + 1).map_or(n, |next| next.start + lag);
+        let window = r.start..end.min(n);
+        if let Some(onset) = detect_onset(coords, window.clone(), &sigmas, 0.0) {
+            out.push(Window {
+                id: out.len() as i64 + 1,
+                range: window,
+                onset: Some(onset),
+            });
+        }
+    }
+    if out.len() < 2 {
+        Vec::new()
+    } else {
+        out
+    }
+}
