@@ -1,1 +1,215 @@
-//! limpid-dsp
+//! limpid-dsp: zero-phase low-pass filtering and numerical derivatives.
+//!
+//! Seed 000 §II-C and seed 001 "Data Processing" low-pass and differentiate
+//! positions; seed 001 eq. (1) low-passes rectified EMG with a 2nd-order
+//! Butterworth at 8 Hz. Filter design and `sosfiltfilt` come from `sci-rs`
+//! (checked against scipy values in `tests/scipy_fixtures.rs`); this crate
+//! adds the argument checks that turn its panics into errors, and the
+//! derivative schemes.
+//!
+//! Conventions: cut-off in Hz, sample interval in s; `filtfilt` pads with the
+//! odd extension of length `3 * (2 * sections + 1)` exactly as
+//! `scipy.signal.sosfiltfilt`; Savitzky-Golay edges use `mode='nearest'`.
+
+use limpid_core::{Error, Result};
+use sci_rs::signal::filter::design::{
+    butter_dyn, DigitalFilter, FilterBandType, FilterOutputType, Sos,
+};
+
+/// A designed zero-phase low-pass filter (second-order sections).
+#[derive(Debug, Clone)]
+pub struct LowPass {
+    sos: Vec<Sos<f64>>,
+    order: usize,
+    cutoff_hz: f64,
+}
+
+impl LowPass {
+    /// Butterworth low-pass of `order` (1..=20) at `cutoff_hz` for sample rate `fs_hz`.
+    pub fn butterworth(order: usize, cutoff_hz: f64, fs_hz: f64) -> Result<Self> {
+        if !(1..=20).contains(&order) {
+            return Err(Error::invalid(
+                "filter order",
+                format!("expected 1 to 20, found {order}"),
+            ));
+        }
+        let nyquist = fs_hz / 2.0;
+        if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
+            return Err(Error::invalid(
+                "cut-off",
+                format!("expected 0 < cut-off < {nyquist} Hz (Nyquist), found {cutoff_hz} Hz"),
+            ));
+        }
+        let filter = butter_dyn(
+            order,
+            vec![cutoff_hz],
+            Some(FilterBandType::Lowpass),
+            Some(false),
+            Some(FilterOutputType::Sos),
+            Some(fs_hz),
+        );
+        let DigitalFilter::Sos(sos) = filter else {
+            return Err(Error::invalid("filter", "sci-rs returned no second-order sections"));
+        };
+        Ok(LowPass {
+            sos: sos.sos,
+            order,
+            cutoff_hz,
+        })
+    }
+
+    /// Filter order (per pass; zero-phase filtering doubles the effective order).
+    pub fn order(&self) -> usize {
+        self.order
+    }
+    /// Cut-off frequency in Hz (-3 dB per pass).
+    pub fn cutoff_hz(&self) -> f64 {
+        self.cutoff_hz
+    }
+    /// Number of samples of odd-extension padding (scipy's default `padlen`).
+    pub fn padlen(&self) -> usize {
+        let n = self.sos.len();
+        let bzeros = self.sos.iter().filter(|s| s.b[2] == 0.0).count();
+        let azeros = self.sos.iter().filter(|s| s.a[2] == 0.0).count();
+        3 * (2 * n + 1 - bzeros.min(azeros))
+    }
+
+    /// Forward-backward (zero-phase) filtering, as `scipy.signal.sosfiltfilt`.
+    pub fn filtfilt(&self, x: &[f64]) -> Result<Vec<f64>> {
+        let pad = self.padlen();
+        if x.len() <= pad {
+            return Err(Error::invalid(
+                "signal length",
+                format!(
+                    "zero-phase filtering needs more than {pad} samples, found {}",
+                    x.len()
+                ),
+            ));
+        }
+        Ok(sci_rs::signal::filter::sosfiltfilt_dyn(x.iter(), &self.sos))
+    }
+
+    /// One causal pass, as `scipy.signal.sosfilt` with zero initial state.
+    pub fn filter_causal(&self, x: &[f64]) -> Vec<f64> {
+        let mut sos = self.sos.clone();
+        sci_rs::signal::filter::sosfilt_dyn(x.iter(), &mut sos)
+    }
+}
+
+/// Savitzky-Golay filter (`scipy.signal.savgol_filter(x, window, polyorder, deriv, delta, mode='nearest')`).
+pub fn savgol(x: &[f64], window: usize, polyorder: usize, deriv: usize, delta: f64) -> Result<Vec<f64>> {
+    if window % 2 == 0 || window < polyorder + 2 {
+        return Err(Error::invalid(
+            "Savitzky-Golay window",
+            format!("expected an odd length of at least polyorder + 2 = {}, found {window}", polyorder + 2),
+        ));
+    }
+    if deriv > polyorder {
+        return Err(Error::invalid(
+            "Savitzky-Golay derivative",
+            format!("derivative order {deriv} exceeds the polynomial order {polyorder}"),
+        ));
+    }
+    if x.len() < window {
+        return Err(Error::invalid(
+            "signal length",
+            format!("Savitzky-Golay window of {window} needs at least {window} samples, found {}", x.len()),
+        ));
+    }
+    Ok(sci_rs::signal::filter::savgol_filter_dyn(
+        x.iter(),
+        window,
+        polyorder,
+        Some(deriv),
+        Some(delta),
+    ))
+}
+
+/// First derivative by central differences (second-order one-sided at the ends).
+pub fn central_first(x: &[f64], dt: f64) -> Vec<f64> {
+    let n = x.len();
+    let mut d = vec![0.0; n];
+    if n < 3 {
+        if n == 2 {
+            let s = (x[1] - x[0]) / dt;
+            d.fill(s);
+        }
+        return d;
+    }
+    for i in 1..n - 1 {
+        d[i] = (x[i + 1] - x[i - 1]) / (2.0 * dt);
+    }
+    d[0] = (-3.0 * x[0] + 4.0 * x[1] - x[2]) / (2.0 * dt);
+    d[n - 1] = (3.0 * x[n - 1] - 4.0 * x[n - 2] + x[n - 3]) / (2.0 * dt);
+    d
+}
+
+/// Second derivative by central differences (end values copied from their neighbours).
+pub fn central_second(x: &[f64], dt: f64) -> Vec<f64> {
+    let n = x.len();
+    let mut d = vec![0.0; n];
+    if n < 3 {
+        return d;
+    }
+    let h2 = dt * dt;
+    for i in 1..n - 1 {
+        d[i] = (x[i + 1] - 2.0 * x[i] + x[i - 1]) / h2;
+    }
+    if n >= 4 {
+        // second-order one-sided second derivative
+        d[0] = (2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]) / h2;
+        d[n - 1] = (2.0 * x[n - 1] - 5.0 * x[n - 2] + 4.0 * x[n - 3] - x[n - 4]) / h2;
+    } else {
+        d[0] = d[1];
+        d[n - 1] = d[n - 2];
+    }
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn central_differences_exact_on_quadratics() {
+        let dt = 0.01;
+        let x: Vec<f64> = (0..50).map(|i| {
+            let t = i as f64 * dt;
+            3.0 + 2.0 * t - 4.0 * t * t
+        }).collect();
+        let v = central_first(&x, dt);
+        let a = central_second(&x, dt);
+        for (i, (vi, ai)) in v.iter().zip(&a).enumerate() {
+            let t = i as f64 * dt;
+            assert_relative_eq!(*vi, 2.0 - 8.0 * t, epsilon = 1e-9);
+            assert_relative_eq!(*ai, -8.0, epsilon = 1e-7);
+        }
+    }
+
+    #[test]
+    fn savgol_exact_on_cubics_inside() {
+        let dt = 0.002;
+        let x: Vec<f64> = (0..200).map(|i| {
+            let t = i as f64 * dt;
+            1.0 - t + 0.5 * t * t + 2.0 * t * t * t
+        }).collect();
+        let v = savgol(&x, 11, 3, 1, dt).unwrap();
+        let a = savgol(&x, 11, 3, 2, dt).unwrap();
+        for i in 5..195 {
+            let t = i as f64 * dt;
+            assert_relative_eq!(v[i], -1.0 + t + 6.0 * t * t, epsilon = 1e-8);
+            assert_relative_eq!(a[i], 1.0 + 12.0 * t, epsilon = 1e-6);
+        }
+    }
+
+    #[test]
+    fn bad_filter_arguments_are_errors_not_panics() {
+        assert!(LowPass::butterworth(4, 300.0, 500.0).is_err());
+        assert!(LowPass::butterworth(0, 10.0, 500.0).is_err());
+        let f = LowPass::butterworth(4, 10.0, 500.0).unwrap();
+        assert!(f.filtfilt(&[1.0; 10]).is_err());
+        assert!(savgol(&[1.0; 100], 10, 3, 1, 1.0).is_err());
+        assert!(savgol(&[1.0; 5], 11, 3, 1, 1.0).is_err());
+    }
+}
