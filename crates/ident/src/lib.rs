@@ -1,1 +1,12 @@
-//! limpid-ident
+//! limpid-ident: from a recording to impedance estimates with their quality.
+//!
+//! - [`prepare`]: windows, offsets, filtering, derivatives (seed 000 §II-C,
+//!   seed 001 "Data Processing").
+//! - [`linear`]: the linear model `M x'' + B x' + K (x - x_eq) = f` by least
+//!   squares (seed 000 eq. (3)-(8), seed 001 eq. (3)-(10)).
+
+pub mod linear;
+pub mod prepare;
+
+pub use linear::{fit_linear, LinearEstimate, LinearParams};
+pub use prepare::{prepare, Derivative, Prepared, PrepareParams, Windowing};

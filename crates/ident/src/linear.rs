@@ -1,0 +1,537 @@
+//! Linear impedance least squares: `M x'' + B x' + K (x - x_eq) = f` in n
+//! coordinates (seed 000 eq. (2)-(8); seed 001 eq. (2)-(10)).
+//!
+//! Seed 000 stacks the 27 parameters of `[M B K]` into one vector and a
+//! block-diagonal regressor `Y_a` (3m x 27); seed 001 writes the same problem
+//! as `P = F Y^+` with the 3 x 9 matrix `P = [M B K]`. Both are the same
+//! least-squares problem: each row of `P` is fitted to one force component with
+//! the shared regressor `L = [x''; x'; x - x_ref]` (eq. (7)). We solve it in
+//! that form — one regressor with n right-hand sides — which needs 1/n of the
+//! memory and flops of the block-diagonal form. With `equilibrium` a constant
+//! column is added; its coefficient `c = -K (x_eq - x_ref)` gives
+//! `x_eq = x_ref - K^{-1} c`.
+//!
+//! Numerics: columns are scaled to unit RMS, the augmented matrix
+//! `[L | F]` is reduced by a tall-skinny Householder QR (chunks reduced in
+//! parallel, never normal equations), and the small triangular factor is
+//! solved by SVD, which also gives the condition number of the scaled
+//! regressor. Standard errors come from the residual variance of each force
+//! component times `(L^T L)^{-1}`, inflated by the residuals' autocorrelation
+//! over the low-pass correlation length (Bartlett-weighted sum), because
+//! filtered residuals are not white. This inflation is exact when the
+//! regressors change slowly over that length, and conservative otherwise.
+
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::prepare::Prepared;
+use limpid_core::{Error, Result};
+
+/// Settings of the linear estimator.
+///
+/// | Name | Default | Purpose | Range |
+/// |---|---|---|---|
+/// | `equilibrium` | true | fit a constant, report `x_eq` (seed 000); false: 9-column form of seed 001 | |
+/// | `identifiable_ratio` | 2 | a diagonal element counts as identified when `|value| >= ratio * SE` | > 0 |
+#[derive(Debug, Clone)]
+pub struct LinearParams {
+    pub equilibrium: bool,
+    pub identifiable_ratio: f64,
+}
+
+impl Default for LinearParams {
+    fn default() -> Self {
+        LinearParams {
+            equilibrium: true,
+            identifiable_ratio: 2.0,
+        }
+    }
+}
+
+/// Matrices as row-major nested vectors (`[row][col]`), SI units.
+pub type Mat = Vec<Vec<f64>>;
+
+/// Goodness of fit per force component.
+#[derive(Debug, Clone, Serialize)]
+pub struct FitQuality {
+    /// Correlation coefficient of measured and predicted force.
+    pub r: Vec<f64>,
+    /// Variance accounted for, percent: 100 (1 - var(f - f̂) / var(f)).
+    pub vaf: Vec<f64>,
+    /// Root-mean-square residual (N or N m).
+    pub rmse: Vec<f64>,
+}
+
+/// Whether each matrix is identified from the data (every diagonal element >= ratio x SE).
+#[derive(Debug, Clone, Serialize)]
+pub struct Identifiable {
+    pub inertia: bool,
+    pub damping: bool,
+    pub stiffness: bool,
+}
+
+/// The linear estimate with its quality.
+#[derive(Debug, Clone, Serialize)]
+pub struct LinearEstimate {
+    pub coordinates: Vec<String>,
+    pub inertia: Mat,
+    pub damping: Mat,
+    pub stiffness: Mat,
+    /// Equilibrium position (absolute coordinates), when fitted and K is invertible.
+    pub equilibrium: Option<Vec<f64>>,
+    /// Standard errors, same layout as the estimates.
+    pub standard_errors: StandardErrors,
+    pub fit: FitQuality,
+    /// Condition number of the column-scaled regressor.
+    pub condition_number: f64,
+    pub identifiable: Identifiable,
+    pub samples: usize,
+    pub parameters: usize,
+    /// Autocorrelation inflation of the residual variance, per force component.
+    pub variance_inflation: Vec<f64>,
+    /// Share of each regressor's variance that is signal, not propagated
+    /// position noise (`[acceleration, velocity, displacement]` per
+    /// coordinate). Below [`MIN_RELIABILITY`] the matching parameters are
+    /// attenuated towards zero (errors in variables) and are reported as not
+    /// identifiable.
+    pub regressor_reliability: Vec<[f64; 3]>,
+    /// How the standard errors were obtained.
+    pub standard_error_method: String,
+    pub warnings: Vec<String>,
+}
+
+/// Standard errors of the estimate.
+#[derive(Debug, Clone, Serialize)]
+pub struct StandardErrors {
+    pub inertia: Mat,
+    pub damping: Mat,
+    pub stiffness: Mat,
+    /// Of the constant term (N), when fitted.
+    pub constant: Option<Vec<f64>>,
+}
+
+const CHUNK: usize = 4096;
+/// Smallest regressor reliability at which a parameter counts as identifiable.
+pub const MIN_RELIABILITY: f64 = 0.8;
+/// Fewest blocks for a jackknife standard error.
+const MIN_JACKKNIFE_BLOCKS: usize = 8;
+/// Contiguous pieces used as jackknife blocks when the trials are too few.
+const CONTIGUOUS_BLOCKS: usize = 20;
+
+struct Solved {
+    theta: DMatrix<f64>,
+    rss: Vec<f64>,
+    cov_unit: DMatrix<f64>,
+    condition_number: f64,
+}
+
+/// Solve the least-squares problem held in the augmented triangle `[R z; 0 s]`.
+fn solve_triangle(r_aug: &DMatrix<f64>, p: usize, n: usize, scales: &[f64]) -> std::result::Result<Solved, String> {
+    let r = r_aug.view((0, 0), (p, p)).into_owned();
+    let z = r_aug.view((0, p), (p, n)).into_owned();
+    let s_block = r_aug.view((p, p), (n, n)).into_owned();
+    let svd = r.svd(true, true);
+    let sv = &svd.singular_values;
+    let (smax, smin) = (sv.max(), sv.min());
+    if !(smin > smax * 1e-13) {
+        return Err(format!(
+            "the regressor is rank-deficient (condition number above 1e13): the motion does not excite all {p} parameters independently"
+        ));
+    }
+    let (Some(u), Some(v_t)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
+        return Err("SVD failed".into());
+    };
+    let inv_s = DMatrix::from_diagonal(&sv.map(|s| 1.0 / s));
+    let r_pinv = v_t.transpose() * &inv_s * u.transpose();
+    let theta_scaled = &r_pinv * &z;
+    let mut theta = DMatrix::<f64>::zeros(p, n);
+    for a in 0..n {
+        for j in 0..p {
+            theta[(j, a)] = theta_scaled[(j, a)] * scales[p + a] / scales[j];
+        }
+    }
+    let rss = (0..n)
+        .map(|a| s_block.column(a).norm_squared() * scales[p + a] * scales[p + a])
+        .collect();
+    Ok(Solved {
+        theta,
+        rss,
+        cov_unit: &r_pinv * r_pinv.transpose(),
+        condition_number: smax / smin,
+    })
+}
+
+/// Merge q x q triangles into the triangle of their stacked rows.
+fn merge<'a>(tris: impl Iterator<Item = &'a DMatrix<f64>>, q: usize) -> DMatrix<f64> {
+    let tris: Vec<&DMatrix<f64>> = tris.collect();
+    let mut stacked = DMatrix::<f64>::zeros(tris.len().max(1) * q, q);
+    for (k, t) in tris.iter().enumerate() {
+        stacked.rows_mut(k * q, q).copy_from(t);
+    }
+    triangle(stacked, q)
+}
+
+/// Fit the linear model to prepared data.
+pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstimate> {
+    let n = data.dims();
+    let m = data.len();
+    let with_const = params.equilibrium || data.continuous;
+    let p = 3 * n + usize::from(with_const);
+    let q = p + n;
+    let numerical = |message: String| Error::Numerical {
+        path: data.path.clone(),
+        message,
+    };
+    if m < 2 * p {
+        return Err(Error::TooFewSamples {
+            path: data.path.clone(),
+            what: format!("a {p}-parameter linear fit"),
+            needed: 2 * p,
+            found: m,
+        });
+    }
+    // regressor columns: acc, vel, disp per coordinate, then constant; then forces
+    let mut cols: Vec<&[f64]> = Vec::with_capacity(q);
+    cols.extend(data.acc.iter().map(Vec::as_slice));
+    cols.extend(data.vel.iter().map(Vec::as_slice));
+    cols.extend(data.disp.iter().map(Vec::as_slice));
+    let names = column_names(&data.coordinates, with_const);
+    let scales: Vec<f64> = (0..q)
+        .map(|j| {
+            if j == 3 * n && with_const {
+                1.0
+            } else {
+                let c = if j < 3 * n { cols[j] } else { &data.force[j - p] };
+                (c.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()
+            }
+        })
+        .collect();
+    for (j, s) in scales.iter().enumerate().take(p) {
+        if *s == 0.0 {
+            return Err(numerical(format!(
+                "regressor column {} is zero in every sample: that coordinate never moves, so its parameters cannot be estimated",
+                names[j]
+            )));
+        }
+    }
+    let forces: Vec<&[f64]> = data.force.iter().map(Vec::as_slice).collect();
+    let reliability: Vec<[f64; 3]> = (0..n)
+        .map(|k| {
+            let nv = data.regressor_noise_var.get(k).copied().unwrap_or([0.0; 3]);
+            let rel = |col: usize, noise: f64| (1.0 - noise / (scales[col] * scales[col])).max(0.0);
+            [rel(k, nv[2]), rel(n + k, nv[1]), rel(2 * n + k, nv[0])]
+        })
+        .collect();
+    let fill_row = |mat: &mut DMatrix<f64>, r: usize, i: usize| {
+        for j in 0..q {
+            let v = if j < 3 * n {
+                cols[j][i]
+            } else if j < p {
+                1.0
+            } else {
+                forces[j - p][i]
+            };
+            let s = if scales[j] > 0.0 { scales[j] } else { 1.0 };
+            mat[(r, j)] = v / s;
+        }
+    };
+    // blocks for the jackknife: the windows when there are enough, else contiguous pieces
+    let blocks: Vec<std::ops::Range<usize>> = if data.windows.len() >= MIN_JACKKNIFE_BLOCKS {
+        data.windows.iter().map(|w| w.samples.clone()).collect()
+    } else {
+        let g = CONTIGUOUS_BLOCKS.min(m / (4 * q)).max(1);
+        (0..g).map(|b| b * m / g..(b + 1) * m / g).collect()
+    };
+    // tall-skinny QR: each block reduced to its q x q triangle (in parallel), then merged
+    let triangles: Vec<DMatrix<f64>> = blocks
+        .par_iter()
+        .map(|range| {
+            let mut acc: Option<DMatrix<f64>> = None;
+            let mut lo = range.start;
+            while lo < range.end {
+                let hi = (lo + CHUNK).min(range.end);
+                let rows = hi - lo + acc.as_ref().map_or(0, |_| q);
+                let mut a = DMatrix::<f64>::zeros(rows, q);
+                let mut r0 = 0;
+                if let Some(prev) = &acc {
+                    a.rows_mut(0, q).copy_from(prev);
+                    r0 = q;
+                }
+                for i in lo..hi {
+                    fill_row(&mut a, r0 + i - lo, i);
+                }
+                acc = Some(triangle(a, q));
+                lo = hi;
+            }
+            acc.unwrap_or_else(|| DMatrix::zeros(q, q))
+        })
+        .collect();
+    let r_aug = merge(triangles.iter(), q);
+    let solved = solve_triangle(&r_aug, p, n, &scales).map_err(|e| numerical(e.to_string()))?;
+    let theta = solved.theta.clone();
+    let condition_number = solved.condition_number;
+    let rss = solved.rss.clone();
+
+    // second pass: predictions for r/VAF and residual autocorrelation
+    let lags = data.correlation_lags().min(m / 4).max(1);
+    let mut fit = FitQuality {
+        r: Vec::with_capacity(n),
+        vaf: Vec::with_capacity(n),
+        rmse: Vec::with_capacity(n),
+    };
+    let mut inflation = Vec::with_capacity(n);
+    for a in 0..n {
+        let coef: Vec<f64> = (0..p).map(|j| theta[(j, a)]).collect();
+        let predicted: Vec<f64> = (0..m)
+            .into_par_iter()
+            .with_min_len(1 << 14)
+            .map(|i| {
+                let mut s = if with_const { coef[3 * n] } else { 0.0 };
+                for j in 0..3 * n {
+                    s += coef[j] * cols[j][i];
+                }
+                s
+            })
+            .collect();
+        let f = forces[a];
+        let (r_coef, vaf, rmse) = fit_stats(f, &predicted);
+        fit.r.push(r_coef);
+        fit.vaf.push(vaf);
+        fit.rmse.push(rmse);
+        let resid: Vec<f64> = f.iter().zip(&predicted).map(|(y, yh)| y - yh).collect();
+        inflation.push(autocorrelation_inflation(&resid, &data.windows, lags));
+    }
+    // standard errors: delete-one-block jackknife (robust to slow force drift, which
+    // correlates residuals over whole trials), or the analytic ones when blocks are too few
+    let g = blocks.len();
+    let (se, se_method) = if g >= MIN_JACKKNIFE_BLOCKS {
+        let replicates: Vec<DMatrix<f64>> = (0..g)
+            .into_par_iter()
+            .filter_map(|b| {
+                let others = triangles.iter().enumerate().filter(|(k, _)| *k != b).map(|(_, t)| t);
+                solve_triangle(&merge(others, q), p, n, &scales).ok().map(|s| s.theta)
+            })
+            .collect();
+        let g_ok = replicates.len() as f64;
+        let mean = replicates.iter().fold(DMatrix::<f64>::zeros(p, n), |acc, t| acc + t) / g_ok;
+        let var = replicates
+            .iter()
+            .fold(DMatrix::<f64>::zeros(p, n), |acc, t| acc + (t - &mean).map(|v| v * v))
+            * ((g_ok - 1.0) / g_ok);
+        (var.map(f64::sqrt), format!("jackknife over {g} blocks ({})", if g == data.windows.len() { "trials" } else { "contiguous pieces" }))
+    } else {
+        let dof = (m - p) as f64;
+        let mut se = DMatrix::<f64>::zeros(p, n);
+        for a in 0..n {
+            let sigma2 = rss[a] / dof * inflation[a];
+            for j in 0..p {
+                se[(j, a)] = (sigma2 * solved.cov_unit[(j, j)]).sqrt() / scales[j];
+            }
+        }
+        (se, "analytic, residual variance inflated by its autocorrelation".to_string())
+    };
+    let block = |m_: &DMatrix<f64>, b: usize| -> Mat {
+        (0..n)
+            .map(|row| (0..n).map(|col| m_[(b * n + col, row)]).collect())
+            .collect()
+    };
+    let inertia = block(&theta, 0);
+    let damping = block(&theta, 1);
+    let stiffness = block(&theta, 2);
+    let mut warnings = Vec::new();
+    let equilibrium = if with_const && params.equilibrium {
+        let k = DMatrix::from_fn(n, n, |i, j| stiffness[i][j]);
+        let c = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);
+        match k.clone().lu().solve(&c) {
+            Some(kc) if k.clone().svd(false, false).singular_values.min() > 1e-12 * k.norm() => {
+                Some((0..n).map(|i| data.reference[i] - kc[i]).collect())
+            }
+            _ => {
+                warnings.push("equilibrium not reported: the stiffness matrix is singular".into());
+                None
+            }
+        }
+    } else {
+        None
+    };
+    let se_out = StandardErrors {
+        inertia: block(&se, 0),
+        damping: block(&se, 1),
+        stiffness: block(&se, 2),
+        constant: with_const.then(|| (0..n).map(|a| se[(3 * n, a)]).collect()),
+    };
+    let ratio = params.identifiable_ratio;
+    let check = |value: &Mat, se: &Mat, label: &str, unit: &str, warnings: &mut Vec<String>| {
+        let column = match label {
+            "M" => 0,
+            "B" => 1,
+            _ => 2,
+        };
+        let noisy: Vec<String> = (0..n)
+            .filter(|&i| reliability[i][column] < MIN_RELIABILITY)
+            .map(|i| format!("{} {:.0} %", data.coordinates[i], 100.0 * reliability[i][column]))
+            .collect();
+        if !noisy.is_empty() {
+            warnings.push(format!(
+                "{} regressors are dominated by position noise (signal share {}; needs {:.0} %): the {} estimate is biased towards zero",
+                ["acceleration", "velocity", "displacement"][column],
+                noisy.join(", "),
+                100.0 * MIN_RELIABILITY,
+                ["inertia", "damping", "stiffness"][column],
+            ));
+        }
+        let bad: Vec<String> = (0..n)
+            .filter(|&i| value[i][i].abs() < ratio * se[i][i])
+            .map(|i| {
+                format!(
+                    "{}{} = {:.3} ± {:.3} {unit}",
+                    label,
+                    sub(&data.coordinates, i, i),
+                    value[i][i],
+                    se[i][i]
+                )
+            })
+            .collect();
+        if !bad.is_empty() {
+            warnings.push(format!(
+                "{} is not identifiable from this data ({}; |value| < {ratio} SE): treat it as unknown",
+                match label {
+                    "M" => "inertia",
+                    "B" => "damping",
+                    _ => "stiffness",
+                },
+                bad.join(", ")
+            ));
+        }
+        bad.is_empty() && noisy.is_empty()
+    };
+    let (mu, bu, ku) = units(&data.coordinates);
+    let identifiable = Identifiable {
+        inertia: check(&inertia, &se_out.inertia, "M", mu, &mut warnings),
+        damping: check(&damping, &se_out.damping, "B", bu, &mut warnings),
+        stiffness: check(&stiffness, &se_out.stiffness, "K", ku, &mut warnings),
+    };
+    if !identifiable.inertia {
+        warnings.push("inertial forces are below the noise: perturbations this slow cannot identify inertia (seed 000's 3 s motions are such a case)".into());
+    }
+    if condition_number > 1e4 {
+        warnings.push(format!(
+            "the scaled regressor is ill-conditioned (condition number {condition_number:.3e}): parameters are strongly correlated"
+        ));
+    }
+    for (a, v) in fit.vaf.iter().enumerate() {
+        if *v < 50.0 {
+            warnings.push(format!(
+                "the model explains only {v:.1} % of the force variance along {}",
+                data.coordinates[a]
+            ));
+        }
+    }
+    Ok(LinearEstimate {
+        coordinates: data.coordinates.clone(),
+        inertia,
+        damping,
+        stiffness,
+        equilibrium,
+        standard_errors: se_out,
+        fit,
+        condition_number,
+        identifiable,
+        samples: m,
+        parameters: p * n,
+        variance_inflation: inflation,
+        regressor_reliability: reliability,
+        standard_error_method: se_method,
+        warnings,
+    })
+}
+
+/// Upper triangle (q x q) of the Householder QR of `a`.
+fn triangle(a: DMatrix<f64>, q: usize) -> DMatrix<f64> {
+    let rows = a.nrows();
+    if rows < q {
+        let mut padded = DMatrix::<f64>::zeros(q, q);
+        padded.rows_mut(0, rows).copy_from(&a);
+        return triangle(padded, q);
+    }
+    a.qr().r()
+}
+
+fn fit_stats(f: &[f64], fhat: &[f64]) -> (f64, f64, f64) {
+    let m = f.len() as f64;
+    let mf = f.iter().sum::<f64>() / m;
+    let mh = fhat.iter().sum::<f64>() / m;
+    let (mut sff, mut shh, mut sfh, mut see, mut sum_e) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (y, yh) in f.iter().zip(fhat) {
+        let (dy, dh) = (y - mf, yh - mh);
+        sff += dy * dy;
+        shh += dh * dh;
+        sfh += dy * dh;
+        let e = y - yh;
+        see += e * e;
+        sum_e += e;
+    }
+    let var_e = see / m - (sum_e / m).powi(2);
+    let r = if sff > 0.0 && shh > 0.0 { sfh / (sff * shh).sqrt() } else { 0.0 };
+    let vaf = if sff > 0.0 { 100.0 * (1.0 - var_e / (sff / m)) } else { 0.0 };
+    (r, vaf, (see / m).sqrt())
+}
+
+/// 1 + 2 Σ_k (1 - k/(L+1)) ρ_k of the residuals, lags not crossing window edges; at least 1.
+fn autocorrelation_inflation(e: &[f64], windows: &[crate::prepare::PreparedWindow], lags: usize) -> f64 {
+    let var: f64 = e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64;
+    if var == 0.0 {
+        return 1.0;
+    }
+    let mut tau = 1.0;
+    for k in 1..=lags {
+        let mut s = 0.0;
+        let mut count = 0usize;
+        for w in windows {
+            let seg = &e[w.samples.clone()];
+            if seg.len() > k {
+                s += seg[k..].iter().zip(seg).map(|(a, b)| a * b).sum::<f64>();
+                count += seg.len() - k;
+            }
+        }
+        if count == 0 {
+            break;
+        }
+        let rho = s / count as f64 / var;
+        tau += 2.0 * (1.0 - k as f64 / (lags as f64 + 1.0)) * rho;
+    }
+    tau.max(1.0)
+}
+
+fn column_names(coords: &[String], with_const: bool) -> Vec<String> {
+    let mut names = Vec::new();
+    for prefix in ["acceleration ", "velocity ", "displacement "] {
+        names.extend(coords.iter().map(|c| format!("{prefix}{c}")));
+    }
+    if with_const {
+        names.push("constant".into());
+    }
+    names
+}
+
+/// Subscript of element (i, j), e.g. `xy`, or `11` for joint coordinates.
+pub fn sub(coords: &[String], i: usize, j: usize) -> String {
+    let short = |c: &str| c.trim_start_matches('q').to_string();
+    if coords.iter().all(|c| c.len() == 1) {
+        format!("{}{}", coords[i], coords[j])
+    } else {
+        format!("{},{}", short(&coords[i]), short(&coords[j]))
+    }
+}
+
+/// Units of M, B, K entries for these coordinates (translational or rotational).
+pub fn units(coords: &[String]) -> (&'static str, &'static str, &'static str) {
+    if coords.iter().all(|c| matches!(c.as_str(), "x" | "y" | "z")) {
+        ("kg", "N s/m", "N/m")
+    } else if coords.iter().all(|c| c == "theta" || c.starts_with('q')) {
+        ("kg m^2", "N m s/rad", "N m/rad")
+    } else {
+        ("SI", "SI", "SI")
+    }
+}

@@ -1,0 +1,422 @@
+//! Preparation: from a checked recording to generalized coordinates
+//! `x, x', x''` and forces `f` per window (seed 000 §II-C, seed 001 "Data
+//! Processing").
+//!
+//! Steps, in order:
+//! 1. choose coordinates and their forces (`x,y,z`/`fx,fy,fz`, `theta`/`tauy`,
+//!    or `q1..qn`/`tau1..taun`), optionally negate forces read by a sensor;
+//! 2. optional frame change (seed 000 eq. (1), or any homogeneous transform);
+//! 3. cut into windows: the `trial` column, onsets found from the motion, or
+//!    one continuous window;
+//! 4. per perturbation window: subtract the mean force of the pre-onset rest
+//!    (sensor bias, arm weight) and measure position from the rest position;
+//!    continuous windows keep their constant, which the estimator fits;
+//! 5. per window: the same zero-phase low-pass on positions and forces (so
+//!    the linear model still holds exactly between the filtered signals),
+//!    then derivatives by central differences; or Savitzky-Golay smoothing
+//!    and derivatives of one window and order;
+//! 6. drop `trim` samples at both ends of every window (filter/derivative
+//!    edge effects) and concatenate.
+
+use std::ops::Range;
+use std::path::PathBuf;
+
+use limpid_core::trial::{detect_onset, detect_windows, noise_sigma, windows_from_trial_column};
+use limpid_core::{Error, FrameTransform, Recording, Result, Window};
+use limpid_dsp::{central_first, central_second, savgol, LowPass};
+use serde::Serialize;
+
+/// How velocity and acceleration are obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Derivative {
+    /// Butterworth zero-phase low-pass, then central differences.
+    Central,
+    /// Savitzky-Golay (cubic) smoothing and derivatives; window from the cut-off.
+    Savgol,
+}
+
+/// How the recording is cut into estimation windows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Windowing {
+    /// `trial` column if present; else continuous if commanded inputs (`u*`) exist;
+    /// else perturbation onsets if at least two are found; else continuous.
+    Auto,
+    /// Use the `trial` column (error if absent).
+    Trials,
+    /// Detect perturbation onsets from the motion.
+    Onsets,
+    /// One continuous window with a constant term.
+    Continuous,
+}
+
+/// Preparation settings.
+///
+/// | Name | Default | Purpose | Range |
+/// |---|---|---|---|
+/// | `windowing` | `Auto` | how windows are formed | see [`Windowing`] |
+/// | `cutoff_hz` | 20 Hz (capped at 0.4 fs) | zero-phase low-pass cut-off | (0, fs/2) |
+/// | `filter_order` | 4 | Butterworth order per pass | 1..=20 |
+/// | `derivative` | `Central` | derivative scheme | see [`Derivative`] |
+/// | `negate_force` | false | force columns hold the hand's force on the sensor | |
+/// | `transform` | none | frame change applied to `x,y,z`, `fx,fy,fz` | rotation det +1 |
+/// | `min_rest_s` | 0.02 s | shortest rest before an onset | > 0 |
+/// | `trial_column` | `trial` | column with trial ids | |
+#[derive(Debug, Clone)]
+pub struct PrepareParams {
+    pub windowing: Windowing,
+    pub cutoff_hz: Option<f64>,
+    pub filter_order: usize,
+    pub derivative: Derivative,
+    pub negate_force: bool,
+    pub transform: Option<FrameTransform>,
+    pub min_rest_s: f64,
+    pub trial_column: String,
+}
+
+impl Default for PrepareParams {
+    fn default() -> Self {
+        PrepareParams {
+            windowing: Windowing::Auto,
+            cutoff_hz: None,
+            filter_order: 4,
+            derivative: Derivative::Central,
+            negate_force: false,
+            transform: None,
+            min_rest_s: 0.02,
+            trial_column: "trial".into(),
+        }
+    }
+}
+
+/// Default low-pass cut-off (Hz): 20 Hz, but never above 0.4 of the sample rate.
+pub fn default_cutoff(fs: f64) -> f64 {
+    20.0f64.min(0.4 * fs)
+}
+
+/// One window after preparation, as a range of the concatenated samples.
+#[derive(Debug, Clone, Serialize)]
+pub struct PreparedWindow {
+    /// Trial id.
+    pub id: i64,
+    /// Range into the concatenated arrays of [`Prepared`].
+    pub samples: Range<usize>,
+    /// Rows of the source recording used (absolute sample indices).
+    pub rows: Range<usize>,
+    /// Pre-onset rest samples (0 for continuous windows).
+    pub rest_samples: usize,
+    /// Force offset removed (N or N m), one per coordinate.
+    pub force_offset: Vec<f64>,
+    /// Rest (reference) position, one per coordinate.
+    pub reference: Vec<f64>,
+}
+
+/// Prepared data: per coordinate, concatenated over windows.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    pub path: PathBuf,
+    /// Coordinate names (`x`, `y`, `z`, `theta`, `q1`, ...).
+    pub coordinates: Vec<String>,
+    /// Force column of each coordinate.
+    pub force_columns: Vec<String>,
+    /// Sample rate (Hz).
+    pub fs: f64,
+    /// Displacement from the window's reference position.
+    pub disp: Vec<Vec<f64>>,
+    pub vel: Vec<Vec<f64>>,
+    pub acc: Vec<Vec<f64>>,
+    /// Force with the rest offset removed (perturbation windows) or raw (continuous).
+    pub force: Vec<Vec<f64>>,
+    pub windows: Vec<PreparedWindow>,
+    /// True when the data is one continuous window (a constant term is needed).
+    pub continuous: bool,
+    /// Effective settings, for reports.
+    pub cutoff_hz: f64,
+    pub filter_order: usize,
+    pub derivative: Derivative,
+    /// Samples dropped at each window edge.
+    pub trim: usize,
+    /// Mean reference position over windows (absolute coordinates).
+    pub reference: Vec<f64>,
+    /// Position noise σ per coordinate, estimated from second differences of the raw data.
+    pub position_noise: Vec<f64>,
+    /// Variance that the position noise contributes to the prepared
+    /// displacement, velocity and acceleration of each coordinate (`[disp, vel, acc]`).
+    pub regressor_noise_var: Vec<[f64; 3]>,
+}
+
+impl Prepared {
+    /// Number of coordinates.
+    pub fn dims(&self) -> usize {
+        self.coordinates.len()
+    }
+    /// Number of samples used.
+    pub fn len(&self) -> usize {
+        self.disp.first().map_or(0, Vec::len)
+    }
+    /// True when no sample is used.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Lags over which residuals are correlated by the low-pass (for standard errors).
+    pub fn correlation_lags(&self) -> usize {
+        ((self.fs / self.cutoff_hz).round() as usize).max(1)
+    }
+}
+
+/// Pick coordinates and their force columns from what the recording has.
+pub fn choose_coordinates(rec: &Recording) -> Result<(Vec<String>, Vec<String>)> {
+    let mut coords = Vec::new();
+    let mut forces = Vec::new();
+    for (c, f) in [("x", "fx"), ("y", "fy"), ("z", "fz"), ("theta", "tauy")] {
+        if rec.has(c) {
+            rec.require(f, &format!("force paired with position {c}"))?;
+            coords.push(c.to_string());
+            forces.push(f.to_string());
+        }
+    }
+    if coords.is_empty() {
+        let mut k = 1;
+        while rec.has(&format!("q{k}")) {
+            let f = format!("tau{k}");
+            rec.require(&f, &format!("torque paired with joint angle q{k}"))?;
+            coords.push(format!("q{k}"));
+            forces.push(f);
+            k += 1;
+        }
+    }
+    if coords.is_empty() {
+        return Err(Error::MissingColumn {
+            path: rec.path().to_path_buf(),
+            column: "x".into(),
+            why: "positions x,y[,z] with forces fx,fy[,fz], or joint angles q1.. with torques tau1..".into(),
+            found: rec.names().join(","),
+        });
+    }
+    Ok((coords, forces))
+}
+
+/// Prepare a recording for estimation.
+pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
+    let fs = rec.sample_rate();
+    let cutoff = params.cutoff_hz.unwrap_or_else(|| default_cutoff(fs));
+    let lowpass = LowPass::butterworth(params.filter_order, cutoff, fs)?;
+    if !(params.min_rest_s > 0.0) {
+        return Err(Error::invalid("minimum rest", "must be positive"));
+    }
+    let mut rec_local;
+    let rec = if let Some(tf) = &params.transform {
+        rec_local = rec.clone();
+        tf.apply(&mut rec_local)?;
+        &rec_local
+    } else {
+        rec
+    };
+    let (coords, force_cols) = choose_coordinates(rec)?;
+    let pos: Vec<&[f64]> = coords.iter().map(|c| rec.column(c).unwrap_or(&[])).collect();
+    let sign = if params.negate_force { -1.0 } else { 1.0 };
+    let frc: Vec<&[f64]> = force_cols.iter().map(|c| rec.column(c).unwrap_or(&[])).collect();
+    let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
+
+    let windows = make_windows(rec, params, &pos, fs, min_rest)?;
+    let continuous = windows.iter().all(|w| w.onset.is_none());
+
+    let (trim, sg_window) = match params.derivative {
+        Derivative::Central => (((0.25 * fs / cutoff).round() as usize).max(2), 0),
+        Derivative::Savgol => {
+            let w = savgol_window(fs, cutoff);
+            (w / 2, w)
+        }
+    };
+    let dt = 1.0 / fs;
+    let n = coords.len();
+    let mut out = Prepared {
+        path: rec.path().to_path_buf(),
+        coordinates: coords.clone(),
+        force_columns: force_cols.clone(),
+        fs,
+        disp: vec![Vec::new(); n],
+        vel: vec![Vec::new(); n],
+        acc: vec![Vec::new(); n],
+        force: vec![Vec::new(); n],
+        windows: Vec::new(),
+        continuous,
+        cutoff_hz: cutoff,
+        filter_order: params.filter_order,
+        derivative: params.derivative,
+        trim,
+        reference: vec![0.0; n],
+        position_noise: pos.iter().map(|c| noise_sigma(c)).collect(),
+        regressor_noise_var: Vec::new(),
+    };
+    let gains = noise_gains(params.derivative, &lowpass, sg_window, dt)?;
+    out.regressor_noise_var = out
+        .position_noise
+        .iter()
+        .map(|s| [s * s * gains[0], s * s * gains[1], s * s * gains[2]])
+        .collect();
+    for w in &windows {
+        let r = w.range.clone();
+        let need = (2 * trim + 1).max(lowpass.padlen() + 1).max(sg_window);
+        if r.len() < need {
+            return Err(Error::TooFewSamples {
+                path: rec.path().to_path_buf(),
+                what: format!("trial {} (rows {}-{})", w.id, rec.row_of(r.start), rec.row_of(r.end - 1)),
+                needed: need,
+                found: r.len(),
+            });
+        }
+        let rest = match w.onset {
+            Some(onset) => r.start..onset,
+            None => r.clone(),
+        };
+        let start = out.disp[0].len();
+        let mut offsets = Vec::with_capacity(n);
+        let mut refs = Vec::with_capacity(n);
+        for k in 0..n {
+            let reference = mean(&pos[k][rest.clone()]);
+            let offset = if w.onset.is_some() {
+                sign * mean(&frc[k][rest.clone()])
+            } else {
+                0.0
+            };
+            let x: Vec<f64> = pos[k][r.clone()].iter().map(|p| p - reference).collect();
+            let f: Vec<f64> = frc[k][r.clone()].iter().map(|v| sign * v - offset).collect();
+            let (xs, v, a, fs_) = match params.derivative {
+                Derivative::Central => {
+                    let xs = lowpass.filtfilt(&x)?;
+                    let v = central_first(&xs, dt);
+                    let a = central_second(&xs, dt);
+                    (xs, v, a, lowpass.filtfilt(&f)?)
+                }
+                Derivative::Savgol => (
+                    savgol(&x, sg_window, 3, 0, dt)?,
+                    savgol(&x, sg_window, 3, 1, dt)?,
+                    savgol(&x, sg_window, 3, 2, dt)?,
+                    savgol(&f, sg_window, 3, 0, dt)?,
+                ),
+            };
+            let keep = trim..r.len() - trim;
+            out.disp[k].extend_from_slice(&xs[keep.clone()]);
+            out.vel[k].extend_from_slice(&v[keep.clone()]);
+            out.acc[k].extend_from_slice(&a[keep.clone()]);
+            out.force[k].extend_from_slice(&fs_[keep]);
+            offsets.push(offset);
+            refs.push(reference);
+        }
+        out.windows.push(PreparedWindow {
+            id: w.id,
+            samples: start..out.disp[0].len(),
+            rows: r.start + trim..r.end - trim,
+            rest_samples: w.rest_len(),
+            force_offset: offsets,
+            reference: refs,
+        });
+    }
+    for k in 0..n {
+        out.reference[k] =
+            out.windows.iter().map(|w| w.reference[k]).sum::<f64>() / out.windows.len() as f64;
+    }
+    Ok(out)
+}
+
+/// Savitzky-Golay window (odd, samples) whose cubic smoother has about the given cut-off.
+///
+/// Uses the approximation f_c / f_s ≈ (N + 1) / (6.4 M - 9.2) for polynomial
+/// order N = 3 and window 2M + 1 (Schafer, "What is a Savitzky-Golay filter?", 2011).
+pub fn savgol_window(fs: f64, cutoff: f64) -> usize {
+    let m = ((4.0 * fs / cutoff + 9.2) / 6.4).round().max(3.0) as usize;
+    2 * m + 1
+}
+
+/// Sum of squared impulse responses of the displacement, velocity and
+/// acceleration operators: white noise of variance σ² in a position comes out
+/// with variance σ² × gain.
+fn noise_gains(derivative: Derivative, lowpass: &LowPass, sg_window: usize, dt: f64) -> Result<[f64; 3]> {
+    let n = 4001;
+    let mut impulse = vec![0.0; n];
+    impulse[n / 2] = 1.0;
+    let (x, v, a) = match derivative {
+        Derivative::Central => {
+            let x = lowpass.filtfilt(&impulse)?;
+            let v = central_first(&x, dt);
+            let a = central_second(&x, dt);
+            (x, v, a)
+        }
+        Derivative::Savgol => (
+            savgol(&impulse, sg_window, 3, 0, dt)?,
+            savgol(&impulse, sg_window, 3, 1, dt)?,
+            savgol(&impulse, sg_window, 3, 2, dt)?,
+        ),
+    };
+    let ss = |y: &[f64]| y.iter().map(|v| v * v).sum::<f64>();
+    Ok([ss(&x), ss(&v), ss(&a)])
+}
+
+fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+fn make_windows(
+    rec: &Recording,
+    params: &PrepareParams,
+    pos: &[&[f64]],
+    fs: f64,
+    min_rest: usize,
+) -> Result<Vec<Window>> {
+    let continuous = || {
+        vec![Window {
+            id: 1,
+            range: 0..rec.len(),
+            onset: None,
+        }]
+    };
+    let has_trials = rec.has(&params.trial_column);
+    let mode = match params.windowing {
+        Windowing::Auto if has_trials => Windowing::Trials,
+        Windowing::Auto if rec.names().iter().any(|n| matches!(n.as_str(), "ux" | "uy" | "uz" | "utheta")) => {
+            Windowing::Continuous
+        }
+        other => other,
+    };
+    match mode {
+        Windowing::Continuous => Ok(continuous()),
+        Windowing::Trials => {
+            let sigmas: Vec<f64> = pos.iter().map(|c| noise_sigma(c)).collect();
+            let floor = 1e-9;
+            let mut windows = windows_from_trial_column(rec, &params.trial_column)?;
+            for w in &mut windows {
+                let onset = detect_onset(pos, w.range.clone(), &sigmas, floor).unwrap_or(w.range.end);
+                let rest = onset - w.range.start;
+                if rest < min_rest {
+                    return Err(Error::NoRestBeforeOnset {
+                        path: rec.path().to_path_buf(),
+                        row: rec.row_of(w.range.start),
+                        column: params.trial_column.clone(),
+                        trial: w.id,
+                        rest_samples: rest,
+                        needed: min_rest,
+                    });
+                }
+                // leave a guard of 2 samples between rest and detected motion
+                w.onset = Some(onset.saturating_sub(2).max(w.range.start + 1));
+            }
+            Ok(windows)
+        }
+        Windowing::Onsets | Windowing::Auto => {
+            let found = detect_windows(pos, fs, min_rest.max((0.05 * fs) as usize));
+            if found.is_empty() {
+                if mode == Windowing::Onsets {
+                    return Err(Error::Format {
+                        path: rec.path().to_path_buf(),
+                        message: "no perturbation onsets found (need at least two rests at the start position followed by motion); use continuous windowing".into(),
+                    });
+                }
+                Ok(continuous())
+            } else {
+                Ok(found)
+            }
+        }
+    }
+}
