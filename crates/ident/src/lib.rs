@@ -9,4 +9,4 @@ pub mod linear;
 pub mod prepare;
 
 pub use linear::{fit_linear, LinearEstimate, LinearParams};
-pub use prepare::{prepare, Derivative, Prepared, PrepareParams, Windowing};
+pub use prepare::{prepare, Derivative, Offsets, PrepareParams, Prepared, Windowing};

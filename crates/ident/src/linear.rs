@@ -176,18 +176,21 @@ fn merge<'a>(tris: impl Iterator<Item = &'a DMatrix<f64>>, q: usize) -> DMatrix<
 pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstimate> {
     let n = data.dims();
     let m = data.len();
-    let with_const = params.equilibrium || data.continuous;
+    // a constant term: the equilibrium (seed 000), or the unknown offset of continuous data;
+    // demeaned windows already had their per-trial constants removed
+    let with_const = !data.demeaned && (params.equilibrium || data.continuous);
+    let absorbed = if data.demeaned { data.windows.len() } else { 0 };
     let p = 3 * n + usize::from(with_const);
     let q = p + n;
     let numerical = |message: String| Error::Numerical {
         path: data.path.clone(),
         message,
     };
-    if m < 2 * p {
+    if m < 2 * (p + absorbed) {
         return Err(Error::TooFewSamples {
             path: data.path.clone(),
             what: format!("a {p}-parameter linear fit"),
-            needed: 2 * p,
+            needed: 2 * (p + absorbed),
             found: m,
         });
     }
@@ -321,7 +324,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             * ((g_ok - 1.0) / g_ok);
         (var.map(f64::sqrt), format!("jackknife over {g} blocks ({})", if g == data.windows.len() { "trials" } else { "contiguous pieces" }))
     } else {
-        let dof = (m - p) as f64;
+        let dof = (m - p - absorbed) as f64;
         let mut se = DMatrix::<f64>::zeros(p, n);
         for a in 0..n {
             let sigma2 = rss[a] / dof * inflation[a];
@@ -340,6 +343,9 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
     let damping = block(&theta, 1);
     let stiffness = block(&theta, 2);
     let mut warnings = Vec::new();
+    if data.demeaned && params.equilibrium {
+        warnings.push("equilibrium not estimated: each trial's force offset was fitted, which absorbs it; use rest offsets (seed 000) to estimate it".into());
+    }
     let equilibrium = if with_const && params.equilibrium {
         let k = DMatrix::from_fn(n, n, |i, j| stiffness[i][j]);
         let c = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);

@@ -36,12 +36,27 @@ pub enum Derivative {
     Savgol,
 }
 
+/// How per-trial force offsets (sensor bias, arm weight, slow drift) are handled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Offsets {
+    /// Subtract the mean force of the pre-onset rest (seed 000 §II-C, seed 001).
+    /// The equilibrium position can then be estimated with a constant term.
+    Rest,
+    /// Fit one constant per trial (within-trial demeaning of forces and
+    /// regressors). Uses every sample of a trial to find its offset, so slow
+    /// force drift biases damping far less (seed data: damping error 16 % ->
+    /// 10 % on ex_cubic); the equilibrium is then not identifiable.
+    Fit,
+}
+
 /// How the recording is cut into estimation windows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Windowing {
-    /// `trial` column if present; else continuous if commanded inputs (`u*`) exist;
-    /// else perturbation onsets if at least two are found; else continuous.
+    /// The `trial` column if present, else one continuous window. Onsets are
+    /// not searched for automatically: a pseudo-random step perturbation
+    /// (e.g. ../shared/real/reklab_ankle) has rests and steps that look like trials.
     Auto,
     /// Use the `trial` column (error if absent).
     Trials,
@@ -59,20 +74,25 @@ pub enum Windowing {
 /// | `cutoff_hz` | 20 Hz (capped at 0.4 fs) | zero-phase low-pass cut-off | (0, fs/2) |
 /// | `filter_order` | 4 | Butterworth order per pass | 1..=20 |
 /// | `derivative` | `Central` | derivative scheme | see [`Derivative`] |
+/// | `offsets` | `Fit` | per-trial force offsets: rest mean or fitted | see [`Offsets`] |
 /// | `negate_force` | false | force columns hold the hand's force on the sensor | |
 /// | `transform` | none | frame change applied to `x,y,z`, `fx,fy,fz` | rotation det +1 |
 /// | `min_rest_s` | 0.02 s | shortest rest before an onset | > 0 |
 /// | `trial_column` | `trial` | column with trial ids | |
+/// | `level` | none | keep only windows of this `level` | a value of the `level` column |
 #[derive(Debug, Clone)]
 pub struct PrepareParams {
     pub windowing: Windowing,
     pub cutoff_hz: Option<f64>,
     pub filter_order: usize,
     pub derivative: Derivative,
+    pub offsets: Offsets,
     pub negate_force: bool,
     pub transform: Option<FrameTransform>,
     pub min_rest_s: f64,
     pub trial_column: String,
+    /// Keep only windows whose samples all carry this `level` (condition label).
+    pub level: Option<f64>,
 }
 
 impl Default for PrepareParams {
@@ -82,17 +102,29 @@ impl Default for PrepareParams {
             cutoff_hz: None,
             filter_order: 4,
             derivative: Derivative::Central,
+            offsets: Offsets::Fit,
             negate_force: false,
             transform: None,
             min_rest_s: 0.02,
             trial_column: "trial".into(),
+            level: None,
         }
     }
 }
 
-/// Default low-pass cut-off (Hz): 20 Hz, but never above 0.4 of the sample rate.
+/// Samples dropped at each window edge, in periods of the cut-off frequency:
+/// the zero-phase filter's odd-extension padding does not obey the impedance
+/// model where a window ends in motion, and a 4th-order Butterworth transient
+/// has decayed to ~1 % after about one period.
+pub const TRIM_PERIODS: f64 = 1.0;
+
+/// Default low-pass cut-off (Hz): 30 Hz, but never above 0.4 of the sample rate.
+///
+/// Chosen on the examples: high enough that 100 ms perturbations (seed 001) and
+/// the ankle data keep their inertial content, low enough that position noise
+/// does not dominate the acceleration of slow ones (see the README).
 pub fn default_cutoff(fs: f64) -> f64 {
-    20.0f64.min(0.4 * fs)
+    30.0f64.min(0.4 * fs)
 }
 
 /// One window after preparation, as a range of the concatenated samples.
@@ -131,6 +163,8 @@ pub struct Prepared {
     pub windows: Vec<PreparedWindow>,
     /// True when the data is one continuous window (a constant term is needed).
     pub continuous: bool,
+    /// True when every window was demeaned (per-trial offsets fitted): no constant term.
+    pub demeaned: bool,
     /// Effective settings, for reports.
     pub cutoff_hz: f64,
     pub filter_order: usize,
@@ -219,11 +253,24 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
     let frc: Vec<&[f64]> = force_cols.iter().map(|c| rec.column(c).unwrap_or(&[])).collect();
     let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
 
-    let windows = make_windows(rec, params, &pos, fs, min_rest)?;
+    let mut windows = make_windows(rec, params, &pos, &frc, fs, min_rest)?;
+    if let Some(level) = params.level {
+        let levels = rec.require("level", "selecting windows by --level")?;
+        windows.retain(|w| levels[w.range.clone()].iter().all(|l| (l - level).abs() < 1e-9));
+        if windows.is_empty() {
+            let mut found: Vec<f64> = levels.to_vec();
+            found.sort_by(f64::total_cmp);
+            found.dedup();
+            return Err(Error::invalid(
+                "level",
+                format!("no window has level {level} throughout; levels present: {found:?}"),
+            ));
+        }
+    }
     let continuous = windows.iter().all(|w| w.onset.is_none());
 
     let (trim, sg_window) = match params.derivative {
-        Derivative::Central => (((0.25 * fs / cutoff).round() as usize).max(2), 0),
+        Derivative::Central => (((TRIM_PERIODS * fs / cutoff).ceil() as usize).max(2), 0),
         Derivative::Savgol => {
             let w = savgol_window(fs, cutoff);
             (w / 2, w)
@@ -242,6 +289,7 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         force: vec![Vec::new(); n],
         windows: Vec::new(),
         continuous,
+        demeaned: params.offsets == Offsets::Fit && !continuous,
         cutoff_hz: cutoff,
         filter_order: params.filter_order,
         derivative: params.derivative,
@@ -298,10 +346,12 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
                 ),
             };
             let keep = trim..r.len() - trim;
-            out.disp[k].extend_from_slice(&xs[keep.clone()]);
-            out.vel[k].extend_from_slice(&v[keep.clone()]);
-            out.acc[k].extend_from_slice(&a[keep.clone()]);
-            out.force[k].extend_from_slice(&fs_[keep]);
+            let demean = out.demeaned;
+            for (dst, src) in [(&mut out.disp[k], &xs), (&mut out.vel[k], &v), (&mut out.acc[k], &a), (&mut out.force[k], &fs_)] {
+                let part = &src[keep.clone()];
+                let m = if demean { mean(part) } else { 0.0 };
+                dst.extend(part.iter().map(|v| v - m));
+            }
             offsets.push(offset);
             refs.push(reference);
         }
@@ -362,6 +412,7 @@ fn make_windows(
     rec: &Recording,
     params: &PrepareParams,
     pos: &[&[f64]],
+    frc: &[&[f64]],
     fs: f64,
     min_rest: usize,
 ) -> Result<Vec<Window>> {
@@ -375,19 +426,20 @@ fn make_windows(
     let has_trials = rec.has(&params.trial_column);
     let mode = match params.windowing {
         Windowing::Auto if has_trials => Windowing::Trials,
-        Windowing::Auto if rec.names().iter().any(|n| matches!(n.as_str(), "ux" | "uy" | "uz" | "utheta")) => {
-            Windowing::Continuous
-        }
+        Windowing::Auto => Windowing::Continuous,
         other => other,
     };
     match mode {
         Windowing::Continuous => Ok(continuous()),
         Windowing::Trials => {
-            let sigmas: Vec<f64> = pos.iter().map(|c| noise_sigma(c)).collect();
+            // onset: the earlier of motion and force change (a step in acceleration
+            // moves the force before the displacement rises above the noise)
+            let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
+            let sigmas: Vec<f64> = signals.iter().map(|c| noise_sigma(c)).collect();
             let floor = 1e-9;
             let mut windows = windows_from_trial_column(rec, &params.trial_column)?;
             for w in &mut windows {
-                let onset = detect_onset(pos, w.range.clone(), &sigmas, floor).unwrap_or(w.range.end);
+                let onset = detect_onset(&signals, w.range.clone(), &sigmas, floor).unwrap_or(w.range.end);
                 let rest = onset - w.range.start;
                 if rest < min_rest {
                     return Err(Error::NoRestBeforeOnset {
@@ -407,16 +459,12 @@ fn make_windows(
         Windowing::Onsets | Windowing::Auto => {
             let found = detect_windows(pos, fs, min_rest.max((0.05 * fs) as usize));
             if found.is_empty() {
-                if mode == Windowing::Onsets {
-                    return Err(Error::Format {
-                        path: rec.path().to_path_buf(),
-                        message: "no perturbation onsets found (need at least two rests at the start position followed by motion); use continuous windowing".into(),
-                    });
-                }
-                Ok(continuous())
-            } else {
-                Ok(found)
+                return Err(Error::Format {
+                    path: rec.path().to_path_buf(),
+                    message: "no perturbation onsets found (need at least two rests at the start position followed by motion); use continuous windowing".into(),
+                });
             }
+            Ok(found)
         }
     }
 }
