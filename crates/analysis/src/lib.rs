@@ -1,1 +1,207 @@
-//! limpid-analysis
+//! limpid-analysis: what an impedance matrix says.
+//!
+//! - symmetric / antisymmetric split Z = Z_s + Z_a (seed 000 eq. (10)-(11),
+//!   seed 001 eq. (11)-(12)) and the Table II quantities of seed 000;
+//! - the ellipsoid of a symmetric matrix (seed 000 eq. (13)-(17)): principal
+//!   axes sorted by decreasing eigenvalue, made a right-handed rotation
+//!   (det +1) by flipping the third axis if needed, yaw/pitch/roll with
+//!   R = Rz(yaw) Ry(pitch) Rx(roll) per eq. (17), and two radius conventions:
+//!   `radii_inverse_sqrt` = 1/sqrt(λ) (seed 000, the quadric x^T A x = 1) and
+//!   `radii_proportional` = λ (seed 001 Fig. 5, length proportional to stiffness);
+//! - criteria (seed 003 §III-C): positive definiteness of the symmetric part
+//!   (smallest eigenvalue > 0) and the symmetry ratio ||Z_a||_F / ||Z_s||_F.
+
+pub mod report;
+
+use nalgebra::{DMatrix, Matrix3};
+use serde::Serialize;
+
+/// Row-major matrix.
+pub type Mat = Vec<Vec<f64>>;
+
+fn to_dm(m: &Mat) -> DMatrix<f64> {
+    let n = m.len();
+    DMatrix::from_fn(n, n, |i, j| m[i][j])
+}
+
+fn from_dm(m: &DMatrix<f64>) -> Mat {
+    (0..m.nrows())
+        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+        .collect()
+}
+
+/// Symmetric part (Z + Z^T) / 2.
+pub fn symmetric(m: &Mat) -> Mat {
+    let z = to_dm(m);
+    from_dm(&((&z + z.transpose()) * 0.5))
+}
+
+/// Antisymmetric part (Z - Z^T) / 2.
+pub fn antisymmetric(m: &Mat) -> Mat {
+    let z = to_dm(m);
+    from_dm(&((&z - z.transpose()) * 0.5))
+}
+
+/// Seed 000 Table II quantities of one matrix.
+#[derive(Debug, Clone, Serialize)]
+pub struct TableII {
+    /// Largest absolute element of the symmetric part.
+    pub max_symmetric: f64,
+    /// Smallest absolute element of the symmetric part.
+    pub min_symmetric: f64,
+    /// Largest absolute off-diagonal element of the antisymmetric part.
+    pub max_antisymmetric: f64,
+}
+
+/// Table II quantities (seed 000).
+pub fn table_ii(m: &Mat) -> TableII {
+    let s = symmetric(m);
+    let a = antisymmetric(m);
+    let abs_s = s.iter().flatten().map(|v| v.abs());
+    TableII {
+        max_symmetric: abs_s.clone().fold(0.0, f64::max),
+        min_symmetric: abs_s.fold(f64::INFINITY, f64::min),
+        max_antisymmetric: a.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max),
+    }
+}
+
+/// The ellipsoid (or ellipse, for 2 x 2) of a symmetric matrix.
+#[derive(Debug, Clone, Serialize)]
+pub struct Ellipsoid {
+    /// Eigenvalues, largest first.
+    pub eigenvalues: Vec<f64>,
+    /// Principal axes as the columns of a rotation matrix (det +1), row-major.
+    pub axes: Mat,
+    /// Yaw, pitch, roll in degrees (seed 000 eq. (17)); for 2 x 2, one angle of
+    /// the major axis from the first coordinate axis.
+    pub angles_deg: Vec<f64>,
+    /// 1/sqrt(λ) per axis (seed 000); `None` where λ <= 0 (no real radius).
+    pub radii_inverse_sqrt: Vec<Option<f64>>,
+    /// λ per axis: length proportional to stiffness (seed 001).
+    pub radii_proportional: Vec<f64>,
+}
+
+/// Ellipsoid of the symmetric part of `m` (n = 2 or 3); `None` for other sizes.
+pub fn ellipsoid(m: &Mat) -> Option<Ellipsoid> {
+    let n = m.len();
+    if !(2..=3).contains(&n) {
+        return None;
+    }
+    let s = to_dm(&symmetric(m));
+    let eig = s.symmetric_eigen();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    let values: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
+    let mut axes = DMatrix::from_fn(n, n, |r, c| eig.eigenvectors[(r, order[c])]);
+    if axes.determinant() < 0.0 {
+        for r in 0..n {
+            axes[(r, n - 1)] = -axes[(r, n - 1)];
+        }
+    }
+    let angles_deg = if n == 3 {
+        let r = Matrix3::from_fn(|i, j| axes[(i, j)]);
+        let (yaw, pitch, roll) = yaw_pitch_roll(&r);
+        vec![yaw.to_degrees(), pitch.to_degrees(), roll.to_degrees()]
+    } else {
+        vec![axes[(1, 0)].atan2(axes[(0, 0)]).to_degrees()]
+    };
+    Some(Ellipsoid {
+        radii_inverse_sqrt: values
+            .iter()
+            .map(|l| (*l > 0.0).then(|| 1.0 / l.sqrt()))
+            .collect(),
+        radii_proportional: values.clone(),
+        eigenvalues: values,
+        axes: from_dm(&axes),
+        angles_deg,
+    })
+}
+
+/// Seed 000 eq. (17): yaw α, pitch β, roll γ (rad) of R = Rz(α) Ry(β) Rx(γ).
+pub fn yaw_pitch_roll(r: &Matrix3<f64>) -> (f64, f64, f64) {
+    let yaw = r[(1, 0)].atan2(r[(0, 0)]);
+    let pitch = (-r[(2, 0)]).atan2((r[(2, 1)].powi(2) + r[(2, 2)].powi(2)).sqrt());
+    let roll = r[(2, 1)].atan2(r[(2, 2)]);
+    (yaw, pitch, roll)
+}
+
+/// R = Rz(yaw) Ry(pitch) Rx(roll), angles in rad.
+pub fn rotation_from_ypr(yaw: f64, pitch: f64, roll: f64) -> Matrix3<f64> {
+    let rz = Matrix3::new(yaw.cos(), -yaw.sin(), 0.0, yaw.sin(), yaw.cos(), 0.0, 0.0, 0.0, 1.0);
+    let ry = Matrix3::new(pitch.cos(), 0.0, pitch.sin(), 0.0, 1.0, 0.0, -pitch.sin(), 0.0, pitch.cos());
+    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, roll.cos(), -roll.sin(), 0.0, roll.sin(), roll.cos());
+    rz * ry * rx
+}
+
+/// Confidence criteria of one matrix (seed 003 §III-C).
+#[derive(Debug, Clone, Serialize)]
+pub struct MatrixCriteria {
+    /// Smallest eigenvalue of the symmetric part.
+    pub min_eigenvalue: f64,
+    /// Symmetric part positive definite (smallest eigenvalue > 0).
+    pub positive_definite: bool,
+    /// ||Z_a||_F / ||Z_s||_F (0 for a symmetric matrix).
+    pub symmetry_ratio: f64,
+}
+
+/// Criteria of one matrix.
+pub fn criteria(m: &Mat) -> MatrixCriteria {
+    let s = to_dm(&symmetric(m));
+    let a = to_dm(&antisymmetric(m));
+    let min_eigenvalue = s.clone().symmetric_eigen().eigenvalues.min();
+    let ns = s.norm();
+    MatrixCriteria {
+        min_eigenvalue,
+        positive_definite: min_eigenvalue > 0.0,
+        symmetry_ratio: if ns > 0.0 { a.norm() / ns } else { 0.0 },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn ellipsoid_angles_round_trip(yaw in -3.0f64..3.0, pitch in -1.5f64..1.5, roll in -3.0f64..3.0,
+                                       l1 in 500.0f64..1000.0, l2 in 200.0f64..450.0, l3 in 10.0f64..150.0) {
+            let r = rotation_from_ypr(yaw, pitch, roll);
+            let k = r * Matrix3::from_diagonal(&nalgebra::Vector3::new(l1, l2, l3)) * r.transpose();
+            let m: Mat = (0..3).map(|i| (0..3).map(|j| k[(i, j)]).collect()).collect();
+            let e = ellipsoid(&m).unwrap();
+            prop_assert!((e.eigenvalues[0] - l1).abs() < 1e-8 * l1);
+            prop_assert!((e.eigenvalues[2] - l3).abs() < 1e-8 * l1);
+            let axes = Matrix3::from_fn(|i, j| e.axes[i][j]);
+            prop_assert!((axes.determinant() - 1.0).abs() < 1e-9, "right-handed");
+            // the recovered angles rebuild the principal frame up to axis signs:
+            // each rebuilt column is parallel to the true column
+            let back = rotation_from_ypr(e.angles_deg[0].to_radians(), e.angles_deg[1].to_radians(), e.angles_deg[2].to_radians());
+            prop_assert!((back - axes).norm() < 1e-8);
+            for c in 0..3 {
+                prop_assert!((back.column(c).dot(&r.column(c)).abs() - 1.0).abs() < 1e-8);
+            }
+        }
+    }
+
+    #[test]
+    fn split_and_table_ii() {
+        let m = vec![vec![10.0, 3.0], vec![1.0, 5.0]];
+        assert_eq!(symmetric(&m), vec![vec![10.0, 2.0], vec![2.0, 5.0]]);
+        assert_eq!(antisymmetric(&m), vec![vec![0.0, 1.0], vec![-1.0, 0.0]]);
+        let t = table_ii(&m);
+        assert_eq!((t.max_symmetric, t.min_symmetric, t.max_antisymmetric), (10.0, 2.0, 1.0));
+        let c = criteria(&m);
+        assert!(c.positive_definite);
+        assert!((c.symmetry_ratio - (2.0f64).sqrt() / (100.0f64 + 8.0 + 25.0).sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn ellipse_radii_conventions() {
+        let m = vec![vec![400.0, 0.0], vec![0.0, 100.0]];
+        let e = ellipsoid(&m).unwrap();
+        assert_eq!(e.radii_proportional, vec![400.0, 100.0]);
+        assert_eq!(e.radii_inverse_sqrt, vec![Some(0.05), Some(0.1)]);
+        assert!(e.angles_deg[0].abs() < 1e-12 || (e.angles_deg[0].abs() - 180.0).abs() < 1e-12);
+    }
+}

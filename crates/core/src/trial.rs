@@ -52,6 +52,17 @@ pub fn noise_sigma(x: &[f64]) -> f64 {
     med / (0.6745 * 6f64.sqrt())
 }
 
+/// Smallest change that counts as an onset, per signal: 0.1 % of its range.
+pub fn change_floors(signals: &[&[f64]]) -> Vec<f64> {
+    signals
+        .iter()
+        .map(|c| {
+            let (lo, hi) = c.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+            if hi > lo { 1e-3 * (hi - lo) } else { 1e-12 }
+        })
+        .collect()
+}
+
 /// Split the recording by its integer `trial` column into consecutive runs.
 pub fn windows_from_trial_column(rec: &Recording, column: &str) -> Result<Vec<Window>> {
     let ids = rec.require(column, "trial ids")?;
@@ -83,9 +94,9 @@ const ONSET_SIGMA: f64 = 6.0;
 
 /// Find the perturbation onset inside `range` (absolute index), or `None` if nothing moves.
 ///
-/// `floor` is the smallest displacement (m or rad) that counts as motion, so
-/// that noiseless synthetic data still has a finite threshold.
-pub fn detect_onset(coords: &[&[f64]], range: Range<usize>, sigmas: &[f64], floor: f64) -> Option<usize> {
+/// `floors` are the smallest changes that count, one per signal, so that
+/// noiseless or smooth (drifting) signals still have a finite threshold.
+pub fn detect_onset(coords: &[&[f64]], range: Range<usize>, sigmas: &[f64], floors: &[f64]) -> Option<usize> {
     let n = range.len();
     if n < 4 {
         return None;
@@ -95,14 +106,15 @@ pub fn detect_onset(coords: &[&[f64]], range: Range<usize>, sigmas: &[f64], floo
         .iter()
         .map(|c| c[range.start..range.start + k0].iter().sum::<f64>() / k0 as f64)
         .collect();
-    let over = |i: usize, m: f64| {
-        coords.iter().zip(&base).zip(sigmas).any(|((c, b), s)| {
-            (c[i] - b).abs() > (m * s).max(floor)
+    let over = |i: usize| {
+        let m = ONSET_SIGMA;
+        coords.iter().zip(&base).zip(sigmas.iter().zip(floors)).any(|((c, b), (s, floor))| {
+            (c[i] - b).abs() > (m * s).max(*floor)
         })
     };
     let mut run = 0;
     for i in range.clone() {
-        if over(i, ONSET_SIGMA) {
+        if over(i) {
             run += 1;
             if run == 3 {
                 return Some(i - 2);
@@ -176,7 +188,7 @@ pub fn detect_windows(coords: &[&[f64]], fs: f64, min_rest: usize) -> Vec<Window
         }
         let end = runs.get(k + 1).map_or(n, |next| next.start + lag);
         let window = r.start..end.min(n);
-        if let Some(onset) = detect_onset(coords, window.clone(), &sigmas, 0.0) {
+        if let Some(onset) = detect_onset(coords, window.clone(), &sigmas, &change_floors(coords)) {
             out.push(Window {
                 id: out.len() as i64 + 1,
                 range: window,

@@ -114,6 +114,9 @@ pub struct StandardErrors {
 const CHUNK: usize = 4096;
 /// Smallest regressor reliability at which a parameter counts as identifiable.
 pub const MIN_RELIABILITY: f64 = 0.8;
+/// Smallest regressor reliability at which its noise bias is compensated;
+/// below it the compensation would amplify noise more than it removes bias.
+pub const MIN_CORRECTABLE: f64 = 0.5;
 /// Fewest blocks for a jackknife standard error.
 const MIN_JACKKNIFE_BLOCKS: usize = 8;
 /// Contiguous pieces used as jackknife blocks when the trials are too few.
@@ -127,7 +130,19 @@ struct Solved {
 }
 
 /// Solve the least-squares problem held in the augmented triangle `[R z; 0 s]`.
-fn solve_triangle(r_aug: &DMatrix<f64>, p: usize, n: usize, scales: &[f64]) -> std::result::Result<Solved, String> {
+///
+/// With a non-zero `noise` (per-sample noise covariance of the scaled
+/// regressors), the bias-compensated estimate (R^T R - rows N)^-1 R^T z
+/// removes the attenuation that position noise causes; the Gram matrix is
+/// formed only here, on the well-conditioned scaled triangle.
+fn solve_triangle(
+    r_aug: &DMatrix<f64>,
+    p: usize,
+    n: usize,
+    scales: &[f64],
+    noise: &DMatrix<f64>,
+    rows: f64,
+) -> std::result::Result<Solved, String> {
     let r = r_aug.view((0, 0), (p, p)).into_owned();
     let z = r_aug.view((0, p), (p, n)).into_owned();
     let s_block = r_aug.view((p, p), (n, n)).into_owned();
@@ -144,7 +159,16 @@ fn solve_triangle(r_aug: &DMatrix<f64>, p: usize, n: usize, scales: &[f64]) -> s
     };
     let inv_s = DMatrix::from_diagonal(&sv.map(|s| 1.0 / s));
     let r_pinv = v_t.transpose() * &inv_s * u.transpose();
-    let theta_scaled = &r_pinv * &z;
+    let mut theta_scaled = &r_pinv * &z;
+    let mut cov_unit = &r_pinv * r_pinv.transpose();
+    if noise.iter().any(|v| *v != 0.0) {
+        let r_owned = r_aug.view((0, 0), (p, p)).into_owned();
+        let gram = r_owned.transpose() * &r_owned - noise * rows;
+        if let Some(chol) = gram.cholesky() {
+            theta_scaled = chol.solve(&(r_owned.transpose() * &z));
+            cov_unit = chol.inverse();
+        }
+    }
     let mut theta = DMatrix::<f64>::zeros(p, n);
     for a in 0..n {
         for j in 0..p {
@@ -157,7 +181,7 @@ fn solve_triangle(r_aug: &DMatrix<f64>, p: usize, n: usize, scales: &[f64]) -> s
     Ok(Solved {
         theta,
         rss,
-        cov_unit: &r_pinv * r_pinv.transpose(),
+        cov_unit,
         condition_number: smax / smin,
     })
 }
@@ -221,7 +245,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
     let forces: Vec<&[f64]> = data.force.iter().map(Vec::as_slice).collect();
     let reliability: Vec<[f64; 3]> = (0..n)
         .map(|k| {
-            let nv = data.regressor_noise_var.get(k).copied().unwrap_or([0.0; 3]);
+            let nv = data.regressor_noise_var.get(k).copied().unwrap_or([0.0; 4]);
             let rel = |col: usize, noise: f64| (1.0 - noise / (scales[col] * scales[col])).max(0.0);
             [rel(k, nv[2]), rel(n + k, nv[1]), rel(2 * n + k, nv[0])]
         })
@@ -239,6 +263,29 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             mat[(r, j)] = v / s;
         }
     };
+    // errors-in-variables: noise covariance of the scaled regressor columns, per
+    // sample, for the columns reliable enough to correct (bias-compensated LS)
+    let mut noise = DMatrix::<f64>::zeros(p, p);
+    let correctable = |col: usize, kind: usize| reliability[col][kind] >= MIN_CORRECTABLE;
+    for k in 0..n {
+        let nv = data.regressor_noise_var.get(k).copied().unwrap_or([0.0; 4]);
+        let (ia, iv, ix) = (k, n + k, 2 * n + k);
+        if correctable(k, 0) {
+            noise[(ia, ia)] = nv[2] / (scales[ia] * scales[ia]);
+        }
+        if correctable(k, 1) {
+            noise[(iv, iv)] = nv[1] / (scales[iv] * scales[iv]);
+        }
+        if correctable(k, 2) {
+            noise[(ix, ix)] = nv[0] / (scales[ix] * scales[ix]);
+        }
+        if correctable(k, 0) && correctable(k, 2) {
+            let c = nv[3] / (scales[ia] * scales[ix]);
+            noise[(ia, ix)] = c;
+            noise[(ix, ia)] = c;
+        }
+    }
+    let block_rows: Vec<usize>;
     // blocks for the jackknife: the windows when there are enough, else contiguous pieces
     let blocks: Vec<std::ops::Range<usize>> = if data.windows.len() >= MIN_JACKKNIFE_BLOCKS {
         data.windows.iter().map(|w| w.samples.clone()).collect()
@@ -270,8 +317,9 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             acc.unwrap_or_else(|| DMatrix::zeros(q, q))
         })
         .collect();
+    block_rows = blocks.iter().map(|b| b.len()).collect();
     let r_aug = merge(triangles.iter(), q);
-    let solved = solve_triangle(&r_aug, p, n, &scales).map_err(|e| numerical(e.to_string()))?;
+    let solved = solve_triangle(&r_aug, p, n, &scales, &noise, m as f64).map_err(|e| numerical(e.to_string()))?;
     let theta = solved.theta.clone();
     let condition_number = solved.condition_number;
     let rss = solved.rss.clone();
@@ -313,7 +361,8 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             .into_par_iter()
             .filter_map(|b| {
                 let others = triangles.iter().enumerate().filter(|(k, _)| *k != b).map(|(_, t)| t);
-                solve_triangle(&merge(others, q), p, n, &scales).ok().map(|s| s.theta)
+                let rows = (m - block_rows[b]) as f64;
+                solve_triangle(&merge(others, q), p, n, &scales, &noise, rows).ok().map(|s| s.theta)
             })
             .collect();
         let g_ok = replicates.len() as f64;

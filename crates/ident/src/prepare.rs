@@ -21,7 +21,7 @@
 use std::ops::Range;
 use std::path::PathBuf;
 
-use limpid_core::trial::{detect_onset, detect_windows, noise_sigma, windows_from_trial_column};
+use limpid_core::trial::{change_floors, detect_onset, detect_windows, noise_sigma, windows_from_trial_column};
 use limpid_core::{Error, FrameTransform, Recording, Result, Window};
 use limpid_dsp::{central_first, central_second, savgol, LowPass};
 use serde::Serialize;
@@ -176,8 +176,10 @@ pub struct Prepared {
     /// Position noise σ per coordinate, estimated from second differences of the raw data.
     pub position_noise: Vec<f64>,
     /// Variance that the position noise contributes to the prepared
-    /// displacement, velocity and acceleration of each coordinate (`[disp, vel, acc]`).
-    pub regressor_noise_var: Vec<[f64; 3]>,
+    /// displacement, velocity and acceleration of each coordinate, and the
+    /// displacement-acceleration noise covariance (`[disp, vel, acc, disp_acc]`;
+    /// velocity noise is uncorrelated with both, the operators being odd and even).
+    pub regressor_noise_var: Vec<[f64; 4]>,
 }
 
 impl Prepared {
@@ -302,7 +304,7 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
     out.regressor_noise_var = out
         .position_noise
         .iter()
-        .map(|s| [s * s * gains[0], s * s * gains[1], s * s * gains[2]])
+        .map(|s| [s * s * gains[0], s * s * gains[1], s * s * gains[2], s * s * gains[3]])
         .collect();
     for w in &windows {
         let r = w.range.clone();
@@ -383,7 +385,7 @@ pub fn savgol_window(fs: f64, cutoff: f64) -> usize {
 /// Sum of squared impulse responses of the displacement, velocity and
 /// acceleration operators: white noise of variance σ² in a position comes out
 /// with variance σ² × gain.
-fn noise_gains(derivative: Derivative, lowpass: &LowPass, sg_window: usize, dt: f64) -> Result<[f64; 3]> {
+fn noise_gains(derivative: Derivative, lowpass: &LowPass, sg_window: usize, dt: f64) -> Result<[f64; 4]> {
     let n = 4001;
     let mut impulse = vec![0.0; n];
     impulse[n / 2] = 1.0;
@@ -401,7 +403,8 @@ fn noise_gains(derivative: Derivative, lowpass: &LowPass, sg_window: usize, dt: 
         ),
     };
     let ss = |y: &[f64]| y.iter().map(|v| v * v).sum::<f64>();
-    Ok([ss(&x), ss(&v), ss(&a)])
+    let cross = x.iter().zip(&a).map(|(p, q)| p * q).sum::<f64>();
+    Ok([ss(&x), ss(&v), ss(&a), cross])
 }
 
 fn mean(x: &[f64]) -> f64 {
@@ -436,10 +439,10 @@ fn make_windows(
             // moves the force before the displacement rises above the noise)
             let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
             let sigmas: Vec<f64> = signals.iter().map(|c| noise_sigma(c)).collect();
-            let floor = 1e-9;
+            let floors = change_floors(&signals);
             let mut windows = windows_from_trial_column(rec, &params.trial_column)?;
             for w in &mut windows {
-                let onset = detect_onset(&signals, w.range.clone(), &sigmas, floor).unwrap_or(w.range.end);
+                let onset = detect_onset(&signals, w.range.clone(), &sigmas, &floors).unwrap_or(w.range.end);
                 let rest = onset - w.range.start;
                 if rest < min_rest {
                     return Err(Error::NoRestBeforeOnset {

@@ -1,0 +1,157 @@
+//! `limpid estimate linear`: flags -> preparation and estimator settings.
+
+use std::path::PathBuf;
+
+use clap::{Args, Subcommand, ValueEnum};
+use limpid_analysis::report::linear_result;
+use limpid_core::FrameTransform;
+use limpid_ident::{fit_linear, prepare, Derivative, LinearParams, Offsets, PrepareParams, Windowing};
+
+use crate::{table, CliResult};
+
+#[derive(Subcommand)]
+pub enum Method {
+    /// Linear model M x'' + B x' + K (x - x_eq) = f by least squares (seeds 000, 001).
+    Linear(LinearArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum DerivativeArg {
+    /// Butterworth zero-phase low-pass, then central differences.
+    Central,
+    /// Savitzky-Golay (cubic) smoothing and derivatives.
+    Savgol,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum OffsetsArg {
+    /// Fit one force offset per trial (robust to slow drift; no equilibrium).
+    Fit,
+    /// Subtract the pre-onset rest mean (seeds 000, 001); equilibrium estimated.
+    Rest,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum WindowArg {
+    /// The trial column if present, else one continuous window.
+    Auto,
+    /// The trial column.
+    Trials,
+    /// Detect perturbation onsets from the motion.
+    Onsets,
+    /// One continuous window with a constant term.
+    Continuous,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum FrameArg {
+    /// Keep the recording's frame.
+    Identity,
+    /// Seed 000 eq. (1): robot axes [X_R Y_R Z_R] = [-Y_H Z_H -X_H] to the human frame.
+    Seed000,
+}
+
+#[derive(Args)]
+pub struct LinearArgs {
+    /// Recording (CSV or Parquet, FORMAT.md).
+    pub recording: PathBuf,
+    /// Fit without the equilibrium constant (the 9-column form P = F Y^+ of seed 001).
+    #[arg(long)]
+    pub no_equilibrium: bool,
+    /// Low-pass cut-off in Hz (default: 30, at most 0.4 x sample rate).
+    #[arg(long, value_name = "HZ")]
+    pub cutoff: Option<f64>,
+    /// Butterworth order per pass.
+    #[arg(long, default_value_t = 4)]
+    pub order: usize,
+    /// How velocity and acceleration are computed.
+    #[arg(long, value_enum, default_value_t = DerivativeArg::Central)]
+    pub derivative: DerivativeArg,
+    /// How per-trial force offsets are handled.
+    #[arg(long, value_enum, default_value_t = OffsetsArg::Fit)]
+    pub offsets: OffsetsArg,
+    /// How the recording is cut into windows.
+    #[arg(long, value_enum, default_value_t = WindowArg::Auto)]
+    pub window: WindowArg,
+    /// Use only trials of this condition level (the `level` column).
+    #[arg(long)]
+    pub level: Option<f64>,
+    /// Frame change applied to x,y,z and fx,fy,fz.
+    #[arg(long, value_enum, default_value_t = FrameArg::Identity)]
+    pub frame: FrameArg,
+    /// General transform: r11,r12,...,r33,tx,ty,tz (applied after --frame).
+    #[arg(long, value_delimiter = ',', num_args = 12, allow_hyphen_values = true)]
+    pub transform: Option<Vec<f64>>,
+    /// The force columns hold the hand's force on the sensor: negate them.
+    #[arg(long)]
+    pub negate_force: bool,
+    /// Print one JSON object instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl LinearArgs {
+    /// Validated preparation settings.
+    pub fn prepare_params(&self) -> CliResult<PrepareParams> {
+        let mut transform = match self.frame {
+            FrameArg::Identity => None,
+            FrameArg::Seed000 => Some(FrameTransform::seed000_robot_to_human()),
+        };
+        if let Some(values) = &self.transform {
+            let t = FrameTransform::from_values(values)?;
+            transform = Some(match transform {
+                Some(first) => FrameTransform {
+                    rotation: t.rotation * first.rotation,
+                    translation: t.rotation * first.translation + t.translation,
+                },
+                None => t,
+            });
+        }
+        Ok(PrepareParams {
+            windowing: match self.window {
+                WindowArg::Auto => Windowing::Auto,
+                WindowArg::Trials => Windowing::Trials,
+                WindowArg::Onsets => Windowing::Onsets,
+                WindowArg::Continuous => Windowing::Continuous,
+            },
+            cutoff_hz: self.cutoff,
+            filter_order: self.order,
+            derivative: match self.derivative {
+                DerivativeArg::Central => Derivative::Central,
+                DerivativeArg::Savgol => Derivative::Savgol,
+            },
+            offsets: match self.offsets {
+                OffsetsArg::Fit => Offsets::Fit,
+                OffsetsArg::Rest => Offsets::Rest,
+            },
+            negate_force: self.negate_force,
+            transform,
+            level: self.level,
+            ..PrepareParams::default()
+        })
+    }
+}
+
+pub fn run(method: Method) -> CliResult {
+    match method {
+        Method::Linear(args) => {
+            let params = args.prepare_params()?;
+            let rec = limpid_io::read_recording(&args.recording)?;
+            let prepared = prepare(&rec, &params)?;
+            let est = fit_linear(
+                &prepared,
+                &LinearParams {
+                    equilibrium: !args.no_equilibrium,
+                    ..LinearParams::default()
+                },
+            )?;
+            let result = linear_result(&est, &prepared);
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&result)?);
+            } else {
+                print!("{}", table::linear_text(&result));
+            }
+            Ok(())
+        }
+    }
+}

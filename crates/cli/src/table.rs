@@ -1,0 +1,145 @@
+//! Plain-text tables in the layout of seed 000 Table I-II.
+
+use std::fmt::Write;
+
+use limpid_analysis::report::LinearResult;
+use limpid_analysis::Mat;
+
+/// A number with 4 significant digits, without exponent for the usual range.
+pub fn num(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e5).contains(&a) {
+        format!("{v:.3e}")
+    } else {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    }
+}
+
+fn matrix_block(out: &mut String, title: &str, m: &Mat, se: &Mat, coords: &[String]) {
+    let _ = writeln!(out, "{title}");
+    let _ = write!(out, "      ");
+    for c in coords {
+        let _ = write!(out, "{c:>22}");
+    }
+    out.push('\n');
+    for (i, row) in m.iter().enumerate() {
+        let _ = write!(out, "  {:<4}", coords[i]);
+        for (j, v) in row.iter().enumerate() {
+            let cell = format!("{} ± {}", num(*v), num(se[i][j]));
+            let _ = write!(out, "{cell:>22}");
+        }
+        out.push('\n');
+    }
+}
+
+/// The readable report of `estimate linear`.
+pub fn linear_text(r: &LinearResult) -> String {
+    let mut out = String::new();
+    let p = &r.provenance;
+    let coords = &p.coordinates;
+    let _ = writeln!(out, "limpid estimate linear: {}", p.recording);
+    let windows = if p.continuous {
+        "one continuous window".to_string()
+    } else {
+        format!("{} trials", p.windows)
+    };
+    let _ = writeln!(
+        out,
+        "coordinates {} | {} Hz | {} | {} samples used | low-pass {} Hz (Butterworth order {}, zero-phase), derivatives: {}, force offsets: {}",
+        coords.join(", "),
+        num(p.sample_rate_hz),
+        windows,
+        r.criteria.samples,
+        num(p.cutoff_hz),
+        p.filter_order,
+        p.derivative,
+        p.offsets
+    );
+    out.push('\n');
+    let ident = &r.criteria.identifiable;
+    let flag = |ok: bool| if ok { "" } else { "   [NOT IDENTIFIABLE: see warnings]" };
+    let [mu, bu, ku] = &p.units;
+    matrix_block(&mut out, &format!("Stiffness K ({ku}){}", flag(ident.stiffness)), &r.stiffness, &r.standard_errors.stiffness, coords);
+    matrix_block(&mut out, &format!("Damping B ({bu}){}", flag(ident.damping)), &r.damping, &r.standard_errors.damping, coords);
+    matrix_block(&mut out, &format!("Inertia M ({mu}){}", flag(ident.inertia)), &r.inertia, &r.standard_errors.inertia, coords);
+    match &r.equilibrium {
+        Some(eq) => {
+            let _ = writeln!(out, "Equilibrium x_eq: {}", eq.iter().map(|v| num(*v)).collect::<Vec<_>>().join(", "));
+        }
+        None => {
+            let _ = writeln!(out, "Equilibrium x_eq: not estimated (see warnings)");
+        }
+    }
+    out.push('\n');
+    if coords.len() >= 2 {
+        let _ = writeln!(out, "Symmetric parts (seed 000 Table I layout): K(s) | B(s) | M(s)");
+        for i in 0..coords.len() {
+            let row = |m: &Mat| m[i].iter().map(|v| format!("{:>9}", num(*v))).collect::<String>();
+            let _ = writeln!(
+                out,
+                "  {:<4}{}  |{}  |{}",
+                coords[i],
+                row(&r.symmetric.stiffness),
+                row(&r.symmetric.damping),
+                row(&r.symmetric.inertia)
+            );
+        }
+        let t = &r.table_ii;
+        let _ = writeln!(
+            out,
+            "Table II: K max/min/maxA {} / {} / {} | B {} / {} / {} | M {} / {} / {}",
+            num(t.stiffness.max_symmetric), num(t.stiffness.min_symmetric), num(t.stiffness.max_antisymmetric),
+            num(t.damping.max_symmetric), num(t.damping.min_symmetric), num(t.damping.max_antisymmetric),
+            num(t.inertia.max_symmetric), num(t.inertia.min_symmetric), num(t.inertia.max_antisymmetric),
+        );
+        if let Some(e) = &r.ellipsoids.stiffness {
+            let _ = writeln!(
+                out,
+                "Stiffness ellipsoid: principal stiffnesses {} {ku}; orientation {} deg ({})",
+                e.eigenvalues.iter().map(|v| num(*v)).collect::<Vec<_>>().join(", "),
+                e.angles_deg.iter().map(|v| format!("{v:.1}")).collect::<Vec<_>>().join(", "),
+                if e.angles_deg.len() == 3 { "yaw, pitch, roll" } else { "major axis from the first coordinate" }
+            );
+        }
+        out.push('\n');
+    }
+    let _ = writeln!(out, "Quality");
+    let per_axis = |v: &[f64], digits: usize| {
+        coords
+            .iter()
+            .zip(v)
+            .map(|(c, x)| format!("{c} {x:.digits$}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let _ = writeln!(out, "  fit: r {}; VAF % {}", per_axis(&r.fit.r, 3), per_axis(&r.fit.vaf, 1));
+    let m = &r.criteria.matrices;
+    let _ = writeln!(
+        out,
+        "  condition number (scaled regressor) {:.3}; K positive definite: {} (min eigenvalue {}), symmetry ratio {:.3}; B positive definite: {}",
+        r.criteria.condition_number,
+        yes(m.stiffness.positive_definite),
+        num(m.stiffness.min_eigenvalue),
+        m.stiffness.symmetry_ratio,
+        yes(m.damping.positive_definite)
+    );
+    let _ = writeln!(out, "  standard errors: {}", r.criteria.standard_error_method);
+    if r.warnings.is_empty() {
+        let _ = writeln!(out, "  no warnings: every matrix is identified from this data");
+    }
+    for w in &r.warnings {
+        let _ = writeln!(out, "warning: {w}");
+    }
+    out
+}
+
+fn yes(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "no"
+    }
+}
