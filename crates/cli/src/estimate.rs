@@ -68,7 +68,7 @@ pub struct LinearArgs {
     #[arg(long, value_enum, default_value_t = DerivativeArg::Central)]
     pub derivative: DerivativeArg,
     /// How per-trial force offsets are handled.
-    #[arg(long, value_enum, default_value_t = OffsetsArg::Fit)]
+    #[arg(long, value_enum, default_value_t = OffsetsArg::Rest)]
     pub offsets: OffsetsArg,
     /// How the recording is cut into windows.
     #[arg(long, value_enum, default_value_t = WindowArg::Auto)]

@@ -16,6 +16,15 @@ use sci_rs::signal::filter::design::{
     butter_dyn, DigitalFilter, FilterBandType, FilterOutputType, Sos,
 };
 
+/// How a window is extended beyond its ends before zero-phase filtering.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Edge {
+    /// Point reflection about the end sample (scipy's `padtype='odd'`).
+    Odd,
+    /// Mirror about the end sample (scipy's `padtype='even'`).
+    Even,
+}
+
 /// A designed zero-phase low-pass filter (second-order sections).
 #[derive(Debug, Clone)]
 pub struct LowPass {
@@ -87,6 +96,39 @@ impl LowPass {
             ));
         }
         Ok(sci_rs::signal::filter::sosfiltfilt_dyn(x.iter(), &self.sos))
+    }
+
+    /// Zero-phase filtering after extending each end by its own reflection:
+    /// [`Edge::Odd`] (point reflection, keeps the slope continuous) or
+    /// [`Edge::Even`] (mirror, keeps the curvature continuous). `extra` samples
+    /// are added per end before scipy's own odd padding; they are removed again.
+    ///
+    /// Why: a linear model `f = M x'' + B x' + K x` still holds between the
+    /// filtered signals only if the extensions obey it too. A mirror obeys it
+    /// where the window ends at zero velocity (any acceleration), a point
+    /// reflection where it ends at zero acceleration.
+    pub fn filtfilt_edges(&self, x: &[f64], left: Edge, right: Edge, extra: usize) -> Result<Vec<f64>> {
+        let n = x.len();
+        if n < 2 {
+            return Err(Error::invalid("signal length", format!("need at least 2 samples, found {n}")));
+        }
+        let e = extra.min(n - 1);
+        let mut ext = Vec::with_capacity(n + 2 * e);
+        for k in (1..=e).rev() {
+            ext.push(match left {
+                Edge::Odd => 2.0 * x[0] - x[k],
+                Edge::Even => x[k],
+            });
+        }
+        ext.extend_from_slice(x);
+        for k in 1..=e {
+            ext.push(match right {
+                Edge::Odd => 2.0 * x[n - 1] - x[n - 1 - k],
+                Edge::Even => x[n - 1 - k],
+            });
+        }
+        let y = self.filtfilt(&ext)?;
+        Ok(y[e..e + n].to_vec())
     }
 
     /// One causal pass, as `scipy.signal.sosfilt` with zero initial state.

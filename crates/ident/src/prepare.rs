@@ -23,7 +23,7 @@ use std::path::PathBuf;
 
 use limpid_core::trial::{change_floors, detect_onset, detect_windows, noise_sigma, windows_from_trial_column};
 use limpid_core::{Error, FrameTransform, Recording, Result, Window};
-use limpid_dsp::{central_first, central_second, savgol, LowPass};
+use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
 use serde::Serialize;
 
 /// How velocity and acceleration are obtained.
@@ -45,8 +45,10 @@ pub enum Offsets {
     Rest,
     /// Fit one constant per trial (within-trial demeaning of forces and
     /// regressors). Uses every sample of a trial to find its offset, so slow
-    /// force drift biases damping far less (seed data: damping error 16 % ->
-    /// 10 % on ex_cubic); the equilibrium is then not identifiable.
+    /// force drift biases damping of slow perturbations less (ex_cubic: damping
+    /// error 14.5 % -> 10 %), but any model mismatch during fast motion moves
+    /// the offsets and so the stiffness (ex_config7: K error 0.1 % -> 1.6 %);
+    /// the equilibrium is not identifiable.
     Fit,
 }
 
@@ -74,7 +76,7 @@ pub enum Windowing {
 /// | `cutoff_hz` | 20 Hz (capped at 0.4 fs) | zero-phase low-pass cut-off | (0, fs/2) |
 /// | `filter_order` | 4 | Butterworth order per pass | 1..=20 |
 /// | `derivative` | `Central` | derivative scheme | see [`Derivative`] |
-/// | `offsets` | `Fit` | per-trial force offsets: rest mean or fitted | see [`Offsets`] |
+/// | `offsets` | `Rest` | per-trial force offsets: rest mean or fitted | see [`Offsets`] |
 /// | `negate_force` | false | force columns hold the hand's force on the sensor | |
 /// | `transform` | none | frame change applied to `x,y,z`, `fx,fy,fz` | rotation det +1 |
 /// | `min_rest_s` | 0.02 s | shortest rest before an onset | > 0 |
@@ -102,7 +104,7 @@ impl Default for PrepareParams {
             cutoff_hz: None,
             filter_order: 4,
             derivative: Derivative::Central,
-            offsets: Offsets::Fit,
+            offsets: Offsets::Rest,
             negate_force: false,
             transform: None,
             min_rest_s: 0.02,
@@ -112,11 +114,14 @@ impl Default for PrepareParams {
     }
 }
 
-/// Samples dropped at each window edge, in periods of the cut-off frequency:
-/// the zero-phase filter's odd-extension padding does not obey the impedance
-/// model where a window ends in motion, and a 4th-order Butterworth transient
-/// has decayed to ~1 % after about one period.
-pub const TRIM_PERIODS: f64 = 1.0;
+/// Samples dropped at each window edge, in periods of the cut-off frequency
+/// (at least 2 samples, the derivative stencil). Zero: each window end is
+/// extended by the reflection that obeys the impedance model there (see
+/// [`LowPass::filtfilt_edges`]), so filtered samples up to the edge stay
+/// consistent; trimming measured worse (it removes the pre-onset rest that pins
+/// the stiffness: ex_config7 level 0.5 with fitted offsets, K error 0.6 % -> 30 %
+/// at a 10 Hz cut-off with one period trimmed).
+pub const TRIM_PERIODS: f64 = 0.0;
 
 /// Default low-pass cut-off (Hz): 30 Hz, but never above 0.4 of the sample rate.
 ///
@@ -322,6 +327,11 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
             None => r.clone(),
         };
         let start = out.disp[0].len();
+        // one extension per window end, shared by every signal so that the model holds across coordinates
+        let edge_samples = ((fs / cutoff).round() as usize).max(3);
+        let left = edge_kind(&pos, r.start, r.clone(), edge_samples, dt);
+        let right = edge_kind(&pos, r.end - 1, r.clone(), edge_samples, dt);
+        let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
         let mut offsets = Vec::with_capacity(n);
         let mut refs = Vec::with_capacity(n);
         for k in 0..n {
@@ -335,10 +345,10 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
             let f: Vec<f64> = frc[k][r.clone()].iter().map(|v| sign * v - offset).collect();
             let (xs, v, a, fs_) = match params.derivative {
                 Derivative::Central => {
-                    let xs = lowpass.filtfilt(&x)?;
+                    let xs = lowpass.filtfilt_edges(&x, left, right, extra)?;
                     let v = central_first(&xs, dt);
                     let a = central_second(&xs, dt);
-                    (xs, v, a, lowpass.filtfilt(&f)?)
+                    (xs, v, a, lowpass.filtfilt_edges(&f, left, right, extra)?)
                 }
                 Derivative::Savgol => (
                     savgol(&x, sg_window, 3, 0, dt)?,
@@ -371,6 +381,43 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
             out.windows.iter().map(|w| w.reference[k]).sum::<f64>() / out.windows.len() as f64;
     }
     Ok(out)
+}
+
+/// Extension for one window end: a mirror where the limb is (nearly) still
+/// there, a point reflection where it still moves. The speed at the end is the
+/// slope of a least-squares line through the last `span` samples, compared with
+/// the window's largest such slope.
+fn edge_kind(pos: &[&[f64]], at: usize, window: Range<usize>, span: usize, dt: f64) -> Edge {
+    let span = span.min(window.len() / 4).max(2);
+    let slope = |c: &[f64], s: usize| {
+        let seg = &c[s..s + span];
+        let tm = (span as f64 - 1.0) / 2.0;
+        let xm = seg.iter().sum::<f64>() / span as f64;
+        let (mut num, mut den) = (0.0, 0.0);
+        for (k, v) in seg.iter().enumerate() {
+            num += (k as f64 - tm) * (v - xm);
+            den += (k as f64 - tm).powi(2);
+        }
+        num / den / dt
+    };
+    let s_end = if at == window.start { window.start } else { window.end - span };
+    let mut moving = false;
+    for c in pos {
+        let mut peak = 0.0f64;
+        let mut s = window.start;
+        while s + span <= window.end {
+            peak = peak.max(slope(c, s).abs());
+            s += span / 2;
+        }
+        if peak > 0.0 && slope(c, s_end).abs() > 0.2 * peak {
+            moving = true;
+        }
+    }
+    if moving {
+        Edge::Odd
+    } else {
+        Edge::Even
+    }
 }
 
 /// Savitzky-Golay window (odd, samples) whose cubic smoother has about the given cut-off.
