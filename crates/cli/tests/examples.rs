@@ -1,0 +1,104 @@
+//! `limpid estimate linear` against ../shared/examples truths and the real
+//! ankle data (issue 2 acceptance), and `limpid demo` against its subject.
+
+mod common;
+use common::*;
+
+#[test]
+fn cartesian_slow_within_3_percent_stiffness_15_percent_damping() {
+    for case in ["ex_cubic", "ex_sinusoid"] {
+        let dir = shared().join("examples/cartesian_slow");
+        let truth = read_json(&dir.join(format!("{case}.truth.json")));
+        let rec = dir.join(format!("{case}.csv"));
+        let r = json(&["estimate", "linear", rec.to_str().unwrap(), "--json"]);
+        let ek = rel_err(&mat(&r["stiffness"]), &mat(&truth["stiffness"]));
+        let eb = rel_err(&mat(&r["damping"]), &mat(&truth["damping"]));
+        assert!(ek < 0.03, "{case}: stiffness error {ek}");
+        assert!(eb < 0.15, "{case}: damping error {eb}");
+        // seed 000's slow perturbations cannot identify inertia: it must say so
+        assert_eq!(r["criteria"]["identifiable"]["inertia"], false, "{case}");
+        assert!(r["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("inertia is not identifiable")
+            || w.as_str().unwrap().contains("acceleration regressors are dominated by position noise")));
+        // the equilibrium is the start point (truth) to within 0.5 mm
+        let eq: Vec<f64> = r["equilibrium"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let te: Vec<f64> = truth["equilibrium"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        for (a, b) in eq.iter().zip(&te) {
+            assert!((a - b).abs() < 5e-4, "{case}: equilibrium {eq:?} vs {te:?}");
+        }
+    }
+}
+
+#[test]
+fn cocontraction_levels_one_at_a_time() {
+    for case in ["ex_config4", "ex_config7"] {
+        let dir = shared().join("examples/cocontraction");
+        let truth = read_json(&dir.join(format!("{case}.truth.json")));
+        let rec = dir.join(format!("{case}.csv"));
+        for level in truth["levels"].as_array().unwrap() {
+            let l = level["level"].as_f64().unwrap().to_string();
+            let r = json(&["estimate", "linear", rec.to_str().unwrap(), "--level", &l, "--json"]);
+            let ek = rel_err(&mat(&r["stiffness"]), &mat(&level["stiffness"]));
+            let eb = rel_err(&mat(&r["damping"]), &mat(&truth["damping"]));
+            let em = rel_err(&mat(&r["inertia"]), &mat(&truth["inertia"]));
+            assert!(ek < 0.03, "{case} level {l}: stiffness error {ek}");
+            assert!(eb < 0.15, "{case} level {l}: damping error {eb}");
+            // fast 100 ms perturbations do identify inertia
+            assert!(em < 0.05, "{case} level {l}: inertia error {em}");
+            assert_eq!(r["criteria"]["identifiable"]["inertia"], true);
+        }
+    }
+}
+
+#[test]
+fn real_ankle_inertia_in_physiological_range_and_vaf_at_least_plain_fit() {
+    let plain = read_json(&std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/ankle_plain_fit.json"));
+    for name in ["df", "df2", "df3", "pf", "pf2"] {
+        let rec = shared().join(format!("real/reklab_ankle/{name}.csv"));
+        let r = json(&["estimate", "linear", rec.to_str().unwrap(), "--json"]);
+        let inertia = r["inertia"][0][0].as_f64().unwrap();
+        assert!((0.01..=0.025).contains(&inertia), "{name}: inertia {inertia}");
+        let vaf = r["fit"]["vaf"][0].as_f64().unwrap();
+        let plain_vaf = plain[name]["vaf"].as_f64().unwrap();
+        assert!(vaf >= plain_vaf, "{name}: VAF {vaf} below the plain fit's {plain_vaf}");
+        assert!(r["stiffness"][0][0].as_f64().unwrap() > 0.0);
+        // the text report prints the three parameters and VAF
+        let text = limpid(&["estimate", "linear", rec.to_str().unwrap()]).stdout;
+        for needle in ["Inertia M (kg m^2)", "Damping B (N m s/rad)", "Stiffness K (N m/rad)", "VAF %"] {
+            assert!(text.contains(needle), "{name}: no {needle:?} in\n{text}");
+        }
+    }
+}
+
+#[test]
+fn parquet_gives_the_csv_result() {
+    let csv = shared().join("examples/cartesian_slow/ex_cubic.csv");
+    let rec = limpid_io::read_recording(&csv).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let pq = dir.path().join("ex_cubic.parquet");
+    limpid_io::write_recording(&rec, &pq).unwrap();
+    let a = json(&["estimate", "linear", csv.to_str().unwrap(), "--json"]);
+    let b = json(&["estimate", "linear", pq.to_str().unwrap(), "--json"]);
+    assert_eq!(a["stiffness"], b["stiffness"]);
+    assert_eq!(a["damping"], b["damping"]);
+}
+
+#[test]
+fn demo_recovers_all_six_start_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = limpid(&["demo", "--out", dir.path().to_str().unwrap()]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    for s in ["S1", "S2", "S3", "S4", "S5", "S6"] {
+        assert!(out.stdout.contains(s), "{s} missing:\n{}", out.stdout);
+    }
+    let points = read_json(&dir.path().join("demo.json"));
+    let points = points.as_array().unwrap();
+    assert_eq!(points.len(), 6);
+    for p in points {
+        let k = p["stiffness_error_percent"].as_f64().unwrap();
+        assert!(k < 3.0, "{}: stiffness error {k} %", p["start_point"]);
+        // the error is measured against the subject's own matrix
+        let e = rel_err(&mat(&p["estimate"]["stiffness"]), &mat(&p["true_stiffness"]));
+        assert!((100.0 * e - k).abs() < 1e-9);
+    }
+    assert!(dir.path().join("demo.csv").exists());
+}
