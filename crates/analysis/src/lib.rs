@@ -127,9 +127,39 @@ pub fn yaw_pitch_roll(r: &Matrix3<f64>) -> (f64, f64, f64) {
 
 /// R = Rz(yaw) Ry(pitch) Rx(roll), angles in rad.
 pub fn rotation_from_ypr(yaw: f64, pitch: f64, roll: f64) -> Matrix3<f64> {
-    let rz = Matrix3::new(yaw.cos(), -yaw.sin(), 0.0, yaw.sin(), yaw.cos(), 0.0, 0.0, 0.0, 1.0);
-    let ry = Matrix3::new(pitch.cos(), 0.0, pitch.sin(), 0.0, 1.0, 0.0, -pitch.sin(), 0.0, pitch.cos());
-    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, roll.cos(), -roll.sin(), 0.0, roll.sin(), roll.cos());
+    let rz = Matrix3::new(
+        yaw.cos(),
+        -yaw.sin(),
+        0.0,
+        yaw.sin(),
+        yaw.cos(),
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+    );
+    let ry = Matrix3::new(
+        pitch.cos(),
+        0.0,
+        pitch.sin(),
+        0.0,
+        1.0,
+        0.0,
+        -pitch.sin(),
+        0.0,
+        pitch.cos(),
+    );
+    let rx = Matrix3::new(
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        roll.cos(),
+        -roll.sin(),
+        0.0,
+        roll.sin(),
+        roll.cos(),
+    );
     rz * ry * rx
 }
 
@@ -190,10 +220,15 @@ mod tests {
         assert_eq!(symmetric(&m), vec![vec![10.0, 2.0], vec![2.0, 5.0]]);
         assert_eq!(antisymmetric(&m), vec![vec![0.0, 1.0], vec![-1.0, 0.0]]);
         let t = table_ii(&m);
-        assert_eq!((t.max_symmetric, t.min_symmetric, t.max_antisymmetric), (10.0, 2.0, 1.0));
+        assert_eq!(
+            (t.max_symmetric, t.min_symmetric, t.max_antisymmetric),
+            (10.0, 2.0, 1.0)
+        );
         let c = criteria(&m);
         assert!(c.positive_definite);
-        assert!((c.symmetry_ratio - (2.0f64).sqrt() / (100.0f64 + 8.0 + 25.0).sqrt()).abs() < 1e-12);
+        assert!(
+            (c.symmetry_ratio - (2.0f64).sqrt() / (100.0f64 + 8.0 + 25.0).sqrt()).abs() < 1e-12
+        );
     }
 
     #[test]

@@ -3,7 +3,10 @@
 
 use serde::Serialize;
 
-use crate::{antisymmetric, criteria, ellipsoid, symmetric, table_ii, Ellipsoid, Mat, MatrixCriteria, TableII};
+use crate::{
+    antisymmetric, criteria, ellipsoid, symmetric, table_ii, Ellipsoid, Mat, MatrixCriteria,
+    TableII,
+};
 use limpid_ident::linear::{units, FitQuality, Identifiable, LinearEstimate, StandardErrors};
 use limpid_ident::Prepared;
 

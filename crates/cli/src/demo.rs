@@ -58,7 +58,9 @@ pub struct DemoPoint {
 }
 
 fn rows(m: &Matrix3<f64>) -> Vec<Vec<f64>> {
-    (0..3).map(|i| (0..3).map(|j| m[(i, j)]).collect()).collect()
+    (0..3)
+        .map(|i| (0..3).map(|j| m[(i, j)]).collect())
+        .collect()
 }
 
 fn rel_err(est: &[Vec<f64>], truth: &Matrix3<f64>) -> f64 {
@@ -120,7 +122,8 @@ pub fn run(args: DemoArgs) -> CliResult {
     std::fs::write(&json_path, serde_json::to_string_pretty(&points)?)
         .map_err(|e| format!("{}: {e}", json_path.display()))?;
     let csv_path = args.out.join("demo.csv");
-    std::fs::write(&csv_path, demo_csv(&points)).map_err(|e| format!("{}: {e}", csv_path.display()))?;
+    std::fs::write(&csv_path, demo_csv(&points))
+        .map_err(|e| format!("{}: {e}", csv_path.display()))?;
 
     if args.json {
         println!("{}", serde_json::to_string_pretty(&points)?);
@@ -134,26 +137,60 @@ pub fn run(args: DemoArgs) -> CliResult {
         protocol.motion_s,
         protocol.sample_rate
     );
-    println!("sensor noise: per-trial force offset 3 N, drift 0.05 N, white 0.1 N, position 20 um\n");
-    println!("{:<6}{:<10}{:>30}{:>30}{:>10}{:>10}  inertia", "point", "", "Kxx Kyy Kzz (N/m)", "Bxx Byy Bzz (N s/m)", "K err %", "B err %");
+    println!(
+        "sensor noise: per-trial force offset 3 N, drift 0.05 N, white 0.1 N, position 20 um\n"
+    );
+    println!(
+        "{:<6}{:<10}{:>30}{:>30}{:>10}{:>10}  inertia",
+        "point", "", "Kxx Kyy Kzz (N/m)", "Bxx Byy Bzz (N s/m)", "K err %", "B err %"
+    );
     for d in &points {
-        let diag = |m: &Vec<Vec<f64>>| format!("{:>9} {:>9} {:>9}", num(m[0][0]), num(m[1][1]), num(m[2][2]));
+        let diag = |m: &Vec<Vec<f64>>| {
+            format!(
+                "{:>9} {:>9} {:>9}",
+                num(m[0][0]),
+                num(m[1][1]),
+                num(m[2][2])
+            )
+        };
         let e = &d.estimate;
         let inertia = if e.criteria.identifiable.inertia {
             format!("identified, error {:.1} %", d.inertia_error_percent)
         } else {
             "not identifiable (too slow)".to_string()
         };
-        println!("{:<6}{:<10}{:>30}{:>30}", d.start_point, "true", diag(&d.true_stiffness), diag(&d.true_damping));
+        println!(
+            "{:<6}{:<10}{:>30}{:>30}",
+            d.start_point,
+            "true",
+            diag(&d.true_stiffness),
+            diag(&d.true_damping)
+        );
         println!(
             "{:<6}{:<10}{:>30}{:>30}{:>10.2}{:>10.1}  {}",
-            "", "estimated", diag(&e.stiffness), diag(&e.damping), d.stiffness_error_percent, d.damping_error_percent, inertia
+            "",
+            "estimated",
+            diag(&e.stiffness),
+            diag(&e.damping),
+            d.stiffness_error_percent,
+            d.damping_error_percent,
+            inertia
         );
     }
-    let worst_k = points.iter().map(|d| d.stiffness_error_percent).fold(0.0, f64::max);
-    let worst_b = points.iter().map(|d| d.damping_error_percent).fold(0.0, f64::max);
+    let worst_k = points
+        .iter()
+        .map(|d| d.stiffness_error_percent)
+        .fold(0.0, f64::max);
+    let worst_b = points
+        .iter()
+        .map(|d| d.damping_error_percent)
+        .fold(0.0, f64::max);
     println!("\nworst stiffness error {worst_k:.2} %, worst damping error {worst_b:.1} % (relative Frobenius norm)");
-    println!("results: {} and {}", json_path.display(), csv_path.display());
+    println!(
+        "results: {} and {}",
+        json_path.display(),
+        csv_path.display()
+    );
     Ok(())
 }
 
@@ -162,14 +199,40 @@ fn demo_csv(points: &[DemoPoint]) -> String {
     for d in points {
         let e = &d.estimate;
         for (kind, t, m, err, ok) in [
-            ("stiffness", &d.true_stiffness, &e.stiffness, d.stiffness_error_percent, e.criteria.identifiable.stiffness),
-            ("damping", &d.true_damping, &e.damping, d.damping_error_percent, e.criteria.identifiable.damping),
-            ("inertia", &d.true_inertia, &e.inertia, d.inertia_error_percent, e.criteria.identifiable.inertia),
+            (
+                "stiffness",
+                &d.true_stiffness,
+                &e.stiffness,
+                d.stiffness_error_percent,
+                e.criteria.identifiable.stiffness,
+            ),
+            (
+                "damping",
+                &d.true_damping,
+                &e.damping,
+                d.damping_error_percent,
+                e.criteria.identifiable.damping,
+            ),
+            (
+                "inertia",
+                &d.true_inertia,
+                &e.inertia,
+                d.inertia_error_percent,
+                e.criteria.identifiable.inertia,
+            ),
         ] {
             s.push_str(&format!(
                 "{},{},{},{},{kind},{},{},{},{},{},{},{err:.4},{ok}\n",
-                d.start_point, d.position[0], d.position[1], d.position[2],
-                t[0][0], t[1][1], t[2][2], m[0][0], m[1][1], m[2][2]
+                d.start_point,
+                d.position[0],
+                d.position[1],
+                d.position[2],
+                t[0][0],
+                t[1][1],
+                t[2][2],
+                m[0][0],
+                m[1][1],
+                m[2][2]
             ));
         }
     }

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand, ValueEnum};
 use limpid_analysis::report::linear_result;
 use limpid_core::FrameTransform;
-use limpid_ident::{fit_linear, prepare, Derivative, LinearParams, Offsets, PrepareParams, Windowing};
+use limpid_ident::{
+    fit_linear, prepare, Derivative, LinearParams, Offsets, PrepareParams, Windowing,
+};
 
 use crate::{table, CliResult};
 
@@ -80,7 +82,12 @@ pub struct LinearArgs {
     #[arg(long, value_enum, default_value_t = FrameArg::Identity)]
     pub frame: FrameArg,
     /// General transform: r11,r12,...,r33,tx,ty,tz (applied after --frame).
-    #[arg(long, value_delimiter = ',', num_args = 12, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        value_name = "R11,..,R33,TX,TY,TZ"
+    )]
     pub transform: Option<Vec<f64>>,
     /// The force columns hold the hand's force on the sensor: negate them.
     #[arg(long)]

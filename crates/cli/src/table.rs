@@ -60,14 +60,42 @@ pub fn linear_text(r: &LinearResult) -> String {
     );
     out.push('\n');
     let ident = &r.criteria.identifiable;
-    let flag = |ok: bool| if ok { "" } else { "   [NOT IDENTIFIABLE: see warnings]" };
+    let flag = |ok: bool| {
+        if ok {
+            ""
+        } else {
+            "   [NOT IDENTIFIABLE: see warnings]"
+        }
+    };
     let [mu, bu, ku] = &p.units;
-    matrix_block(&mut out, &format!("Stiffness K ({ku}){}", flag(ident.stiffness)), &r.stiffness, &r.standard_errors.stiffness, coords);
-    matrix_block(&mut out, &format!("Damping B ({bu}){}", flag(ident.damping)), &r.damping, &r.standard_errors.damping, coords);
-    matrix_block(&mut out, &format!("Inertia M ({mu}){}", flag(ident.inertia)), &r.inertia, &r.standard_errors.inertia, coords);
+    matrix_block(
+        &mut out,
+        &format!("Stiffness K ({ku}){}", flag(ident.stiffness)),
+        &r.stiffness,
+        &r.standard_errors.stiffness,
+        coords,
+    );
+    matrix_block(
+        &mut out,
+        &format!("Damping B ({bu}){}", flag(ident.damping)),
+        &r.damping,
+        &r.standard_errors.damping,
+        coords,
+    );
+    matrix_block(
+        &mut out,
+        &format!("Inertia M ({mu}){}", flag(ident.inertia)),
+        &r.inertia,
+        &r.standard_errors.inertia,
+        coords,
+    );
     match &r.equilibrium {
         Some(eq) => {
-            let _ = writeln!(out, "Equilibrium x_eq: {}", eq.iter().map(|v| num(*v)).collect::<Vec<_>>().join(", "));
+            let _ = writeln!(
+                out,
+                "Equilibrium x_eq: {}",
+                eq.iter().map(|v| num(*v)).collect::<Vec<_>>().join(", ")
+            );
         }
         None => {
             let _ = writeln!(out, "Equilibrium x_eq: not estimated (see warnings)");
@@ -75,9 +103,16 @@ pub fn linear_text(r: &LinearResult) -> String {
     }
     out.push('\n');
     if coords.len() >= 2 {
-        let _ = writeln!(out, "Symmetric parts (seed 000 Table I layout): K(s) | B(s) | M(s)");
+        let _ = writeln!(
+            out,
+            "Symmetric parts (seed 000 Table I layout): K(s) | B(s) | M(s)"
+        );
         for i in 0..coords.len() {
-            let row = |m: &Mat| m[i].iter().map(|v| format!("{:>9}", num(*v))).collect::<String>();
+            let row = |m: &Mat| {
+                m[i].iter()
+                    .map(|v| format!("{:>9}", num(*v)))
+                    .collect::<String>()
+            };
             let _ = writeln!(
                 out,
                 "  {:<4}{}  |{}  |{}",
@@ -91,17 +126,35 @@ pub fn linear_text(r: &LinearResult) -> String {
         let _ = writeln!(
             out,
             "Table II: K max/min/maxA {} / {} / {} | B {} / {} / {} | M {} / {} / {}",
-            num(t.stiffness.max_symmetric), num(t.stiffness.min_symmetric), num(t.stiffness.max_antisymmetric),
-            num(t.damping.max_symmetric), num(t.damping.min_symmetric), num(t.damping.max_antisymmetric),
-            num(t.inertia.max_symmetric), num(t.inertia.min_symmetric), num(t.inertia.max_antisymmetric),
+            num(t.stiffness.max_symmetric),
+            num(t.stiffness.min_symmetric),
+            num(t.stiffness.max_antisymmetric),
+            num(t.damping.max_symmetric),
+            num(t.damping.min_symmetric),
+            num(t.damping.max_antisymmetric),
+            num(t.inertia.max_symmetric),
+            num(t.inertia.min_symmetric),
+            num(t.inertia.max_antisymmetric),
         );
         if let Some(e) = &r.ellipsoids.stiffness {
             let _ = writeln!(
                 out,
                 "Stiffness ellipsoid: principal stiffnesses {} {ku}; orientation {} deg ({})",
-                e.eigenvalues.iter().map(|v| num(*v)).collect::<Vec<_>>().join(", "),
-                e.angles_deg.iter().map(|v| format!("{v:.1}")).collect::<Vec<_>>().join(", "),
-                if e.angles_deg.len() == 3 { "yaw, pitch, roll" } else { "major axis from the first coordinate" }
+                e.eigenvalues
+                    .iter()
+                    .map(|v| num(*v))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                e.angles_deg
+                    .iter()
+                    .map(|v| format!("{v:.1}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if e.angles_deg.len() == 3 {
+                    "yaw, pitch, roll"
+                } else {
+                    "major axis from the first coordinate"
+                }
             );
         }
         out.push('\n');
@@ -115,7 +168,12 @@ pub fn linear_text(r: &LinearResult) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let _ = writeln!(out, "  fit: r {}; VAF % {}", per_axis(&r.fit.r, 3), per_axis(&r.fit.vaf, 1));
+    let _ = writeln!(
+        out,
+        "  fit: r {}; VAF % {}",
+        per_axis(&r.fit.r, 3),
+        per_axis(&r.fit.vaf, 1)
+    );
     let m = &r.criteria.matrices;
     let _ = writeln!(
         out,
@@ -126,9 +184,16 @@ pub fn linear_text(r: &LinearResult) -> String {
         m.stiffness.symmetry_ratio,
         yes(m.damping.positive_definite)
     );
-    let _ = writeln!(out, "  standard errors: {}", r.criteria.standard_error_method);
+    let _ = writeln!(
+        out,
+        "  standard errors: {}",
+        r.criteria.standard_error_method
+    );
     if r.warnings.is_empty() {
-        let _ = writeln!(out, "  no warnings: every matrix is identified from this data");
+        let _ = writeln!(
+            out,
+            "  no warnings: every matrix is identified from this data"
+        );
     }
     for w in &r.warnings {
         let _ = writeln!(out, "warning: {w}");

@@ -17,11 +17,26 @@ fn cartesian_slow_within_3_percent_stiffness_15_percent_damping() {
         assert!(eb < 0.15, "{case}: damping error {eb}");
         // seed 000's slow perturbations cannot identify inertia: it must say so
         assert_eq!(r["criteria"]["identifiable"]["inertia"], false, "{case}");
-        assert!(r["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("inertia is not identifiable")
-            || w.as_str().unwrap().contains("acceleration regressors are dominated by position noise")));
+        assert!(r["warnings"].as_array().unwrap().iter().any(|w| w
+            .as_str()
+            .unwrap()
+            .contains("inertia is not identifiable")
+            || w.as_str()
+                .unwrap()
+                .contains("acceleration regressors are dominated by position noise")));
         // the equilibrium is the start point (truth) to within 0.5 mm
-        let eq: Vec<f64> = r["equilibrium"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-        let te: Vec<f64> = truth["equilibrium"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let eq: Vec<f64> = r["equilibrium"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let te: Vec<f64> = truth["equilibrium"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
         for (a, b) in eq.iter().zip(&te) {
             assert!((a - b).abs() < 5e-4, "{case}: equilibrium {eq:?} vs {te:?}");
         }
@@ -36,7 +51,14 @@ fn cocontraction_levels_one_at_a_time() {
         let rec = dir.join(format!("{case}.csv"));
         for level in truth["levels"].as_array().unwrap() {
             let l = level["level"].as_f64().unwrap().to_string();
-            let r = json(&["estimate", "linear", rec.to_str().unwrap(), "--level", &l, "--json"]);
+            let r = json(&[
+                "estimate",
+                "linear",
+                rec.to_str().unwrap(),
+                "--level",
+                &l,
+                "--json",
+            ]);
             let ek = rel_err(&mat(&r["stiffness"]), &mat(&level["stiffness"]));
             let eb = rel_err(&mat(&r["damping"]), &mat(&truth["damping"]));
             let em = rel_err(&mat(&r["inertia"]), &mat(&truth["inertia"]));
@@ -51,19 +73,33 @@ fn cocontraction_levels_one_at_a_time() {
 
 #[test]
 fn real_ankle_inertia_in_physiological_range_and_vaf_at_least_plain_fit() {
-    let plain = read_json(&std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/ankle_plain_fit.json"));
+    let plain = read_json(
+        &std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/ankle_plain_fit.json"),
+    );
     for name in ["df", "df2", "df3", "pf", "pf2"] {
         let rec = shared().join(format!("real/reklab_ankle/{name}.csv"));
         let r = json(&["estimate", "linear", rec.to_str().unwrap(), "--json"]);
         let inertia = r["inertia"][0][0].as_f64().unwrap();
-        assert!((0.01..=0.025).contains(&inertia), "{name}: inertia {inertia}");
+        assert!(
+            (0.01..=0.025).contains(&inertia),
+            "{name}: inertia {inertia}"
+        );
         let vaf = r["fit"]["vaf"][0].as_f64().unwrap();
         let plain_vaf = plain[name]["vaf"].as_f64().unwrap();
-        assert!(vaf >= plain_vaf, "{name}: VAF {vaf} below the plain fit's {plain_vaf}");
+        assert!(
+            vaf >= plain_vaf,
+            "{name}: VAF {vaf} below the plain fit's {plain_vaf}"
+        );
         assert!(r["stiffness"][0][0].as_f64().unwrap() > 0.0);
         // the text report prints the three parameters and VAF
         let text = limpid(&["estimate", "linear", rec.to_str().unwrap()]).stdout;
-        for needle in ["Inertia M (kg m^2)", "Damping B (N m s/rad)", "Stiffness K (N m/rad)", "VAF %"] {
+        for needle in [
+            "Inertia M (kg m^2)",
+            "Damping B (N m s/rad)",
+            "Stiffness K (N m/rad)",
+            "VAF %",
+        ] {
             assert!(text.contains(needle), "{name}: no {needle:?} in\n{text}");
         }
     }
@@ -97,8 +133,80 @@ fn demo_recovers_all_six_start_points() {
         let k = p["stiffness_error_percent"].as_f64().unwrap();
         assert!(k < 3.0, "{}: stiffness error {k} %", p["start_point"]);
         // the error is measured against the subject's own matrix
-        let e = rel_err(&mat(&p["estimate"]["stiffness"]), &mat(&p["true_stiffness"]));
+        let e = rel_err(
+            &mat(&p["estimate"]["stiffness"]),
+            &mat(&p["true_stiffness"]),
+        );
         assert!((100.0 * e - k).abs() < 1e-9);
     }
     assert!(dir.path().join("demo.csv").exists());
+}
+
+#[test]
+fn onsets_found_without_trial_column() {
+    let csv = shared().join("examples/cartesian_slow/ex_cubic.csv");
+    let rec = limpid_io::read_recording(&csv).unwrap();
+    let keep: Vec<(String, Vec<f64>)> = rec
+        .columns()
+        .filter(|(n, _)| *n != "trial")
+        .map(|(n, c)| (n.to_string(), c.to_vec()))
+        .collect();
+    let (names, cols): (Vec<String>, Vec<Vec<f64>>) = keep.into_iter().unzip();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("no_trial.parquet");
+    limpid_io::write_recording(
+        &limpid_core::Recording::new(&path, names, cols, 1).unwrap(),
+        &path,
+    )
+    .unwrap();
+    let truth = read_json(&shared().join("examples/cartesian_slow/ex_cubic.truth.json"));
+    let r = json(&[
+        "estimate",
+        "linear",
+        path.to_str().unwrap(),
+        "--window",
+        "onsets",
+        "--json",
+    ]);
+    assert_eq!(r["provenance"]["windows"], 16);
+    let ek = rel_err(&mat(&r["stiffness"]), &mat(&truth["stiffness"]));
+    assert!(ek < 0.03, "stiffness error {ek}");
+    // by default, without a trial column, the data is one continuous window
+    let c = json(&["estimate", "linear", path.to_str().unwrap(), "--json"]);
+    assert_eq!(c["provenance"]["continuous"], true);
+}
+
+#[test]
+fn seed000_frame_change_recovers_the_human_frame_matrices() {
+    let csv = shared().join("examples/cartesian_slow/ex_sinusoid.csv");
+    let mut rec = limpid_io::read_recording(&csv).unwrap();
+    // express the recording in the robot frame: p_R = R^T p_H
+    let r = limpid_core::FrameTransform::seed000_robot_to_human()
+        .rotation
+        .transpose();
+    let mut v: Vec<f64> = r.transpose().iter().copied().collect(); // row-major of r
+    v.extend([0.0, 0.0, 0.0]);
+    limpid_core::FrameTransform::from_values(&v)
+        .unwrap()
+        .apply(&mut rec)
+        .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let robot = dir.path().join("robot_frame.csv");
+    limpid_io::write_recording(&rec, &robot).unwrap();
+    let human = json(&["estimate", "linear", csv.to_str().unwrap(), "--json"]);
+    let back = json(&[
+        "estimate",
+        "linear",
+        robot.to_str().unwrap(),
+        "--frame",
+        "seed000",
+        "--json",
+    ]);
+    let e = rel_err(&mat(&back["stiffness"]), &mat(&human["stiffness"]));
+    assert!(e < 1e-9, "frame round trip changed K by {e}");
+    let raw = json(&["estimate", "linear", robot.to_str().unwrap(), "--json"]);
+    assert!(
+        rel_err(&mat(&raw["stiffness"]), &mat(&human["stiffness"])) > 0.1,
+        "the robot frame differs"
+    );
 }

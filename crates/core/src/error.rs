@@ -27,7 +27,9 @@ pub enum Error {
     #[error("{path}: the file has a header row but no samples")]
     HeaderOnly { path: PathBuf },
     /// A column name appears twice in the header.
-    #[error("{path}: row 1, column {column}: duplicate column name (columns {first} and {second})")]
+    #[error(
+        "{path}: row 1, column {column}: duplicate column name (columns {first} and {second})"
+    )]
     DuplicateColumn {
         path: PathBuf,
         column: String,

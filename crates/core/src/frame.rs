@@ -43,7 +43,10 @@ impl FrameTransform {
         if v.len() != 12 {
             return Err(Error::invalid(
                 "transform",
-                format!("expected 12 numbers (r11..r33, tx, ty, tz), found {}", v.len()),
+                format!(
+                    "expected 12 numbers (r11..r33, tx, ty, tz), found {}",
+                    v.len()
+                ),
             ));
         }
         let rotation = Matrix3::from_row_slice(&v[..9]);

@@ -71,15 +71,16 @@ impl Recording {
                 });
             }
         }
-        let time_index = names
-            .iter()
-            .position(|n| n == "t")
-            .ok_or_else(|| Error::MissingColumn {
-                path: path.clone(),
-                column: "t".into(),
-                why: "sample time in s".into(),
-                found: names.join(","),
-            })?;
+        let time_index =
+            names
+                .iter()
+                .position(|n| n == "t")
+                .ok_or_else(|| Error::MissingColumn {
+                    path: path.clone(),
+                    column: "t".into(),
+                    why: "sample time in s".into(),
+                    found: names.join(","),
+                })?;
         let sample_rate = check_time(&path, &columns[time_index], first_row)?;
         Ok(Recording {
             path,
@@ -187,9 +188,7 @@ fn check_time(path: &Path, t: &[f64], first_row: usize) -> Result<f64> {
     }
     let mut dt: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
     let mid = dt.len() / 2;
-    let median = *dt
-        .select_nth_unstable_by(mid, |a, b| a.total_cmp(b))
-        .1;
+    let median = *dt.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
     for i in 1..t.len() {
         let d = t[i] - t[i - 1];
         if (d - median).abs() > SAMPLING_TOLERANCE * median {
@@ -239,6 +238,10 @@ mod tests {
         let mut t: Vec<f64> = (0..10).map(|i| i as f64 * 0.001).collect();
         t[6] += 0.00002; // 2 % of an interval
         let e = rec(t).unwrap_err();
-        assert!(e.to_string().contains("row 8, column t: non-uniform sampling"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("row 8, column t: non-uniform sampling"),
+            "{e}"
+        );
     }
 }

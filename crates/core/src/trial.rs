@@ -57,8 +57,16 @@ pub fn change_floors(signals: &[&[f64]]) -> Vec<f64> {
     signals
         .iter()
         .map(|c| {
-            let (lo, hi) = c.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
-            if hi > lo { 1e-3 * (hi - lo) } else { 1e-12 }
+            let (lo, hi) = c
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                    (l.min(*v), h.max(*v))
+                });
+            if hi > lo {
+                1e-3 * (hi - lo)
+            } else {
+                1e-12
+            }
         })
         .collect()
 }
@@ -96,7 +104,12 @@ const ONSET_SIGMA: f64 = 6.0;
 ///
 /// `floors` are the smallest changes that count, one per signal, so that
 /// noiseless or smooth (drifting) signals still have a finite threshold.
-pub fn detect_onset(coords: &[&[f64]], range: Range<usize>, sigmas: &[f64], floors: &[f64]) -> Option<usize> {
+pub fn detect_onset(
+    coords: &[&[f64]],
+    range: Range<usize>,
+    sigmas: &[f64],
+    floors: &[f64],
+) -> Option<usize> {
     let n = range.len();
     if n < 4 {
         return None;
@@ -108,9 +121,11 @@ pub fn detect_onset(coords: &[&[f64]], range: Range<usize>, sigmas: &[f64], floo
         .collect();
     let over = |i: usize| {
         let m = ONSET_SIGMA;
-        coords.iter().zip(&base).zip(sigmas.iter().zip(floors)).any(|((c, b), (s, floor))| {
-            (c[i] - b).abs() > (m * s).max(*floor)
-        })
+        coords
+            .iter()
+            .zip(&base)
+            .zip(sigmas.iter().zip(floors))
+            .any(|((c, b), (s, floor))| (c[i] - b).abs() > (m * s).max(*floor))
     };
     let mut run = 0;
     for i in range.clone() {
@@ -128,72 +143,66 @@ pub fn detect_onset(coords: &[&[f64]], range: Range<usize>, sigmas: &[f64], floo
 
 /// Find perturbation windows in a recording without a `trial` column.
 ///
-/// A window starts with a still period at the home position (the position of
-/// the first still period) and ends where the motion stops again. Returns an
-/// empty list when fewer than two such windows exist (then the data is
-/// treated as continuous).
-pub fn detect_windows(coords: &[&[f64]], fs: f64, min_rest: usize) -> Vec<Window> {
+/// The home position is the mean of the first 10 samples. A sample is "at
+/// home" when every coordinate is within max(6σ, 2 % of its largest
+/// excursion) of home. A window runs from the start of one stretch of at
+/// least `min_rest` samples at home to the start of the next such stretch;
+/// its onset is found inside it by [`detect_onset`]. Returns an empty list when
+/// fewer than two windows are found.
+pub fn detect_windows(coords: &[&[f64]], min_rest: usize) -> Vec<Window> {
     let n = coords.first().map_or(0, |c| c.len());
-    let sigmas: Vec<f64> = coords.iter().map(|c| noise_sigma(c)).collect();
-    let lag = ((0.02 * fs).round() as usize).max(1);
-    if n <= lag + min_rest {
+    if n < 2 * min_rest.max(10) {
         return Vec::new();
     }
-    // still[i]: no coordinate moved more than the noise allows over the last `lag` samples
-    let still: Vec<bool> = (0..n)
-        .map(|i| {
-            i >= lag
-                && coords.iter().zip(&sigmas).all(|(c, s)| {
-                    (c[i] - c[i - lag]).abs() <= (ONSET_SIGMA * std::f64::consts::SQRT_2 * s).max(1e-12)
-                })
+    let sigmas: Vec<f64> = coords.iter().map(|c| noise_sigma(c)).collect();
+    let home: Vec<f64> = coords
+        .iter()
+        .map(|c| c[..10].iter().sum::<f64>() / 10.0)
+        .collect();
+    let tol: Vec<f64> = coords
+        .iter()
+        .zip(&home)
+        .zip(&sigmas)
+        .map(|((c, h), s)| {
+            let exc = c.iter().fold(0.0f64, |m, v| m.max((v - h).abs()));
+            (ONSET_SIGMA * s).max(0.02 * exc).max(1e-12)
         })
         .collect();
-    // runs of still samples
-    let mut runs: Vec<Range<usize>> = Vec::new();
+    let at_home = |i: usize| {
+        coords
+            .iter()
+            .zip(&home)
+            .zip(&tol)
+            .all(|((c, h), t)| (c[i] - h).abs() <= *t)
+    };
+    // starts of stretches at home that last at least min_rest samples
+    let mut starts = Vec::new();
     let mut i = 0;
     while i < n {
-        if still[i] {
+        if at_home(i) {
             let s = i;
-            while i < n && still[i] {
+            while i < n && at_home(i) {
                 i += 1;
             }
-            runs.push(s.saturating_sub(lag)..i);
+            if i - s >= min_rest && i < n {
+                starts.push(s);
+            }
         } else {
             i += 1;
         }
     }
-    let runs: Vec<Range<usize>> = runs.into_iter().filter(|r| r.len() >= min_rest).collect();
-    let Some(home_run) = runs.first() else {
-        return Vec::new();
-    };
-    let home: Vec<f64> = coords
-        .iter()
-        .map(|c| c[home_run.clone()].iter().sum::<f64>() / home_run.len() as f64)
-        .collect();
-    let max_exc: Vec<f64> = coords
-        .iter()
-        .zip(&home)
-        .map(|(c, h)| c.iter().fold(0.0f64, |m, v| m.max((v - h).abs())))
-        .collect();
-    let at_home = |r: &Range<usize>| {
-        coords.iter().zip(&home).zip(&max_exc).all(|((c, h), m)| {
-            let mean = c[r.clone()].iter().sum::<f64>() / r.len() as f64;
-            (mean - h).abs() <= 0.25 * m + 1e-12
-        })
-    };
+    let floors = change_floors(coords);
     let mut out = Vec::new();
-    for (k, r) in runs.iter().enumerate() {
-        if !at_home(r) || r.end >= n {
-            continue;
-        }
-        let end = runs.get(k + 1).map_or(n, |next| next.start + lag);
-        let window = r.start..end.min(n);
-        if let Some(onset) = detect_onset(coords, window.clone(), &sigmas, &change_floors(coords)) {
-            out.push(Window {
-                id: out.len() as i64 + 1,
-                range: window,
-                onset: Some(onset),
-            });
+    for (k, &s) in starts.iter().enumerate() {
+        let end = starts.get(k + 1).copied().unwrap_or(n);
+        if let Some(onset) = detect_onset(coords, s..end, &sigmas, &floors) {
+            if onset - s >= min_rest {
+                out.push(Window {
+                    id: out.len() as i64 + 1,
+                    range: s..end,
+                    onset: Some(onset),
+                });
+            }
         }
     }
     if out.len() < 2 {

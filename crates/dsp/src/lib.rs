@@ -42,7 +42,8 @@ impl LowPass {
                 format!("expected 1 to 20, found {order}"),
             ));
         }
-        let nyquist = fs_hz / 2.0;
+        // rounded for the message: 499.99999999999955 -> 500
+        let nyquist = (fs_hz / 2.0 * 1e9).round() / 1e9;
         if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
             return Err(Error::invalid(
                 "cut-off",
@@ -58,7 +59,10 @@ impl LowPass {
             Some(fs_hz),
         );
         let DigitalFilter::Sos(sos) = filter else {
-            return Err(Error::invalid("filter", "sci-rs returned no second-order sections"));
+            return Err(Error::invalid(
+                "filter",
+                "sci-rs returned no second-order sections",
+            ));
         };
         Ok(LowPass {
             sos: sos.sos,
@@ -107,10 +111,19 @@ impl LowPass {
     /// filtered signals only if the extensions obey it too. A mirror obeys it
     /// where the window ends at zero velocity (any acceleration), a point
     /// reflection where it ends at zero acceleration.
-    pub fn filtfilt_edges(&self, x: &[f64], left: Edge, right: Edge, extra: usize) -> Result<Vec<f64>> {
+    pub fn filtfilt_edges(
+        &self,
+        x: &[f64],
+        left: Edge,
+        right: Edge,
+        extra: usize,
+    ) -> Result<Vec<f64>> {
         let n = x.len();
         if n < 2 {
-            return Err(Error::invalid("signal length", format!("need at least 2 samples, found {n}")));
+            return Err(Error::invalid(
+                "signal length",
+                format!("need at least 2 samples, found {n}"),
+            ));
         }
         let e = extra.min(n - 1);
         let mut ext = Vec::with_capacity(n + 2 * e);
@@ -139,11 +152,20 @@ impl LowPass {
 }
 
 /// Savitzky-Golay filter (`scipy.signal.savgol_filter(x, window, polyorder, deriv, delta, mode='nearest')`).
-pub fn savgol(x: &[f64], window: usize, polyorder: usize, deriv: usize, delta: f64) -> Result<Vec<f64>> {
-    if window % 2 == 0 || window < polyorder + 2 {
+pub fn savgol(
+    x: &[f64],
+    window: usize,
+    polyorder: usize,
+    deriv: usize,
+    delta: f64,
+) -> Result<Vec<f64>> {
+    if window.is_multiple_of(2) || window < polyorder + 2 {
         return Err(Error::invalid(
             "Savitzky-Golay window",
-            format!("expected an odd length of at least polyorder + 2 = {}, found {window}", polyorder + 2),
+            format!(
+                "expected an odd length of at least polyorder + 2 = {}, found {window}",
+                polyorder + 2
+            ),
         ));
     }
     if deriv > polyorder {
@@ -155,7 +177,10 @@ pub fn savgol(x: &[f64], window: usize, polyorder: usize, deriv: usize, delta: f
     if x.len() < window {
         return Err(Error::invalid(
             "signal length",
-            format!("Savitzky-Golay window of {window} needs at least {window} samples, found {}", x.len()),
+            format!(
+                "Savitzky-Golay window of {window} needs at least {window} samples, found {}",
+                x.len()
+            ),
         ));
     }
     Ok(sci_rs::signal::filter::savgol_filter_dyn(
@@ -216,10 +241,12 @@ mod tests {
     #[test]
     fn central_differences_exact_on_quadratics() {
         let dt = 0.01;
-        let x: Vec<f64> = (0..50).map(|i| {
-            let t = i as f64 * dt;
-            3.0 + 2.0 * t - 4.0 * t * t
-        }).collect();
+        let x: Vec<f64> = (0..50)
+            .map(|i| {
+                let t = i as f64 * dt;
+                3.0 + 2.0 * t - 4.0 * t * t
+            })
+            .collect();
         let v = central_first(&x, dt);
         let a = central_second(&x, dt);
         for (i, (vi, ai)) in v.iter().zip(&a).enumerate() {
@@ -232,10 +259,12 @@ mod tests {
     #[test]
     fn savgol_exact_on_cubics_inside() {
         let dt = 0.002;
-        let x: Vec<f64> = (0..200).map(|i| {
-            let t = i as f64 * dt;
-            1.0 - t + 0.5 * t * t + 2.0 * t * t * t
-        }).collect();
+        let x: Vec<f64> = (0..200)
+            .map(|i| {
+                let t = i as f64 * dt;
+                1.0 - t + 0.5 * t * t + 2.0 * t * t * t
+            })
+            .collect();
         let v = savgol(&x, 11, 3, 1, dt).unwrap();
         let a = savgol(&x, 11, 3, 2, dt).unwrap();
         for i in 5..195 {

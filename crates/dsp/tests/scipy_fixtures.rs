@@ -9,12 +9,18 @@ fn fixture() -> Value {
 }
 
 fn vec_of(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 fn max_rel_err(a: &[f64], b: &[f64]) -> f64 {
     let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
 }
 
 #[test]
@@ -23,7 +29,12 @@ fn butterworth_sosfiltfilt_matches_scipy() {
     let x = vec_of(&f["x"]);
     for case in f["butter"].as_array().unwrap() {
         let order = case["order"].as_u64().unwrap() as usize;
-        let lp = LowPass::butterworth(order, case["cutoff"].as_f64().unwrap(), case["fs"].as_f64().unwrap()).unwrap();
+        let lp = LowPass::butterworth(
+            order,
+            case["cutoff"].as_f64().unwrap(),
+            case["fs"].as_f64().unwrap(),
+        )
+        .unwrap();
         let y = lp.filtfilt(&x).unwrap();
         let err = max_rel_err(&y, &vec_of(&case["filtfilt"]));
         assert!(err < 1e-10, "order {order}: max relative error {err:e}");
@@ -40,6 +51,9 @@ fn savitzky_golay_matches_scipy_nearest_mode() {
         let d = case["deriv"].as_u64().unwrap() as usize;
         let y = savgol(&x, w, p, d, case["delta"].as_f64().unwrap()).unwrap();
         let err = max_rel_err(&y, &vec_of(&case["y"]));
-        assert!(err < 1e-9, "window {w} poly {p} deriv {d}: max relative error {err:e}");
+        assert!(
+            err < 1e-9,
+            "window {w} poly {p} deriv {d}: max relative error {err:e}"
+        );
     }
 }

@@ -149,7 +149,8 @@ fn solve_triangle(
     let svd = r.svd(true, true);
     let sv = &svd.singular_values;
     let (smax, smin) = (sv.max(), sv.min());
-    if !(smin > smax * 1e-13) {
+    // NaN-safe: a NaN singular value also counts as rank-deficient
+    if smin.partial_cmp(&(smax * 1e-13)) != Some(std::cmp::Ordering::Greater) {
         return Err(format!(
             "the regressor is rank-deficient (condition number above 1e13): the motion does not excite all {p} parameters independently"
         ));
@@ -229,7 +230,11 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             if j == 3 * n && with_const {
                 1.0
             } else {
-                let c = if j < 3 * n { cols[j] } else { &data.force[j - p] };
+                let c = if j < 3 * n {
+                    cols[j]
+                } else {
+                    &data.force[j - p]
+                };
                 (c.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()
             }
         })
@@ -285,7 +290,6 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             noise[(ix, ia)] = c;
         }
     }
-    let block_rows: Vec<usize>;
     // blocks for the jackknife: the windows when there are enough, else contiguous pieces
     let blocks: Vec<std::ops::Range<usize>> = if data.windows.len() >= MIN_JACKKNIFE_BLOCKS {
         data.windows.iter().map(|w| w.samples.clone()).collect()
@@ -317,9 +321,10 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             acc.unwrap_or_else(|| DMatrix::zeros(q, q))
         })
         .collect();
-    block_rows = blocks.iter().map(|b| b.len()).collect();
+    let block_rows: Vec<usize> = blocks.iter().map(|b| b.len()).collect();
     let r_aug = merge(triangles.iter(), q);
-    let solved = solve_triangle(&r_aug, p, n, &scales, &noise, m as f64).map_err(|e| numerical(e.to_string()))?;
+    let solved = solve_triangle(&r_aug, p, n, &scales, &noise, m as f64)
+        .map_err(|e| numerical(e.to_string()))?;
     let theta = solved.theta.clone();
     let condition_number = solved.condition_number;
     let rss = solved.rss.clone();
@@ -360,18 +365,39 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         let replicates: Vec<DMatrix<f64>> = (0..g)
             .into_par_iter()
             .filter_map(|b| {
-                let others = triangles.iter().enumerate().filter(|(k, _)| *k != b).map(|(_, t)| t);
+                let others = triangles
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != b)
+                    .map(|(_, t)| t);
                 let rows = (m - block_rows[b]) as f64;
-                solve_triangle(&merge(others, q), p, n, &scales, &noise, rows).ok().map(|s| s.theta)
+                solve_triangle(&merge(others, q), p, n, &scales, &noise, rows)
+                    .ok()
+                    .map(|s| s.theta)
             })
             .collect();
         let g_ok = replicates.len() as f64;
-        let mean = replicates.iter().fold(DMatrix::<f64>::zeros(p, n), |acc, t| acc + t) / g_ok;
+        let mean = replicates
+            .iter()
+            .fold(DMatrix::<f64>::zeros(p, n), |acc, t| acc + t)
+            / g_ok;
         let var = replicates
             .iter()
-            .fold(DMatrix::<f64>::zeros(p, n), |acc, t| acc + (t - &mean).map(|v| v * v))
+            .fold(DMatrix::<f64>::zeros(p, n), |acc, t| {
+                acc + (t - &mean).map(|v| v * v)
+            })
             * ((g_ok - 1.0) / g_ok);
-        (var.map(f64::sqrt), format!("jackknife over {g} blocks ({})", if g == data.windows.len() { "trials" } else { "contiguous pieces" }))
+        (
+            var.map(f64::sqrt),
+            format!(
+                "jackknife over {g} blocks ({})",
+                if g == data.windows.len() {
+                    "trials"
+                } else {
+                    "contiguous pieces"
+                }
+            ),
+        )
     } else {
         let dof = (m - p - absorbed) as f64;
         let mut se = DMatrix::<f64>::zeros(p, n);
@@ -381,7 +407,10 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
                 se[(j, a)] = (sigma2 * solved.cov_unit[(j, j)]).sqrt() / scales[j];
             }
         }
-        (se, "analytic, residual variance inflated by its autocorrelation".to_string())
+        (
+            se,
+            "analytic, residual variance inflated by its autocorrelation".to_string(),
+        )
     };
     let block = |m_: &DMatrix<f64>, b: usize| -> Mat {
         (0..n)
@@ -425,7 +454,13 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         };
         let noisy: Vec<String> = (0..n)
             .filter(|&i| reliability[i][column] < MIN_RELIABILITY)
-            .map(|i| format!("{} {:.0} %", data.coordinates[i], 100.0 * reliability[i][column]))
+            .map(|i| {
+                format!(
+                    "{} {:.0} %",
+                    data.coordinates[i],
+                    100.0 * reliability[i][column]
+                )
+            })
             .collect();
         if !noisy.is_empty() {
             warnings.push(format!(
@@ -528,13 +563,25 @@ fn fit_stats(f: &[f64], fhat: &[f64]) -> (f64, f64, f64) {
         sum_e += e;
     }
     let var_e = see / m - (sum_e / m).powi(2);
-    let r = if sff > 0.0 && shh > 0.0 { sfh / (sff * shh).sqrt() } else { 0.0 };
-    let vaf = if sff > 0.0 { 100.0 * (1.0 - var_e / (sff / m)) } else { 0.0 };
+    let r = if sff > 0.0 && shh > 0.0 {
+        sfh / (sff * shh).sqrt()
+    } else {
+        0.0
+    };
+    let vaf = if sff > 0.0 {
+        100.0 * (1.0 - var_e / (sff / m))
+    } else {
+        0.0
+    };
     (r, vaf, (see / m).sqrt())
 }
 
 /// 1 + 2 Σ_k (1 - k/(L+1)) ρ_k of the residuals, lags not crossing window edges; at least 1.
-fn autocorrelation_inflation(e: &[f64], windows: &[crate::prepare::PreparedWindow], lags: usize) -> f64 {
+fn autocorrelation_inflation(
+    e: &[f64],
+    windows: &[crate::prepare::PreparedWindow],
+    lags: usize,
+) -> f64 {
     let var: f64 = e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64;
     if var == 0.0 {
         return 1.0;

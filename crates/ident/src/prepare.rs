@@ -21,7 +21,9 @@
 use std::ops::Range;
 use std::path::PathBuf;
 
-use limpid_core::trial::{change_floors, detect_onset, detect_windows, noise_sigma, windows_from_trial_column};
+use limpid_core::trial::{
+    change_floors, detect_onset, detect_windows, noise_sigma, windows_from_trial_column,
+};
 use limpid_core::{Error, FrameTransform, Recording, Result, Window};
 use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
 use serde::Serialize;
@@ -231,7 +233,9 @@ pub fn choose_coordinates(rec: &Recording) -> Result<(Vec<String>, Vec<String>)>
         return Err(Error::MissingColumn {
             path: rec.path().to_path_buf(),
             column: "x".into(),
-            why: "positions x,y[,z] with forces fx,fy[,fz], or joint angles q1.. with torques tau1..".into(),
+            why:
+                "positions x,y[,z] with forces fx,fy[,fz], or joint angles q1.. with torques tau1.."
+                    .into(),
             found: rec.names().join(","),
         });
     }
@@ -243,7 +247,7 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
     let fs = rec.sample_rate();
     let cutoff = params.cutoff_hz.unwrap_or_else(|| default_cutoff(fs));
     let lowpass = LowPass::butterworth(params.filter_order, cutoff, fs)?;
-    if !(params.min_rest_s > 0.0) {
+    if params.min_rest_s.is_nan() || params.min_rest_s <= 0.0 {
         return Err(Error::invalid("minimum rest", "must be positive"));
     }
     let mut rec_local;
@@ -255,15 +259,25 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         rec
     };
     let (coords, force_cols) = choose_coordinates(rec)?;
-    let pos: Vec<&[f64]> = coords.iter().map(|c| rec.column(c).unwrap_or(&[])).collect();
+    let pos: Vec<&[f64]> = coords
+        .iter()
+        .map(|c| rec.column(c).unwrap_or(&[]))
+        .collect();
     let sign = if params.negate_force { -1.0 } else { 1.0 };
-    let frc: Vec<&[f64]> = force_cols.iter().map(|c| rec.column(c).unwrap_or(&[])).collect();
+    let frc: Vec<&[f64]> = force_cols
+        .iter()
+        .map(|c| rec.column(c).unwrap_or(&[]))
+        .collect();
     let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
 
-    let mut windows = make_windows(rec, params, &pos, &frc, fs, min_rest)?;
+    let mut windows = make_windows(rec, params, &pos, &frc, min_rest)?;
     if let Some(level) = params.level {
         let levels = rec.require("level", "selecting windows by --level")?;
-        windows.retain(|w| levels[w.range.clone()].iter().all(|l| (l - level).abs() < 1e-9));
+        windows.retain(|w| {
+            levels[w.range.clone()]
+                .iter()
+                .all(|l| (l - level).abs() < 1e-9)
+        });
         if windows.is_empty() {
             let mut found: Vec<f64> = levels.to_vec();
             found.sort_by(f64::total_cmp);
@@ -309,7 +323,14 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
     out.regressor_noise_var = out
         .position_noise
         .iter()
-        .map(|s| [s * s * gains[0], s * s * gains[1], s * s * gains[2], s * s * gains[3]])
+        .map(|s| {
+            [
+                s * s * gains[0],
+                s * s * gains[1],
+                s * s * gains[2],
+                s * s * gains[3],
+            ]
+        })
         .collect();
     for w in &windows {
         let r = w.range.clone();
@@ -317,7 +338,12 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         if r.len() < need {
             return Err(Error::TooFewSamples {
                 path: rec.path().to_path_buf(),
-                what: format!("trial {} (rows {}-{})", w.id, rec.row_of(r.start), rec.row_of(r.end - 1)),
+                what: format!(
+                    "trial {} (rows {}-{}) with zero-phase filtering and differences",
+                    w.id,
+                    rec.row_of(r.start),
+                    rec.row_of(r.end - 1)
+                ),
                 needed: need,
                 found: r.len(),
             });
@@ -342,7 +368,10 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
                 0.0
             };
             let x: Vec<f64> = pos[k][r.clone()].iter().map(|p| p - reference).collect();
-            let f: Vec<f64> = frc[k][r.clone()].iter().map(|v| sign * v - offset).collect();
+            let f: Vec<f64> = frc[k][r.clone()]
+                .iter()
+                .map(|v| sign * v - offset)
+                .collect();
             let (xs, v, a, fs_) = match params.derivative {
                 Derivative::Central => {
                     let xs = lowpass.filtfilt_edges(&x, left, right, extra)?;
@@ -359,7 +388,12 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
             };
             let keep = trim..r.len() - trim;
             let demean = out.demeaned;
-            for (dst, src) in [(&mut out.disp[k], &xs), (&mut out.vel[k], &v), (&mut out.acc[k], &a), (&mut out.force[k], &fs_)] {
+            for (dst, src) in [
+                (&mut out.disp[k], &xs),
+                (&mut out.vel[k], &v),
+                (&mut out.acc[k], &a),
+                (&mut out.force[k], &fs_),
+            ] {
                 let part = &src[keep.clone()];
                 let m = if demean { mean(part) } else { 0.0 };
                 dst.extend(part.iter().map(|v| v - m));
@@ -400,7 +434,11 @@ fn edge_kind(pos: &[&[f64]], at: usize, window: Range<usize>, span: usize, dt: f
         }
         num / den / dt
     };
-    let s_end = if at == window.start { window.start } else { window.end - span };
+    let s_end = if at == window.start {
+        window.start
+    } else {
+        window.end - span
+    };
     let mut moving = false;
     for c in pos {
         let mut peak = 0.0f64;
@@ -432,7 +470,12 @@ pub fn savgol_window(fs: f64, cutoff: f64) -> usize {
 /// Sum of squared impulse responses of the displacement, velocity and
 /// acceleration operators: white noise of variance σ² in a position comes out
 /// with variance σ² × gain.
-fn noise_gains(derivative: Derivative, lowpass: &LowPass, sg_window: usize, dt: f64) -> Result<[f64; 4]> {
+fn noise_gains(
+    derivative: Derivative,
+    lowpass: &LowPass,
+    sg_window: usize,
+    dt: f64,
+) -> Result<[f64; 4]> {
     let n = 4001;
     let mut impulse = vec![0.0; n];
     impulse[n / 2] = 1.0;
@@ -463,7 +506,6 @@ fn make_windows(
     params: &PrepareParams,
     pos: &[&[f64]],
     frc: &[&[f64]],
-    fs: f64,
     min_rest: usize,
 ) -> Result<Vec<Window>> {
     let continuous = || {
@@ -489,7 +531,8 @@ fn make_windows(
             let floors = change_floors(&signals);
             let mut windows = windows_from_trial_column(rec, &params.trial_column)?;
             for w in &mut windows {
-                let onset = detect_onset(&signals, w.range.clone(), &sigmas, &floors).unwrap_or(w.range.end);
+                let onset = detect_onset(&signals, w.range.clone(), &sigmas, &floors)
+                    .unwrap_or(w.range.end);
                 let rest = onset - w.range.start;
                 if rest < min_rest {
                     return Err(Error::NoRestBeforeOnset {
@@ -507,7 +550,7 @@ fn make_windows(
             Ok(windows)
         }
         Windowing::Onsets | Windowing::Auto => {
-            let found = detect_windows(pos, fs, min_rest.max((0.05 * fs) as usize));
+            let found = detect_windows(pos, min_rest);
             if found.is_empty() {
                 return Err(Error::Format {
                     path: rec.path().to_path_buf(),

@@ -14,7 +14,13 @@ fn mat(v: &Value) -> Vec<Vec<f64>> {
     v.as_array()
         .unwrap()
         .iter()
-        .map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect())
+        .map(|r| {
+            r.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect()
+        })
         .collect()
 }
 
@@ -32,17 +38,28 @@ fn rel_err(est: &[Vec<f64>], truth: &[Vec<f64>]) -> f64 {
 #[test]
 fn cartesian_slow_examples_recover_stiffness_and_damping() {
     for case in ["ex_cubic", "ex_sinusoid"] {
-        let rec = limpid_io::read_recording(format!("{EXAMPLES}/cartesian_slow/{case}.csv")).unwrap();
+        let rec =
+            limpid_io::read_recording(format!("{EXAMPLES}/cartesian_slow/{case}.csv")).unwrap();
         let t = truth(&format!("{EXAMPLES}/cartesian_slow/{case}.truth.json"));
         for equilibrium in [true, false] {
             let prepared = prepare(&rec, &PrepareParams::default()).unwrap();
-            let est = fit_linear(&prepared, &LinearParams { equilibrium, ..Default::default() }).unwrap();
+            let est = fit_linear(
+                &prepared,
+                &LinearParams {
+                    equilibrium,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
             let ek = rel_err(&est.stiffness, &mat(&t["stiffness"]));
             let eb = rel_err(&est.damping, &mat(&t["damping"]));
             eprintln!("{case} eq={equilibrium}: K err {:.4}, B err {:.4}, M {:?}, vaf {:?}, warnings {:?}", ek, eb, est.inertia, est.fit.vaf, est.warnings);
             assert!(ek < 0.03, "{case}: stiffness error {ek}");
             assert!(eb < 0.15, "{case}: damping error {eb}");
-            assert!(!est.identifiable.inertia, "{case}: slow perturbations must flag inertia");
+            assert!(
+                !est.identifiable.inertia,
+                "{case}: slow perturbations must flag inertia"
+            );
         }
     }
 }

@@ -22,8 +22,16 @@ fn matrix(n: usize, diag: &[f64], off: &[f64], skew: f64) -> DMatrix<f64> {
     m
 }
 
+/// One signal per coordinate.
+type Signals = Vec<Vec<f64>>;
+
 /// Multi-sine motion per coordinate with exact derivatives.
-fn kinematics(n: usize, len: usize, fs: f64, phases: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>) {
+fn kinematics(
+    n: usize,
+    len: usize,
+    fs: f64,
+    phases: &[f64],
+) -> (Signals, Signals, Signals) {
     let freqs = [0.7, 1.9, 3.3, 5.1, 7.7];
     let mut x = vec![vec![0.0; len]; n];
     let mut v = x.clone();
@@ -44,13 +52,24 @@ fn kinematics(n: usize, len: usize, fs: f64, phases: &[f64]) -> (Vec<Vec<f64>>, 
     (x, v, a)
 }
 
-fn forces(m: &DMatrix<f64>, b: &DMatrix<f64>, k: &DMatrix<f64>, x: &[Vec<f64>], v: &[Vec<f64>], a: &[Vec<f64>]) -> Vec<Vec<f64>> {
+fn forces(
+    m: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    k: &DMatrix<f64>,
+    x: &[Vec<f64>],
+    v: &[Vec<f64>],
+    a: &[Vec<f64>],
+) -> Vec<Vec<f64>> {
     let n = x.len();
     let len = x[0].len();
     (0..n)
         .map(|r| {
             (0..len)
-                .map(|i| (0..n).map(|c| m[(r, c)] * a[c][i] + b[(r, c)] * v[c][i] + k[(r, c)] * x[c][i]).sum())
+                .map(|i| {
+                    (0..n)
+                        .map(|c| m[(r, c)] * a[c][i] + b[(r, c)] * v[c][i] + k[(r, c)] * x[c][i])
+                        .sum()
+                })
                 .collect()
         })
         .collect()
@@ -76,7 +95,7 @@ proptest! {
                                         kdiag in proptest::collection::vec(100.0f64..2000.0, 3),
                                         off in proptest::collection::vec(-1.0f64..1.0, 3),
                                         skew in -0.1f64..0.1,
-                                        phases in proptest::collection::vec(0.0f64..6.28, 15)) {
+                                        phases in proptest::collection::vec(0.0f64..std::f64::consts::TAU, 15)) {
         let fs = 500.0;
         let len = 4000;
         let (m, b, k) = (matrix(n, &mdiag, &off, skew), matrix(n, &bdiag, &off, skew), matrix(n, &kdiag, &off, skew));
@@ -117,7 +136,11 @@ fn end_to_end_noiseless_recording_recovers_to_1e_3() {
     let fs = 1000.0;
     let len = 20_000;
     let off = [0.4, -0.2, 0.3];
-    let (m, b, k) = (matrix(n, &[1.5, 1.2, 0.9], &off, 0.05), matrix(n, &[20.0, 15.0, 25.0], &off, 0.05), matrix(n, &[900.0, 400.0, 600.0], &off, 0.05));
+    let (m, b, k) = (
+        matrix(n, &[1.5, 1.2, 0.9], &off, 0.05),
+        matrix(n, &[20.0, 15.0, 25.0], &off, 0.05),
+        matrix(n, &[900.0, 400.0, 600.0], &off, 0.05),
+    );
     let phases: Vec<f64> = (0..15).map(|i| i as f64 * 0.77).collect();
     let (x, v, a) = kinematics(n, len, fs, &phases);
     let f = forces(&m, &b, &k, &x, &v, &a);
@@ -132,10 +155,16 @@ fn end_to_end_noiseless_recording_recovers_to_1e_3() {
         cols.push(f[c].clone());
     }
     let rec = limpid_core::Recording::new("synthetic.csv", names, cols, 2).unwrap();
-    let data = prepare(&rec, &PrepareParams { windowing: Windowing::Continuous, ..Default::default() }).unwrap();
+    let data = prepare(
+        &rec,
+        &PrepareParams {
+            windowing: Windowing::Continuous,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let est = fit_linear(&data, &LinearParams::default()).unwrap();
     assert!(rel(&est.stiffness, &k) < 1e-3, "K {:?}", est.stiffness);
     assert!(rel(&est.damping, &b) < 1e-3, "B {:?}", est.damping);
     assert!(rel(&est.inertia, &m) < 1e-3, "M {:?}", est.inertia);
 }
-

@@ -25,7 +25,10 @@ use parquet::schema::types::Type;
 /// True when the path names a Parquet file.
 pub fn is_parquet(path: &Path) -> bool {
     matches!(
-        path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(),
+        path.extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref(),
         Some("parquet" | "pq")
     )
 }
@@ -154,7 +157,9 @@ pub fn read_parquet(path: &Path) -> Result<Recording> {
                 ($r:expr, $t:ty) => {{
                     let mut r = $r;
                     let mut vals: Vec<$t> = Vec::with_capacity(rows);
-                    let (n_rec, _, _) = r.read_records(rows, Some(&mut defs), None, &mut vals).map_err(pq_err)?;
+                    let (n_rec, _, _) = r
+                        .read_records(rows, Some(&mut defs), None, &mut vals)
+                        .map_err(pq_err)?;
                     if vals.len() != n_rec {
                         let missing = defs.iter().position(|d| *d == 0).unwrap_or(0);
                         return Err(Error::NotANumber {

@@ -92,7 +92,12 @@ mod tests {
 
     #[test]
     fn derivatives_match_finite_differences() {
-        for p in [Profile::Cubic, Profile::Quintic, Profile::Trapezoid, Profile::Sinusoid] {
+        for p in [
+            Profile::Cubic,
+            Profile::Quintic,
+            Profile::Trapezoid,
+            Profile::Sinusoid,
+        ] {
             let d = 3.0;
             let h = 1e-6;
             for t in [0.13, 0.9, 1.7, 2.95] {

@@ -85,7 +85,11 @@ impl CentreOut {
             radius_m: 0.03,
             directions: crate::sphere::even_directions(16),
             rest_s: 0.2,
-            motion_s: if profile == Profile::Sinusoid { 6.0 } else { 3.0 },
+            motion_s: if profile == Profile::Sinusoid {
+                6.0
+            } else {
+                3.0
+            },
             sample_rate: 500.0,
         }
     }
@@ -108,7 +112,7 @@ pub fn simulate_centre_out(
     let per = protocol.samples_per_trial();
     let total = per * protocol.directions.len();
     let dt = 1.0 / protocol.sample_rate;
-    let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(total); 8];
+    let mut cols: Vec<Vec<f64>> = (0..8).map(|_| Vec::with_capacity(total)).collect();
     let drift = drift_signal(total, protocol.sample_rate, noise, &mut rng)?;
     let unit = Normal::new(0.0, 1.0).expect("unit normal is valid");
     let (m, b, k): (Matrix3<f64>, Matrix3<f64>, Matrix3<f64>) =
@@ -127,14 +131,14 @@ pub fn simulate_centre_out(
             cols[0].push(idx as f64 * dt);
             for a in 0..3 {
                 cols[1 + a].push(x[a] + noise.position_std_m * unit.sample(&mut rng));
-                cols[4 + a].push(
-                    f[a] + drift[a][idx] + noise.white_std_n * unit.sample(&mut rng),
-                );
+                cols[4 + a].push(f[a] + drift[a][idx] + noise.white_std_n * unit.sample(&mut rng));
             }
             cols[7].push((trial + 1) as f64);
         }
     }
-    let names = ["t", "x", "y", "z", "fx", "fy", "fz", "trial"].map(String::from).to_vec();
+    let names = ["t", "x", "y", "z", "fx", "fy", "fz", "trial"]
+        .map(String::from)
+        .to_vec();
     Recording::new(format!("virtual:{}", posture.name), names, cols, 2)
 }
 
@@ -148,7 +152,9 @@ fn drift_signal(n: usize, fs: f64, noise: &NoiseModel, rng: &mut StdRng) -> Resu
         .map(|_| {
             let w: Vec<f64> = (0..n).map(|_| rng.random::<f64>() - 0.5).collect();
             let y = lp.filtfilt(&w)?;
-            let sd = (y.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt().max(1e-300);
+            let sd = (y.iter().map(|v| v * v).sum::<f64>() / n as f64)
+                .sqrt()
+                .max(1e-300);
             Ok(y.iter().map(|v| v / sd * noise.drift_std_n).collect())
         })
         .collect()

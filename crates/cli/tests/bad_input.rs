@@ -1,0 +1,232 @@
+//! Every class of bad input: a one-line error naming file, row and column,
+//! exit status 2, never a panic (issue 2). Messages are pinned exactly.
+
+mod common;
+use common::*;
+
+use std::path::PathBuf;
+
+fn write(dir: &tempfile::TempDir, name: &str, content: &str) -> PathBuf {
+    let p = dir.path().join(name);
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+/// A valid 1-DoF recording body (t, q1, tau1) of `n` rows at 1 kHz.
+fn rows(n: usize) -> String {
+    let mut s = String::from("t,q1,tau1\n");
+    for i in 0..n {
+        let t = i as f64 * 0.001;
+        let q = 0.01 * (7.0 * t).sin() + 0.004 * (23.0 * t).sin();
+        s.push_str(&format!("{t:.3},{q},{}\n", 50.0 * q));
+    }
+    s
+}
+
+fn fails_with(path: &std::path::Path, extra: &[&str], expected: &str) {
+    let mut args = vec!["estimate", "linear", path.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let out = limpid(&args);
+    assert_eq!(
+        out.code, 2,
+        "exit code for {expected:?}; stderr {}",
+        out.stderr
+    );
+    let line = out.stderr.trim_end();
+    assert_eq!(line.lines().count(), 1, "one line: {line}");
+    let want = format!("limpid: {}: {expected}", path.display());
+    assert_eq!(line, want);
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn missing_required_column() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(&d, "r.csv", &rows(50).replace("tau1", "torque"));
+    fails_with(&p, &[], "missing required column tau1 (torque paired with joint angle q1); found columns: t,q1,torque");
+}
+
+#[test]
+fn non_numeric_cell() {
+    let d = tempfile::tempdir().unwrap();
+    let body = rows(50);
+    let mut lines: Vec<String> = body.lines().map(String::from).collect();
+    lines[3] = "0.002,n/a,0.1".into();
+    let p = write(&d, "r.csv", &(lines.join("\n") + "\n"));
+    fails_with(
+        &p,
+        &[],
+        "row 4, column q1: expected a number, found \"n/a\"",
+    );
+}
+
+#[test]
+fn nan_and_infinity() {
+    let d = tempfile::tempdir().unwrap();
+    for (cell, shown) in [("NaN", "NaN"), ("inf", "inf"), ("-Infinity", "-inf")] {
+        let body = rows(50);
+        let mut lines: Vec<String> = body.lines().map(String::from).collect();
+        lines[10] = format!("0.009,0.001,{cell}");
+        let p = write(&d, "r.csv", &(lines.join("\n") + "\n"));
+        fails_with(
+            &p,
+            &[],
+            &format!("row 11, column tau1: expected a finite number, found {shown}"),
+        );
+    }
+}
+
+#[test]
+fn empty_file_and_header_only() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(&d, "empty.csv", "");
+    fails_with(
+        &p,
+        &[],
+        "the file is empty; expected a header row and samples",
+    );
+    let p = write(&d, "header.csv", "t,q1,tau1\n");
+    fails_with(&p, &[], "the file has a header row but no samples");
+}
+
+#[test]
+fn duplicate_column() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(&d, "r.csv", "t,q1,tau1,q1\n0,0,0,0\n0.001,0,0,0\n");
+    fails_with(
+        &p,
+        &[],
+        "row 1, column q1: duplicate column name (columns 2 and 4)",
+    );
+}
+
+#[test]
+fn time_not_strictly_increasing() {
+    let d = tempfile::tempdir().unwrap();
+    let body = rows(50);
+    let mut lines: Vec<String> = body.lines().map(String::from).collect();
+    lines[20] = "0.018,0.001,0.05".into(); // after 0.018: stands still
+    let p = write(&d, "r.csv", &(lines.join("\n") + "\n"));
+    fails_with(
+        &p,
+        &[],
+        "row 21, column t: time must be strictly increasing, found 0.018 after 0.018",
+    );
+}
+
+#[test]
+fn non_uniform_sampling() {
+    let d = tempfile::tempdir().unwrap();
+    let body = rows(50);
+    let mut lines: Vec<String> = body.lines().map(String::from).collect();
+    lines[30] = "0.02905,0.001,0.05".into(); // 1.05 ms after the previous sample, 0.95 ms before the next
+    let p = write(&d, "r.csv", &(lines.join("\n") + "\n"));
+    fails_with(&p, &[], "row 31, column t: non-uniform sampling, interval 0.001050 s differs from the median 0.001000 s by more than 1 %");
+}
+
+#[test]
+fn ragged_row() {
+    let d = tempfile::tempdir().unwrap();
+    let body = rows(50);
+    let mut lines: Vec<String> = body.lines().map(String::from).collect();
+    lines[5] = "0.004,0.001".into();
+    let p = write(&d, "r.csv", &(lines.join("\n") + "\n"));
+    fails_with(&p, &[], "row 6: expected 3 cells like the header, found 2");
+}
+
+#[test]
+fn fewer_samples_than_the_model_needs() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(&d, "r.csv", &rows(12));
+    fails_with(&p, &["--cutoff", "100"], "12 samples usable for trial 1 (rows 2-13) with zero-phase filtering and differences, but at least 16 are needed");
+}
+
+#[test]
+fn trial_without_rest_before_onset() {
+    let d = tempfile::tempdir().unwrap();
+    let mut s = String::from("t,x,fx,trial\n");
+    let n = 400;
+    for i in 0..2 * n {
+        let t = i as f64 * 0.002;
+        let k = i % n;
+        // trial 1 rests 100 samples first; trial 2 moves from its first sample
+        let moving = if i < n { k >= 100 } else { true };
+        let x = if moving {
+            0.01 * ((k as f64 - if i < n { 100.0 } else { 0.0 }) * 0.01).sin()
+        } else {
+            0.0
+        };
+        s.push_str(&format!("{t},{x},{},{}\n", 300.0 * x, 1 + i / n));
+    }
+    let p = write(&d, "r.csv", &s);
+    fails_with(&p, &[], "row 402, column trial: trial 2 has no rest before its perturbation onset (found 0 rest samples, need 10); start each trial at rest");
+}
+
+#[test]
+fn unreadable_files() {
+    let d = tempfile::tempdir().unwrap();
+    let missing = d.path().join("absent.csv");
+    let out = limpid(&["estimate", "linear", missing.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert_eq!(
+        out.stderr.trim_end(),
+        format!(
+            "limpid: {}: No such file or directory (os error 2)",
+            missing.display()
+        )
+    );
+    let garbage = write(&d, "bad.parquet", "this is not parquet");
+    let out = limpid(&["estimate", "linear", garbage.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.starts_with(&format!(
+            "limpid: {}: not a readable Parquet file",
+            garbage.display()
+        )),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim_end().lines().count(), 1);
+}
+
+#[test]
+fn bad_parameters() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(&d, "r.csv", &rows(300));
+    let out = limpid(&["estimate", "linear", p.to_str().unwrap(), "--cutoff", "700"]);
+    assert_eq!(out.code, 2);
+    assert_eq!(
+        out.stderr.trim_end(),
+        "limpid: invalid cut-off: expected 0 < cut-off < 500 Hz (Nyquist), found 700 Hz"
+    );
+    let out = limpid(&["estimate", "linear", p.to_str().unwrap(), "--level", "0.5"]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("missing required column level"),
+        "{}",
+        out.stderr
+    );
+    let out = limpid(&[
+        "estimate",
+        "linear",
+        p.to_str().unwrap(),
+        "--transform",
+        "1,0,0,0,1,0,0,0,-1,0,0,0",
+    ]);
+    assert_eq!(out.code, 2);
+    assert_eq!(
+        out.stderr.trim_end(),
+        "limpid: invalid transform: the rotation part must be orthonormal with determinant +1"
+    );
+}
+
+#[test]
+fn motionless_coordinate_is_explained() {
+    let d = tempfile::tempdir().unwrap();
+    let mut s = String::from("t,q1,tau1\n");
+    for i in 0..500 {
+        s.push_str(&format!("{},0.1,2.0\n", i as f64 * 0.001));
+    }
+    let p = write(&d, "r.csv", &s);
+    fails_with(&p, &[], "regressor column acceleration q1 is zero in every sample: that coordinate never moves, so its parameters cannot be estimated");
+}
