@@ -1,1 +1,51 @@
-fn main() {}
+//! Criterion benchmark of `estimate linear` (issue 2): load from Parquet,
+//! prepare, estimate — on simulated 500 Hz 3-D recordings of 1 and 60 minutes
+//! (seed 000 cubic trials back to back, fixed seed).
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
+use limpid_lab::{seed000_subject1, simulate_centre_out, sphere, CentreOut, NoiseModel, Profile};
+
+/// A recording of `minutes` of 3.2 s cubic trials at 500 Hz.
+pub fn long_recording(minutes: f64) -> limpid_core::Recording {
+    let mut protocol = CentreOut::seed000(Profile::Cubic);
+    let trials = (minutes * 60.0 / (protocol.rest_s + protocol.motion_s)).ceil() as usize;
+    let dirs = sphere::even_directions(16);
+    protocol.directions = (0..trials).map(|i| dirs[i % dirs.len()]).collect();
+    simulate_centre_out(&seed000_subject1()[0], &protocol, &NoiseModel::default(), 42).expect("simulation")
+}
+
+fn bench(c: &mut Criterion) {
+    let dir = std::env::temp_dir().join("limpid-bench");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let mut group = c.benchmark_group("estimate_linear");
+    group.sample_size(10);
+    for minutes in [1.0, 60.0] {
+        let rec = long_recording(minutes);
+        let path = dir.join(format!("cubic_{minutes}min.parquet"));
+        limpid_io::write_recording(&rec, &path).expect("write parquet");
+        group.throughput(Throughput::Elements(rec.len() as u64));
+        let id = format!("{minutes}min_{}samples", rec.len());
+        group.bench_with_input(BenchmarkId::new("load_parquet", &id), &path, |b, p| {
+            b.iter(|| limpid_io::read_recording(p).expect("read"))
+        });
+        group.bench_with_input(BenchmarkId::new("prepare", &id), &rec, |b, r| {
+            b.iter(|| prepare(r, &PrepareParams::default()).expect("prepare"))
+        });
+        let prepared = prepare(&rec, &PrepareParams::default()).expect("prepare");
+        group.bench_with_input(BenchmarkId::new("fit", &id), &prepared, |b, p| {
+            b.iter(|| fit_linear(p, &LinearParams::default()).expect("fit"))
+        });
+        group.bench_with_input(BenchmarkId::new("whole_command", &id), &path, |b, p| {
+            b.iter(|| {
+                let r = limpid_io::read_recording(p).expect("read");
+                let d = prepare(&r, &PrepareParams::default()).expect("prepare");
+                fit_linear(&d, &LinearParams::default()).expect("fit")
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -88,8 +88,9 @@ pub struct LinearEstimate {
     pub identifiable: Identifiable,
     pub samples: usize,
     pub parameters: usize,
-    /// Autocorrelation inflation of the residual variance, per force component.
-    pub variance_inflation: Vec<f64>,
+    /// Autocorrelation inflation of the residual variance, per force
+    /// component, where the analytic standard errors were used (else null).
+    pub variance_inflation: Option<Vec<f64>>,
     /// Share of each regressor's variance that is signal, not propagated
     /// position noise (`[acceleration, velocity, displacement]` per
     /// coordinate). Below [`MIN_RELIABILITY`] the matching parameters are
@@ -119,6 +120,8 @@ pub const MIN_RELIABILITY: f64 = 0.8;
 pub const MIN_CORRECTABLE: f64 = 0.5;
 /// Fewest blocks for a jackknife standard error.
 const MIN_JACKKNIFE_BLOCKS: usize = 8;
+/// Most jackknife groups; more trials are grouped into consecutive runs.
+const MAX_JACKKNIFE_GROUPS: usize = 64;
 /// Contiguous pieces used as jackknife blocks when the trials are too few.
 const CONTIGUOUS_BLOCKS: usize = 20;
 
@@ -290,9 +293,14 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             noise[(ix, ia)] = c;
         }
     }
-    // blocks for the jackknife: the windows when there are enough, else contiguous pieces
+    // jackknife groups: the windows (contiguous runs of them when there are more
+    // than MAX_JACKKNIFE_GROUPS), else contiguous pieces of the data
     let blocks: Vec<std::ops::Range<usize>> = if data.windows.len() >= MIN_JACKKNIFE_BLOCKS {
-        data.windows.iter().map(|w| w.samples.clone()).collect()
+        let w = &data.windows;
+        let g = w.len().min(MAX_JACKKNIFE_GROUPS);
+        (0..g)
+            .map(|b| w[b * w.len() / g].samples.start..w[(b + 1) * w.len() / g - 1].samples.end)
+            .collect()
     } else {
         let g = CONTIGUOUS_BLOCKS.min(m / (4 * q)).max(1);
         (0..g).map(|b| b * m / g..(b + 1) * m / g).collect()
@@ -337,26 +345,33 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         rmse: Vec::with_capacity(n),
     };
     let mut inflation = Vec::with_capacity(n);
+    let mut predicted = vec![0.0; m];
+    let mut resid = vec![0.0; m];
     for a in 0..n {
         let coef: Vec<f64> = (0..p).map(|j| theta[(j, a)]).collect();
-        let predicted: Vec<f64> = (0..m)
-            .into_par_iter()
+        predicted
+            .par_iter_mut()
             .with_min_len(1 << 14)
-            .map(|i| {
+            .enumerate()
+            .for_each(|(i, out)| {
                 let mut s = if with_const { coef[3 * n] } else { 0.0 };
                 for j in 0..3 * n {
                     s += coef[j] * cols[j][i];
                 }
-                s
-            })
-            .collect();
+                *out = s;
+            });
         let f = forces[a];
         let (r_coef, vaf, rmse) = fit_stats(f, &predicted);
         fit.r.push(r_coef);
         fit.vaf.push(vaf);
         fit.rmse.push(rmse);
-        let resid: Vec<f64> = f.iter().zip(&predicted).map(|(y, yh)| y - yh).collect();
-        inflation.push(autocorrelation_inflation(&resid, &data.windows, lags));
+        for ((e, y), yh) in resid.iter_mut().zip(f).zip(&predicted) {
+            *e = y - yh;
+        }
+        if blocks.len() < MIN_JACKKNIFE_BLOCKS {
+            // only the analytic standard errors need it
+            inflation.push(autocorrelation_inflation(&resid, &data.windows, lags));
+        }
     }
     // standard errors: delete-one-block jackknife (robust to slow force drift, which
     // correlates residuals over whole trials), or the analytic ones when blocks are too few
@@ -387,17 +402,14 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
                 acc + (t - &mean).map(|v| v * v)
             })
             * ((g_ok - 1.0) / g_ok);
-        (
-            var.map(f64::sqrt),
-            format!(
-                "jackknife over {g} blocks ({})",
-                if g == data.windows.len() {
-                    "trials"
-                } else {
-                    "contiguous pieces"
-                }
-            ),
-        )
+        let unit = if g == data.windows.len() {
+            "trials"
+        } else if data.windows.len() >= MIN_JACKKNIFE_BLOCKS {
+            "groups of consecutive trials"
+        } else {
+            "contiguous pieces"
+        };
+        (var.map(f64::sqrt), format!("jackknife over {g} blocks ({unit})"))
     } else {
         let dof = (m - p - absorbed) as f64;
         let mut se = DMatrix::<f64>::zeros(p, n);
@@ -530,7 +542,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         identifiable,
         samples: m,
         parameters: p * n,
-        variance_inflation: inflation,
+        variance_inflation: (!inflation.is_empty()).then_some(inflation),
         regressor_reliability: reliability,
         standard_error_method: se_method,
         warnings,
