@@ -12,7 +12,13 @@ pub fn long_recording(minutes: f64) -> limpid_core::Recording {
     let trials = (minutes * 60.0 / (protocol.rest_s + protocol.motion_s)).ceil() as usize;
     let dirs = sphere::even_directions(16);
     protocol.directions = (0..trials).map(|i| dirs[i % dirs.len()]).collect();
-    simulate_centre_out(&seed000_subject1()[0], &protocol, &NoiseModel::default(), 42).expect("simulation")
+    simulate_centre_out(
+        &seed000_subject1()[0],
+        &protocol,
+        &NoiseModel::default(),
+        42,
+    )
+    .expect("simulation")
 }
 
 fn bench(c: &mut Criterion) {

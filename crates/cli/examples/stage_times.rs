@@ -12,6 +12,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t3 = Instant::now();
     let _ = limpid_analysis::report::linear_result(&est, &prepared);
     let t4 = Instant::now();
-    println!("load {:?} prepare {:?} fit {:?} analyse {:?}", t1 - t0, t2 - t1, t3 - t2, t4 - t3);
+    println!(
+        "load {:?} prepare {:?} fit {:?} analyse {:?}",
+        t1 - t0,
+        t2 - t1,
+        t3 - t2,
+        t4 - t3
+    );
     Ok(())
 }

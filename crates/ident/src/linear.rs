@@ -409,7 +409,10 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         } else {
             "contiguous pieces"
         };
-        (var.map(f64::sqrt), format!("jackknife over {g} blocks ({unit})"))
+        (
+            var.map(f64::sqrt),
+            format!("jackknife over {g} blocks ({unit})"),
+        )
     } else {
         let dof = (m - p - absorbed) as f64;
         let mut se = DMatrix::<f64>::zeros(p, n);

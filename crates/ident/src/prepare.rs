@@ -334,7 +334,12 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         .collect();
     let total: usize = windows.iter().map(|w| w.range.len()).sum();
     for k in 0..n {
-        for buf in [&mut out.disp[k], &mut out.vel[k], &mut out.acc[k], &mut out.force[k]] {
+        for buf in [
+            &mut out.disp[k],
+            &mut out.vel[k],
+            &mut out.acc[k],
+            &mut out.force[k],
+        ] {
             buf.reserve_exact(total);
         }
     }

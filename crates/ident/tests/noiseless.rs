@@ -26,12 +26,7 @@ fn matrix(n: usize, diag: &[f64], off: &[f64], skew: f64) -> DMatrix<f64> {
 type Signals = Vec<Vec<f64>>;
 
 /// Multi-sine motion per coordinate with exact derivatives.
-fn kinematics(
-    n: usize,
-    len: usize,
-    fs: f64,
-    phases: &[f64],
-) -> (Signals, Signals, Signals) {
+fn kinematics(n: usize, len: usize, fs: f64, phases: &[f64]) -> (Signals, Signals, Signals) {
     let freqs = [0.7, 1.9, 3.3, 5.1, 7.7];
     let mut x = vec![vec![0.0; len]; n];
     let mut v = x.clone();
