@@ -3,6 +3,8 @@
 use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
+use limpid_analysis::cocontraction::estimate_cocontraction;
+use limpid_analysis::emg::EmgParams;
 use limpid_analysis::report::linear_result;
 use limpid_core::FrameTransform;
 use limpid_ident::{
@@ -15,6 +17,8 @@ use crate::{table, CliResult};
 pub enum Method {
     /// Linear model M x'' + B x' + K (x - x_eq) = f by least squares (seeds 000, 001).
     Linear(LinearArgs),
+    /// Co-contraction index and impedance per level, compared with the lowest level (seed 001).
+    Cocontraction(CocontractionArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -53,13 +57,9 @@ pub enum FrameArg {
     Seed000,
 }
 
+/// Preparation flags shared by the estimators.
 #[derive(Args)]
-pub struct LinearArgs {
-    /// Recording (CSV or Parquet, FORMAT.md).
-    pub recording: PathBuf,
-    /// Fit without the equilibrium constant (the 9-column form P = F Y^+ of seed 001).
-    #[arg(long)]
-    pub no_equilibrium: bool,
+pub struct PrepareArgs {
     /// Low-pass cut-off in Hz (default: 30, at most 0.4 x sample rate).
     #[arg(long, value_name = "HZ")]
     pub cutoff: Option<f64>,
@@ -75,31 +75,54 @@ pub struct LinearArgs {
     /// How the recording is cut into windows.
     #[arg(long, value_enum, default_value_t = WindowArg::Auto)]
     pub window: WindowArg,
-    /// Use only trials of this condition level (the `level` column).
-    #[arg(long)]
-    pub level: Option<f64>,
     /// Frame change applied to x,y,z and fx,fy,fz.
     #[arg(long, value_enum, default_value_t = FrameArg::Identity)]
     pub frame: FrameArg,
     /// General transform: r11,r12,...,r33,tx,ty,tz (applied after --frame).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        allow_hyphen_values = true,
-        value_name = "R11,..,R33,TX,TY,TZ"
-    )]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "R11,..,R33,TX,TY,TZ")]
     pub transform: Option<Vec<f64>>,
     /// The force columns hold the hand's force on the sensor: negate them.
     #[arg(long)]
     pub negate_force: bool,
+}
+
+#[derive(Args)]
+pub struct LinearArgs {
+    /// Recording (CSV or Parquet, FORMAT.md).
+    pub recording: PathBuf,
+    #[command(flatten)]
+    pub prepare: PrepareArgs,
+    /// Fit without the equilibrium constant (the 9-column form P = F Y^+ of seed 001).
+    #[arg(long)]
+    pub no_equilibrium: bool,
+    /// Use only trials of this condition level (the `level` column).
+    #[arg(long)]
+    pub level: Option<f64>,
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
 }
 
-impl LinearArgs {
+#[derive(Args)]
+pub struct CocontractionArgs {
+    /// Recording with `level` and `emg_*` columns (seed 001).
+    pub recording: PathBuf,
+    /// Maximum voluntary co-contraction recording with the same EMG channels.
+    #[arg(long)]
+    pub mvc: PathBuf,
+    #[command(flatten)]
+    pub prepare: PrepareArgs,
+    /// Half-width of the band around the target level counted as "on target".
+    #[arg(long, default_value_t = 0.1)]
+    pub tolerance: f64,
+    /// Print one JSON object instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl PrepareArgs {
     /// Validated preparation settings.
-    pub fn prepare_params(&self) -> CliResult<PrepareParams> {
+    pub fn params(&self) -> CliResult<PrepareParams> {
         let mut transform = match self.frame {
             FrameArg::Identity => None,
             FrameArg::Seed000 => Some(FrameTransform::seed000_robot_to_human()),
@@ -133,7 +156,6 @@ impl LinearArgs {
             },
             negate_force: self.negate_force,
             transform,
-            level: self.level,
             ..PrepareParams::default()
         })
     }
@@ -142,7 +164,10 @@ impl LinearArgs {
 pub fn run(method: Method) -> CliResult {
     match method {
         Method::Linear(args) => {
-            let params = args.prepare_params()?;
+            let params = PrepareParams {
+                level: args.level,
+                ..args.prepare.params()?
+            };
             let rec = limpid_io::read_recording(&args.recording)?;
             let prepared = prepare(&rec, &params)?;
             let est = fit_linear(
@@ -157,6 +182,25 @@ pub fn run(method: Method) -> CliResult {
                 println!("{}", serde_json::to_string_pretty(&result)?);
             } else {
                 print!("{}", table::linear_text(&result));
+            }
+            Ok(())
+        }
+        Method::Cocontraction(args) => {
+            if !(args.tolerance > 0.0) {
+                return Err(limpid_core::Error::invalid("tolerance", format!("expected a positive band half-width, found {}", args.tolerance)).into());
+            }
+            let params = args.prepare.params()?;
+            let rec = limpid_io::read_recording(&args.recording)?;
+            let mvc = limpid_io::read_recording(&args.mvc)?;
+            let emg = EmgParams {
+                tolerance: args.tolerance,
+                ..EmgParams::default()
+            };
+            let result = estimate_cocontraction(&rec, &mvc, &params, &emg)?;
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&result)?);
+            } else {
+                print!("{}", table::cocontraction_text(&result));
             }
             Ok(())
         }

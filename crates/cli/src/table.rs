@@ -2,6 +2,7 @@
 
 use std::fmt::Write;
 
+use limpid_analysis::cocontraction::CocontractionResult;
 use limpid_analysis::report::LinearResult;
 use limpid_analysis::Mat;
 
@@ -207,4 +208,76 @@ fn yes(b: bool) -> &'static str {
     } else {
         "no"
     }
+}
+
+/// The readable report of `estimate cocontraction` (seed 001 Tables 1-5 for one recording).
+pub fn cocontraction_text(r: &CocontractionResult) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "limpid estimate cocontraction: {} (MVC {})", r.recording, r.mvc);
+    let _ = writeln!(out, "muscles: {}", r.muscles.join(", "));
+    out.push('\n');
+    let _ = writeln!(
+        out,
+        "{:>6} {:>16} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {}",
+        "level", "C (mean ± sd)", "on band", "Kxx", "Kyy", "Kzz", "K_maxA", "K1", "K2", "K3", "quality"
+    );
+    for l in &r.levels {
+        let k = &l.stiffness;
+        let n = k.len();
+        let get = |i: usize, j: usize| if i < n && j < n { num(k[i][j]) } else { "-".into() };
+        let principal: Vec<String> = match &l.ellipsoid {
+            Some(e) => e.eigenvalues.iter().map(|v| num(*v)).collect(),
+            None => vec![],
+        };
+        let p = |i: usize| principal.get(i).cloned().unwrap_or_else(|| "-".into());
+        let e = &l.estimate;
+        let quality = format!("VAF {}%", e.fit.vaf.iter().map(|v| format!("{v:.1}")).collect::<Vec<_>>().join("/"));
+        let _ = writeln!(
+            out,
+            "{:>6} {:>16} {:>7.0}% {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {}",
+            num(l.level),
+            format!("{:.3} ± {:.3}", l.cocontraction_index, l.cocontraction_sd),
+            100.0 * l.cocontraction_within_band,
+            get(0, 0),
+            get(1, 1),
+            get(2, 2),
+            num(e.table_ii.stiffness.max_antisymmetric),
+            p(0),
+            p(1),
+            p(2),
+            quality
+        );
+    }
+    if !r.comparisons.is_empty() {
+        out.push('\n');
+        let _ = writeln!(out, "Change against level {} (Fig. 6, Table 5): principal stiffness % | axis rotation deg", num(r.comparisons[0].reference_level));
+        for c in &r.comparisons {
+            let fmt = |v: &[f64], amb: &[bool]| {
+                v.iter()
+                    .zip(amb)
+                    .map(|(x, a)| format!("{x:+.1}{}", if *a { "?" } else { "" }))
+                    .collect::<Vec<_>>()
+                    .join(" / ")
+            };
+            let _ = writeln!(
+                out,
+                "  level {:>5}: primary/secondary/tertiary {} % | {} deg",
+                num(c.level),
+                fmt(&c.principal_change_percent, &c.ambiguous),
+                fmt(&c.rotation_deg, &c.ambiguous)
+            );
+        }
+        if r.comparisons.iter().any(|c| c.ambiguous.iter().any(|a| *a)) {
+            let _ = writeln!(out, "  ? = tied principal stiffnesses (within 5 %): that axis is not defined by the matrix");
+        }
+    }
+    for l in &r.levels {
+        for w in &l.estimate.warnings {
+            let _ = writeln!(out, "warning: level {}: {w}", num(l.level));
+        }
+    }
+    for w in &r.warnings {
+        let _ = writeln!(out, "warning: {w}");
+    }
+    out
 }
