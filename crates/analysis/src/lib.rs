@@ -14,6 +14,7 @@
 pub mod cocontraction;
 pub mod emg;
 pub mod report;
+pub mod study;
 
 use nalgebra::{DMatrix, Matrix3};
 use serde::Serialize;

@@ -4,6 +4,7 @@
 
 mod demo;
 mod estimate;
+mod study;
 mod table;
 
 use std::process::ExitCode;
@@ -27,6 +28,11 @@ enum Command {
     },
     /// Run seed 000's 3-D study on a built-in virtual subject and compare with the truth.
     Demo(demo::DemoArgs),
+    /// Whole co-contraction studies: tables across subjects and configurations (seed 001).
+    Study {
+        #[command(subcommand)]
+        command: study::StudyCommand,
+    },
 }
 
 fn main() -> ExitCode {
@@ -34,6 +40,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Estimate { method } => estimate::run(method),
         Command::Demo(args) => demo::run(args),
+        Command::Study { command } => study::run(command),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -4,6 +4,7 @@
 //! This first part covers seed 000's centre-out protocol (§II-B) on a
 //! linear subject; see each module for the seed and equation it implements.
 
+pub mod cocontraction;
 pub mod profile;
 pub mod simulate;
 pub mod sphere;

@@ -1,0 +1,348 @@
+//! Whole studies (seed 001 Tables 1-5): subjects x configurations x
+//! recordings listed in a TOML manifest, processed in parallel, averaged
+//! across subjects per configuration and level.
+//!
+//! Manifest (paths relative to the manifest's folder):
+//!
+//! ```toml
+//! [study]
+//! name = "virtual seed 001"   # optional
+//! tolerance = 0.1             # optional, band around the target level
+//!
+//! [[recording]]
+//! subject = "1"
+//! configuration = "4"
+//! file = "s1_c4.parquet"
+//! mvc = "s1_mvc.parquet"
+//! ```
+//!
+//! Tables 1-4: per configuration and level, the across-subject means of Kxx,
+//! Kyy, Kzz, K_maxA (largest antisymmetric element), K1, K2, K3 (principal
+//! stiffnesses). Table 5: per configuration, the mean rotation of the
+//! primary, secondary and tertiary axes from the lowest to the highest level
+//! (axes matched by direction, see [`crate::cocontraction`]), with the mean
+//! percent change of each principal stiffness (Fig. 6). A recording that fails
+//! is listed with its error and left out of the means.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::cocontraction::{compare, estimate_cocontraction, CocontractionResult};
+use crate::emg::EmgParams;
+use limpid_core::{Error, Result};
+use limpid_ident::PrepareParams;
+
+/// The manifest file.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    #[serde(default)]
+    pub study: StudyMeta,
+    #[serde(default)]
+    pub recording: Vec<Entry>,
+}
+
+/// Study-wide settings.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyMeta {
+    pub name: Option<String>,
+    pub tolerance: Option<f64>,
+}
+
+/// One recording of one subject in one configuration.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Entry {
+    pub subject: String,
+    pub configuration: String,
+    pub file: PathBuf,
+    pub mvc: PathBuf,
+}
+
+/// Read and check a manifest; relative paths are resolved against its folder.
+pub fn load_manifest(path: &Path) -> Result<Manifest> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut m: Manifest = toml::from_str(&text).map_err(|e| Error::Format {
+        path: path.to_path_buf(),
+        message: e.to_string().lines().next().unwrap_or("not a valid manifest").to_string(),
+    })?;
+    if m.recording.is_empty() {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: "no [[recording]] entry: nothing to process".into(),
+        });
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    for e in &mut m.recording {
+        e.file = base.join(&e.file);
+        e.mvc = base.join(&e.mvc);
+    }
+    Ok(m)
+}
+
+/// Tables 1-4 row: one configuration at one level.
+#[derive(Debug, Clone, Serialize)]
+pub struct LevelRow {
+    pub configuration: String,
+    pub level: f64,
+    pub subjects: usize,
+    pub cocontraction_index: f64,
+    pub kxx: f64,
+    pub kyy: f64,
+    pub kzz: f64,
+    pub k_max_a: f64,
+    pub k1: f64,
+    pub k2: f64,
+    pub k3: f64,
+}
+
+/// Table 5 row (and Fig. 6): highest vs lowest level for one configuration.
+#[derive(Debug, Clone, Serialize)]
+pub struct RotationRow {
+    pub configuration: String,
+    pub from_level: f64,
+    pub to_level: f64,
+    pub subjects: usize,
+    /// Mean rotation of primary, secondary, tertiary axes (deg).
+    pub rotation_deg: Vec<f64>,
+    /// Mean percent change of primary, secondary, tertiary stiffness.
+    pub principal_change_percent: Vec<f64>,
+}
+
+/// A recording that could not be processed.
+#[derive(Debug, Clone, Serialize)]
+pub struct Failure {
+    pub subject: String,
+    pub configuration: String,
+    pub file: String,
+    pub error: String,
+}
+
+/// One processed recording.
+#[derive(Debug, Clone, Serialize)]
+pub struct Processed {
+    pub subject: String,
+    pub configuration: String,
+    pub result: CocontractionResult,
+}
+
+/// The whole study.
+#[derive(Debug, Clone, Serialize)]
+pub struct StudyResult {
+    pub name: String,
+    pub levels: Vec<LevelRow>,
+    pub rotation: Vec<RotationRow>,
+    pub failures: Vec<Failure>,
+    pub recordings: Vec<Processed>,
+}
+
+/// Process every recording (in parallel); `progress` is called once per recording.
+pub fn run_study(m: &Manifest, params: &PrepareParams, progress: &(dyn Fn() + Sync)) -> StudyResult {
+    let emg = EmgParams {
+        tolerance: m.study.tolerance.unwrap_or(0.1),
+        ..EmgParams::default()
+    };
+    let outcomes: Vec<std::result::Result<Processed, Failure>> = m
+        .recording
+        .par_iter()
+        .map(|e| {
+            let run = || -> Result<CocontractionResult> {
+                let rec = limpid_io_read(&e.file)?;
+                let mvc = limpid_io_read(&e.mvc)?;
+                if !["x", "y", "z"].iter().all(|c| rec.has(c)) {
+                    return Err(Error::Format {
+                        path: e.file.clone(),
+                        message: "study tables need 3-D recordings (x, y, z)".into(),
+                    });
+                }
+                estimate_cocontraction(&rec, &mvc, params, &emg)
+            };
+            let out = run()
+                .map(|result| Processed {
+                    subject: e.subject.clone(),
+                    configuration: e.configuration.clone(),
+                    result,
+                })
+                .map_err(|err| Failure {
+                    subject: e.subject.clone(),
+                    configuration: e.configuration.clone(),
+                    file: e.file.display().to_string(),
+                    error: err.to_string(),
+                });
+            progress();
+            out
+        })
+        .collect();
+    let mut recordings = Vec::new();
+    let mut failures = Vec::new();
+    for o in outcomes {
+        match o {
+            Ok(p) => recordings.push(p),
+            Err(f) => failures.push(f),
+        }
+    }
+    let mut configurations: Vec<String> = recordings.iter().map(|p| p.configuration.clone()).collect();
+    configurations.sort_by(|a, b| natural(a, b));
+    configurations.dedup();
+    let mut levels_out = Vec::new();
+    let mut rotation = Vec::new();
+    for c in &configurations {
+        let group: Vec<&Processed> = recordings.iter().filter(|p| &p.configuration == c).collect();
+        let mut levels: Vec<f64> = group.iter().flat_map(|p| p.result.levels.iter().map(|l| l.level)).collect();
+        levels.sort_by(f64::total_cmp);
+        levels.dedup();
+        for level in &levels {
+            let at: Vec<&crate::cocontraction::LevelResult> = group
+                .iter()
+                .filter_map(|p| p.result.levels.iter().find(|l| l.level == *level))
+                .collect();
+            let mean = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| at.iter().map(|l| f(l)).sum::<f64>() / at.len() as f64;
+            let eig = |l: &crate::cocontraction::LevelResult, i: usize| l.ellipsoid.as_ref().and_then(|e| e.eigenvalues.get(i).copied()).unwrap_or(f64::NAN);
+            let k = |l: &crate::cocontraction::LevelResult, i: usize| l.stiffness.get(i).and_then(|r| r.get(i)).copied().unwrap_or(f64::NAN);
+            levels_out.push(LevelRow {
+                configuration: c.clone(),
+                level: *level,
+                subjects: at.len(),
+                cocontraction_index: mean(&|l| l.cocontraction_index),
+                kxx: mean(&|l| k(l, 0)),
+                kyy: mean(&|l| k(l, 1)),
+                kzz: mean(&|l| k(l, 2)),
+                k_max_a: mean(&|l| l.estimate.table_ii.stiffness.max_antisymmetric),
+                k1: mean(&|l| eig(l, 0)),
+                k2: mean(&|l| eig(l, 1)),
+                k3: mean(&|l| eig(l, 2)),
+            });
+        }
+        if let (Some(lo), Some(hi)) = (levels.first(), levels.last()) {
+            let changes: Vec<_> = group
+                .iter()
+                .filter_map(|p| {
+                    let a = p.result.levels.iter().find(|l| l.level == *lo)?;
+                    let b = p.result.levels.iter().find(|l| l.level == *hi)?;
+                    compare(&a.stiffness, &b.stiffness)
+                })
+                .collect();
+            if lo != hi && !changes.is_empty() {
+                let n = changes[0].rotation_deg.len();
+                let avg = |f: &dyn Fn(&crate::cocontraction::EllipsoidChange) -> &Vec<f64>| {
+                    (0..n).map(|i| changes.iter().map(|c| f(c)[i]).sum::<f64>() / changes.len() as f64).collect()
+                };
+                rotation.push(RotationRow {
+                    configuration: c.clone(),
+                    from_level: *lo,
+                    to_level: *hi,
+                    subjects: changes.len(),
+                    rotation_deg: avg(&|c| &c.rotation_deg),
+                    principal_change_percent: avg(&|c| &c.change_percent),
+                });
+            }
+        }
+    }
+    StudyResult {
+        name: m.study.name.clone().unwrap_or_else(|| "study".into()),
+        levels: levels_out,
+        rotation,
+        failures,
+        recordings,
+    }
+}
+
+fn limpid_io_read(path: &Path) -> Result<limpid_core::Recording> {
+    limpid_io::read_recording(path)
+}
+
+/// Numbers in numeric order, then text.
+fn natural(a: &str, b: &str) -> std::cmp::Ordering {
+    match (a.parse::<f64>(), b.parse::<f64>()) {
+        (Ok(x), Ok(y)) => x.total_cmp(&y),
+        _ => a.cmp(b),
+    }
+}
+
+/// Write `tables.csv`, `rotation.csv`, `study.json`, `tables.md` into `dir`.
+pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let write = |name: &str, text: String| -> Result<PathBuf> {
+        let p = dir.join(name);
+        std::fs::write(&p, text).map_err(|source| Error::Io { path: p.clone(), source })?;
+        Ok(p)
+    };
+    let mut csv = String::from("configuration,level,subjects,cocontraction_index,kxx,kyy,kzz,k_max_a,k1,k2,k3\n");
+    for l in &r.levels {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{:.4},{:.2},{:.2},{:.2},{:.2},{:.2},{:.2},{:.2}",
+            l.configuration, l.level, l.subjects, l.cocontraction_index, l.kxx, l.kyy, l.kzz, l.k_max_a, l.k1, l.k2, l.k3
+        );
+    }
+    let mut rot = String::from("configuration,from_level,to_level,subjects,rotation_primary_deg,rotation_secondary_deg,rotation_tertiary_deg,change_primary_percent,change_secondary_percent,change_tertiary_percent\n");
+    for x in &r.rotation {
+        let g = |v: &Vec<f64>, i: usize| v.get(i).map_or(String::new(), |x| format!("{x:.2}"));
+        let _ = writeln!(
+            rot,
+            "{},{},{},{},{},{},{},{},{},{}",
+            x.configuration, x.from_level, x.to_level, x.subjects,
+            g(&x.rotation_deg, 0), g(&x.rotation_deg, 1), g(&x.rotation_deg, 2),
+            g(&x.principal_change_percent, 0), g(&x.principal_change_percent, 1), g(&x.principal_change_percent, 2)
+        );
+    }
+    let json = serde_json::to_string_pretty(r).map_err(|e| Error::Format {
+        path: dir.join("study.json"),
+        message: e.to_string(),
+    })?;
+    Ok(vec![
+        write("tables.csv", csv)?,
+        write("rotation.csv", rot)?,
+        write("study.json", json)?,
+        write("tables.md", markdown(r))?,
+    ])
+}
+
+/// Seed 001's tables as Markdown.
+pub fn markdown(r: &StudyResult) -> String {
+    let mut md = format!("# {}\n\n", r.name);
+    let mut levels: Vec<f64> = r.levels.iter().map(|l| l.level).collect();
+    levels.sort_by(f64::total_cmp);
+    levels.dedup();
+    for (i, level) in levels.iter().enumerate() {
+        let _ = writeln!(md, "## Table {}: stiffness at co-contraction level {level}, mean across subjects (N/m)\n", i + 1);
+        md.push_str("| configuration | subjects | C | Kxx | Kyy | Kzz | K_maxA | K1 | K2 | K3 |\n|---|---|---|---|---|---|---|---|---|---|\n");
+        for l in r.levels.iter().filter(|l| l.level == *level) {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.3} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
+                l.configuration, l.subjects, l.cocontraction_index, l.kxx, l.kyy, l.kzz, l.k_max_a, l.k1, l.k2, l.k3
+            );
+        }
+        md.push('\n');
+    }
+    let _ = writeln!(md, "## Table {}: rotation of the principal axes and change of the principal stiffnesses, lowest to highest level\n", levels.len() + 1);
+    md.push_str("| configuration | subjects | Δθ1 (deg) | Δθ2 (deg) | Δθ3 (deg) | ΔK1 (%) | ΔK2 (%) | ΔK3 (%) |\n|---|---|---|---|---|---|---|---|\n");
+    for x in &r.rotation {
+        let g = |v: &Vec<f64>, i: usize| v.get(i).map_or("-".to_string(), |x| format!("{x:.1}"));
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            x.configuration, x.subjects,
+            g(&x.rotation_deg, 0), g(&x.rotation_deg, 1), g(&x.rotation_deg, 2),
+            g(&x.principal_change_percent, 0), g(&x.principal_change_percent, 1), g(&x.principal_change_percent, 2)
+        );
+    }
+    if !r.failures.is_empty() {
+        md.push_str("\n## Recordings left out\n\n");
+        for f in &r.failures {
+            let _ = writeln!(md, "- subject {}, configuration {}: {}", f.subject, f.configuration, f.error);
+        }
+    }
+    md
+}

@@ -1,0 +1,128 @@
+//! `limpid study run` and `limpid study simulate` (seed 001 Tables 1-5).
+
+use std::path::PathBuf;
+
+use clap::{Args, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use limpid_analysis::study::{load_manifest, run_study, write_tables};
+use limpid_ident::PrepareParams;
+use limpid_lab::cocontraction::{seed001_population, simulate_cocontraction, CocontractionProtocol};
+use limpid_lab::NoiseModel;
+use rayon::prelude::*;
+
+use crate::CliResult;
+
+#[derive(Subcommand)]
+pub enum StudyCommand {
+    /// Process every recording of a manifest and write the study tables.
+    Run(RunArgs),
+    /// Write a virtual seed 001 study (recordings, MVC files, study.toml) with known truth.
+    Simulate(SimulateArgs),
+}
+
+#[derive(Args)]
+pub struct RunArgs {
+    /// Study manifest (TOML).
+    pub manifest: PathBuf,
+    /// Output folder for tables.csv, rotation.csv, study.json, tables.md.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print the Markdown tables to standard output too.
+    #[arg(long)]
+    pub print: bool,
+}
+
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Number of subjects (each in seed 001's 7 configurations).
+    #[arg(long, default_value_t = 4)]
+    pub subjects: usize,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+fn bar(len: usize, msg: &'static str) -> CliResult<ProgressBar> {
+    let bar = ProgressBar::new(len as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({elapsed})")
+            .map_err(|e| e.to_string())?
+            .progress_chars("=> "),
+    );
+    bar.set_message(msg);
+    Ok(bar)
+}
+
+pub fn run(cmd: StudyCommand) -> CliResult {
+    match cmd {
+        StudyCommand::Run(args) => {
+            let manifest = load_manifest(&args.manifest)?;
+            let progress = bar(manifest.recording.len(), "processing recordings")?;
+            let result = run_study(&manifest, &PrepareParams::default(), &|| progress.inc(1));
+            progress.finish_and_clear();
+            let files = write_tables(&result, &args.out)?;
+            let ok = result.recordings.len();
+            println!(
+                "study {}: {ok} of {} recordings processed, {} configurations",
+                result.name,
+                manifest.recording.len(),
+                result.rotation.len()
+            );
+            for f in &result.failures {
+                println!("failed: subject {}, configuration {}: {}", f.subject, f.configuration, f.error);
+            }
+            if args.print {
+                println!("\n{}", limpid_analysis::study::markdown(&result));
+            }
+            println!("wrote {}", files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+            if ok == 0 {
+                return Err("no recording could be processed".into());
+            }
+            Ok(())
+        }
+        StudyCommand::Simulate(args) => {
+            if args.subjects == 0 {
+                return Err(limpid_core::Error::invalid("subjects", "expected at least 1").into());
+            }
+            std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
+            let population = seed001_population(args.subjects, args.seed);
+            let protocol = CocontractionProtocol::seed001();
+            let progress = bar(population.len(), "simulating recordings")?;
+            let entries: Vec<String> = population
+                .par_iter()
+                .map(|(s, c, subject)| -> CliResult<String> {
+                    let seed = args.seed.wrapping_mul(10_000) + (*s as u64) * 100 + *c as u64;
+                    let (rec, mvc) = simulate_cocontraction(subject, &protocol, &NoiseModel::default(), seed)?;
+                    let file = format!("s{s}_c{c}.parquet");
+                    let mvc_file = format!("s{s}_c{c}.mvc.parquet");
+                    limpid_io::write_recording(&rec, args.out.join(&file))?;
+                    limpid_io::write_recording(&mvc, args.out.join(&mvc_file))?;
+                    let truth = serde_json::json!({
+                        "levels": protocol.levels.iter().map(|l| {
+                            let k = subject.stiffness(*l);
+                            serde_json::json!({"level": l, "stiffness": (0..3).map(|i| (0..3).map(|j| k[(i, j)]).collect::<Vec<f64>>()).collect::<Vec<_>>()})
+                        }).collect::<Vec<_>>(),
+                    });
+                    std::fs::write(args.out.join(format!("s{s}_c{c}.truth.json")), serde_json::to_string_pretty(&truth)?)?;
+                    progress.inc(1);
+                    Ok(format!(
+                        "[[recording]]\nsubject = \"{s}\"\nconfiguration = \"{c}\"\nfile = \"{file}\"\nmvc = \"{mvc_file}\"\n"
+                    ))
+                })
+                .collect::<CliResult<_>>()?;
+            progress.finish_and_clear();
+            let manifest = format!(
+                "# virtual seed 001 study: {} subjects x 7 configurations x 4 levels x 18 perturbations\n[study]\nname = \"virtual seed 001 study\"\n\n{}",
+                args.subjects,
+                entries.join("\n")
+            );
+            let path = args.out.join("study.toml");
+            std::fs::write(&path, manifest)?;
+            println!("wrote {} recordings and {}", population.len(), path.display());
+            Ok(())
+        }
+    }
+}
