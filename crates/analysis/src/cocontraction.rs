@@ -107,14 +107,18 @@ fn permutations(n: usize) -> Vec<Vec<usize>> {
 pub fn compare(reference: &Mat, other: &Mat) -> Option<EllipsoidChange> {
     let (a, b) = (ellipsoid(reference)?, ellipsoid(other)?);
     let n = a.eigenvalues.len();
-    let cos = |i: usize, j: usize| (0..n).map(|r| a.axes[r][i] * b.axes[r][j]).sum::<f64>().abs().min(1.0);
-    let partner = permutations(n)
-        .into_iter()
-        .max_by(|p, q| {
-            let sp: f64 = (0..n).map(|i| cos(i, p[i])).sum();
-            let sq: f64 = (0..n).map(|i| cos(i, q[i])).sum();
-            sp.total_cmp(&sq)
-        })?;
+    let cos = |i: usize, j: usize| {
+        (0..n)
+            .map(|r| a.axes[r][i] * b.axes[r][j])
+            .sum::<f64>()
+            .abs()
+            .min(1.0)
+    };
+    let partner = permutations(n).into_iter().max_by(|p, q| {
+        let sp: f64 = (0..n).map(|i| cos(i, p[i])).sum();
+        let sq: f64 = (0..n).map(|i| cos(i, q[i])).sum();
+        sp.total_cmp(&sq)
+    })?;
     let tied = |e: &Ellipsoid, i: usize| {
         let near = |j: usize| {
             let (x, y) = (e.eigenvalues[i], e.eigenvalues[j]);
@@ -126,8 +130,12 @@ pub fn compare(reference: &Mat, other: &Mat) -> Option<EllipsoidChange> {
         change_percent: (0..n)
             .map(|i| 100.0 * (b.eigenvalues[partner[i]] / a.eigenvalues[i] - 1.0))
             .collect(),
-        rotation_deg: (0..n).map(|i| cos(i, partner[i]).acos().to_degrees()).collect(),
-        ambiguous: (0..n).map(|i| tied(&a, i) || tied(&b, partner[i])).collect(),
+        rotation_deg: (0..n)
+            .map(|i| cos(i, partner[i]).acos().to_degrees())
+            .collect(),
+        ambiguous: (0..n)
+            .map(|i| tied(&a, i) || tied(&b, partner[i]))
+            .collect(),
         partner,
     })
 }
@@ -154,7 +162,10 @@ pub fn estimate_cocontraction(
         let data = match prepare(rec, &params) {
             Ok(d) => d,
             Err(Error::InvalidParameter { .. }) => {
-                warnings.push(format!("level {}: no complete trial at this level; skipped", s.level));
+                warnings.push(format!(
+                    "level {}: no complete trial at this level; skipped",
+                    s.level
+                ));
                 continue;
             }
             Err(e) => return Err(e),
@@ -216,7 +227,9 @@ mod tests {
     use super::*;
 
     fn rows(m: &Matrix3<f64>) -> Mat {
-        (0..3).map(|i| (0..3).map(|j| m[(i, j)]).collect()).collect()
+        (0..3)
+            .map(|i| (0..3).map(|j| m[(i, j)]).collect())
+            .collect()
     }
 
     #[test]
@@ -245,7 +258,9 @@ mod tests {
         // flip signs by conjugating with a reflection: the same matrix family, other eigenvector signs
         let s = Matrix3::from_diagonal(&Vector3::new(-1.0, 1.0, -1.0));
         let a = compare(&rows(&k0), &rows(&k1)).unwrap().rotation_deg;
-        let b = compare(&rows(&(s * k0 * s)), &rows(&(s * k1 * s))).unwrap().rotation_deg;
+        let b = compare(&rows(&(s * k0 * s)), &rows(&(s * k1 * s)))
+            .unwrap()
+            .rotation_deg;
         for i in 0..3 {
             assert!(a[i] <= 90.0 && (a[i] - b[i]).abs() < 1e-9);
         }
@@ -266,7 +281,11 @@ mod tests {
         let k1 = r * Matrix3::from_diagonal(&Vector3::new(2050.0, 720.0, 900.0)) * r.transpose();
         let c = compare(&rows(&k0), &rows(&k1)).unwrap();
         assert_eq!(c.partner, vec![0, 2, 1]);
-        assert!((c.change_percent[2] - 100.0).abs() < 1e-9, "{:?}", c.change_percent);
+        assert!(
+            (c.change_percent[2] - 100.0).abs() < 1e-9,
+            "{:?}",
+            c.change_percent
+        );
         assert!((c.change_percent[1] - 100.0 * (720.0 / 700.0 - 1.0)).abs() < 1e-9);
         assert!(c.rotation_deg.iter().all(|a| (a - 5.0).abs() < 5.0 + 1e-9));
     }

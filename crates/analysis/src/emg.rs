@@ -41,7 +41,11 @@ impl Default for EmgParams {
 
 /// Names of the EMG columns (`emg_*`), in file order.
 pub fn emg_columns(rec: &Recording) -> Vec<String> {
-    rec.names().iter().filter(|n| n.starts_with("emg_")).cloned().collect()
+    rec.names()
+        .iter()
+        .filter(|n| n.starts_with("emg_"))
+        .cloned()
+        .collect()
 }
 
 /// Rectified and low-passed envelope of one raw EMG signal (V).
@@ -60,7 +64,10 @@ pub fn mvc_maxima(mvc: &Recording, muscles: &[String], params: &EmgParams) -> Re
     muscles
         .iter()
         .map(|m| {
-            let raw = mvc.require(m, "the MVC recording must have every EMG channel of the trials")?;
+            let raw = mvc.require(
+                m,
+                "the MVC recording must have every EMG channel of the trials",
+            )?;
             let env = envelope(raw, mvc.sample_rate(), params)?;
             let max = env.iter().fold(0.0f64, |a, v| a.max(*v));
             if max > 0.0 {
@@ -68,7 +75,9 @@ pub fn mvc_maxima(mvc: &Recording, muscles: &[String], params: &EmgParams) -> Re
             } else {
                 Err(Error::Numerical {
                     path: mvc.path().to_path_buf(),
-                    message: format!("column {m}: the MVC envelope is zero everywhere, nothing to normalise by"),
+                    message: format!(
+                        "column {m}: the MVC envelope is zero everywhere, nothing to normalise by"
+                    ),
                 })
             }
         })
@@ -76,7 +85,12 @@ pub fn mvc_maxima(mvc: &Recording, muscles: &[String], params: &EmgParams) -> Re
 }
 
 /// Co-contraction index per sample: mean over muscles of envelope / MVC maximum.
-pub fn cocontraction_index(rec: &Recording, muscles: &[String], maxima: &[f64], params: &EmgParams) -> Result<Vec<f64>> {
+pub fn cocontraction_index(
+    rec: &Recording,
+    muscles: &[String],
+    maxima: &[f64],
+    params: &EmgParams,
+) -> Result<Vec<f64>> {
     if muscles.is_empty() {
         return Err(Error::MissingColumn {
             path: rec.path().to_path_buf(),
@@ -127,8 +141,13 @@ pub fn per_level(index: &[f64], levels: &[f64], tolerance: f64) -> Vec<LevelInde
                 .collect();
             let n = values.len() as f64;
             let mean = values.iter().sum::<f64>() / n;
-            let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
-            let within = values.iter().filter(|v| (*v - level).abs() <= tolerance).count() as f64 / n;
+            let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0))
+                .sqrt();
+            let within = values
+                .iter()
+                .filter(|v| (*v - level).abs() <= tolerance)
+                .count() as f64
+                / n;
             LevelIndex {
                 level,
                 mean,
@@ -150,7 +169,9 @@ mod tests {
         let fs = 1000.0;
         let n = 6000;
         let amp = |i: usize| if i < 3000 { 0.2e-3 } else { 0.8e-3 };
-        let raw: Vec<f64> = (0..n).map(|i| if (i * 7919) % 13 < 6 { amp(i) } else { -amp(i) }).collect();
+        let raw: Vec<f64> = (0..n)
+            .map(|i| if (i * 7919) % 13 < 6 { amp(i) } else { -amp(i) })
+            .collect();
         let env = envelope(&raw, fs, &EmgParams::default()).unwrap();
         // away from the step, the envelope equals the amplitude (DC gain 1)
         assert!((env[1500] - 0.2e-3).abs() < 1e-9);

@@ -71,7 +71,12 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
     })?;
     let mut m: Manifest = toml::from_str(&text).map_err(|e| Error::Format {
         path: path.to_path_buf(),
-        message: e.to_string().lines().next().unwrap_or("not a valid manifest").to_string(),
+        message: e
+            .to_string()
+            .lines()
+            .next()
+            .unwrap_or("not a valid manifest")
+            .to_string(),
     })?;
     if m.recording.is_empty() {
         return Err(Error::Format {
@@ -144,7 +149,11 @@ pub struct StudyResult {
 }
 
 /// Process every recording (in parallel); `progress` is called once per recording.
-pub fn run_study(m: &Manifest, params: &PrepareParams, progress: &(dyn Fn() + Sync)) -> StudyResult {
+pub fn run_study(
+    m: &Manifest,
+    params: &PrepareParams,
+    progress: &(dyn Fn() + Sync),
+) -> StudyResult {
     let emg = EmgParams {
         tolerance: m.study.tolerance.unwrap_or(0.1),
         ..EmgParams::default()
@@ -188,14 +197,21 @@ pub fn run_study(m: &Manifest, params: &PrepareParams, progress: &(dyn Fn() + Sy
             Err(f) => failures.push(f),
         }
     }
-    let mut configurations: Vec<String> = recordings.iter().map(|p| p.configuration.clone()).collect();
+    let mut configurations: Vec<String> =
+        recordings.iter().map(|p| p.configuration.clone()).collect();
     configurations.sort_by(|a, b| natural(a, b));
     configurations.dedup();
     let mut levels_out = Vec::new();
     let mut rotation = Vec::new();
     for c in &configurations {
-        let group: Vec<&Processed> = recordings.iter().filter(|p| &p.configuration == c).collect();
-        let mut levels: Vec<f64> = group.iter().flat_map(|p| p.result.levels.iter().map(|l| l.level)).collect();
+        let group: Vec<&Processed> = recordings
+            .iter()
+            .filter(|p| &p.configuration == c)
+            .collect();
+        let mut levels: Vec<f64> = group
+            .iter()
+            .flat_map(|p| p.result.levels.iter().map(|l| l.level))
+            .collect();
         levels.sort_by(f64::total_cmp);
         levels.dedup();
         for level in &levels {
@@ -203,9 +219,22 @@ pub fn run_study(m: &Manifest, params: &PrepareParams, progress: &(dyn Fn() + Sy
                 .iter()
                 .filter_map(|p| p.result.levels.iter().find(|l| l.level == *level))
                 .collect();
-            let mean = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| at.iter().map(|l| f(l)).sum::<f64>() / at.len() as f64;
-            let eig = |l: &crate::cocontraction::LevelResult, i: usize| l.ellipsoid.as_ref().and_then(|e| e.eigenvalues.get(i).copied()).unwrap_or(f64::NAN);
-            let k = |l: &crate::cocontraction::LevelResult, i: usize| l.stiffness.get(i).and_then(|r| r.get(i)).copied().unwrap_or(f64::NAN);
+            let mean = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| {
+                at.iter().map(|l| f(l)).sum::<f64>() / at.len() as f64
+            };
+            let eig = |l: &crate::cocontraction::LevelResult, i: usize| {
+                l.ellipsoid
+                    .as_ref()
+                    .and_then(|e| e.eigenvalues.get(i).copied())
+                    .unwrap_or(f64::NAN)
+            };
+            let k = |l: &crate::cocontraction::LevelResult, i: usize| {
+                l.stiffness
+                    .get(i)
+                    .and_then(|r| r.get(i))
+                    .copied()
+                    .unwrap_or(f64::NAN)
+            };
             levels_out.push(LevelRow {
                 configuration: c.clone(),
                 level: *level,
@@ -232,7 +261,11 @@ pub fn run_study(m: &Manifest, params: &PrepareParams, progress: &(dyn Fn() + Sy
             if lo != hi && !changes.is_empty() {
                 let n = changes[0].rotation_deg.len();
                 let avg = |f: &dyn Fn(&crate::cocontraction::EllipsoidChange) -> &Vec<f64>| {
-                    (0..n).map(|i| changes.iter().map(|c| f(c)[i]).sum::<f64>() / changes.len() as f64).collect()
+                    (0..n)
+                        .map(|i| {
+                            changes.iter().map(|c| f(c)[i]).sum::<f64>() / changes.len() as f64
+                        })
+                        .collect()
                 };
                 rotation.push(RotationRow {
                     configuration: c.clone(),
@@ -274,15 +307,30 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
     })?;
     let write = |name: &str, text: String| -> Result<PathBuf> {
         let p = dir.join(name);
-        std::fs::write(&p, text).map_err(|source| Error::Io { path: p.clone(), source })?;
+        std::fs::write(&p, text).map_err(|source| Error::Io {
+            path: p.clone(),
+            source,
+        })?;
         Ok(p)
     };
-    let mut csv = String::from("configuration,level,subjects,cocontraction_index,kxx,kyy,kzz,k_max_a,k1,k2,k3\n");
+    let mut csv = String::from(
+        "configuration,level,subjects,cocontraction_index,kxx,kyy,kzz,k_max_a,k1,k2,k3\n",
+    );
     for l in &r.levels {
         let _ = writeln!(
             csv,
             "{},{},{},{:.4},{:.2},{:.2},{:.2},{:.2},{:.2},{:.2},{:.2}",
-            l.configuration, l.level, l.subjects, l.cocontraction_index, l.kxx, l.kyy, l.kzz, l.k_max_a, l.k1, l.k2, l.k3
+            l.configuration,
+            l.level,
+            l.subjects,
+            l.cocontraction_index,
+            l.kxx,
+            l.kyy,
+            l.kzz,
+            l.k_max_a,
+            l.k1,
+            l.k2,
+            l.k3
         );
     }
     let mut rot = String::from("configuration,from_level,to_level,subjects,rotation_primary_deg,rotation_secondary_deg,rotation_tertiary_deg,change_primary_percent,change_secondary_percent,change_tertiary_percent\n");
@@ -291,9 +339,16 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
         let _ = writeln!(
             rot,
             "{},{},{},{},{},{},{},{},{},{}",
-            x.configuration, x.from_level, x.to_level, x.subjects,
-            g(&x.rotation_deg, 0), g(&x.rotation_deg, 1), g(&x.rotation_deg, 2),
-            g(&x.principal_change_percent, 0), g(&x.principal_change_percent, 1), g(&x.principal_change_percent, 2)
+            x.configuration,
+            x.from_level,
+            x.to_level,
+            x.subjects,
+            g(&x.rotation_deg, 0),
+            g(&x.rotation_deg, 1),
+            g(&x.rotation_deg, 2),
+            g(&x.principal_change_percent, 0),
+            g(&x.principal_change_percent, 1),
+            g(&x.principal_change_percent, 2)
         );
     }
     let json = serde_json::to_string_pretty(r).map_err(|e| Error::Format {
@@ -315,13 +370,26 @@ pub fn markdown(r: &StudyResult) -> String {
     levels.sort_by(f64::total_cmp);
     levels.dedup();
     for (i, level) in levels.iter().enumerate() {
-        let _ = writeln!(md, "## Table {}: stiffness at co-contraction level {level}, mean across subjects (N/m)\n", i + 1);
+        let _ = writeln!(
+            md,
+            "## Table {}: stiffness at co-contraction level {level}, mean across subjects (N/m)\n",
+            i + 1
+        );
         md.push_str("| configuration | subjects | C | Kxx | Kyy | Kzz | K_maxA | K1 | K2 | K3 |\n|---|---|---|---|---|---|---|---|---|---|\n");
         for l in r.levels.iter().filter(|l| l.level == *level) {
             let _ = writeln!(
                 md,
                 "| {} | {} | {:.3} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
-                l.configuration, l.subjects, l.cocontraction_index, l.kxx, l.kyy, l.kzz, l.k_max_a, l.k1, l.k2, l.k3
+                l.configuration,
+                l.subjects,
+                l.cocontraction_index,
+                l.kxx,
+                l.kyy,
+                l.kzz,
+                l.k_max_a,
+                l.k1,
+                l.k2,
+                l.k3
             );
         }
         md.push('\n');
@@ -333,15 +401,24 @@ pub fn markdown(r: &StudyResult) -> String {
         let _ = writeln!(
             md,
             "| {} | {} | {} | {} | {} | {} | {} | {} |",
-            x.configuration, x.subjects,
-            g(&x.rotation_deg, 0), g(&x.rotation_deg, 1), g(&x.rotation_deg, 2),
-            g(&x.principal_change_percent, 0), g(&x.principal_change_percent, 1), g(&x.principal_change_percent, 2)
+            x.configuration,
+            x.subjects,
+            g(&x.rotation_deg, 0),
+            g(&x.rotation_deg, 1),
+            g(&x.rotation_deg, 2),
+            g(&x.principal_change_percent, 0),
+            g(&x.principal_change_percent, 1),
+            g(&x.principal_change_percent, 2)
         );
     }
     if !r.failures.is_empty() {
         md.push_str("\n## Recordings left out\n\n");
         for f in &r.failures {
-            let _ = writeln!(md, "- subject {}, configuration {}: {}", f.subject, f.configuration, f.error);
+            let _ = writeln!(
+                md,
+                "- subject {}, configuration {}: {}",
+                f.subject, f.configuration, f.error
+            );
         }
     }
     md

@@ -79,7 +79,12 @@ pub struct PrepareArgs {
     #[arg(long, value_enum, default_value_t = FrameArg::Identity)]
     pub frame: FrameArg,
     /// General transform: r11,r12,...,r33,tx,ty,tz (applied after --frame).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "R11,..,R33,TX,TY,TZ")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        value_name = "R11,..,R33,TX,TY,TZ"
+    )]
     pub transform: Option<Vec<f64>>,
     /// The force columns hold the hand's force on the sensor: negate them.
     #[arg(long)]
@@ -186,8 +191,15 @@ pub fn run(method: Method) -> CliResult {
             Ok(())
         }
         Method::Cocontraction(args) => {
-            if !(args.tolerance > 0.0) {
-                return Err(limpid_core::Error::invalid("tolerance", format!("expected a positive band half-width, found {}", args.tolerance)).into());
+            if args.tolerance.is_nan() || args.tolerance <= 0.0 {
+                return Err(limpid_core::Error::invalid(
+                    "tolerance",
+                    format!(
+                        "expected a positive band half-width, found {}",
+                        args.tolerance
+                    ),
+                )
+                .into());
             }
             let params = args.prepare.params()?;
             let rec = limpid_io::read_recording(&args.recording)?;

@@ -6,7 +6,9 @@ use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use limpid_analysis::study::{load_manifest, run_study, write_tables};
 use limpid_ident::PrepareParams;
-use limpid_lab::cocontraction::{seed001_population, simulate_cocontraction, CocontractionProtocol};
+use limpid_lab::cocontraction::{
+    seed001_population, simulate_cocontraction, CocontractionProtocol,
+};
 use limpid_lab::NoiseModel;
 use rayon::prelude::*;
 
@@ -72,12 +74,22 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 result.rotation.len()
             );
             for f in &result.failures {
-                println!("failed: subject {}, configuration {}: {}", f.subject, f.configuration, f.error);
+                println!(
+                    "failed: subject {}, configuration {}: {}",
+                    f.subject, f.configuration, f.error
+                );
             }
             if args.print {
                 println!("\n{}", limpid_analysis::study::markdown(&result));
             }
-            println!("wrote {}", files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+            println!(
+                "wrote {}",
+                files
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
             if ok == 0 {
                 return Err("no recording could be processed".into());
             }
@@ -87,7 +99,8 @@ pub fn run(cmd: StudyCommand) -> CliResult {
             if args.subjects == 0 {
                 return Err(limpid_core::Error::invalid("subjects", "expected at least 1").into());
             }
-            std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
+            std::fs::create_dir_all(&args.out)
+                .map_err(|e| format!("{}: {e}", args.out.display()))?;
             let population = seed001_population(args.subjects, args.seed);
             let protocol = CocontractionProtocol::seed001();
             let progress = bar(population.len(), "simulating recordings")?;
@@ -121,7 +134,11 @@ pub fn run(cmd: StudyCommand) -> CliResult {
             );
             let path = args.out.join("study.toml");
             std::fs::write(&path, manifest)?;
-            println!("wrote {} recordings and {}", population.len(), path.display());
+            println!(
+                "wrote {} recordings and {}",
+                population.len(),
+                path.display()
+            );
             Ok(())
         }
     }

@@ -213,25 +213,43 @@ fn yes(b: bool) -> &'static str {
 /// The readable report of `estimate cocontraction` (seed 001 Tables 1-5 for one recording).
 pub fn cocontraction_text(r: &CocontractionResult) -> String {
     let mut out = String::new();
-    let _ = writeln!(out, "limpid estimate cocontraction: {} (MVC {})", r.recording, r.mvc);
+    let _ = writeln!(
+        out,
+        "limpid estimate cocontraction: {} (MVC {})",
+        r.recording, r.mvc
+    );
     let _ = writeln!(out, "muscles: {}", r.muscles.join(", "));
     out.push('\n');
     let _ = writeln!(
         out,
-        "{:>6} {:>16} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {}",
-        "level", "C (mean ± sd)", "on band", "Kxx", "Kyy", "Kzz", "K_maxA", "K1", "K2", "K3", "quality"
+        "{:>6} {:>16} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  quality",
+        "level", "C (mean ± sd)", "on band", "Kxx", "Kyy", "Kzz", "K_maxA", "K1", "K2", "K3",
     );
     for l in &r.levels {
         let k = &l.stiffness;
         let n = k.len();
-        let get = |i: usize, j: usize| if i < n && j < n { num(k[i][j]) } else { "-".into() };
+        let get = |i: usize, j: usize| {
+            if i < n && j < n {
+                num(k[i][j])
+            } else {
+                "-".into()
+            }
+        };
         let principal: Vec<String> = match &l.ellipsoid {
             Some(e) => e.eigenvalues.iter().map(|v| num(*v)).collect(),
             None => vec![],
         };
         let p = |i: usize| principal.get(i).cloned().unwrap_or_else(|| "-".into());
         let e = &l.estimate;
-        let quality = format!("VAF {}%", e.fit.vaf.iter().map(|v| format!("{v:.1}")).collect::<Vec<_>>().join("/"));
+        let quality = format!(
+            "VAF {}%",
+            e.fit
+                .vaf
+                .iter()
+                .map(|v| format!("{v:.1}"))
+                .collect::<Vec<_>>()
+                .join("/")
+        );
         let _ = writeln!(
             out,
             "{:>6} {:>16} {:>7.0}% {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {}",
@@ -250,7 +268,11 @@ pub fn cocontraction_text(r: &CocontractionResult) -> String {
     }
     if !r.comparisons.is_empty() {
         out.push('\n');
-        let _ = writeln!(out, "Change against level {} (Fig. 6, Table 5): principal stiffness % | axis rotation deg", num(r.comparisons[0].reference_level));
+        let _ = writeln!(
+            out,
+            "Change against level {} (Fig. 6, Table 5): principal stiffness % | axis rotation deg",
+            num(r.comparisons[0].reference_level)
+        );
         for c in &r.comparisons {
             let fmt = |v: &[f64], amb: &[bool]| {
                 v.iter()

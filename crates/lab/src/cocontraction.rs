@@ -91,13 +91,16 @@ pub fn simulate_cocontraction(
     let per = (trial_s * fs).round() as usize;
     let trials = protocol.levels.len() * protocol.directions.len();
     let total = per * trials;
-    let mut cols: Vec<Vec<f64>> = (0..9 + MUSCLES.len()).map(|_| Vec::with_capacity(total)).collect();
+    let mut cols: Vec<Vec<f64>> = (0..9 + MUSCLES.len())
+        .map(|_| Vec::with_capacity(total))
+        .collect();
     let back_start = protocol.rest_s + protocol.move_s + protocol.hold_s;
     for (li, level) in protocol.levels.iter().enumerate() {
         let k = subject.stiffness(*level);
         for (di, dir) in protocol.directions.iter().enumerate() {
             let trial = li * protocol.directions.len() + di;
-            let offset = Vector3::from_fn(|_, _| noise.offset_per_trial_std_n * unit.sample(&mut rng));
+            let offset =
+                Vector3::from_fn(|_, _| noise.offset_per_trial_std_n * unit.sample(&mut rng));
             for i in 0..per {
                 let idx = trial * per + i;
                 let t = i as f64 / fs;
@@ -111,7 +114,9 @@ pub fn simulate_cocontraction(
                     + offset;
                 cols[0].push(idx as f64 / fs);
                 for a in 0..3 {
-                    cols[1 + a].push(subject.start[a] + disp[a] + noise.position_std_m * unit.sample(&mut rng));
+                    cols[1 + a].push(
+                        subject.start[a] + disp[a] + noise.position_std_m * unit.sample(&mut rng),
+                    );
                     cols[4 + a].push(f[a] + noise.white_std_n * unit.sample(&mut rng));
                 }
                 cols[7].push((trial + 1) as f64);
@@ -123,7 +128,9 @@ pub fn simulate_cocontraction(
             }
         }
     }
-    let mut names: Vec<String> = ["t", "x", "y", "z", "fx", "fy", "fz", "trial", "level"].map(String::from).to_vec();
+    let mut names: Vec<String> = ["t", "x", "y", "z", "fx", "fy", "fz", "trial", "level"]
+        .map(String::from)
+        .to_vec();
     names.extend(MUSCLES.iter().map(|m| m.to_string()));
     let rec = Recording::new(format!("virtual:{}", subject.name), names.clone(), cols, 2)?;
 
@@ -186,10 +193,13 @@ pub fn seed001_population(subjects: usize, seed: u64) -> Vec<(usize, usize, Coco
         for (c, (k0, k1)) in SEED001_PRINCIPAL.iter().enumerate() {
             let axis = Vector3::from_fn(|_, _| unit.sample(&mut rng));
             let angle = unit.sample(&mut rng);
-            let r0 = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle).into_inner();
+            let r0 =
+                nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle)
+                    .into_inner();
             let d0 = Matrix3::from_diagonal(&Vector3::new(k0[0], k0[1], k0[2])) * factor;
             let gain = Vector3::new(k1[0] - k0[0], k1[1] - k0[1], k1[2] - k0[2]) * factor;
-            let turn = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), 15f64.to_radians()).into_inner();
+            let turn = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), 15f64.to_radians())
+                .into_inner();
             let r1 = r0 * turn;
             let inertia = Matrix3::from_diagonal(&Vector3::new(1.6, 1.7, 1.5)) * factor;
             let damping = Matrix3::from_diagonal(&Vector3::new(16.0, 19.0, 18.0)) * factor;

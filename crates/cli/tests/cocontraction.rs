@@ -1,0 +1,198 @@
+//! Co-contraction (issue 4): examples per level, the virtual study, failures.
+
+mod common;
+use common::*;
+
+#[test]
+fn examples_index_within_0_03_and_stiffness_within_5_percent_per_level() {
+    for case in ["ex_config4", "ex_config7"] {
+        let dir = shared().join("examples/cocontraction");
+        let truth = read_json(&dir.join(format!("{case}.truth.json")));
+        let rec = dir.join(format!("{case}.csv"));
+        let mvc = dir.join(format!("{case}.mvc.csv"));
+        let r = json(&[
+            "estimate",
+            "cocontraction",
+            rec.to_str().unwrap(),
+            "--mvc",
+            mvc.to_str().unwrap(),
+            "--json",
+        ]);
+        let levels = r["levels"].as_array().unwrap();
+        let truth_levels = truth["levels"].as_array().unwrap();
+        assert_eq!(levels.len(), truth_levels.len());
+        for (l, t) in levels.iter().zip(truth_levels) {
+            assert_eq!(l["level"], t["level"]);
+            let c = l["cocontraction_index"].as_f64().unwrap();
+            let ct = t["cocontraction_index"].as_f64().unwrap();
+            assert!(
+                (c - ct).abs() < 0.03,
+                "{case} level {}: index {c} vs {ct}",
+                l["level"]
+            );
+            assert!(l["cocontraction_sd"].as_f64().unwrap() > 0.0);
+            let ek = rel_err(&mat(&l["stiffness"]), &mat(&t["stiffness"]));
+            assert!(
+                ek < 0.05,
+                "{case} level {}: stiffness error {ek}",
+                l["level"]
+            );
+            for key in ["damping", "inertia", "ellipsoid"] {
+                assert!(!l[key].is_null(), "{key}");
+            }
+        }
+        // the truth's own description: at level 1 the tertiary stiffness grows most
+        let last = r["comparisons"].as_array().unwrap().last().unwrap().clone();
+        let change: Vec<f64> = last["principal_change_percent"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert!(
+            change[2] > 50.0 && change[0] < 10.0 && change[1] < 10.0,
+            "{case}: {change:?}"
+        );
+        let rot: Vec<f64> = last["rotation_deg"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert!(rot.iter().all(|a| (0.0..=90.0).contains(a)));
+    }
+}
+
+#[test]
+fn virtual_study_tables_show_the_anisotropic_increase() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = limpid(&["study", "simulate", "--out", dir.path().to_str().unwrap()]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let manifest = dir.path().join("study.toml");
+    let tables = dir.path().join("tables");
+    let run = limpid(&[
+        "study",
+        "run",
+        manifest.to_str().unwrap(),
+        "--out",
+        tables.to_str().unwrap(),
+    ]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(
+        run.stdout.contains("28 of 28 recordings processed"),
+        "{}",
+        run.stdout
+    );
+    let study = read_json(&tables.join("study.json"));
+    let levels = study["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 7 * 4);
+    // Table 1 principal stiffnesses are those the population was built from (seed 001 Table 1)
+    let table1 = [
+        [2202.1, 711.5, 188.7],
+        [2740.1, 661.3, 146.6],
+        [2807.6, 476.6, 268.1],
+        [2046.6, 663.4, 471.1],
+        [2550.1, 484.3, 301.1],
+        [3264.9, 505.1, 247.7],
+        [2549.9, 845.9, 368.3],
+    ];
+    for row in levels.iter().filter(|l| l["level"] == 0.0) {
+        let c: usize = row["configuration"].as_str().unwrap().parse().unwrap();
+        for (k, key) in ["k1", "k2", "k3"].iter().enumerate() {
+            let v = row[key].as_f64().unwrap();
+            assert!(
+                (v / table1[c - 1][k] - 1.0).abs() < 0.05,
+                "config {c} {key}: {v}"
+            );
+        }
+    }
+    // co-contraction raises the tertiary stiffness relatively more than the primary
+    let rotation = study["rotation"].as_array().unwrap();
+    assert_eq!(rotation.len(), 7);
+    for r in rotation {
+        let ch: Vec<f64> = r["principal_change_percent"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert!(
+            ch[2] > ch[0],
+            "configuration {}: {ch:?}",
+            r["configuration"]
+        );
+    }
+    for f in ["tables.csv", "rotation.csv", "tables.md"] {
+        assert!(tables.join(f).exists(), "{f}");
+    }
+}
+
+#[test]
+fn a_failing_recording_is_reported_and_the_others_processed() {
+    let dir = tempfile::tempdir().unwrap();
+    let ex = shared().join("examples/cocontraction");
+    let manifest = format!(
+        "[study]\nname = \"two\"\n\n[[recording]]\nsubject = \"1\"\nconfiguration = \"4\"\nfile = \"{}\"\nmvc = \"{}\"\n\n[[recording]]\nsubject = \"2\"\nconfiguration = \"4\"\nfile = \"missing.csv\"\nmvc = \"missing.mvc.csv\"\n",
+        ex.join("ex_config4.csv").display(),
+        ex.join("ex_config4.mvc.csv").display()
+    );
+    let path = dir.path().join("study.toml");
+    std::fs::write(&path, manifest).unwrap();
+    let out = limpid(&[
+        "study",
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        dir.path().join("t").to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(
+        out.stdout.contains("1 of 2 recordings processed"),
+        "{}",
+        out.stdout
+    );
+    assert!(
+        out.stdout.contains("failed: subject 2, configuration 4:")
+            && out.stdout.contains("missing.csv"),
+        "{}",
+        out.stdout
+    );
+}
+
+#[test]
+fn bad_manifest_and_missing_mvc_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("study.toml");
+    std::fs::write(&path, "[[recording]]\nsubject = 1\n").unwrap();
+    let out = limpid(&[
+        "study",
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr
+            .starts_with(&format!("limpid: {}: ", path.display())),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim_end().lines().count(), 1, "{}", out.stderr);
+    // an MVC file without the EMG channels
+    let ex = shared().join("examples/cocontraction/ex_config4.csv");
+    let mvc = dir.path().join("mvc.csv");
+    std::fs::write(&mvc, "t,x\n0,0\n0.001,0\n0.002,0\n").unwrap();
+    let out = limpid(&[
+        "estimate",
+        "cocontraction",
+        ex.to_str().unwrap(),
+        "--mvc",
+        mvc.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2);
+    assert_eq!(
+        out.stderr.trim_end(),
+        format!("limpid: {}: missing required column emg_deltoid_anterior (the MVC recording must have every EMG channel of the trials); found columns: t,x", mvc.display())
+    );
+}
