@@ -19,6 +19,8 @@ pub enum Method {
     Linear(LinearArgs),
     /// Co-contraction index and impedance per level, compared with the lowest level (seed 001).
     Cocontraction(CocontractionArgs),
+    /// Planar two-link arm in joint space: inertial parameters, K, D, confidence criteria (seed 003).
+    Planar(crate::planar::PlanarArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -190,6 +192,7 @@ pub fn run(method: Method) -> CliResult {
             }
             Ok(())
         }
+        Method::Planar(args) => crate::planar::run_estimate(args),
         Method::Cocontraction(args) => {
             if args.tolerance.is_nan() || args.tolerance <= 0.0 {
                 return Err(limpid_core::Error::invalid(

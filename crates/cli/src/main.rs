@@ -4,6 +4,7 @@
 
 mod demo;
 mod estimate;
+mod planar;
 mod study;
 mod table;
 
@@ -28,6 +29,8 @@ enum Command {
     },
     /// Run seed 000's 3-D study on a built-in virtual subject and compare with the truth.
     Demo(demo::DemoArgs),
+    /// Planar-arm estimates over a range of observation windows, with the minimum trustworthy window (seed 003).
+    WindowSweep(planar::SweepArgs),
     /// Whole co-contraction studies: tables across subjects and configurations (seed 001).
     Study {
         #[command(subcommand)]
@@ -41,6 +44,7 @@ fn main() -> ExitCode {
         Command::Estimate { method } => estimate::run(method),
         Command::Demo(args) => demo::run(args),
         Command::Study { command } => study::run(command),
+        Command::WindowSweep(args) => planar::run_sweep(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,6 +5,7 @@
 //! force applied **to the limb** (FORMAT.md sign convention), so the model is
 //! `M x'' + B x' + K (x - x_eq) = f`; matrices are row-major `[row][col]`.
 
+pub mod arm;
 pub mod error;
 pub mod frame;
 pub mod recording;

@@ -6,6 +6,8 @@
 //!   squares (seed 000 eq. (3)-(8), seed 001 eq. (3)-(10)).
 
 pub mod linear;
+pub mod lsq;
+pub mod planar;
 pub mod prepare;
 
 pub use linear::{fit_linear, LinearEstimate, LinearParams};

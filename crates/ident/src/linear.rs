@@ -25,6 +25,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::lsq::{merge, triangle};
 use crate::prepare::Prepared;
 use limpid_core::{Error, Result};
 
@@ -188,16 +189,6 @@ fn solve_triangle(
         cov_unit,
         condition_number: smax / smin,
     })
-}
-
-/// Merge q x q triangles into the triangle of their stacked rows.
-fn merge<'a>(tris: impl Iterator<Item = &'a DMatrix<f64>>, q: usize) -> DMatrix<f64> {
-    let tris: Vec<&DMatrix<f64>> = tris.collect();
-    let mut stacked = DMatrix::<f64>::zeros(tris.len().max(1) * q, q);
-    for (k, t) in tris.iter().enumerate() {
-        stacked.rows_mut(k * q, q).copy_from(t);
-    }
-    triangle(stacked, q)
 }
 
 /// Fit the linear model to prepared data.
@@ -550,17 +541,6 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         standard_error_method: se_method,
         warnings,
     })
-}
-
-/// Upper triangle (q x q) of the Householder QR of `a`.
-fn triangle(a: DMatrix<f64>, q: usize) -> DMatrix<f64> {
-    let rows = a.nrows();
-    if rows < q {
-        let mut padded = DMatrix::<f64>::zeros(q, q);
-        padded.rows_mut(0, rows).copy_from(&a);
-        return triangle(padded, q);
-    }
-    a.qr().r()
 }
 
 fn fit_stats(f: &[f64], fhat: &[f64]) -> (f64, f64, f64) {

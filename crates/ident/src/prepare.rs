@@ -432,7 +432,13 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
 /// there, a point reflection where it still moves. The speed at the end is the
 /// slope of a least-squares line through the last `span` samples, compared with
 /// the window's largest such slope.
-fn edge_kind(pos: &[&[f64]], at: usize, window: Range<usize>, span: usize, dt: f64) -> Edge {
+pub(crate) fn edge_kind(
+    pos: &[&[f64]],
+    at: usize,
+    window: Range<usize>,
+    span: usize,
+    dt: f64,
+) -> Edge {
     let span = span.min(window.len() / 4).max(2);
     let slope = |c: &[f64], s: usize| {
         let seg = &c[s..s + span];

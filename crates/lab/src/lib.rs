@@ -5,6 +5,7 @@
 //! linear subject; see each module for the seed and equation it implements.
 
 pub mod cocontraction;
+pub mod planar;
 pub mod profile;
 pub mod simulate;
 pub mod sphere;

@@ -1,0 +1,318 @@
+//! `limpid estimate planar` and `limpid window-sweep` (seed 003).
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use clap::Args;
+use limpid_ident::planar::{
+    fit_planar, leave_one_out_vaf, prepare_planar, window_sweep, Arm, PlanarData, PlanarEstimate,
+    PlanarPrepare,
+};
+
+use crate::table::num;
+use crate::CliResult;
+
+/// Arm geometry and preparation flags shared by both commands.
+#[derive(Args)]
+pub struct ArmArgs {
+    /// Recording: joint space (q1,q2,tau1,tau2) or end point (x,y,fx,fy), with a trial column.
+    pub recording: PathBuf,
+    /// Upper-arm and forearm lengths (m).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        num_args = 1,
+        value_name = "L1,L2",
+        required = true
+    )]
+    pub link_lengths: Vec<f64>,
+    /// Shoulder position in the recording's frame (m).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "X,Y",
+        default_value = "0,0",
+        allow_hyphen_values = true
+    )]
+    pub shoulder: Vec<f64>,
+    /// Known base inertial parameters xi1,xi2,xi3 (kg m^2): the reduced 8-parameter model (eq. 23-25).
+    #[arg(long, value_delimiter = ',', value_name = "A,B,C")]
+    pub inertial_parameters: Option<Vec<f64>>,
+    /// Inverse-kinematics branch for end-point data: the elbow angle q2 negative.
+    #[arg(long)]
+    pub elbow_negative: bool,
+    /// Low-pass cut-off in Hz (default: 30, at most 0.4 x sample rate).
+    #[arg(long, value_name = "HZ")]
+    pub cutoff: Option<f64>,
+}
+
+impl ArmArgs {
+    fn load(&self) -> CliResult<(PlanarData, Option<[f64; 3]>)> {
+        let pair = |v: &[f64], name: &str| -> CliResult<[f64; 2]> {
+            match v {
+                [a, b] => Ok([*a, *b]),
+                _ => Err(limpid_core::Error::invalid(
+                    name,
+                    format!(
+                        "expected two numbers separated by a comma, found {}",
+                        v.len()
+                    ),
+                )
+                .into()),
+            }
+        };
+        let l = pair(&self.link_lengths, "link lengths")?;
+        let shoulder = pair(&self.shoulder, "shoulder")?;
+        let xi = match &self.inertial_parameters {
+            Some(v) if v.len() == 3 => Some([v[0], v[1], v[2]]),
+            Some(v) => {
+                return Err(limpid_core::Error::invalid(
+                    "inertial parameters",
+                    format!("expected three numbers, found {}", v.len()),
+                )
+                .into())
+            }
+            None => None,
+        };
+        let rec = limpid_io::read_recording(&self.recording)?;
+        let data = prepare_planar(
+            &rec,
+            &PlanarPrepare {
+                arm: Arm {
+                    l1: l[0],
+                    l2: l[1],
+                    shoulder,
+                },
+                cutoff_hz: self.cutoff,
+                order: 4,
+                elbow_positive: !self.elbow_negative,
+            },
+        )?;
+        Ok((data, xi))
+    }
+}
+
+#[derive(Args)]
+pub struct PlanarArgs {
+    #[command(flatten)]
+    pub arm: ArmArgs,
+    /// Observation window after the perturbation onset (ms); default: all samples of every trial.
+    #[arg(long, value_name = "T")]
+    pub window_ms: Option<f64>,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct SweepArgs {
+    #[command(flatten)]
+    pub arm: ArmArgs,
+    /// Shortest observation window (ms).
+    #[arg(long, default_value_t = 50.0)]
+    pub from: f64,
+    /// Longest observation window (ms).
+    #[arg(long, default_value_t = 400.0)]
+    pub to: f64,
+    /// Step (ms).
+    #[arg(long, default_value_t = 10.0)]
+    pub step: f64,
+    /// Print JSON.
+    #[arg(long, conflicts_with = "csv")]
+    pub json: bool,
+    /// Print the table as CSV.
+    #[arg(long)]
+    pub csv: bool,
+}
+
+fn window_samples(data: &PlanarData, ms: Option<f64>) -> CliResult<usize> {
+    match ms {
+        None => Ok(usize::MAX),
+        Some(t) if t > 0.0 => Ok((t * data.fs / 1000.0).round() as usize),
+        Some(t) => Err(limpid_core::Error::invalid(
+            "observation window",
+            format!("expected a positive duration in ms, found {t}"),
+        )
+        .into()),
+    }
+}
+
+fn m2(m: &[[f64; 2]; 2], se: &[[f64; 2]; 2]) -> String {
+    let mut s = String::new();
+    for i in 0..2 {
+        let _ = writeln!(
+            s,
+            "    {:>20}{:>20}",
+            format!("{} ± {}", num(m[i][0]), num(se[i][0])),
+            format!("{} ± {}", num(m[i][1]), num(se[i][1]))
+        );
+    }
+    s
+}
+
+fn text(e: &PlanarEstimate, data: &PlanarData, loo: [f64; 2]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "limpid estimate planar: {} ({} trials, {} samples, T_obs {} ms, {} data)",
+        data.path.display(),
+        e.trials,
+        e.samples,
+        num(e.observation_window_ms),
+        if data.from_endpoint {
+            "end-point"
+        } else {
+            "joint-space"
+        }
+    );
+    let xi = &e.inertial_parameters;
+    if e.inertial_parameters_fixed {
+        let _ = writeln!(
+            s,
+            "inertial parameters (given): {}, {}, {} kg m^2",
+            num(xi[0]),
+            num(xi[1]),
+            num(xi[2])
+        );
+    } else {
+        let se = &e.standard_errors.inertial_parameters;
+        let _ = writeln!(
+            s,
+            "inertial parameters xi1..xi3: {} ± {}, {} ± {}, {} ± {} kg m^2",
+            num(xi[0]),
+            num(se[0]),
+            num(xi[1]),
+            num(se[1]),
+            num(xi[2]),
+            num(se[2])
+        );
+    }
+    let _ = write!(
+        s,
+        "joint stiffness K (N m/rad)\n{}",
+        m2(&e.stiffness, &e.standard_errors.stiffness)
+    );
+    let _ = write!(
+        s,
+        "joint damping D (N m s/rad)\n{}",
+        m2(&e.damping, &e.standard_errors.damping)
+    );
+    let kx = &e.endpoint_stiffness;
+    let _ = writeln!(
+        s,
+        "end-point stiffness J^-T K J^-1 (N/m): [[{}, {}], [{}, {}]]",
+        num(kx[0][0]),
+        num(kx[0][1]),
+        num(kx[1][0]),
+        num(kx[1][1])
+    );
+    let c = &e.criteria;
+    let _ = writeln!(
+        s,
+        "fit: VAF {:.1} / {:.1} %, r {:.3} / {:.3}; leave-one-trial-out VAF {:.1} / {:.1} %",
+        e.fit.vaf[0], e.fit.vaf[1], e.fit.r[0], e.fit.r[1], loo[0], loo[1]
+    );
+    let _ = writeln!(s, "criteria: cond(W) {} (scaled {}), K eigenvalues {} / {}, D eigenvalues {} / {}, symmetry ratio K {:.3}, D {:.3}", num(c.condition_number), num(c.condition_number_scaled), num(c.stiffness_eigenvalues[0]), num(c.stiffness_eigenvalues[1]), num(c.damping_eigenvalues[0]), num(c.damping_eigenvalues[1]), c.stiffness_symmetry_ratio, c.damping_symmetry_ratio);
+    if c.trusted {
+        let _ = writeln!(
+            s,
+            "verdict: trusted (well-conditioned, K and D positive definite and quasi-symmetric)"
+        );
+    } else {
+        let _ = writeln!(s, "verdict: NOT TRUSTED: {}", c.reasons.join("; "));
+    }
+    s
+}
+
+pub fn run_estimate(args: PlanarArgs) -> CliResult {
+    let (data, xi) = args.arm.load()?;
+    let window = window_samples(&data, args.window_ms)?;
+    let all: Vec<usize> = (0..data.trials.len()).collect();
+    let est = fit_planar(&data, window, xi, &all)?;
+    let loo = leave_one_out_vaf(&data, window, xi)?;
+    if args.json {
+        let mut v = serde_json::to_value(&est)?;
+        v["leave_one_out_vaf"] = serde_json::json!(loo);
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        print!("{}", text(&est, &data, loo));
+    }
+    Ok(())
+}
+
+pub fn run_sweep(args: SweepArgs) -> CliResult {
+    let (data, xi) = args.arm.load()?;
+    let sweep = window_sweep(&data, args.from, args.to, args.step, xi)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&sweep)?);
+        return Ok(());
+    }
+    let mut s = String::from("t_obs_ms,cond_w,cond_w_scaled,xi1,xi2,xi3,k11,k12,k21,k22,d11,d12,d21,d22,k_eig_min,d_eig_min,k_sym_ratio,d_sym_ratio,vaf1,vaf2,trusted\n");
+    for r in &sweep.rows {
+        let e = &r.estimate;
+        let c = &e.criteria;
+        let _ = writeln!(
+            s,
+            "{},{:.4e},{:.4e},{:.5},{:.5},{:.5},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.5},{:.4},{:.5},{:.4},{:.4},{:.2},{:.2},{}",
+            r.observation_window_ms, c.condition_number, c.condition_number_scaled,
+            e.inertial_parameters[0], e.inertial_parameters[1], e.inertial_parameters[2],
+            e.stiffness[0][0], e.stiffness[0][1], e.stiffness[1][0], e.stiffness[1][1],
+            e.damping[0][0], e.damping[0][1], e.damping[1][0], e.damping[1][1],
+            c.stiffness_eigenvalues[1], c.damping_eigenvalues[1], c.stiffness_symmetry_ratio, c.damping_symmetry_ratio,
+            e.fit.vaf[0], e.fit.vaf[1], c.trusted
+        );
+    }
+    if args.csv {
+        print!("{s}");
+        return Ok(());
+    }
+    println!(
+        "limpid window-sweep: {} ({} trials)",
+        data.path.display(),
+        data.trials.len()
+    );
+    println!(
+        "{:>8} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8}  verdict",
+        "T_obs", "cond(W)s", "K11", "K22", "D11", "D22", "xi1", "Kmin", "K asym"
+    );
+    for r in &sweep.rows {
+        let e = &r.estimate;
+        let c = &e.criteria;
+        println!(
+            "{:>8} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8.3}  {}",
+            num(r.observation_window_ms),
+            num(c.condition_number_scaled),
+            num(e.stiffness[0][0]),
+            num(e.stiffness[1][1]),
+            num(e.damping[0][0]),
+            num(e.damping[1][1]),
+            num(e.inertial_parameters[0]),
+            num(c.stiffness_eigenvalues[1]),
+            c.stiffness_symmetry_ratio,
+            if c.trusted { "trusted" } else { "not trusted" }
+        );
+    }
+    let show = |v: Option<f64>| {
+        v.map_or("not reached in the sweep".to_string(), |t| {
+            format!("{} ms", num(t))
+        })
+    };
+    println!(
+        "\nK positive definite from T_obs = {}",
+        show(sweep.min_positive_definite_ms)
+    );
+    println!(
+        "K and D quasi-symmetric (ratio < 0.1) from T_obs = {}",
+        show(sweep.min_quasi_symmetric_ms)
+    );
+    println!(
+        "all parameters quasi-constant from T_obs = {} ({})",
+        show(sweep.min_quasi_constant_ms),
+        sweep.quasi_constant_definition
+    );
+    println!(
+        "leave-one-trial-out VAF at the longest window: {:.1} / {:.1} %",
+        sweep.leave_one_out_vaf[0], sweep.leave_one_out_vaf[1]
+    );
+    Ok(())
+}

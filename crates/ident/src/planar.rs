@@ -1,0 +1,825 @@
+//! Planar two-link arm in joint space (seed 003).
+//!
+//! Model, eq. (9): `M(q, ξ) q'' + (C(q, q', ξ) + D) q' + K Δq = Δτ_ext` with
+//! `M = [[ξ1 + 2 ξ2 cos q2, ξ3 + ξ2 cos q2], [ξ3 + ξ2 cos q2, ξ3]]`, q1 the
+//! shoulder and q2 the relative elbow angle. The regressor rows are eq. (13)
+//! (11 parameters: ξ1..ξ3, D11, D12, D21, D22, K11, K12, K21, K22); with known ξ
+//! the reduced model eq. (23)-(25) has 8.
+//!
+//! Data: joint-space recordings (`q1,q2,tau1,tau2`) or end-point recordings
+//! (`x,y,fx,fy`), converted by analytical inverse kinematics (elbow branch
+//! q2 > 0, i.e. the elbow flexed, unless told otherwise) and `τ = J(q)^T F`
+//! (§IV-C). Per trial, `q0` and `τ0` are the means over the pre-onset rest;
+//! angles and torques get the same zero-phase low-pass (each window end
+//! extended by the reflection that keeps it consistent), derivatives by
+//! central differences. The observation window of a trial runs from the
+//! perturbation onset for `T_obs` (seed 003 Fig. 3).
+//!
+//! Criteria (§III-C): condition number of W (eq. (19), reported both for W
+//! as is and with unit-RMS columns), positive definiteness of the symmetric
+//! parts of K and D (eq. (20)), and the symmetry ratio ||X_a|| / ||X_s|| of K
+//! and D (eq. (22)). Verdict "trusted" when the scaled condition number is
+//! below 1000, K_s and D_s are positive definite and both ratios are below 0.1
+//! ("quasi-symmetric", our threshold).
+
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::lsq::{merge, triangle};
+use crate::prepare::edge_kind;
+pub use limpid_core::arm::{coriolis, mass_matrix, Arm};
+use limpid_core::trial::{change_floors, detect_onset, noise_sigma, windows_from_trial_column};
+use limpid_core::{Error, Recording, Result};
+use limpid_dsp::{central_first, central_second, LowPass};
+
+/// Regressor rows X (2 x 11) of eq. (13) at one sample.
+pub fn regressor(q2: f64, qd: [f64; 2], qdd: [f64; 2], dq: [f64; 2]) -> [[f64; 11]; 2] {
+    let (s, c) = q2.sin_cos();
+    let mut x = [[0.0; 11]; 2];
+    x[0][0] = qdd[0];
+    x[0][1] = (2.0 * qdd[0] + qdd[1]) * c - (2.0 * qd[0] * qd[1] + qd[1] * qd[1]) * s;
+    x[0][2] = qdd[1];
+    x[1][1] = qdd[0] * c + qd[0] * qd[0] * s;
+    x[1][2] = qdd[0] + qdd[1];
+    x[0][3] = qd[0];
+    x[0][4] = qd[1];
+    x[1][5] = qd[0];
+    x[1][6] = qd[1];
+    x[0][7] = dq[0];
+    x[0][8] = dq[1];
+    x[1][9] = dq[0];
+    x[1][10] = dq[1];
+    x
+}
+
+/// One prepared trial: samples from the perturbation onset to the end of the window.
+#[derive(Debug, Clone)]
+pub struct PlanarTrial {
+    pub id: i64,
+    pub q: [Vec<f64>; 2],
+    pub qd: [Vec<f64>; 2],
+    pub qdd: [Vec<f64>; 2],
+    /// Δq = q - q0.
+    pub dq: [Vec<f64>; 2],
+    /// Δτ = τ - τ0.
+    pub dtau: [Vec<f64>; 2],
+    pub q0: [f64; 2],
+    pub tau0: [f64; 2],
+}
+
+/// Preparation settings of planar data.
+///
+/// | Name | Default | Purpose | Range |
+/// |---|---|---|---|
+/// | `arm` | required | link lengths, shoulder | l1, l2 > 0 |
+/// | `cutoff_hz` | 30 Hz (at most 0.4 fs) | zero-phase low-pass of angles and torques | (0, fs/2) |
+/// | `order` | 4 | Butterworth order | 1..=20 |
+/// | `elbow_positive` | true | inverse-kinematics branch for end-point data | |
+#[derive(Debug, Clone)]
+pub struct PlanarPrepare {
+    pub arm: Arm,
+    pub cutoff_hz: Option<f64>,
+    pub order: usize,
+    pub elbow_positive: bool,
+}
+
+/// Prepared planar data.
+#[derive(Debug, Clone)]
+pub struct PlanarData {
+    pub path: std::path::PathBuf,
+    pub fs: f64,
+    pub arm: Arm,
+    pub trials: Vec<PlanarTrial>,
+    /// True when the recording held end-point data converted to joint space.
+    pub from_endpoint: bool,
+    pub cutoff_hz: f64,
+}
+
+impl PlanarData {
+    /// Longest observation window available in every trial (s).
+    pub fn max_window_s(&self) -> f64 {
+        self.trials.iter().map(|t| t.dq[0].len()).min().unwrap_or(0) as f64 / self.fs
+    }
+}
+
+/// Convert, cut into trials, take baselines, filter and differentiate.
+pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> {
+    let fs = rec.sample_rate();
+    let arm = p.arm;
+    if !(arm.l1 > 0.0 && arm.l2 > 0.0) {
+        return Err(Error::invalid(
+            "link lengths",
+            format!(
+                "expected two positive lengths in m, found {}, {}",
+                arm.l1, arm.l2
+            ),
+        ));
+    }
+    let from_endpoint = !rec.has("q1");
+    let (q, tau): ([Vec<f64>; 2], [Vec<f64>; 2]) = if from_endpoint {
+        let x = rec.require("x", "end-point position (or give q1,q2 joint angles)")?;
+        let y = rec.require("y", "end-point position")?;
+        let fx = rec.require("fx", "end-point force")?;
+        let fy = rec.require("fy", "end-point force")?;
+        let mut q = [Vec::with_capacity(rec.len()), Vec::with_capacity(rec.len())];
+        let mut tau = [Vec::with_capacity(rec.len()), Vec::with_capacity(rec.len())];
+        for i in 0..rec.len() {
+            let qi = arm.ik([x[i], y[i]], p.elbow_positive).ok_or_else(|| Error::Numerical {
+                path: rec.path().to_path_buf(),
+                message: format!(
+                    "row {}, columns x,y: ({}, {}) is out of reach of links {} + {} m from the shoulder at ({}, {})",
+                    rec.row_of(i), x[i], y[i], arm.l1, arm.l2, arm.shoulder[0], arm.shoulder[1]
+                ),
+            })?;
+            let t = arm.jacobian(qi).transpose() * Vector2::new(fx[i], fy[i]);
+            for k in 0..2 {
+                q[k].push(qi[k]);
+                tau[k].push(t[k]);
+            }
+        }
+        (q, tau)
+    } else {
+        let get = |n: &str, why: &str| rec.require(n, why).map(<[f64]>::to_vec);
+        (
+            [
+                get("q1", "shoulder angle")?,
+                get("q2", "relative elbow angle")?,
+            ],
+            [
+                get("tau1", "shoulder torque")?,
+                get("tau2", "elbow torque")?,
+            ],
+        )
+    };
+    let cutoff = p
+        .cutoff_hz
+        .unwrap_or_else(|| crate::prepare::default_cutoff(fs));
+    let lp = LowPass::butterworth(p.order, cutoff, fs)?;
+    let signals: Vec<&[f64]> = vec![&q[0], &q[1], &tau[0], &tau[1]];
+    let sigmas: Vec<f64> = signals.iter().map(|c| noise_sigma(c)).collect();
+    let floors = change_floors(&signals);
+    let windows = windows_from_trial_column(rec, "trial")?;
+    let dt = 1.0 / fs;
+    let min_rest = ((0.02 * fs).round() as usize).max(3);
+    let qs: Vec<&[f64]> = vec![&q[0], &q[1]];
+    let trials = windows
+        .iter()
+        .map(|w| {
+            let r = w.range.clone();
+            let onset = detect_onset(&signals, r.clone(), &sigmas, &floors).unwrap_or(r.end);
+            if onset - r.start < min_rest {
+                return Err(Error::NoRestBeforeOnset {
+                    path: rec.path().to_path_buf(),
+                    row: rec.row_of(r.start),
+                    column: "trial".into(),
+                    trial: w.id,
+                    rest_samples: onset - r.start,
+                    needed: min_rest,
+                });
+            }
+            if r.len() <= lp.padlen() + 1 {
+                return Err(Error::TooFewSamples {
+                    path: rec.path().to_path_buf(),
+                    what: format!("trial {} with zero-phase filtering", w.id),
+                    needed: lp.padlen() + 2,
+                    found: r.len(),
+                });
+            }
+            let rest_end = onset.saturating_sub(2).max(r.start + 1);
+            let span = ((fs / cutoff).round() as usize).max(3);
+            let left = edge_kind(&qs, r.start, r.clone(), span, dt);
+            let right = edge_kind(&qs, r.end - 1, r.clone(), span, dt);
+            let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
+            let mut t = PlanarTrial {
+                id: w.id,
+                q: Default::default(),
+                qd: Default::default(),
+                qdd: Default::default(),
+                dq: Default::default(),
+                dtau: Default::default(),
+                q0: [0.0; 2],
+                tau0: [0.0; 2],
+            };
+            let start = onset - r.start;
+            for k in 0..2 {
+                let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+                t.q0[k] = mean(&q[k][r.start..rest_end]);
+                t.tau0[k] = mean(&tau[k][r.start..rest_end]);
+                let qf = lp.filtfilt_edges(&q[k][r.clone()], left, right, extra)?;
+                let tf = lp.filtfilt_edges(&tau[k][r.clone()], left, right, extra)?;
+                let qd = central_first(&qf, dt);
+                let qdd = central_second(&qf, dt);
+                t.dq[k] = qf[start..].iter().map(|v| v - t.q0[k]).collect();
+                t.dtau[k] = tf[start..].iter().map(|v| v - t.tau0[k]).collect();
+                t.q[k] = qf[start..].to_vec();
+                t.qd[k] = qd[start..].to_vec();
+                t.qdd[k] = qdd[start..].to_vec();
+            }
+            Ok(t)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    if trials.len() < 2 {
+        return Err(Error::TooFewSamples {
+            path: rec.path().to_path_buf(),
+            what: "a planar estimate (trials)".into(),
+            needed: 2,
+            found: trials.len(),
+        });
+    }
+    Ok(PlanarData {
+        path: rec.path().to_path_buf(),
+        fs,
+        arm,
+        trials,
+        from_endpoint,
+        cutoff_hz: cutoff,
+    })
+}
+
+/// Confidence criteria of seed 003 §III-C.
+#[derive(Debug, Clone, Serialize)]
+pub struct PlanarCriteria {
+    /// cond(W) of eq. (19), W as is.
+    pub condition_number: f64,
+    /// cond(W) with unit-RMS columns.
+    pub condition_number_scaled: f64,
+    pub stiffness_eigenvalues: [f64; 2],
+    pub damping_eigenvalues: [f64; 2],
+    pub stiffness_positive_definite: bool,
+    pub damping_positive_definite: bool,
+    /// ||K_a|| / ||K_s||.
+    pub stiffness_symmetry_ratio: f64,
+    pub damping_symmetry_ratio: f64,
+    pub trusted: bool,
+    pub reasons: Vec<String>,
+}
+
+/// A planar estimate.
+#[derive(Debug, Clone, Serialize)]
+pub struct PlanarEstimate {
+    /// ξ1..ξ3 (kg m^2); the given values when fixed.
+    pub inertial_parameters: [f64; 3],
+    pub inertial_parameters_fixed: bool,
+    /// Joint stiffness (N m/rad) and damping (N m s/rad).
+    pub stiffness: [[f64; 2]; 2],
+    pub damping: [[f64; 2]; 2],
+    /// End-point stiffness J^-T K J^-1 at the mean q0 (N/m), without the
+    /// geometric term of the baseline force.
+    pub endpoint_stiffness: [[f64; 2]; 2],
+    /// Jackknife (delete-one-trial) standard errors, same layout.
+    pub standard_errors: PlanarErrors,
+    /// VAF (%) and r of Δτ per joint.
+    pub fit: PlanarFit,
+    pub criteria: PlanarCriteria,
+    pub observation_window_ms: f64,
+    pub trials: usize,
+    pub samples: usize,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PlanarErrors {
+    pub inertial_parameters: [f64; 3],
+    pub stiffness: [[f64; 2]; 2],
+    pub damping: [[f64; 2]; 2],
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PlanarFit {
+    pub vaf: [f64; 2],
+    pub r: [f64; 2],
+}
+
+/// Rows (W | y) of one trial's first `n` samples, unscaled.
+fn trial_rows(t: &PlanarTrial, n: usize, xi: Option<[f64; 3]>) -> DMatrix<f64> {
+    let p = if xi.is_some() { 8 } else { 11 };
+    let n = n.min(t.dq[0].len());
+    let mut a = DMatrix::<f64>::zeros(2 * n, p + 1);
+    for i in 0..n {
+        let qd = [t.qd[0][i], t.qd[1][i]];
+        let qdd = [t.qdd[0][i], t.qdd[1][i]];
+        let x = regressor(t.q[1][i], qd, qdd, [t.dq[0][i], t.dq[1][i]]);
+        let known = xi.map(|xi| {
+            mass_matrix(t.q[1][i], xi) * Vector2::new(qdd[0], qdd[1]) + coriolis(t.q[1][i], qd, xi)
+        });
+        for r in 0..2 {
+            let row = 2 * i + r;
+            let first = if xi.is_some() { 3 } else { 0 };
+            for (c, j) in (first..11).enumerate() {
+                a[(row, c)] = x[r][j];
+            }
+            a[(row, p)] = t.dtau[r][i] - known.map_or(0.0, |k| k[r]);
+        }
+    }
+    a
+}
+
+/// Estimate from the first `window` samples after onset of the given trials.
+pub fn fit_planar(
+    data: &PlanarData,
+    window: usize,
+    xi: Option<[f64; 3]>,
+    use_trials: &[usize],
+) -> Result<PlanarEstimate> {
+    let p = if xi.is_some() { 8 } else { 11 };
+    let q = p + 1;
+    let blocks: Vec<DMatrix<f64>> = use_trials
+        .iter()
+        .map(|&k| trial_rows(&data.trials[k], window, xi))
+        .collect();
+    let rows: usize = blocks.iter().map(|b| b.nrows()).sum();
+    if rows < 2 * p {
+        return Err(Error::TooFewSamples {
+            path: data.path.clone(),
+            what: format!("a {p}-parameter planar fit"),
+            needed: 2 * p,
+            found: rows,
+        });
+    }
+    // column scales (RMS over all rows)
+    let mut scales = vec![0.0; q];
+    for b in &blocks {
+        for j in 0..q {
+            scales[j] += b.column(j).norm_squared();
+        }
+    }
+    for s in &mut scales {
+        *s = (*s / rows as f64).sqrt();
+        if *s == 0.0 {
+            *s = 1.0;
+        }
+    }
+    let scaled: Vec<DMatrix<f64>> = blocks
+        .iter()
+        .map(|b| {
+            let mut b = b.clone();
+            for j in 0..q {
+                b.column_mut(j).scale_mut(1.0 / scales[j]);
+            }
+            b
+        })
+        .collect();
+    let tris: Vec<DMatrix<f64>> = scaled.par_iter().map(|b| triangle(b.clone(), q)).collect();
+    let numerical = |m: String| Error::Numerical {
+        path: data.path.clone(),
+        message: m,
+    };
+    let solve = |r_aug: &DMatrix<f64>| -> std::result::Result<(DVector<f64>, f64), String> {
+        let r = r_aug.view((0, 0), (p, p)).into_owned();
+        let z = r_aug.view((0, p), (p, 1)).into_owned();
+        let svd = r.svd(true, true);
+        let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
+        if smin.partial_cmp(&(smax * 1e-13)) != Some(std::cmp::Ordering::Greater) {
+            return Err("the observation matrix W is rank-deficient: the perturbations do not excite every parameter".into());
+        }
+        let sol = svd.solve(&z, 0.0)?;
+        let theta = DVector::from_fn(p, |j, _| sol[(j, 0)] * scales[p] / scales[j]);
+        Ok((theta, smax / smin))
+    };
+    let (theta, cond_scaled) = solve(&merge(tris.iter(), q)).map_err(numerical)?;
+    // jackknife over trials
+    let g = tris.len();
+    let reps: Vec<DVector<f64>> = (0..g)
+        .into_par_iter()
+        .filter_map(|b| {
+            solve(&merge(
+                tris.iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != b)
+                    .map(|(_, t)| t),
+                q,
+            ))
+            .ok()
+            .map(|s| s.0)
+        })
+        .collect();
+    let gn = reps.len() as f64;
+    let mean = reps.iter().fold(DVector::zeros(p), |a, t| a + t) / gn.max(1.0);
+    let se = (reps
+        .iter()
+        .fold(DVector::zeros(p), |a, t| a + (t - &mean).map(|v| v * v))
+        * ((gn - 1.0) / gn.max(1.0)))
+    .map(f64::sqrt);
+    // unscaled condition number of W (eq. (19))
+    let raw_tris: Vec<DMatrix<f64>> = blocks
+        .iter()
+        .map(|b| triangle(b.columns(0, p).into_owned(), p))
+        .collect();
+    let raw = merge(raw_tris.iter(), p).svd(false, false).singular_values;
+    let condition_number = raw.max() / raw.min();
+    let off = if xi.is_some() { 0 } else { 3 };
+    let (xi_hat, xi_se) = match xi {
+        Some(x) => (x, [0.0; 3]),
+        None => ([theta[0], theta[1], theta[2]], [se[0], se[1], se[2]]),
+    };
+    let m2 = |v: &DVector<f64>, s: usize| [[v[s], v[s + 1]], [v[s + 2], v[s + 3]]];
+    let damping = m2(&theta, off);
+    let stiffness = m2(&theta, off + 4);
+    // fit
+    let mut fit = PlanarFit {
+        vaf: [0.0; 2],
+        r: [0.0; 2],
+    };
+    for r in 0..2 {
+        let (mut y, mut yh) = (Vec::new(), Vec::new());
+        for b in &blocks {
+            for i in (r..b.nrows()).step_by(2) {
+                let pred: f64 = (0..p).map(|j| b[(i, j)] * theta[j]).sum();
+                y.push(b[(i, p)]);
+                yh.push(pred);
+            }
+        }
+        let (vaf, rr) = vaf_r(&y, &yh);
+        fit.vaf[r] = vaf;
+        fit.r[r] = rr;
+    }
+    let criteria = criteria(stiffness, damping, condition_number, cond_scaled);
+    let q0 = {
+        let n = data.trials.len() as f64;
+        [
+            data.trials.iter().map(|t| t.q0[0]).sum::<f64>() / n,
+            data.trials.iter().map(|t| t.q0[1]).sum::<f64>() / n,
+        ]
+    };
+    let j = data.arm.jacobian(q0);
+    let kx = match j.try_inverse() {
+        Some(ji) => {
+            let k = Matrix2::new(
+                stiffness[0][0],
+                stiffness[0][1],
+                stiffness[1][0],
+                stiffness[1][1],
+            );
+            let kx = ji.transpose() * k * ji;
+            [[kx[(0, 0)], kx[(0, 1)]], [kx[(1, 0)], kx[(1, 1)]]]
+        }
+        None => {
+            return Err(numerical(
+                "the arm is singular (stretched) at q0: no end-point stiffness".into(),
+            ))
+        }
+    };
+    Ok(PlanarEstimate {
+        inertial_parameters: xi_hat,
+        inertial_parameters_fixed: xi.is_some(),
+        stiffness,
+        damping,
+        endpoint_stiffness: kx,
+        standard_errors: PlanarErrors {
+            inertial_parameters: xi_se,
+            stiffness: m2(&se, off + 4),
+            damping: m2(&se, off),
+        },
+        fit,
+        criteria,
+        observation_window_ms: (1e4
+            * window.min(data.trials.iter().map(|t| t.dq[0].len()).min().unwrap_or(0)) as f64
+            / data.fs)
+            .round()
+            / 10.0,
+        trials: use_trials.len(),
+        samples: rows / 2,
+    })
+}
+
+fn vaf_r(y: &[f64], yh: &[f64]) -> (f64, f64) {
+    let n = y.len() as f64;
+    let my = y.iter().sum::<f64>() / n;
+    let mh = yh.iter().sum::<f64>() / n;
+    let (mut syy, mut shh, mut syh, mut see, mut se) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (a, b) in y.iter().zip(yh) {
+        syy += (a - my).powi(2);
+        shh += (b - mh).powi(2);
+        syh += (a - my) * (b - mh);
+        see += (a - b).powi(2);
+        se += a - b;
+    }
+    let var_e = see / n - (se / n).powi(2);
+    let vaf = if syy > 0.0 {
+        100.0 * (1.0 - var_e / (syy / n))
+    } else {
+        0.0
+    };
+    let r = if syy > 0.0 && shh > 0.0 {
+        syh / (syy * shh).sqrt()
+    } else {
+        0.0
+    };
+    (vaf, r)
+}
+
+/// Leave-one-trial-out prediction of Δτ (seed 003 Fig. 6): each trial
+/// predicted by the estimate from all the others, VAF (%) pooled per joint.
+pub fn leave_one_out_vaf(
+    data: &PlanarData,
+    window: usize,
+    xi: Option<[f64; 3]>,
+) -> Result<[f64; 2]> {
+    let n = data.trials.len();
+    let preds: Vec<Result<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>)>> = (0..n)
+        .into_par_iter()
+        .map(|k| {
+            let others: Vec<usize> = (0..n).filter(|&j| j != k).collect();
+            let est = fit_planar(data, window, xi, &others)?;
+            let rows = trial_rows(&data.trials[k], window, xi);
+            let p = rows.ncols() - 1;
+            let mut theta = Vec::with_capacity(p);
+            if xi.is_none() {
+                theta.extend(est.inertial_parameters);
+            }
+            theta.extend(est.damping.iter().flatten());
+            theta.extend(est.stiffness.iter().flatten());
+            let (mut y1, mut h1, mut y2, mut h2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+            for i in 0..rows.nrows() {
+                let pred: f64 = (0..p).map(|j| rows[(i, j)] * theta[j]).sum();
+                if i % 2 == 0 {
+                    y1.push(rows[(i, p)]);
+                    h1.push(pred);
+                } else {
+                    y2.push(rows[(i, p)]);
+                    h2.push(pred);
+                }
+            }
+            Ok((y1, h1, y2, h2))
+        })
+        .collect();
+    let (mut y1, mut h1, mut y2, mut h2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for p in preds {
+        let (a, b, c, d) = p?;
+        y1.extend(a);
+        h1.extend(b);
+        y2.extend(c);
+        h2.extend(d);
+    }
+    Ok([vaf_r(&y1, &h1).0, vaf_r(&y2, &h2).0])
+}
+
+/// One observation window of the sweep.
+#[derive(Debug, Clone, Serialize)]
+pub struct SweepRow {
+    pub observation_window_ms: f64,
+    pub estimate: PlanarEstimate,
+}
+
+/// The observation-window study (seed 003 §IV, Fig. 4-5).
+#[derive(Debug, Clone, Serialize)]
+pub struct Sweep {
+    pub rows: Vec<SweepRow>,
+    /// Shortest T_obs from which K_s stays positive definite.
+    pub min_positive_definite_ms: Option<f64>,
+    /// Shortest T_obs from which K and D stay quasi-symmetric.
+    pub min_quasi_symmetric_ms: Option<f64>,
+    /// Shortest T_obs from which every parameter group stays quasi-constant.
+    pub min_quasi_constant_ms: Option<f64>,
+    /// How "quasi-constant" is defined.
+    pub quasi_constant_definition: String,
+    /// Leave-one-trial-out VAF (%) per joint at the longest window.
+    pub leave_one_out_vaf: [f64; 2],
+}
+
+/// Relative change below which a parameter group counts as constant.
+pub const QUASI_CONSTANT: f64 = 0.05;
+
+/// Estimates over T_obs = from..=to in steps (ms), each with its criteria.
+pub fn window_sweep(
+    data: &PlanarData,
+    from_ms: f64,
+    to_ms: f64,
+    step_ms: f64,
+    xi: Option<[f64; 3]>,
+) -> Result<Sweep> {
+    if !(from_ms > 0.0 && step_ms > 0.0 && to_ms >= from_ms) {
+        return Err(Error::invalid(
+            "window range",
+            format!(
+                "expected 0 < from <= to and step > 0, found {from_ms}..{to_ms} step {step_ms} ms"
+            ),
+        ));
+    }
+    let max_ms = 1000.0 * data.max_window_s();
+    let mut windows = Vec::new();
+    let mut t = from_ms;
+    while t <= to_ms.min(max_ms) + 1e-9 {
+        windows.push(t);
+        t += step_ms;
+    }
+    if windows.is_empty() {
+        return Err(Error::invalid(
+            "window range",
+            format!("the trials hold only {max_ms:.0} ms after the onset, less than {from_ms} ms"),
+        ));
+    }
+    let all: Vec<usize> = (0..data.trials.len()).collect();
+    let rows: Vec<SweepRow> = windows
+        .par_iter()
+        .filter_map(|ms| {
+            let n = (ms * data.fs / 1000.0).round() as usize;
+            fit_planar(data, n, xi, &all).ok().map(|estimate| SweepRow {
+                observation_window_ms: *ms,
+                estimate,
+            })
+        })
+        .collect();
+    let from_which = |ok: &dyn Fn(&PlanarEstimate) -> bool| -> Option<f64> {
+        let mut first = None;
+        for r in rows.iter().rev() {
+            if ok(&r.estimate) {
+                first = Some(r.observation_window_ms);
+            } else {
+                break;
+            }
+        }
+        first
+    };
+    let last = rows.last().map(|r| r.estimate.clone());
+    let rel = |a: &[[f64; 2]; 2], b: &[[f64; 2]; 2]| {
+        let (mut n, mut d) = (0.0, 0.0);
+        for i in 0..2 {
+            for j in 0..2 {
+                n += (a[i][j] - b[i][j]).powi(2);
+                d += b[i][j].powi(2);
+            }
+        }
+        (n / d.max(1e-300)).sqrt()
+    };
+    let constant = |e: &PlanarEstimate| match &last {
+        Some(l) => {
+            let xi_change = (0..3)
+                .map(|i| (e.inertial_parameters[i] - l.inertial_parameters[i]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+                / l.inertial_parameters
+                    .iter()
+                    .map(|v| v * v)
+                    .sum::<f64>()
+                    .sqrt()
+                    .max(1e-300);
+            rel(&e.stiffness, &l.stiffness) < QUASI_CONSTANT
+                && rel(&e.damping, &l.damping) < QUASI_CONSTANT
+                && xi_change < QUASI_CONSTANT
+        }
+        None => false,
+    };
+    let longest = rows.last().map_or(0, |r| {
+        (r.observation_window_ms * data.fs / 1000.0).round() as usize
+    });
+    Ok(Sweep {
+        min_positive_definite_ms: from_which(&|e| e.criteria.stiffness_positive_definite),
+        min_quasi_symmetric_ms: from_which(&|e| e.criteria.stiffness_symmetry_ratio < QUASI_SYMMETRIC && e.criteria.damping_symmetry_ratio < QUASI_SYMMETRIC),
+        min_quasi_constant_ms: from_which(&constant),
+        quasi_constant_definition: format!(
+            "K, D and the inertial parameters each within {:.0} % (relative Frobenius norm) of their estimate at the longest window, for this and every longer window",
+            100.0 * QUASI_CONSTANT
+        ),
+        leave_one_out_vaf: leave_one_out_vaf(data, longest, xi)?,
+        rows,
+    })
+}
+
+/// Quasi-symmetry threshold of ||X_a|| / ||X_s|| (our choice).
+pub const QUASI_SYMMETRIC: f64 = 0.1;
+/// Largest scaled condition number counted as well-conditioned (our choice).
+pub const MAX_CONDITION: f64 = 1000.0;
+
+/// Criteria of seed 003 §III-C on a 2 x 2 K and D.
+pub fn criteria(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, cond_scaled: f64) -> PlanarCriteria {
+    let eig = |m: [[f64; 2]; 2]| {
+        let s = Matrix2::new(
+            m[0][0],
+            0.5 * (m[0][1] + m[1][0]),
+            0.5 * (m[0][1] + m[1][0]),
+            m[1][1],
+        );
+        let e = s.symmetric_eigenvalues();
+        let (a, b) = (e[0].max(e[1]), e[0].min(e[1]));
+        [a, b]
+    };
+    let ratio = |m: [[f64; 2]; 2]| {
+        let a = 0.5 * (m[0][1] - m[1][0]).abs() * 2f64.sqrt();
+        let sym = (m[0][0].powi(2) + m[1][1].powi(2) + 0.5 * (m[0][1] + m[1][0]).powi(2)).sqrt();
+        if sym > 0.0 {
+            a / sym
+        } else {
+            f64::INFINITY
+        }
+    };
+    let (ke, de) = (eig(k), eig(d));
+    let (kr, dr) = (ratio(k), ratio(d));
+    let mut reasons = Vec::new();
+    if cond_scaled >= MAX_CONDITION {
+        reasons.push(format!(
+            "ill-conditioned: scaled condition number {cond_scaled:.0} >= {MAX_CONDITION:.0}"
+        ));
+    }
+    if ke[1] <= 0.0 {
+        reasons.push(format!(
+            "stiffness not positive definite (eigenvalues {:.3}, {:.3})",
+            ke[0], ke[1]
+        ));
+    }
+    if de[1] <= 0.0 {
+        reasons.push(format!(
+            "damping not positive definite (eigenvalues {:.3}, {:.3})",
+            de[0], de[1]
+        ));
+    }
+    if kr >= QUASI_SYMMETRIC {
+        reasons.push(format!(
+            "stiffness not quasi-symmetric (ratio {kr:.3} >= {QUASI_SYMMETRIC})"
+        ));
+    }
+    if dr >= QUASI_SYMMETRIC {
+        reasons.push(format!(
+            "damping not quasi-symmetric (ratio {dr:.3} >= {QUASI_SYMMETRIC})"
+        ));
+    }
+    PlanarCriteria {
+        condition_number: cond,
+        condition_number_scaled: cond_scaled,
+        stiffness_eigenvalues: ke,
+        damping_eigenvalues: de,
+        stiffness_positive_definite: ke[1] > 0.0,
+        damping_positive_definite: de[1] > 0.0,
+        stiffness_symmetry_ratio: kr,
+        damping_symmetry_ratio: dr,
+        trusted: reasons.is_empty(),
+        reasons,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regressor_matches_inverse_dynamics() {
+        // Ψ = M q'' + (C + D) q' + K Δq must equal X ζ, and C must follow from M
+        let xi = [0.35, 0.14, 0.15];
+        let d = [[1.8, 0.6], [0.5, 1.4]];
+        let k = [[38.0, 9.0], [9.5, 10.0]];
+        let zeta = [
+            xi[0], xi[1], xi[2], d[0][0], d[0][1], d[1][0], d[1][1], k[0][0], k[0][1], k[1][0],
+            k[1][1],
+        ];
+        let (q2, qd, qdd, dq) = (0.9, [0.7, -1.1], [3.0, -2.0], [0.02, -0.01]);
+        let x = regressor(q2, qd, qdd, dq);
+        let psi = mass_matrix(q2, xi) * Vector2::new(qdd[0], qdd[1])
+            + coriolis(q2, qd, xi)
+            + Matrix2::new(d[0][0], d[0][1], d[1][0], d[1][1]) * Vector2::new(qd[0], qd[1])
+            + Matrix2::new(k[0][0], k[0][1], k[1][0], k[1][1]) * Vector2::new(dq[0], dq[1]);
+        for r in 0..2 {
+            let xz: f64 = (0..11).map(|j| x[r][j] * zeta[j]).sum();
+            assert!((xz - psi[r]).abs() < 1e-12, "row {r}: {xz} vs {}", psi[r]);
+        }
+        // Coriolis from the Christoffel symbols of M by finite differences: c_i = Σ_jk (∂M_ij/∂q_k - ½ ∂M_jk/∂q_i) q'_j q'_k
+        let h = 1e-6;
+        let dm = (mass_matrix(q2 + h, xi) - mass_matrix(q2 - h, xi)) / (2.0 * h); // only q2 matters
+        let mut c = [0.0; 2];
+        for i in 0..2 {
+            for j in 0..2 {
+                for kk in 0..2 {
+                    let dmij_dqk = if kk == 1 { dm[(i, j)] } else { 0.0 };
+                    let dmjk_dqi = if i == 1 { dm[(j, kk)] } else { 0.0 };
+                    c[i] += (dmij_dqk - 0.5 * dmjk_dqi) * qd[j] * qd[kk];
+                }
+            }
+        }
+        let cor = coriolis(q2, qd, xi);
+        assert!(
+            (c[0] - cor[0]).abs() < 1e-6 && (c[1] - cor[1]).abs() < 1e-6,
+            "{c:?} vs {cor}"
+        );
+    }
+
+    #[test]
+    fn criteria_flags_hand_made_matrices() {
+        let good = criteria(
+            [[30.0, 8.0], [8.0, 12.0]],
+            [[2.0, 0.4], [0.4, 1.5]],
+            50.0,
+            20.0,
+        );
+        assert!(good.trusted, "{:?}", good.reasons);
+        let indefinite = criteria(
+            [[30.0, 25.0], [25.0, 12.0]],
+            [[2.0, 0.4], [0.4, 1.5]],
+            50.0,
+            20.0,
+        );
+        assert!(!indefinite.stiffness_positive_definite && !indefinite.trusted);
+        let skew = criteria(
+            [[30.0, 8.0], [2.0, 12.0]],
+            [[2.0, 0.4], [0.4, 1.5]],
+            50.0,
+            20.0,
+        );
+        assert!(skew.stiffness_symmetry_ratio > QUASI_SYMMETRIC && !skew.trusted);
+        let ill = criteria(
+            [[30.0, 8.0], [8.0, 12.0]],
+            [[2.0, 0.4], [0.4, 1.5]],
+            1e6,
+            5e3,
+        );
+        assert!(!ill.trusted && ill.reasons[0].contains("ill-conditioned"));
+    }
+}

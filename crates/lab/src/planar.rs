@@ -1,0 +1,137 @@
+//! Virtual planar-arm experiments (seed 003 §IV-B): a robot holds the arm at
+//! q0, waits, then imposes a quintic (minimum-jerk, eq. (16)) joint-space
+//! displacement in one of six directions over the interpolation interval T_k
+//! and holds. The torque the robot applies is the inverse dynamics of eq. (9)
+//! plus the baseline τ0, with an optional reflex: after a latency the
+//! stiffness and damping are scaled (seed 003 §I-B: reflexes act after
+//! 25-110 ms). Each trial window holds `rest_s` before the onset and `after_s`
+//! after it.
+
+use nalgebra::{Matrix2, Vector2};
+use rand::{rngs::StdRng, seq::SliceRandom, SeedableRng};
+use rand_distr::{Distribution, Normal};
+
+use crate::profile::Profile;
+use limpid_core::arm::{coriolis, mass_matrix};
+use limpid_core::{Recording, Result};
+
+/// A reflex: after `latency_s`, K and D are multiplied by `1 + gain`.
+#[derive(Debug, Clone, Copy)]
+pub struct Reflex {
+    pub latency_s: f64,
+    pub stiffness_gain: f64,
+    pub damping_gain: f64,
+}
+
+/// A planar subject in joint space.
+#[derive(Debug, Clone)]
+pub struct PlanarSubject {
+    /// Base inertial parameters ξ1..ξ3 (kg m^2).
+    pub xi: [f64; 3],
+    pub stiffness: Matrix2<f64>,
+    pub damping: Matrix2<f64>,
+    pub q0: [f64; 2],
+    pub tau0: [f64; 2],
+    pub reflex: Option<Reflex>,
+}
+
+impl PlanarSubject {
+    /// The `ex_joint_180` truth of ../shared/examples/planar (seed 003's posture q0 = (0.08, 1.0)).
+    pub fn seed003() -> Self {
+        PlanarSubject {
+            xi: [0.356, 0.143, 0.147],
+            stiffness: Matrix2::new(37.95, 9.31, 9.31, 10.14),
+            damping: Matrix2::new(1.854, 0.590, 0.590, 1.435),
+            q0: [0.08, 1.0],
+            tau0: [0.37, 0.41],
+            reflex: None,
+        }
+    }
+}
+
+/// The perturbation protocol.
+#[derive(Debug, Clone)]
+pub struct PlanarProtocol {
+    /// Displacements Δq_f (rad), seed 003: (±0.05, 0), (0, ±0.05), ±(0.05, -0.05).
+    pub directions: Vec<[f64; 2]>,
+    pub trials: usize,
+    /// Interpolation interval T_k (s).
+    pub interpolation_s: f64,
+    pub rest_s: f64,
+    pub after_s: f64,
+    pub sample_rate: f64,
+}
+
+impl PlanarProtocol {
+    /// Seed 003: 30 trials over the six directions, T_k = 200 ms, 0.3 s rest, 0.45 s after onset, 1 kHz.
+    pub fn seed003() -> Self {
+        PlanarProtocol {
+            directions: vec![
+                [0.05, 0.0],
+                [-0.05, 0.0],
+                [0.0, 0.05],
+                [0.0, -0.05],
+                [0.05, -0.05],
+                [-0.05, 0.05],
+            ],
+            trials: 30,
+            interpolation_s: 0.2,
+            rest_s: 0.3,
+            after_s: 0.45,
+            sample_rate: 1000.0,
+        }
+    }
+}
+
+/// Simulate `t,q1,q2,tau1,tau2,trial` with white torque and angle noise.
+pub fn simulate_planar(
+    subject: &PlanarSubject,
+    protocol: &PlanarProtocol,
+    torque_std: f64,
+    angle_std: f64,
+    seed: u64,
+) -> Result<Recording> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let unit = Normal::new(0.0, 1.0).expect("unit normal is valid");
+    let mut order: Vec<usize> = (0..protocol.trials)
+        .map(|i| i % protocol.directions.len().max(1))
+        .collect();
+    order.shuffle(&mut rng);
+    let fs = protocol.sample_rate;
+    let per = ((protocol.rest_s + protocol.after_s) * fs).round() as usize;
+    let mut cols: Vec<Vec<f64>> = (0..6)
+        .map(|_| Vec::with_capacity(per * order.len()))
+        .collect();
+    for (trial, &d) in order.iter().enumerate() {
+        let dir = protocol.directions[d];
+        for i in 0..per {
+            let t_on = i as f64 / fs - protocol.rest_s;
+            let (s, sd, sdd) = Profile::Quintic.eval(t_on, protocol.interpolation_s);
+            let q = [subject.q0[0] + dir[0] * s, subject.q0[1] + dir[1] * s];
+            let qd = [dir[0] * sd, dir[1] * sd];
+            let qdd = [dir[0] * sdd, dir[1] * sdd];
+            let (kk, dd) = match subject.reflex {
+                Some(r) if t_on > r.latency_s => (
+                    subject.stiffness * (1.0 + r.stiffness_gain),
+                    subject.damping * (1.0 + r.damping_gain),
+                ),
+                _ => (subject.stiffness, subject.damping),
+            };
+            let tau = mass_matrix(q[1], subject.xi) * Vector2::new(qdd[0], qdd[1])
+                + coriolis(q[1], qd, subject.xi)
+                + dd * Vector2::new(qd[0], qd[1])
+                + kk * Vector2::new(q[0] - subject.q0[0], q[1] - subject.q0[1])
+                + Vector2::new(subject.tau0[0], subject.tau0[1]);
+            cols[0].push((trial * per + i) as f64 / fs);
+            cols[1].push(q[0] + angle_std * unit.sample(&mut rng));
+            cols[2].push(q[1] + angle_std * unit.sample(&mut rng));
+            cols[3].push(tau[0] + torque_std * unit.sample(&mut rng));
+            cols[4].push(tau[1] + torque_std * unit.sample(&mut rng));
+            cols[5].push((trial + 1) as f64);
+        }
+    }
+    let names = ["t", "q1", "q2", "tau1", "tau2", "trial"]
+        .map(String::from)
+        .to_vec();
+    Recording::new("virtual:planar", names, cols, 2)
+}
