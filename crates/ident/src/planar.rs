@@ -339,8 +339,8 @@ pub fn fit_planar(
     // column scales (RMS over all rows)
     let mut scales = vec![0.0; q];
     for b in &blocks {
-        for j in 0..q {
-            scales[j] += b.column(j).norm_squared();
+        for (j, s) in scales.iter_mut().enumerate() {
+            *s += b.column(j).norm_squared();
         }
     }
     for s in &mut scales {
@@ -349,17 +349,16 @@ pub fn fit_planar(
             *s = 1.0;
         }
     }
-    let scaled: Vec<DMatrix<f64>> = blocks
-        .iter()
+    let tris: Vec<DMatrix<f64>> = blocks
+        .par_iter()
         .map(|b| {
             let mut b = b.clone();
-            for j in 0..q {
-                b.column_mut(j).scale_mut(1.0 / scales[j]);
+            for (j, s) in scales.iter().enumerate() {
+                b.column_mut(j).scale_mut(1.0 / s);
             }
-            b
+            triangle(b, q)
         })
         .collect();
-    let tris: Vec<DMatrix<f64>> = scaled.par_iter().map(|b| triangle(b.clone(), q)).collect();
     let numerical = |m: String| Error::Numerical {
         path: data.path.clone(),
         message: m,
@@ -516,7 +515,9 @@ pub fn leave_one_out_vaf(
     xi: Option<[f64; 3]>,
 ) -> Result<[f64; 2]> {
     let n = data.trials.len();
-    let preds: Vec<Result<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>)>> = (0..n)
+    // per held-out trial: measured and predicted Δτ of joint 1, then of joint 2
+    type Held = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
+    let preds: Vec<Result<Held>> = (0..n)
         .into_par_iter()
         .map(|k| {
             let others: Vec<usize> = (0..n).filter(|&j| j != k).collect();

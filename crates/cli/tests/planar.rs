@@ -1,0 +1,142 @@
+//! `limpid estimate planar` and `limpid window-sweep` (issue 5).
+
+mod common;
+use common::*;
+
+fn m2(v: &serde_json::Value) -> Vec<Vec<f64>> {
+    mat(v)
+}
+
+#[test]
+fn planar_examples_through_the_cli() {
+    for (case, lengths) in [
+        ("ex_joint_180", "0.28,0.35"),
+        ("ex_endpoint_220", "0.32,0.31"),
+    ] {
+        let dir = shared().join("examples/planar");
+        let t = read_json(&dir.join(format!("{case}.truth.json")));
+        let rec = dir.join(format!("{case}.csv"));
+        let r = json(&[
+            "estimate",
+            "planar",
+            rec.to_str().unwrap(),
+            "--link-lengths",
+            lengths,
+            "--json",
+        ]);
+        assert!(
+            rel_err(&m2(&r["stiffness"]), &mat(&t["stiffness"])) < 0.05,
+            "{case}"
+        );
+        assert!(
+            rel_err(&m2(&r["damping"]), &mat(&t["damping"])) < 0.15,
+            "{case}"
+        );
+        let xi: Vec<f64> = r["inertial_parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let xt: Vec<f64> = t["inertial_parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert!(rel_err(&[xi], std::slice::from_ref(&xt)) < 0.10, "{case}");
+        assert_eq!(r["criteria"]["trusted"], true);
+        for key in [
+            "endpoint_stiffness",
+            "standard_errors",
+            "fit",
+            "leave_one_out_vaf",
+        ] {
+            assert!(!r[key].is_null(), "{key}");
+        }
+        // the reduced model with the true inertial parameters gives the same K
+        let given = xt
+            .iter()
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(",");
+        let red = json(&[
+            "estimate",
+            "planar",
+            rec.to_str().unwrap(),
+            "--link-lengths",
+            lengths,
+            "--inertial-parameters",
+            &given,
+            "--json",
+        ]);
+        assert_eq!(red["inertial_parameters_fixed"], true);
+        assert!(
+            rel_err(&m2(&red["stiffness"]), &mat(&t["stiffness"])) < 0.05,
+            "{case} reduced"
+        );
+    }
+}
+
+#[test]
+fn window_sweep_reports_minimum_windows() {
+    let rec = shared().join("examples/planar/ex_joint_180.csv");
+    let out = limpid(&[
+        "window-sweep",
+        rec.to_str().unwrap(),
+        "--link-lengths",
+        "0.28,0.35",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    for needle in [
+        "K positive definite from T_obs",
+        "quasi-symmetric",
+        "quasi-constant",
+        "leave-one-trial-out VAF",
+    ] {
+        assert!(out.stdout.contains(needle), "{needle}:\n{}", out.stdout);
+    }
+    let csv = limpid(&[
+        "window-sweep",
+        rec.to_str().unwrap(),
+        "--link-lengths",
+        "0.28,0.35",
+        "--csv",
+    ])
+    .stdout;
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].starts_with("t_obs_ms,cond_w"));
+    // 50..240 ms in 10 ms steps (the trials hold 250 ms after the onset)
+    assert_eq!(lines.len() - 1, 20);
+}
+
+#[test]
+fn planar_bad_inputs() {
+    let rec = shared().join("examples/planar/ex_endpoint_220.csv");
+    let out = limpid(&[
+        "estimate",
+        "planar",
+        rec.to_str().unwrap(),
+        "--link-lengths",
+        "0.1,0.1",
+    ]);
+    assert_eq!(out.code, 2);
+    let line = out.stderr.trim_end();
+    assert!(
+        line.starts_with(&format!("limpid: {}: row 2, columns x,y: (", rec.display()))
+            && line.contains("is out of reach of links 0.1 + 0.1 m"),
+        "{line}"
+    );
+    let out = limpid(&[
+        "estimate",
+        "planar",
+        rec.to_str().unwrap(),
+        "--link-lengths",
+        "0.3",
+    ]);
+    assert_eq!(out.code, 2);
+    assert_eq!(
+        out.stderr.trim_end(),
+        "limpid: invalid link lengths: expected two numbers separated by a comma, found 1"
+    );
+}
