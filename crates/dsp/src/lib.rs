@@ -1,4 +1,5 @@
-//! limpid-dsp: zero-phase low-pass filtering and numerical derivatives.
+//! limpid-dsp: zero-phase low-pass filtering, numerical derivatives, and
+//! Welch spectral analysis ([`spectral`]).
 //!
 //! Seed 000 §II-C and seed 001 "Data Processing" low-pass and differentiate
 //! positions; seed 001 eq. (1) low-passes rectified EMG with a 2nd-order
@@ -10,6 +11,8 @@
 //! Conventions: cut-off in Hz, sample interval in s; `filtfilt` pads with the
 //! odd extension of length `3 * (2 * sections + 1)` exactly as
 //! `scipy.signal.sosfiltfilt`; Savitzky-Golay edges use `mode='nearest'`.
+
+pub mod spectral;
 
 use limpid_core::{Error, Result};
 use sci_rs::signal::filter::design::{

@@ -9,6 +9,7 @@ pub mod linear;
 pub mod lsq;
 pub mod planar;
 pub mod prepare;
+pub mod stochastic;
 
 pub use linear::{fit_linear, LinearEstimate, LinearParams};
 pub use prepare::{prepare, Derivative, Offsets, PrepareParams, Prepared, Windowing};

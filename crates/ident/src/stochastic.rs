@@ -1,0 +1,325 @@
+//! Stochastic MIMO impedance in the frequency domain (seed 004 §II-A, §III-E).
+//!
+//! Random commanded perturbations `u` (columns `ux`, `uz`, `utheta`, ... one
+//! per coordinate) drive the limb or rig. From Welch spectra of inputs,
+//! displacements and forces, the H1 transfer-function matrices R (u -> x) and
+//! T (u -> f) are estimated, and the impedance follows by analytical
+//! compensation, eq. (1)-(2): `C = R T^-1`, `Z = T R^-1`. Multiple and
+//! partial coherences of every output say where the linear model holds.
+//!
+//! The parametric fit of `Z(f) = K - w^2 M + j w B` over a band is linear
+//! least squares per element, weighted by the smallest multiple coherence of
+//! the outputs at each frequency: real parts give K and M, imaginary parts B.
+//! Standard errors come from the weighted residuals, with the variance
+//! multiplied by the window's equivalent noise bandwidth in bins (1.5 for
+//! Hann), because neighbouring Welch bins are correlated.
+//!
+//! Accuracy against an expected model (eq. (15)-(16)): `phi_T` is the mean over
+//! the band of the largest singular value of `Z - Z_model`, `phi_ij` the mean of
+//! `|Z_ij - Z_model,ij|`.
+
+use nalgebra::{DMatrix, DVector};
+use num_complex::Complex64;
+use serde::Serialize;
+
+use crate::prepare::choose_coordinates;
+use limpid_core::{Error, Recording, Result};
+use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch};
+
+/// Settings of the stochastic estimator.
+///
+/// | Name | Default | Purpose | Range |
+/// |---|---|---|---|
+/// | `welch` | Hann, `nperseg` ≈ 4 s (power of 2, at most a quarter of the data), 50 % overlap | spectral estimation | |
+/// | `band_hz` | 0.5-10 Hz | band of the parametric fit and of the accuracy measures (seed 004: 10 Hz) | 0 < lo < hi < fs/2 |
+#[derive(Debug, Clone)]
+pub struct StochasticParams {
+    pub welch: Option<Welch>,
+    pub band_hz: (f64, f64),
+}
+
+impl Default for StochasticParams {
+    fn default() -> Self {
+        StochasticParams {
+            welch: None,
+            band_hz: (0.5, 10.0),
+        }
+    }
+}
+
+/// Default Welch settings for `n` samples at `fs`.
+pub fn default_welch(n: usize, fs: f64) -> Welch {
+    let target = (4.0 * fs).max(16.0);
+    let mut nperseg = 2usize.pow(target.log2().round() as u32);
+    while nperseg > n / 4 && nperseg > 16 {
+        nperseg /= 2;
+    }
+    Welch {
+        nperseg,
+        ..Welch::new(fs)
+    }
+}
+
+/// Coherences per frequency.
+#[derive(Debug, Clone, Serialize)]
+pub struct Coherences {
+    /// Output names (positions, then forces).
+    pub outputs: Vec<String>,
+    /// `multiple[output][frequency]`.
+    pub multiple: Vec<Vec<f64>>,
+    /// `partial[output][input][frequency]`.
+    pub partial: Vec<Vec<Vec<f64>>>,
+}
+
+/// Non-parametric and parametric impedance with its quality.
+#[derive(Debug, Clone, Serialize)]
+pub struct StochasticEstimate {
+    pub coordinates: Vec<String>,
+    pub inputs: Vec<String>,
+    /// Frequencies (Hz) up to the band's upper edge.
+    pub frequencies: Vec<f64>,
+    /// `impedance[f][i][j] = [re, im]` of Z (force per displacement).
+    pub impedance: Vec<Vec<Vec<[f64; 2]>>>,
+    pub coherence: Coherences,
+    /// Parametric fit over the band (SI).
+    pub inertia: Vec<Vec<f64>>,
+    pub damping: Vec<Vec<f64>>,
+    pub stiffness: Vec<Vec<f64>>,
+    pub standard_errors: ParametricErrors,
+    pub criteria: StochasticCriteria,
+    pub warnings: Vec<String>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ParametricErrors {
+    pub inertia: Vec<Vec<f64>>,
+    pub damping: Vec<Vec<f64>>,
+    pub stiffness: Vec<Vec<f64>>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct StochasticCriteria {
+    pub band_hz: [f64; 2],
+    pub frequency_resolution_hz: f64,
+    pub segments: usize,
+    pub nperseg: usize,
+    /// Mean over the band of the smallest multiple coherence of the outputs.
+    pub mean_multiple_coherence: f64,
+    /// Smallest multiple coherence in the band.
+    pub min_multiple_coherence: f64,
+    /// Largest ordinary coherence between two inputs in the band (seed 004 asks < 0.6).
+    pub max_input_coherence: f64,
+    /// phi_T of the non-parametric Z against the parametric fit (eq. (15)).
+    pub phi_t_vs_fit: f64,
+    /// Weighted VAF (%) of the parametric fit of Z over the band.
+    pub fit_vaf: f64,
+}
+
+fn input_name(coord: &str) -> String {
+    match coord {
+        "x" | "y" | "z" | "theta" => format!("u{coord}"),
+        q => format!("u{}", q.trim_start_matches('q')),
+    }
+}
+
+/// Estimate Z(f) and its parametric fit from a recording with `u*` columns.
+pub fn estimate_stochastic(rec: &Recording, params: &StochasticParams) -> Result<StochasticEstimate> {
+    let (coords, force_cols) = choose_coordinates(rec)?;
+    let n = coords.len();
+    let inputs: Vec<String> = coords.iter().map(|c| input_name(c)).collect();
+    let mut signals: Vec<&[f64]> = Vec::with_capacity(3 * n);
+    for u in &inputs {
+        signals.push(rec.require(u, "commanded perturbation (stochastic input) of each coordinate")?);
+    }
+    for c in coords.iter().chain(&force_cols) {
+        signals.push(rec.require(c, "output")?);
+    }
+    let fs = rec.sample_rate();
+    let welch = params.welch.clone().unwrap_or_else(|| default_welch(rec.len(), fs));
+    let (lo, hi) = params.band_hz;
+    if !(lo > 0.0 && hi > lo && hi < fs / 2.0) {
+        return Err(Error::invalid("band", format!("expected 0 < low < high < {} Hz, found {lo}-{hi} Hz", fs / 2.0)));
+    }
+    let spectra = SegmentSpectra::new(&signals, &welch)?;
+    let mats = spectra.matrix();
+    let freqs = &spectra.frequencies;
+    let top = freqs.iter().position(|f| *f > hi).unwrap_or(freqs.len());
+    let mut out_f = Vec::new();
+    let mut z_all: Vec<DMatrix<Complex64>> = Vec::new();
+    let mut multiple = vec![Vec::new(); 2 * n];
+    let mut partial = vec![vec![Vec::new(); n]; 2 * n];
+    let mut max_input_coh: f64 = 0.0;
+    for k in 1..top {
+        let s = &mats[k];
+        let Some(p) = mimo_point(s, n) else { continue };
+        let r = p.h.view((0, 0), (n, n)).into_owned();
+        let t = p.h.view((n, 0), (n, n)).into_owned();
+        let Some(r_inv) = r.try_inverse() else { continue };
+        out_f.push(freqs[k]);
+        z_all.push(t * r_inv);
+        for o in 0..2 * n {
+            multiple[o].push(p.multiple[o]);
+            for i in 0..n {
+                partial[o][i].push(p.partial[o][i]);
+            }
+        }
+        if freqs[k] >= lo {
+            for i in 0..n {
+                for j in i + 1..n {
+                    let c = s[(i, j)].norm_sqr() / (s[(i, i)].re * s[(j, j)].re);
+                    max_input_coh = max_input_coh.max(c);
+                }
+            }
+        }
+    }
+    let in_band: Vec<usize> = (0..out_f.len()).filter(|&k| out_f[k] >= lo && out_f[k] <= hi).collect();
+    if in_band.len() < 4 {
+        return Err(Error::TooFewSamples {
+            path: rec.path().to_path_buf(),
+            what: format!("frequencies in the {lo}-{hi} Hz band (resolution {:.3} Hz)", fs / welch.nperseg as f64),
+            needed: 4,
+            found: in_band.len(),
+        });
+    }
+    let weight: Vec<f64> = (0..out_f.len())
+        .map(|k| (0..2 * n).map(|o| multiple[o][k]).fold(1.0, f64::min))
+        .collect();
+    // parametric fit per element
+    let enbw_bins = match welch.window {
+        limpid_dsp::spectral::Window::Hann => 1.5,
+        limpid_dsp::spectral::Window::Hamming => 1.36,
+        limpid_dsp::spectral::Window::Boxcar => 1.0,
+    };
+    let mut m = vec![vec![0.0; n]; n];
+    let mut b = vec![vec![0.0; n]; n];
+    let mut kk = vec![vec![0.0; n]; n];
+    let mut se = ParametricErrors { inertia: m.clone(), damping: m.clone(), stiffness: m.clone() };
+    let (mut ss_res, mut ss_tot) = (0.0, 0.0);
+    for i in 0..n {
+        for j in 0..n {
+            let rows = in_band.len();
+            let mut a_re = DMatrix::<f64>::zeros(rows, 2);
+            let mut y_re = DVector::<f64>::zeros(rows);
+            let mut a_im = DMatrix::<f64>::zeros(rows, 1);
+            let mut y_im = DVector::<f64>::zeros(rows);
+            for (r, &k) in in_band.iter().enumerate() {
+                let w = weight[k].max(1e-6).sqrt();
+                let om = 2.0 * std::f64::consts::PI * out_f[k];
+                a_re[(r, 0)] = w;
+                a_re[(r, 1)] = -om * om * w;
+                y_re[r] = z_all[k][(i, j)].re * w;
+                a_im[(r, 0)] = om * w;
+                y_im[r] = z_all[k][(i, j)].im * w;
+            }
+            let (th_re, se_re, res_re) = weighted_ls(&a_re, &y_re, enbw_bins);
+            let (th_im, se_im, res_im) = weighted_ls(&a_im, &y_im, enbw_bins);
+            kk[i][j] = th_re[0];
+            m[i][j] = th_re[1];
+            b[i][j] = th_im[0];
+            se.stiffness[i][j] = se_re[0];
+            se.inertia[i][j] = se_re[1];
+            se.damping[i][j] = se_im[0];
+            ss_res += res_re + res_im;
+            ss_tot += y_re.norm_squared() + y_im.norm_squared();
+        }
+    }
+    let model = |f: f64| {
+        let om = 2.0 * std::f64::consts::PI * f;
+        DMatrix::from_fn(n, n, |i, j| Complex64::new(kk[i][j] - om * om * m[i][j], om * b[i][j]))
+    };
+    let phi_t_vs_fit = in_band.iter().map(|&k| max_singular(&(&z_all[k] - model(out_f[k])))).sum::<f64>() / in_band.len() as f64;
+    let mean_coh = in_band.iter().map(|&k| weight[k]).sum::<f64>() / in_band.len() as f64;
+    let min_coh = in_band.iter().map(|&k| weight[k]).fold(1.0, f64::min);
+    let mut warnings = Vec::new();
+    if min_coh < 0.8 {
+        warnings.push(format!("multiple coherence falls to {min_coh:.2} in the band: the linear model does not hold everywhere there (noise, nonlinearity or unmeasured inputs)"));
+    }
+    if max_input_coh >= 0.6 {
+        warnings.push(format!("inputs are correlated (ordinary coherence up to {max_input_coh:.2}, seed 004 asks < 0.6): R and T are poorly separated"));
+    }
+    Ok(StochasticEstimate {
+        coordinates: coords,
+        inputs,
+        impedance: z_all
+            .iter()
+            .map(|z| (0..n).map(|i| (0..n).map(|j| [z[(i, j)].re, z[(i, j)].im]).collect()).collect())
+            .collect(),
+        frequencies: out_f,
+        coherence: Coherences {
+            outputs: signals_names(rec, n),
+            multiple,
+            partial,
+        },
+        inertia: m,
+        damping: b,
+        stiffness: kk,
+        standard_errors: se,
+        criteria: StochasticCriteria {
+            band_hz: [lo, hi],
+            frequency_resolution_hz: fs / welch.nperseg as f64,
+            segments: spectra.segments(),
+            nperseg: welch.nperseg,
+            mean_multiple_coherence: mean_coh,
+            min_multiple_coherence: min_coh,
+            max_input_coherence: max_input_coh,
+            phi_t_vs_fit,
+            fit_vaf: if ss_tot > 0.0 { 100.0 * (1.0 - ss_res / ss_tot) } else { 0.0 },
+        },
+        warnings,
+    })
+}
+
+fn signals_names(rec: &Recording, n: usize) -> Vec<String> {
+    choose_coordinates(rec)
+        .map(|(c, f)| c.into_iter().chain(f).collect())
+        .unwrap_or_else(|_| vec![String::new(); 2 * n])
+}
+
+/// Least squares with standard errors (variance times `inflation`); returns (θ, SE, RSS).
+fn weighted_ls(a: &DMatrix<f64>, y: &DVector<f64>, inflation: f64) -> (Vec<f64>, Vec<f64>, f64) {
+    let p = a.ncols();
+    let svd = a.clone().svd(true, true);
+    let theta = svd.solve(y, 1e-14).unwrap_or_else(|_| DVector::zeros(p));
+    let resid = y - a * &theta;
+    let rss = resid.norm_squared();
+    let dof = (a.nrows().saturating_sub(p)).max(1) as f64;
+    let sigma2 = rss / dof * inflation;
+    let inv_s2 = svd.singular_values.map(|s| if s > 0.0 { 1.0 / (s * s) } else { 0.0 });
+    let v = svd.v_t.map(|vt| vt.transpose()).unwrap_or_else(|| DMatrix::identity(p, p));
+    let cov = &v * DMatrix::from_diagonal(&inv_s2) * v.transpose() * sigma2;
+    (theta.iter().copied().collect(), (0..p).map(|j| cov[(j, j)].sqrt()).collect(), rss)
+}
+
+fn max_singular(m: &DMatrix<Complex64>) -> f64 {
+    m.clone().svd(false, false).singular_values.max()
+}
+
+/// Seed 004 eq. (15)-(16): (phi_T, phi_ij) of estimated Z against `M, B, K`
+/// over the frequencies in `band`.
+pub fn accuracy(est: &StochasticEstimate, m: &[Vec<f64>], b: &[Vec<f64>], k: &[Vec<f64>], band: (f64, f64)) -> (f64, Vec<Vec<f64>>, f64) {
+    let n = est.coordinates.len();
+    let mut phi_t = 0.0;
+    let mut phi = vec![vec![0.0; n]; n];
+    let mut rel = 0.0;
+    let mut count = 0.0f64;
+    for (f, z) in est.frequencies.iter().zip(&est.impedance) {
+        if *f < band.0 || *f > band.1 {
+            continue;
+        }
+        let om = 2.0 * std::f64::consts::PI * f;
+        let zm = DMatrix::from_fn(n, n, |i, j| Complex64::new(k[i][j] - om * om * m[i][j], om * b[i][j]));
+        let ze = DMatrix::from_fn(n, n, |i, j| Complex64::new(z[i][j][0], z[i][j][1]));
+        let d = &ze - &zm;
+        let dn = max_singular(&d);
+        phi_t += dn;
+        rel += dn / max_singular(&zm);
+        for i in 0..n {
+            for j in 0..n {
+                phi[i][j] += d[(i, j)].norm();
+            }
+        }
+        count += 1.0;
+    }
+    let c = count.max(1.0);
+    (phi_t / c, phi.iter().map(|r| r.iter().map(|v| v / c).collect()).collect(), rel / c)
+}
