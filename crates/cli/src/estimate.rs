@@ -21,6 +21,8 @@ pub enum Method {
     Cocontraction(CocontractionArgs),
     /// Planar two-link arm in joint space: inertial parameters, K, D, confidence criteria (seed 003).
     Planar(crate::planar::PlanarArgs),
+    /// Stochastic MIMO impedance Z = T R^-1 from Welch spectra, with a parametric fit (seed 004).
+    Stochastic(crate::stochastic::StochasticArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -193,6 +195,7 @@ pub fn run(method: Method) -> CliResult {
             Ok(())
         }
         Method::Planar(args) => crate::planar::run_estimate(args),
+        Method::Stochastic(args) => crate::stochastic::run_estimate(args),
         Method::Cocontraction(args) => {
             if args.tolerance.is_nan() || args.tolerance <= 0.0 {
                 return Err(limpid_core::Error::invalid(

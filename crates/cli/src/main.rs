@@ -5,6 +5,7 @@
 mod demo;
 mod estimate;
 mod planar;
+mod stochastic;
 mod study;
 mod table;
 
@@ -31,6 +32,8 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Planar-arm estimates over a range of observation windows, with the minimum trustworthy window (seed 003).
     WindowSweep(planar::SweepArgs),
+    /// Welch PSD, coherence, multiple and partial coherence of outputs on inputs, as CSV.
+    Spectra(stochastic::SpectraArgs),
     /// Whole co-contraction studies: tables across subjects and configurations (seed 001).
     Study {
         #[command(subcommand)]
@@ -39,12 +42,20 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // Output piped into `head` etc.: end quietly like other Unix tools instead of
+    // panicking on a closed pipe.
+    #[cfg(unix)]
+    // SAFETY: resetting a signal disposition to its default at start-up, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Estimate { method } => estimate::run(method),
         Command::Demo(args) => demo::run(args),
         Command::Study { command } => study::run(command),
         Command::WindowSweep(args) => planar::run_sweep(args),
+        Command::Spectra(args) => stochastic::run_spectra(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -113,6 +113,11 @@ pub enum Error {
 /// Result with limpid's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// A number rounded to 9 decimals for messages (500 Hz, not 499.99999999999955 Hz).
+pub fn display_round(v: f64) -> f64 {
+    (v * 1e9).round() / 1e9
+}
+
 impl Error {
     /// Shorthand for [`Error::InvalidParameter`].
     pub fn invalid(name: impl Into<String>, message: impl Into<String>) -> Self {

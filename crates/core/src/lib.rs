@@ -11,7 +11,7 @@ pub mod frame;
 pub mod recording;
 pub mod trial;
 
-pub use error::{Error, Result};
+pub use error::{display_round, Error, Result};
 pub use frame::FrameTransform;
 pub use recording::Recording;
 pub use trial::Window;

@@ -45,8 +45,7 @@ impl LowPass {
                 format!("expected 1 to 20, found {order}"),
             ));
         }
-        // rounded for the message: 499.99999999999955 -> 500
-        let nyquist = (fs_hz / 2.0 * 1e9).round() / 1e9;
+        let nyquist = limpid_core::display_round(fs_hz / 2.0);
         if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
             return Err(Error::invalid(
                 "cut-off",

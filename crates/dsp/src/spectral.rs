@@ -87,19 +87,29 @@ impl Welch {
     }
 
     fn check(&self, n: usize) -> Result<()> {
-        if !(self.fs > 0.0) {
-            return Err(Error::invalid("sample rate", format!("expected a positive rate, found {}", self.fs)));
+        if self.fs.is_nan() || self.fs <= 0.0 {
+            return Err(Error::invalid(
+                "sample rate",
+                format!("expected a positive rate, found {}", self.fs),
+            ));
         }
         if self.nperseg < 2 || self.nperseg > n {
             return Err(Error::invalid(
                 "segment length",
-                format!("expected 2 to {n} samples (the signal length), found {}", self.nperseg),
+                format!(
+                    "expected 2 to {n} samples (the signal length), found {}",
+                    self.nperseg
+                ),
             ));
         }
         if self.overlap() >= self.nperseg {
             return Err(Error::invalid(
                 "overlap",
-                format!("expected fewer than nperseg = {} samples, found {}", self.nperseg, self.overlap()),
+                format!(
+                    "expected fewer than nperseg = {} samples, found {}",
+                    self.nperseg,
+                    self.overlap()
+                ),
             ));
         }
         Ok(())
@@ -122,7 +132,9 @@ impl Welch {
 
     /// Frequencies (Hz) of the one-sided estimate.
     pub fn frequencies(&self) -> Vec<f64> {
-        (0..self.nperseg / 2 + 1).map(|k| k as f64 * self.fs / self.nperseg as f64).collect()
+        (0..self.nperseg / 2 + 1)
+            .map(|k| k as f64 * self.fs / self.nperseg as f64)
+            .collect()
     }
 }
 
@@ -139,13 +151,17 @@ impl SegmentSpectra {
     pub fn new(signals: &[&[f64]], p: &Welch) -> Result<Self> {
         let n = signals.first().map_or(0, |s| s.len());
         if signals.iter().any(|s| s.len() != n) {
-            return Err(Error::invalid("signals", "all signals must have the same length"));
+            return Err(Error::invalid(
+                "signals",
+                "all signals must have the same length",
+            ));
         }
         p.check(n)?;
         let step = p.nperseg - p.overlap();
         let segments = (n - p.nperseg) / step + 1;
         let w = p.window_values();
-        let plan: Arc<dyn RealToComplex<f64>> = RealFftPlanner::<f64>::new().plan_fft_forward(p.nperseg);
+        let plan: Arc<dyn RealToComplex<f64>> =
+            RealFftPlanner::<f64>::new().plan_fft_forward(p.nperseg);
         let mut input = plan.make_input_vec();
         let mut scratch = plan.make_scratch_vec();
         let bins = p.nperseg / 2 + 1;
@@ -171,7 +187,7 @@ impl SegmentSpectra {
         };
         let scale = (0..bins)
             .map(|b| {
-                let nyquist = p.nperseg % 2 == 0 && b == bins - 1;
+                let nyquist = p.nperseg.is_multiple_of(2) && b == bins - 1;
                 if b == 0 || nyquist {
                     base
                 } else {
@@ -207,18 +223,19 @@ impl SegmentSpectra {
     /// The spectral matrix `S[f][i][j] = P_{s_i s_j}(f)` of all signals.
     pub fn matrix(&self) -> Vec<DMatrix<Complex64>> {
         let m = self.spectra.len();
-        let mut pairs = vec![vec![Vec::new(); m]; m];
-        for i in 0..m {
-            for j in i..m {
-                let p = self.cross(i, j);
-                if i != j {
-                    pairs[j][i] = p.iter().map(|v| v.conj()).collect();
-                }
-                pairs[i][j] = p;
+        // the upper triangle; the lower one is its conjugate (Hermitian matrix)
+        let upper: Vec<Vec<Vec<Complex64>>> = (0..m)
+            .map(|i| (i..m).map(|j| self.cross(i, j)).collect())
+            .collect();
+        let at = |i: usize, j: usize, k: usize| {
+            if i <= j {
+                upper[i][j - i][k]
+            } else {
+                upper[j][i - j][k].conj()
             }
-        }
+        };
         (0..self.scale.len())
-            .map(|k| DMatrix::from_fn(m, m, |i, j| pairs[i][j][k]))
+            .map(|k| DMatrix::from_fn(m, m, |i, j| at(i, j, k)))
             .collect()
     }
 }
@@ -257,7 +274,10 @@ pub fn csd(x: &[f64], y: &[f64], p: &Welch) -> Result<(Vec<f64>, Vec<Complex64>)
 /// `scipy.signal.welch(x)`: frequencies and the power spectral density.
 pub fn psd(x: &[f64], p: &Welch) -> Result<(Vec<f64>, Vec<f64>)> {
     let s = SegmentSpectra::new(&[x], p)?;
-    Ok((s.frequencies.clone(), s.cross(0, 0).iter().map(|v| v.re).collect()))
+    Ok((
+        s.frequencies.clone(),
+        s.cross(0, 0).iter().map(|v| v.re).collect(),
+    ))
 }
 
 /// `scipy.signal.coherence(x, y)`: magnitude-squared coherence.
@@ -306,7 +326,11 @@ pub fn mimo_point(s: &DMatrix<Complex64>, inputs: usize) -> Option<MimoPoint> {
         let gyy = s[(q + k, q + k)].re;
         let col = guy.column(k);
         let explained = (col.adjoint() * &inv * col)[(0, 0)].re;
-        multiple.push(if gyy > 0.0 { (explained / gyy).clamp(0.0, 1.0) } else { 0.0 });
+        multiple.push(if gyy > 0.0 {
+            (explained / gyy).clamp(0.0, 1.0)
+        } else {
+            0.0
+        });
         for i in 0..q {
             // condition input i and output k on the other inputs
             let rest: Vec<usize> = (0..q).filter(|&j| j != i).collect();
@@ -318,12 +342,21 @@ pub fn mimo_point(s: &DMatrix<Complex64>, inputs: usize) -> Option<MimoPoint> {
                 let grr_inv = grr.try_inverse()?;
                 let g_a_r = |a: usize| DMatrix::from_fn(1, r, |_, b| s[(a, rest[b])]);
                 let g_r_b = |b: usize| DMatrix::from_fn(r, 1, |a, _| s[(rest[a], b)]);
-                let cond = |a: usize, b: usize| s[(a, b)] - (g_a_r(a) * &grr_inv * g_r_b(b))[(0, 0)];
+                let cond =
+                    |a: usize, b: usize| s[(a, b)] - (g_a_r(a) * &grr_inv * g_r_b(b))[(0, 0)];
                 (cond(i, i), cond(q + k, q + k), cond(i, q + k))
             };
             let d = gii.re * gkk.re;
-            partial[k][i] = if d > 0.0 { (gik.norm_sqr() / d).clamp(0.0, 1.0) } else { 0.0 };
+            partial[k][i] = if d > 0.0 {
+                (gik.norm_sqr() / d).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
         }
     }
-    Some(MimoPoint { h, multiple, partial })
+    Some(MimoPoint {
+        h,
+        multiple,
+        partial,
+    })
 }

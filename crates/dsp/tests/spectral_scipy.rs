@@ -1,16 +1,24 @@
 //! Welch PSD, CSD and coherence against scipy.signal 1.17 (fixture made by
 //! fixtures/make_scipy_spectral.py), and multiple coherence of a MIMO system.
 
-use limpid_dsp::spectral::{coherence, csd, mimo_point, psd, Detrend, Scaling, SegmentSpectra, Welch, Window};
+use limpid_dsp::spectral::{
+    coherence, csd, mimo_point, psd, Detrend, Scaling, SegmentSpectra, Welch, Window,
+};
 use serde_json::Value;
 
 fn vec_of(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 fn max_rel(a: &[f64], b: &[f64]) -> f64 {
     let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
 }
 
 #[test]
@@ -34,19 +42,36 @@ fn welch_csd_coherence_match_scipy() {
             Some("none") => Detrend::None,
             _ => Detrend::Constant,
         };
-        w.scaling = if p["scaling"].as_str() == Some("spectrum") { Scaling::Spectrum } else { Scaling::Density };
+        w.scaling = if p["scaling"].as_str() == Some("spectrum") {
+            Scaling::Spectrum
+        } else {
+            Scaling::Density
+        };
         let (freq, pxx) = psd(&x, &w).unwrap();
         assert!(max_rel(&freq, &vec_of(&case["f"])) < 1e-12);
         assert!(max_rel(&pxx, &vec_of(&case["pxx"])) < 1e-10, "psd {p}");
         let (_, pxy) = csd(&x, &y, &w).unwrap();
         let re: Vec<f64> = pxy.iter().map(|c| c.re).collect();
         let im: Vec<f64> = pxy.iter().map(|c| c.im).collect();
-        let scale = vec_of(&case["pxy_re"]).iter().chain(vec_of(&case["pxy_im"]).iter()).fold(0.0f64, |m, v| m.max(v.abs()));
-        let err = re.iter().zip(vec_of(&case["pxy_re"])).chain(im.iter().zip(vec_of(&case["pxy_im"]))).fold(0.0f64, |m, (a, b)| m.max((a - b).abs() / scale));
+        let scale = vec_of(&case["pxy_re"])
+            .iter()
+            .chain(vec_of(&case["pxy_im"]).iter())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        let err = re
+            .iter()
+            .zip(vec_of(&case["pxy_re"]))
+            .chain(im.iter().zip(vec_of(&case["pxy_im"])))
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs() / scale));
         assert!(err < 1e-10, "csd {p}: {err:e}");
-        let wc = Welch { scaling: Scaling::Density, ..w.clone() };
+        let wc = Welch {
+            scaling: Scaling::Density,
+            ..w.clone()
+        };
         let (_, cxy) = coherence(&x, &y, &wc).unwrap();
-        assert!(max_rel(&cxy, &vec_of(&case["cxy"])) < 1e-10, "coherence {p}");
+        assert!(
+            max_rel(&cxy, &vec_of(&case["cxy"])) < 1e-10,
+            "coherence {p}"
+        );
     }
 }
 
@@ -64,10 +89,17 @@ fn multiple_coherence_is_one_without_noise_and_drops_as_predicted() {
     let u1: Vec<f64> = (0..n).map(|_| rnd()).collect();
     let u2: Vec<f64> = (0..n).map(|_| rnd()).collect();
     let noise: Vec<f64> = (0..n).map(|_| rnd()).collect();
-    let y2: Vec<f64> = (0..n).map(|i| if i >= 3 { u2[i - 3] } else { 0.0 }).collect();
-    let w = Welch { nperseg: 256, ..Welch::new(1000.0) };
+    let y2: Vec<f64> = (0..n)
+        .map(|i| if i >= 3 { u2[i - 3] } else { 0.0 })
+        .collect();
+    let w = Welch {
+        nperseg: 256,
+        ..Welch::new(1000.0)
+    };
     for (sigma, expected) in [(0.0, 1.0), (1.0, 1.25 / 2.25)] {
-        let y1: Vec<f64> = (0..n).map(|i| u1[i] + 0.5 * u2[i] + sigma * noise[i]).collect();
+        let y1: Vec<f64> = (0..n)
+            .map(|i| u1[i] + 0.5 * u2[i] + sigma * noise[i])
+            .collect();
         let spectra = SegmentSpectra::new(&[&u1, &u2, &y1, &y2], &w).unwrap();
         let mats = spectra.matrix();
         let mut mean_coh = 0.0;
@@ -81,13 +113,21 @@ fn multiple_coherence_is_one_without_noise_and_drops_as_predicted() {
             mean_h += p.h[(0, 0)].re;
             if sigma == 0.0 {
                 assert!((p.h[(0, 1)] - num_complex::Complex64::new(0.5, 0.0)).norm() < 1e-9);
-                assert!((p.partial[0][0] - 1.0).abs() < 1e-9 && (p.partial[0][1] - 1.0).abs() < 1e-9);
+                assert!(
+                    (p.partial[0][0] - 1.0).abs() < 1e-9 && (p.partial[0][1] - 1.0).abs() < 1e-9
+                );
             }
         }
         mean_coh /= bins.len() as f64;
         mean_h /= bins.len() as f64;
-        assert!((mean_h - 1.0).abs() < if sigma == 0.0 { 1e-9 } else { 0.05 }, "H11 {mean_h}");
+        assert!(
+            (mean_h - 1.0).abs() < if sigma == 0.0 { 1e-9 } else { 0.05 },
+            "H11 {mean_h}"
+        );
         // signal power 1.25 var(u), noise power var(u): coherence 1.25 / 2.25 with noise
-        assert!((mean_coh - expected).abs() < 0.03, "sigma {sigma}: mean multiple coherence {mean_coh}");
+        assert!(
+            (mean_coh - expected).abs() < 0.03,
+            "sigma {sigma}: mean multiple coherence {mean_coh}"
+        );
     }
 }

@@ -123,22 +123,35 @@ fn input_name(coord: &str) -> String {
 }
 
 /// Estimate Z(f) and its parametric fit from a recording with `u*` columns.
-pub fn estimate_stochastic(rec: &Recording, params: &StochasticParams) -> Result<StochasticEstimate> {
+pub fn estimate_stochastic(
+    rec: &Recording,
+    params: &StochasticParams,
+) -> Result<StochasticEstimate> {
     let (coords, force_cols) = choose_coordinates(rec)?;
     let n = coords.len();
     let inputs: Vec<String> = coords.iter().map(|c| input_name(c)).collect();
     let mut signals: Vec<&[f64]> = Vec::with_capacity(3 * n);
     for u in &inputs {
-        signals.push(rec.require(u, "commanded perturbation (stochastic input) of each coordinate")?);
+        signals.push(rec.require(
+            u,
+            "commanded perturbation (stochastic input) of each coordinate",
+        )?);
     }
     for c in coords.iter().chain(&force_cols) {
         signals.push(rec.require(c, "output")?);
     }
     let fs = rec.sample_rate();
-    let welch = params.welch.clone().unwrap_or_else(|| default_welch(rec.len(), fs));
+    let welch = params
+        .welch
+        .clone()
+        .unwrap_or_else(|| default_welch(rec.len(), fs));
     let (lo, hi) = params.band_hz;
     if !(lo > 0.0 && hi > lo && hi < fs / 2.0) {
-        return Err(Error::invalid("band", format!("expected 0 < low < high < {} Hz, found {lo}-{hi} Hz", fs / 2.0)));
+        let nyquist = limpid_core::display_round(fs / 2.0);
+        return Err(Error::invalid(
+            "band",
+            format!("expected 0 < low < high < {nyquist} Hz, found {lo}-{hi} Hz"),
+        ));
     }
     let spectra = SegmentSpectra::new(&signals, &welch)?;
     let mats = spectra.matrix();
@@ -154,13 +167,15 @@ pub fn estimate_stochastic(rec: &Recording, params: &StochasticParams) -> Result
         let Some(p) = mimo_point(s, n) else { continue };
         let r = p.h.view((0, 0), (n, n)).into_owned();
         let t = p.h.view((n, 0), (n, n)).into_owned();
-        let Some(r_inv) = r.try_inverse() else { continue };
+        let Some(r_inv) = r.try_inverse() else {
+            continue;
+        };
         out_f.push(freqs[k]);
         z_all.push(t * r_inv);
-        for o in 0..2 * n {
-            multiple[o].push(p.multiple[o]);
-            for i in 0..n {
-                partial[o][i].push(p.partial[o][i]);
+        for (o, (mult, part)) in multiple.iter_mut().zip(partial.iter_mut()).enumerate() {
+            mult.push(p.multiple[o]);
+            for (series, value) in part.iter_mut().zip(&p.partial[o]) {
+                series.push(*value);
             }
         }
         if freqs[k] >= lo {
@@ -172,11 +187,16 @@ pub fn estimate_stochastic(rec: &Recording, params: &StochasticParams) -> Result
             }
         }
     }
-    let in_band: Vec<usize> = (0..out_f.len()).filter(|&k| out_f[k] >= lo && out_f[k] <= hi).collect();
+    let in_band: Vec<usize> = (0..out_f.len())
+        .filter(|&k| out_f[k] >= lo && out_f[k] <= hi)
+        .collect();
     if in_band.len() < 4 {
         return Err(Error::TooFewSamples {
             path: rec.path().to_path_buf(),
-            what: format!("frequencies in the {lo}-{hi} Hz band (resolution {:.3} Hz)", fs / welch.nperseg as f64),
+            what: format!(
+                "frequencies in the {lo}-{hi} Hz band (resolution {:.3} Hz)",
+                fs / welch.nperseg as f64
+            ),
             needed: 4,
             found: in_band.len(),
         });
@@ -193,7 +213,11 @@ pub fn estimate_stochastic(rec: &Recording, params: &StochasticParams) -> Result
     let mut m = vec![vec![0.0; n]; n];
     let mut b = vec![vec![0.0; n]; n];
     let mut kk = vec![vec![0.0; n]; n];
-    let mut se = ParametricErrors { inertia: m.clone(), damping: m.clone(), stiffness: m.clone() };
+    let mut se = ParametricErrors {
+        inertia: m.clone(),
+        damping: m.clone(),
+        stiffness: m.clone(),
+    };
     let (mut ss_res, mut ss_tot) = (0.0, 0.0);
     for i in 0..n {
         for j in 0..n {
@@ -225,9 +249,15 @@ pub fn estimate_stochastic(rec: &Recording, params: &StochasticParams) -> Result
     }
     let model = |f: f64| {
         let om = 2.0 * std::f64::consts::PI * f;
-        DMatrix::from_fn(n, n, |i, j| Complex64::new(kk[i][j] - om * om * m[i][j], om * b[i][j]))
+        DMatrix::from_fn(n, n, |i, j| {
+            Complex64::new(kk[i][j] - om * om * m[i][j], om * b[i][j])
+        })
     };
-    let phi_t_vs_fit = in_band.iter().map(|&k| max_singular(&(&z_all[k] - model(out_f[k])))).sum::<f64>() / in_band.len() as f64;
+    let phi_t_vs_fit = in_band
+        .iter()
+        .map(|&k| max_singular(&(&z_all[k] - model(out_f[k]))))
+        .sum::<f64>()
+        / in_band.len() as f64;
     let mean_coh = in_band.iter().map(|&k| weight[k]).sum::<f64>() / in_band.len() as f64;
     let min_coh = in_band.iter().map(|&k| weight[k]).fold(1.0, f64::min);
     let mut warnings = Vec::new();
@@ -242,7 +272,11 @@ pub fn estimate_stochastic(rec: &Recording, params: &StochasticParams) -> Result
         inputs,
         impedance: z_all
             .iter()
-            .map(|z| (0..n).map(|i| (0..n).map(|j| [z[(i, j)].re, z[(i, j)].im]).collect()).collect())
+            .map(|z| {
+                (0..n)
+                    .map(|i| (0..n).map(|j| [z[(i, j)].re, z[(i, j)].im]).collect())
+                    .collect()
+            })
             .collect(),
         frequencies: out_f,
         coherence: Coherences {
@@ -263,7 +297,11 @@ pub fn estimate_stochastic(rec: &Recording, params: &StochasticParams) -> Result
             min_multiple_coherence: min_coh,
             max_input_coherence: max_input_coh,
             phi_t_vs_fit,
-            fit_vaf: if ss_tot > 0.0 { 100.0 * (1.0 - ss_res / ss_tot) } else { 0.0 },
+            fit_vaf: if ss_tot > 0.0 {
+                100.0 * (1.0 - ss_res / ss_tot)
+            } else {
+                0.0
+            },
         },
         warnings,
     })
@@ -284,10 +322,19 @@ fn weighted_ls(a: &DMatrix<f64>, y: &DVector<f64>, inflation: f64) -> (Vec<f64>,
     let rss = resid.norm_squared();
     let dof = (a.nrows().saturating_sub(p)).max(1) as f64;
     let sigma2 = rss / dof * inflation;
-    let inv_s2 = svd.singular_values.map(|s| if s > 0.0 { 1.0 / (s * s) } else { 0.0 });
-    let v = svd.v_t.map(|vt| vt.transpose()).unwrap_or_else(|| DMatrix::identity(p, p));
+    let inv_s2 = svd
+        .singular_values
+        .map(|s| if s > 0.0 { 1.0 / (s * s) } else { 0.0 });
+    let v = svd
+        .v_t
+        .map(|vt| vt.transpose())
+        .unwrap_or_else(|| DMatrix::identity(p, p));
     let cov = &v * DMatrix::from_diagonal(&inv_s2) * v.transpose() * sigma2;
-    (theta.iter().copied().collect(), (0..p).map(|j| cov[(j, j)].sqrt()).collect(), rss)
+    (
+        theta.iter().copied().collect(),
+        (0..p).map(|j| cov[(j, j)].sqrt()).collect(),
+        rss,
+    )
 }
 
 fn max_singular(m: &DMatrix<Complex64>) -> f64 {
@@ -296,7 +343,13 @@ fn max_singular(m: &DMatrix<Complex64>) -> f64 {
 
 /// Seed 004 eq. (15)-(16): (phi_T, phi_ij) of estimated Z against `M, B, K`
 /// over the frequencies in `band`.
-pub fn accuracy(est: &StochasticEstimate, m: &[Vec<f64>], b: &[Vec<f64>], k: &[Vec<f64>], band: (f64, f64)) -> (f64, Vec<Vec<f64>>, f64) {
+pub fn accuracy(
+    est: &StochasticEstimate,
+    m: &[Vec<f64>],
+    b: &[Vec<f64>],
+    k: &[Vec<f64>],
+    band: (f64, f64),
+) -> (f64, Vec<Vec<f64>>, f64) {
     let n = est.coordinates.len();
     let mut phi_t = 0.0;
     let mut phi = vec![vec![0.0; n]; n];
@@ -307,7 +360,9 @@ pub fn accuracy(est: &StochasticEstimate, m: &[Vec<f64>], b: &[Vec<f64>], k: &[V
             continue;
         }
         let om = 2.0 * std::f64::consts::PI * f;
-        let zm = DMatrix::from_fn(n, n, |i, j| Complex64::new(k[i][j] - om * om * m[i][j], om * b[i][j]));
+        let zm = DMatrix::from_fn(n, n, |i, j| {
+            Complex64::new(k[i][j] - om * om * m[i][j], om * b[i][j])
+        });
         let ze = DMatrix::from_fn(n, n, |i, j| Complex64::new(z[i][j][0], z[i][j][1]));
         let d = &ze - &zm;
         let dn = max_singular(&d);
@@ -321,5 +376,11 @@ pub fn accuracy(est: &StochasticEstimate, m: &[Vec<f64>], b: &[Vec<f64>], k: &[V
         count += 1.0;
     }
     let c = count.max(1.0);
-    (phi_t / c, phi.iter().map(|r| r.iter().map(|v| v / c).collect()).collect(), rel / c)
+    (
+        phi_t / c,
+        phi.iter()
+            .map(|r| r.iter().map(|v| v / c).collect())
+            .collect(),
+        rel / c,
+    )
 }

@@ -5,10 +5,23 @@
 use limpid_ident::stochastic::{accuracy, estimate_stochastic, StochasticParams};
 use serde_json::Value;
 
-const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/examples/stochastic");
+const EXAMPLES: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/examples/stochastic"
+);
 
 fn mat(v: &Value) -> Vec<Vec<f64>> {
-    v.as_array().unwrap().iter().map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect()
+        })
+        .collect()
 }
 
 fn rel(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
@@ -23,14 +36,20 @@ fn rel(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
 #[test]
 fn spring_array_examples() {
     for case in ["ex_sa3", "ex_sa4"] {
-        let t: Value = serde_json::from_str(&std::fs::read_to_string(format!("{EXAMPLES}/{case}.truth.json")).unwrap()).unwrap();
+        let t: Value = serde_json::from_str(
+            &std::fs::read_to_string(format!("{EXAMPLES}/{case}.truth.json")).unwrap(),
+        )
+        .unwrap();
         let rec = limpid_io::read_recording(format!("{EXAMPLES}/{case}.csv")).unwrap();
         let est = estimate_stochastic(&rec, &StochasticParams::default()).unwrap();
         let (m, b, k) = (mat(&t["inertia"]), mat(&t["damping"]), mat(&t["stiffness"]));
         let (phi_t, _, mean_rel) = accuracy(&est, &m, &b, &k, (0.5, 10.0));
         let ek = rel(&est.stiffness, &k);
         eprintln!("{case}: phi_T {phi_t:.3}, mean relative Z error {mean_rel:.4}, K error {ek:.4}, K {:?}, M {:?}, criteria {:?}", est.stiffness, est.inertia, est.criteria);
-        assert!(mean_rel < 0.10, "{case}: mean relative impedance error {mean_rel}");
+        assert!(
+            mean_rel < 0.10,
+            "{case}: mean relative impedance error {mean_rel}"
+        );
         assert!(ek < 0.05, "{case}: stiffness error {ek}");
         assert!(est.criteria.mean_multiple_coherence > 0.9);
     }

@@ -1,0 +1,262 @@
+//! `limpid estimate stochastic` and `limpid spectra` (seed 004).
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch, Window};
+use limpid_ident::stochastic::{accuracy, default_welch, estimate_stochastic, StochasticParams};
+
+use crate::table::num;
+use crate::CliResult;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum WindowArg {
+    Hann,
+    Hamming,
+    Boxcar,
+}
+
+/// Welch flags shared by both commands.
+#[derive(Args)]
+pub struct WelchArgs {
+    /// Samples per segment (= FFT length); default about 4 s, a power of two.
+    #[arg(long, value_name = "N")]
+    pub nfft: Option<usize>,
+    /// Overlapping samples; default half a segment.
+    #[arg(long, value_name = "N")]
+    pub overlap: Option<usize>,
+    /// Segment window.
+    #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
+    pub window: WindowArg,
+}
+
+impl WelchArgs {
+    fn welch(&self, n: usize, fs: f64) -> Welch {
+        let mut w = default_welch(n, fs);
+        if let Some(nfft) = self.nfft {
+            w.nperseg = nfft;
+        }
+        w.noverlap = self.overlap;
+        w.window = match self.window {
+            WindowArg::Hann => Window::Hann,
+            WindowArg::Hamming => Window::Hamming,
+            WindowArg::Boxcar => Window::Boxcar,
+        };
+        w
+    }
+}
+
+#[derive(Args)]
+pub struct StochasticArgs {
+    /// Recording with commanded inputs u* (one per coordinate), positions and forces.
+    pub recording: PathBuf,
+    #[command(flatten)]
+    pub welch: WelchArgs,
+    /// Band of the parametric fit and accuracy measures (Hz).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "LO,HI",
+        default_value = "0.5,10"
+    )]
+    pub band: Vec<f64>,
+    /// Truth or expected model (JSON with inertia, damping, stiffness): prints phi_T and phi_ij (eq. 15-16).
+    #[arg(long, value_name = "FILE")]
+    pub expected: Option<PathBuf>,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct SpectraArgs {
+    /// Recording.
+    pub recording: PathBuf,
+    /// Input columns.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub inputs: Vec<String>,
+    /// Output columns.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub outputs: Vec<String>,
+    #[command(flatten)]
+    pub welch: WelchArgs,
+    /// Print JSON instead of CSV.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn matrix_of(v: &serde_json::Value, key: &str, path: &std::path::Path) -> CliResult<Vec<Vec<f64>>> {
+    let bad = || {
+        format!(
+            "{}: key {key}: expected a square matrix of numbers",
+            path.display()
+        )
+    };
+    v[key]
+        .as_array()
+        .ok_or_else(bad)?
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .ok_or_else(bad)?
+                .iter()
+                .map(|x| x.as_f64().ok_or_else(bad))
+                .collect::<Result<Vec<f64>, String>>()
+        })
+        .collect::<Result<_, String>>()
+        .map_err(Into::into)
+}
+
+pub fn run_estimate(args: StochasticArgs) -> CliResult {
+    let rec = limpid_io::read_recording(&args.recording)?;
+    let band = match args.band.as_slice() {
+        [lo, hi] => (*lo, *hi),
+        _ => {
+            return Err(
+                limpid_core::Error::invalid("band", "expected two frequencies LO,HI in Hz").into(),
+            )
+        }
+    };
+    let params = StochasticParams {
+        welch: Some(args.welch.welch(rec.len(), rec.sample_rate())),
+        band_hz: band,
+    };
+    let est = estimate_stochastic(&rec, &params)?;
+    let expected = match &args.expected {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            let v: serde_json::Value =
+                serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))?;
+            let (m, b, k) = (
+                matrix_of(&v, "inertia", p)?,
+                matrix_of(&v, "damping", p)?,
+                matrix_of(&v, "stiffness", p)?,
+            );
+            Some(accuracy(&est, &m, &b, &k, band))
+        }
+        None => None,
+    };
+    if args.json {
+        let mut v = serde_json::to_value(&est)?;
+        if let Some((phi_t, phi, rel)) = &expected {
+            v["accuracy"] =
+                serde_json::json!({"phi_t": phi_t, "phi_ij": phi, "mean_relative_error": rel});
+        }
+        println!("{}", serde_json::to_string(&v)?);
+        return Ok(());
+    }
+    let c = &est.criteria;
+    let coords = &est.coordinates;
+    println!("limpid estimate stochastic: {}", args.recording.display());
+    println!(
+        "coordinates {} driven by {} | Welch: {} segments of {} samples (resolution {:.3} Hz), Hann | fit band {}-{} Hz",
+        coords.join(", "), est.inputs.join(", "), c.segments, c.nperseg, c.frequency_resolution_hz, num(band.0), num(band.1)
+    );
+    for (title, m, se) in [
+        (
+            "Stiffness K",
+            &est.stiffness,
+            &est.standard_errors.stiffness,
+        ),
+        ("Damping B", &est.damping, &est.standard_errors.damping),
+        ("Inertia M", &est.inertia, &est.standard_errors.inertia),
+    ] {
+        println!("{title} (SI, per coordinate pair)");
+        for (i, row) in m.iter().enumerate() {
+            let cells: String = row
+                .iter()
+                .zip(&se[i])
+                .map(|(v, s)| format!("{:>24}", format!("{} ± {}", num(*v), num(*s))))
+                .collect();
+            println!("  {:<6}{cells}", coords[i]);
+        }
+    }
+    println!(
+        "quality: multiple coherence mean {:.3}, min {:.3} in the band; input coherence max {:.3}; fit VAF {:.2} %; phi_T(Z vs fit) {}",
+        c.mean_multiple_coherence, c.min_multiple_coherence, c.max_input_coherence, c.fit_vaf, num(c.phi_t_vs_fit)
+    );
+    if let Some((phi_t, phi, rel)) = expected {
+        let cells: Vec<String> = phi
+            .iter()
+            .map(|r| r.iter().map(|v| num(*v)).collect::<Vec<_>>().join(" "))
+            .collect();
+        println!(
+            "accuracy vs expected model: phi_T {} (mean relative error {:.2} %), phi_ij [{}]",
+            num(phi_t),
+            100.0 * rel,
+            cells.join("; ")
+        );
+    }
+    for w in &est.warnings {
+        println!("warning: {w}");
+    }
+    Ok(())
+}
+
+pub fn run_spectra(args: SpectraArgs) -> CliResult {
+    let rec = limpid_io::read_recording(&args.recording)?;
+    let mut signals: Vec<&[f64]> = Vec::new();
+    for name in args.inputs.iter().chain(&args.outputs) {
+        signals.push(rec.require(name, "named in --inputs/--outputs")?);
+    }
+    let welch = args.welch.welch(rec.len(), rec.sample_rate());
+    let s = SegmentSpectra::new(&signals, &welch)?;
+    let mats = s.matrix();
+    let q = args.inputs.len();
+    let names: Vec<&String> = args.inputs.iter().chain(&args.outputs).collect();
+    let mut rows = Vec::new();
+    for (k, f) in s.frequencies.iter().enumerate() {
+        let point = mimo_point(&mats[k], q);
+        rows.push((f, &mats[k], point));
+    }
+    if args.json {
+        let v = serde_json::json!({
+            "frequencies": s.frequencies,
+            "signals": names,
+            "psd": (0..names.len()).map(|i| mats.iter().map(|m| m[(i, i)].re).collect::<Vec<_>>()).collect::<Vec<_>>(),
+            "multiple_coherence": (0..args.outputs.len()).map(|o| rows.iter().map(|r| r.2.as_ref().map(|p| p.multiple[o])).collect::<Vec<_>>()).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string(&v)?);
+        return Ok(());
+    }
+    let mut out = String::from("frequency_hz");
+    for n in &names {
+        let _ = write!(out, ",psd_{n}");
+    }
+    for o in &args.outputs {
+        let _ = write!(out, ",multiple_coherence_{o}");
+        for i in &args.inputs {
+            let _ = write!(out, ",coherence_{i}_{o},partial_coherence_{i}_{o}");
+        }
+    }
+    out.push('\n');
+    for (f, m, p) in &rows {
+        let _ = write!(out, "{f}");
+        for i in 0..names.len() {
+            let _ = write!(out, ",{:e}", m[(i, i)].re);
+        }
+        for o in 0..args.outputs.len() {
+            let oo = q + o;
+            let mc = p
+                .as_ref()
+                .map_or(String::new(), |p| format!("{:.6}", p.multiple[o]));
+            let _ = write!(out, ",{mc}");
+            for i in 0..q {
+                let d = m[(i, i)].re * m[(oo, oo)].re;
+                let coh = if d > 0.0 {
+                    m[(i, oo)].norm_sqr() / d
+                } else {
+                    0.0
+                };
+                let pc = p
+                    .as_ref()
+                    .map_or(String::new(), |p| format!("{:.6}", p.partial[o][i]));
+                let _ = write!(out, ",{coh:.6},{pc}");
+            }
+        }
+        out.push('\n');
+    }
+    print!("{out}");
+    Ok(())
+}

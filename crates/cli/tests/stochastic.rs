@@ -1,0 +1,80 @@
+//! `limpid estimate stochastic` and `limpid spectra` (issue 6).
+
+mod common;
+use common::*;
+
+#[test]
+fn stochastic_examples_through_the_cli() {
+    for case in ["ex_sa3", "ex_sa4"] {
+        let dir = shared().join("examples/stochastic");
+        let truth_path = dir.join(format!("{case}.truth.json"));
+        let truth = read_json(&truth_path);
+        let rec = dir.join(format!("{case}.csv"));
+        let r = json(&[
+            "estimate",
+            "stochastic",
+            rec.to_str().unwrap(),
+            "--expected",
+            truth_path.to_str().unwrap(),
+            "--json",
+        ]);
+        let rel = r["accuracy"]["mean_relative_error"].as_f64().unwrap();
+        assert!(rel < 0.10, "{case}: mean relative impedance error {rel}");
+        let ek = rel_err(&mat(&r["stiffness"]), &mat(&truth["stiffness"]));
+        assert!(ek < 0.05, "{case}: stiffness error {ek}");
+        let nf = r["frequencies"].as_array().unwrap().len();
+        assert_eq!(r["impedance"].as_array().unwrap().len(), nf);
+        assert_eq!(r["impedance"][0].as_array().unwrap().len(), 3);
+        assert_eq!(r["coherence"]["multiple"].as_array().unwrap().len(), 6);
+        assert_eq!(r["coherence"]["partial"][0].as_array().unwrap().len(), 3);
+        for key in ["inertia", "damping", "standard_errors", "criteria"] {
+            assert!(!r[key].is_null(), "{key}");
+        }
+    }
+}
+
+#[test]
+fn spectra_csv_and_bad_band() {
+    let rec = shared().join("examples/stochastic/ex_sa4.csv");
+    let out = limpid(&[
+        "spectra",
+        rec.to_str().unwrap(),
+        "--inputs",
+        "ux,uz",
+        "--outputs",
+        "x,z",
+        "--nfft",
+        "1024",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let lines: Vec<&str> = out.stdout.lines().collect();
+    assert_eq!(lines.len(), 1 + 513, "header + nfft/2 + 1 frequencies");
+    assert!(lines[0].starts_with("frequency_hz,psd_ux,psd_uz,psd_x,psd_z,multiple_coherence_x"));
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        rec.to_str().unwrap(),
+        "--band",
+        "5,600",
+    ]);
+    assert_eq!(out.code, 2);
+    assert_eq!(
+        out.stderr.trim_end(),
+        "limpid: invalid band: expected 0 < low < high < 500 Hz, found 5-600 Hz"
+    );
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        shared()
+            .join("examples/cartesian_slow/ex_cubic.csv")
+            .to_str()
+            .unwrap(),
+    ]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr
+            .contains("missing required column ux (commanded perturbation"),
+        "{}",
+        out.stderr
+    );
+}
