@@ -54,3 +54,36 @@ fn spring_array_examples() {
         assert!(est.criteria.mean_multiple_coherence > 0.9);
     }
 }
+
+#[test]
+fn eq_10_reproduces_the_examples_spring_arrays() {
+    use limpid_lab::rig::{spring_array_stiffness, Geometry};
+    for case in ["ex_sa3", "ex_sa4"] {
+        let t: Value = serde_json::from_str(
+            &std::fs::read_to_string(format!("{EXAMPLES}/{case}.truth.json")).unwrap(),
+        )
+        .unwrap();
+        let s = &t["springs_N_per_m"];
+        let springs = ["k1a", "k1b", "k2a", "k2b", "k3a", "k3b", "k4a", "k4b"]
+            .map(|k| s[k].as_f64().unwrap());
+        let k = spring_array_stiffness(&springs, &Geometry::from_k_sa1());
+        let est: Vec<Vec<f64>> = (0..3)
+            .map(|i| (0..3).map(|j| k[(i, j)]).collect())
+            .collect();
+        assert!(rel(&est, &mat(&t["stiffness"])) < 1e-6, "{case}: {k}");
+    }
+}
+
+#[test]
+fn virtual_spring_array_experiment_recovers_its_stiffness() {
+    use limpid_lab::rig::{simulate_rig, RigExperiment, SA1};
+    let e = RigExperiment::spring_array(&SA1);
+    let rec = simulate_rig(&e, [1e-6, 1e-5], 11).unwrap();
+    let est = estimate_stochastic(&rec, &StochasticParams::default()).unwrap();
+    let k: Vec<Vec<f64>> = (0..3)
+        .map(|i| (0..3).map(|j| e.stiffness[(i, j)]).collect())
+        .collect();
+    let ek = rel(&est.stiffness, &k);
+    assert!(ek < 0.05, "stiffness error {ek}: {:?}", est.stiffness);
+    assert!(est.criteria.max_input_coherence < 0.6);
+}
