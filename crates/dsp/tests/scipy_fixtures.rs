@@ -3,24 +3,12 @@
 use limpid_dsp::{savgol, LowPass};
 use serde_json::Value;
 
+mod common;
+use common::{max_rel, vec_of};
+
 fn fixture() -> Value {
     let text = include_str!("fixtures/scipy_dsp.json");
     serde_json::from_str(text).expect("fixture is valid JSON")
-}
-
-fn vec_of(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
-
-fn max_rel_err(a: &[f64], b: &[f64]) -> f64 {
-    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
 }
 
 #[test]
@@ -36,7 +24,7 @@ fn butterworth_sosfiltfilt_matches_scipy() {
         )
         .unwrap();
         let y = lp.filtfilt(&x).unwrap();
-        let err = max_rel_err(&y, &vec_of(&case["filtfilt"]));
+        let err = max_rel(&y, &vec_of(&case["filtfilt"]));
         assert!(err < 1e-10, "order {order}: max relative error {err:e}");
     }
 }
@@ -50,7 +38,7 @@ fn savitzky_golay_matches_scipy_nearest_mode() {
         let p = case["polyorder"].as_u64().unwrap() as usize;
         let d = case["deriv"].as_u64().unwrap() as usize;
         let y = savgol(&x, w, p, d, case["delta"].as_f64().unwrap()).unwrap();
-        let err = max_rel_err(&y, &vec_of(&case["y"]));
+        let err = max_rel(&y, &vec_of(&case["y"]));
         assert!(
             err < 1e-9,
             "window {w} poly {p} deriv {d}: max relative error {err:e}"

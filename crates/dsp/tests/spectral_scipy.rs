@@ -6,20 +6,8 @@ use limpid_dsp::spectral::{
 };
 use serde_json::Value;
 
-fn vec_of(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
-
-fn max_rel(a: &[f64], b: &[f64]) -> f64 {
-    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
-}
+mod common;
+use common::{max_rel, vec_of};
 
 #[test]
 fn welch_csd_coherence_match_scipy() {

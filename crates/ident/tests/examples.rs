@@ -1,39 +1,11 @@
 //! Recovery of ../shared/examples truths by the linear estimator (issue 2 acceptance).
 
 use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
-use serde_json::Value;
+
+mod common;
+use common::{mat, rel_err, truth};
 
 const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/examples");
-
-fn truth(path: &str) -> Value {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    serde_json::from_str(&text).unwrap()
-}
-
-fn mat(v: &Value) -> Vec<Vec<f64>> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect()
-        })
-        .collect()
-}
-
-/// Relative Frobenius error ||est - truth|| / ||truth||.
-fn rel_err(est: &[Vec<f64>], truth: &[Vec<f64>]) -> f64 {
-    let mut num = 0.0;
-    let mut den = 0.0;
-    for (a, b) in est.iter().flatten().zip(truth.iter().flatten()) {
-        num += (a - b) * (a - b);
-        den += b * b;
-    }
-    (num / den).sqrt()
-}
 
 #[test]
 fn cartesian_slow_examples_recover_stiffness_and_damping() {

@@ -10,28 +10,8 @@ const EXAMPLES: &str = concat!(
     "/../../../shared/examples/stochastic"
 );
 
-fn mat(v: &Value) -> Vec<Vec<f64>> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect()
-        })
-        .collect()
-}
-
-fn rel(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
-    let (mut n, mut d) = (0.0, 0.0);
-    for (x, y) in a.iter().flatten().zip(b.iter().flatten()) {
-        n += (x - y).powi(2);
-        d += y * y;
-    }
-    (n / d).sqrt()
-}
+mod common;
+use common::{mat, rel_err as rel};
 
 #[test]
 fn spring_array_examples() {
