@@ -5,6 +5,7 @@
 mod demo;
 mod estimate;
 mod planar;
+mod protocol;
 mod stochastic;
 mod study;
 mod table;
@@ -32,6 +33,13 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Planar-arm estimates over a range of observation windows, with the minimum trustworthy window (seed 003).
     WindowSweep(planar::SweepArgs),
+    /// Design and check perturbation protocols (TOML).
+    Protocol {
+        #[command(subcommand)]
+        command: protocol::ProtocolCommand,
+    },
+    /// Simulate a protocol on a virtual subject: a recording and its truth file.
+    Simulate(protocol::SimulateArgs),
     /// Welch PSD, coherence, multiple and partial coherence of outputs on inputs, as CSV.
     Spectra(stochastic::SpectraArgs),
     /// Whole co-contraction studies: tables across subjects and configurations (seed 001).
@@ -56,6 +64,8 @@ fn main() -> ExitCode {
         Command::Study { command } => study::run(command),
         Command::WindowSweep(args) => planar::run_sweep(args),
         Command::Spectra(args) => stochastic::run_spectra(args),
+        Command::Protocol { command } => protocol::run(command),
+        Command::Simulate(args) => protocol::run_simulate(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

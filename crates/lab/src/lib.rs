@@ -7,6 +7,7 @@
 pub mod cocontraction;
 pub mod planar;
 pub mod profile;
+pub mod protocol;
 pub mod rig;
 pub mod simulate;
 pub mod sphere;
