@@ -35,6 +35,8 @@ pub enum DerivativeArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum OffsetsArg {
+    /// Fitted for trials longer than 2 s (slow perturbations), rest mean otherwise.
+    Auto,
     /// Fit one force offset per trial (robust to slow drift; no equilibrium).
     Fit,
     /// Subtract the pre-onset rest mean (seeds 000, 001); equilibrium estimated.
@@ -74,7 +76,7 @@ pub struct PrepareArgs {
     #[arg(long, value_enum, default_value_t = DerivativeArg::Central)]
     pub derivative: DerivativeArg,
     /// How per-trial force offsets are handled.
-    #[arg(long, value_enum, default_value_t = OffsetsArg::Rest)]
+    #[arg(long, value_enum, default_value_t = OffsetsArg::Auto)]
     pub offsets: OffsetsArg,
     /// How the recording is cut into windows.
     #[arg(long, value_enum, default_value_t = WindowArg::Auto)]
@@ -162,6 +164,7 @@ impl PrepareArgs {
             offsets: match self.offsets {
                 OffsetsArg::Fit => Offsets::Fit,
                 OffsetsArg::Rest => Offsets::Rest,
+                OffsetsArg::Auto => Offsets::Auto,
             },
             negate_force: self.negate_force,
             transform,

@@ -52,7 +52,14 @@ pub enum Offsets {
     /// the offsets and so the stiffness (ex_config7: K error 0.1 % -> 1.6 %);
     /// the equilibrium is not identifiable.
     Fit,
+    /// `Fit` when the trials last longer than [`AUTO_FIT_ABOVE_S`] (median),
+    /// `Rest` otherwise: over a short trial the force drifts little after the
+    /// rest, while over seconds its drift rivals the damping force.
+    Auto,
 }
+
+/// Median trial duration (s) above which [`Offsets::Auto`] fits the offsets.
+pub const AUTO_FIT_ABOVE_S: f64 = 2.0;
 
 /// How the recording is cut into estimation windows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -78,7 +85,7 @@ pub enum Windowing {
 /// | `cutoff_hz` | 20 Hz (capped at 0.4 fs) | zero-phase low-pass cut-off | (0, fs/2) |
 /// | `filter_order` | 4 | Butterworth order per pass | 1..=20 |
 /// | `derivative` | `Central` | derivative scheme | see [`Derivative`] |
-/// | `offsets` | `Rest` | per-trial force offsets: rest mean or fitted | see [`Offsets`] |
+/// | `offsets` | `Auto` | per-trial force offsets: rest mean or fitted | see [`Offsets`] |
 /// | `negate_force` | false | force columns hold the hand's force on the sensor | |
 /// | `transform` | none | frame change applied to `x,y,z`, `fx,fy,fz` | rotation det +1 |
 /// | `min_rest_s` | 0.02 s | shortest rest before an onset | > 0 |
@@ -106,7 +113,7 @@ impl Default for PrepareParams {
             cutoff_hz: None,
             filter_order: 4,
             derivative: Derivative::Central,
-            offsets: Offsets::Rest,
+            offsets: Offsets::Auto,
             negate_force: false,
             transform: None,
             min_rest_s: 0.02,
@@ -310,7 +317,16 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         force: vec![Vec::new(); n],
         windows: Vec::new(),
         continuous,
-        demeaned: params.offsets == Offsets::Fit && !continuous,
+        demeaned: !continuous
+            && match params.offsets {
+                Offsets::Fit => true,
+                Offsets::Rest => false,
+                Offsets::Auto => {
+                    let mut lengths: Vec<usize> = windows.iter().map(|w| w.range.len()).collect();
+                    lengths.sort_unstable();
+                    lengths[lengths.len() / 2] as f64 / fs > AUTO_FIT_ABOVE_S
+                }
+            },
         cutoff_hz: cutoff,
         filter_order: params.filter_order,
         derivative: params.derivative,
