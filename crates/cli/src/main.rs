@@ -16,7 +16,12 @@ use clap::{Parser, Subcommand};
 
 /// limpid — limb impedance identification.
 #[derive(Parser)]
-#[command(name = "limpid", version, about, long_about = None)]
+#[command(
+    name = "limpid",
+    version,
+    about = "limpid: limb impedance identification from robot-perturbation recordings",
+    long_about = None
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
