@@ -106,3 +106,99 @@ mod tests {
         assert!(FrameTransform::from_values(&v).is_err());
     }
 }
+
+/// Gravity compensation of a force/torque sensor in two steps (seed 004
+/// §II-B, eq. (4)-(9)): the sensor's intrinsic bias is constant in the
+/// sensor frame, the weight of handle and limb is constant in the reference
+/// frame, so they are removed separately.
+///
+/// Step 1: `bias_sensor`, the mean sensor reading in a pose where gravity does
+/// not load the sensor axes. Step 2: at the start of the test (no perturbation
+/// yet), the bias-free reading rotated into the reference frame is the
+/// gravity term `gravity_ref` (= -F_G). During the test,
+/// `R (reading - bias) - gravity_ref` is the force the limb exerts on the
+/// sensor (eq. (9): -F_sΔ); its negative is the force applied to the limb.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GravityCompensation {
+    pub bias_sensor: Vector3<f64>,
+    pub gravity_ref: Vector3<f64>,
+}
+
+impl GravityCompensation {
+    /// Calibrate from gravity-free readings (step 1) and the first readings of
+    /// the test with the sensor-to-reference rotation at that time (step 2).
+    pub fn calibrate(
+        bias_readings: &[Vector3<f64>],
+        initial_readings: &[Vector3<f64>],
+        initial_rotation: &Matrix3<f64>,
+    ) -> Result<Self> {
+        if bias_readings.is_empty() || initial_readings.is_empty() {
+            return Err(Error::invalid(
+                "gravity compensation",
+                "needs at least one bias reading and one initial reading",
+            ));
+        }
+        let mean = |v: &[Vector3<f64>]| v.iter().sum::<Vector3<f64>>() / v.len() as f64;
+        let bias_sensor = mean(bias_readings);
+        let gravity_ref = initial_rotation * (mean(initial_readings) - bias_sensor);
+        Ok(GravityCompensation {
+            bias_sensor,
+            gravity_ref,
+        })
+    }
+
+    /// Force applied to the limb (reference frame) from one sensor reading and
+    /// the sensor-to-reference rotation at that sample.
+    pub fn force_on_limb(&self, reading: &Vector3<f64>, rotation: &Matrix3<f64>) -> Vector3<f64> {
+        -(rotation * (reading - self.bias_sensor) - self.gravity_ref)
+    }
+}
+
+#[cfg(test)]
+mod gravity_tests {
+    use super::*;
+
+    fn ry(theta: f64) -> Matrix3<f64> {
+        Matrix3::new(
+            theta.cos(),
+            0.0,
+            theta.sin(),
+            0.0,
+            1.0,
+            0.0,
+            -theta.sin(),
+            0.0,
+            theta.cos(),
+        )
+    }
+
+    #[test]
+    fn bias_in_sensor_frame_and_gravity_in_reference_frame_are_both_removed() {
+        let bias = Vector3::new(0.3, -0.2, 0.15);
+        let weight_ref = Vector3::new(0.0, 0.0, -6.0); // -F_G on the sensor, reference frame
+                                                       // a sensor reading: R^T (weight + force of the limb on the sensor) + bias
+        let read = |theta: f64, limb_on_sensor: Vector3<f64>| {
+            ry(theta).transpose() * (weight_ref + limb_on_sensor) + bias
+        };
+        // step 1: a pose where gravity is along no sensor axis is modelled as zero load
+        let bias_readings = vec![bias; 10];
+        let g = GravityCompensation::calibrate(
+            &bias_readings,
+            &[read(0.0, Vector3::zeros())],
+            &ry(0.0),
+        )
+        .unwrap();
+        for (theta, f_limb) in [
+            (0.0, Vector3::new(1.0, 0.0, 2.0)),
+            (0.3, Vector3::new(-2.0, 0.5, 0.7)),
+            (-0.6, Vector3::new(0.0, 0.0, -3.0)),
+        ] {
+            // the robot applies f_limb to the limb, so the limb pushes -f_limb on the sensor
+            let f = g.force_on_limb(&read(theta, -f_limb), &ry(theta));
+            assert!(
+                (f - f_limb).norm() < 1e-12,
+                "theta {theta}: {f} vs {f_limb}"
+            );
+        }
+    }
+}

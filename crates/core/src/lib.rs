@@ -12,6 +12,6 @@ pub mod recording;
 pub mod trial;
 
 pub use error::{display_round, Error, Result};
-pub use frame::FrameTransform;
+pub use frame::{FrameTransform, GravityCompensation};
 pub use recording::Recording;
 pub use trial::Window;
