@@ -9,6 +9,7 @@ pub mod planar;
 pub mod profile;
 pub mod protocol;
 pub mod rig;
+pub mod robot;
 pub mod simulate;
 pub mod sphere;
 pub mod subject;

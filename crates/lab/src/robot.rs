@@ -1,0 +1,315 @@
+//! Serial robot kinematics for the virtual lab (seeds 000, 001, 004):
+//! Denavit-Hartenberg models in the standard and Craig's modified convention,
+//! forward kinematics, the geometric Jacobian, and damped least-squares
+//! inverse kinematics that holds the end-effector orientation (seeds 000
+//! and 001 keep roll, pitch and yaw fixed during perturbations).
+//!
+//! Built-in models: the KUKA LWR4+ (7 DoF) with the DH table commonly used
+//! for it (standard convention; d1 = 0.3105, d3 = 0.4, d5 = 0.39,
+//! d7 = 0.078 m), and a 3-DoF PUMA-type arm after seed 004 Table I (Craig's
+//! convention; the link lengths are not printed in the seed, limpid uses
+//! a1 = 0.15 m, a2 = 0.35 m, d3 = 0.10 m).
+
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Vector3};
+use serde::{Deserialize, Serialize};
+
+use limpid_core::{Error, Result};
+
+/// Which DH convention a table uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Convention {
+    /// T_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i).
+    Standard,
+    /// Craig: T_i = Rx(α_{i-1}) Tx(a_{i-1}) Rz(θ_i) Tz(d_i).
+    Modified,
+}
+
+/// One revolute joint: DH parameters (m, rad), joint offset, limits.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+pub struct Joint {
+    pub a: f64,
+    pub alpha: f64,
+    pub d: f64,
+    /// Added to the joint angle.
+    pub theta_offset: f64,
+    pub min: f64,
+    pub max: f64,
+    /// Largest joint speed (rad/s).
+    pub max_speed: f64,
+}
+
+/// A serial robot of revolute joints.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Robot {
+    pub name: String,
+    pub convention: Convention,
+    pub joints: Vec<Joint>,
+}
+
+fn rot_x(a: f64) -> Matrix4<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix4::new(
+        1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0,
+    )
+}
+fn rot_z(a: f64) -> Matrix4<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix4::new(
+        c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    )
+}
+fn trans(x: f64, z: f64) -> Matrix4<f64> {
+    let mut t = Matrix4::identity();
+    t[(0, 3)] = x;
+    t[(2, 3)] = z;
+    t
+}
+
+impl Robot {
+    /// KUKA LWR4+ (7 DoF), standard DH, limits ±170/±120 deg, 1.9 rad/s.
+    pub fn kuka_lwr4() -> Self {
+        use std::f64::consts::FRAC_PI_2 as H;
+        let deg = |v: f64| v.to_radians();
+        let j = |alpha: f64, d: f64, lim: f64| Joint {
+            a: 0.0,
+            alpha,
+            d,
+            theta_offset: 0.0,
+            min: -deg(lim),
+            max: deg(lim),
+            max_speed: 1.9,
+        };
+        Robot {
+            name: "KUKA LWR4+".into(),
+            convention: Convention::Standard,
+            joints: vec![
+                j(H, 0.3105, 170.0),
+                j(-H, 0.0, 120.0),
+                j(-H, 0.4, 170.0),
+                j(H, 0.0, 120.0),
+                j(H, 0.39, 170.0),
+                j(-H, 0.0, 120.0),
+                j(0.0, 0.078, 170.0),
+            ],
+        }
+    }
+
+    /// 3-DoF PUMA-type arm (seed 004 Table I layout, Craig's convention).
+    pub fn puma3() -> Self {
+        use std::f64::consts::FRAC_PI_2 as H;
+        let j = |a: f64, alpha: f64, d: f64| Joint {
+            a,
+            alpha,
+            d,
+            theta_offset: 0.0,
+            min: -std::f64::consts::PI,
+            max: std::f64::consts::PI,
+            max_speed: 3.0,
+        };
+        Robot {
+            name: "PUMA-type 3-DoF".into(),
+            convention: Convention::Modified,
+            joints: vec![j(0.0, 0.0, 0.0), j(0.15, -H, 0.0), j(0.35, H, 0.10)],
+        }
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Frames of every joint axis and of the end effector (base = identity first).
+    fn frames(&self, q: &[f64]) -> Vec<Matrix4<f64>> {
+        let mut t = Matrix4::identity();
+        let mut out = vec![t];
+        for (j, qi) in self.joints.iter().zip(q) {
+            let th = qi + j.theta_offset;
+            let step = match self.convention {
+                Convention::Standard => {
+                    rot_z(th) * trans(0.0, j.d) * trans(j.a, 0.0) * rot_x(j.alpha)
+                }
+                Convention::Modified => {
+                    rot_x(j.alpha) * trans(j.a, 0.0) * rot_z(th) * trans(0.0, j.d)
+                }
+            };
+            t *= step;
+            out.push(t);
+        }
+        out
+    }
+
+    /// End-effector pose (homogeneous transform in the base frame).
+    pub fn fk(&self, q: &[f64]) -> Matrix4<f64> {
+        *self
+            .frames(q)
+            .last()
+            .expect("frames holds at least the base")
+    }
+
+    /// Geometric Jacobian (6 x n): linear velocity over angular velocity.
+    pub fn jacobian(&self, q: &[f64]) -> DMatrix<f64> {
+        let frames = self.frames(q);
+        let pe: Vector3<f64> = frames
+            .last()
+            .expect("end frame")
+            .fixed_view::<3, 1>(0, 3)
+            .into();
+        let n = self.dof();
+        let mut jac = DMatrix::zeros(6, n);
+        for i in 0..n {
+            // joint i rotates about z of frame i-1 (standard) or of frame i (modified)
+            let f = match self.convention {
+                Convention::Standard => frames[i],
+                Convention::Modified => frames[i + 1],
+            };
+            let z: Vector3<f64> = f.fixed_view::<3, 1>(0, 2).into();
+            let p: Vector3<f64> = f.fixed_view::<3, 1>(0, 3).into();
+            let v = z.cross(&(pe - p));
+            for k in 0..3 {
+                jac[(k, i)] = v[k];
+                jac[(3 + k, i)] = z[k];
+            }
+        }
+        jac
+    }
+
+    /// Damped least-squares IK to a target pose (position and orientation),
+    /// starting from `q0`. Converges to 1e-12 or fails with an error.
+    pub fn ik(&self, target: &Matrix4<f64>, q0: &[f64]) -> Result<Vec<f64>> {
+        let mut q = q0.to_vec();
+        let pt: Vector3<f64> = target.fixed_view::<3, 1>(0, 3).into();
+        let rt: Matrix3<f64> = target.fixed_view::<3, 3>(0, 0).into();
+        let lambda2 = 1e-6;
+        for _ in 0..500 {
+            let t = self.fk(&q);
+            let p: Vector3<f64> = t.fixed_view::<3, 1>(0, 3).into();
+            let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into();
+            let ep = pt - p;
+            let er = nalgebra::Rotation3::from_matrix_unchecked(rt * r.transpose()).scaled_axis();
+            let e = DVector::from_iterator(6, ep.iter().chain(er.iter()).copied());
+            if ep.norm() < 1e-13 && er.norm() < 1e-13 {
+                return Ok(q);
+            }
+            let j = self.jacobian(&q);
+            let jjt = &j * j.transpose() + DMatrix::identity(6, 6) * lambda2 * e.norm().min(1.0);
+            let step = j.transpose()
+                * jjt
+                    .lu()
+                    .solve(&e)
+                    .ok_or_else(|| Error::invalid("inverse kinematics", "singular step"))?;
+            for (qi, s) in q.iter_mut().zip(step.iter()) {
+                *qi += s;
+            }
+        }
+        let t = self.fk(&q);
+        let err = (pt - Vector3::from(t.fixed_view::<3, 1>(0, 3))).norm();
+        if err < 1e-9 {
+            Ok(q)
+        } else {
+            Err(Error::invalid("inverse kinematics", format!("did not converge (position error {err:.3e} m): target out of reach or singular")))
+        }
+    }
+
+    /// First joint limit or speed limit a joint trajectory (rows = samples) breaks.
+    pub fn check_joint_trajectory(&self, q: &[Vec<f64>], dt: f64) -> Result<()> {
+        for (k, row) in q.iter().enumerate() {
+            for (i, (v, j)) in row.iter().zip(&self.joints).enumerate() {
+                if *v < j.min || *v > j.max {
+                    return Err(Error::invalid(
+                        "joint trajectory",
+                        format!(
+                            "joint {} at {:.4} rad leaves its range [{:.4}, {:.4}] at sample {k}",
+                            i + 1,
+                            v,
+                            j.min,
+                            j.max
+                        ),
+                    ));
+                }
+                if k > 0 {
+                    let speed = (v - q[k - 1][i]).abs() / dt;
+                    if speed > j.max_speed {
+                        return Err(Error::invalid(
+                            "joint trajectory",
+                            format!(
+                                "joint {} speed {speed:.3} rad/s exceeds {} rad/s at sample {k}",
+                                i + 1,
+                                j.max_speed
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        for robot in [Robot::kuka_lwr4(), Robot::puma3()] {
+            let q: Vec<f64> = (0..robot.dof()).map(|i| 0.3 + 0.2 * i as f64).collect();
+            let j = robot.jacobian(&q);
+            let h = 1e-7;
+            for c in 0..robot.dof() {
+                let mut qp = q.clone();
+                qp[c] += h;
+                let (a, b) = (robot.fk(&q), robot.fk(&qp));
+                for k in 0..3 {
+                    assert!(
+                        ((b[(k, 3)] - a[(k, 3)]) / h - j[(k, c)]).abs() < 1e-5,
+                        "{} joint {c}",
+                        robot.name
+                    );
+                }
+                // angular part: (R_b R_a^T - I) / h ~ skew(w)
+                let ra: Matrix3<f64> = a.fixed_view::<3, 3>(0, 0).into();
+                let rb: Matrix3<f64> = b.fixed_view::<3, 3>(0, 0).into();
+                let w = (rb * ra.transpose() - Matrix3::identity()) / h;
+                assert!(
+                    (w[(2, 1)] - j[(3, c)]).abs() < 1e-5
+                        && (w[(0, 2)] - j[(4, c)]).abs() < 1e-5
+                        && (w[(1, 0)] - j[(5, c)]).abs() < 1e-5
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn redundant_ik_round_trip_holds_orientation() {
+        let robot = Robot::kuka_lwr4();
+        let q_true = vec![0.2, 0.6, -0.3, -1.2, 0.4, 0.7, 0.1];
+        let start = robot.fk(&q_true);
+        // a 3 cm displacement with the orientation held, as in seed 000
+        let mut target = start;
+        target[(0, 3)] += 0.02;
+        target[(1, 3)] -= 0.015;
+        target[(2, 3)] += 0.013;
+        let q = robot.ik(&target, &q_true).unwrap();
+        let got = robot.fk(&q);
+        let pos_err = (0..3)
+            .map(|k| (got[(k, 3)] - target[(k, 3)]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let rot_err = (got.fixed_view::<3, 3>(0, 0) - start.fixed_view::<3, 3>(0, 0)).norm();
+        assert!(pos_err < 1e-9, "position error {pos_err:e}");
+        assert!(rot_err < 1e-9, "orientation error {rot_err:e}");
+        assert!(robot
+            .check_joint_trajectory(&[q_true.clone(), q.clone()], 1.0)
+            .is_ok());
+        // an over-fast step is refused naming the joint
+        let e = robot
+            .check_joint_trajectory(&[q_true, q], 0.001)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("speed") && e.contains("exceeds 1.9 rad/s at sample 1"),
+            "{e}"
+        );
+    }
+}
