@@ -95,6 +95,40 @@ pub struct PrepareArgs {
     /// The force columns hold the hand's force on the sensor: negate them.
     #[arg(long)]
     pub negate_force: bool,
+    /// Compute x,y,z from the robot_q1..n columns by this robot's forward kinematics (kuka-lwr4, puma3), as seed 000 does.
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: Option<String>,
+}
+
+impl PrepareArgs {
+    /// Read the recording and apply `--robot`.
+    pub fn read(&self, path: &std::path::Path) -> CliResult<limpid_core::Recording> {
+        let mut rec = limpid_io::read_recording(path)?;
+        if let Some(name) = &self.robot {
+            let robot = limpid_lab::robot::Robot::by_name(name)?;
+            let joints: Vec<Vec<f64>> = (1..=robot.dof())
+                .map(|i| {
+                    rec.require(&format!("robot_q{i}"), "robot joint angles for --robot")
+                        .map(<[f64]>::to_vec)
+                })
+                .collect::<Result<_, _>>()?;
+            let mut xyz: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(rec.len())).collect();
+            let mut q = vec![0.0; robot.dof()];
+            for k in 0..rec.len() {
+                for (qi, c) in q.iter_mut().zip(&joints) {
+                    *qi = c[k];
+                }
+                let t = robot.fk(&q);
+                for (a, col) in xyz.iter_mut().enumerate() {
+                    col.push(t[(a, 3)]);
+                }
+            }
+            for (name, col) in ["x", "y", "z"].iter().zip(xyz) {
+                rec.set_column(name, col)?;
+            }
+        }
+        Ok(rec)
+    }
 }
 
 #[derive(Args)]
@@ -180,7 +214,7 @@ pub fn run(method: Method) -> CliResult {
                 level: args.level,
                 ..args.prepare.params()?
             };
-            let rec = limpid_io::read_recording(&args.recording)?;
+            let rec = args.prepare.read(&args.recording)?;
             let prepared = prepare(&rec, &params)?;
             let est = fit_linear(
                 &prepared,
@@ -211,7 +245,7 @@ pub fn run(method: Method) -> CliResult {
                 .into());
             }
             let params = args.prepare.params()?;
-            let rec = limpid_io::read_recording(&args.recording)?;
+            let rec = args.prepare.read(&args.recording)?;
             let mvc = limpid_io::read_recording(&args.mvc)?;
             let emg = EmgParams {
                 tolerance: args.tolerance,

@@ -21,6 +21,15 @@ pub enum ProtocolCommand {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// End-effector poses and joint trajectories of a protocol for a robot, at the protocol's rate (CSV or Parquet).
+    Export {
+        protocol: PathBuf,
+        /// kuka-lwr4 or puma3.
+        #[arg(long)]
+        robot: String,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Check a protocol against its safety limits and report what it will excite.
     Check {
         protocol: PathBuf,
@@ -74,6 +83,11 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             }
             Ok(())
         }
+        ProtocolCommand::Export {
+            protocol,
+            robot,
+            output,
+        } => export(&protocol, &robot, &output),
         ProtocolCommand::Check { protocol, json } => {
             let p = read_protocol(&protocol)?;
             let r = check(&p).map_err(|e| format!("{}: {e}", protocol.display()))?;
@@ -99,6 +113,84 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             Ok(())
         }
     }
+}
+
+/// Every phase of every trial (rest, centre-out, hold, return by the same
+/// profile reversed, relax), tracked by the robot with the orientation of its
+/// home pose held (seeds 000, 001).
+fn export(path: &Path, robot: &str, output: &Path) -> CliResult {
+    let p = read_protocol(path)?;
+    check(&p).map_err(|e| format!("{}: {e}", path.display()))?;
+    let robot = limpid_lab::robot::Robot::by_name(robot)?;
+    let home = robot.home();
+    let orientation: Matrix3<f64> = robot.fk(&home).fixed_view::<3, 3>(0, 0).into();
+    let fs = p.sample_rate_hz;
+    let ph = &p.phases;
+    let total_s = ph.rest_s + ph.centre_out_s + ph.hold_s + ph.return_s + ph.relax_s;
+    let per = (total_s * fs).round() as usize;
+    let dirs = p.directions();
+    let n = robot.dof();
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 6 + n];
+    let mut sample = 0usize;
+    for (si, start) in p.start_points().iter().enumerate() {
+        let mut q = robot
+            .track(&[*start], &orientation, &home)
+            .map_err(|e| format!("start point {}: {e}", si + 1))?
+            .remove(0);
+        for (ti, dir) in dirs.iter().enumerate() {
+            let positions: Vec<nalgebra::Vector3<f64>> = (0..per)
+                .map(|i| {
+                    let t = i as f64 / fs - ph.rest_s;
+                    let out = ph.profile.eval(t, ph.centre_out_s).0;
+                    let back = ph
+                        .profile
+                        .eval(t - ph.centre_out_s - ph.hold_s, ph.return_s)
+                        .0;
+                    start + dir * (p.targets.radius_m * (out - back))
+                })
+                .collect();
+            let joints = robot
+                .track(&positions, &orientation, &q)
+                .map_err(|e| format!("start point {}, target {}: {e}", si + 1, ti + 1))?;
+            robot
+                .check_joint_trajectory(&joints, 1.0 / fs)
+                .map_err(|e| {
+                    format!(
+                        "{}: start point {}, target {}: {e}",
+                        robot.name,
+                        si + 1,
+                        ti + 1
+                    )
+                })?;
+            for (x, qk) in positions.iter().zip(&joints) {
+                cols[0].push(sample as f64 / fs);
+                cols[1].push((si + 1) as f64);
+                cols[2].push((ti + 1) as f64);
+                for a in 0..3 {
+                    cols[3 + a].push(x[a]);
+                }
+                for (j, v) in qk.iter().enumerate() {
+                    cols[6 + j].push(*v);
+                }
+                sample += 1;
+            }
+            q = joints.last().cloned().unwrap_or(q);
+        }
+    }
+    let mut names: Vec<String> = ["t", "start_point", "trial", "x", "y", "z"]
+        .map(String::from)
+        .to_vec();
+    names.extend((1..=n).map(|i| format!("robot_q{i}")));
+    let rec = limpid_core::Recording::new(output, names, cols, 2)?;
+    limpid_io::write_recording(&rec, output)?;
+    println!(
+        "wrote {}: {} samples of end-effector positions and {} joint angles ({})",
+        output.display(),
+        rec.len(),
+        n,
+        robot.name
+    );
+    Ok(())
 }
 
 fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
@@ -135,6 +227,16 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
         directions: p.directions(),
         rest_s: p.phases.rest_s,
         motion_s: p.phases.centre_out_s,
+        hold_s: if p.phases.record_hold_and_return {
+            p.phases.hold_s
+        } else {
+            0.0
+        },
+        return_s: if p.phases.record_hold_and_return {
+            p.phases.return_s
+        } else {
+            0.0
+        },
         sample_rate: p.sample_rate_hz,
     };
     let noise = NoiseModel::default();

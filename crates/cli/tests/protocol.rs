@@ -70,3 +70,108 @@ fn over_fast_protocol_is_refused() {
         .stderr
         .contains("presets: artemiadis-3d, patel-cocontraction"));
 }
+
+#[test]
+fn export_for_the_kuka_and_estimate_from_robot_joint_angles() {
+    use limpid_lab::robot::Robot;
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("p.toml");
+    assert_eq!(
+        limpid(&[
+            "protocol",
+            "new",
+            "--preset",
+            "patel-cocontraction",
+            "-o",
+            p.to_str().unwrap()
+        ])
+        .code,
+        0
+    );
+    let traj = dir.path().join("traj.parquet");
+    let out = limpid(&[
+        "protocol",
+        "export",
+        p.to_str().unwrap(),
+        "--robot",
+        "kuka-lwr4",
+        "-o",
+        traj.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    // the exported joints reproduce the exported end-effector path with the orientation held
+    let rec = limpid_io::read_recording(&traj).unwrap();
+    let robot = Robot::kuka_lwr4();
+    let q: Vec<&[f64]> = (1..=7)
+        .map(|i| rec.column(&format!("robot_q{i}")).unwrap())
+        .collect();
+    let first = robot.fk(&(0..7).map(|j| q[j][0]).collect::<Vec<_>>());
+    for k in (0..rec.len()).step_by(97) {
+        let t = robot.fk(&(0..7).map(|j| q[j][k]).collect::<Vec<_>>());
+        for (a, name) in ["x", "y", "z"].iter().enumerate() {
+            assert!((t[(a, 3)] - rec.column(name).unwrap()[k]).abs() < 1e-9);
+        }
+        assert!((t.fixed_view::<3, 3>(0, 0) - first.fixed_view::<3, 3>(0, 0)).norm() < 1e-9);
+    }
+
+    // a simulated recording whose end point is known only through the robot's joint angles
+    let sim = dir.path().join("rec.parquet");
+    assert_eq!(
+        limpid(&["simulate", p.to_str().unwrap(), "-o", sim.to_str().unwrap()]).code,
+        0
+    );
+    let truth = read_json(&dir.path().join("rec.truth.json"));
+    let rec = limpid_io::read_recording(&sim).unwrap();
+    let orientation: nalgebra::Matrix3<f64> =
+        robot.fk(&robot.home()).fixed_view::<3, 3>(0, 0).into();
+    let positions: Vec<nalgebra::Vector3<f64>> = (0..rec.len())
+        .map(|k| {
+            nalgebra::Vector3::new(
+                rec.column("x").unwrap()[k],
+                rec.column("y").unwrap()[k],
+                rec.column("z").unwrap()[k],
+            )
+        })
+        .collect();
+    let start = robot
+        .track(&positions[..1], &orientation, &robot.home())
+        .unwrap()
+        .remove(0);
+    let joints = robot.track(&positions, &orientation, &start).unwrap();
+    let mut names: Vec<String> = vec![
+        "t".into(),
+        "fx".into(),
+        "fy".into(),
+        "fz".into(),
+        "trial".into(),
+    ];
+    let mut cols: Vec<Vec<f64>> = names
+        .iter()
+        .map(|n| rec.column(n).unwrap().to_vec())
+        .collect();
+    // x, y, z must be present for the coordinates; --robot overwrites them from the joint angles
+    for n in ["x", "y", "z"] {
+        names.push(n.into());
+        cols.push(vec![0.0; rec.len()]);
+    }
+    for j in 0..7 {
+        names.push(format!("robot_q{}", j + 1));
+        cols.push(joints.iter().map(|q| q[j]).collect());
+    }
+    let robot_rec = dir.path().join("robot.parquet");
+    limpid_io::write_recording(
+        &limpid_core::Recording::new(&robot_rec, names, cols, 1).unwrap(),
+        &robot_rec,
+    )
+    .unwrap();
+    let est = json(&[
+        "estimate",
+        "linear",
+        robot_rec.to_str().unwrap(),
+        "--robot",
+        "kuka-lwr4",
+        "--json",
+    ]);
+    let ek = rel_err(&mat(&est["stiffness"]), &mat(&truth["stiffness"]));
+    assert!(ek < 0.03, "stiffness from robot joint angles: error {ek}");
+}

@@ -61,6 +61,11 @@ pub struct Phases {
     pub hold_s: f64,
     pub return_s: f64,
     pub relax_s: f64,
+    /// Record the hold and the return too (seed 001 style); otherwise only the
+    /// rest and the centre-out motion are recorded (seed 000, where the subject
+    /// relaxes after it).
+    #[serde(default)]
+    pub record_hold_and_return: bool,
 }
 
 /// Safety limits.
@@ -85,7 +90,7 @@ pub fn preset(name: &str) -> Result<Protocol> {
             sample_rate_hz: 500.0,
             start_points: StartPoints { points: vec![], centre_m: [0.40, 0.0, 0.0], radius_m: 0.20 },
             targets: Targets { count: 16, radius_m: 0.03 },
-            phases: Phases { profile: Profile::Cubic, rest_s: 0.2, centre_out_s: 3.0, hold_s: 2.0, return_s: 2.0, relax_s: 2.0 },
+            phases: Phases { profile: Profile::Cubic, rest_s: 0.2, centre_out_s: 3.0, hold_s: 2.0, return_s: 2.0, relax_s: 2.0, record_hold_and_return: false },
             limits: Limits {
                 max_displacement_m: 0.05,
                 max_velocity_m_s: 0.1,
@@ -101,7 +106,7 @@ pub fn preset(name: &str) -> Result<Protocol> {
             sample_rate_hz: 1000.0,
             start_points: StartPoints { points: vec![[0.30, -0.20, 0.05]], centre_m: [0.0; 3], radius_m: 0.0 },
             targets: Targets { count: 18, radius_m: 0.008 },
-            phases: Phases { profile: Profile::Cubic, rest_s: 0.05, centre_out_s: 0.1, hold_s: 0.5, return_s: 0.1, relax_s: 1.0 },
+            phases: Phases { profile: Profile::Cubic, rest_s: 0.05, centre_out_s: 0.1, hold_s: 0.5, return_s: 0.1, relax_s: 1.0, record_hold_and_return: true },
             limits: Limits {
                 max_displacement_m: 0.015,
                 max_velocity_m_s: 0.2,

@@ -174,8 +174,9 @@ impl Robot {
         jac
     }
 
-    /// Damped least-squares IK to a target pose (position and orientation),
-    /// starting from `q0`. Converges to 1e-12 or fails with an error.
+    /// Damped least-squares IK to a target pose (position and orientation;
+    /// position only for robots with fewer than 6 joints), starting from `q0`.
+    /// Converges to 1e-13 or fails with an error.
     pub fn ik(&self, target: &Matrix4<f64>, q0: &[f64]) -> Result<Vec<f64>> {
         let mut q = q0.to_vec();
         let pt: Vector3<f64> = target.fixed_view::<3, 1>(0, 3).into();
@@ -186,20 +187,30 @@ impl Robot {
             let p: Vector3<f64> = t.fixed_view::<3, 1>(0, 3).into();
             let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into();
             let ep = pt - p;
-            let er = nalgebra::Rotation3::from_matrix_unchecked(rt * r.transpose()).scaled_axis();
-            let e = DVector::from_iterator(6, ep.iter().chain(er.iter()).copied());
-            if ep.norm() < 1e-13 && er.norm() < 1e-13 {
+            // orientation error 0.5 Σ r_i × r_target,i (robust where the rotation is nearly identity)
+            let er: Vector3<f64> = (0..3)
+                .map(|i| r.column(i).cross(&rt.column(i)))
+                .sum::<Vector3<f64>>()
+                * 0.5;
+            // fewer than 6 joints cannot also hold the orientation: position only
+            let full = self.dof() >= 6;
+            let rows = if full { 6 } else { 3 };
+            let e = DVector::from_iterator(rows, ep.iter().chain(er.iter()).take(rows).copied());
+            if ep.norm() < 1e-13 && (!full || er.norm() < 1e-13) {
                 return Ok(q);
             }
-            let j = self.jacobian(&q);
-            let jjt = &j * j.transpose() + DMatrix::identity(6, 6) * lambda2 * e.norm().min(1.0);
+            let j = self.jacobian(&q).rows(0, rows).into_owned();
+            let jjt =
+                &j * j.transpose() + DMatrix::identity(rows, rows) * lambda2 * e.norm().min(1.0);
             let step = j.transpose()
                 * jjt
                     .lu()
                     .solve(&e)
                     .ok_or_else(|| Error::invalid("inverse kinematics", "singular step"))?;
             for (qi, s) in q.iter_mut().zip(step.iter()) {
-                *qi += s;
+                // keep revolute angles in (-pi, pi]
+                let v = *qi + s;
+                *qi = v.sin().atan2(v.cos());
             }
         }
         let t = self.fk(&q);
@@ -243,6 +254,48 @@ impl Robot {
             }
         }
         Ok(())
+    }
+}
+
+impl Robot {
+    /// A built-in robot by name: `kuka-lwr4` or `puma3`.
+    pub fn by_name(name: &str) -> Result<Self> {
+        match name {
+            "kuka-lwr4" => Ok(Robot::kuka_lwr4()),
+            "puma3" => Ok(Robot::puma3()),
+            other => Err(Error::invalid(
+                "robot",
+                format!("unknown robot {other:?}; built in: kuka-lwr4, puma3"),
+            )),
+        }
+    }
+
+    /// A comfortable joint configuration to start IK from (elbow bent, wrist centred).
+    pub fn home(&self) -> Vec<f64> {
+        match self.dof() {
+            7 => vec![0.0, 0.6, 0.0, -1.4, 0.0, 0.8, 0.0],
+            n => (0..n).map(|i| if i == 1 { -0.5 } else { 0.3 }).collect(),
+        }
+    }
+
+    /// Joint trajectory tracking end-effector positions with the orientation of
+    /// `orientation` held; each sample starts IK from the previous solution.
+    pub fn track(
+        &self,
+        positions: &[Vector3<f64>],
+        orientation: &Matrix3<f64>,
+        q_start: &[f64],
+    ) -> Result<Vec<Vec<f64>>> {
+        let mut q = q_start.to_vec();
+        let mut out = Vec::with_capacity(positions.len());
+        for p in positions {
+            let mut target = Matrix4::identity();
+            target.fixed_view_mut::<3, 3>(0, 0).copy_from(orientation);
+            target.fixed_view_mut::<3, 1>(0, 3).copy_from(p);
+            q = self.ik(&target, &q)?;
+            out.push(q.clone());
+        }
+        Ok(out)
     }
 }
 

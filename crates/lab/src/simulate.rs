@@ -73,6 +73,10 @@ pub struct CentreOut {
     pub rest_s: f64,
     /// Duration of the motion (s).
     pub motion_s: f64,
+    /// Recorded hold at the target after the motion, then a recorded return
+    /// by the same profile (s); 0 and 0 record only rest and motion (seed 000).
+    pub hold_s: f64,
+    pub return_s: f64,
     /// Sample rate (Hz).
     pub sample_rate: f64,
 }
@@ -90,13 +94,16 @@ impl CentreOut {
             } else {
                 3.0
             },
+            hold_s: 0.0,
+            return_s: 0.0,
             sample_rate: 500.0,
         }
     }
 
     /// Samples per trial window.
     pub fn samples_per_trial(&self) -> usize {
-        ((self.rest_s + self.motion_s) * self.sample_rate).round() as usize
+        ((self.rest_s + self.motion_s + self.hold_s + self.return_s) * self.sample_rate).round()
+            as usize
     }
 }
 
@@ -122,7 +129,16 @@ pub fn simulate_centre_out(
         for i in 0..per {
             let idx = trial * per + i;
             let t_in = i as f64 * dt - protocol.rest_s;
-            let (s, sd, sdd) = protocol.profile.eval(t_in, protocol.motion_s);
+            let (s1, v1, a1) = protocol.profile.eval(t_in, protocol.motion_s);
+            let (s2, v2, a2) = if protocol.return_s > 0.0 {
+                protocol.profile.eval(
+                    t_in - protocol.motion_s - protocol.hold_s,
+                    protocol.return_s,
+                )
+            } else {
+                (0.0, 0.0, 0.0)
+            };
+            let (s, sd, sdd) = (s1 - s2, v1 - v2, a1 - a2);
             let disp = dir * (protocol.radius_m * s);
             let vel = dir * (protocol.radius_m * sd);
             let acc = dir * (protocol.radius_m * sdd);
