@@ -126,11 +126,11 @@ const MAX_JACKKNIFE_GROUPS: usize = 64;
 /// Contiguous pieces used as jackknife blocks when the trials are too few.
 const CONTIGUOUS_BLOCKS: usize = 20;
 
-struct Solved {
-    theta: DMatrix<f64>,
-    rss: Vec<f64>,
-    cov_unit: DMatrix<f64>,
-    condition_number: f64,
+pub(crate) struct Solved {
+    pub(crate) theta: DMatrix<f64>,
+    pub(crate) rss: Vec<f64>,
+    pub(crate) cov_unit: DMatrix<f64>,
+    pub(crate) condition_number: f64,
 }
 
 /// Solve the least-squares problem held in the augmented triangle `[R z; 0 s]`.
@@ -139,7 +139,7 @@ struct Solved {
 /// regressors), the bias-compensated estimate (R^T R - rows N)^-1 R^T z
 /// removes the attenuation that position noise causes; the Gram matrix is
 /// formed only here, on the well-conditioned scaled triangle.
-fn solve_triangle(
+pub(crate) fn solve_triangle(
     r_aug: &DMatrix<f64>,
     p: usize,
     n: usize,
@@ -543,7 +543,8 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
     })
 }
 
-fn fit_stats(f: &[f64], fhat: &[f64]) -> (f64, f64, f64) {
+/// Correlation r, VAF (%) and RMS error of measured `f` against predicted `fhat`.
+pub(crate) fn fit_stats(f: &[f64], fhat: &[f64]) -> (f64, f64, f64) {
     let m = f.len() as f64;
     let mf = f.iter().sum::<f64>() / m;
     let mh = fhat.iter().sum::<f64>() / m;

@@ -26,6 +26,7 @@ use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::linear::{fit_stats, solve_triangle};
 use crate::lsq::{merge, triangle};
 use crate::prepare::edge_kind;
 pub use limpid_core::arm::{coriolis, mass_matrix, Arm};
@@ -363,17 +364,12 @@ pub fn fit_planar(
         path: data.path.clone(),
         message: m,
     };
+    // the linear estimator's triangle solver, with one right-hand side and no noise compensation
+    let no_noise = DMatrix::<f64>::zeros(p, p);
     let solve = |r_aug: &DMatrix<f64>| -> std::result::Result<(DVector<f64>, f64), String> {
-        let r = r_aug.view((0, 0), (p, p)).into_owned();
-        let z = r_aug.view((0, p), (p, 1)).into_owned();
-        let svd = r.svd(true, true);
-        let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
-        if smin.partial_cmp(&(smax * 1e-13)) != Some(std::cmp::Ordering::Greater) {
-            return Err("the observation matrix W is rank-deficient: the perturbations do not excite every parameter".into());
-        }
-        let sol = svd.solve(&z, 0.0)?;
-        let theta = DVector::from_fn(p, |j, _| sol[(j, 0)] * scales[p] / scales[j]);
-        Ok((theta, smax / smin))
+        solve_triangle(r_aug, p, 1, &scales, &no_noise, rows as f64)
+            .map(|s| (s.theta.column(0).into_owned(), s.condition_number))
+            .map_err(|_| "the observation matrix W is rank-deficient: the perturbations do not excite every parameter".to_string())
     };
     let (theta, cond_scaled) = solve(&merge(tris.iter(), q)).map_err(numerical)?;
     // jackknife over trials
@@ -428,7 +424,7 @@ pub fn fit_planar(
                 yh.push(pred);
             }
         }
-        let (vaf, rr) = vaf_r(&y, &yh);
+        let (rr, vaf, _) = fit_stats(&y, &yh);
         fit.vaf[r] = vaf;
         fit.r[r] = rr;
     }
@@ -481,32 +477,6 @@ pub fn fit_planar(
     })
 }
 
-fn vaf_r(y: &[f64], yh: &[f64]) -> (f64, f64) {
-    let n = y.len() as f64;
-    let my = y.iter().sum::<f64>() / n;
-    let mh = yh.iter().sum::<f64>() / n;
-    let (mut syy, mut shh, mut syh, mut see, mut se) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (a, b) in y.iter().zip(yh) {
-        syy += (a - my).powi(2);
-        shh += (b - mh).powi(2);
-        syh += (a - my) * (b - mh);
-        see += (a - b).powi(2);
-        se += a - b;
-    }
-    let var_e = see / n - (se / n).powi(2);
-    let vaf = if syy > 0.0 {
-        100.0 * (1.0 - var_e / (syy / n))
-    } else {
-        0.0
-    };
-    let r = if syy > 0.0 && shh > 0.0 {
-        syh / (syy * shh).sqrt()
-    } else {
-        0.0
-    };
-    (vaf, r)
-}
-
 /// Leave-one-trial-out prediction of Δτ (seed 003 Fig. 6): each trial
 /// predicted by the estimate from all the others, VAF (%) pooled per joint.
 pub fn leave_one_out_vaf(
@@ -552,7 +522,7 @@ pub fn leave_one_out_vaf(
         y2.extend(c);
         h2.extend(d);
     }
-    Ok([vaf_r(&y1, &h1).0, vaf_r(&y2, &h2).0])
+    Ok([fit_stats(&y1, &h1).1, fit_stats(&y2, &h2).1])
 }
 
 /// One observation window of the sweep.

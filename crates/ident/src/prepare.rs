@@ -285,7 +285,8 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         .collect();
     let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
 
-    let mut windows = make_windows(rec, params, &pos, &frc, min_rest)?;
+    let position_noise: Vec<f64> = pos.iter().map(|c| noise_sigma(c)).collect();
+    let mut windows = make_windows(rec, params, &pos, &frc, &position_noise, min_rest)?;
     if let Some(level) = params.level {
         let levels = rec.require("level", "selecting windows by --level")?;
         windows.retain(|w| {
@@ -345,7 +346,7 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         derivative: params.derivative,
         trim,
         reference: vec![0.0; n],
-        position_noise: pos.iter().map(|c| noise_sigma(c)).collect(),
+        position_noise,
         regressor_noise_var: Vec::new(),
     };
     let gains = noise_gains(params.derivative, &lowpass, sg_window, dt)?;
@@ -556,6 +557,7 @@ fn make_windows(
     params: &PrepareParams,
     pos: &[&[f64]],
     frc: &[&[f64]],
+    position_noise: &[f64],
     min_rest: usize,
 ) -> Result<Vec<Window>> {
     let continuous = || {
@@ -577,7 +579,11 @@ fn make_windows(
             // onset: the earlier of motion and force change (a step in acceleration
             // moves the force before the displacement rises above the noise)
             let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
-            let sigmas: Vec<f64> = signals.iter().map(|c| noise_sigma(c)).collect();
+            let sigmas: Vec<f64> = position_noise
+                .iter()
+                .copied()
+                .chain(frc.iter().map(|c| noise_sigma(c)))
+                .collect();
             let floors = change_floors(&signals);
             let mut windows = windows_from_trial_column(rec, &params.trial_column)?;
             for w in &mut windows {

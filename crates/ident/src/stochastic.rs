@@ -267,6 +267,7 @@ pub fn estimate_stochastic(
     if max_input_coh >= 0.6 {
         warnings.push(format!("inputs are correlated (ordinary coherence up to {max_input_coh:.2}, seed 004 asks < 0.6): R and T are poorly separated"));
     }
+    let outputs: Vec<String> = coords.iter().chain(&force_cols).cloned().collect();
     Ok(StochasticEstimate {
         coordinates: coords,
         inputs,
@@ -280,7 +281,7 @@ pub fn estimate_stochastic(
             .collect(),
         frequencies: out_f,
         coherence: Coherences {
-            outputs: signals_names(rec, n),
+            outputs,
             multiple,
             partial,
         },
@@ -305,12 +306,6 @@ pub fn estimate_stochastic(
         },
         warnings,
     })
-}
-
-fn signals_names(rec: &Recording, n: usize) -> Vec<String> {
-    choose_coordinates(rec)
-        .map(|(c, f)| c.into_iter().chain(f).collect())
-        .unwrap_or_else(|_| vec![String::new(); 2 * n])
 }
 
 /// Least squares with standard errors (variance times `inflation`); returns (θ, SE, RSS).
