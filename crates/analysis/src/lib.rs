@@ -13,6 +13,7 @@
 
 pub mod cocontraction;
 pub mod emg;
+pub mod markers;
 pub mod report;
 pub mod study;
 

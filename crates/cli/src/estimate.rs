@@ -98,6 +98,15 @@ pub struct PrepareArgs {
     /// Compute x,y,z from the robot_q1..n columns by this robot's forward kinematics (kuka-lwr4, puma3), as seed 000 does.
     #[arg(long, value_name = "ROBOT")]
     pub robot: Option<String>,
+    /// Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad), as a protocol's `robot_base`.
+    #[arg(
+        long,
+        value_name = "POSE",
+        value_delimiter = ',',
+        requires = "robot",
+        allow_hyphen_values = true
+    )]
+    pub robot_base: Option<Vec<f64>>,
 }
 
 impl PrepareArgs {
@@ -105,7 +114,19 @@ impl PrepareArgs {
     pub fn read(&self, path: &std::path::Path) -> CliResult<limpid_core::Recording> {
         let mut rec = limpid_io::read_recording(path)?;
         if let Some(name) = &self.robot {
-            let robot = limpid_lab::robot::Robot::by_name(name)?;
+            let mut robot = limpid_lab::robot::Robot::by_name(name)?;
+            match self.robot_base.as_deref() {
+                None => {}
+                Some([x, y, z]) => robot = robot.placed([*x, *y, *z], [0.0; 3]),
+                Some([x, y, z, r, p, w]) => robot = robot.placed([*x, *y, *z], [*r, *p, *w]),
+                Some(other) => {
+                    return Err(limpid_core::Error::invalid(
+                        "--robot-base",
+                        format!("expected 3 or 6 numbers, found {}", other.len()),
+                    )
+                    .into())
+                }
+            }
             let joints: Vec<Vec<f64>> = (1..=robot.dof())
                 .map(|i| {
                     rec.require(&format!("robot_q{i}"), "robot joint angles for --robot")
@@ -143,9 +164,20 @@ pub struct LinearArgs {
     /// Use only trials of this condition level (the `level` column).
     #[arg(long)]
     pub level: Option<f64>,
+    /// The upward vertical axis of the frame, for the arm configuration from
+    /// `elbow_*`/`wrist_*` markers (seed 001's frame has x vertical).
+    #[arg(long, value_enum, default_value_t = AxisArg::Z)]
+    pub vertical: AxisArg,
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum AxisArg {
+    X,
+    Y,
+    Z,
 }
 
 #[derive(Args)]
@@ -224,10 +256,23 @@ pub fn run(method: Method) -> CliResult {
                 },
             )?;
             let result = linear_result(&est, &prepared);
+            let up = match args.vertical {
+                AxisArg::X => nalgebra::Vector3::x(),
+                AxisArg::Y => nalgebra::Vector3::y(),
+                AxisArg::Z => nalgebra::Vector3::z(),
+            };
+            let arm = limpid_analysis::markers::from_markers(&rec, up)?;
             if args.json {
-                println!("{}", serde_json::to_string_pretty(&result)?);
+                let mut v = serde_json::to_value(&result)?;
+                if let Some(a) = &arm {
+                    v["arm_configuration"] = serde_json::to_value(a)?;
+                }
+                println!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 print!("{}", table::linear_text(&result));
+                if let Some(a) = &arm {
+                    print!("{}", table::arm_configuration_text(a));
+                }
             }
             Ok(())
         }

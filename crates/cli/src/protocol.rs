@@ -3,9 +3,13 @@
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
-use limpid_lab::protocol::{check, preset, Protocol};
+use limpid_lab::design::{check, Design, DesignReport, PlanarDesign, StochasticDesign};
+use limpid_lab::planar::{simulate_planar, PlanarSubject, Reflex};
+use limpid_lab::protocol::Protocol;
+use limpid_lab::rig::{simulate_rig, RigExperiment, Springs};
+use limpid_lab::robot::Robot;
 use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Posture};
-use nalgebra::Matrix3;
+use nalgebra::{Matrix2, Matrix3};
 use serde::Deserialize;
 
 use crate::table::num;
@@ -13,7 +17,7 @@ use crate::CliResult;
 
 #[derive(Subcommand)]
 pub enum ProtocolCommand {
-    /// Print a preset protocol as TOML (artemiadis-3d, patel-cocontraction).
+    /// Print a preset protocol as TOML: artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic).
     New {
         #[arg(long)]
         preset: String,
@@ -21,16 +25,19 @@ pub enum ProtocolCommand {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
-    /// End-effector poses and joint trajectories of a protocol for a robot, at the protocol's rate (CSV or Parquet).
+    /// The protocol's schedule at its sample rate (CSV or Parquet): end-effector poses and
+    /// joint trajectories for a robot (centre-out), joint angles with the random waits
+    /// (planar), or the input signals (stochastic).
     Export {
         protocol: PathBuf,
-        /// kuka-lwr4 or puma3.
+        /// Centre-out only: kuka-lwr4, puma3 or a .urdf file.
         #[arg(long)]
-        robot: String,
+        robot: Option<String>,
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Check a protocol against its safety limits and report what it will excite.
+    /// Check a protocol against its safety limits and report what it will excite,
+    /// with the condition number the estimator will meet on a nominal subject.
     Check {
         protocol: PathBuf,
         #[arg(long)]
@@ -42,8 +49,12 @@ pub enum ProtocolCommand {
 pub struct SimulateArgs {
     /// Protocol (TOML).
     pub protocol: PathBuf,
-    /// Subject (TOML with 3 x 3 `inertia`, `damping`, `stiffness`, SI); default:
-    /// seed 000 Table I, subject 1, posture i at start point i.
+    /// Subject (TOML). Centre-out: 3 x 3 `inertia`, `damping`, `stiffness` (SI) and
+    /// optionally a `[noise]` table; default seed 000 Table I subject 1, posture i at
+    /// start point i. Planar: `xi` (3), 2 x 2 `stiffness`, `damping`, `tau0` (2),
+    /// optional `[reflex]` (latency_s, stiffness_gain, damping_gain); default the
+    /// seed 003 subject. Stochastic: a spring set `springs` (8 values, N/m, k1a..k4b);
+    /// default set SA3 of ../shared/examples.
     #[arg(long)]
     pub subject: Option<PathBuf>,
     /// Output recording (.csv or .parquet); with several start points `_S<i>` is added before the extension.
@@ -52,6 +63,18 @@ pub struct SimulateArgs {
     /// Random seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Stochastic protocols: who holds the spring array. `ideal`: a linear robot with
+    /// the desired impedance; `imbic`: the PUMA-type robot with joint friction under
+    /// IMBIC (seed 004 eq. 11-14); `pd`: the same robot under a plain PD law.
+    #[arg(long, value_enum, default_value_t = ControllerArg::Ideal)]
+    pub controller: ControllerArg,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ControllerArg {
+    Ideal,
+    Imbic,
+    Pd,
 }
 
 #[derive(Deserialize)]
@@ -60,11 +83,61 @@ struct SubjectFile {
     inertia: [[f64; 3]; 3],
     damping: [[f64; 3]; 3],
     stiffness: [[f64; 3]; 3],
+    #[serde(default)]
+    noise: Option<NoiseModel>,
 }
 
-fn read_protocol(path: &Path) -> CliResult<Protocol> {
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlanarSubjectFile {
+    xi: [f64; 3],
+    stiffness: [[f64; 2]; 2],
+    damping: [[f64; 2]; 2],
+    #[serde(default)]
+    tau0: [f64; 2],
+    #[serde(default)]
+    reflex: Option<ReflexFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReflexFile {
+    latency_s: f64,
+    stiffness_gain: f64,
+    damping_gain: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RigSubjectFile {
+    springs: [f64; 8],
+}
+
+fn read_toml<T: for<'de> Deserialize<'de>>(path: &Path) -> CliResult<T> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(Protocol::from_toml(&text, path)?)
+    Ok(toml::from_str(&text).map_err(|e| {
+        format!(
+            "{}: {}",
+            path.display(),
+            e.to_string().lines().next().unwrap_or("")
+        )
+    })?)
+}
+
+fn read_design(path: &Path) -> CliResult<Design> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let d = Design::from_toml(&text, path)?;
+    check(&d).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(d)
+}
+
+/// The robot of a centre-out protocol, placed as the protocol says.
+fn placed_robot(name: &str, p: &Protocol) -> CliResult<Robot> {
+    let robot = Robot::by_name(name)?;
+    Ok(match p.robot_base {
+        Some(b) => robot.placed(b.xyz_m, b.rpy_rad),
+        None => robot,
+    })
 }
 
 pub fn run(cmd: ProtocolCommand) -> CliResult {
@@ -74,8 +147,8 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             output,
         } => {
             let text = format!(
-                "# limpid protocol (preset {name}); units: m, s, Hz, N\n{}",
-                preset(&name)?.to_toml()
+                "# limpid protocol (preset {name}); units: m, rad, s, Hz, N\n{}",
+                Design::preset(&name)?.to_toml()
             );
             match output {
                 Some(p) => std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?,
@@ -87,15 +160,37 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             protocol,
             robot,
             output,
-        } => export(&protocol, &robot, &output),
+        } => match (read_design(&protocol)?, robot) {
+            (Design::CentreOut(p), Some(robot)) => export(&p, &robot, &output),
+            (Design::CentreOut(_), None) => {
+                Err("a centre-out protocol is exported for a robot: add --robot kuka-lwr4|puma3|FILE.urdf".into())
+            }
+            (Design::Planar(p), _) => export_planar(&p, &output),
+            (Design::Stochastic(p), _) => export_stochastic(&p, &output),
+        },
         ProtocolCommand::Check { protocol, json } => {
-            let p = read_protocol(&protocol)?;
-            let r = check(&p).map_err(|e| format!("{}: {e}", protocol.display()))?;
+            let d = read_design(&protocol)?;
+            let report = check(&d)?;
+            let predicted = predicted_condition(&d)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&r)?);
+                let mut v = serde_json::to_value(&report)?;
+                v["predicted_condition_number"] = serde_json::json!(predicted);
+                println!("{}", serde_json::to_string_pretty(&v)?);
                 return Ok(());
             }
             println!("protocol {}: within its limits", protocol.display());
+            print_report(&d, &report);
+            if let Some(c) = predicted {
+                println!("  condition number of the estimator's scaled regressor on a nominal noise-free subject: {}", num(c));
+            }
+            Ok(())
+        }
+    }
+}
+
+fn print_report(d: &Design, report: &DesignReport) {
+    match (d, report) {
+        (Design::CentreOut(p), DesignReport::CentreOut(r)) => {
             println!(
                 "  {} trials of {} samples; {} target directions, minimum angular separation {:.2} deg",
                 r.trials, r.samples_per_trial, p.targets.count, r.min_separation_deg
@@ -104,24 +199,119 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
                 "  peaks: displacement {} m, velocity {} m/s, acceleration {} m/s^2, expected force {} N",
                 num(r.peak_displacement_m), num(r.peak_velocity_m_s), num(r.peak_acceleration_m_s2), num(r.peak_force_n)
             );
-            println!(
-                "  conditioning ratios C12, C13, C23 (seed 003 eq. 17): {}, {}, {}",
-                num(r.conditioning_ratios[0]),
-                num(r.conditioning_ratios[1]),
-                num(r.conditioning_ratios[2])
-            );
-            Ok(())
+            print_ratios(&r.conditioning_ratios);
         }
+        (Design::Planar(_), DesignReport::Planar(r)) => {
+            println!(
+                "  {} trials in {:.1} s; peaks: joint displacement {} rad, velocity {} rad/s, acceleration {} rad/s^2, expected torque {} N m",
+                r.trials, r.session_s, num(r.peak_joint_displacement_rad), num(r.peak_joint_velocity_rad_s), num(r.peak_joint_acceleration_rad_s2), num(r.peak_torque_nm)
+            );
+            print_ratios(&r.conditioning_ratios);
+        }
+        (Design::Stochastic(p), DesignReport::Stochastic(r)) => {
+            println!(
+                "  {} samples per channel; peak inputs {}; predicted peak displacement {} m",
+                r.samples,
+                p.channels
+                    .iter()
+                    .zip(&r.peak_force)
+                    .map(|(c, v)| format!("{c} {}", num(*v)))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                num(r.predicted_peak_displacement_m)
+            );
+            println!(
+                "  largest input coherence below {} Hz: {:.3} ({} / {} at {:.2} Hz; limit {})",
+                p.cutoff_hz,
+                r.max_input_coherence,
+                r.max_coherence_pair[0],
+                r.max_coherence_pair[1],
+                r.max_coherence_hz,
+                p.max_input_coherence
+            );
+        }
+        _ => {}
+    }
+}
+
+fn print_ratios(c: &[f64; 3]) {
+    println!(
+        "  conditioning ratios C12, C13, C23 (seed 003 eq. 17): {}, {}, {}",
+        num(c[0]),
+        num(c[1]),
+        num(c[2])
+    );
+}
+
+/// The condition number the estimator meets when the protocol is run on a
+/// nominal subject without noise: the scaled 27-parameter regressor of seed 000
+/// on the first start point (seed 000 Table I posture 1), or the planar
+/// regressor W of seed 003 eq. (19) with unit-RMS columns on the seed 003
+/// subject. None for stochastic protocols (their conditioning is the input
+/// coherence, reported above).
+fn predicted_condition(d: &Design) -> CliResult<Option<f64>> {
+    match d {
+        Design::CentreOut(p) => {
+            let mut posture = seed000_subject1().remove(0);
+            posture.start = p.start_points()[0];
+            let rec = simulate_centre_out(&posture, &centre_out(p), &NoiseModel::none(), 1)?;
+            let prepared = limpid_ident::prepare(&rec, &limpid_ident::PrepareParams::default())?;
+            let est = limpid_ident::fit_linear(&prepared, &limpid_ident::LinearParams::default())?;
+            Ok(Some(est.condition_number))
+        }
+        Design::Planar(p) => {
+            let subject = PlanarSubject {
+                q0: p.posture_rad,
+                ..PlanarSubject::seed003()
+            };
+            let rec = simulate_planar(&subject, &p.simulation(), 0.0, 0.0, p.seed)?;
+            let data = limpid_ident::planar::prepare_planar(&rec, &planar_prepare(p))?;
+            let all: Vec<usize> = (0..data.trials.len()).collect();
+            let est = limpid_ident::planar::fit_planar(&data, usize::MAX, Some(subject.xi), &all)?;
+            Ok(Some(est.criteria.condition_number_scaled))
+        }
+        Design::Stochastic(_) => Ok(None),
+    }
+}
+
+fn planar_prepare(p: &PlanarDesign) -> limpid_ident::planar::PlanarPrepare {
+    limpid_ident::planar::PlanarPrepare {
+        arm: limpid_ident::planar::Arm {
+            l1: p.link_lengths_m[0],
+            l2: p.link_lengths_m[1],
+            shoulder: [0.0, 0.0],
+        },
+        cutoff_hz: None,
+        order: 4,
+        elbow_positive: true,
+    }
+}
+
+fn centre_out(p: &Protocol) -> CentreOut {
+    let recorded = |v: f64| {
+        if p.phases.record_hold_and_return {
+            v
+        } else {
+            0.0
+        }
+    };
+    CentreOut {
+        profile: p.phases.profile,
+        radius_m: p.targets.radius_m,
+        directions: p.directions(),
+        rest_s: p.phases.rest_s,
+        motion_s: p.phases.centre_out_s,
+        hold_s: recorded(p.phases.hold_s),
+        return_s: recorded(p.phases.return_s),
+        sample_rate: p.sample_rate_hz,
     }
 }
 
 /// Every phase of every trial (rest, centre-out, hold, return by the same
 /// profile reversed, relax), tracked by the robot with the orientation of its
 /// home pose held (seeds 000, 001).
-fn export(path: &Path, robot: &str, output: &Path) -> CliResult {
-    let p = read_protocol(path)?;
-    check(&p).map_err(|e| format!("{}: {e}", path.display()))?;
-    let robot = limpid_lab::robot::Robot::by_name(robot)?;
+fn export(p: &Protocol, robot: &str, output: &Path) -> CliResult {
+    let robot = placed_robot(robot, p)?;
     let home = robot.home();
     let orientation: Matrix3<f64> = robot.fk(&home).fixed_view::<3, 3>(0, 0).into();
     let fs = p.sample_rate_hz;
@@ -134,9 +324,8 @@ fn export(path: &Path, robot: &str, output: &Path) -> CliResult {
     let mut sample = 0usize;
     for (si, start) in p.start_points().iter().enumerate() {
         let mut q = robot
-            .track(&[*start], &orientation, &home)
-            .map_err(|e| format!("start point {}: {e}", si + 1))?
-            .remove(0);
+            .reach(start, &orientation, &home)
+            .map_err(|e| format!("{}: start point {}: {e}", robot.name, si + 1))?;
         for (ti, dir) in dirs.iter().enumerate() {
             let positions: Vec<nalgebra::Vector3<f64>> = (0..per)
                 .map(|i| {
@@ -175,6 +364,22 @@ fn export(path: &Path, robot: &str, output: &Path) -> CliResult {
                 sample += 1;
             }
             q = joints.last().cloned().unwrap_or(q);
+            // seed 001: a longer rest between sets, holding the start point
+            let set = p.phases.trials_per_set;
+            if set > 0 && (ti + 1) % set == 0 && ti + 1 < dirs.len() {
+                for _ in 0..(p.phases.set_rest_s * fs).round() as usize {
+                    cols[0].push(sample as f64 / fs);
+                    cols[1].push((si + 1) as f64);
+                    cols[2].push(0.0);
+                    for a in 0..3 {
+                        cols[3 + a].push(start[a]);
+                    }
+                    for (j, v) in q.iter().enumerate() {
+                        cols[6 + j].push(*v);
+                    }
+                    sample += 1;
+                }
+            }
         }
     }
     let mut names: Vec<String> = ["t", "start_point", "trial", "x", "y", "z"]
@@ -202,47 +407,213 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}{suffix}.{ext}"))
 }
 
-pub fn run_simulate(args: SimulateArgs) -> CliResult {
-    let p = read_protocol(&args.protocol)?;
-    check(&p).map_err(|e| format!("{}: {e}", args.protocol.display()))?;
-    let given: Option<SubjectFile> = match &args.subject {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-            Some(toml::from_str(&text).map_err(|e| {
-                format!(
-                    "{}: {}",
-                    path.display(),
-                    e.to_string().lines().next().unwrap_or("")
-                )
-            })?)
+/// Seed 003's session: the posture held through random waits, each followed by
+/// a quintic displacement held for `after_s`; `trial` is 0 during waits.
+fn export_planar(p: &PlanarDesign, output: &Path) -> CliResult {
+    let fs = p.sample_rate_hz;
+    let schedule = p.schedule();
+    let end = schedule.last().map(|s| s.0 + p.after_s).unwrap_or(0.0);
+    let n = (end * fs).round() as usize + 1;
+    let mut cols: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(n)).collect();
+    let mut next = 0;
+    for k in 0..n {
+        let t = k as f64 / fs;
+        while next + 1 < schedule.len() && t >= schedule[next + 1].0 - 1e-12 {
+            next += 1;
         }
-        None => None,
-    };
-    let table = seed000_subject1();
-    let starts = p.start_points();
-    let protocol = CentreOut {
-        profile: p.phases.profile,
-        radius_m: p.targets.radius_m,
-        directions: p.directions(),
-        rest_s: p.phases.rest_s,
-        motion_s: p.phases.centre_out_s,
-        hold_s: if p.phases.record_hold_and_return {
-            p.phases.hold_s
+        let (onset, d) = schedule[next];
+        let in_trial = t >= onset - 1e-12 && t < onset + p.after_s;
+        let s = if t >= onset - 1e-12 {
+            limpid_lab::Profile::Quintic
+                .eval(t - onset, p.interpolation_s)
+                .0
         } else {
             0.0
-        },
-        return_s: if p.phases.record_hold_and_return {
-            p.phases.return_s
-        } else {
-            0.0
-        },
-        sample_rate: p.sample_rate_hz,
-    };
-    let noise = NoiseModel::default();
+        };
+        let s = if in_trial { s } else { 0.0 };
+        let dq = p.displacements_rad[d];
+        cols[0].push(t);
+        cols[1].push(if in_trial { (next + 1) as f64 } else { 0.0 });
+        cols[2].push(p.posture_rad[0] + dq[0] * s);
+        cols[3].push(p.posture_rad[1] + dq[1] * s);
+    }
+    let names = ["t", "trial", "q1", "q2"].map(String::from).to_vec();
+    let rec = limpid_core::Recording::new(output, names, cols, 2)?;
+    limpid_io::write_recording(&rec, output)?;
+    println!(
+        "wrote {}: {} samples ({:.1} s) of joint angles for {} perturbations",
+        output.display(),
+        rec.len(),
+        end,
+        schedule.len()
+    );
+    Ok(())
+}
+
+/// Seed 004's commanded inputs, one column per channel.
+fn export_stochastic(p: &StochasticDesign, output: &Path) -> CliResult {
+    let u = p.inputs()?;
+    let fs = p.sample_rate_hz;
+    let mut cols = vec![(0..u[0].len()).map(|k| k as f64 / fs).collect::<Vec<f64>>()];
+    cols.extend(u);
+    let mut names = vec!["t".to_string()];
+    names.extend(p.channels.iter().cloned());
+    let rec = limpid_core::Recording::new(output, names, cols, 2)?;
+    limpid_io::write_recording(&rec, output)?;
+    println!(
+        "wrote {}: {} samples of {} input channels",
+        output.display(),
+        rec.len(),
+        p.channels.len()
+    );
+    Ok(())
+}
+
+fn write_truth(path: &Path, truth: &serde_json::Value) -> CliResult {
+    std::fs::write(path, serde_json::to_string_pretty(truth)?)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(())
+}
+
+pub fn run_simulate(args: SimulateArgs) -> CliResult {
     if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
+    match read_design(&args.protocol)? {
+        Design::CentreOut(p) => simulate_centre_out_protocol(&p, &args),
+        Design::Planar(p) => simulate_planar_protocol(&p, &args),
+        Design::Stochastic(p) => simulate_stochastic_protocol(&p, &args),
+    }
+}
+
+fn simulate_planar_protocol(p: &PlanarDesign, args: &SimulateArgs) -> CliResult {
+    let mut subject = PlanarSubject {
+        q0: p.posture_rad,
+        ..PlanarSubject::seed003()
+    };
+    if let Some(path) = &args.subject {
+        let s: PlanarSubjectFile = read_toml(path)?;
+        let m2 = |a: &[[f64; 2]; 2]| Matrix2::new(a[0][0], a[0][1], a[1][0], a[1][1]);
+        subject.xi = s.xi;
+        subject.stiffness = m2(&s.stiffness);
+        subject.damping = m2(&s.damping);
+        subject.tau0 = s.tau0;
+        subject.reflex = s.reflex.map(|r| Reflex {
+            latency_s: r.latency_s,
+            stiffness_gain: r.stiffness_gain,
+            damping_gain: r.damping_gain,
+        });
+    }
+    let (torque_std, angle_std) = (0.02, 1e-5);
+    let rec = simulate_planar(&subject, &p.simulation(), torque_std, angle_std, args.seed)?;
+    limpid_io::write_recording(&rec, &args.output)?;
+    let rows = |m: &Matrix2<f64>| vec![vec![m[(0, 0)], m[(0, 1)]], vec![m[(1, 0)], m[(1, 1)]]];
+    let truth = serde_json::json!({
+        "method": "planar",
+        "variant": "joint",
+        "sample_rate": p.sample_rate_hz,
+        "inertial_parameters": subject.xi,
+        "stiffness": rows(&subject.stiffness),
+        "damping": rows(&subject.damping),
+        "link_lengths": p.link_lengths_m,
+        "q0": subject.q0,
+        "interpolation_interval_ms": p.interpolation_s * 1e3,
+        "reflex": subject.reflex.map(|r| serde_json::json!({"latency_s": r.latency_s, "stiffness_gain": r.stiffness_gain, "damping_gain": r.damping_gain})),
+        "noise": {"torque_white_std_Nm": torque_std, "baseline_torque_Nm": subject.tau0, "joint_angle_std_rad": angle_std},
+        "notes": ["tau = M(q) q'' + C(q,q') q' + D q' + K (q - q0) + tau0 + noise, seed 003 eq. (9)", "made by limpid simulate"],
+    });
+    let truth_path = args.output.with_extension("truth.json");
+    write_truth(&truth_path, &truth)?;
+    println!(
+        "wrote {} ({} samples) and {}",
+        args.output.display(),
+        rec.len(),
+        truth_path.display()
+    );
+    Ok(())
+}
+
+fn simulate_stochastic_protocol(p: &StochasticDesign, args: &SimulateArgs) -> CliResult {
+    if p.channels.len() != 3 {
+        return Err(format!(
+            "{}: the virtual spring-array rig has three inputs (x, z, theta); the protocol has {}",
+            args.protocol.display(),
+            p.channels.len()
+        )
+        .into());
+    }
+    let springs: Springs = match &args.subject {
+        Some(path) => read_toml::<RigSubjectFile>(path)?.springs,
+        None => limpid_lab::rig::SPRING_SET_SA3,
+    };
+    let mut e = RigExperiment::spring_array(&springs);
+    e.seconds = p.duration_s;
+    e.sample_rate = p.sample_rate_hz;
+    e.peak = [p.peak[0], p.peak[1], p.peak[2]];
+    e.cutoff_hz = p.cutoff_hz;
+    let noise = [1e-6, 1e-5];
+    let seed = args.seed.wrapping_add(p.seed);
+    let dynamics = limpid_lab::imbic::RobotDynamics::seed004();
+    let rec = match args.controller {
+        ControllerArg::Ideal => simulate_rig(&e, noise, seed)?,
+        ControllerArg::Imbic => limpid_lab::imbic::simulate_robot_rig(
+            &e,
+            &dynamics,
+            &limpid_lab::imbic::Controller::imbic_seed004(),
+            noise,
+            seed,
+        )?,
+        ControllerArg::Pd => limpid_lab::imbic::simulate_robot_rig(
+            &e,
+            &dynamics,
+            &limpid_lab::imbic::Controller::pd_seed004(),
+            noise,
+            seed,
+        )?,
+    };
+    limpid_io::write_recording(&rec, &args.output)?;
+    let rows = |m: &Matrix3<f64>| {
+        (0..3)
+            .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<f64>>())
+            .collect::<Vec<_>>()
+    };
+    let truth = serde_json::json!({
+        "method": "stochastic",
+        "sample_rate": p.sample_rate_hz,
+        "coordinates": ["x (m)", "z (m)", "theta (rad, about y)"],
+        "inertia": rows(&e.inertia),
+        "damping": rows(&e.damping),
+        "stiffness": rows(&e.stiffness),
+        "equilibrium": [0.0, 0.0, 0.0],
+        "springs_N_per_m": springs,
+        "robot": match args.controller {
+            ControllerArg::Ideal => serde_json::json!({"model": "linear, desired impedance", "M_rd": rows(&e.robot_inertia), "B_rd": rows(&e.robot_damping), "K_rd": rows(&e.robot_stiffness)}),
+            ControllerArg::Imbic => serde_json::json!({"model": "PUMA-type vertical-plane chain with joint friction under IMBIC (seed 004 eq. 11-14, the paper's gains)", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous}),
+            ControllerArg::Pd => serde_json::json!({"model": "PUMA-type vertical-plane chain with joint friction under a plain PD law", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous}),
+        },
+        "noise": {"position_std_m": noise[0], "angle_std_rad": noise[1]},
+        "notes": ["spring array of seed 004 eq. (10) on the impedance-controlled robot; force on the rig", "made by limpid simulate"],
+    });
+    let truth_path = args.output.with_extension("truth.json");
+    write_truth(&truth_path, &truth)?;
+    println!(
+        "wrote {} ({} samples) and {}",
+        args.output.display(),
+        rec.len(),
+        truth_path.display()
+    );
+    Ok(())
+}
+
+fn simulate_centre_out_protocol(p: &Protocol, args: &SimulateArgs) -> CliResult {
+    let given: Option<SubjectFile> = args.subject.as_deref().map(read_toml).transpose()?;
+    let table = seed000_subject1();
+    let starts = p.start_points();
+    let protocol = centre_out(p);
+    let noise = given
+        .as_ref()
+        .and_then(|s| s.noise.clone())
+        .unwrap_or_default();
     for (i, start) in starts.iter().enumerate() {
         let m3 = |a: &[[f64; 3]; 3]| Matrix3::from_fn(|r, c| a[r][c]);
         let mut posture: Posture = table[i % table.len()].clone();
@@ -283,8 +654,7 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
             "notes": ["f = M a + B v + K (x - S) + offset_trial + drift + white; force applied to the limb", "made by limpid simulate"],
         });
         let truth_path = out.with_extension("truth.json");
-        std::fs::write(&truth_path, serde_json::to_string_pretty(&truth)?)
-            .map_err(|e| format!("{}: {e}", truth_path.display()))?;
+        write_truth(&truth_path, &truth)?;
         println!(
             "wrote {} ({} samples) and {}",
             out.display(),

@@ -303,3 +303,19 @@ pub fn cocontraction_text(r: &CocontractionResult) -> String {
     }
     out
 }
+
+/// The arm configuration from markers, one paragraph.
+pub fn arm_configuration_text(a: &limpid_analysis::markers::MarkerConfiguration) -> String {
+    let rotation = a.humeral_rotation_deg.map_or(
+        "undefined (elbow straight or arm vertical)".to_string(),
+        |r| format!("{r:.1} deg"),
+    );
+    let mut s = format!(
+        "arm configuration from markers ({} samples): shoulder elevation {:.1} deg, azimuth {:.1} deg, humeral rotation {rotation}, elbow flexion {:.1} deg; upper arm {:.3} m, forearm {:.3} m (spread {:.1} mm)\n",
+        a.samples, a.shoulder_elevation_deg, a.shoulder_azimuth_deg, a.elbow_flexion_deg, a.upper_arm_length_m, a.forearm_length_m, a.segment_length_spread_m * 1e3
+    );
+    for w in &a.warnings {
+        s.push_str(&format!("warning: {w}\n"));
+    }
+    s
+}

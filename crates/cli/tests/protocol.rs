@@ -101,7 +101,9 @@ fn export_for_the_kuka_and_estimate_from_robot_joint_angles() {
     assert_eq!(out.code, 0, "{}", out.stderr);
     // the exported joints reproduce the exported end-effector path with the orientation held
     let rec = limpid_io::read_recording(&traj).unwrap();
-    let robot = Robot::kuka_lwr4();
+    // the preset places the robot's base below and behind the workspace, facing it
+    let base = [-0.05, 0.0, -0.6, 0.0, 0.0, std::f64::consts::PI];
+    let robot = Robot::kuka_lwr4().placed([base[0], base[1], base[2]], [base[3], base[4], base[5]]);
     let q: Vec<&[f64]> = (1..=7)
         .map(|i| rec.column(&format!("robot_q{i}")).unwrap())
         .collect();
@@ -134,9 +136,8 @@ fn export_for_the_kuka_and_estimate_from_robot_joint_angles() {
         })
         .collect();
     let start = robot
-        .track(&positions[..1], &orientation, &robot.home())
-        .unwrap()
-        .remove(0);
+        .reach(&positions[0], &orientation, &robot.home())
+        .unwrap();
     let joints = robot.track(&positions, &orientation, &start).unwrap();
     let mut names: Vec<String> = vec![
         "t".into(),
@@ -170,8 +171,195 @@ fn export_for_the_kuka_and_estimate_from_robot_joint_angles() {
         robot_rec.to_str().unwrap(),
         "--robot",
         "kuka-lwr4",
+        "--robot-base",
+        &base.map(|v| v.to_string()).join(","),
         "--json",
     ]);
     let ek = rel_err(&mat(&est["stiffness"]), &mat(&truth["stiffness"]));
     assert!(ek < 0.03, "stiffness from robot joint angles: error {ek}");
+}
+
+#[test]
+fn urdf_robot_exports_the_same_joint_trajectory_as_its_dh_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("p.toml");
+    limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        "patel-cocontraction",
+        "-o",
+        p.to_str().unwrap(),
+    ]);
+    let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../lab/tests/fixtures/kuka_lwr4.urdf");
+    let mut recs = Vec::new();
+    for (name, robot) in [
+        ("dh.parquet", "kuka-lwr4"),
+        ("urdf.parquet", urdf.to_str().unwrap()),
+    ] {
+        let out_path = dir.path().join(name);
+        let out = limpid(&[
+            "protocol",
+            "export",
+            p.to_str().unwrap(),
+            "--robot",
+            robot,
+            "-o",
+            out_path.to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        recs.push(limpid_io::read_recording(&out_path).unwrap());
+    }
+    assert_eq!(recs[0].len(), recs[1].len());
+    for j in 1..=7 {
+        let c = format!("robot_q{j}");
+        let worst = recs[0]
+            .column(&c)
+            .unwrap()
+            .iter()
+            .zip(recs[1].column(&c).unwrap())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-8, "{c}: {worst:e}");
+    }
+    // seed 001's sets of 6 with a 10 s rest between sets: 2 set rests of 10 s at 1 kHz
+    let per_trial = ((0.05 + 0.1 + 0.5 + 0.1 + 1.0) * 1000.0f64).round() as usize;
+    assert_eq!(recs[0].len(), 18 * per_trial + 2 * 10_000);
+}
+
+#[test]
+fn planar_preset_checks_exports_simulates_and_estimates_back_to_its_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("planar.toml");
+    limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        "lakatos-planar",
+        "-o",
+        p.to_str().unwrap(),
+    ]);
+    let check = limpid(&["protocol", "check", p.to_str().unwrap(), "--json"]);
+    assert_eq!(check.code, 0, "{}", check.stderr);
+    let report: serde_json::Value = serde_json::from_str(&check.stdout).unwrap();
+    assert_eq!(report["kind"], "planar");
+    let cond = report["predicted_condition_number"].as_f64().unwrap();
+    assert!(cond > 1.0 && cond < 100.0, "condition number {cond}");
+
+    // the schedule: 30 perturbations, each after a wait of 1-3 s
+    let traj = dir.path().join("schedule.csv");
+    assert_eq!(
+        limpid(&[
+            "protocol",
+            "export",
+            p.to_str().unwrap(),
+            "-o",
+            traj.to_str().unwrap()
+        ])
+        .code,
+        0
+    );
+    let rec = limpid_io::read_recording(&traj).unwrap();
+    let (t, trial) = (rec.column("t").unwrap(), rec.column("trial").unwrap());
+    let mut last_end = 0.0;
+    let mut onsets = 0;
+    for k in 1..rec.len() {
+        if trial[k] > 0.0 && trial[k - 1] == 0.0 {
+            let wait = t[k] - last_end;
+            assert!(
+                (0.999..=3.001).contains(&wait),
+                "wait {wait} before trial {}",
+                trial[k]
+            );
+            onsets += 1;
+        }
+        if trial[k] == 0.0 && trial[k - 1] > 0.0 {
+            last_end = t[k];
+        }
+    }
+    assert_eq!(onsets, 30);
+
+    let sim = dir.path().join("planar.csv");
+    let out = limpid(&[
+        "simulate",
+        p.to_str().unwrap(),
+        "-o",
+        sim.to_str().unwrap(),
+        "--seed",
+        "3",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let truth = read_json(&dir.path().join("planar.truth.json"));
+    let est = json(&[
+        "estimate",
+        "planar",
+        sim.to_str().unwrap(),
+        "--link-lengths",
+        "0.3,0.33",
+        "--json",
+    ]);
+    let ek = rel_err(&mat(&est["stiffness"]), &mat(&truth["stiffness"]));
+    let ed = rel_err(&mat(&est["damping"]), &mat(&truth["damping"]));
+    assert!(ek < 0.03 && ed < 0.05, "planar K error {ek}, D error {ed}");
+}
+
+#[test]
+fn stochastic_preset_simulates_and_estimates_back_to_its_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("st.toml");
+    limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        "park-stochastic",
+        "-o",
+        p.to_str().unwrap(),
+    ]);
+    let check = limpid(&["protocol", "check", p.to_str().unwrap()]);
+    assert_eq!(check.code, 0, "{}", check.stderr);
+    assert!(
+        check.stdout.contains("largest input coherence below 15 Hz"),
+        "{}",
+        check.stdout
+    );
+    let sim = dir.path().join("st.parquet");
+    let out = limpid(&["simulate", p.to_str().unwrap(), "-o", sim.to_str().unwrap()]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let truth = read_json(&dir.path().join("st.truth.json"));
+    let est = json(&["estimate", "stochastic", sim.to_str().unwrap(), "--json"]);
+    let ek = rel_err(&mat(&est["stiffness"]), &mat(&truth["stiffness"]));
+    assert!(ek < 0.05, "stochastic stiffness error {ek}");
+}
+
+#[test]
+fn protocol_files_of_unknown_kind_or_without_a_robot_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("odd.toml");
+    std::fs::write(&p, "kind = \"spiral\"\n").unwrap();
+    let out = limpid(&["protocol", "check", p.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("odd.toml") && out.stderr.contains("unknown kind \"spiral\""),
+        "{}",
+        out.stderr
+    );
+    let c = dir.path().join("c.toml");
+    limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        "artemiadis-3d",
+        "-o",
+        c.to_str().unwrap(),
+    ]);
+    let out = limpid(&[
+        "protocol",
+        "export",
+        c.to_str().unwrap(),
+        "-o",
+        dir.path().join("x.csv").to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("add --robot"), "{}", out.stderr);
 }

@@ -3,7 +3,7 @@
 //! with base inertial parameters ξ: M(q, ξ) and C(q, q', ξ) q'. Shared by the
 //! estimator (limpid-ident) and the virtual lab (limpid-lab).
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Vector2, Vector3};
 use serde::Serialize;
 
 /// Planar arm geometry: link lengths (m) and shoulder position (m).
@@ -102,5 +102,111 @@ mod tests {
             }
         }
         assert!(arm.ik([5.0, 5.0], true).is_none());
+    }
+}
+
+/// The 3-D arm configuration from tracked markers (seed 000 §II-A: trackers at
+/// the elbow and the wrist, reference frame on the shoulder; seed 001: motion
+/// capture of the arm). Angles in rad:
+///
+/// - `shoulder_elevation`: angle between the upper arm and the downward vertical
+///   (0 arm hanging, π/2 horizontal);
+/// - `shoulder_azimuth`: direction of the upper arm's horizontal projection, measured
+///   about the vertical from the first horizontal axis (x when z is vertical);
+/// - `humeral_rotation`: rotation of the forearm's plane about the upper arm, 0 when
+///   the forearm points upward in the vertical plane through the upper arm (ill-defined
+///   when the elbow is straight or the arm vertical: then `None`);
+/// - `elbow_flexion`: 0 with the arm straight;
+/// - segment lengths (m), which a rigid marker set keeps constant.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ArmConfiguration {
+    pub shoulder_elevation: f64,
+    pub shoulder_azimuth: f64,
+    pub humeral_rotation: Option<f64>,
+    pub elbow_flexion: f64,
+    pub upper_arm_length: f64,
+    pub forearm_length: f64,
+}
+
+/// The arm configuration from shoulder, elbow and wrist positions, with `up`
+/// the unit upward vertical of the frame. None if two markers coincide.
+pub fn arm_configuration(
+    shoulder: Vector3<f64>,
+    elbow: Vector3<f64>,
+    wrist: Vector3<f64>,
+    up: Vector3<f64>,
+) -> Option<ArmConfiguration> {
+    let upper = elbow - shoulder;
+    let fore = wrist - elbow;
+    let (lu, lf) = (upper.norm(), fore.norm());
+    if lu < 1e-9 || lf < 1e-9 {
+        return None;
+    }
+    let u = upper / lu;
+    let f = fore / lf;
+    let angle = |a: &Vector3<f64>, b: &Vector3<f64>| a.cross(b).norm().atan2(a.dot(b));
+    // horizontal axes: the first frame axis not parallel to `up`, made orthogonal
+    let seed = if up.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let h1 = (seed - up * seed.dot(&up)).normalize();
+    let h2 = up.cross(&h1);
+    let u_perp_up = |v: Vector3<f64>| v - u * v.dot(&u);
+    let reference = u_perp_up(up);
+    let forearm_perp = u_perp_up(f);
+    let humeral_rotation = (reference.norm() > 1e-6 && forearm_perp.norm() > 1e-6).then(|| {
+        let (r, p) = (reference.normalize(), forearm_perp.normalize());
+        r.cross(&p).dot(&u).atan2(r.dot(&p))
+    });
+    Some(ArmConfiguration {
+        shoulder_elevation: angle(&u, &(-up)),
+        shoulder_azimuth: u.dot(&h2).atan2(u.dot(&h1)),
+        humeral_rotation,
+        elbow_flexion: angle(&u, &f),
+        upper_arm_length: lu,
+        forearm_length: lf,
+    })
+}
+
+#[cfg(test)]
+mod configuration_tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    #[test]
+    fn arm_configuration_of_known_postures() {
+        let up = Vector3::z();
+        let s = Vector3::new(0.1, 0.2, 0.3);
+        // upper arm horizontal along +y, forearm pointing up: elbow at 90 deg, no rotation
+        let c = arm_configuration(
+            s,
+            s + Vector3::new(0.0, 0.3, 0.0),
+            s + Vector3::new(0.0, 0.3, 0.25),
+            up,
+        )
+        .unwrap();
+        assert!((c.shoulder_elevation - FRAC_PI_2).abs() < 1e-12);
+        assert!((c.shoulder_azimuth - FRAC_PI_2).abs() < 1e-12);
+        assert!((c.elbow_flexion - FRAC_PI_2).abs() < 1e-12);
+        assert!(c.humeral_rotation.unwrap().abs() < 1e-12);
+        assert!(
+            (c.upper_arm_length - 0.3).abs() < 1e-12 && (c.forearm_length - 0.25).abs() < 1e-12
+        );
+        // the forearm turned to point along +x: rotated by +90 deg about +y (right-handed)
+        let c = arm_configuration(
+            s,
+            s + Vector3::new(0.0, 0.3, 0.0),
+            s + Vector3::new(0.25, 0.3, 0.0),
+            up,
+        )
+        .unwrap();
+        assert!((c.humeral_rotation.unwrap() - FRAC_PI_2).abs() < 1e-12);
+        // arm hanging straight down: elevation 0, elbow 0, rotation undefined
+        let c = arm_configuration(s, s - up * 0.3, s - up * 0.55, up).unwrap();
+        assert!(c.shoulder_elevation.abs() < 1e-12 && c.elbow_flexion.abs() < 1e-12);
+        assert!(c.humeral_rotation.is_none());
+        assert!(arm_configuration(s, s, s + up, up).is_none());
     }
 }

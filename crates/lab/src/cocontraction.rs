@@ -117,7 +117,9 @@ pub fn simulate_cocontraction(
                     cols[1 + a].push(
                         subject.start[a] + disp[a] + noise.position_std_m * unit.sample(&mut rng),
                     );
-                    cols[4 + a].push(f[a] + noise.white_std_n * unit.sample(&mut rng));
+                    cols[4 + a].push(
+                        noise.quantise_force(f[a] + noise.white_std_n * unit.sample(&mut rng)),
+                    );
                 }
                 cols[7].push((trial + 1) as f64);
                 cols[8].push(*level);
@@ -149,7 +151,7 @@ pub fn simulate_cocontraction(
         mvc[0].push(t);
         for a in 0..3 {
             mvc[1 + a].push(subject.start[a] + noise.position_std_m * unit.sample(&mut rng));
-            mvc[4 + a].push(noise.white_std_n * unit.sample(&mut rng));
+            mvc[4 + a].push(noise.quantise_force(noise.white_std_n * unit.sample(&mut rng)));
         }
         mvc[7].push(0.0);
         mvc[8].push(1.0);

@@ -5,6 +5,8 @@
 //! linear subject; see each module for the seed and equation it implements.
 
 pub mod cocontraction;
+pub mod design;
+pub mod imbic;
 pub mod planar;
 pub mod profile;
 pub mod protocol;

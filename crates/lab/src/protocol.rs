@@ -26,6 +26,19 @@ pub struct Protocol {
     pub targets: Targets,
     pub phases: Phases,
     pub limits: Limits,
+    /// Where the robot's base sits in the protocol frame (for `protocol export`
+    /// and `--robot`); absent: the robot's base frame is the protocol frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot_base: Option<Placement>,
+}
+
+/// A rigid placement: translation (m) and URDF roll-pitch-yaw (rad).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Placement {
+    pub xyz_m: [f64; 3],
+    #[serde(default)]
+    pub rpy_rad: [f64; 3],
 }
 
 /// Start points: explicit, or `count` (6: octahedron) on a sphere.
@@ -66,6 +79,12 @@ pub struct Phases {
     /// relaxes after it).
     #[serde(default)]
     pub record_hold_and_return: bool,
+    /// Trials are given in sets of this many (seed 001: 6), with
+    /// `set_rest_s` between sets; 0: one set.
+    #[serde(default)]
+    pub trials_per_set: usize,
+    #[serde(default)]
+    pub set_rest_s: f64,
 }
 
 /// Safety limits.
@@ -90,7 +109,7 @@ pub fn preset(name: &str) -> Result<Protocol> {
             sample_rate_hz: 500.0,
             start_points: StartPoints { points: vec![], centre_m: [0.40, 0.0, 0.0], radius_m: 0.20 },
             targets: Targets { count: 16, radius_m: 0.03 },
-            phases: Phases { profile: Profile::Cubic, rest_s: 0.2, centre_out_s: 3.0, hold_s: 2.0, return_s: 2.0, relax_s: 2.0, record_hold_and_return: false },
+            phases: Phases { profile: Profile::Cubic, rest_s: 0.2, centre_out_s: 3.0, hold_s: 2.0, return_s: 2.0, relax_s: 2.0, record_hold_and_return: false, trials_per_set: 0, set_rest_s: 0.0 },
             limits: Limits {
                 max_displacement_m: 0.05,
                 max_velocity_m_s: 0.1,
@@ -100,13 +119,16 @@ pub fn preset(name: &str) -> Result<Protocol> {
                 workspace_min_m: [0.1, -0.35, -0.35],
                 workspace_max_m: [0.7, 0.35, 0.35],
             },
+            // the KUKA LWR4+ below and behind the workspace, facing it: reaches every
+            // start point and target with the home orientation held (robot.rs tests)
+            robot_base: Some(Placement { xyz_m: [-0.05, 0.0, -0.6], rpy_rad: [0.0, 0.0, std::f64::consts::PI] }),
         },
         "patel-cocontraction" => Protocol {
             name: "seed 001: 18 targets at 8 mm, 100 ms out, 500 ms hold, 100 ms back, 1 s rest".into(),
             sample_rate_hz: 1000.0,
             start_points: StartPoints { points: vec![[0.30, -0.20, 0.05]], centre_m: [0.0; 3], radius_m: 0.0 },
             targets: Targets { count: 18, radius_m: 0.008 },
-            phases: Phases { profile: Profile::Cubic, rest_s: 0.05, centre_out_s: 0.1, hold_s: 0.5, return_s: 0.1, relax_s: 1.0, record_hold_and_return: true },
+            phases: Phases { profile: Profile::Cubic, rest_s: 0.05, centre_out_s: 0.1, hold_s: 0.5, return_s: 0.1, relax_s: 1.0, record_hold_and_return: true, trials_per_set: 6, set_rest_s: 10.0 },
             limits: Limits {
                 max_displacement_m: 0.015,
                 max_velocity_m_s: 0.2,
@@ -116,11 +138,12 @@ pub fn preset(name: &str) -> Result<Protocol> {
                 workspace_min_m: [0.0, -0.6, -0.4],
                 workspace_max_m: [0.7, 0.3, 0.5],
             },
+            robot_base: Some(Placement { xyz_m: [-0.05, 0.0, -0.6], rpy_rad: [0.0, 0.0, std::f64::consts::PI] }),
         },
         other => {
             return Err(Error::invalid(
                 "preset",
-                format!("{other:?} is not available yet; presets: artemiadis-3d, patel-cocontraction (planar protocols: limpid_lab::planar::PlanarProtocol; stochastic inputs: limpid_lab::rig)"),
+                format!("{other:?} is not a centre-out preset; centre-out presets: artemiadis-3d, patel-cocontraction"),
             ))
         }
     };
@@ -154,7 +177,7 @@ impl Protocol {
 
     /// TOML text.
     pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).unwrap_or_default()
+        toml::to_string(self).unwrap_or_default()
     }
 
     /// The start points (m).

@@ -28,6 +28,8 @@ pub type Springs = [f64; 8];
 pub const SA1: Springs = [38.0615, 38.0615, 38.0615, 38.0615, 0.0, 0.0, 0.0, 66.3707];
 /// Seed 004 Table II, configuration sa2 (springs 4a and 4b exchanged).
 pub const SA2: Springs = [38.0615, 38.0615, 38.0615, 38.0615, 0.0, 0.0, 66.3707, 0.0];
+/// The spring set of `../shared/examples/stochastic/ex_sa3` (N/m, k1a..k4b).
+pub const SPRING_SET_SA3: Springs = [50.0, 50.0, 30.0, 30.0, 0.0, 66.3707, 0.0, 0.0];
 
 /// Geometry constants of eq. (10).
 #[derive(Debug, Clone, Copy)]
@@ -121,6 +123,8 @@ pub struct RigExperiment {
     pub sample_rate: f64,
     /// Peak commanded force/torque per channel (N, N, N m).
     pub peak: [f64; 3],
+    /// Cut-off of the inputs' 8th-order Butterworth low-pass (Hz).
+    pub cutoff_hz: f64,
 }
 
 impl RigExperiment {
@@ -146,6 +150,7 @@ impl RigExperiment {
             seconds: 50.0,
             sample_rate: 1000.0,
             peak: [40.0, 40.0, 4.9],
+            cutoff_hz: 15.0,
         }
     }
 }
@@ -157,7 +162,7 @@ pub fn simulate_rig(e: &RigExperiment, noise_std: [f64; 2], seed: u64) -> Result
     let dt = 1.0 / fs;
     let n = (e.seconds * fs).round() as usize + 1;
     let pre = (5.0 * fs) as usize; // settle, then discard
-    let u = stochastic_input(n + pre, fs, &e.peak, 15.0, seed)?;
+    let u = stochastic_input(n + pre, fs, &e.peak, e.cutoff_hz, seed)?;
     let mt = e.inertia + e.robot_inertia;
     let bt = e.damping + e.robot_damping;
     let kt = e.stiffness + e.robot_stiffness;

@@ -10,7 +10,9 @@
 //! convention; the link lengths are not printed in the seed, limpid uses
 //! a1 = 0.15 m, a2 = 0.35 m, d3 = 0.10 m).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Vector3};
+use nalgebra::{
+    DMatrix, DVector, Isometry3, Matrix3, Matrix4, Rotation3, Translation3, Unit, Vector3,
+};
 use serde::{Deserialize, Serialize};
 
 use limpid_core::{Error, Result};
@@ -25,7 +27,7 @@ pub enum Convention {
     Modified,
 }
 
-/// One revolute joint: DH parameters (m, rad), joint offset, limits.
+/// One revolute joint of a DH table: DH parameters (m, rad), joint offset, limits.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub struct Joint {
     pub a: f64,
@@ -39,24 +41,39 @@ pub struct Joint {
     pub max_speed: f64,
 }
 
-/// A serial robot of revolute joints.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+/// A revolute joint in the form every model is reduced to:
+/// T_i = before · Rot(axis, q_i + offset) · after.
+#[derive(Debug, Clone)]
+pub struct RevoluteJoint {
+    pub name: String,
+    pub before: Matrix4<f64>,
+    /// Unit rotation axis in the joint frame.
+    pub axis: Vector3<f64>,
+    pub after: Matrix4<f64>,
+    pub offset: f64,
+    pub min: f64,
+    pub max: f64,
+    pub max_speed: f64,
+}
+
+/// A joint's world axis (unit) and a point on it.
+type JointAxis = (Vector3<f64>, Vector3<f64>);
+
+/// A serial robot of revolute joints, placed in the lab by `base`.
+#[derive(Debug, Clone)]
 pub struct Robot {
     pub name: String,
-    pub convention: Convention,
-    pub joints: Vec<Joint>,
+    /// Pose of the robot's base in the lab (protocol) frame.
+    pub base: Matrix4<f64>,
+    pub joints: Vec<RevoluteJoint>,
+    /// Fixed transform from the last joint to the end effector.
+    pub tip: Matrix4<f64>,
 }
 
 fn rot_x(a: f64) -> Matrix4<f64> {
     let (s, c) = a.sin_cos();
     Matrix4::new(
         1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0,
-    )
-}
-fn rot_z(a: f64) -> Matrix4<f64> {
-    let (s, c) = a.sin_cos();
-    Matrix4::new(
-        c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
     )
 }
 fn trans(x: f64, z: f64) -> Matrix4<f64> {
@@ -66,7 +83,165 @@ fn trans(x: f64, z: f64) -> Matrix4<f64> {
     t
 }
 
+/// Homogeneous transform of a translation and URDF roll-pitch-yaw angles
+/// (R = Rz(yaw) Ry(pitch) Rx(roll)).
+pub fn pose(xyz: [f64; 3], rpy: [f64; 3]) -> Matrix4<f64> {
+    let r = Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]);
+    Isometry3::from_parts(Translation3::new(xyz[0], xyz[1], xyz[2]), r.into()).to_homogeneous()
+}
+
+fn rotation_about(axis: &Vector3<f64>, angle: f64) -> Matrix4<f64> {
+    Rotation3::from_axis_angle(&Unit::new_unchecked(*axis), angle).to_homogeneous()
+}
+
 impl Robot {
+    /// A robot from a DH table.
+    pub fn from_dh(name: &str, convention: Convention, table: &[Joint]) -> Self {
+        let joints = table
+            .iter()
+            .enumerate()
+            .map(|(i, j)| {
+                let (before, after) = match convention {
+                    Convention::Standard => (
+                        Matrix4::identity(),
+                        trans(0.0, j.d) * trans(j.a, 0.0) * rot_x(j.alpha),
+                    ),
+                    Convention::Modified => (rot_x(j.alpha) * trans(j.a, 0.0), trans(0.0, j.d)),
+                };
+                RevoluteJoint {
+                    name: format!("q{}", i + 1),
+                    before,
+                    axis: Vector3::z(),
+                    after,
+                    offset: j.theta_offset,
+                    min: j.min,
+                    max: j.max,
+                    max_speed: j.max_speed,
+                }
+            })
+            .collect();
+        Robot {
+            name: name.into(),
+            base: Matrix4::identity(),
+            joints,
+            tip: Matrix4::identity(),
+        }
+    }
+
+    /// A robot from a URDF file (parsed by `urdf-rs`): the chain of revolute
+    /// and continuous joints from the root link to `tip_link` (default: the
+    /// only leaf). Fixed joints are folded into the neighbouring transforms;
+    /// any other joint type on the chain is refused.
+    pub fn from_urdf(path: &std::path::Path, tip_link: Option<&str>) -> Result<Self> {
+        let fail = |message: String| Error::Format {
+            path: path.to_path_buf(),
+            message,
+        };
+        let urdf = urdf_rs::read_file(path).map_err(|e| {
+            fail(
+                e.to_string()
+                    .lines()
+                    .next()
+                    .unwrap_or("not a URDF file")
+                    .to_string(),
+            )
+        })?;
+        let parents: std::collections::HashSet<&str> =
+            urdf.joints.iter().map(|j| j.parent.link.as_str()).collect();
+        let tip = match tip_link {
+            Some(t) => t.to_string(),
+            None => {
+                let leaves: Vec<&str> = urdf
+                    .joints
+                    .iter()
+                    .map(|j| j.child.link.as_str())
+                    .filter(|c| !parents.contains(c))
+                    .collect();
+                match leaves.as_slice() {
+                    [one] => one.to_string(),
+                    _ => {
+                        return Err(fail(format!(
+                            "the tree has {} leaf links ({}); name the end effector",
+                            leaves.len(),
+                            leaves.join(", ")
+                        )))
+                    }
+                }
+            }
+        };
+        // walk from the tip to the root
+        let mut chain = Vec::new();
+        let mut link = tip.clone();
+        while let Some(j) = urdf.joints.iter().find(|j| j.child.link == link) {
+            chain.push(j);
+            link = j.parent.link.clone();
+            if chain.len() > urdf.joints.len() {
+                return Err(fail("the joints form a loop".into()));
+            }
+        }
+        if chain.is_empty() {
+            return Err(fail(format!("no joint leads to link {tip:?}")));
+        }
+        chain.reverse();
+        let mut joints = Vec::new();
+        let mut pending = Matrix4::identity();
+        for j in chain {
+            let origin = pose(*j.origin.xyz, *j.origin.rpy);
+            match j.joint_type {
+                urdf_rs::JointType::Fixed => pending *= origin,
+                urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
+                    let axis = Vector3::from(*j.axis.xyz);
+                    let norm = axis.norm();
+                    if norm < 1e-12 {
+                        return Err(fail(format!("joint {:?} has a zero axis", j.name)));
+                    }
+                    let continuous = j.joint_type == urdf_rs::JointType::Continuous;
+                    joints.push(RevoluteJoint {
+                        name: j.name.clone(),
+                        before: pending * origin,
+                        axis: axis / norm,
+                        after: Matrix4::identity(),
+                        offset: 0.0,
+                        min: if continuous {
+                            f64::NEG_INFINITY
+                        } else {
+                            j.limit.lower
+                        },
+                        max: if continuous {
+                            f64::INFINITY
+                        } else {
+                            j.limit.upper
+                        },
+                        max_speed: if j.limit.velocity > 0.0 {
+                            j.limit.velocity
+                        } else {
+                            f64::INFINITY
+                        },
+                    });
+                    pending = Matrix4::identity();
+                }
+                ref other => {
+                    return Err(fail(format!(
+                        "joint {:?} is {other:?}; limpid models serial chains of revolute joints",
+                        j.name
+                    )))
+                }
+            }
+        }
+        Ok(Robot {
+            name: urdf.name,
+            base: Matrix4::identity(),
+            joints,
+            tip: pending,
+        })
+    }
+
+    /// Place the robot's base at `xyz` (m) with roll-pitch-yaw `rpy` (rad) in the lab frame.
+    pub fn placed(mut self, xyz: [f64; 3], rpy: [f64; 3]) -> Self {
+        self.base = pose(xyz, rpy);
+        self
+    }
+
     /// KUKA LWR4+ (7 DoF), standard DH, limits ±170/±120 deg, 1.9 rad/s.
     pub fn kuka_lwr4() -> Self {
         use std::f64::consts::FRAC_PI_2 as H;
@@ -80,10 +255,10 @@ impl Robot {
             max: deg(lim),
             max_speed: 1.9,
         };
-        Robot {
-            name: "KUKA LWR4+".into(),
-            convention: Convention::Standard,
-            joints: vec![
+        Robot::from_dh(
+            "KUKA LWR4+",
+            Convention::Standard,
+            &[
                 j(H, 0.3105, 170.0),
                 j(-H, 0.0, 120.0),
                 j(-H, 0.4, 170.0),
@@ -92,7 +267,7 @@ impl Robot {
                 j(-H, 0.0, 120.0),
                 j(0.0, 0.078, 170.0),
             ],
-        }
+        )
     }
 
     /// 3-DoF PUMA-type arm (seed 004 Table I layout, Craig's convention).
@@ -107,11 +282,11 @@ impl Robot {
             max: std::f64::consts::PI,
             max_speed: 3.0,
         };
-        Robot {
-            name: "PUMA-type 3-DoF".into(),
-            convention: Convention::Modified,
-            joints: vec![j(0.0, 0.0, 0.0), j(0.15, -H, 0.0), j(0.35, H, 0.10)],
-        }
+        Robot::from_dh(
+            "PUMA-type 3-DoF",
+            Convention::Modified,
+            &[j(0.0, 0.0, 0.0), j(0.15, -H, 0.0), j(0.35, H, 0.10)],
+        )
     }
 
     /// Number of joints.
@@ -119,52 +294,30 @@ impl Robot {
         self.joints.len()
     }
 
-    /// Frames of every joint axis and of the end effector (base = identity first).
-    fn frames(&self, q: &[f64]) -> Vec<Matrix4<f64>> {
-        let mut t = Matrix4::identity();
-        let mut out = vec![t];
+    /// World axis and a point on it for every joint, and the end-effector pose.
+    fn axes(&self, q: &[f64]) -> (Vec<JointAxis>, Matrix4<f64>) {
+        let mut t = self.base;
+        let mut axes = Vec::with_capacity(self.dof());
         for (j, qi) in self.joints.iter().zip(q) {
-            let th = qi + j.theta_offset;
-            let step = match self.convention {
-                Convention::Standard => {
-                    rot_z(th) * trans(0.0, j.d) * trans(j.a, 0.0) * rot_x(j.alpha)
-                }
-                Convention::Modified => {
-                    rot_x(j.alpha) * trans(j.a, 0.0) * rot_z(th) * trans(0.0, j.d)
-                }
-            };
-            t *= step;
-            out.push(t);
+            t *= j.before;
+            let r = t.fixed_view::<3, 3>(0, 0);
+            axes.push((r * j.axis, t.fixed_view::<3, 1>(0, 3).into()));
+            t = t * rotation_about(&j.axis, qi + j.offset) * j.after;
         }
-        out
+        (axes, t * self.tip)
     }
 
     /// End-effector pose (homogeneous transform in the base frame).
     pub fn fk(&self, q: &[f64]) -> Matrix4<f64> {
-        *self
-            .frames(q)
-            .last()
-            .expect("frames holds at least the base")
+        self.axes(q).1
     }
 
     /// Geometric Jacobian (6 x n): linear velocity over angular velocity.
     pub fn jacobian(&self, q: &[f64]) -> DMatrix<f64> {
-        let frames = self.frames(q);
-        let pe: Vector3<f64> = frames
-            .last()
-            .expect("end frame")
-            .fixed_view::<3, 1>(0, 3)
-            .into();
-        let n = self.dof();
-        let mut jac = DMatrix::zeros(6, n);
-        for i in 0..n {
-            // joint i rotates about z of frame i-1 (standard) or of frame i (modified)
-            let f = match self.convention {
-                Convention::Standard => frames[i],
-                Convention::Modified => frames[i + 1],
-            };
-            let z: Vector3<f64> = f.fixed_view::<3, 1>(0, 2).into();
-            let p: Vector3<f64> = f.fixed_view::<3, 1>(0, 3).into();
+        let (axes, end) = self.axes(q);
+        let pe: Vector3<f64> = end.fixed_view::<3, 1>(0, 3).into();
+        let mut jac = DMatrix::zeros(6, self.dof());
+        for (i, (z, p)) in axes.iter().enumerate() {
             let v = z.cross(&(pe - p));
             for k in 0..3 {
                 jac[(k, i)] = v[k];
@@ -181,8 +334,8 @@ impl Robot {
         let mut q = q0.to_vec();
         let pt: Vector3<f64> = target.fixed_view::<3, 1>(0, 3).into();
         let rt: Matrix3<f64> = target.fixed_view::<3, 3>(0, 0).into();
-        let lambda2 = 1e-6;
-        for _ in 0..500 {
+        let lambda2 = 1e-4;
+        for _ in 0..2000 {
             let t = self.fk(&q);
             let p: Vector3<f64> = t.fixed_view::<3, 1>(0, 3).into();
             let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into();
@@ -207,7 +360,9 @@ impl Robot {
                     .lu()
                     .solve(&e)
                     .ok_or_else(|| Error::invalid("inverse kinematics", "singular step"))?;
-            for (qi, s) in q.iter_mut().zip(step.iter()) {
+            // at most 0.2 rad per iteration: far from the solution the linearisation misleads
+            let scale = (0.2 / step.amax()).min(1.0);
+            for (qi, s) in q.iter_mut().zip(step.iter().map(|s| s * scale)) {
                 // keep revolute angles in (-pi, pi]
                 let v = *qi + s;
                 *qi = v.sin().atan2(v.cos());
@@ -263,9 +418,10 @@ impl Robot {
         match name {
             "kuka-lwr4" => Ok(Robot::kuka_lwr4()),
             "puma3" => Ok(Robot::puma3()),
+            path if path.ends_with(".urdf") => Robot::from_urdf(std::path::Path::new(path), None),
             other => Err(Error::invalid(
                 "robot",
-                format!("unknown robot {other:?}; built in: kuka-lwr4, puma3"),
+                format!("unknown robot {other:?}; built in: kuka-lwr4, puma3, or a path to a .urdf file"),
             )),
         }
     }
@@ -276,6 +432,26 @@ impl Robot {
             7 => vec![0.0, 0.6, 0.0, -1.4, 0.0, 0.8, 0.0],
             n => (0..n).map(|i| if i == 1 { -0.5 } else { 0.3 }).collect(),
         }
+    }
+
+    /// Joint angles that put the end effector at `position` with `orientation`,
+    /// reached from `q_start` along a straight line in steps of at most 1 cm
+    /// (a direct IK jump across the workspace can fall into a singularity).
+    pub fn reach(
+        &self,
+        position: &Vector3<f64>,
+        orientation: &Matrix3<f64>,
+        q_start: &[f64],
+    ) -> Result<Vec<f64>> {
+        let from: Vector3<f64> = self.fk(q_start).fixed_view::<3, 1>(0, 3).into();
+        let steps = ((position - from).norm() / 0.01).ceil().max(1.0) as usize;
+        let path: Vec<Vector3<f64>> = (1..=steps)
+            .map(|k| from + (position - from) * (k as f64 / steps as f64))
+            .collect();
+        Ok(self
+            .track(&path, orientation, q_start)?
+            .pop()
+            .expect("path has at least one point"))
     }
 
     /// Joint trajectory tracking end-effector positions with the orientation of
@@ -305,7 +481,9 @@ mod tests {
 
     #[test]
     fn jacobian_matches_finite_differences() {
-        for robot in [Robot::kuka_lwr4(), Robot::puma3()] {
+        let urdf = Robot::from_urdf(&fixture("kuka_lwr4.urdf"), None).unwrap();
+        let placed = Robot::puma3().placed([0.3, -0.2, 0.1], [0.2, -0.4, 1.1]);
+        for robot in [Robot::kuka_lwr4(), Robot::puma3(), urdf, placed] {
             let q: Vec<f64> = (0..robot.dof()).map(|i| 0.3 + 0.2 * i as f64).collect();
             let j = robot.jacobian(&q);
             let h = 1e-7;
@@ -330,6 +508,74 @@ mod tests {
                         && (w[(1, 0)] - j[(5, c)]).abs() < 1e-5
                 );
             }
+        }
+    }
+
+    fn fixture(name: &str) -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures")
+            .join(name)
+    }
+
+    #[test]
+    fn urdf_chain_equals_the_dh_model_it_was_written_from() {
+        let dh = Robot::kuka_lwr4();
+        let urdf = Robot::from_urdf(&fixture("kuka_lwr4.urdf"), None).unwrap();
+        assert_eq!(urdf.dof(), 7);
+        assert_eq!(urdf.name, "kuka_lwr4_dh");
+        assert!((urdf.joints[1].max - 120f64.to_radians()).abs() < 1e-12);
+        for k in 0..20 {
+            let q: Vec<f64> = (0..7)
+                .map(|i| ((k * 7 + i) as f64 * 0.77).sin() * 2.0)
+                .collect();
+            let err = (dh.fk(&q) - urdf.fk(&q)).norm();
+            assert!(err < 1e-12, "pose difference {err:e} at {q:?}");
+        }
+    }
+
+    #[test]
+    fn bad_urdf_files_are_refused_with_their_path() {
+        let dir = std::env::temp_dir().join(format!("limpid-urdf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let cases = [
+            (
+                "broken.urdf",
+                "<robot name=\"x\"><link name=\"a\"/>",
+                "broken.urdf",
+            ),
+            (
+                "prismatic.urdf",
+                r#"<robot name="p"><link name="a"/><link name="b"/>
+                   <joint name="slide" type="prismatic"><parent link="a"/><child link="b"/>
+                   <axis xyz="1 0 0"/><limit lower="0" upper="1" effort="1" velocity="1"/></joint></robot>"#,
+                "joint \"slide\" is Prismatic",
+            ),
+        ];
+        for (name, text, expect) in cases {
+            let path = dir.join(name);
+            std::fs::write(&path, text).unwrap();
+            let e = Robot::from_urdf(&path, None).unwrap_err().to_string();
+            assert!(e.contains(expect) && e.contains(name), "{e}");
+        }
+    }
+
+    #[test]
+    fn placed_robot_reaches_the_seed000_start_points() {
+        // seed 000's six start points on a 20 cm sphere, reached with the home
+        // orientation held, once the base is placed behind the workspace facing it
+        // (the artemiadis-3d preset's placement); unplaced, the far points are out of reach
+        let robot = Robot::kuka_lwr4().placed([-0.05, 0.0, -0.6], [0.0, 0.0, std::f64::consts::PI]);
+        let orientation: Matrix3<f64> = robot.fk(&robot.home()).fixed_view::<3, 3>(0, 0).into();
+        // start points and the farthest and nearest targets 3 cm around them
+        let centre = Vector3::new(0.40, 0.0, 0.0);
+        let mut points = crate::sphere::octahedron_points(centre, 0.20);
+        points.extend(crate::sphere::octahedron_points(centre, 0.23));
+        points.extend(crate::sphere::octahedron_points(centre, 0.17));
+        for p in points {
+            let q = robot.reach(&p, &orientation, &robot.home()).unwrap();
+            let got = robot.fk(&q);
+            assert!((got.fixed_view::<3, 1>(0, 3) - p).norm() < 1e-9);
+            assert!(robot.check_joint_trajectory(&[q], 1.0).is_ok());
         }
     }
 

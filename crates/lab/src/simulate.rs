@@ -10,7 +10,7 @@
 use nalgebra::{Matrix3, Vector3};
 use rand::{rngs::StdRng, Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::profile::Profile;
 use crate::subject::Posture;
@@ -26,13 +26,16 @@ use limpid_dsp::LowPass;
 /// | `white_std_n` | 0.1 N | white force noise |
 /// | `drift_std_n` | 0.05 N | slow force drift, continuous over the recording |
 /// | `drift_lowpass_hz` | 0.5 Hz | bandwidth of the drift |
-#[derive(Debug, Clone, Serialize)]
+/// | `force_quantum_n` | 1/160 N | F/T sensor resolution (ATI-type 16-bit count; forces are rounded to it) |
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct NoiseModel {
     pub position_std_m: f64,
     pub offset_per_trial_std_n: f64,
     pub white_std_n: f64,
     pub drift_std_n: f64,
     pub drift_lowpass_hz: f64,
+    pub force_quantum_n: f64,
 }
 
 impl Default for NoiseModel {
@@ -43,11 +46,21 @@ impl Default for NoiseModel {
             white_std_n: 0.1,
             drift_std_n: 0.05,
             drift_lowpass_hz: 0.5,
+            force_quantum_n: 1.0 / 160.0,
         }
     }
 }
 
 impl NoiseModel {
+    /// A force as the sensor reports it: rounded to its resolution.
+    pub fn quantise_force(&self, f: f64) -> f64 {
+        if self.force_quantum_n > 0.0 {
+            (f / self.force_quantum_n).round() * self.force_quantum_n
+        } else {
+            f
+        }
+    }
+
     /// No noise at all (for exact-recovery tests).
     pub fn none() -> Self {
         NoiseModel {
@@ -56,6 +69,7 @@ impl NoiseModel {
             white_std_n: 0.0,
             drift_std_n: 0.0,
             drift_lowpass_hz: 0.5,
+            force_quantum_n: 0.0,
         }
     }
 }
@@ -147,7 +161,9 @@ pub fn simulate_centre_out(
             cols[0].push(idx as f64 * dt);
             for a in 0..3 {
                 cols[1 + a].push(x[a] + noise.position_std_m * unit.sample(&mut rng));
-                cols[4 + a].push(f[a] + drift[a][idx] + noise.white_std_n * unit.sample(&mut rng));
+                cols[4 + a].push(noise.quantise_force(
+                    f[a] + drift[a][idx] + noise.white_std_n * unit.sample(&mut rng),
+                ));
             }
             cols[7].push((trial + 1) as f64);
         }
