@@ -168,6 +168,16 @@ pub struct LinearArgs {
     /// `elbow_*`/`wrist_*` markers (seed 001's frame has x vertical).
     #[arg(long, value_enum, default_value_t = AxisArg::Z)]
     pub vertical: AxisArg,
+    /// Also give the shoulder's joint-space stiffness and damping J_h^T Z J_h (seed 004's
+    /// 3-DoF shoulder): UPPER_ARM_M,FOREARM_M,ELBOW_DEG,FLEXION_DEG,ABDUCTION_DEG,ROTATION_DEG
+    /// (frame: x forward, y left, z up, origin at the shoulder; right arm).
+    #[arg(
+        long,
+        value_name = "L1,L2,E,F,A,R",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub shoulder: Option<Vec<f64>>,
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
@@ -262,16 +272,39 @@ pub fn run(method: Method) -> CliResult {
                 AxisArg::Z => nalgebra::Vector3::z(),
             };
             let arm = limpid_analysis::markers::from_markers(&rec, up)?;
+            let shoulder = match args.shoulder.as_deref() {
+                None => None,
+                Some(v) => Some(shoulder_impedance(v, &est)?),
+            };
             if args.json {
                 let mut v = serde_json::to_value(&result)?;
                 if let Some(a) = &arm {
                     v["arm_configuration"] = serde_json::to_value(a)?;
+                }
+                if let Some(s) = &shoulder {
+                    v["shoulder"] = s.clone();
                 }
                 println!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 print!("{}", table::linear_text(&result));
                 if let Some(a) = &arm {
                     print!("{}", table::arm_configuration_text(a));
+                }
+                if let Some(s) = &shoulder {
+                    let row = |m: &serde_json::Value, i: usize| {
+                        (0..3)
+                            .map(|j| table::num(m[i][j].as_f64().unwrap_or(0.0)))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    };
+                    println!("shoulder joint stiffness J_h^T K J_h (N m/rad; flexion, abduction, rotation):");
+                    for i in 0..3 {
+                        println!("  [{}]", row(&s["stiffness"], i));
+                    }
+                    println!("shoulder joint damping J_h^T B J_h (N m s/rad):");
+                    for i in 0..3 {
+                        println!("  [{}]", row(&s["damping"], i));
+                    }
                 }
             }
             Ok(())
@@ -305,4 +338,45 @@ pub fn run(method: Method) -> CliResult {
             Ok(())
         }
     }
+}
+
+/// Seed 004's 3-DoF shoulder: the hand estimate mapped to joint space.
+fn shoulder_impedance(
+    v: &[f64],
+    est: &limpid_ident::LinearEstimate,
+) -> CliResult<serde_json::Value> {
+    let [l1, l2, elbow, flex, abd, rot] = v else {
+        return Err(limpid_core::Error::invalid(
+            "--shoulder",
+            format!(
+                "expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found {}",
+                v.len()
+            ),
+        )
+        .into());
+    };
+    if est.coordinates.len() != 3 {
+        return Err(
+            limpid_core::Error::invalid("--shoulder", "needs a 3-D estimate (x, y, z)").into(),
+        );
+    }
+    let s = limpid_core::arm::Shoulder {
+        upper_arm_m: *l1,
+        forearm_m: *l2,
+        elbow_rad: elbow.to_radians(),
+    };
+    let q = [flex.to_radians(), abd.to_radians(), rot.to_radians()];
+    let m3 = |m: &Vec<Vec<f64>>| nalgebra::Matrix3::from_fn(|i, j| m[i][j]);
+    let rows = |m: &nalgebra::Matrix3<f64>| {
+        (0..3)
+            .map(|i| (0..3).map(|j| m[(i, j)]).collect::<Vec<f64>>())
+            .collect::<Vec<_>>()
+    };
+    Ok(serde_json::json!({
+        "angles_deg": [flex, abd, rot],
+        "jacobian": rows(&s.jacobian(q)),
+        "stiffness": rows(&s.joint_impedance(&m3(&est.stiffness), q)),
+        "damping": rows(&s.joint_impedance(&m3(&est.damping), q)),
+        "note": "J_h^T Z J_h about the posture; the static-load term dJ^T/dq F is not included",
+    }))
 }

@@ -4,6 +4,7 @@
 
 mod demo;
 mod estimate;
+mod gravity;
 mod planar;
 mod protocol;
 mod stochastic;
@@ -45,6 +46,8 @@ enum Command {
     },
     /// Simulate a protocol on a virtual subject: a recording and its truth file.
     Simulate(protocol::SimulateArgs),
+    /// Turn F/T sensor readings into the force on the limb: bias and weight removed in two steps (seed 004 eq. 4-9).
+    GravityCompensate(gravity::GravityArgs),
     /// Welch PSD, coherence, multiple and partial coherence of outputs on inputs, as CSV.
     Spectra(stochastic::SpectraArgs),
     /// Whole co-contraction studies: tables across subjects and configurations (seed 001).
@@ -71,6 +74,7 @@ fn main() -> ExitCode {
         Command::Spectra(args) => stochastic::run_spectra(args),
         Command::Protocol { command } => protocol::run(command),
         Command::Simulate(args) => protocol::run_simulate(args),
+        Command::GravityCompensate(args) => gravity::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

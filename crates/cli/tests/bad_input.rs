@@ -230,3 +230,17 @@ fn motionless_coordinate_is_explained() {
     let p = write(&d, "r.csv", &s);
     fails_with(&p, &[], "regressor column acceleration q1 is zero in every sample: that coordinate never moves, so its parameters cannot be estimated");
 }
+
+#[test]
+fn shoulder_posture_with_the_wrong_count_or_a_1_dof_estimate() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(&d, "r.csv", &rows(2000));
+    for (extra, expected) in [
+        ("0.3,0.35,90,30,20", "invalid --shoulder: expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found 5"),
+        ("0.3,0.35,90,30,20,0", "invalid --shoulder: needs a 3-D estimate (x, y, z)"),
+    ] {
+        let out = limpid(&["estimate", "linear", p.to_str().unwrap(), "--shoulder", extra]);
+        assert_eq!(out.code, 2, "{}", out.stderr);
+        assert_eq!(out.stderr.trim_end(), format!("limpid: {expected}"));
+    }
+}

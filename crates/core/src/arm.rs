@@ -210,3 +210,105 @@ mod configuration_tests {
         assert!(arm_configuration(s, s, s + up, up).is_none());
     }
 }
+
+/// The shoulder as a 3-DoF ball joint (seed 004 §I: flexion/extension about
+/// the transverse axis, abduction/adduction about the antero-posterior axis,
+/// internal/external rotation about the humerus), with the elbow held at a
+/// fixed flexion. Frame: x forward, y to the subject's left, z up, origin at
+/// the shoulder's centre; a right arm; all angles 0 with the arm hanging and
+/// the forearm forward of the elbow by `elbow_rad` (π/2: horizontal).
+/// Hand torques and impedance follow from the hand Jacobian J_h:
+/// τ = J_h^T F, Z_joint = J_h^T Z_hand J_h (small motions about a posture; the
+/// term (∂J_h^T/∂q) F of a static load is left out).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Shoulder {
+    pub upper_arm_m: f64,
+    pub forearm_m: f64,
+    pub elbow_rad: f64,
+}
+
+fn rot_x(a: f64) -> nalgebra::Matrix3<f64> {
+    nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), a).into_inner()
+}
+fn rot_y(a: f64) -> nalgebra::Matrix3<f64> {
+    nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), a).into_inner()
+}
+fn rot_z(a: f64) -> nalgebra::Matrix3<f64> {
+    nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), a).into_inner()
+}
+
+impl Shoulder {
+    /// Hand position for [flexion, abduction, internal rotation] (rad):
+    /// R = Ry(-flexion) Rx(-abduction) Rz(rotation) applied to the hanging arm.
+    pub fn hand(&self, angles: [f64; 3]) -> Vector3<f64> {
+        let r = rot_y(-angles[0]) * rot_x(-angles[1]) * rot_z(angles[2]);
+        let upper = Vector3::new(0.0, 0.0, -self.upper_arm_m);
+        let fore = Vector3::new(self.elbow_rad.sin(), 0.0, -self.elbow_rad.cos()) * self.forearm_m;
+        r * (upper + fore)
+    }
+
+    /// J_h = ∂hand/∂angles (central differences, step 1e-6 rad: error ~1e-12 m).
+    pub fn jacobian(&self, angles: [f64; 3]) -> nalgebra::Matrix3<f64> {
+        let h = 1e-6;
+        let mut j = nalgebra::Matrix3::zeros();
+        for c in 0..3 {
+            let (mut up, mut down) = (angles, angles);
+            up[c] += h;
+            down[c] -= h;
+            j.set_column(c, &((self.hand(up) - self.hand(down)) / (2.0 * h)));
+        }
+        j
+    }
+
+    /// Joint-space impedance J_h^T Z J_h of a hand impedance matrix Z.
+    pub fn joint_impedance(
+        &self,
+        hand: &nalgebra::Matrix3<f64>,
+        angles: [f64; 3],
+    ) -> nalgebra::Matrix3<f64> {
+        let j = self.jacobian(angles);
+        j.transpose() * hand * j
+    }
+
+    /// Joint torques τ = J_h^T F of a hand force.
+    pub fn torques(&self, force: &Vector3<f64>, angles: [f64; 3]) -> Vector3<f64> {
+        self.jacobian(angles).transpose() * force
+    }
+}
+
+#[cfg(test)]
+mod shoulder_tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    #[test]
+    fn shoulder_kinematics_torques_and_impedance() {
+        let s = Shoulder {
+            upper_arm_m: 0.3,
+            forearm_m: 0.35,
+            elbow_rad: FRAC_PI_2,
+        };
+        // hanging arm, forearm forward: hand 0.35 m forward, 0.3 m down
+        let h = s.hand([0.0; 3]);
+        assert!((h - Vector3::new(0.35, 0.0, -0.3)).norm() < 1e-12);
+        // internal rotation by 90 deg turns the forearm across the body (to +y, the left)
+        let h = s.hand([0.0, 0.0, FRAC_PI_2]);
+        assert!((h - Vector3::new(0.0, 0.35, -0.3)).norm() < 1e-12);
+        // flexion by 90 deg lifts the upper arm forward to horizontal
+        let h = s.hand([FRAC_PI_2, 0.0, 0.0]);
+        assert!((h - Vector3::new(0.3, 0.0, 0.35)).norm() < 1e-12);
+        // virtual work: τ · dq = F · dx for a small joint motion
+        let q = [0.4, 0.3, -0.2];
+        let f = Vector3::new(3.0, -2.0, 5.0);
+        let dq = Vector3::new(1e-6, -2e-6, 1.5e-6);
+        let dx = s.hand([q[0] + dq[0], q[1] + dq[1], q[2] + dq[2]]) - s.hand(q);
+        assert!((s.torques(&f, q).dot(&dq) - f.dot(&dx)).abs() < 1e-10);
+        // a hand stiffness maps to a symmetric joint stiffness with the same work
+        let k = nalgebra::Matrix3::new(300.0, 20.0, 10.0, 20.0, 200.0, 5.0, 10.0, 5.0, 400.0);
+        let kq = s.joint_impedance(&k, q);
+        assert!((kq - kq.transpose()).norm() < 1e-9);
+        let j = s.jacobian(q);
+        let dxl = j * dq;
+        assert!((dq.dot(&(kq * dq)) - dxl.dot(&(k * dxl))).abs() < 1e-15);
+    }
+}

@@ -163,3 +163,42 @@ fn end_to_end_noiseless_recording_recovers_to_1e_3() {
     assert!(rel(&est.damping, &b) < 1e-3, "B {:?}", est.damping);
     assert!(rel(&est.inertia, &m) < 1e-3, "M {:?}", est.inertia);
 }
+
+/// A position-controlled robot (30 Hz servo) lags its command; the recorded
+/// motion is the actual one, so the noise-free estimate stays exact while the
+/// tracking error stays below velocity x 2/ω.
+#[test]
+fn servo_tracking_error_is_bounded_and_does_not_bias_the_estimate() {
+    use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Profile};
+    let posture = seed000_subject1().remove(0);
+    let protocol = CentreOut::seed000(Profile::Cubic);
+    let ideal = simulate_centre_out(&posture, &protocol, &NoiseModel::none(), 1).unwrap();
+    let noise = NoiseModel {
+        servo_bandwidth_hz: 30.0,
+        ..NoiseModel::none()
+    };
+    let servo = simulate_centre_out(&posture, &protocol, &noise, 1).unwrap();
+    // 3 cm in 3 s by a cubic: peak speed 1.5 cm/s, lag 2/ω = 10.6 ms
+    let bound = 0.015 * 2.0 / (2.0 * std::f64::consts::PI * 30.0);
+    let mut worst = 0.0f64;
+    for c in ["x", "y", "z"] {
+        for (a, b) in ideal
+            .column(c)
+            .unwrap()
+            .iter()
+            .zip(servo.column(c).unwrap())
+        {
+            worst = worst.max((a - b).abs());
+        }
+    }
+    assert!(
+        worst > 0.2 * bound && worst < bound,
+        "tracking error {worst:e} vs bound {bound:e}"
+    );
+    let data = prepare(&servo, &PrepareParams::default()).unwrap();
+    let est = fit_linear(&data, &LinearParams::default()).unwrap();
+    let k = DMatrix::from_fn(3, 3, |i, j| posture.stiffness[(i, j)]);
+    let b = DMatrix::from_fn(3, 3, |i, j| posture.damping[(i, j)]);
+    assert!(rel(&est.stiffness, &k) < 1e-4, "K {:?}", est.stiffness);
+    assert!(rel(&est.damping, &b) < 1e-3, "B {:?}", est.damping);
+}

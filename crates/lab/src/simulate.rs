@@ -27,6 +27,7 @@ use limpid_dsp::LowPass;
 /// | `drift_std_n` | 0.05 N | slow force drift, continuous over the recording |
 /// | `drift_lowpass_hz` | 0.5 Hz | bandwidth of the drift |
 /// | `force_quantum_n` | 1/160 N | F/T sensor resolution (ATI-type 16-bit count; forces are rounded to it) |
+/// | `servo_bandwidth_hz` | 30 Hz | the position-controlled robot follows its command through a critically damped 2nd-order servo of this natural frequency (tracking error ≈ velocity x 2/ω); 0: ideal tracking |
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct NoiseModel {
@@ -36,6 +37,7 @@ pub struct NoiseModel {
     pub drift_std_n: f64,
     pub drift_lowpass_hz: f64,
     pub force_quantum_n: f64,
+    pub servo_bandwidth_hz: f64,
 }
 
 impl Default for NoiseModel {
@@ -47,6 +49,7 @@ impl Default for NoiseModel {
             drift_std_n: 0.05,
             drift_lowpass_hz: 0.5,
             force_quantum_n: 1.0 / 160.0,
+            servo_bandwidth_hz: 30.0,
         }
     }
 }
@@ -70,6 +73,7 @@ impl NoiseModel {
             drift_std_n: 0.0,
             drift_lowpass_hz: 0.5,
             force_quantum_n: 0.0,
+            servo_bandwidth_hz: 0.0,
         }
     }
 }
@@ -138,21 +142,41 @@ pub fn simulate_centre_out(
     let unit = Normal::new(0.0, 1.0).expect("unit normal is valid");
     let (m, b, k): (Matrix3<f64>, Matrix3<f64>, Matrix3<f64>) =
         (posture.inertia, posture.damping, posture.stiffness);
+    let omega = 2.0 * std::f64::consts::PI * noise.servo_bandwidth_hz;
+    // commanded displacement (fraction of the radius), rate and acceleration:
+    // out, hold, and back by the same profile
+    let command_at = |t_in: f64| {
+        let (s1, v1, a1) = protocol.profile.eval(t_in, protocol.motion_s);
+        let (s2, v2, a2) = if protocol.return_s > 0.0 {
+            protocol.profile.eval(
+                t_in - protocol.motion_s - protocol.hold_s,
+                protocol.return_s,
+            )
+        } else {
+            (0.0, 0.0, 0.0)
+        };
+        (s1 - s2, v1 - v2, a1 - a2)
+    };
     for (trial, dir) in protocol.directions.iter().enumerate() {
         let offset = Vector3::from_fn(|_, _| noise.offset_per_trial_std_n * unit.sample(&mut rng));
+        // the servo's state: actual displacement along `dir` and its rate (starts at rest)
+        let (mut servo_s, mut servo_v) = (0.0f64, 0.0f64);
         for i in 0..per {
             let idx = trial * per + i;
             let t_in = i as f64 * dt - protocol.rest_s;
-            let (s1, v1, a1) = protocol.profile.eval(t_in, protocol.motion_s);
-            let (s2, v2, a2) = if protocol.return_s > 0.0 {
-                protocol.profile.eval(
-                    t_in - protocol.motion_s - protocol.hold_s,
-                    protocol.return_s,
-                )
-            } else {
-                (0.0, 0.0, 0.0)
-            };
-            let (s, sd, sdd) = (s1 - s2, v1 - v2, a1 - a2);
+            let (mut s, mut sd, mut sdd) = command_at(t_in);
+            if omega > 0.0 {
+                // actual motion: s'' = ω² (s_cmd - s) - 2 ω s' with the command
+                // continuous in time, 20 semi-implicit Euler steps per sample
+                let h = dt / 20.0;
+                let accel = |c: f64, p: f64, v: f64| omega * omega * (c - p) - 2.0 * omega * v;
+                (s, sd, sdd) = (servo_s, servo_v, accel(s, servo_s, servo_v));
+                for j in 0..20 {
+                    let c = command_at(t_in + j as f64 * h).0;
+                    servo_v += accel(c, servo_s, servo_v) * h;
+                    servo_s += servo_v * h;
+                }
+            }
             let disp = dir * (protocol.radius_m * s);
             let vel = dir * (protocol.radius_m * sd);
             let acc = dir * (protocol.radius_m * sdd);

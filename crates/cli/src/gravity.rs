@@ -1,0 +1,116 @@
+//! `limpid gravity-compensate`: seed 004 §II-B, eq. (4)-(9). The F/T sensor's
+//! readings (`sensor_fx`, `sensor_fy`, `sensor_fz`: the force of the hand on
+//! the sensor, in the sensor frame) become the force applied to the limb in
+//! the reference frame (`fx`, `fy`, `fz`, FORMAT.md): the intrinsic bias comes
+//! from a recording in a pose where gravity does not load the sensor (step 1),
+//! the weight of handle and limb from the first seconds of the test (step 2).
+//! The sensor's orientation per sample comes from the robot's joint angles
+//! (`--robot`), else from `theta` (rotation about y, seed 004's rig), else it
+//! is fixed.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use limpid_core::frame::GravityCompensation;
+use limpid_core::{Error, Recording};
+use nalgebra::{Matrix3, Vector3};
+
+use crate::CliResult;
+
+#[derive(Args)]
+pub struct GravityArgs {
+    /// The test recording with `sensor_fx`, `sensor_fy`, `sensor_fz`.
+    pub recording: PathBuf,
+    /// Step 1: readings in a pose where gravity does not load the sensor axes.
+    #[arg(long)]
+    pub bias: PathBuf,
+    /// Step 2: the first seconds of the test, before any perturbation.
+    #[arg(long, default_value_t = 1.0)]
+    pub initial_s: f64,
+    /// Sensor orientation from the robot_q columns by this robot's forward kinematics.
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: Option<String>,
+    /// Output recording with fx, fy, fz written (CSV or Parquet).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+fn readings(rec: &Recording) -> CliResult<Vec<Vector3<f64>>> {
+    let why = "F/T sensor readings for gravity compensation";
+    let c = [
+        rec.require("sensor_fx", why)?,
+        rec.require("sensor_fy", why)?,
+        rec.require("sensor_fz", why)?,
+    ];
+    Ok((0..rec.len())
+        .map(|k| Vector3::new(c[0][k], c[1][k], c[2][k]))
+        .collect())
+}
+
+fn rotations(rec: &Recording, robot: Option<&str>) -> CliResult<Vec<Matrix3<f64>>> {
+    if let Some(name) = robot {
+        let robot = limpid_lab::robot::Robot::by_name(name)?;
+        let joints: Vec<&[f64]> = (1..=robot.dof())
+            .map(|i| rec.require(&format!("robot_q{i}"), "robot joint angles for --robot"))
+            .collect::<Result<_, _>>()?;
+        let mut q = vec![0.0; robot.dof()];
+        return Ok((0..rec.len())
+            .map(|k| {
+                for (qi, c) in q.iter_mut().zip(&joints) {
+                    *qi = c[k];
+                }
+                robot.fk(&q).fixed_view::<3, 3>(0, 0).into()
+            })
+            .collect());
+    }
+    Ok(match rec.column("theta") {
+        Some(theta) => theta
+            .iter()
+            .map(|a| {
+                let (s, c) = a.sin_cos();
+                Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
+            })
+            .collect(),
+        None => vec![Matrix3::identity(); rec.len()],
+    })
+}
+
+pub fn run(args: GravityArgs) -> CliResult {
+    let mut rec = limpid_io::read_recording(&args.recording)?;
+    let bias = limpid_io::read_recording(&args.bias)?;
+    let read = readings(&rec)?;
+    let bias_readings = readings(&bias)?;
+    let initial = (args.initial_s * rec.sample_rate()).round() as usize;
+    if !(args.initial_s > 0.0) || initial == 0 || initial > rec.len() {
+        return Err(Error::invalid(
+            "--initial-s",
+            format!(
+                "{} s must be positive and within the recording ({:.3} s)",
+                args.initial_s,
+                rec.len() as f64 / rec.sample_rate()
+            ),
+        )
+        .into());
+    }
+    let rot = rotations(&rec, args.robot.as_deref())?;
+    // step 2 uses the orientation at the start; the start must be still
+    let comp = GravityCompensation::calibrate(&bias_readings, &read[..initial], &rot[0])?;
+    let mut out: Vec<Vec<f64>> = vec![Vec::with_capacity(rec.len()); 3];
+    for (r, m) in read.iter().zip(&rot) {
+        let f = comp.force_on_limb(r, m);
+        for a in 0..3 {
+            out[a].push(f[a]);
+        }
+    }
+    for (name, col) in ["fx", "fy", "fz"].iter().zip(out) {
+        rec.set_column(name, col)?;
+    }
+    limpid_io::write_recording(&rec, &args.output)?;
+    println!(
+        "wrote {}: fx, fy, fz = force on the limb in the reference frame; sensor bias [{:.4}, {:.4}, {:.4}] N, weight term [{:.4}, {:.4}, {:.4}] N",
+        args.output.display(),
+        comp.bias_sensor[0], comp.bias_sensor[1], comp.bias_sensor[2],
+        comp.gravity_ref[0], comp.gravity_ref[1], comp.gravity_ref[2]
+    );
+    Ok(())
+}
