@@ -81,7 +81,7 @@ pub fn run(args: GravityArgs) -> CliResult {
     let read = readings(&rec)?;
     let bias_readings = readings(&bias)?;
     let initial = (args.initial_s * rec.sample_rate()).round() as usize;
-    if !(args.initial_s > 0.0) || initial == 0 || initial > rec.len() {
+    if args.initial_s.is_nan() || args.initial_s <= 0.0 || initial == 0 || initial > rec.len() {
         return Err(Error::invalid(
             "--initial-s",
             format!(
