@@ -95,7 +95,7 @@ pub fn run(args: GravityArgs) -> CliResult {
     let rot = rotations(&rec, args.robot.as_deref())?;
     // step 2 uses the orientation at the start; the start must be still
     let comp = GravityCompensation::calibrate(&bias_readings, &read[..initial], &rot[0])?;
-    let mut out: Vec<Vec<f64>> = vec![Vec::with_capacity(rec.len()); 3];
+    let mut out: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(rec.len())).collect();
     for (r, m) in read.iter().zip(&rot) {
         let f = comp.force_on_limb(r, m);
         for a in 0..3 {
