@@ -40,6 +40,9 @@ pub struct DemoArgs {
     /// Print the comparison as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Where to write the HTML report (default: report.html in the output folder).
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 /// One start point: truth, estimate, errors.
@@ -124,6 +127,11 @@ pub fn run(args: DemoArgs) -> CliResult {
     let csv_path = args.out.join("demo.csv");
     std::fs::write(&csv_path, demo_csv(&points))
         .map_err(|e| format!("{}: {e}", csv_path.display()))?;
+    let report_path = args
+        .report
+        .clone()
+        .unwrap_or_else(|| args.out.join("report.html"));
+    crate::report::write(&[serde_json::to_value(&points)?], &report_path)?;
 
     if args.json {
         println!("{}", serde_json::to_string_pretty(&points)?);

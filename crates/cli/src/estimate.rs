@@ -181,6 +181,9 @@ pub struct LinearArgs {
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Also write the HTML report (ellipsoids, tables) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -276,14 +279,17 @@ pub fn run(method: Method) -> CliResult {
                 None => None,
                 Some(v) => Some(shoulder_impedance(v, &est)?),
             };
+            let mut v = serde_json::to_value(&result)?;
+            if let Some(a) = &arm {
+                v["arm_configuration"] = serde_json::to_value(a)?;
+            }
+            if let Some(s) = &shoulder {
+                v["shoulder"] = s.clone();
+            }
+            if let Some(path) = &args.report {
+                crate::report::write(&[v.clone()], path)?;
+            }
             if args.json {
-                let mut v = serde_json::to_value(&result)?;
-                if let Some(a) = &arm {
-                    v["arm_configuration"] = serde_json::to_value(a)?;
-                }
-                if let Some(s) = &shoulder {
-                    v["shoulder"] = s.clone();
-                }
                 println!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 print!("{}", table::linear_text(&result));

@@ -7,6 +7,7 @@ mod estimate;
 mod gravity;
 mod planar;
 mod protocol;
+mod report;
 mod stochastic;
 mod study;
 mod table;
@@ -46,6 +47,8 @@ enum Command {
     },
     /// Simulate a protocol on a virtual subject: a recording and its truth file.
     Simulate(protocol::SimulateArgs),
+    /// One self-contained HTML report (ellipsoids, tables, Bode and coherence plots) from JSON results.
+    Report(report::ReportArgs),
     /// Turn F/T sensor readings into the force on the limb: bias and weight removed in two steps (seed 004 eq. 4-9).
     GravityCompensate(gravity::GravityArgs),
     /// Welch PSD, coherence, multiple and partial coherence of outputs on inputs, as CSV.
@@ -75,6 +78,7 @@ fn main() -> ExitCode {
         Command::Protocol { command } => protocol::run(command),
         Command::Simulate(args) => protocol::run_simulate(args),
         Command::GravityCompensate(args) => gravity::run(args),
+        Command::Report(args) => report::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

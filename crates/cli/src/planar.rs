@@ -102,6 +102,9 @@ pub struct PlanarArgs {
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Also write the HTML report to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -123,6 +126,9 @@ pub struct SweepArgs {
     /// Print the table as CSV.
     #[arg(long)]
     pub csv: bool,
+    /// Also write the HTML report (criteria against the window) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 fn window_samples(data: &PlanarData, ms: Option<f64>) -> CliResult<usize> {
@@ -230,9 +236,12 @@ pub fn run_estimate(args: PlanarArgs) -> CliResult {
     let all: Vec<usize> = (0..data.trials.len()).collect();
     let est = fit_planar(&data, window, xi, &all)?;
     let loo = leave_one_out_vaf(&data, window, xi)?;
+    let mut v = serde_json::to_value(&est)?;
+    v["leave_one_out_vaf"] = serde_json::json!(loo);
+    if let Some(path) = &args.report {
+        crate::report::write(&[v.clone()], path)?;
+    }
     if args.json {
-        let mut v = serde_json::to_value(&est)?;
-        v["leave_one_out_vaf"] = serde_json::json!(loo);
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         print!("{}", text(&est, &data, loo));
@@ -243,6 +252,9 @@ pub fn run_estimate(args: PlanarArgs) -> CliResult {
 pub fn run_sweep(args: SweepArgs) -> CliResult {
     let (data, xi) = args.arm.load()?;
     let sweep = window_sweep(&data, args.from, args.to, args.step, xi)?;
+    if let Some(path) = &args.report {
+        crate::report::write(&[serde_json::to_value(&sweep)?], path)?;
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&sweep)?);
         return Ok(());

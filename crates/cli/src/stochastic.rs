@@ -67,6 +67,9 @@ pub struct StochasticArgs {
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Also write the HTML report (Bode plots, coherences) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -133,16 +136,24 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
                 matrix_of(&v, "damping", p)?,
                 matrix_of(&v, "stiffness", p)?,
             );
-            Some(accuracy(&est, &m, &b, &k, band))
+            let acc = accuracy(&est, &m, &b, &k, band);
+            Some((
+                acc.0,
+                acc.1,
+                acc.2,
+                serde_json::json!({"inertia": v["inertia"], "damping": v["damping"], "stiffness": v["stiffness"]}),
+            ))
         }
         None => None,
     };
+    let mut v = serde_json::to_value(&est)?;
+    if let Some((phi_t, phi, rel, model)) = &expected {
+        v["accuracy"] = serde_json::json!({"phi_t": phi_t, "phi_ij": phi, "mean_relative_error": rel, "expected": model});
+    }
+    if let Some(path) = &args.report {
+        crate::report::write(&[v.clone()], path)?;
+    }
     if args.json {
-        let mut v = serde_json::to_value(&est)?;
-        if let Some((phi_t, phi, rel)) = &expected {
-            v["accuracy"] =
-                serde_json::json!({"phi_t": phi_t, "phi_ij": phi, "mean_relative_error": rel});
-        }
         println!("{}", serde_json::to_string(&v)?);
         return Ok(());
     }
@@ -176,7 +187,7 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         "quality: multiple coherence mean {:.3}, min {:.3} in the band; input coherence max {:.3}; fit VAF {:.2} %; phi_T(Z vs fit) {}",
         c.mean_multiple_coherence, c.min_multiple_coherence, c.max_input_coherence, c.fit_vaf, num(c.phi_t_vs_fit)
     );
-    if let Some((phi_t, phi, rel)) = expected {
+    if let Some((phi_t, phi, rel, _)) = expected {
         let cells: Vec<String> = phi
             .iter()
             .map(|r| r.iter().map(|v| num(*v)).collect::<Vec<_>>().join(" "))

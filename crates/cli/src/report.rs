@@ -1,0 +1,70 @@
+//! `limpid report RESULT.json... -o report.html [--figures DIR]` and the
+//! `--report FILE` option of the other commands (limpid-report).
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use serde_json::Value;
+
+use crate::CliResult;
+
+#[derive(Args)]
+pub struct ReportArgs {
+    /// JSON results: `estimate ... --json`, `demo.json`, `window-sweep --json`.
+    #[arg(required = true)]
+    pub results: Vec<PathBuf>,
+    /// The HTML file to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write every figure as SVG into this folder (for papers).
+    #[arg(long, value_name = "DIR")]
+    pub figures: Option<PathBuf>,
+}
+
+/// Write the report of named results; returns the report for `--figures`.
+fn write_named(inputs: &[(String, Value)], path: &Path) -> CliResult<limpid_report::Report> {
+    let report = limpid_report::build(inputs)?;
+    std::fs::write(path, limpid_report::to_html(&report))
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(report)
+}
+
+/// `--report FILE` of the other commands: the results of this run.
+pub fn write(results: &[Value], path: &Path) -> CliResult {
+    let named: Vec<(String, Value)> = results
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (format!("result {}", i + 1), v.clone()))
+        .collect();
+    write_named(&named, path)?;
+    eprintln!("report: {}", path.display());
+    Ok(())
+}
+
+pub fn run(args: ReportArgs) -> CliResult {
+    let mut inputs = Vec::new();
+    for p in &args.results {
+        let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+        let v: Value = serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}: line {}, column {}: not JSON ({e})",
+                p.display(),
+                e.line(),
+                e.column()
+            )
+        })?;
+        inputs.push((p.display().to_string(), v));
+    }
+    let report = write_named(&inputs, &args.output)?;
+    println!("wrote {}", args.output.display());
+    if let Some(dir) = &args.figures {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let files = limpid_report::figure_files(&report);
+        for (name, svg) in &files {
+            let p = dir.join(name);
+            std::fs::write(&p, svg).map_err(|e| format!("{}: {e}", p.display()))?;
+        }
+        println!("wrote {} figures to {}", files.len(), dir.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,274 @@
+//! The HTML report (issue 7): figure data against committed snapshots, no
+//! external URL, and the pages of `limpid demo` and of a stochastic example
+//! opened in headless Chromium (Debian's `chromium`, installed by .ci/run).
+
+mod common;
+use common::*;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SA3: &str = "../../../shared/examples/stochastic/ex_sa3";
+
+fn example(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+/// A compact summary of every figure: id, and per trace its name, point count
+/// and values at three positions.
+fn figure_summary(report: &limpid_report::Report) -> Value {
+    let figures: Vec<Value> = report
+        .sections
+        .iter()
+        .flat_map(|s| s.figures.iter())
+        .map(|f| {
+            let traces: Vec<Value> = f
+                .chart
+                .series
+                .iter()
+                .map(|s| {
+                    let n = s.y.len();
+                    let pick = |i: usize| s.y.get(i).copied().filter(|v| v.is_finite());
+                    serde_json::json!({"name": s.name, "points": n, "y": [pick(0), pick(n / 2), pick(n.saturating_sub(1))]})
+                })
+                .collect();
+            serde_json::json!({"id": f.id, "traces": traces})
+        })
+        .collect();
+    serde_json::json!(figures)
+}
+
+/// Equal up to a relative 1e-3 in every number (thread scheduling may change
+/// the last bits of parallel sums).
+fn close(a: &Value, b: &Value, at: &str) {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            assert!(
+                (x - y).abs() <= 1e-3 * x.abs().max(y.abs()).max(1e-9),
+                "{at}: {x} vs {y}"
+            );
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            assert_eq!(x.len(), y.len(), "{at}: lengths");
+            for (i, (p, q)) in x.iter().zip(y).enumerate() {
+                close(p, q, &format!("{at}[{i}]"));
+            }
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            assert_eq!(
+                x.keys().collect::<Vec<_>>(),
+                y.keys().collect::<Vec<_>>(),
+                "{at}: keys"
+            );
+            for (k, p) in x {
+                close(p, &y[k], &format!("{at}.{k}"));
+            }
+        }
+        _ => assert_eq!(a, b, "{at}"),
+    }
+}
+
+fn check_snapshot(name: &str, got: &Value) {
+    let path = example(&format!("tests/snapshots/{name}.json"));
+    if std::env::var_os("LIMPID_UPDATE_SNAPSHOTS").is_some() {
+        std::fs::write(&path, serde_json::to_string_pretty(got).unwrap()).unwrap();
+    }
+    let want: Value = read_json(&path);
+    close(got, &want, name);
+}
+
+#[test]
+fn stochastic_report_figure_data_matches_its_snapshot() {
+    let est = json(&[
+        "estimate",
+        "stochastic",
+        example(&format!("{SA3}.csv")).to_str().unwrap(),
+        "--expected",
+        example(&format!("{SA3}.truth.json")).to_str().unwrap(),
+        "--json",
+    ]);
+    let report = limpid_report::build(&[("ex_sa3".into(), est)]).unwrap();
+    let summary = figure_summary(&report);
+    // 3 x 3 elements x (magnitude, phase), the multiple coherence, 6 partial coherences
+    assert_eq!(summary.as_array().unwrap().len(), 18 + 1 + 6);
+    for f in summary.as_array().unwrap().iter().take(18) {
+        assert_eq!(
+            f["traces"].as_array().unwrap().len(),
+            3,
+            "{}: estimate, fit, expected",
+            f["id"]
+        );
+    }
+    check_snapshot("report_ex_sa3", &summary);
+}
+
+#[test]
+fn report_command_writes_html_without_external_urls_and_svg_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let res = dir.path().join("sweep.json");
+    let sweep = limpid(&[
+        "window-sweep",
+        example("../../../shared/examples/planar/ex_joint_180.csv")
+            .to_str()
+            .unwrap(),
+        "--link-lengths",
+        "0.28,0.35",
+        "--json",
+    ]);
+    assert_eq!(sweep.code, 0, "{}", sweep.stderr);
+    std::fs::write(&res, &sweep.stdout).unwrap();
+    let html = dir.path().join("r.html");
+    let figs = dir.path().join("figs");
+    let out = limpid(&[
+        "report",
+        res.to_str().unwrap(),
+        "-o",
+        html.to_str().unwrap(),
+        "--figures",
+        figs.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let text = std::fs::read_to_string(&html).unwrap();
+    assert!(
+        !text.contains("src=") && !text.contains("href="),
+        "no src/href at all"
+    );
+    assert!(text.contains("shortest trustworthy windows"));
+    let svgs: Vec<_> = std::fs::read_dir(&figs).unwrap().collect();
+    assert_eq!(svgs.len(), 3, "condition number, eigenvalues, symmetry");
+    // something that is not a result: one line naming the file
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, "{\"hello\": 1}").unwrap();
+    let out = limpid(&[
+        "report",
+        bad.to_str().unwrap(),
+        "-o",
+        html.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("bad.json: not a limpid result"),
+        "{}",
+        out.stderr
+    );
+}
+
+/// Headless Chromium: the DOM after the page's scripts ran, the console, a screenshot.
+fn open_in_chromium(page: &Path, shot: &Path) -> (String, String) {
+    let chromium = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .into_iter()
+        .find(|p| Path::new(p).exists())
+        .expect(
+            "headless Chromium is needed for this test: apt-get install chromium (.ci/run does)",
+        );
+    let profile = tempfile::tempdir().unwrap();
+    let flags = [
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--enable-logging=stderr",
+        "--v=0",
+    ];
+    let url = format!("file://{}?all", page.display());
+    let run = |extra: &[String]| {
+        let out = Command::new(chromium)
+            .args(flags)
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .args(extra)
+            .arg(&url)
+            .output()
+            .expect("chromium runs");
+        (
+            String::from_utf8_lossy(&out.stdout).to_string(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let (dom, log) = run(&["--dump-dom".into()]);
+    run(&[
+        format!("--screenshot={}", shot.display()),
+        "--window-size=1300,1800".into(),
+    ]);
+    (dom, log)
+}
+
+fn no_console_errors(log: &str) {
+    for line in log.lines() {
+        assert!(
+            !(line.contains("CONSOLE")
+                || line.contains("Uncaught")
+                || line.contains("SyntaxError")),
+            "console: {line}"
+        );
+    }
+}
+
+fn screenshot_ok(shot: &Path) {
+    let png = std::fs::read(shot).expect("a screenshot was written");
+    assert!(
+        png.starts_with(b"\x89PNG") && png.len() > 10_000,
+        "screenshot {} bytes",
+        png.len()
+    );
+}
+
+#[test]
+fn demo_and_stochastic_reports_render_in_headless_chromium() {
+    let dir = tempfile::tempdir().unwrap();
+    // the demo's report
+    let out = limpid(&["demo", "--out", dir.path().to_str().unwrap()]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let page = dir.path().join("report.html");
+    let shot = dir.path().join("demo.png");
+    let (dom, log) = open_in_chromium(&page, &shot);
+    no_console_errors(&log);
+    for kind in ["stiffness", "damping", "inertia"] {
+        for p in 1..=6 {
+            let tag = format!("class=\"ellipsoid\" data-kind=\"{kind}\" data-point=\"S{p}\"");
+            assert_eq!(dom.matches(&tag).count(), 1, "{tag}");
+        }
+    }
+    assert_eq!(dom.matches("class=\"ellipsoid\"").count(), 18);
+    screenshot_ok(&shot);
+    std::fs::copy(&shot, std::env::temp_dir().join("limpid-report-demo.png")).unwrap();
+
+    // a stochastic example's report
+    let page = dir.path().join("st.html");
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        example(&format!("{SA3}.csv")).to_str().unwrap(),
+        "--expected",
+        example(&format!("{SA3}.truth.json")).to_str().unwrap(),
+        "--report",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let shot = dir.path().join("st.png");
+    let (dom, log) = open_in_chromium(&page, &shot);
+    no_console_errors(&log);
+    let magnitude = dom
+        .split("<figure id=\"bode-mag-")
+        .skip(1)
+        .collect::<Vec<_>>();
+    assert_eq!(magnitude.len(), 9, "one magnitude panel per element");
+    for panel in magnitude {
+        let panel = panel.split("</figure>").next().unwrap();
+        assert_eq!(
+            panel.matches("class=\"trace\"").count(),
+            3,
+            "estimate, fit, expected"
+        );
+    }
+    screenshot_ok(&shot);
+    std::fs::copy(
+        &shot,
+        std::env::temp_dir().join("limpid-report-stochastic.png"),
+    )
+    .unwrap();
+}

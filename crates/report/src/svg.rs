@@ -1,0 +1,289 @@
+//! Static line charts as SVG. Each trace is one `<path class="trace">` with
+//! its name in `data-name`, so that tests (and readers of the file) can find
+//! it; axes are linear or logarithmic with 1-2-5 or decade ticks.
+
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// How a trace is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Stroke {
+    Solid,
+    Dashed,
+    Dotted,
+}
+
+/// One trace.
+#[derive(Debug, Clone, Serialize)]
+pub struct Series {
+    pub name: String,
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+    pub stroke: Stroke,
+    pub color: String,
+}
+
+/// One chart: axes and traces.
+#[derive(Debug, Clone, Serialize)]
+pub struct Chart {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub x_log: bool,
+    pub y_log: bool,
+    /// Fixed y range; None: from the data.
+    pub y_range: Option<(f64, f64)>,
+    pub series: Vec<Series>,
+}
+
+/// Colours for up to 9 traces (colour-blind-safe Okabe-Ito, then greys).
+pub const PALETTE: [&str; 9] = [
+    "#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#999999",
+    "#F0E442",
+];
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// Tick positions for [lo, hi]: decades on a log axis, 1-2-5 steps otherwise.
+fn ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
+    if log {
+        let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        // three decades or fewer: 1-2-5 in each
+        let steps: &[f64] = if b - a <= 3 { &[1.0, 2.0, 5.0] } else { &[1.0] };
+        return (a..=b)
+            .flat_map(|e| steps.iter().map(move |m| m * 10f64.powi(e)))
+            .filter(|t| *t >= lo * 0.999 && *t <= hi * 1.001)
+            .collect();
+    }
+    let span = (hi - lo).abs().max(1e-300);
+    let raw = span / 5.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .find(|s| span / s <= 6.0)
+        .unwrap_or(10.0 * mag);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last).map(|k| k as f64 * step).collect()
+}
+
+fn tick_label(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        format!("{v:.0e}")
+    } else if a >= 1.0 && (v - v.round()).abs() < 1e-9 {
+        format!("{}", v.round())
+    } else {
+        let s = format!("{v:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+impl Chart {
+    fn finite_points<'a>(&'a self, s: &'a Series) -> impl Iterator<Item = (f64, f64)> + 'a {
+        s.x.iter()
+            .zip(&s.y)
+            .map(|(x, y)| (*x, *y))
+            .filter(move |(x, y)| {
+                x.is_finite()
+                    && y.is_finite()
+                    && (!self.x_log || *x > 0.0)
+                    && (!self.y_log || *y > 0.0)
+            })
+    }
+
+    fn range(&self, pick: impl Fn((f64, f64)) -> f64, log: bool) -> (f64, f64) {
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for s in &self.series {
+            for p in self.finite_points(s) {
+                lo = lo.min(pick(p));
+                hi = hi.max(pick(p));
+            }
+        }
+        if !lo.is_finite() {
+            return if log { (1.0, 10.0) } else { (0.0, 1.0) };
+        }
+        if log {
+            if hi / lo < 10.0 {
+                let mid = (hi * lo).sqrt();
+                return (mid / 3.2, mid * 3.2);
+            }
+            return (lo, hi);
+        }
+        if (hi - lo).abs() < 1e-12 * hi.abs().max(1.0) {
+            return (lo - 1.0, hi + 1.0);
+        }
+        let pad = 0.05 * (hi - lo);
+        (lo - pad, hi + pad)
+    }
+
+    /// The chart as a standalone `<svg>` element of `width` x `height` px.
+    pub fn to_svg(&self, width: f64, height: f64) -> String {
+        let (ml, mr, mt, mb) = (64.0, 12.0, 28.0, 44.0);
+        let (pw, ph) = (width - ml - mr, height - mt - mb);
+        let (x0, x1) = self.range(|p| p.0, self.x_log);
+        let (y0, y1) = self
+            .y_range
+            .unwrap_or_else(|| self.range(|p| p.1, self.y_log));
+        let map = |v: f64, lo: f64, hi: f64, log: bool| {
+            if log {
+                (v.log10() - lo.log10()) / (hi.log10() - lo.log10())
+            } else {
+                (v - lo) / (hi - lo)
+            }
+        };
+        let px = |x: f64| ml + pw * map(x, x0, x1, self.x_log);
+        let py = |y: f64| mt + ph * (1.0 - map(y, y0, y1, self.y_log));
+        let mut s = String::new();
+        let _ = write!(
+            s,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" class="chart" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="11">"#
+        );
+        let _ = write!(s, r#"<title>{}</title>"#, escape(&self.title));
+        let _ = write!(
+            s,
+            r##"<text x="{}" y="16" text-anchor="middle" font-size="12" font-weight="bold">{}</text>"##,
+            ml + pw / 2.0,
+            escape(&self.title)
+        );
+        let _ = write!(
+            s,
+            r##"<rect x="{ml}" y="{mt}" width="{pw}" height="{ph}" fill="none" stroke="#444"/>"##
+        );
+        for t in ticks(x0, x1, self.x_log) {
+            let x = px(t);
+            let _ = write!(
+                s,
+                r##"<line x1="{x:.1}" y1="{mt}" x2="{x:.1}" y2="{:.1}" stroke="#ddd"/><text x="{x:.1}" y="{:.1}" text-anchor="middle">{}</text>"##,
+                mt + ph,
+                mt + ph + 14.0,
+                tick_label(t)
+            );
+        }
+        for t in ticks(y0, y1, self.y_log) {
+            let y = py(t);
+            let _ = write!(
+                s,
+                r##"<line x1="{ml}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
+                ml + pw,
+                ml - 4.0,
+                y + 4.0,
+                tick_label(t)
+            );
+        }
+        let _ = write!(
+            s,
+            r##"<text x="{}" y="{}" text-anchor="middle">{}</text>"##,
+            ml + pw / 2.0,
+            height - 8.0,
+            escape(&self.x_label)
+        );
+        let _ = write!(
+            s,
+            r##"<text transform="translate(14 {}) rotate(-90)" text-anchor="middle">{}</text>"##,
+            mt + ph / 2.0,
+            escape(&self.y_label)
+        );
+        for (k, series) in self.series.iter().enumerate() {
+            let mut d = String::new();
+            let mut pen_down = false;
+            for (x, y) in self.finite_points(series) {
+                let (cx, cy) = (px(x), py(y.clamp(y0.min(y1), y0.max(y1))));
+                let _ = write!(d, "{}{cx:.1},{cy:.1}", if pen_down { " L" } else { "M" });
+                pen_down = true;
+            }
+            let dash = match series.stroke {
+                Stroke::Solid => "",
+                Stroke::Dashed => r#" stroke-dasharray="6 3""#,
+                Stroke::Dotted => r#" stroke-dasharray="1.5 2.5""#,
+            };
+            let _ = write!(
+                s,
+                r#"<path class="trace" data-name="{}" d="{d}" fill="none" stroke="{}" stroke-width="1.4"{dash}/>"#,
+                escape(&series.name),
+                series.color
+            );
+            // legend
+            let ly = mt + 12.0 + 13.0 * k as f64;
+            let _ = write!(
+                s,
+                r#"<line x1="{:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{}" stroke-width="1.6"{dash}/><text x="{:.1}" y="{:.1}">{}</text>"#,
+                ml + pw - 150.0,
+                ml + pw - 130.0,
+                series.color,
+                ml + pw - 126.0,
+                ly + 4.0,
+                escape(&series.name)
+            );
+        }
+        s.push_str("</svg>");
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round_numbers_inside_the_range() {
+        assert_eq!(
+            ticks(0.0, 1.0, false),
+            vec![0.0, 0.2, 0.4, 0.6000000000000001, 0.8, 1.0]
+        );
+        assert_eq!(ticks(0.3, 30.0, true), vec![0.5, 1.0, 2.0, 5.0, 10.0, 20.0]);
+        assert_eq!(
+            ticks(0.01, 1000.0, true),
+            vec![0.01, 0.1, 1.0, 10.0, 100.0, 1000.0]
+        );
+        assert_eq!(tick_label(1000.0), "1000");
+        assert_eq!(tick_label(0.25), "0.25");
+    }
+
+    #[test]
+    fn every_series_is_one_named_path_and_log_axes_drop_non_positive_points() {
+        let chart = Chart {
+            title: "a <b>".into(),
+            x_label: "f (Hz)".into(),
+            y_label: "|Z|".into(),
+            x_log: true,
+            y_log: true,
+            y_range: None,
+            series: vec![
+                Series {
+                    name: "one".into(),
+                    x: vec![0.0, 1.0, 10.0],
+                    y: vec![1.0, 2.0, 3.0],
+                    stroke: Stroke::Solid,
+                    color: PALETTE[0].into(),
+                },
+                Series {
+                    name: "two".into(),
+                    x: vec![1.0, 10.0],
+                    y: vec![f64::NAN, 5.0],
+                    stroke: Stroke::Dashed,
+                    color: PALETTE[1].into(),
+                },
+            ],
+        };
+        let svg = chart.to_svg(400.0, 300.0);
+        assert_eq!(svg.matches(r#"class="trace""#).count(), 2);
+        assert!(svg.contains("a &lt;b&gt;"));
+        // the x = 0 point of "one" and the NaN of "two" are left out
+        let one = svg.split(r#"data-name="one" d=""#).nth(1).unwrap();
+        assert_eq!(one.split('"').next().unwrap().matches('L').count(), 1);
+        let two = svg.split(r#"data-name="two" d=""#).nth(1).unwrap();
+        assert_eq!(two.split('"').next().unwrap().matches('L').count(), 0);
+    }
+}
