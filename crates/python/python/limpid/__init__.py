@@ -1,0 +1,235 @@
+"""limpid: limb impedance identification, for notebooks.
+
+A thin layer over the Rust library (``limpid._limpid``):
+
+- recordings: a path (CSV/Parquet, FORMAT.md), a dict of 1-D arrays, or a
+  pandas DataFrame;
+- spectra with scipy.signal's argument names and defaults (``psd``, ``csd``,
+  ``coherence``) returning ``(f, values)``;
+- the estimators (``estimate_linear``, ``estimate_planar``,
+  ``estimate_stochastic``, ``estimate_cocontraction``) returning
+  :class:`Result` objects whose ``to_dict()`` has the keys of the CLI's JSON;
+- the virtual lab (``protocol_preset``, ``protocol_check``, ``simulate``),
+  ``ellipsoid`` and ``report``.
+
+Bad input raises ``ValueError`` (files: ``OSError``) with the library's
+one-line message; long computations release the GIL.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _limpid
+
+__all__ = [
+    "Result",
+    "read_recording",
+    "psd",
+    "csd",
+    "coherence",
+    "lowpass_filtfilt",
+    "estimate_linear",
+    "estimate_planar",
+    "estimate_stochastic",
+    "estimate_cocontraction",
+    "ellipsoid",
+    "protocol_preset",
+    "protocol_check",
+    "simulate",
+    "report",
+]
+
+RecordingLike = Union[str, "os.PathLike[str]", Mapping[str, Any], Any]
+
+
+def _arrayish(v: Any) -> Any:
+    """Nested lists of numbers become numpy arrays; everything else stays."""
+    if isinstance(v, list) and v and all(isinstance(x, (int, float, list)) and not isinstance(x, bool) for x in v):
+        try:
+            a = np.asarray(v, dtype=float)
+            if a.dtype == float and a.ndim >= 1:
+                return a
+        except (ValueError, TypeError):
+            pass
+    return v
+
+
+class Result:
+    """An estimate: attribute access to its fields (numeric lists as numpy
+    arrays, nested objects as Results); ``to_dict()`` gives the plain dict
+    with the CLI's JSON keys."""
+
+    def __init__(self, data: Dict[str, Any]):
+        self._data = data
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            v = self._data[name]
+        except KeyError:
+            raise AttributeError(name) from None
+        if isinstance(v, dict):
+            return Result(v)
+        return _arrayish(v)
+
+    def __getitem__(self, name: str) -> Any:
+        return self.__getattr__(name)
+
+    def __dir__(self) -> List[str]:
+        return sorted(self._data.keys())
+
+    def keys(self) -> List[str]:
+        return list(self._data.keys())
+
+    def to_dict(self) -> Dict[str, Any]:
+        return self._data
+
+    def __repr__(self) -> str:
+        return f"limpid.Result({', '.join(self._data.keys())})"
+
+
+def _recording(rec: RecordingLike) -> Any:
+    """A path stays a path; a DataFrame or mapping becomes a dict of float arrays."""
+    if isinstance(rec, (str, bytes)) or hasattr(rec, "__fspath__"):
+        return rec
+    if hasattr(rec, "columns") and not isinstance(rec, Mapping):  # a pandas DataFrame
+        return {str(c): np.ascontiguousarray(rec[c].to_numpy(dtype=float)) for c in rec.columns}
+    if isinstance(rec, Mapping):
+        return {str(k): np.ascontiguousarray(np.asarray(v, dtype=float)) for k, v in rec.items()}
+    raise ValueError("a recording is a path, a dict of 1-D arrays or a pandas DataFrame")
+
+
+def read_recording(path: Union[str, "os.PathLike[str]"]) -> Dict[str, np.ndarray]:
+    """Read a CSV or Parquet recording (FORMAT.md) into a dict of arrays."""
+    return _limpid.read_recording(path)
+
+
+def _welch_args(n: int, nperseg: Optional[int], noverlap: Optional[int], nfft: Optional[int],
+                return_onesided: bool, axis: int, average: str) -> Tuple[int, Optional[int]]:
+    if nfft is not None and nfft != (nperseg or min(256, n)):
+        raise ValueError("nfft different from nperseg is not supported")
+    if not return_onesided:
+        raise ValueError("only one-sided spectra are supported")
+    if axis not in (-1, 0):
+        raise ValueError("1-D signals only")
+    if average != "mean":
+        raise ValueError("only average='mean' is supported")
+    seg = 256 if nperseg is None else int(nperseg)
+    seg = min(seg, n)  # scipy shortens the segment to the signal (with a warning)
+    return seg, noverlap
+
+
+def _vector(x: Any) -> np.ndarray:
+    a = np.ascontiguousarray(np.asarray(x, dtype=float))
+    if a.ndim != 1:
+        raise ValueError(f"expected a 1-D signal, found {a.ndim} dimensions")
+    return a
+
+
+def psd(x: Any, fs: float = 1.0, window: str = "hann", nperseg: Optional[int] = None,
+        noverlap: Optional[int] = None, nfft: Optional[int] = None, detrend: Union[str, bool] = "constant",
+        return_onesided: bool = True, scaling: str = "density", axis: int = -1,
+        average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
+    """Welch power spectral density, as ``scipy.signal.welch``."""
+    x = _vector(x)
+    seg, ov = _welch_args(len(x), nperseg, noverlap, nfft, return_onesided, axis, average)
+    return _limpid.psd(x, float(fs), window, seg, ov, str(detrend).lower(), scaling)
+
+
+def csd(x: Any, y: Any, fs: float = 1.0, window: str = "hann", nperseg: Optional[int] = None,
+        noverlap: Optional[int] = None, nfft: Optional[int] = None, detrend: Union[str, bool] = "constant",
+        return_onesided: bool = True, scaling: str = "density", axis: int = -1,
+        average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
+    """Welch cross spectral density, as ``scipy.signal.csd``."""
+    x, y = _vector(x), _vector(y)
+    if len(x) != len(y):
+        raise ValueError(f"x has {len(x)} samples, y has {len(y)}")
+    seg, ov = _welch_args(len(x), nperseg, noverlap, nfft, return_onesided, axis, average)
+    return _limpid.csd(x, y, float(fs), window, seg, ov, str(detrend).lower(), scaling)
+
+
+def coherence(x: Any, y: Any, fs: float = 1.0, window: str = "hann", nperseg: Optional[int] = None,
+              noverlap: Optional[int] = None, nfft: Optional[int] = None,
+              detrend: Union[str, bool] = "constant", axis: int = -1) -> Tuple[np.ndarray, np.ndarray]:
+    """Magnitude-squared coherence, as ``scipy.signal.coherence``."""
+    x, y = _vector(x), _vector(y)
+    if len(x) != len(y):
+        raise ValueError(f"x has {len(x)} samples, y has {len(y)}")
+    seg, ov = _welch_args(len(x), nperseg, noverlap, nfft, True, axis, "mean")
+    return _limpid.coherence(x, y, float(fs), window, seg, ov, str(detrend).lower())
+
+
+def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4) -> np.ndarray:
+    """Zero-phase Butterworth low-pass, as
+    ``scipy.signal.sosfiltfilt(scipy.signal.butter(order, cutoff_hz, fs=fs, output='sos'), x)``."""
+    return _limpid.lowpass_filtfilt(_vector(x), float(cutoff_hz), float(fs), int(order))
+
+
+def estimate_linear(recording: RecordingLike, *, cutoff_hz: Optional[float] = None,
+                    order: Optional[int] = None, window: str = "auto", offsets: str = "auto",
+                    derivative: str = "central", level: Optional[float] = None,
+                    negate_force: bool = False, equilibrium: bool = True) -> Result:
+    """Seed 000's linear estimator (M, B, K with standard errors, fit, criteria,
+    ellipsoids); the options of ``limpid estimate linear``."""
+    opts = {"cutoff_hz": cutoff_hz, "order": order, "window": window, "offsets": offsets,
+            "derivative": derivative, "level": level, "negate_force": negate_force,
+            "equilibrium": equilibrium}
+    return Result(json.loads(_limpid.estimate_linear(_recording(recording), json.dumps(opts))))
+
+
+def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], *,
+                    window_ms: Optional[float] = None,
+                    inertial_parameters: Optional[Sequence[float]] = None) -> Result:
+    """Seed 003's planar-arm estimator (joint K, D, inertial parameters, criteria)."""
+    l1, l2 = link_lengths
+    xi = tuple(inertial_parameters) if inertial_parameters is not None else None
+    return Result(json.loads(_limpid.estimate_planar(_recording(recording), (float(l1), float(l2)), window_ms, xi)))
+
+
+def estimate_stochastic(recording: RecordingLike, *, nperseg: Optional[int] = None,
+                        noverlap: Optional[int] = None,
+                        band_hz: Tuple[float, float] = (0.5, 10.0)) -> Result:
+    """Seed 004's stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric fit."""
+    return Result(json.loads(_limpid.estimate_stochastic(_recording(recording), nperseg, noverlap, tuple(band_hz))))
+
+
+def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, *, window: str = "auto",
+                           offsets: str = "auto") -> Result:
+    """Seed 001's co-contraction analysis: index and stiffness per level."""
+    opts = {"window": window, "offsets": offsets}
+    return Result(json.loads(_limpid.estimate_cocontraction(_recording(recording), _recording(mvc), json.dumps(opts))))
+
+
+def ellipsoid(matrix: Any) -> Result:
+    """Ellipsoid of the symmetric part of a 2 x 2 or 3 x 3 matrix (seed 000 eq. 13-17)."""
+    m = np.asarray(matrix, dtype=float)
+    return Result(json.loads(_limpid.ellipsoid(m.tolist())))
+
+
+def protocol_preset(name: str) -> str:
+    """A preset protocol as TOML: artemiadis-3d, patel-cocontraction, lakatos-planar, park-stochastic."""
+    return _limpid.protocol_preset(name)
+
+
+def protocol_check(toml_text: str) -> Result:
+    """Check a protocol (TOML text) against its limits; raises ValueError at the first breach."""
+    return Result(json.loads(_limpid.protocol_check(toml_text)))
+
+
+def simulate(protocol: str, seed: int = 1) -> List[Tuple[Dict[str, np.ndarray], Dict[str, Any]]]:
+    """Simulate a centre-out protocol (TOML text or preset name) on seed 000's
+    subject 1: per start point, the recording's columns and its truth."""
+    text = protocol if "\n" in protocol or "=" in protocol else protocol_preset(protocol)
+    return [(cols, json.loads(truth)) for cols, truth in _limpid.simulate(text, int(seed))]
+
+
+def report(results: Sequence[Union[Result, Mapping[str, Any], List[Any]]], path: Union[str, "os.PathLike[str]"]) -> None:
+    """Write one self-contained HTML report of results to ``path``."""
+    texts = [json.dumps(r.to_dict() if isinstance(r, Result) else r) for r in results]
+    _limpid.report(texts, path)
+
+
+import os  # noqa: E402  (used in annotations only)

@@ -1,0 +1,499 @@
+//! `limpid._limpid`: the Rust side of the Python package, thin over the
+//! library. Arrays come in as numpy arrays and go out as numpy arrays;
+//! results go out as JSON text with the keys of the CLI's `--json`, which the
+//! Python side turns into result objects. Errors raise `ValueError` (bad
+//! input, with the library's one-line message) or `OSError` (files). Long
+//! computations release the GIL.
+
+use std::path::Path;
+
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use limpid_core::{Error, Recording};
+use limpid_dsp::spectral::{Detrend, Scaling, Welch, Window};
+
+/// Frequencies and one spectrum, as numpy arrays.
+type Spectrum<'py, T> = PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<T>>)>;
+
+fn err(e: Error) -> PyErr {
+    match e {
+        Error::Io { .. } => PyOSError::new_err(e.to_string()),
+        other => PyValueError::new_err(other.to_string()),
+    }
+}
+
+fn value_err(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// A recording from a path (CSV or Parquet) or a dict of 1-D arrays.
+fn recording(source: &Bound<'_, PyAny>) -> PyResult<Recording> {
+    if let Ok(path) = source.extract::<std::path::PathBuf>() {
+        return limpid_io::read_recording(&path).map_err(err);
+    }
+    let dict = source.cast::<PyDict>().map_err(|_| {
+        PyValueError::new_err("a recording is a path or a dict of 1-D float arrays")
+    })?;
+    let mut names = Vec::with_capacity(dict.len());
+    let mut cols = Vec::with_capacity(dict.len());
+    for (k, v) in dict.iter() {
+        let name: String = k
+            .extract()
+            .map_err(|_| PyValueError::new_err("column names must be strings"))?;
+        let arr: PyReadonlyArray1<f64> = v.extract().map_err(|_| {
+            PyValueError::new_err(format!("column {name}: expected a 1-D float array"))
+        })?;
+        cols.push(arr.as_array().to_vec());
+        names.push(name);
+    }
+    Recording::new("<arrays>", names, cols, 1).map_err(err)
+}
+
+fn welch(
+    fs: f64,
+    window: &str,
+    nperseg: usize,
+    noverlap: Option<usize>,
+    detrend: &str,
+    scaling: &str,
+) -> PyResult<Welch> {
+    Ok(Welch {
+        fs,
+        nperseg,
+        noverlap,
+        window: match window {
+            "hann" | "hanning" => Window::Hann,
+            "hamming" => Window::Hamming,
+            "boxcar" | "rectangular" | "ones" => Window::Boxcar,
+            other => {
+                return Err(value_err(format!(
+                    "window {other:?}: limpid has hann, hamming, boxcar"
+                )))
+            }
+        },
+        detrend: match detrend {
+            "constant" => Detrend::Constant,
+            "linear" => Detrend::Linear,
+            "none" | "false" => Detrend::None,
+            other => {
+                return Err(value_err(format!(
+                    "detrend {other:?}: constant, linear or none"
+                )))
+            }
+        },
+        scaling: match scaling {
+            "density" => Scaling::Density,
+            "spectrum" => Scaling::Spectrum,
+            other => return Err(value_err(format!("scaling {other:?}: density or spectrum"))),
+        },
+    })
+}
+
+/// Welch power spectral density (scipy.signal.welch conventions).
+#[pyfunction]
+#[pyo3(signature = (x, fs, window, nperseg, noverlap, detrend, scaling))]
+#[allow(clippy::too_many_arguments)]
+fn psd<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'py, f64>,
+    fs: f64,
+    window: &str,
+    nperseg: usize,
+    noverlap: Option<usize>,
+    detrend: &str,
+    scaling: &str,
+) -> Spectrum<'py, f64> {
+    let p = welch(fs, window, nperseg, noverlap, detrend, scaling)?;
+    let x = x.as_array().to_vec();
+    let (f, v) = py
+        .detach(|| limpid_dsp::spectral::psd(&x, &p))
+        .map_err(err)?;
+    Ok((f.into_pyarray(py), v.into_pyarray(py)))
+}
+
+/// Welch cross spectral density (scipy.signal.csd conventions).
+#[pyfunction]
+#[pyo3(signature = (x, y, fs, window, nperseg, noverlap, detrend, scaling))]
+#[allow(clippy::too_many_arguments)]
+fn csd<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    fs: f64,
+    window: &str,
+    nperseg: usize,
+    noverlap: Option<usize>,
+    detrend: &str,
+    scaling: &str,
+) -> Spectrum<'py, num_complex::Complex64> {
+    let p = welch(fs, window, nperseg, noverlap, detrend, scaling)?;
+    let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
+    let (f, v) = py
+        .detach(|| limpid_dsp::spectral::csd(&x, &y, &p))
+        .map_err(err)?;
+    Ok((f.into_pyarray(py), v.into_pyarray(py)))
+}
+
+/// Magnitude-squared coherence (scipy.signal.coherence conventions).
+#[pyfunction]
+#[pyo3(signature = (x, y, fs, window, nperseg, noverlap, detrend))]
+#[allow(clippy::too_many_arguments)]
+fn coherence<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    fs: f64,
+    window: &str,
+    nperseg: usize,
+    noverlap: Option<usize>,
+    detrend: &str,
+) -> Spectrum<'py, f64> {
+    let p = welch(fs, window, nperseg, noverlap, detrend, "density")?;
+    let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
+    let (f, v) = py
+        .detach(|| limpid_dsp::spectral::coherence(&x, &y, &p))
+        .map_err(err)?;
+    Ok((f.into_pyarray(py), v.into_pyarray(py)))
+}
+
+/// Zero-phase Butterworth low-pass (scipy: sosfiltfilt(butter(order, cutoff, fs=fs, output='sos'), x)).
+#[pyfunction]
+#[pyo3(signature = (x, cutoff_hz, fs, order))]
+fn lowpass_filtfilt<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'py, f64>,
+    cutoff_hz: f64,
+    fs: f64,
+    order: usize,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let lp = limpid_dsp::LowPass::butterworth(order, cutoff_hz, fs).map_err(err)?;
+    let x = x.as_array().to_vec();
+    let y = py.detach(|| lp.filtfilt(&x)).map_err(err)?;
+    Ok(y.into_pyarray(py))
+}
+
+/// A recording file as a dict of numpy arrays (column order kept).
+#[pyfunction]
+fn read_recording<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let rec = py
+        .detach(|| limpid_io::read_recording(&path))
+        .map_err(err)?;
+    let d = PyDict::new(py);
+    for (name, col) in rec.columns() {
+        d.set_item(name, col.to_vec().into_pyarray(py))?;
+    }
+    Ok(d)
+}
+
+fn prepare_params(options: &str) -> PyResult<limpid_ident::PrepareParams> {
+    use limpid_ident::{Derivative, Offsets, PrepareParams, Windowing};
+    let o: serde_json::Value = serde_json::from_str(options).map_err(value_err)?;
+    let mut p = PrepareParams::default();
+    if let Some(c) = o["cutoff_hz"].as_f64() {
+        p.cutoff_hz = Some(c);
+    }
+    if let Some(n) = o["order"].as_u64() {
+        p.filter_order = n as usize;
+    }
+    if let Some(w) = o["window"].as_str() {
+        p.windowing = match w {
+            "auto" => Windowing::Auto,
+            "trials" => Windowing::Trials,
+            "onsets" => Windowing::Onsets,
+            "continuous" => Windowing::Continuous,
+            other => {
+                return Err(value_err(format!(
+                    "window {other:?}: auto, trials, onsets or continuous"
+                )))
+            }
+        };
+    }
+    if let Some(w) = o["offsets"].as_str() {
+        p.offsets = match w {
+            "auto" => Offsets::Auto,
+            "fit" => Offsets::Fit,
+            "rest" => Offsets::Rest,
+            other => return Err(value_err(format!("offsets {other:?}: auto, fit or rest"))),
+        };
+    }
+    if let Some(w) = o["derivative"].as_str() {
+        p.derivative = match w {
+            "central" => Derivative::Central,
+            "savgol" => Derivative::Savgol,
+            other => {
+                return Err(value_err(format!(
+                    "derivative {other:?}: central or savgol"
+                )))
+            }
+        };
+    }
+    if let Some(l) = o["level"].as_f64() {
+        p.level = Some(l);
+    }
+    p.negate_force = o["negate_force"].as_bool().unwrap_or(false);
+    Ok(p)
+}
+
+/// Seed 000's linear estimator; JSON text with the CLI's keys.
+#[pyfunction]
+#[pyo3(signature = (recording, options))]
+fn estimate_linear(
+    py: Python<'_>,
+    recording: &Bound<'_, PyAny>,
+    options: &str,
+) -> PyResult<String> {
+    let rec = self::recording(recording)?;
+    let params = prepare_params(options)?;
+    let o: serde_json::Value = serde_json::from_str(options).map_err(value_err)?;
+    let equilibrium = o["equilibrium"].as_bool().unwrap_or(true);
+    py.detach(move || {
+        let prepared = limpid_ident::prepare(&rec, &params)?;
+        let est = limpid_ident::fit_linear(
+            &prepared,
+            &limpid_ident::LinearParams {
+                equilibrium,
+                ..Default::default()
+            },
+        )?;
+        Ok(
+            serde_json::to_string(&limpid_analysis::report::linear_result(&est, &prepared))
+                .unwrap_or_default(),
+        )
+    })
+    .map_err(err)
+}
+
+/// Seed 003's planar-arm estimator; JSON text.
+#[pyfunction]
+#[pyo3(signature = (recording, link_lengths, window_ms=None, inertial_parameters=None))]
+fn estimate_planar(
+    py: Python<'_>,
+    recording: &Bound<'_, PyAny>,
+    link_lengths: (f64, f64),
+    window_ms: Option<f64>,
+    inertial_parameters: Option<(f64, f64, f64)>,
+) -> PyResult<String> {
+    use limpid_ident::planar::{fit_planar, leave_one_out_vaf, prepare_planar, Arm, PlanarPrepare};
+    let rec = self::recording(recording)?;
+    py.detach(move || -> limpid_core::Result<String> {
+        let data = prepare_planar(
+            &rec,
+            &PlanarPrepare {
+                arm: Arm {
+                    l1: link_lengths.0,
+                    l2: link_lengths.1,
+                    shoulder: [0.0, 0.0],
+                },
+                cutoff_hz: None,
+                order: 4,
+                elbow_positive: true,
+            },
+        )?;
+        let window = match window_ms {
+            None => usize::MAX,
+            Some(ms) if ms > 0.0 => (ms * 1e-3 * data.fs).round() as usize,
+            Some(ms) => {
+                return Err(Error::invalid(
+                    "observation window",
+                    format!("expected a positive duration in ms, found {ms}"),
+                ))
+            }
+        };
+        let xi = inertial_parameters.map(|(a, b, c)| [a, b, c]);
+        let all: Vec<usize> = (0..data.trials.len()).collect();
+        let est = fit_planar(&data, window, xi, &all)?;
+        let loo = leave_one_out_vaf(&data, window, xi)?;
+        let mut v = serde_json::to_value(&est).unwrap_or_default();
+        v["leave_one_out_vaf"] = serde_json::json!(loo);
+        Ok(v.to_string())
+    })
+    .map_err(err)
+}
+
+/// Seed 004's stochastic MIMO estimator; JSON text.
+#[pyfunction]
+#[pyo3(signature = (recording, nperseg=None, noverlap=None, band_hz=(0.5, 10.0)))]
+fn estimate_stochastic(
+    py: Python<'_>,
+    recording: &Bound<'_, PyAny>,
+    nperseg: Option<usize>,
+    noverlap: Option<usize>,
+    band_hz: (f64, f64),
+) -> PyResult<String> {
+    use limpid_ident::stochastic::{default_welch, estimate_stochastic, StochasticParams};
+    let rec = self::recording(recording)?;
+    py.detach(move || -> limpid_core::Result<String> {
+        let mut w = default_welch(rec.len(), rec.sample_rate());
+        if let Some(n) = nperseg {
+            w.nperseg = n;
+        }
+        w.noverlap = noverlap.or(w.noverlap);
+        let est = estimate_stochastic(
+            &rec,
+            &StochasticParams {
+                welch: Some(w),
+                band_hz,
+            },
+        )?;
+        Ok(serde_json::to_string(&est).unwrap_or_default())
+    })
+    .map_err(err)
+}
+
+/// Seed 001's co-contraction analysis; JSON text.
+#[pyfunction]
+#[pyo3(signature = (recording, mvc, options))]
+fn estimate_cocontraction(
+    py: Python<'_>,
+    recording: &Bound<'_, PyAny>,
+    mvc: &Bound<'_, PyAny>,
+    options: &str,
+) -> PyResult<String> {
+    let rec = self::recording(recording)?;
+    let mvc = self::recording(mvc)?;
+    let params = prepare_params(options)?;
+    py.detach(move || {
+        let r = limpid_analysis::cocontraction::estimate_cocontraction(
+            &rec,
+            &mvc,
+            &params,
+            &limpid_analysis::emg::EmgParams::default(),
+        )?;
+        Ok(serde_json::to_string(&r).unwrap_or_default())
+    })
+    .map_err(err)
+}
+
+/// The ellipsoid of the symmetric part of a 2 x 2 or 3 x 3 matrix; JSON text.
+#[pyfunction]
+fn ellipsoid(matrix: Vec<Vec<f64>>) -> PyResult<String> {
+    let e = limpid_analysis::ellipsoid(&matrix)
+        .ok_or_else(|| value_err("ellipsoids are for 2 x 2 and 3 x 3 matrices"))?;
+    serde_json::to_string(&e).map_err(value_err)
+}
+
+/// A preset protocol as TOML text.
+#[pyfunction]
+fn protocol_preset(name: &str) -> PyResult<String> {
+    Ok(limpid_lab::design::Design::preset(name)
+        .map_err(err)?
+        .to_toml())
+}
+
+/// Check a protocol (TOML text); JSON text of the report.
+#[pyfunction]
+fn protocol_check(toml_text: &str) -> PyResult<String> {
+    let d =
+        limpid_lab::design::Design::from_toml(toml_text, Path::new("<protocol>")).map_err(err)?;
+    let r = limpid_lab::design::check(&d).map_err(err)?;
+    serde_json::to_string(&r).map_err(value_err)
+}
+
+/// Simulate a centre-out protocol (TOML text) on seed 000's subject 1: one
+/// (columns, truth JSON) per start point.
+#[pyfunction]
+#[pyo3(signature = (toml_text, seed=1))]
+fn simulate<'py>(
+    py: Python<'py>,
+    toml_text: &str,
+    seed: u64,
+) -> PyResult<Vec<(Bound<'py, PyDict>, String)>> {
+    use limpid_lab::design::Design;
+    let d = Design::from_toml(toml_text, Path::new("<protocol>")).map_err(err)?;
+    limpid_lab::design::check(&d).map_err(err)?;
+    let Design::CentreOut(p) = d else {
+        return Err(value_err("the Python simulate runs centre-out protocols; use the limpid CLI for planar and stochastic ones"));
+    };
+    let recorded = |v: f64| {
+        if p.phases.record_hold_and_return {
+            v
+        } else {
+            0.0
+        }
+    };
+    let protocol = limpid_lab::CentreOut {
+        profile: p.phases.profile,
+        radius_m: p.targets.radius_m,
+        directions: p.directions(),
+        rest_s: p.phases.rest_s,
+        motion_s: p.phases.centre_out_s,
+        hold_s: recorded(p.phases.hold_s),
+        return_s: recorded(p.phases.return_s),
+        sample_rate: p.sample_rate_hz,
+    };
+    let table = limpid_lab::seed000_subject1();
+    let noise = limpid_lab::NoiseModel::default();
+    let mut out = Vec::new();
+    for (i, start) in p.start_points().iter().enumerate() {
+        let mut posture = table[i % table.len()].clone();
+        posture.start = *start;
+        let rec = py
+            .detach(|| {
+                limpid_lab::simulate_centre_out(
+                    &posture,
+                    &protocol,
+                    &noise,
+                    seed.wrapping_mul(1000) + i as u64,
+                )
+            })
+            .map_err(err)?;
+        let d = PyDict::new(py);
+        for (name, col) in rec.columns() {
+            d.set_item(name, col.to_vec().into_pyarray(py))?;
+        }
+        let rows = |m: &nalgebra::Matrix3<f64>| {
+            (0..3)
+                .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<f64>>())
+                .collect::<Vec<_>>()
+        };
+        let truth = serde_json::json!({
+            "method": "cartesian",
+            "inertia": rows(&posture.inertia),
+            "damping": rows(&posture.damping),
+            "stiffness": rows(&posture.stiffness),
+            "equilibrium": [start.x, start.y, start.z],
+        });
+        out.push((d, truth.to_string()));
+    }
+    Ok(out)
+}
+
+/// Write the HTML report of JSON results (texts) to `path`.
+#[pyfunction]
+fn report(results: Vec<String>, path: std::path::PathBuf) -> PyResult<()> {
+    let inputs: Vec<(String, serde_json::Value)> = results
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            Ok((
+                format!("result {}", i + 1),
+                serde_json::from_str(t).map_err(value_err)?,
+            ))
+        })
+        .collect::<PyResult<_>>()?;
+    let r = limpid_report::build(&inputs).map_err(value_err)?;
+    std::fs::write(&path, limpid_report::to_html(&r))
+        .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))
+}
+
+#[pymodule]
+fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(psd, m)?)?;
+    m.add_function(wrap_pyfunction!(csd, m)?)?;
+    m.add_function(wrap_pyfunction!(coherence, m)?)?;
+    m.add_function(wrap_pyfunction!(lowpass_filtfilt, m)?)?;
+    m.add_function(wrap_pyfunction!(read_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate_linear, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate_planar, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate_stochastic, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate_cocontraction, m)?)?;
+    m.add_function(wrap_pyfunction!(ellipsoid, m)?)?;
+    m.add_function(wrap_pyfunction!(protocol_preset, m)?)?;
+    m.add_function(wrap_pyfunction!(protocol_check, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(report, m)?)?;
+    Ok(())
+}

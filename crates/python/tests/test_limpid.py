@@ -1,0 +1,177 @@
+"""limpid's Python package against scipy.signal, numpy.linalg.lstsq and the
+truth files of ../shared/examples (issue 8)."""
+
+import json
+import os
+import pathlib
+
+import numpy as np
+import pytest
+import scipy.signal as ss
+
+import limpid
+
+SHARED = pathlib.Path(__file__).resolve().parents[4] / "shared" / "examples"
+RNG = np.random.default_rng(20261123)
+
+
+def rel(a, b):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return np.linalg.norm(a - b) / np.linalg.norm(b)
+
+
+@pytest.mark.parametrize("nperseg,noverlap,window,detrend,scaling", [
+    (None, None, "hann", "constant", "density"),
+    (512, 384, "hamming", "linear", "spectrum"),
+    (300, 0, "boxcar", False, "density"),
+])
+def test_psd_csd_coherence_match_scipy(nperseg, noverlap, window, detrend, scaling):
+    n = 10_000
+    x = RNG.standard_normal(n)
+    y = np.convolve(x, [0.5, 0.3, -0.2], mode="same") + 0.3 * RNG.standard_normal(n)
+    kw = dict(fs=250.0, window=window, nperseg=nperseg, noverlap=noverlap, detrend=detrend)
+    f, p = limpid.psd(x, scaling=scaling, **kw)
+    fs_, ps = ss.welch(x, scaling=scaling, **kw)
+    np.testing.assert_allclose(f, fs_, rtol=1e-12)
+    np.testing.assert_allclose(p, ps, rtol=1e-10)
+    f, c = limpid.csd(x, y, scaling=scaling, **kw)
+    _, cs = ss.csd(x, y, scaling=scaling, **kw)
+    np.testing.assert_allclose(c, cs, rtol=1e-10, atol=1e-12 * np.abs(cs).max())
+    f, h = limpid.coherence(x, y, **kw)
+    _, hs = ss.coherence(x, y, **kw)
+    np.testing.assert_allclose(h, hs, rtol=1e-10, atol=1e-12)
+
+
+def test_short_signal_uses_its_length_as_scipy_does():
+    x = RNG.standard_normal(100)
+    with pytest.warns(UserWarning):
+        _, ps = ss.welch(x)
+    _, p = limpid.psd(x)
+    np.testing.assert_allclose(p, ps, rtol=1e-10)
+
+
+@pytest.mark.parametrize("order,cutoff", [(2, 10.0), (4, 30.0), (6, 45.0)])
+def test_butterworth_filtfilt_matches_scipy(order, cutoff):
+    fs = 500.0
+    x = np.cumsum(RNG.standard_normal(3000)) + 5 * np.sin(np.arange(3000) / 30)
+    y = limpid.lowpass_filtfilt(x, cutoff, fs, order)
+    ys = ss.sosfiltfilt(ss.butter(order, cutoff, fs=fs, output="sos"), x)
+    np.testing.assert_allclose(y, ys, rtol=1e-10, atol=1e-10 * np.abs(ys).max())
+
+
+def test_linear_estimator_matches_lstsq_on_a_noiseless_system():
+    fs, n = 1000.0, 20_000
+    t = np.arange(n) / fs
+    M = np.array([[1.5, 0.2, 0.1], [0.2, 1.2, 0.05], [0.1, 0.05, 0.9]])
+    B = np.array([[20.0, 2.0, 1.0], [1.5, 15.0, 0.5], [1.0, 0.5, 25.0]])
+    K = np.array([[900.0, 40.0, 30.0], [35.0, 400.0, 20.0], [30.0, 25.0, 600.0]])
+    # independent phases and frequencies per axis (a common phase pattern would
+    # make the three axes span only two signals)
+    x = np.zeros((3, n)); v = np.zeros((3, n)); a = np.zeros((3, n))
+    for i in range(3):
+        for k in range(5):
+            f = (0.6 + 0.9 * k) * (1.0 + 0.13 * i)
+            w, ph, amp = 2 * np.pi * f, RNG.uniform(0, 2 * np.pi), 0.004 / (k + 1)
+            x[i] += amp * np.sin(w * t + ph)
+            v[i] += amp * w * np.cos(w * t + ph)
+            a[i] -= amp * w * w * np.sin(w * t + ph)
+    F = M @ a + B @ v + K @ x
+    rec = {"t": t, "x": x[0], "y": x[1], "z": x[2], "fx": F[0], "fy": F[1], "fz": F[2]}
+    est = limpid.estimate_linear(rec, window="continuous")
+    # numpy's least squares on the exact kinematics: F^T = [a v x 1]^T P
+    Y = np.vstack([a, v, x, np.ones(n)]).T
+    P, *_ = np.linalg.lstsq(Y, F.T, rcond=None)
+    M_ls, B_ls, K_ls = P[0:3].T, P[3:6].T, P[6:9].T
+    assert rel(K_ls, K) < 1e-9 and rel(B_ls, B) < 1e-9
+    assert rel(est.stiffness, K_ls) < 1e-3
+    assert rel(est.damping, B_ls) < 1e-3
+    assert rel(est.inertia, M_ls) < 1e-3
+    # the result carries its quality, with the CLI's JSON keys
+    d = est.to_dict()
+    for key in ["inertia", "damping", "stiffness", "standard_errors", "symmetric", "antisymmetric",
+                "ellipsoids", "table_ii", "fit", "criteria", "warnings", "provenance"]:
+        assert key in d, key
+    assert est.stiffness.shape == (3, 3)
+    assert min(est.fit.vaf) > 99.9
+
+
+def test_recovers_the_shared_example_truths():
+    case = SHARED / "cartesian_slow" / "ex_cubic"
+    truth = json.loads(case.with_suffix(".truth.json").read_text())
+    est = limpid.estimate_linear(str(case.with_suffix(".csv")))
+    assert rel(est.stiffness, truth["stiffness"]) < 0.03
+
+    case = SHARED / "planar" / "ex_joint_180"
+    truth = json.loads(case.with_suffix(".truth.json").read_text())
+    est = limpid.estimate_planar(case.with_suffix(".csv"), truth["link_lengths"])
+    assert rel(est.stiffness, truth["stiffness"]) < 0.03
+    assert est.criteria.trusted
+
+    case = SHARED / "stochastic" / "ex_sa3"
+    truth = json.loads(case.with_suffix(".truth.json").read_text())
+    # from a dict of arrays this time
+    est = limpid.estimate_stochastic(limpid.read_recording(case.with_suffix(".csv")))
+    assert rel(est.stiffness, truth["stiffness"]) < 0.05
+    assert est.impedance.shape[1:] == (3, 3, 2)
+
+    case = SHARED / "cocontraction" / "ex_config4"
+    truth = json.loads(case.with_suffix(".truth.json").read_text())
+    res = limpid.estimate_cocontraction(case.with_suffix(".csv"), str(case) + ".mvc.csv")
+    assert len(res.to_dict()["levels"]) == 4
+
+
+class FakeFrame:
+    """The two things limpid uses of a pandas DataFrame."""
+
+    def __init__(self, d):
+        self._d = d
+        self.columns = list(d)
+
+    def __getitem__(self, k):
+        class Col:
+            def __init__(self, v):
+                self.v = v
+
+            def to_numpy(self, dtype=float):
+                return np.asarray(self.v, dtype=dtype)
+        return Col(self._d[k])
+
+
+def test_dataframes_and_errors():
+    rec = limpid.read_recording(SHARED / "cartesian_slow" / "ex_cubic.csv")
+    a = limpid.estimate_linear(FakeFrame(rec))
+    b = limpid.estimate_linear(rec)
+    np.testing.assert_array_equal(a.stiffness, b.stiffness)
+    bad = dict(rec)
+    del bad["fx"]
+    with pytest.raises(ValueError, match="fx"):
+        limpid.estimate_linear(bad)
+    bad = dict(rec)
+    bad["fy"] = bad["fy"][:-1]
+    with pytest.raises(ValueError, match="samples"):
+        limpid.estimate_linear(bad)
+    with pytest.raises(OSError, match="nope.csv"):
+        limpid.read_recording("nope.csv")
+    with pytest.raises(ValueError, match="window"):
+        limpid.psd(np.ones(1000), window="kaiser")
+
+
+def test_virtual_lab_ellipsoid_and_report(tmp_path):
+    text = limpid.protocol_preset("artemiadis-3d")
+    assert "kind = \"centre-out\"" in text
+    r = limpid.protocol_check(text)
+    assert r.kind == "centre-out"
+    fast = text.replace("centre_out_s = 3.0", "centre_out_s = 0.2")
+    with pytest.raises(ValueError, match="acceleration"):
+        limpid.protocol_check(fast)
+    runs = limpid.simulate("artemiadis-3d", seed=3)
+    assert len(runs) == 6
+    cols, truth = runs[0]
+    est = limpid.estimate_linear(cols)
+    assert rel(est.stiffness, truth["stiffness"]) < 0.03
+    e = limpid.ellipsoid(np.diag([3.0, 2.0, 1.0]))
+    np.testing.assert_allclose(e.eigenvalues, [3.0, 2.0, 1.0])
+    out = tmp_path / "r.html"
+    limpid.report([est], out)
+    html = out.read_text()
+    assert "Ellipsoids at their start points" in html and "src=" not in html

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The tests: the Rust workspace, then the Python package built as a wheel and
+# tested in a fresh virtual environment (maturin, numpy, scipy, pytest from PyPI).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo test --workspace --release
+venv=target/venv-test
+python3 -m venv --clear "$venv"
+"$venv/bin/pip" install -q --disable-pip-version-check maturin numpy scipy pytest
+rm -rf target/wheels
+"$venv/bin/maturin" build --release -q -m crates/python/Cargo.toml -o target/wheels
+"$venv/bin/pip" install -q --disable-pip-version-check --no-deps target/wheels/limpid-*.whl
+"$venv/bin/python" -m pytest -q crates/python/tests
