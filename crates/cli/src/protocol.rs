@@ -8,7 +8,7 @@ use limpid_lab::planar::{simulate_planar, PlanarSubject, Reflex};
 use limpid_lab::protocol::Protocol;
 use limpid_lab::rig::{simulate_rig, RigExperiment, Springs};
 use limpid_lab::robot::Robot;
-use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Posture};
+use limpid_lab::{seed000_subject1, simulate_centre_out, NoiseModel, Posture};
 use nalgebra::{Matrix2, Matrix3};
 use serde::Deserialize;
 
@@ -254,7 +254,7 @@ fn predicted_condition(d: &Design) -> CliResult<Option<f64>> {
         Design::CentreOut(p) => {
             let mut posture = seed000_subject1().remove(0);
             posture.start = p.start_points()[0];
-            let rec = simulate_centre_out(&posture, &centre_out(p), &NoiseModel::none(), 1)?;
+            let rec = simulate_centre_out(&posture, &p.centre_out(), &NoiseModel::none(), 1)?;
             let prepared = limpid_ident::prepare(&rec, &limpid_ident::PrepareParams::default())?;
             let est = limpid_ident::fit_linear(&prepared, &limpid_ident::LinearParams::default())?;
             Ok(Some(est.condition_number))
@@ -284,26 +284,6 @@ fn planar_prepare(p: &PlanarDesign) -> limpid_ident::planar::PlanarPrepare {
         cutoff_hz: None,
         order: 4,
         elbow_positive: true,
-    }
-}
-
-fn centre_out(p: &Protocol) -> CentreOut {
-    let recorded = |v: f64| {
-        if p.phases.record_hold_and_return {
-            v
-        } else {
-            0.0
-        }
-    };
-    CentreOut {
-        profile: p.phases.profile,
-        radius_m: p.targets.radius_m,
-        directions: p.directions(),
-        rest_s: p.phases.rest_s,
-        motion_s: p.phases.centre_out_s,
-        hold_s: recorded(p.phases.hold_s),
-        return_s: recorded(p.phases.return_s),
-        sample_rate: p.sample_rate_hz,
     }
 }
 
@@ -469,9 +449,16 @@ fn export_stochastic(p: &StochasticDesign, output: &Path) -> CliResult {
     Ok(())
 }
 
-fn write_truth(path: &Path, truth: &serde_json::Value) -> CliResult {
-    std::fs::write(path, serde_json::to_string_pretty(truth)?)
+/// Write `<recording>.truth.json` beside a written recording and say so.
+fn write_truth(recording: &Path, samples: usize, truth: &serde_json::Value) -> CliResult {
+    let path = recording.with_extension("truth.json");
+    std::fs::write(&path, serde_json::to_string_pretty(truth)?)
         .map_err(|e| format!("{}: {e}", path.display()))?;
+    println!(
+        "wrote {} ({samples} samples) and {}",
+        recording.display(),
+        path.display()
+    );
     Ok(())
 }
 
@@ -522,14 +509,7 @@ fn simulate_planar_protocol(p: &PlanarDesign, args: &SimulateArgs) -> CliResult 
         "noise": {"torque_white_std_Nm": torque_std, "baseline_torque_Nm": subject.tau0, "joint_angle_std_rad": angle_std},
         "notes": ["tau = M(q) q'' + C(q,q') q' + D q' + K (q - q0) + tau0 + noise, seed 003 eq. (9)", "made by limpid simulate"],
     });
-    let truth_path = args.output.with_extension("truth.json");
-    write_truth(&truth_path, &truth)?;
-    println!(
-        "wrote {} ({} samples) and {}",
-        args.output.display(),
-        rec.len(),
-        truth_path.display()
-    );
+    write_truth(&args.output, rec.len(), &truth)?;
     Ok(())
 }
 
@@ -594,14 +574,7 @@ fn simulate_stochastic_protocol(p: &StochasticDesign, args: &SimulateArgs) -> Cl
         "noise": {"position_std_m": noise[0], "angle_std_rad": noise[1]},
         "notes": ["spring array of seed 004 eq. (10) on the impedance-controlled robot; force on the rig", "made by limpid simulate"],
     });
-    let truth_path = args.output.with_extension("truth.json");
-    write_truth(&truth_path, &truth)?;
-    println!(
-        "wrote {} ({} samples) and {}",
-        args.output.display(),
-        rec.len(),
-        truth_path.display()
-    );
+    write_truth(&args.output, rec.len(), &truth)?;
     Ok(())
 }
 
@@ -609,7 +582,7 @@ fn simulate_centre_out_protocol(p: &Protocol, args: &SimulateArgs) -> CliResult 
     let given: Option<SubjectFile> = args.subject.as_deref().map(read_toml).transpose()?;
     let table = seed000_subject1();
     let starts = p.start_points();
-    let protocol = centre_out(p);
+    let protocol = p.centre_out();
     let noise = given
         .as_ref()
         .and_then(|s| s.noise.clone())
@@ -653,14 +626,7 @@ fn simulate_centre_out_protocol(p: &Protocol, args: &SimulateArgs) -> CliResult 
             "protocol": {"trials": protocol.directions.len(), "rest_s": protocol.rest_s, "motion_s": protocol.motion_s, "radius_m": protocol.radius_m},
             "notes": ["f = M a + B v + K (x - S) + offset_trial + drift + white; force applied to the limb", "made by limpid simulate"],
         });
-        let truth_path = out.with_extension("truth.json");
-        write_truth(&truth_path, &truth)?;
-        println!(
-            "wrote {} ({} samples) and {}",
-            out.display(),
-            rec.len(),
-            truth_path.display()
-        );
+        write_truth(&out, rec.len(), &truth)?;
     }
     Ok(())
 }

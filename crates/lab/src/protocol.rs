@@ -200,6 +200,28 @@ impl Protocol {
     pub fn directions(&self) -> Vec<Vector3<f64>> {
         even_directions(self.targets.count)
     }
+
+    /// The recorded part of each trial, for [`crate::simulate_centre_out`]:
+    /// rest and centre-out, plus hold and return when they are recorded.
+    pub fn centre_out(&self) -> crate::CentreOut {
+        let recorded = |v: f64| {
+            if self.phases.record_hold_and_return {
+                v
+            } else {
+                0.0
+            }
+        };
+        crate::CentreOut {
+            profile: self.phases.profile,
+            radius_m: self.targets.radius_m,
+            directions: self.directions(),
+            rest_s: self.phases.rest_s,
+            motion_s: self.phases.centre_out_s,
+            hold_s: recorded(self.phases.hold_s),
+            return_s: recorded(self.phases.return_s),
+            sample_rate: self.sample_rate_hz,
+        }
+    }
 }
 
 /// What `check` found.

@@ -407,23 +407,7 @@ fn simulate<'py>(
     let Design::CentreOut(p) = d else {
         return Err(value_err("the Python simulate runs centre-out protocols; use the limpid CLI for planar and stochastic ones"));
     };
-    let recorded = |v: f64| {
-        if p.phases.record_hold_and_return {
-            v
-        } else {
-            0.0
-        }
-    };
-    let protocol = limpid_lab::CentreOut {
-        profile: p.phases.profile,
-        radius_m: p.targets.radius_m,
-        directions: p.directions(),
-        rest_s: p.phases.rest_s,
-        motion_s: p.phases.centre_out_s,
-        hold_s: recorded(p.phases.hold_s),
-        return_s: recorded(p.phases.return_s),
-        sample_rate: p.sample_rate_hz,
-    };
+    let protocol = p.centre_out();
     let table = limpid_lab::seed000_subject1();
     let noise = limpid_lab::NoiseModel::default();
     let mut out = Vec::new();
