@@ -5,6 +5,7 @@
 mod demo;
 mod estimate;
 mod gravity;
+mod live;
 mod planar;
 mod protocol;
 mod report;
@@ -47,6 +48,8 @@ enum Command {
     },
     /// Simulate a protocol on a virtual subject: a recording and its truth file.
     Simulate(protocol::SimulateArgs),
+    /// Live co-contraction feedback and online stiffness: a web page fed over UDP or by a replay (seed 001 Fig. 3).
+    Live(live::LiveArgs),
     /// One self-contained HTML report (ellipsoids, tables, Bode and coherence plots) from JSON results.
     Report(report::ReportArgs),
     /// Turn F/T sensor readings into the force on the limb: bias and weight removed in two steps (seed 004 eq. 4-9).
@@ -79,6 +82,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => protocol::run_simulate(args),
         Command::GravityCompensate(args) => gravity::run(args),
         Command::Report(args) => report::run(args),
+        Command::Live(args) => live::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

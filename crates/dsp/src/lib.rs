@@ -151,6 +151,47 @@ impl LowPass {
         let mut sos = self.sos.clone();
         sci_rs::signal::filter::sosfilt_dyn(x.iter(), &mut sos)
     }
+
+    /// The same causal filter, one sample at a time (live use): no allocation per sample.
+    pub fn streaming(&self) -> StreamingFilter {
+        StreamingFilter {
+            sections: self
+                .sos
+                .iter()
+                .map(|s| {
+                    let a0 = s.a[0];
+                    (
+                        [s.b[0] / a0, s.b[1] / a0, s.b[2] / a0],
+                        [s.a[1] / a0, s.a[2] / a0],
+                    )
+                })
+                .collect(),
+            state: vec![[0.0; 2]; self.sos.len()],
+        }
+    }
+}
+
+/// A causal cascade of second-order sections in transposed direct form II
+/// (as `scipy.signal.sosfilt`), starting from rest.
+#[derive(Debug, Clone)]
+pub struct StreamingFilter {
+    sections: Vec<([f64; 3], [f64; 2])>,
+    state: Vec<[f64; 2]>,
+}
+
+impl StreamingFilter {
+    /// Filter one sample.
+    #[inline]
+    pub fn step(&mut self, x: f64) -> f64 {
+        let mut y = x;
+        for ((b, a), z) in self.sections.iter().zip(self.state.iter_mut()) {
+            let out = b[0] * y + z[0];
+            z[0] = b[1] * y - a[0] * out + z[1];
+            z[1] = b[2] * y - a[1] * out;
+            y = out;
+        }
+        y
+    }
 }
 
 /// Savitzky-Golay filter (`scipy.signal.savgol_filter(x, window, polyorder, deriv, delta, mode='nearest')`).
@@ -238,6 +279,19 @@ pub fn central_second(x: &[f64], dt: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn streaming_filter_equals_the_causal_block_filter() {
+        let lp = LowPass::butterworth(4, 8.0, 1000.0).unwrap();
+        let x: Vec<f64> = (0..3000)
+            .map(|i| ((i as f64) * 0.37).sin().abs() + (i % 7) as f64 * 0.1)
+            .collect();
+        let block = lp.filter_causal(&x);
+        let mut s = lp.streaming();
+        for (xi, yi) in x.iter().zip(&block) {
+            assert!((s.step(*xi) - yi).abs() < 1e-12);
+        }
+    }
     use approx::assert_relative_eq;
 
     #[test]

@@ -1,0 +1,188 @@
+//! `limpid live` end to end (issue 9): a replayed co-contraction recording,
+//! the page in headless Chromium at each phase, and garbage on the UDP port.
+
+mod common;
+mod live_common;
+use common::*;
+use live_common::*;
+use std::net::UdpSocket;
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+const CASE: &str = "../../../shared/examples/cocontraction/ex_config4";
+
+fn example(suffix: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("{CASE}{suffix}"))
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+fn chromium_dom(url: &str, shot: Option<&Path>) -> (String, String) {
+    let profile = tempfile::tempdir().unwrap();
+    let mut cmd = Command::new("/usr/bin/chromium");
+    cmd.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--enable-logging=stderr",
+        "--v=0",
+        // long enough for the WebSocket's first messages, shorter than the page's 0.5 s stall alarm
+        "--virtual-time-budget=400",
+    ])
+    .arg(format!("--user-data-dir={}", profile.path().display()));
+    match shot {
+        Some(p) => cmd
+            .arg(format!("--screenshot={}", p.display()))
+            .arg("--window-size=900,700"),
+        None => cmd.arg("--dump-dom"),
+    };
+    let out = cmd
+        .arg(url)
+        .output()
+        .expect("headless Chromium (apt-get install chromium; .ci/run does)");
+    (
+        String::from_utf8_lossy(&out.stdout).to_string(),
+        String::from_utf8_lossy(&out.stderr).to_string(),
+    )
+}
+
+fn shown_level(dom: &str) -> f64 {
+    let after = dom
+        .split("id=\"level\">")
+        .nth(1)
+        .expect("the level element");
+    after.split('<').next().unwrap().parse().unwrap_or(f64::NAN)
+}
+
+#[test]
+fn replay_shows_each_phase_level_in_the_browser() {
+    let truth = read_json(Path::new(&example(".truth.json")));
+    let levels: Vec<(f64, f64)> = truth["levels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| {
+            (
+                l["level"].as_f64().unwrap(),
+                l["cocontraction_index"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    let speed = 2.0;
+    let live = start(&[
+        "--mvc",
+        &example(".mvc.csv"),
+        "--replay",
+        &example(".csv"),
+        "--speed",
+        "2",
+        "--target",
+        "0.5",
+    ]);
+    // the recording holds 4 phases of 13.5 s (levels 0, 0.5, 0.75, 1); look at
+    // each one's middle part, timed by the replay's own clock (the last sample time)
+    let phase_s = 13.5;
+    let started = Instant::now();
+    for (k, (level, expected)) in levels.iter().enumerate() {
+        let mut readings = Vec::new();
+        for q in [0.3, 0.45, 0.6] {
+            let due = (k as f64 + q) * phase_s;
+            while get_json(&live.http, "/state")["last_t"]
+                .as_f64()
+                .unwrap_or(0.0)
+                < due
+            {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            let (dom, log) = chromium_dom(&live.page, None);
+            for line in log.lines() {
+                assert!(
+                    !line.contains("CONSOLE") && !line.contains("Uncaught"),
+                    "console: {line}"
+                );
+            }
+            assert!(
+                dom.contains("streaming"),
+                "stream health shown: {}",
+                dom.split("id=\"health\"")
+                    .nth(1)
+                    .unwrap_or("")
+                    .chars()
+                    .take(80)
+                    .collect::<String>()
+            );
+            readings.push(shown_level(&dom));
+        }
+        readings.sort_by(f64::total_cmp);
+        let median = readings[1];
+        eprintln!("level {level}: page shows {readings:?}, truth index {expected:.3}");
+        assert!(
+            (median - expected).abs() < 0.05,
+            "level {level}: page {median}, truth {expected}"
+        );
+    }
+    let shot = std::env::temp_dir().join("limpid-live.png");
+    chromium_dom(&live.page, Some(&shot));
+    let png = std::fs::read(&shot).expect("screenshot");
+    assert!(png.starts_with(b"\x89PNG") && png.len() > 5_000);
+    // after the replay ends the stream stalls, and the page says so within 0.5 s
+    std::thread::sleep(Duration::from_secs_f64(
+        (4.0 * phase_s / speed - started.elapsed().as_secs_f64()).max(0.0) + 0.7,
+    ));
+    let s = get_json(&live.http, "/state");
+    assert_eq!(s["stalled"], true, "{s}");
+    assert_eq!(s["lost"], 0);
+    assert_eq!(s["received"], 54_000);
+}
+
+#[test]
+fn garbage_is_counted_and_dropped_and_the_stream_goes_on() {
+    let live = start(&["--channels", "emg_a,emg_b", "--rate", "1000"]);
+    let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let good = |seq: u64| {
+        limpid_live::wire::encode(&limpid_live::wire::Sample {
+            seq,
+            t: seq as f64 * 1e-3,
+            sent_unix_ns: 0,
+            emg: vec![1e-4, -2e-4],
+            kinematics: None,
+        })
+    };
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut garbage = 0;
+    for seq in 0..2000u64 {
+        sock.send_to(&good(seq), &live.udp).unwrap();
+        if seq % 10 == 0 {
+            // random bytes of random length, and truncated good datagrams
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let len = (state % 120) as usize;
+            let bytes: Vec<u8> = (0..len).map(|i| (state >> (i % 56)) as u8).collect();
+            sock.send_to(&bytes, &live.udp).unwrap();
+            let g = good(seq);
+            sock.send_to(&g[..g.len() - 1 - (seq as usize % 20)], &live.udp)
+                .unwrap();
+            garbage += 2;
+        }
+        if seq % 200 == 0 {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let s = get_json(&live.http, "/state");
+    assert_eq!(s["received"], 2000, "{s}");
+    assert_eq!(s["malformed"], garbage, "{s}");
+    assert_eq!(s["lost"], 0, "{s}");
+    assert_eq!(s["stalled"], false);
+    // no MVC was given: the index waits for a capture, which the page's buttons drive
+    assert!(s["index"].is_null());
+}

@@ -1,0 +1,378 @@
+//! The live server: a UDP receiver thread (blocking socket with a large
+//! receive buffer, one datagram per sample, processing inline), an optional
+//! replay thread that streams a recording to that socket at real time or
+//! faster, and an HTTP server (axum) with the page, `/state` (JSON),
+//! `/ws` (the same JSON pushed every 33 ms), and `POST /mvc/start|stop`.
+
+use std::net::{SocketAddr, UdpSocket};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::State as AxState;
+use axum::response::{Html, IntoResponse};
+use axum::routing::{get, post};
+use axum::{Json, Router};
+use serde::Serialize;
+
+use crate::process::Processor;
+use crate::wire::{decode, encode, Sample};
+use limpid_core::{Error, Recording, Result};
+
+/// How the session is set up.
+pub struct Config {
+    /// UDP address the samples arrive at.
+    pub udp: SocketAddr,
+    pub channels: Vec<String>,
+    pub sample_rate: f64,
+    /// MVC maxima per channel (None: capture live with the page's button).
+    pub maxima: Option<Vec<f64>>,
+    /// Target co-contraction level shown as a band (fraction of MVC).
+    pub target: Option<f64>,
+    pub tolerance: f64,
+    /// A recording to stream to the UDP address, and the speed-up.
+    pub replay: Option<(Recording, f64)>,
+}
+
+/// Latency histogram: 10 µs buckets up to 100 ms.
+struct Histogram {
+    buckets: Vec<u64>,
+    overflow: u64,
+    max_us: f64,
+    count: u64,
+}
+
+impl Histogram {
+    fn new() -> Self {
+        Histogram {
+            buckets: vec![0; 10_000],
+            overflow: 0,
+            max_us: 0.0,
+            count: 0,
+        }
+    }
+    fn add(&mut self, us: f64) {
+        let i = (us / 10.0) as usize;
+        match self.buckets.get_mut(i) {
+            Some(b) => *b += 1,
+            None => self.overflow += 1,
+        }
+        self.max_us = self.max_us.max(us);
+        self.count += 1;
+    }
+    fn quantile(&self, q: f64) -> Option<f64> {
+        if self.count == 0 {
+            return None;
+        }
+        let target = (q * self.count as f64).ceil() as u64;
+        let mut seen = 0;
+        for (i, b) in self.buckets.iter().enumerate() {
+            seen += b;
+            if seen >= target {
+                return Some((i + 1) as f64 * 10.0);
+            }
+        }
+        Some(self.max_us)
+    }
+}
+
+struct State {
+    processor: Processor,
+    received: u64,
+    malformed: u64,
+    lost: u64,
+    last_seq: Option<u64>,
+    last_arrival: Option<Instant>,
+    last_t: Option<f64>,
+    latency: Histogram,
+    rate_mark: (Instant, u64),
+    rate_hz: f64,
+}
+
+/// What the page and `/state` show.
+#[derive(Debug, Clone, Serialize)]
+pub struct Snapshot {
+    pub channels: Vec<String>,
+    /// Co-contraction index (fraction of MVC); absent until an MVC is known.
+    pub index: Option<f64>,
+    /// The index averaged over about 1 s, as the bar shows it.
+    pub index_display: Option<f64>,
+    pub activations: Vec<f64>,
+    pub target: Option<f64>,
+    pub tolerance: f64,
+    pub mvc: bool,
+    pub capturing: bool,
+    pub received: u64,
+    pub malformed: u64,
+    pub lost: u64,
+    pub rate_hz: f64,
+    /// No sample for more than 0.5 s (or none yet).
+    pub stalled: bool,
+    pub since_last_ms: Option<f64>,
+    /// Sample time of the last sample (s).
+    pub last_t: Option<f64>,
+    /// Datagram-to-index-update latency (µs), from the sender's clock stamp.
+    pub latency_p50_us: Option<f64>,
+    pub latency_p99_us: Option<f64>,
+    pub latency_max_us: Option<f64>,
+    /// Online stiffness (N/m) and its one-step VAF (%), once kinematics arrive.
+    pub stiffness: Option<[[f64; 3]; 3]>,
+    pub stiffness_vaf: Option<[f64; 3]>,
+}
+
+/// A running session.
+pub struct Session {
+    shared: Arc<Mutex<State>>,
+    stop: Arc<AtomicBool>,
+    channels: Vec<String>,
+    target: Option<f64>,
+    tolerance: f64,
+    pub udp: SocketAddr,
+}
+
+fn now_unix_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_nanos() as u64)
+        .unwrap_or(0)
+}
+
+impl Session {
+    /// Bind the UDP socket and start the receiver (and the replay, if any).
+    pub fn start(config: &Config) -> Result<Session> {
+        let processor = Processor::new(
+            config.channels.len(),
+            config.sample_rate,
+            config.maxima.clone(),
+        )?;
+        let shared = Arc::new(Mutex::new(State {
+            processor,
+            received: 0,
+            malformed: 0,
+            lost: 0,
+            last_seq: None,
+            last_arrival: None,
+            last_t: None,
+            latency: Histogram::new(),
+            rate_mark: (Instant::now(), 0),
+            rate_hz: 0.0,
+        }));
+        let io = |e: std::io::Error| Error::invalid("UDP", format!("{}: {e}", config.udp));
+        let socket = socket2::Socket::new(
+            socket2::Domain::for_address(config.udp),
+            socket2::Type::DGRAM,
+            Some(socket2::Protocol::UDP),
+        )
+        .map_err(io)?;
+        // room for bursts: 8 MB (the kernel may cap it at net.core.rmem_max)
+        let _ = socket.set_recv_buffer_size(8 << 20);
+        socket.bind(&config.udp.into()).map_err(io)?;
+        let socket: UdpSocket = socket.into();
+        socket
+            .set_read_timeout(Some(Duration::from_millis(100)))
+            .map_err(io)?;
+        let udp = socket.local_addr().map_err(io)?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let channels = config.channels.len();
+        {
+            let (shared, stop) = (shared.clone(), stop.clone());
+            std::thread::spawn(move || receive(socket, channels, &shared, &stop));
+        }
+        if let Some((rec, speed)) = &config.replay {
+            let (rec, speed, stop) = (rec.clone(), *speed, stop.clone());
+            let names = config.channels.clone();
+            std::thread::spawn(move || replay(&rec, &names, speed, udp, &stop));
+        }
+        Ok(Session {
+            shared,
+            stop,
+            channels: config.channels.clone(),
+            target: config.target,
+            tolerance: config.tolerance,
+            udp,
+        })
+    }
+
+    /// The current state.
+    pub fn snapshot(&self) -> Snapshot {
+        let mut s = self.shared.lock().expect("state lock");
+        let now = Instant::now();
+        let dt = now.duration_since(s.rate_mark.0).as_secs_f64();
+        if dt >= 0.5 {
+            s.rate_hz = (s.received - s.rate_mark.1) as f64 / dt;
+            s.rate_mark = (now, s.received);
+        }
+        let since = s
+            .last_arrival
+            .map(|a| now.duration_since(a).as_secs_f64() * 1e3);
+        let p = &s.processor;
+        Snapshot {
+            channels: self.channels.clone(),
+            index: p.index.is_finite().then_some(p.index),
+            index_display: p.index_display.is_finite().then_some(p.index_display),
+            activations: p.activations.clone(),
+            target: self.target,
+            tolerance: self.tolerance,
+            mvc: p.has_mvc(),
+            capturing: p.capturing(),
+            received: s.received,
+            malformed: s.malformed,
+            lost: s.lost,
+            rate_hz: if since.is_none_or(|ms| ms > 500.0) {
+                0.0
+            } else {
+                s.rate_hz
+            },
+            stalled: since.is_none_or(|ms| ms > 500.0),
+            since_last_ms: since,
+            last_t: s.last_t,
+            latency_p50_us: s.latency.quantile(0.5),
+            latency_p99_us: s.latency.quantile(0.99),
+            latency_max_us: (s.latency.count > 0).then_some(s.latency.max_us),
+            stiffness: (p.rls.updates > 0).then(|| p.rls.stiffness()),
+            stiffness_vaf: p.rls.vaf(),
+        }
+    }
+
+    fn mvc(&self, start: bool) -> Result<()> {
+        let mut s = self.shared.lock().expect("state lock");
+        if start {
+            s.processor.start_capture();
+            Ok(())
+        } else {
+            s.processor.stop_capture()
+        }
+    }
+
+    /// Serve the page on a bound listener until the process ends.
+    pub async fn serve(self: Arc<Self>, listener: tokio::net::TcpListener) -> Result<()> {
+        let app = Router::new()
+            .route("/", get(|| async { Html(PAGE) }))
+            .route(
+                "/state",
+                get(|AxState(s): AxState<Arc<Session>>| async move { Json(s.snapshot()) }),
+            )
+            .route("/ws", get(ws_handler))
+            .route(
+                "/mvc/start",
+                post(|AxState(s): AxState<Arc<Session>>| async move { mvc_reply(s.mvc(true)) }),
+            )
+            .route(
+                "/mvc/stop",
+                post(|AxState(s): AxState<Arc<Session>>| async move { mvc_reply(s.mvc(false)) }),
+            )
+            .with_state(self.clone());
+        axum::serve(listener, app)
+            .await
+            .map_err(|e| Error::invalid("server", e.to_string()))
+    }
+
+    /// Stop the receiver and the replay.
+    pub fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
+}
+
+fn mvc_reply(r: Result<()>) -> impl IntoResponse {
+    match r {
+        Ok(()) => (axum::http::StatusCode::OK, "ok".to_string()),
+        Err(e) => (axum::http::StatusCode::BAD_REQUEST, e.to_string()),
+    }
+}
+
+async fn ws_handler(ws: WebSocketUpgrade, AxState(s): AxState<Arc<Session>>) -> impl IntoResponse {
+    ws.on_upgrade(move |socket| push(socket, s))
+}
+
+async fn push(mut socket: WebSocket, s: Arc<Session>) {
+    let mut tick = tokio::time::interval(Duration::from_millis(33));
+    loop {
+        tick.tick().await;
+        let text = serde_json::to_string(&s.snapshot()).unwrap_or_default();
+        if socket.send(Message::Text(text.into())).await.is_err() {
+            return;
+        }
+    }
+}
+
+fn receive(socket: UdpSocket, channels: usize, shared: &Mutex<State>, stop: &AtomicBool) {
+    let mut buf = vec![0u8; 65_536];
+    while !stop.load(Ordering::Relaxed) {
+        let n = match socket.recv_from(&mut buf) {
+            Ok((n, _)) => n,
+            Err(_) => continue, // timeout: look at the stop flag
+        };
+        let arrival = Instant::now();
+        let decoded = decode(&buf[..n], channels);
+        let mut s = shared.lock().expect("state lock");
+        match decoded {
+            Err(_) => s.malformed += 1,
+            Ok(sample) => {
+                if let Some(last) = s.last_seq {
+                    if sample.seq > last + 1 {
+                        s.lost += sample.seq - last - 1;
+                    }
+                }
+                s.last_seq = Some(sample.seq);
+                s.processor.update(&sample.emg, sample.kinematics.as_ref());
+                s.received += 1;
+                s.last_arrival = Some(arrival);
+                s.last_t = Some(sample.t);
+                let now = now_unix_ns();
+                if sample.sent_unix_ns > 0 && now >= sample.sent_unix_ns {
+                    s.latency.add((now - sample.sent_unix_ns) as f64 / 1e3);
+                }
+            }
+        }
+    }
+}
+
+/// Stream a recording's EMG (and x, y, z, fx, fy, fz when present) to `udp` at `speed` x real time.
+fn replay(rec: &Recording, channels: &[String], speed: f64, udp: SocketAddr, stop: &AtomicBool) {
+    let Ok(socket) = UdpSocket::bind(if udp.is_ipv4() {
+        "127.0.0.1:0"
+    } else {
+        "[::1]:0"
+    }) else {
+        return;
+    };
+    let emg: Vec<&[f64]> = channels.iter().filter_map(|c| rec.column(c)).collect();
+    if emg.len() != channels.len() {
+        return;
+    }
+    let kin: Option<Vec<&[f64]>> = ["x", "y", "z", "fx", "fy", "fz"]
+        .iter()
+        .map(|c| rec.column(c))
+        .collect();
+    let t = rec.column("t").unwrap_or(&[]);
+    let start = Instant::now();
+    let t0 = t.first().copied().unwrap_or(0.0);
+    let mut values = vec![0.0; channels.len()];
+    for k in 0..rec.len() {
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        let due = Duration::from_secs_f64(((t[k] - t0) / speed).max(0.0));
+        let elapsed = start.elapsed();
+        if due > elapsed + Duration::from_micros(500) {
+            std::thread::sleep(due - elapsed);
+        }
+        for (v, c) in values.iter_mut().zip(&emg) {
+            *v = c[k];
+        }
+        let sample = Sample {
+            seq: k as u64,
+            t: t[k],
+            sent_unix_ns: now_unix_ns(),
+            emg: values.clone(),
+            kinematics: kin
+                .as_ref()
+                .map(|c| [c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k]]),
+        };
+        let _ = socket.send_to(&encode(&sample), udp);
+    }
+}
+
+/// The page: no external resource; reconnects by itself.
+pub const PAGE: &str = include_str!("page.html");
