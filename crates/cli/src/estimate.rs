@@ -208,6 +208,9 @@ pub struct CocontractionArgs {
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Also write the HTML report (per-level tables, ellipsoids side by side) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 impl PrepareArgs {
@@ -336,6 +339,9 @@ pub fn run(method: Method) -> CliResult {
                 ..EmgParams::default()
             };
             let result = estimate_cocontraction(&rec, &mvc, &params, &emg)?;
+            if let Some(path) = &args.report {
+                crate::report::write(&[serde_json::to_value(&result)?], path)?;
+            }
             if args.json {
                 println!("{}", serde_json::to_string_pretty(&result)?);
             } else {

@@ -272,3 +272,31 @@ fn demo_and_stochastic_reports_render_in_headless_chromium() {
     )
     .unwrap();
 }
+
+#[test]
+fn cocontraction_report_has_per_level_ellipsoids_and_tables() {
+    let case = "../../../shared/examples/cocontraction/ex_config4";
+    let est = json(&[
+        "estimate",
+        "cocontraction",
+        example(&format!("{case}.csv")).to_str().unwrap(),
+        "--mvc",
+        example(&format!("{case}.mvc.csv")).to_str().unwrap(),
+        "--json",
+    ]);
+    let report = limpid_report::build(&[("ex_config4".into(), est)]).unwrap();
+    let s = &report.sections[0];
+    // 4 levels side by side, stiffness, damping and inertia each
+    assert_eq!(s.ellipsoids.len(), 12);
+    let points: std::collections::BTreeSet<_> =
+        s.ellipsoids.iter().map(|e| e.point.clone()).collect();
+    assert_eq!(
+        points.into_iter().collect::<Vec<_>>(),
+        ["level 0", "level 0.5", "level 0.75", "level 1"]
+    );
+    // index table, comparisons, one K table per level
+    assert_eq!(s.tables.len(), 2 + 4);
+    assert_eq!(s.tables[0].rows.len(), 4);
+    assert_eq!(s.tables[1].rows.len(), 3);
+    assert!(s.verdict.contains("0.4248 at level 0.5"), "{}", s.verdict);
+}

@@ -82,11 +82,13 @@ pub fn build(inputs: &[(String, Value)]) -> Result<Report, String> {
             sweep_section(name, v)
         } else if v.get("inertial_parameters").is_some() && v.get("criteria").is_some() {
             planar_section(name, v)
+        } else if v.get("levels").is_some() && v.get("comparisons").is_some() {
+            cocontraction_section(name, v)
         } else if v.get("ellipsoids").is_some() && v.get("stiffness").is_some() {
             linear_section(name, v)
         } else {
             return Err(format!(
-                "{name}: not a limpid result this report knows (linear, demo, stochastic, planar, window-sweep JSON)"
+                "{name}: not a limpid result this report knows (linear, demo, stochastic, planar, co-contraction, window-sweep JSON)"
             ));
         };
         sections.push(section?);
@@ -556,6 +558,102 @@ fn stochastic_section(name: &str, v: &Value) -> Result<Section, String> {
         figures,
         ellipsoids: vec![],
     })
+}
+
+/// Seed 001: index and stiffness per co-contraction level, ellipsoids side by side (Fig. 5).
+fn cocontraction_section(name: &str, v: &Value) -> Result<Section, String> {
+    let levels = v["levels"].as_array().ok_or("levels")?;
+    let mut section = Section {
+        heading: format!("Co-contraction levels: {name}"),
+        verdict: String::new(),
+        warnings: strings(&v["warnings"]),
+        tables: vec![],
+        figures: vec![],
+        ellipsoids: vec![],
+    };
+    let mut index_table = Table {
+        caption: "Co-contraction index and stiffness per level (seed 001 Tables 1-5)".into(),
+        header: [
+            "level",
+            "index (mean ± sd)",
+            "within band",
+            "K eigenvalues (N/m)",
+            "verdict",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: vec![],
+    };
+    let mut summary = Vec::new();
+    for (k, l) in levels.iter().enumerate() {
+        let level = num(&l["level"]);
+        let id = format!("level {}", fmt(level));
+        let ev: Vec<String> = l["ellipsoid"]["eigenvalues"]
+            .as_array()
+            .map(|a| a.iter().map(|x| fmt(num(x))).collect())
+            .unwrap_or_default();
+        index_table.rows.push(vec![
+            fmt(level),
+            format!(
+                "{} ± {}",
+                fmt(num(&l["cocontraction_index"])),
+                fmt(num(&l["cocontraction_sd"]))
+            ),
+            format!("{} %", fmt(100.0 * num(&l["cocontraction_within_band"]))),
+            ev.join(" / "),
+            linear_verdict(&l["estimate"]),
+        ]);
+        summary.push(format!(
+            "{} at level {}",
+            fmt(num(&l["cocontraction_index"])),
+            fmt(level)
+        ));
+        // side by side along x, 0.15 m apart (seed 001 Fig. 5)
+        section.ellipsoids.extend(ellipsoids_of(
+            &id,
+            [0.15 * k as f64, 0.0, 0.0],
+            &l["estimate"],
+        ));
+        if let Some(kmat) = matrix(&l["stiffness"]) {
+            let se = matrix(&l["estimate"]["standard_errors"]["stiffness"]);
+            section.tables.push(matrix_table(
+                &format!("{id}: K (N/m) ± standard error"),
+                &coordinates(&l["estimate"], kmat.len()),
+                &kmat,
+                se.as_ref(),
+                None,
+            ));
+        }
+    }
+    let mut comparisons = Table {
+        caption: "Stiffness ellipsoid against the reference level: principal changes and rotations (direction-matched axes)".into(),
+        header: ["level", "reference", "principal change %", "axis rotation (deg)", "ambiguous axes"].map(String::from).to_vec(),
+        rows: vec![],
+    };
+    for c in v["comparisons"].as_array().into_iter().flatten() {
+        let list = |key: &str| {
+            c[key]
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .map(|x| x.as_f64().map(fmt).unwrap_or_else(|| x.to_string()))
+                        .collect::<Vec<_>>()
+                        .join(" / ")
+                })
+                .unwrap_or_default()
+        };
+        comparisons.rows.push(vec![
+            fmt(num(&c["level"])),
+            fmt(num(&c["reference_level"])),
+            list("principal_change_percent"),
+            list("rotation_deg"),
+            list("ambiguous"),
+        ]);
+    }
+    section.verdict = format!("co-contraction index {}", summary.join(", "));
+    section.tables.insert(0, index_table);
+    section.tables.insert(1, comparisons);
+    Ok(section)
 }
 
 fn planar_section(name: &str, v: &Value) -> Result<Section, String> {
