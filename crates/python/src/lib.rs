@@ -159,6 +159,73 @@ fn coherence<'py>(
     Ok((f.into_pyarray(py), v.into_pyarray(py)))
 }
 
+/// MIMO H1 frequency response of outputs on inputs with multiple and partial
+/// coherences (Bendat & Piersol; seed 004 §III-E). Returns
+/// flat arrays (f, H[f][output][input] complex, multiple[f][output], partial[f][output][input]);
+/// NaN where the input spectral matrix is singular.
+#[pyfunction]
+#[pyo3(signature = (inputs, outputs, fs, window, nperseg, noverlap, detrend))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn frequency_response<'py>(
+    py: Python<'py>,
+    inputs: Vec<PyReadonlyArray1<'py, f64>>,
+    outputs: Vec<PyReadonlyArray1<'py, f64>>,
+    fs: f64,
+    window: &str,
+    nperseg: usize,
+    noverlap: Option<usize>,
+    detrend: &str,
+) -> PyResult<(
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<num_complex::Complex64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+)> {
+    let p = welch(fs, window, nperseg, noverlap, detrend, "density")?;
+    let q = inputs.len();
+    if q == 0 || outputs.is_empty() {
+        return Err(value_err("at least one input and one output"));
+    }
+    let signals: Vec<Vec<f64>> = inputs
+        .iter()
+        .chain(&outputs)
+        .map(|a| a.as_array().to_vec())
+        .collect();
+    let nan = num_complex::Complex64::new(f64::NAN, f64::NAN);
+    let (f, h, multiple, partial) = py
+        .detach(|| -> limpid_core::Result<_> {
+            let refs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
+            let s = limpid_dsp::spectral::SegmentSpectra::new(&refs, &p)?;
+            // flat, row-major [f][output][input]; the Python side reshapes
+            let (mut h, mut multiple, mut partial) = (Vec::new(), Vec::new(), Vec::new());
+            let no = signals.len() - q;
+            for m in s.matrix() {
+                match limpid_dsp::spectral::mimo_point(&m, q) {
+                    Some(pt) => {
+                        for o in 0..no {
+                            h.extend((0..q).map(|i| pt.h[(o, i)]));
+                            partial.extend_from_slice(&pt.partial[o]);
+                        }
+                        multiple.extend_from_slice(&pt.multiple);
+                    }
+                    None => {
+                        h.extend(std::iter::repeat_n(nan, no * q));
+                        partial.extend(std::iter::repeat_n(f64::NAN, no * q));
+                        multiple.extend(std::iter::repeat_n(f64::NAN, no));
+                    }
+                }
+            }
+            Ok((s.frequencies.clone(), h, multiple, partial))
+        })
+        .map_err(err)?;
+    Ok((
+        f.into_pyarray(py),
+        h.into_pyarray(py),
+        multiple.into_pyarray(py),
+        partial.into_pyarray(py),
+    ))
+}
+
 /// Zero-phase Butterworth low-pass (scipy: sosfiltfilt(butter(order, cutoff, fs=fs, output='sos'), x)).
 #[pyfunction]
 #[pyo3(signature = (x, cutoff_hz, fs, order))]
@@ -469,6 +536,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(csd, m)?)?;
     m.add_function(wrap_pyfunction!(coherence, m)?)?;
     m.add_function(wrap_pyfunction!(lowpass_filtfilt, m)?)?;
+    m.add_function(wrap_pyfunction!(frequency_response, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_linear, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_planar, m)?)?;

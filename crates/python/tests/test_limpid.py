@@ -175,3 +175,24 @@ def test_virtual_lab_ellipsoid_and_report(tmp_path):
     limpid.report([est], out)
     html = out.read_text()
     assert "Ellipsoids at their start points" in html and "src=" not in html
+
+
+def test_frequency_response_of_a_noiseless_two_input_system():
+    # y1 = 2 u1 - u2 (static), y2 = u1 delayed by one sample: H known, multiple coherence 1
+    n = 20_000
+    u1, u2 = RNG.standard_normal(n), RNG.standard_normal(n)
+    y1 = 2 * u1 - u2
+    y2 = np.r_[0.0, u1[:-1]]
+    f, H, mult, part = limpid.frequency_response([u1, u2], [y1, y2], fs=100.0, nperseg=256)
+    assert H.shape == (len(f), 2, 2)
+    np.testing.assert_allclose(H[:, 0, 0], 2.0, atol=1e-9)
+    np.testing.assert_allclose(H[:, 0, 1], -1.0, atol=1e-9)
+    # a one-sample delay: exp(-j w / fs), up to the edge effects of one sample per segment
+    expected = np.exp(-2j * np.pi * f / 100.0)
+    assert np.abs(H[:, 1, 0] - expected).max() < 0.02
+    np.testing.assert_allclose(mult[:, 0], 1.0, atol=1e-9)
+    assert mult[:, 1].min() > 0.98
+    # with noise on y1 the multiple coherence drops as predicted: S/(S+N) = 5 / (5 + 1)
+    noisy = y1 + RNG.standard_normal(n)
+    _, _, mult, _ = limpid.frequency_response([u1, u2], [noisy], fs=100.0, nperseg=256)
+    assert abs(np.median(mult[:, 0]) - 5 / 6) < 0.03

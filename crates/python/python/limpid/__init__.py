@@ -32,6 +32,7 @@ __all__ = [
     "csd",
     "coherence",
     "lowpass_filtfilt",
+    "frequency_response",
     "estimate_linear",
     "estimate_planar",
     "estimate_stochastic",
@@ -160,6 +161,26 @@ def coherence(x: Any, y: Any, fs: float = 1.0, window: str = "hann", nperseg: Op
         raise ValueError(f"x has {len(x)} samples, y has {len(y)}")
     seg, ov = _welch_args(len(x), nperseg, noverlap, nfft, True, axis, "mean")
     return _limpid.coherence(x, y, float(fs), window, seg, ov, str(detrend).lower())
+
+
+def frequency_response(inputs: Sequence[Any], outputs: Sequence[Any], fs: float = 1.0,
+                       window: str = "hann", nperseg: Optional[int] = None,
+                       noverlap: Optional[int] = None, detrend: Union[str, bool] = "constant"
+                       ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """MIMO H1 frequency response of ``outputs`` on ``inputs`` (lists of 1-D signals)
+    with multiple and partial coherences (Welch settings as ``psd``).
+
+    Returns ``(f, H, multiple, partial)`` with ``H[f, output, input]`` complex,
+    ``multiple[f, output]`` and ``partial[f, output, input]``."""
+    ins = [_vector(x) for x in inputs]
+    outs = [_vector(y) for y in outputs]
+    n = len(ins[0]) if ins else 0
+    if any(len(s) != n for s in ins + outs):
+        raise ValueError("all signals must have the same length")
+    seg, ov = _welch_args(n, nperseg, noverlap, None, True, -1, "mean")
+    f, h, m, p = _limpid.frequency_response(ins, outs, float(fs), window, seg, ov, str(detrend).lower())
+    nf, no, ni = len(f), len(outs), len(ins)
+    return f, h.reshape(nf, no, ni), m.reshape(nf, no), p.reshape(nf, no, ni)
 
 
 def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4) -> np.ndarray:
