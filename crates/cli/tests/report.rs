@@ -300,3 +300,35 @@ fn cocontraction_report_has_per_level_ellipsoids_and_tables() {
     assert_eq!(s.tables[1].rows.len(), 3);
     assert!(s.verdict.contains("0.4248 at level 0.5"), "{}", s.verdict);
 }
+
+#[test]
+fn linear_report_draws_measured_against_predicted_force() {
+    let est = json(&[
+        "estimate",
+        "linear",
+        example("../../../shared/examples/cartesian_slow/ex_cubic.csv")
+            .to_str()
+            .unwrap(),
+        "--json",
+    ]);
+    let report = limpid_report::build(&[("ex_cubic".into(), est.clone())]).unwrap();
+    let figs = &report.sections[0].figures;
+    let ids: Vec<&str> = figs.iter().map(|f| f.id.as_str()).collect();
+    assert_eq!(ids, ["fit-x", "fit-y", "fit-z"]);
+    for (a, f) in figs.iter().enumerate() {
+        let (measured, predicted) = (&f.chart.series[0].y, &f.chart.series[1].y);
+        assert!(measured.len() <= 1500 && measured.len() > 100);
+        // the traces are the fit's own: their VAF is close to the reported one
+        let m = measured.iter().sum::<f64>() / measured.len() as f64;
+        let var_f: f64 = measured.iter().map(|v| (v - m).powi(2)).sum();
+        let e: Vec<f64> = measured.iter().zip(predicted).map(|(y, p)| y - p).collect();
+        let me = e.iter().sum::<f64>() / e.len() as f64;
+        let var_e: f64 = e.iter().map(|v| (v - me).powi(2)).sum();
+        let vaf = 100.0 * (1.0 - var_e / var_f);
+        let reported = est["fit"]["vaf"][a].as_f64().unwrap();
+        assert!(
+            (vaf - reported).abs() < 1.0,
+            "axis {a}: VAF of the traces {vaf}, reported {reported}"
+        );
+    }
+}

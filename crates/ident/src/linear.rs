@@ -62,7 +62,24 @@ pub struct FitQuality {
     pub vaf: Vec<f64>,
     /// Root-mean-square residual (N or N m).
     pub rmse: Vec<f64>,
+    /// Measured and predicted force over the first windows, for plots.
+    pub traces: FitTraces,
 }
+
+/// Measured against predicted force (after preparation: offsets removed,
+/// filtered) over the first windows, at most [`TRACE_POINTS`] points per
+/// coordinate (every k-th sample).
+#[derive(Debug, Clone, Serialize)]
+pub struct FitTraces {
+    /// Time (s) along the concatenated windows.
+    pub time: Vec<f64>,
+    /// `[coordinate][point]`.
+    pub measured: Vec<Vec<f64>>,
+    pub predicted: Vec<Vec<f64>>,
+}
+
+/// Points kept per coordinate in [`FitTraces`].
+pub const TRACE_POINTS: usize = 1500;
 
 /// Whether each matrix is identified from the data (every diagonal element >= ratio x SE).
 #[derive(Debug, Clone, Serialize)]
@@ -330,10 +347,26 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
 
     // second pass: predictions for r/VAF and residual autocorrelation
     let lags = data.correlation_lags().min(m / 4).max(1);
+    // the first (up to) three windows, decimated to TRACE_POINTS
+    let trace_len = data
+        .windows
+        .iter()
+        .take(3)
+        .map(|w| w.samples.end)
+        .last()
+        .unwrap_or(m)
+        .min(m);
+    let trace_step = trace_len.div_ceil(TRACE_POINTS).max(1);
+    let trace_idx: Vec<usize> = (0..trace_len).step_by(trace_step).collect();
     let mut fit = FitQuality {
         r: Vec::with_capacity(n),
         vaf: Vec::with_capacity(n),
         rmse: Vec::with_capacity(n),
+        traces: FitTraces {
+            time: trace_idx.iter().map(|&i| i as f64 / data.fs).collect(),
+            measured: Vec::with_capacity(n),
+            predicted: Vec::with_capacity(n),
+        },
     };
     let mut inflation = Vec::with_capacity(n);
     let mut predicted = vec![0.0; m];
@@ -356,6 +389,12 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         fit.r.push(r_coef);
         fit.vaf.push(vaf);
         fit.rmse.push(rmse);
+        fit.traces
+            .measured
+            .push(trace_idx.iter().map(|&i| f[i]).collect());
+        fit.traces
+            .predicted
+            .push(trace_idx.iter().map(|&i| predicted[i]).collect());
         for ((e, y), yh) in resid.iter_mut().zip(f).zip(&predicted) {
             *e = y - yh;
         }

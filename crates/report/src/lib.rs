@@ -284,6 +284,51 @@ fn linear_tables(v: &Value, truth: Option<&Value>) -> Vec<Table> {
     tables
 }
 
+/// Measured vs predicted force per coordinate, with r and VAF in the title.
+fn fit_figures(prefix: &str, v: &Value) -> Vec<Figure> {
+    let tr = &v["fit"]["traces"];
+    let Some(time) = tr["time"].as_array() else {
+        return vec![];
+    };
+    let t: Vec<f64> = time.iter().map(num).collect();
+    let n = tr["measured"].as_array().map_or(0, Vec::len);
+    let coords = coordinates(v, n);
+    (0..n)
+        .map(|a| {
+            let series = |key: &str, label: &str, stroke, color: &str| Series {
+                name: label.into(),
+                x: t.clone(),
+                y: tr[key][a]
+                    .as_array()
+                    .map(|s| s.iter().map(num).collect())
+                    .unwrap_or_default(),
+                stroke,
+                color: color.into(),
+            };
+            Figure {
+                id: format!("fit-{prefix}{}", coords[a]),
+                chart: Chart {
+                    title: format!(
+                        "{prefix}{}: measured vs predicted force (r {}, VAF {} %)",
+                        coords[a],
+                        fmt(num(&v["fit"]["r"][a])),
+                        fmt(num(&v["fit"]["vaf"][a]))
+                    ),
+                    x_label: "time along the first windows (s)".into(),
+                    y_label: "force (SI)".into(),
+                    x_log: false,
+                    y_log: false,
+                    y_range: None,
+                    series: vec![
+                        series("measured", "measured", Stroke::Solid, PALETTE[0]),
+                        series("predicted", "predicted", Stroke::Dashed, PALETTE[1]),
+                    ],
+                },
+            }
+        })
+        .collect()
+}
+
 fn linear_section(name: &str, v: &Value) -> Result<Section, String> {
     let centre = v["equilibrium"]
         .as_array()
@@ -295,7 +340,7 @@ fn linear_section(name: &str, v: &Value) -> Result<Section, String> {
         verdict: linear_verdict(v),
         warnings: strings(&v["warnings"]),
         tables: linear_tables(v, None),
-        figures: vec![],
+        figures: fit_figures("", v),
         ellipsoids: ellipsoids_of("estimate", centre, v),
     })
 }
@@ -338,6 +383,9 @@ fn demo_section(name: &str, v: &Value) -> Result<Section, String> {
             linear_verdict(est),
         ]);
         section.ellipsoids.extend(ellipsoids_of(&id, pos, est));
+        if section.figures.is_empty() {
+            section.figures = fit_figures(&format!("{id} "), est);
+        }
         let truth = serde_json::json!({
             "stiffness": p["true_stiffness"], "damping": p["true_damping"], "inertia": p["true_inertia"],
         });
