@@ -32,6 +32,9 @@ pub struct RunArgs {
     /// Print the Markdown tables to standard output too.
     #[arg(long)]
     pub print: bool,
+    /// Also write the HTML report (tables, stiffness and index against level) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -66,6 +69,9 @@ pub fn run(cmd: StudyCommand) -> CliResult {
             let result = run_study(&manifest, &PrepareParams::default(), &|| progress.inc(1));
             progress.finish_and_clear();
             let files = write_tables(&result, &args.out)?;
+            if let Some(path) = &args.report {
+                crate::report::write(&[serde_json::to_value(&result)?], path)?;
+            }
             let ok = result.recordings.len();
             println!(
                 "study {}: {ok} of {} recordings processed, {} configurations",

@@ -332,3 +332,35 @@ fn linear_report_draws_measured_against_predicted_force() {
         );
     }
 }
+
+#[test]
+fn study_run_writes_a_report_with_every_configuration() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("study");
+    assert_eq!(
+        limpid(&["study", "simulate", "--out", study.to_str().unwrap()]).code,
+        0
+    );
+    let html = dir.path().join("study.html");
+    let out = limpid(&[
+        "study",
+        "run",
+        study.join("study.toml").to_str().unwrap(),
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+        "--report",
+        html.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let text = std::fs::read_to_string(&html).unwrap();
+    // 7 configurations x 4 levels in the table, one k1 trace per configuration
+    let k1 = text
+        .split("<figure id=\"study-k1\">")
+        .nth(1)
+        .unwrap()
+        .split("</figure>")
+        .next()
+        .unwrap();
+    assert_eq!(k1.matches("class=\"trace\"").count(), 7);
+    assert!(text.contains("28 recordings analysed, 0 failed; 7 configurations"));
+}

@@ -350,11 +350,8 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
     // the first (up to) three windows, decimated to TRACE_POINTS
     let trace_len = data
         .windows
-        .iter()
-        .take(3)
-        .map(|w| w.samples.end)
-        .last()
-        .unwrap_or(m)
+        .get(data.windows.len().min(3).saturating_sub(1))
+        .map_or(m, |w| w.samples.end)
         .min(m);
     let trace_step = trace_len.div_ceil(TRACE_POINTS).max(1);
     let trace_idx: Vec<usize> = (0..trace_len).step_by(trace_step).collect();

@@ -82,13 +82,15 @@ pub fn build(inputs: &[(String, Value)]) -> Result<Report, String> {
             sweep_section(name, v)
         } else if v.get("inertial_parameters").is_some() && v.get("criteria").is_some() {
             planar_section(name, v)
+        } else if v.get("recordings").is_some() && v.get("rotation").is_some() {
+            study_section(name, v)
         } else if v.get("levels").is_some() && v.get("comparisons").is_some() {
             cocontraction_section(name, v)
         } else if v.get("ellipsoids").is_some() && v.get("stiffness").is_some() {
             linear_section(name, v)
         } else {
             return Err(format!(
-                "{name}: not a limpid result this report knows (linear, demo, stochastic, planar, co-contraction, window-sweep JSON)"
+                "{name}: not a limpid result this report knows (linear, demo, stochastic, planar, co-contraction, study, window-sweep JSON)"
             ));
         };
         sections.push(section?);
@@ -603,6 +605,119 @@ fn stochastic_section(name: &str, v: &Value) -> Result<Section, String> {
         verdict,
         warnings: strings(&v["warnings"]),
         tables,
+        figures,
+        ellipsoids: vec![],
+    })
+}
+
+/// A whole seed 001 study: means over subjects per configuration and level,
+/// ellipsoid rotation from level 0 to 1, and the stiffness against the index.
+fn study_section(name: &str, v: &Value) -> Result<Section, String> {
+    let rows = v["levels"].as_array().ok_or("levels")?;
+    let cols = [
+        "configuration",
+        "level",
+        "subjects",
+        "cocontraction_index",
+        "kxx",
+        "kyy",
+        "kzz",
+        "k_max_a",
+        "k1",
+        "k2",
+        "k3",
+    ];
+    let cell = |r: &Value, c: &str| match &r[c] {
+        Value::String(s) => s.clone(),
+        other => other.as_f64().map(fmt).unwrap_or_else(|| "n/a".into()),
+    };
+    let levels = Table {
+        caption: "Means over subjects per configuration and level (seed 001 Tables 1-5): index, diagonal stiffness, largest antisymmetric element, principal stiffnesses (N/m)".into(),
+        header: cols.map(String::from).to_vec(),
+        rows: rows.iter().map(|r| cols.iter().map(|c| cell(r, c)).collect()).collect(),
+    };
+    let rot_cols = ["configuration", "from_level", "to_level", "subjects"];
+    let list = |x: &Value| {
+        x.as_array()
+            .map(|a| {
+                a.iter()
+                    .map(|v| fmt(num(v)))
+                    .collect::<Vec<_>>()
+                    .join(" / ")
+            })
+            .unwrap_or_default()
+    };
+    let rotation = Table {
+        caption: "Stiffness ellipsoid from the lowest to the highest level: axis rotations and principal changes".into(),
+        header: ["configuration", "from", "to", "subjects", "rotation (deg)", "principal change %"].map(String::from).to_vec(),
+        rows: v["rotation"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(|r| {
+                let mut row: Vec<String> = rot_cols.iter().map(|c| cell(r, c)).collect();
+                row.push(list(&r["rotation_deg"]));
+                row.push(list(&r["principal_change_percent"]));
+                row
+            })
+            .collect(),
+    };
+    let mut configs: Vec<String> = rows.iter().map(|r| cell(r, "configuration")).collect();
+    configs.dedup();
+    let per_config = |key: &str| -> Vec<Series> {
+        configs
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let pts: Vec<&Value> = rows
+                    .iter()
+                    .filter(|r| cell(r, "configuration") == *c)
+                    .collect();
+                Series {
+                    name: format!("configuration {c}"),
+                    x: pts.iter().map(|r| num(&r["cocontraction_index"])).collect(),
+                    y: pts.iter().map(|r| num(&r[key])).collect(),
+                    stroke: Stroke::Solid,
+                    color: PALETTE[k % PALETTE.len()].into(),
+                }
+            })
+            .collect()
+    };
+    let figures = vec![Figure {
+        id: "study-k1".into(),
+        chart: Chart {
+            title: "Largest principal stiffness against the co-contraction index".into(),
+            x_label: "co-contraction index (fraction of MVC)".into(),
+            y_label: "k1 (N/m)".into(),
+            x_log: false,
+            y_log: false,
+            y_range: None,
+            series: per_config("k1"),
+        },
+    }];
+    let failures: Vec<String> = v["failures"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|f| {
+            format!(
+                "subject {}, configuration {}: {}",
+                cell(f, "subject"),
+                cell(f, "configuration"),
+                f["error"].as_str().unwrap_or("")
+            )
+        })
+        .collect();
+    Ok(Section {
+        heading: format!("Study {}: {name}", v["name"].as_str().unwrap_or("")),
+        verdict: format!(
+            "{} recordings analysed, {} failed; {} configurations",
+            v["recordings"].as_array().map_or(0, Vec::len),
+            failures.len(),
+            configs.len()
+        ),
+        warnings: failures,
+        tables: vec![levels, rotation],
         figures,
         ellipsoids: vec![],
     })
