@@ -7,7 +7,6 @@ use common::*;
 use live_common::*;
 use std::net::UdpSocket;
 use std::path::Path;
-use std::process::Command;
 use std::time::{Duration, Instant};
 
 const CASE: &str = "../../../shared/examples/cocontraction/ex_config4";
@@ -21,37 +20,16 @@ fn example(suffix: &str) -> String {
 }
 
 fn chromium_dom(url: &str, shot: Option<&Path>) -> (String, String) {
-    let profile = tempfile::tempdir().unwrap();
-    let mut cmd = Command::new("/usr/bin/chromium");
-    cmd.args([
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--enable-logging=stderr",
-        "--v=0",
-        // long enough for the WebSocket's first messages, shorter than the page's 0.5 s stall alarm
-        "--virtual-time-budget=400",
-    ])
-    .arg(format!("--user-data-dir={}", profile.path().display()));
+    // long enough for the WebSocket's first messages, shorter than the page's 0.5 s stall alarm
+    let mut extra = vec!["--virtual-time-budget=400".to_string()];
     match shot {
-        Some(p) => cmd
-            .arg(format!("--screenshot={}", p.display()))
-            .arg("--window-size=900,700"),
-        None => cmd.arg("--dump-dom"),
-    };
-    let out = cmd
-        .arg(url)
-        .output()
-        .expect("headless Chromium (apt-get install chromium; .ci/run does)");
-    (
-        String::from_utf8_lossy(&out.stdout).to_string(),
-        String::from_utf8_lossy(&out.stderr).to_string(),
-    )
+        Some(p) => extra.extend([
+            format!("--screenshot={}", p.display()),
+            "--window-size=900,700".into(),
+        ]),
+        None => extra.push("--dump-dom".into()),
+    }
+    chromium(url, &extra)
 }
 
 fn shown_level(dom: &str) -> f64 {

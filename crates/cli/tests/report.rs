@@ -6,7 +6,6 @@ mod common;
 use common::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 const SA3: &str = "../../../shared/examples/stochastic/ex_sa3";
 
@@ -156,44 +155,15 @@ fn report_command_writes_html_without_external_urls_and_svg_figures() {
 
 /// Headless Chromium: the DOM after the page's scripts ran, the console, a screenshot.
 fn open_in_chromium(page: &Path, shot: &Path) -> (String, String) {
-    let chromium = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
-        .into_iter()
-        .find(|p| Path::new(p).exists())
-        .expect(
-            "headless Chromium is needed for this test: apt-get install chromium (.ci/run does)",
-        );
-    let profile = tempfile::tempdir().unwrap();
-    let flags = [
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--enable-logging=stderr",
-        "--v=0",
-    ];
     let url = format!("file://{}?all", page.display());
-    let run = |extra: &[String]| {
-        let out = Command::new(chromium)
-            .args(flags)
-            .arg(format!("--user-data-dir={}", profile.path().display()))
-            .args(extra)
-            .arg(&url)
-            .output()
-            .expect("chromium runs");
-        (
-            String::from_utf8_lossy(&out.stdout).to_string(),
-            String::from_utf8_lossy(&out.stderr).to_string(),
-        )
-    };
-    let (dom, log) = run(&["--dump-dom".into()]);
-    run(&[
-        format!("--screenshot={}", shot.display()),
-        "--window-size=1300,1800".into(),
-    ]);
+    let (dom, log) = chromium(&url, &["--dump-dom".into()]);
+    chromium(
+        &url,
+        &[
+            format!("--screenshot={}", shot.display()),
+            "--window-size=1300,1800".into(),
+        ],
+    );
     (dom, log)
 }
 

@@ -65,3 +65,39 @@ pub fn rel_err(est: &[Vec<f64>], truth: &[Vec<f64>]) -> f64 {
     }
     (num / den).sqrt()
 }
+
+/// Headless Chromium (Debian's `chromium`, installed by .ci/run) with the
+/// flags this machine needs (no sandbox as root, no background networking on a
+/// closed network, console messages on stderr) and a fresh profile, kept alive
+/// by the returned directory; then `url` with `extra` flags. Returns stdout, stderr.
+pub fn chromium(url: &str, extra: &[String]) -> (String, String) {
+    let binary = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .into_iter()
+        .find(|p| std::path::Path::new(p).exists())
+        .expect(
+            "headless Chromium is needed for this test: apt-get install chromium (.ci/run does)",
+        );
+    let profile = tempfile::tempdir().unwrap();
+    let out = Command::new(binary)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--enable-logging=stderr",
+            "--v=0",
+        ])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .args(extra)
+        .arg(url)
+        .output()
+        .expect("chromium runs");
+    (
+        String::from_utf8_lossy(&out.stdout).to_string(),
+        String::from_utf8_lossy(&out.stderr).to_string(),
+    )
+}
