@@ -459,8 +459,10 @@ fn protocol_check(toml_text: &str) -> PyResult<String> {
     serde_json::to_string(&r).map_err(value_err)
 }
 
-/// Simulate a centre-out protocol (TOML text) on seed 000's subject 1: one
-/// (columns, truth JSON) per start point.
+/// Simulate a protocol (TOML text) on the built-in virtual subjects, as
+/// `limpid simulate` without `--subject`: centre-out on seed 000's subject 1
+/// (one recording per start point), planar on the seed 003 arm, stochastic on
+/// spring set SA3 held by an ideal robot. One (columns, truth JSON) per recording.
 #[pyfunction]
 #[pyo3(signature = (toml_text, seed=1))]
 fn simulate<'py>(
@@ -471,8 +473,68 @@ fn simulate<'py>(
     use limpid_lab::design::Design;
     let d = Design::from_toml(toml_text, Path::new("<protocol>")).map_err(err)?;
     limpid_lab::design::check(&d).map_err(err)?;
-    let Design::CentreOut(p) = d else {
-        return Err(value_err("the Python simulate runs centre-out protocols; use the limpid CLI for planar and stochastic ones"));
+    let columns = |rec: &Recording| -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, col) in rec.columns() {
+            d.set_item(name, col.to_vec().into_pyarray(py))?;
+        }
+        Ok(d)
+    };
+    let rows3 = |m: &nalgebra::Matrix3<f64>| {
+        (0..3)
+            .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<f64>>())
+            .collect::<Vec<_>>()
+    };
+    let p = match d {
+        Design::CentreOut(p) => p,
+        Design::Planar(p) => {
+            let subject = limpid_lab::planar::PlanarSubject {
+                q0: p.posture_rad,
+                ..limpid_lab::planar::PlanarSubject::seed003()
+            };
+            let rec = py
+                .detach(|| {
+                    limpid_lab::planar::simulate_planar(&subject, &p.simulation(), 0.02, 1e-5, seed)
+                })
+                .map_err(err)?;
+            let m2 = |m: &nalgebra::Matrix2<f64>| {
+                vec![vec![m[(0, 0)], m[(0, 1)]], vec![m[(1, 0)], m[(1, 1)]]]
+            };
+            let truth = serde_json::json!({
+                "method": "planar",
+                "inertial_parameters": subject.xi,
+                "stiffness": m2(&subject.stiffness),
+                "damping": m2(&subject.damping),
+                "link_lengths": p.link_lengths_m,
+                "q0": subject.q0,
+            });
+            return Ok(vec![(columns(&rec)?, truth.to_string())]);
+        }
+        Design::Stochastic(p) => {
+            if p.channels.len() != 3 {
+                return Err(value_err(
+                    "the virtual spring-array rig has three inputs (x, z, theta)",
+                ));
+            }
+            let mut e =
+                limpid_lab::rig::RigExperiment::spring_array(&limpid_lab::rig::SPRING_SET_SA3);
+            e.seconds = p.duration_s;
+            e.sample_rate = p.sample_rate_hz;
+            e.peak = [p.peak[0], p.peak[1], p.peak[2]];
+            e.cutoff_hz = p.cutoff_hz;
+            let rec = py
+                .detach(|| {
+                    limpid_lab::rig::simulate_rig(&e, [1e-6, 1e-5], seed.wrapping_add(p.seed))
+                })
+                .map_err(err)?;
+            let truth = serde_json::json!({
+                "method": "stochastic",
+                "inertia": rows3(&e.inertia),
+                "damping": rows3(&e.damping),
+                "stiffness": rows3(&e.stiffness),
+            });
+            return Ok(vec![(columns(&rec)?, truth.to_string())]);
+        }
     };
     let protocol = p.centre_out();
     let table = limpid_lab::seed000_subject1();
@@ -491,23 +553,14 @@ fn simulate<'py>(
                 )
             })
             .map_err(err)?;
-        let d = PyDict::new(py);
-        for (name, col) in rec.columns() {
-            d.set_item(name, col.to_vec().into_pyarray(py))?;
-        }
-        let rows = |m: &nalgebra::Matrix3<f64>| {
-            (0..3)
-                .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<f64>>())
-                .collect::<Vec<_>>()
-        };
         let truth = serde_json::json!({
             "method": "cartesian",
-            "inertia": rows(&posture.inertia),
-            "damping": rows(&posture.damping),
-            "stiffness": rows(&posture.stiffness),
+            "inertia": rows3(&posture.inertia),
+            "damping": rows3(&posture.damping),
+            "stiffness": rows3(&posture.stiffness),
             "equilibrium": [start.x, start.y, start.z],
         });
-        out.push((d, truth.to_string()));
+        out.push((columns(&rec)?, truth.to_string()));
     }
     Ok(out)
 }

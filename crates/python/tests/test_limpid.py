@@ -196,3 +196,12 @@ def test_frequency_response_of_a_noiseless_two_input_system():
     noisy = y1 + RNG.standard_normal(n)
     _, _, mult, _ = limpid.frequency_response([u1, u2], [noisy], fs=100.0, nperseg=256)
     assert abs(np.median(mult[:, 0]) - 5 / 6) < 0.03
+
+
+def test_planar_and_stochastic_simulations_estimate_back_to_their_truth():
+    (cols, truth), = limpid.simulate("lakatos-planar", seed=2)
+    est = limpid.estimate_planar(cols, (0.30, 0.33))
+    assert rel(est.stiffness, truth["stiffness"]) < 0.03
+    (cols, truth), = limpid.simulate("park-stochastic", seed=2)
+    est = limpid.estimate_stochastic(cols)
+    assert rel(est.stiffness, truth["stiffness"]) < 0.05

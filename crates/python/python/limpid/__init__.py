@@ -241,8 +241,10 @@ def protocol_check(toml_text: str) -> Result:
 
 
 def simulate(protocol: str, seed: int = 1) -> List[Tuple[Dict[str, np.ndarray], Dict[str, Any]]]:
-    """Simulate a centre-out protocol (TOML text or preset name) on seed 000's
-    subject 1: per start point, the recording's columns and its truth."""
+    """Simulate a protocol (TOML text or preset name) on the built-in virtual
+    subjects (centre-out: seed 000's subject 1, one recording per start point;
+    planar: the seed 003 arm; stochastic: spring set SA3 on an ideal robot):
+    a list of (columns, truth)."""
     text = protocol if "\n" in protocol or "=" in protocol else protocol_preset(protocol)
     return [(cols, json.loads(truth)) for cols, truth in _limpid.simulate(text, int(seed))]
 
