@@ -127,25 +127,9 @@ impl PrepareArgs {
                     .into())
                 }
             }
-            let joints: Vec<Vec<f64>> = (1..=robot.dof())
-                .map(|i| {
-                    rec.require(&format!("robot_q{i}"), "robot joint angles for --robot")
-                        .map(<[f64]>::to_vec)
-                })
-                .collect::<Result<_, _>>()?;
-            let mut xyz: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(rec.len())).collect();
-            let mut q = vec![0.0; robot.dof()];
-            for k in 0..rec.len() {
-                for (qi, c) in q.iter_mut().zip(&joints) {
-                    *qi = c[k];
-                }
-                let t = robot.fk(&q);
-                for (a, col) in xyz.iter_mut().enumerate() {
-                    col.push(t[(a, 3)]);
-                }
-            }
-            for (name, col) in ["x", "y", "z"].iter().zip(xyz) {
-                rec.set_column(name, col)?;
+            let poses = robot.poses(&rec, "robot joint angles for --robot")?;
+            for (a, name) in ["x", "y", "z"].iter().enumerate() {
+                rec.set_column(name, poses.iter().map(|t| t[(a, 3)]).collect())?;
             }
         }
         Ok(rec)

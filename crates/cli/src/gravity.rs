@@ -50,17 +50,10 @@ fn readings(rec: &Recording) -> CliResult<Vec<Vector3<f64>>> {
 fn rotations(rec: &Recording, robot: Option<&str>) -> CliResult<Vec<Matrix3<f64>>> {
     if let Some(name) = robot {
         let robot = limpid_lab::robot::Robot::by_name(name)?;
-        let joints: Vec<&[f64]> = (1..=robot.dof())
-            .map(|i| rec.require(&format!("robot_q{i}"), "robot joint angles for --robot"))
-            .collect::<Result<_, _>>()?;
-        let mut q = vec![0.0; robot.dof()];
-        return Ok((0..rec.len())
-            .map(|k| {
-                for (qi, c) in q.iter_mut().zip(&joints) {
-                    *qi = c[k];
-                }
-                robot.fk(&q).fixed_view::<3, 3>(0, 0).into()
-            })
+        return Ok(robot
+            .poses(rec, "robot joint angles for --robot")?
+            .iter()
+            .map(|t| t.fixed_view::<3, 3>(0, 0).into())
             .collect());
     }
     Ok(match rec.column("theta") {

@@ -4,9 +4,9 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
 use limpid_lab::design::{check, Design, DesignReport, PlanarDesign, StochasticDesign};
-use limpid_lab::planar::{simulate_planar, PlanarSubject, Reflex};
+use limpid_lab::planar::{simulate_planar, Reflex};
 use limpid_lab::protocol::Protocol;
-use limpid_lab::rig::{simulate_rig, RigExperiment, Springs};
+use limpid_lab::rig::{simulate_rig, Springs};
 use limpid_lab::robot::Robot;
 use limpid_lab::{seed000_subject1, simulate_centre_out, NoiseModel, Posture};
 use nalgebra::{Matrix2, Matrix3};
@@ -124,11 +124,12 @@ fn read_toml<T: for<'de> Deserialize<'de>>(path: &Path) -> CliResult<T> {
     })?)
 }
 
-fn read_design(path: &Path) -> CliResult<Design> {
+/// Read a protocol and check it against its limits; the report comes along.
+fn read_design(path: &Path) -> CliResult<(Design, DesignReport)> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let d = Design::from_toml(&text, path)?;
-    check(&d).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(d)
+    let report = check(&d).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok((d, report))
 }
 
 /// The robot of a centre-out protocol, placed as the protocol says.
@@ -160,7 +161,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             protocol,
             robot,
             output,
-        } => match (read_design(&protocol)?, robot) {
+        } => match (read_design(&protocol)?.0, robot) {
             (Design::CentreOut(p), Some(robot)) => export(&p, &robot, &output),
             (Design::CentreOut(_), None) => {
                 Err("a centre-out protocol is exported for a robot: add --robot kuka-lwr4|puma3|FILE.urdf".into())
@@ -169,8 +170,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             (Design::Stochastic(p), _) => export_stochastic(&p, &output),
         },
         ProtocolCommand::Check { protocol, json } => {
-            let d = read_design(&protocol)?;
-            let report = check(&d)?;
+            let (d, report) = read_design(&protocol)?;
             let predicted = predicted_condition(&d)?;
             if json {
                 let mut v = serde_json::to_value(&report)?;
@@ -260,10 +260,7 @@ fn predicted_condition(d: &Design) -> CliResult<Option<f64>> {
             Ok(Some(est.condition_number))
         }
         Design::Planar(p) => {
-            let subject = PlanarSubject {
-                q0: p.posture_rad,
-                ..PlanarSubject::seed003()
-            };
+            let subject = p.nominal_subject();
             let rec = simulate_planar(&subject, &p.simulation(), 0.0, 0.0, p.seed)?;
             let data = limpid_ident::planar::prepare_planar(&rec, &planar_prepare(p))?;
             let all: Vec<usize> = (0..data.trials.len()).collect();
@@ -466,7 +463,7 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
     if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
-    match read_design(&args.protocol)? {
+    match read_design(&args.protocol)?.0 {
         Design::CentreOut(p) => simulate_centre_out_protocol(&p, &args),
         Design::Planar(p) => simulate_planar_protocol(&p, &args),
         Design::Stochastic(p) => simulate_stochastic_protocol(&p, &args),
@@ -474,10 +471,7 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
 }
 
 fn simulate_planar_protocol(p: &PlanarDesign, args: &SimulateArgs) -> CliResult {
-    let mut subject = PlanarSubject {
-        q0: p.posture_rad,
-        ..PlanarSubject::seed003()
-    };
+    let mut subject = p.nominal_subject();
     if let Some(path) = &args.subject {
         let s: PlanarSubjectFile = read_toml(path)?;
         let m2 = |a: &[[f64; 2]; 2]| Matrix2::new(a[0][0], a[0][1], a[1][0], a[1][1]);
@@ -514,23 +508,13 @@ fn simulate_planar_protocol(p: &PlanarDesign, args: &SimulateArgs) -> CliResult 
 }
 
 fn simulate_stochastic_protocol(p: &StochasticDesign, args: &SimulateArgs) -> CliResult {
-    if p.channels.len() != 3 {
-        return Err(format!(
-            "{}: the virtual spring-array rig has three inputs (x, z, theta); the protocol has {}",
-            args.protocol.display(),
-            p.channels.len()
-        )
-        .into());
-    }
     let springs: Springs = match &args.subject {
         Some(path) => read_toml::<RigSubjectFile>(path)?.springs,
         None => limpid_lab::rig::SPRING_SET_SA3,
     };
-    let mut e = RigExperiment::spring_array(&springs);
-    e.seconds = p.duration_s;
-    e.sample_rate = p.sample_rate_hz;
-    e.peak = [p.peak[0], p.peak[1], p.peak[2]];
-    e.cutoff_hz = p.cutoff_hz;
+    let e = p
+        .rig_experiment(&springs)
+        .map_err(|e| format!("{}: {e}", args.protocol.display()))?;
     let noise = [1e-6, 1e-5];
     let seed = args.seed.wrapping_add(p.seed);
     let dynamics = limpid_lab::imbic::RobotDynamics::seed004();

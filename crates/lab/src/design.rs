@@ -15,9 +15,10 @@
 use rand::{rngs::StdRng, Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
-use crate::planar::PlanarProtocol;
+use crate::planar::{PlanarProtocol, PlanarSubject};
 use crate::profile::Profile;
 use crate::protocol::{self, conditioning_ratios, Protocol};
+use crate::rig::{RigExperiment, Springs};
 use limpid_core::{Error, Result};
 use limpid_dsp::spectral::{coherence, Welch};
 
@@ -182,6 +183,14 @@ impl PlanarDesign {
         Ok(())
     }
 
+    /// The built-in virtual subject (seed 003's arm) held at this protocol's posture.
+    pub fn nominal_subject(&self) -> PlanarSubject {
+        PlanarSubject {
+            q0: self.posture_rad,
+            ..PlanarSubject::seed003()
+        }
+    }
+
     /// The simulation protocol of [`crate::planar::simulate_planar`].
     pub fn simulation(&self) -> PlanarProtocol {
         PlanarProtocol {
@@ -281,6 +290,27 @@ impl StochasticDesign {
             ));
         }
         Ok(())
+    }
+
+    /// The spring array `springs` on the virtual rig, driven by this protocol's
+    /// inputs (duration, rate, peaks, cut-off); the rig has three inputs (x, z, θ).
+    pub fn rig_experiment(&self, springs: &Springs) -> Result<RigExperiment> {
+        let [px, pz, pt] = self.peak[..] else {
+            return Err(Error::invalid(
+                "protocol",
+                format!(
+                    "the virtual spring-array rig has three inputs (x, z, theta); the protocol has {}",
+                    self.channels.len()
+                ),
+            ));
+        };
+        Ok(RigExperiment {
+            seconds: self.duration_s,
+            sample_rate: self.sample_rate_hz,
+            peak: [px, pz, pt],
+            cutoff_hz: self.cutoff_hz,
+            ..RigExperiment::spring_array(springs)
+        })
     }
 
     /// The input signals, one per channel.

@@ -15,7 +15,7 @@ use nalgebra::{
 };
 use serde::{Deserialize, Serialize};
 
-use limpid_core::{Error, Result};
+use limpid_core::{Error, Recording, Result};
 
 /// Which DH convention a table uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -432,6 +432,24 @@ impl Robot {
             7 => vec![0.0, 0.6, 0.0, -1.4, 0.0, 0.8, 0.0],
             n => (0..n).map(|i| if i == 1 { -0.5 } else { 0.3 }).collect(),
         }
+    }
+
+    /// End-effector pose at every sample of a recording's `robot_q1..n`
+    /// columns (seed 000 computes the end point so); `why` goes into the
+    /// missing-column error.
+    pub fn poses(&self, rec: &Recording, why: &str) -> Result<Vec<Matrix4<f64>>> {
+        let joints: Vec<&[f64]> = (1..=self.dof())
+            .map(|i| rec.require(&format!("robot_q{i}"), why))
+            .collect::<Result<_>>()?;
+        let mut q = vec![0.0; self.dof()];
+        Ok((0..rec.len())
+            .map(|k| {
+                for (qi, c) in q.iter_mut().zip(&joints) {
+                    *qi = c[k];
+                }
+                self.fk(&q)
+            })
+            .collect())
     }
 
     /// Joint angles that put the end effector at `position` with `orientation`,

@@ -488,10 +488,7 @@ fn simulate<'py>(
     let p = match d {
         Design::CentreOut(p) => p,
         Design::Planar(p) => {
-            let subject = limpid_lab::planar::PlanarSubject {
-                q0: p.posture_rad,
-                ..limpid_lab::planar::PlanarSubject::seed003()
-            };
+            let subject = p.nominal_subject();
             let rec = py
                 .detach(|| {
                     limpid_lab::planar::simulate_planar(&subject, &p.simulation(), 0.02, 1e-5, seed)
@@ -511,17 +508,9 @@ fn simulate<'py>(
             return Ok(vec![(columns(&rec)?, truth.to_string())]);
         }
         Design::Stochastic(p) => {
-            if p.channels.len() != 3 {
-                return Err(value_err(
-                    "the virtual spring-array rig has three inputs (x, z, theta)",
-                ));
-            }
-            let mut e =
-                limpid_lab::rig::RigExperiment::spring_array(&limpid_lab::rig::SPRING_SET_SA3);
-            e.seconds = p.duration_s;
-            e.sample_rate = p.sample_rate_hz;
-            e.peak = [p.peak[0], p.peak[1], p.peak[2]];
-            e.cutoff_hz = p.cutoff_hz;
+            let e = p
+                .rig_experiment(&limpid_lab::rig::SPRING_SET_SA3)
+                .map_err(err)?;
             let rec = py
                 .detach(|| {
                     limpid_lab::rig::simulate_rig(&e, [1e-6, 1e-5], seed.wrapping_add(p.seed))

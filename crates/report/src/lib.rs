@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 use serde_json::Value;
-use svg::{Chart, Series, Stroke, PALETTE};
+use svg::{escape, Chart, Series, Stroke, PALETTE};
 
 /// A table: caption, header, rows of text cells.
 #[derive(Debug, Clone, Serialize)]
@@ -939,13 +939,6 @@ fn sweep_section(name: &str, v: &Value) -> Result<Section, String> {
         figures,
         ellipsoids: vec![],
     })
-}
-
-fn escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 /// The scale per kind: the largest |eigenvalue| of a kind is drawn with a

@@ -43,7 +43,8 @@ pub const PALETTE: [&str; 9] = [
     "#F0E442",
 ];
 
-fn escape(s: &str) -> String {
+/// Text for HTML/SVG content and attribute values.
+pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
