@@ -112,9 +112,13 @@ fn replay_shows_each_phase_level_in_the_browser() {
     let png = std::fs::read(&shot).expect("screenshot");
     assert!(png.starts_with(b"\x89PNG") && png.len() > 5_000);
     // after the replay ends the stream stalls, and the page says so within 0.5 s
-    std::thread::sleep(Duration::from_secs_f64(
-        (4.0 * phase_s / speed - started.elapsed().as_secs_f64()).max(0.0) + 0.7,
-    ));
+    // (wait for the last sample rather than for the clock: a busy machine may
+    // replay late)
+    let deadline = started + Duration::from_secs_f64(4.0 * phase_s / speed + 60.0);
+    while get_json(&live.http, "/state")["received"] != 54_000 && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(700));
     let s = get_json(&live.http, "/state");
     assert_eq!(s["stalled"], true, "{s}");
     assert_eq!(s["lost"], 0);
