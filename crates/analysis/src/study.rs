@@ -69,15 +69,8 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
         path: path.to_path_buf(),
         source,
     })?;
-    let mut m: Manifest = toml::from_str(&text).map_err(|e| Error::Format {
-        path: path.to_path_buf(),
-        message: e
-            .to_string()
-            .lines()
-            .next()
-            .unwrap_or("not a valid manifest")
-            .to_string(),
-    })?;
+    let mut m: Manifest =
+        toml::from_str(&text).map_err(|e| Error::settings(path, &text, e.span(), e.message()))?;
     if m.recording.is_empty() {
         return Err(Error::Format {
             path: path.to_path_buf(),

@@ -4,13 +4,12 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
 use limpid_lab::design::{check, Design, DesignReport, PlanarDesign, StochasticDesign};
-use limpid_lab::planar::{simulate_planar, Reflex};
+use limpid_lab::planar::simulate_planar;
 use limpid_lab::protocol::Protocol;
-use limpid_lab::rig::{simulate_rig, Springs};
 use limpid_lab::robot::Robot;
-use limpid_lab::{seed000_subject1, simulate_centre_out, NoiseModel, Posture};
-use nalgebra::{Matrix2, Matrix3};
-use serde::Deserialize;
+use limpid_lab::session::{simulate_design, RigController, SubjectText};
+use limpid_lab::{seed000_subject1, simulate_centre_out, NoiseModel};
+use nalgebra::Matrix3;
 
 use crate::table::num;
 use crate::CliResult;
@@ -75,53 +74,6 @@ pub enum ControllerArg {
     Ideal,
     Imbic,
     Pd,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SubjectFile {
-    inertia: [[f64; 3]; 3],
-    damping: [[f64; 3]; 3],
-    stiffness: [[f64; 3]; 3],
-    #[serde(default)]
-    noise: Option<NoiseModel>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct PlanarSubjectFile {
-    xi: [f64; 3],
-    stiffness: [[f64; 2]; 2],
-    damping: [[f64; 2]; 2],
-    #[serde(default)]
-    tau0: [f64; 2],
-    #[serde(default)]
-    reflex: Option<ReflexFile>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ReflexFile {
-    latency_s: f64,
-    stiffness_gain: f64,
-    damping_gain: f64,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RigSubjectFile {
-    springs: [f64; 8],
-}
-
-fn read_toml<T: for<'de> Deserialize<'de>>(path: &Path) -> CliResult<T> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(toml::from_str(&text).map_err(|e| {
-        format!(
-            "{}: {}",
-            path.display(),
-            e.to_string().lines().next().unwrap_or("")
-        )
-    })?)
 }
 
 /// Read a protocol and check it against its limits; the report comes along.
@@ -463,154 +415,37 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
     if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
-    match read_design(&args.protocol)?.0 {
-        Design::CentreOut(p) => simulate_centre_out_protocol(&p, &args),
-        Design::Planar(p) => simulate_planar_protocol(&p, &args),
-        Design::Stochastic(p) => simulate_stochastic_protocol(&p, &args),
-    }
-}
-
-fn simulate_planar_protocol(p: &PlanarDesign, args: &SimulateArgs) -> CliResult {
-    let mut subject = p.nominal_subject();
-    if let Some(path) = &args.subject {
-        let s: PlanarSubjectFile = read_toml(path)?;
-        let m2 = |a: &[[f64; 2]; 2]| Matrix2::new(a[0][0], a[0][1], a[1][0], a[1][1]);
-        subject.xi = s.xi;
-        subject.stiffness = m2(&s.stiffness);
-        subject.damping = m2(&s.damping);
-        subject.tau0 = s.tau0;
-        subject.reflex = s.reflex.map(|r| Reflex {
-            latency_s: r.latency_s,
-            stiffness_gain: r.stiffness_gain,
-            damping_gain: r.damping_gain,
-        });
-    }
-    let (torque_std, angle_std) = (0.02, 1e-5);
-    let rec = simulate_planar(&subject, &p.simulation(), torque_std, angle_std, args.seed)?;
-    limpid_io::write_recording(&rec, &args.output)?;
-    let rows = |m: &Matrix2<f64>| vec![vec![m[(0, 0)], m[(0, 1)]], vec![m[(1, 0)], m[(1, 1)]]];
-    let truth = serde_json::json!({
-        "method": "planar",
-        "variant": "joint",
-        "sample_rate": p.sample_rate_hz,
-        "inertial_parameters": subject.xi,
-        "stiffness": rows(&subject.stiffness),
-        "damping": rows(&subject.damping),
-        "link_lengths": p.link_lengths_m,
-        "q0": subject.q0,
-        "interpolation_interval_ms": p.interpolation_s * 1e3,
-        "reflex": subject.reflex.map(|r| serde_json::json!({"latency_s": r.latency_s, "stiffness_gain": r.stiffness_gain, "damping_gain": r.damping_gain})),
-        "noise": {"torque_white_std_Nm": torque_std, "baseline_torque_Nm": subject.tau0, "joint_angle_std_rad": angle_std},
-        "notes": ["tau = M(q) q'' + C(q,q') q' + D q' + K (q - q0) + tau0 + noise, seed 003 eq. (9)", "made by limpid simulate"],
-    });
-    write_truth(&args.output, rec.len(), &truth)?;
-    Ok(())
-}
-
-fn simulate_stochastic_protocol(p: &StochasticDesign, args: &SimulateArgs) -> CliResult {
-    let springs: Springs = match &args.subject {
-        Some(path) => read_toml::<RigSubjectFile>(path)?.springs,
-        None => limpid_lab::rig::SPRING_SET_SA3,
-    };
-    let e = p
-        .rig_experiment(&springs)
-        .map_err(|e| format!("{}: {e}", args.protocol.display()))?;
-    let noise = [1e-6, 1e-5];
-    let seed = args.seed.wrapping_add(p.seed);
-    let dynamics = limpid_lab::imbic::RobotDynamics::seed004();
-    let rec = match args.controller {
-        ControllerArg::Ideal => simulate_rig(&e, noise, seed)?,
-        ControllerArg::Imbic => limpid_lab::imbic::simulate_robot_rig(
-            &e,
-            &dynamics,
-            &limpid_lab::imbic::Controller::imbic_seed004(),
-            noise,
-            seed,
-        )?,
-        ControllerArg::Pd => limpid_lab::imbic::simulate_robot_rig(
-            &e,
-            &dynamics,
-            &limpid_lab::imbic::Controller::pd_seed004(),
-            noise,
-            seed,
-        )?,
-    };
-    limpid_io::write_recording(&rec, &args.output)?;
-    let rows = |m: &Matrix3<f64>| {
-        (0..3)
-            .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<f64>>())
-            .collect::<Vec<_>>()
-    };
-    let truth = serde_json::json!({
-        "method": "stochastic",
-        "sample_rate": p.sample_rate_hz,
-        "coordinates": ["x (m)", "z (m)", "theta (rad, about y)"],
-        "inertia": rows(&e.inertia),
-        "damping": rows(&e.damping),
-        "stiffness": rows(&e.stiffness),
-        "equilibrium": [0.0, 0.0, 0.0],
-        "springs_N_per_m": springs,
-        "robot": match args.controller {
-            ControllerArg::Ideal => serde_json::json!({"model": "linear, desired impedance", "M_rd": rows(&e.robot_inertia), "B_rd": rows(&e.robot_damping), "K_rd": rows(&e.robot_stiffness)}),
-            ControllerArg::Imbic => serde_json::json!({"model": "PUMA-type vertical-plane chain with joint friction under IMBIC (seed 004 eq. 11-14, the paper's gains)", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous}),
-            ControllerArg::Pd => serde_json::json!({"model": "PUMA-type vertical-plane chain with joint friction under a plain PD law", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous}),
-        },
-        "noise": {"position_std_m": noise[0], "angle_std_rad": noise[1]},
-        "notes": ["spring array of seed 004 eq. (10) on the impedance-controlled robot; force on the rig", "made by limpid simulate"],
-    });
-    write_truth(&args.output, rec.len(), &truth)?;
-    Ok(())
-}
-
-fn simulate_centre_out_protocol(p: &Protocol, args: &SimulateArgs) -> CliResult {
-    let given: Option<SubjectFile> = args.subject.as_deref().map(read_toml).transpose()?;
-    let table = seed000_subject1();
-    let starts = p.start_points();
-    let protocol = p.centre_out();
-    let noise = given
-        .as_ref()
-        .and_then(|s| s.noise.clone())
-        .unwrap_or_default();
-    for (i, start) in starts.iter().enumerate() {
-        let m3 = |a: &[[f64; 3]; 3]| Matrix3::from_fn(|r, c| a[r][c]);
-        let mut posture: Posture = table[i % table.len()].clone();
-        if let Some(s) = &given {
-            posture.inertia = m3(&s.inertia);
-            posture.damping = m3(&s.damping);
-            posture.stiffness = m3(&s.stiffness);
+    let design = read_design(&args.protocol)?.0;
+    let subject_text = match &args.subject {
+        Some(path) => {
+            Some(std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?)
         }
-        posture.start = *start;
-        posture.name = format!("S{}", i + 1);
-        let rec = simulate_centre_out(
-            &posture,
-            &protocol,
-            &noise,
-            args.seed.wrapping_mul(1000) + i as u64,
-        )?;
-        let out = if starts.len() > 1 {
-            with_suffix(&args.output, &format!("_S{}", i + 1))
-        } else {
-            args.output.clone()
+        None => None,
+    };
+    let subject = match (&args.subject, &subject_text) {
+        (Some(path), Some(text)) => Some(SubjectText { text, path }),
+        _ => None,
+    };
+    let controller = match args.controller {
+        ControllerArg::Ideal => RigController::Ideal,
+        ControllerArg::Imbic => RigController::Imbic,
+        ControllerArg::Pd => RigController::Pd,
+    };
+    // errors without a file of their own (a parameter) belong to the protocol
+    let runs =
+        simulate_design(&design, subject.as_ref(), controller, args.seed).map_err(|e| match e {
+            limpid_core::Error::InvalidParameter { .. } => {
+                format!("{}: {e}", args.protocol.display())
+            }
+            other => other.to_string(),
+        })?;
+    for run in runs {
+        let out = match &run.label {
+            Some(label) => with_suffix(&args.output, &format!("_{label}")),
+            None => args.output.clone(),
         };
-        limpid_io::write_recording(&rec, &out)?;
-        let rows = |m: &Matrix3<f64>| {
-            (0..3)
-                .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<f64>>())
-                .collect::<Vec<_>>()
-        };
-        let truth = serde_json::json!({
-            "method": "cartesian",
-            "sample_rate": p.sample_rate_hz,
-            "inertia": rows(&posture.inertia),
-            "damping": rows(&posture.damping),
-            "stiffness": rows(&posture.stiffness),
-            "equilibrium": [start.x, start.y, start.z],
-            "profile": p.phases.profile,
-            "noise": noise,
-            "protocol": {"trials": protocol.directions.len(), "rest_s": protocol.rest_s, "motion_s": protocol.motion_s, "radius_m": protocol.radius_m},
-            "notes": ["f = M a + B v + K (x - S) + offset_trial + drift + white; force applied to the limb", "made by limpid simulate"],
-        });
-        write_truth(&out, rec.len(), &truth)?;
+        limpid_io::write_recording(&run.recording, &out)?;
+        write_truth(&out, run.recording.len(), &run.truth)?;
     }
     Ok(())
 }

@@ -344,6 +344,25 @@ fn protocol_files_of_unknown_kind_or_without_a_robot_are_refused() {
         "{}",
         out.stderr
     );
+    // a misspelt key in a planar protocol: its line in the file, and the key
+    let planar = limpid(&["protocol", "new", "--preset", "lakatos-planar"]).stdout;
+    let key_line = planar
+        .lines()
+        .position(|l| l.starts_with("trials"))
+        .expect("a trials key")
+        + 1;
+    let typo = dir.path().join("typo.toml");
+    std::fs::write(&typo, planar.replacen("trials", "trails", 1)).unwrap();
+    let out = limpid(&["protocol", "check", typo.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr
+            .contains(&format!("typo.toml: line {key_line}, column 1"))
+            && out.stderr.contains("unknown field `trails`"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
     let c = dir.path().join("c.toml");
     limpid(&[
         "protocol",
@@ -362,4 +381,116 @@ fn protocol_files_of_unknown_kind_or_without_a_robot_are_refused() {
     ]);
     assert_eq!(out.code, 2);
     assert!(out.stderr.contains("add --robot"), "{}", out.stderr);
+}
+
+#[test]
+fn subject_files_of_every_kind_are_simulated_and_estimated_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let preset = |name: &str| {
+        let p = dir.path().join(format!("{name}.toml"));
+        limpid(&[
+            "protocol",
+            "new",
+            "--preset",
+            name,
+            "-o",
+            p.to_str().unwrap(),
+        ]);
+        p
+    };
+    let simulate = |protocol: &std::path::Path, subject: &str, out: &str| {
+        let s = dir.path().join(format!("{out}.subject.toml"));
+        std::fs::write(&s, subject).unwrap();
+        let rec = dir.path().join(format!("{out}.csv"));
+        let run = limpid(&[
+            "simulate",
+            protocol.to_str().unwrap(),
+            "--subject",
+            s.to_str().unwrap(),
+            "-o",
+            rec.to_str().unwrap(),
+        ]);
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        rec
+    };
+
+    // centre-out: a stiffer, anisotropic subject (not Table I) at every start point
+    let centre = preset("artemiadis-3d");
+    let k_given = [
+        [900.0, 120.0, -60.0],
+        [120.0, 500.0, 40.0],
+        [-60.0, 40.0, 350.0],
+    ];
+    simulate(
+        &centre,
+        "inertia = [[1.5, 0.0, 0.0], [0.0, 1.8, 0.0], [0.0, 0.0, 2.0]]\n\
+         damping = [[12.0, 1.0, 0.0], [1.0, 9.0, 0.0], [0.0, 0.0, 7.0]]\n\
+         stiffness = [[900.0, 120.0, -60.0], [120.0, 500.0, 40.0], [-60.0, 40.0, 350.0]]\n",
+        "centre",
+    );
+    let truth = read_json(&dir.path().join("centre_S4.truth.json"));
+    assert_eq!(
+        mat(&truth["stiffness"]),
+        k_given.map(|r| r.to_vec()).to_vec()
+    );
+    let est = json(&[
+        "estimate",
+        "linear",
+        dir.path().join("centre_S4.csv").to_str().unwrap(),
+        "--json",
+    ]);
+    let ek = rel_err(&mat(&est["stiffness"]), &mat(&truth["stiffness"]));
+    assert!(ek < 0.03, "centre-out K error {ek}");
+
+    // planar: a softer arm than seed 003's, with a reflex recorded in the truth
+    let planar = preset("lakatos-planar");
+    let rec = simulate(
+        &planar,
+        "xi = [0.30, 0.09, 0.10]\nstiffness = [[20.0, 5.0], [5.0, 8.0]]\n\
+         damping = [[1.2, 0.3], [0.3, 0.9]]\ntau0 = [0.2, 0.1]\n",
+        "planar",
+    );
+    let truth = read_json(&dir.path().join("planar.truth.json"));
+    assert_eq!(truth["stiffness"][0][0], 20.0);
+    let est = json(&[
+        "estimate",
+        "planar",
+        rec.to_str().unwrap(),
+        "--link-lengths",
+        "0.3,0.33",
+        "--json",
+    ]);
+    let ek = rel_err(&mat(&est["stiffness"]), &mat(&truth["stiffness"]));
+    assert!(ek < 0.03, "planar K error {ek}");
+
+    // stochastic: spring set SA3 with every spring 1.5 times stiffer
+    let stochastic = preset("park-stochastic");
+    let rec = simulate(
+        &stochastic,
+        "springs = [75.0, 75.0, 45.0, 45.0, 0.0, 99.556, 0.0, 0.0]\n",
+        "stochastic",
+    );
+    let truth = read_json(&dir.path().join("stochastic.truth.json"));
+    let est = json(&["estimate", "stochastic", rec.to_str().unwrap(), "--json"]);
+    let ek = rel_err(&mat(&est["stiffness"]), &mat(&truth["stiffness"]));
+    assert!(ek < 0.05, "stochastic K error {ek}");
+
+    // a subject of the wrong kind: one line naming the file and the field
+    let wrong = dir.path().join("wrong.toml");
+    std::fs::write(&wrong, "springs = [1.0, 2.0]\n").unwrap();
+    let out = limpid(&[
+        "simulate",
+        centre.to_str().unwrap(),
+        "--subject",
+        wrong.to_str().unwrap(),
+        "-o",
+        dir.path().join("x.csv").to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("wrong.toml") && out.stderr.contains("springs"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
 }

@@ -119,11 +119,63 @@ pub fn display_round(v: f64) -> f64 {
 }
 
 impl Error {
+    /// A settings file (TOML, JSON) that does not parse: one line, with the
+    /// line and column of `span` (a byte range of `text`) when the parser gives one.
+    pub fn settings(
+        path: &std::path::Path,
+        text: &str,
+        span: Option<std::ops::Range<usize>>,
+        message: &str,
+    ) -> Self {
+        let message = message.trim().replace('\n', "; ");
+        let message = match span {
+            Some(span) => {
+                let before = &text[..span.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+                format!("line {line}, column {column}: {message}")
+            }
+            None => message,
+        };
+        Error::Format {
+            path: path.to_path_buf(),
+            message,
+        }
+    }
+
     /// Shorthand for [`Error::InvalidParameter`].
     pub fn invalid(name: impl Into<String>, message: impl Into<String>) -> Self {
         Error::InvalidParameter {
             name: name.into(),
             message: message.into(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_errors_give_line_and_column_of_the_span() {
+        let text = "a = 1\nb = [1,\n  2, x]\n";
+        let at = text.find('x').unwrap();
+        let e = Error::settings(
+            std::path::Path::new("p.toml"),
+            text,
+            Some(at..at + 1),
+            "invalid array\nexpected `]`",
+        );
+        assert_eq!(
+            e.to_string(),
+            "p.toml: line 3, column 6: invalid array; expected `]`"
+        );
+        let e = Error::settings(
+            std::path::Path::new("p.toml"),
+            text,
+            None,
+            "missing field `b`",
+        );
+        assert_eq!(e.to_string(), "p.toml: missing field `b`");
     }
 }

@@ -50,35 +50,51 @@ impl Design {
         }
     }
 
-    /// Parse a protocol file; its `kind` key picks the type.
+    /// Parse a protocol file; its `kind` key picks the type. Errors give the
+    /// line and column in `text`.
     pub fn from_toml(text: &str, path: &std::path::Path) -> Result<Self> {
         let fail = |message: String| Error::Format {
             path: path.to_path_buf(),
             message,
         };
-        let first_line = |e: toml::de::Error| {
-            e.to_string()
-                .lines()
-                .next()
-                .unwrap_or("not a protocol")
-                .to_string()
+        let located =
+            |text: &str, e: toml::de::Error| Error::settings(path, text, e.span(), e.message());
+        #[derive(Deserialize)]
+        struct KindKey {
+            kind: Option<toml::Spanned<toml::Value>>,
+        }
+        let key: KindKey = toml::from_str(text).map_err(|e| located(text, e))?;
+        let (kind, body) = match key.kind {
+            None => ("centre-out".to_string(), text.to_string()),
+            Some(spanned) => {
+                let span = spanned.span();
+                let toml::Value::String(kind) = spanned.into_inner() else {
+                    return Err(Error::settings(
+                        path,
+                        text,
+                        Some(span),
+                        "kind must be a string: centre-out, planar or stochastic",
+                    ));
+                };
+                // blank the `kind = ...` line so that every other byte keeps its place
+                let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
+                let end = text[span.end..]
+                    .find('\n')
+                    .map_or(text.len(), |i| span.end + i);
+                let mut body = text.to_string();
+                body.replace_range(start..end, &" ".repeat(end - start));
+                (kind, body)
+            }
         };
-        let mut table: toml::Table = toml::from_str(text).map_err(|e| fail(first_line(e)))?;
-        let kind = match table.remove("kind") {
-            None => "centre-out".to_string(),
-            Some(toml::Value::String(s)) => s,
-            Some(other) => return Err(fail(format!("kind must be a string, found {other}"))),
-        };
-        let rest = toml::to_string(&table).map_err(|e| fail(e.to_string()))?;
         match kind.as_str() {
-            "centre-out" => Ok(Design::CentreOut(Protocol::from_toml(&rest, path)?)),
+            "centre-out" => Ok(Design::CentreOut(Protocol::from_toml(&body, path)?)),
             "planar" => {
-                let d: PlanarDesign = toml::from_str(&rest).map_err(|e| fail(first_line(e)))?;
+                let d: PlanarDesign = toml::from_str(&body).map_err(|e| located(&body, e))?;
                 d.validate().map_err(fail)?;
                 Ok(Design::Planar(d))
             }
             "stochastic" => {
-                let d: StochasticDesign = toml::from_str(&rest).map_err(|e| fail(first_line(e)))?;
+                let d: StochasticDesign = toml::from_str(&body).map_err(|e| located(&body, e))?;
                 d.validate().map_err(fail)?;
                 Ok(Design::Stochastic(d))
             }

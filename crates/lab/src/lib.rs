@@ -1,8 +1,10 @@
 //! limpid-lab: the virtual lab — perturbation profiles, target directions,
 //! virtual subjects with known impedance, and simulated recordings.
 //!
-//! This first part covers seed 000's centre-out protocol (§II-B) on a
-//! linear subject; see each module for the seed and equation it implements.
+//! Protocols of all four seeds ([`design`]), robots ([`robot`], [`imbic`]),
+//! subjects and rigs ([`subject`], [`planar`], [`rig`], [`cocontraction`]),
+//! and [`session`], which runs a protocol on a subject; each module names the
+//! seed and equation it implements.
 
 pub mod cocontraction;
 pub mod design;
@@ -12,6 +14,7 @@ pub mod profile;
 pub mod protocol;
 pub mod rig;
 pub mod robot;
+pub mod session;
 pub mod simulate;
 pub mod sphere;
 pub mod subject;

@@ -16,7 +16,8 @@ use limpid_core::arm::{coriolis, mass_matrix};
 use limpid_core::{Recording, Result};
 
 /// A reflex: after `latency_s`, K and D are multiplied by `1 + gain`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Reflex {
     pub latency_s: f64,
     pub stiffness_gain: f64,

@@ -153,15 +153,8 @@ pub fn preset(name: &str) -> Result<Protocol> {
 impl Protocol {
     /// Parse and check the structure of a TOML protocol.
     pub fn from_toml(text: &str, path: &std::path::Path) -> Result<Self> {
-        let p: Protocol = toml::from_str(text).map_err(|e| Error::Format {
-            path: path.to_path_buf(),
-            message: e
-                .to_string()
-                .lines()
-                .next()
-                .unwrap_or("not a protocol")
-                .to_string(),
-        })?;
+        let p: Protocol =
+            toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
         if p.sample_rate_hz <= 0.0
             || p.targets.count == 0
             || p.targets.radius_m <= 0.0

@@ -459,99 +459,39 @@ fn protocol_check(toml_text: &str) -> PyResult<String> {
     serde_json::to_string(&r).map_err(value_err)
 }
 
-/// Simulate a protocol (TOML text) on the built-in virtual subjects, as
-/// `limpid simulate` without `--subject`: centre-out on seed 000's subject 1
-/// (one recording per start point), planar on the seed 003 arm, stochastic on
-/// spring set SA3 held by an ideal robot. One (columns, truth JSON) per recording.
+/// Simulate a protocol (TOML text), as `limpid simulate`: on `subject` (TOML
+/// text, named `subject_name` in errors) or the built-in subjects, stochastic
+/// protocols held by `controller` (ideal, imbic, pd). One (columns, truth
+/// JSON) per recording.
 #[pyfunction]
-#[pyo3(signature = (toml_text, seed=1))]
+#[pyo3(signature = (toml_text, seed=1, subject=None, subject_name="<subject>", controller="ideal"))]
 fn simulate<'py>(
     py: Python<'py>,
     toml_text: &str,
     seed: u64,
+    subject: Option<&str>,
+    subject_name: &str,
+    controller: &str,
 ) -> PyResult<Vec<(Bound<'py, PyDict>, String)>> {
-    use limpid_lab::design::Design;
-    let d = Design::from_toml(toml_text, Path::new("<protocol>")).map_err(err)?;
+    use limpid_lab::session::{simulate_design, RigController, SubjectText};
+    let d =
+        limpid_lab::design::Design::from_toml(toml_text, Path::new("<protocol>")).map_err(err)?;
     limpid_lab::design::check(&d).map_err(err)?;
-    let columns = |rec: &Recording| -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        for (name, col) in rec.columns() {
-            d.set_item(name, col.to_vec().into_pyarray(py))?;
-        }
-        Ok(d)
-    };
-    let rows3 = |m: &nalgebra::Matrix3<f64>| {
-        (0..3)
-            .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<f64>>())
-            .collect::<Vec<_>>()
-    };
-    let p = match d {
-        Design::CentreOut(p) => p,
-        Design::Planar(p) => {
-            let subject = p.nominal_subject();
-            let rec = py
-                .detach(|| {
-                    limpid_lab::planar::simulate_planar(&subject, &p.simulation(), 0.02, 1e-5, seed)
-                })
-                .map_err(err)?;
-            let m2 = |m: &nalgebra::Matrix2<f64>| {
-                vec![vec![m[(0, 0)], m[(0, 1)]], vec![m[(1, 0)], m[(1, 1)]]]
-            };
-            let truth = serde_json::json!({
-                "method": "planar",
-                "inertial_parameters": subject.xi,
-                "stiffness": m2(&subject.stiffness),
-                "damping": m2(&subject.damping),
-                "link_lengths": p.link_lengths_m,
-                "q0": subject.q0,
-            });
-            return Ok(vec![(columns(&rec)?, truth.to_string())]);
-        }
-        Design::Stochastic(p) => {
-            let e = p
-                .rig_experiment(&limpid_lab::rig::SPRING_SET_SA3)
-                .map_err(err)?;
-            let rec = py
-                .detach(|| {
-                    limpid_lab::rig::simulate_rig(&e, [1e-6, 1e-5], seed.wrapping_add(p.seed))
-                })
-                .map_err(err)?;
-            let truth = serde_json::json!({
-                "method": "stochastic",
-                "inertia": rows3(&e.inertia),
-                "damping": rows3(&e.damping),
-                "stiffness": rows3(&e.stiffness),
-            });
-            return Ok(vec![(columns(&rec)?, truth.to_string())]);
-        }
-    };
-    let protocol = p.centre_out();
-    let table = limpid_lab::seed000_subject1();
-    let noise = limpid_lab::NoiseModel::default();
-    let mut out = Vec::new();
-    for (i, start) in p.start_points().iter().enumerate() {
-        let mut posture = table[i % table.len()].clone();
-        posture.start = *start;
-        let rec = py
-            .detach(|| {
-                limpid_lab::simulate_centre_out(
-                    &posture,
-                    &protocol,
-                    &noise,
-                    seed.wrapping_mul(1000) + i as u64,
-                )
-            })
-            .map_err(err)?;
-        let truth = serde_json::json!({
-            "method": "cartesian",
-            "inertia": rows3(&posture.inertia),
-            "damping": rows3(&posture.damping),
-            "stiffness": rows3(&posture.stiffness),
-            "equilibrium": [start.x, start.y, start.z],
-        });
-        out.push((columns(&rec)?, truth.to_string()));
-    }
-    Ok(out)
+    let controller: RigController = controller.parse().map_err(value_err)?;
+    let name = Path::new(subject_name);
+    let subject = subject.map(|text| SubjectText { text, path: name });
+    let runs = py
+        .detach(|| simulate_design(&d, subject.as_ref(), controller, seed))
+        .map_err(err)?;
+    runs.into_iter()
+        .map(|run| {
+            let columns = PyDict::new(py);
+            for (name, col) in run.recording.columns() {
+                columns.set_item(name, col.to_vec().into_pyarray(py))?;
+            }
+            Ok((columns, run.truth.to_string()))
+        })
+        .collect()
 }
 
 /// Write the HTML report of JSON results (texts) to `path`.

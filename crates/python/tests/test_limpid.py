@@ -205,3 +205,28 @@ def test_planar_and_stochastic_simulations_estimate_back_to_their_truth():
     (cols, truth), = limpid.simulate("park-stochastic", seed=2)
     est = limpid.estimate_stochastic(cols)
     assert rel(est.stiffness, truth["stiffness"]) < 0.05
+
+
+def test_simulate_with_a_subject_file_and_the_robot_controllers(tmp_path):
+    subject = tmp_path / "stiff.toml"
+    subject.write_text(
+        "inertia = [[1.5, 0, 0], [0, 1.8, 0], [0, 0, 2.0]]\n"
+        "damping = [[12.0, 1.0, 0], [1.0, 9.0, 0], [0, 0, 7.0]]\n"
+        "stiffness = [[900.0, 120.0, -60.0], [120.0, 500.0, 40.0], [-60.0, 40.0, 350.0]]\n"
+    )
+    runs = limpid.simulate("artemiadis-3d", seed=4, subject=subject)
+    cols, truth = runs[2]
+    np.testing.assert_allclose(truth["stiffness"][0], [900.0, 120.0, -60.0])
+    assert rel(limpid.estimate_linear(cols).stiffness, truth["stiffness"]) < 0.03
+    # the same subject as TOML text
+    (_, truth_text), *_ = limpid.simulate("artemiadis-3d", subject=subject.read_text())
+    assert truth_text["stiffness"] == truth["stiffness"]
+    # the spring array held by the PUMA-type robot under IMBIC
+    (cols, truth), = limpid.simulate("park-stochastic", controller="imbic")
+    assert "IMBIC" in truth["robot"]["model"]
+    assert rel(limpid.estimate_stochastic(cols).stiffness, truth["stiffness"]) < 0.05
+    with pytest.raises(ValueError, match="controller"):
+        limpid.simulate("park-stochastic", controller="pid")
+    with pytest.raises(ValueError, match=r"stiff\.toml: line 1, column 1: unknown field `springs`"):
+        subject.write_text("springs = [1.0]\n")
+        limpid.simulate("artemiadis-3d", subject=subject)

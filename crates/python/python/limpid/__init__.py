@@ -240,13 +240,35 @@ def protocol_check(toml_text: str) -> Result:
     return Result(json.loads(_limpid.protocol_check(toml_text)))
 
 
-def simulate(protocol: str, seed: int = 1) -> List[Tuple[Dict[str, np.ndarray], Dict[str, Any]]]:
-    """Simulate a protocol (TOML text or preset name) on the built-in virtual
-    subjects (centre-out: seed 000's subject 1, one recording per start point;
-    planar: the seed 003 arm; stochastic: spring set SA3 on an ideal robot):
-    a list of (columns, truth)."""
+def simulate(
+    protocol: str,
+    seed: int = 1,
+    subject: Optional[Union[str, "os.PathLike[str]"]] = None,
+    controller: str = "ideal",
+) -> List[Tuple[Dict[str, np.ndarray], Dict[str, Any]]]:
+    """Simulate a protocol (TOML text or preset name), as ``limpid simulate``:
+    a list of (columns, truth), one per recording (centre-out: one per start
+    point).
+
+    ``subject`` is TOML text or a path to a TOML file (the CLI's ``--subject``
+    format for the protocol's kind); without it the built-in subjects are used
+    (centre-out: seed 000's subject 1; planar: the seed 003 arm; stochastic:
+    spring set SA3). ``controller`` (stochastic protocols) is ``ideal``,
+    ``imbic`` or ``pd``: who holds the spring array."""
     text = protocol if "\n" in protocol or "=" in protocol else protocol_preset(protocol)
-    return [(cols, json.loads(truth)) for cols, truth in _limpid.simulate(text, int(seed))]
+    subject_text = None
+    subject_name = "<subject>"
+    if subject is not None:
+        if isinstance(subject, str) and ("\n" in subject or "=" in subject):
+            subject_text = subject
+        else:
+            subject_name = os.fspath(subject)
+            with open(subject_name, encoding="utf-8") as f:
+                subject_text = f.read()
+    return [
+        (cols, json.loads(truth))
+        for cols, truth in _limpid.simulate(text, int(seed), subject_text, subject_name, controller)
+    ]
 
 
 def report(results: Sequence[Union[Result, Mapping[str, Any], List[Any]]], path: Union[str, "os.PathLike[str]"]) -> None:

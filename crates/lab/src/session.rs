@@ -1,0 +1,260 @@
+//! A protocol run on a virtual subject: the one path behind `limpid simulate`
+//! and Python's `limpid.simulate`. Each recording comes with its truth, in the
+//! layout of `../shared/examples/*/*.truth.json`.
+//!
+//! Subjects (TOML, all optional — the defaults are the built-in subjects):
+//! - centre-out (seed 000): 3 x 3 `inertia`, `damping`, `stiffness` (SI) and an
+//!   optional `[noise]` table ([`NoiseModel`]); default seed 000 Table I
+//!   subject 1, posture i at start point i;
+//! - planar (seed 003 eq. 9): `xi` (3 inertial parameters), 2 x 2 `stiffness`,
+//!   `damping`, `tau0` (2), optional `[reflex]` (`latency_s`, `stiffness_gain`,
+//!   `damping_gain`); default [`PlanarDesign::nominal_subject`];
+//! - stochastic (seed 004 eq. 10): `springs` (8 values, N/m, k1a..k4b); default
+//!   spring set SA3.
+
+use std::path::Path;
+
+use limpid_core::{Error, Recording, Result};
+use nalgebra::{Matrix2, Matrix3};
+use serde::Deserialize;
+use serde_json::{json, Value};
+
+use crate::design::{Design, PlanarDesign, StochasticDesign};
+use crate::imbic::{simulate_robot_rig, Controller, RobotDynamics};
+use crate::planar::{simulate_planar, Reflex};
+use crate::protocol::Protocol;
+use crate::rig::{simulate_rig, Springs, SPRING_SET_SA3};
+use crate::{seed000_subject1, simulate_centre_out, NoiseModel, Posture};
+
+/// Who holds the spring array of a stochastic protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RigController {
+    /// A linear robot with the desired impedance.
+    Ideal,
+    /// The PUMA-type robot with joint friction under IMBIC (seed 004 eq. 11-14).
+    Imbic,
+    /// The same robot under a plain PD law.
+    Pd,
+}
+
+impl std::str::FromStr for RigController {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "ideal" => Ok(Self::Ideal),
+            "imbic" => Ok(Self::Imbic),
+            "pd" => Ok(Self::Pd),
+            other => Err(format!(
+                "unknown controller {other:?}; expected ideal, imbic or pd"
+            )),
+        }
+    }
+}
+
+/// A subject given as TOML text, with the name errors should carry.
+pub struct SubjectText<'a> {
+    pub text: &'a str,
+    pub path: &'a Path,
+}
+
+/// One simulated recording and its truth.
+pub struct Simulated {
+    /// `S1`, `S2`, ... for the start points of a centre-out protocol; `None` for a single recording.
+    pub label: Option<String>,
+    pub recording: Recording,
+    pub truth: Value,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CentreOutSubjectFile {
+    inertia: [[f64; 3]; 3],
+    damping: [[f64; 3]; 3],
+    stiffness: [[f64; 3]; 3],
+    #[serde(default)]
+    noise: Option<NoiseModel>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlanarSubjectFile {
+    xi: [f64; 3],
+    stiffness: [[f64; 2]; 2],
+    damping: [[f64; 2]; 2],
+    #[serde(default)]
+    tau0: [f64; 2],
+    #[serde(default)]
+    reflex: Option<Reflex>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RigSubjectFile {
+    springs: Springs,
+}
+
+fn parse<T: for<'de> Deserialize<'de>>(subject: &SubjectText) -> Result<T> {
+    toml::from_str(subject.text)
+        .map_err(|e| Error::settings(subject.path, subject.text, e.span(), e.message()))
+}
+
+fn rows3(m: &Matrix3<f64>) -> Vec<Vec<f64>> {
+    (0..3)
+        .map(|r| (0..3).map(|c| m[(r, c)]).collect())
+        .collect()
+}
+
+fn rows2(m: &Matrix2<f64>) -> Vec<Vec<f64>> {
+    (0..2)
+        .map(|r| (0..2).map(|c| m[(r, c)]).collect())
+        .collect()
+}
+
+/// Simulate a (checked) protocol on a subject. `seed` drives the sensor noise.
+pub fn simulate_design(
+    design: &Design,
+    subject: Option<&SubjectText>,
+    controller: RigController,
+    seed: u64,
+) -> Result<Vec<Simulated>> {
+    match design {
+        Design::CentreOut(p) => centre_out(p, subject, seed),
+        Design::Planar(p) => planar(p, subject, seed).map(|s| vec![s]),
+        Design::Stochastic(p) => stochastic(p, subject, controller, seed).map(|s| vec![s]),
+    }
+}
+
+fn centre_out(p: &Protocol, subject: Option<&SubjectText>, seed: u64) -> Result<Vec<Simulated>> {
+    let given: Option<CentreOutSubjectFile> = subject.map(parse).transpose()?;
+    let table = seed000_subject1();
+    let starts = p.start_points();
+    let protocol = p.centre_out();
+    let noise = given
+        .as_ref()
+        .and_then(|s| s.noise.clone())
+        .unwrap_or_default();
+    let m3 = |a: &[[f64; 3]; 3]| Matrix3::from_fn(|r, c| a[r][c]);
+    let mut out = Vec::with_capacity(starts.len());
+    for (i, start) in starts.iter().enumerate() {
+        let mut posture: Posture = table[i % table.len()].clone();
+        if let Some(s) = &given {
+            posture.inertia = m3(&s.inertia);
+            posture.damping = m3(&s.damping);
+            posture.stiffness = m3(&s.stiffness);
+        }
+        posture.start = *start;
+        posture.name = format!("S{}", i + 1);
+        let recording = simulate_centre_out(
+            &posture,
+            &protocol,
+            &noise,
+            seed.wrapping_mul(1000) + i as u64,
+        )?;
+        let truth = json!({
+            "method": "cartesian",
+            "sample_rate": p.sample_rate_hz,
+            "inertia": rows3(&posture.inertia),
+            "damping": rows3(&posture.damping),
+            "stiffness": rows3(&posture.stiffness),
+            "equilibrium": [start.x, start.y, start.z],
+            "profile": p.phases.profile,
+            "noise": noise,
+            "protocol": {"trials": protocol.directions.len(), "rest_s": protocol.rest_s, "motion_s": protocol.motion_s, "radius_m": protocol.radius_m},
+            "notes": ["f = M a + B v + K (x - S) + offset_trial + drift + white; force applied to the limb", "made by limpid simulate"],
+        });
+        out.push(Simulated {
+            label: (starts.len() > 1).then(|| posture.name.clone()),
+            recording,
+            truth,
+        });
+    }
+    Ok(out)
+}
+
+fn planar(p: &PlanarDesign, subject: Option<&SubjectText>, seed: u64) -> Result<Simulated> {
+    let mut arm = p.nominal_subject();
+    if let Some(text) = subject {
+        let s: PlanarSubjectFile = parse(text)?;
+        let m2 = |a: &[[f64; 2]; 2]| Matrix2::new(a[0][0], a[0][1], a[1][0], a[1][1]);
+        arm.xi = s.xi;
+        arm.stiffness = m2(&s.stiffness);
+        arm.damping = m2(&s.damping);
+        arm.tau0 = s.tau0;
+        arm.reflex = s.reflex;
+    }
+    let (torque_std, angle_std) = (0.02, 1e-5);
+    let recording = simulate_planar(&arm, &p.simulation(), torque_std, angle_std, seed)?;
+    let truth = json!({
+        "method": "planar",
+        "variant": "joint",
+        "sample_rate": p.sample_rate_hz,
+        "inertial_parameters": arm.xi,
+        "stiffness": rows2(&arm.stiffness),
+        "damping": rows2(&arm.damping),
+        "link_lengths": p.link_lengths_m,
+        "q0": arm.q0,
+        "interpolation_interval_ms": p.interpolation_s * 1e3,
+        "reflex": arm.reflex,
+        "noise": {"torque_white_std_Nm": torque_std, "baseline_torque_Nm": arm.tau0, "joint_angle_std_rad": angle_std},
+        "notes": ["tau = M(q) q'' + C(q,q') q' + D q' + K (q - q0) + tau0 + noise, seed 003 eq. (9)", "made by limpid simulate"],
+    });
+    Ok(Simulated {
+        label: None,
+        recording,
+        truth,
+    })
+}
+
+fn stochastic(
+    p: &StochasticDesign,
+    subject: Option<&SubjectText>,
+    controller: RigController,
+    seed: u64,
+) -> Result<Simulated> {
+    let springs: Springs = match subject {
+        Some(text) => parse::<RigSubjectFile>(text)?.springs,
+        None => SPRING_SET_SA3,
+    };
+    let e = p.rig_experiment(&springs)?;
+    let noise = [1e-6, 1e-5];
+    let seed = seed.wrapping_add(p.seed);
+    let dynamics = RobotDynamics::seed004();
+    let recording = match controller {
+        RigController::Ideal => simulate_rig(&e, noise, seed)?,
+        RigController::Imbic => {
+            simulate_robot_rig(&e, &dynamics, &Controller::imbic_seed004(), noise, seed)?
+        }
+        RigController::Pd => {
+            simulate_robot_rig(&e, &dynamics, &Controller::pd_seed004(), noise, seed)?
+        }
+    };
+    let robot = match controller {
+        RigController::Ideal => {
+            json!({"model": "linear, desired impedance", "M_rd": rows3(&e.robot_inertia), "B_rd": rows3(&e.robot_damping), "K_rd": rows3(&e.robot_stiffness)})
+        }
+        RigController::Imbic => {
+            json!({"model": "PUMA-type vertical-plane chain with joint friction under IMBIC (seed 004 eq. 11-14, the paper's gains)", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous})
+        }
+        RigController::Pd => {
+            json!({"model": "PUMA-type vertical-plane chain with joint friction under a plain PD law", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous})
+        }
+    };
+    let truth = json!({
+        "method": "stochastic",
+        "sample_rate": p.sample_rate_hz,
+        "coordinates": ["x (m)", "z (m)", "theta (rad, about y)"],
+        "inertia": rows3(&e.inertia),
+        "damping": rows3(&e.damping),
+        "stiffness": rows3(&e.stiffness),
+        "equilibrium": [0.0, 0.0, 0.0],
+        "springs_N_per_m": springs,
+        "robot": robot,
+        "noise": {"position_std_m": noise[0], "angle_std_rad": noise[1]},
+        "notes": ["spring array of seed 004 eq. (10) on the impedance-controlled robot; force on the rig", "made by limpid simulate"],
+    });
+    Ok(Simulated {
+        label: None,
+        recording,
+        truth,
+    })
+}
