@@ -95,7 +95,15 @@ pub struct PrepareArgs {
     /// The force columns hold the hand's force on the sensor: negate them.
     #[arg(long)]
     pub negate_force: bool,
-    /// Compute x,y,z from the robot_q1..n columns by this robot's forward kinematics (kuka-lwr4, puma3), as seed 000 does.
+    #[command(flatten)]
+    pub robot: RobotArgs,
+}
+
+/// `--robot` and `--robot-base`: a robot whose `robot_q1..n` columns give the
+/// end-effector pose by forward kinematics.
+#[derive(Args)]
+pub struct RobotArgs {
+    /// Compute the end-effector pose from the robot_q1..n columns by this robot's forward kinematics (kuka-lwr4, puma3 or a .urdf file), as seed 000 does.
     #[arg(long, value_name = "ROBOT")]
     pub robot: Option<String>,
     /// Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad), as a protocol's `robot_base`.
@@ -109,25 +117,37 @@ pub struct PrepareArgs {
     pub robot_base: Option<Vec<f64>>,
 }
 
+impl RobotArgs {
+    /// The placed robot's end-effector poses (4 x 4, lab frame) per sample, if `--robot` is given.
+    pub fn poses(
+        &self,
+        rec: &limpid_core::Recording,
+    ) -> CliResult<Option<Vec<nalgebra::Matrix4<f64>>>> {
+        let Some(name) = &self.robot else {
+            return Ok(None);
+        };
+        let mut robot = limpid_lab::robot::Robot::by_name(name)?;
+        match self.robot_base.as_deref() {
+            None => {}
+            Some([x, y, z]) => robot = robot.placed([*x, *y, *z], [0.0; 3]),
+            Some([x, y, z, r, p, w]) => robot = robot.placed([*x, *y, *z], [*r, *p, *w]),
+            Some(other) => {
+                return Err(limpid_core::Error::invalid(
+                    "--robot-base",
+                    format!("expected 3 or 6 numbers, found {}", other.len()),
+                )
+                .into())
+            }
+        }
+        Ok(Some(robot.poses(rec, "robot joint angles for --robot")?))
+    }
+}
+
 impl PrepareArgs {
     /// Read the recording and apply `--robot`.
     pub fn read(&self, path: &std::path::Path) -> CliResult<limpid_core::Recording> {
         let mut rec = limpid_io::read_recording(path)?;
-        if let Some(name) = &self.robot {
-            let mut robot = limpid_lab::robot::Robot::by_name(name)?;
-            match self.robot_base.as_deref() {
-                None => {}
-                Some([x, y, z]) => robot = robot.placed([*x, *y, *z], [0.0; 3]),
-                Some([x, y, z, r, p, w]) => robot = robot.placed([*x, *y, *z], [*r, *p, *w]),
-                Some(other) => {
-                    return Err(limpid_core::Error::invalid(
-                        "--robot-base",
-                        format!("expected 3 or 6 numbers, found {}", other.len()),
-                    )
-                    .into())
-                }
-            }
-            let poses = robot.poses(&rec, "robot joint angles for --robot")?;
+        if let Some(poses) = self.robot.poses(&rec)? {
             for (a, name) in ["x", "y", "z"].iter().enumerate() {
                 rec.set_column(name, poses.iter().map(|t| t[(a, 3)]).collect())?;
             }

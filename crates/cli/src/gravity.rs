@@ -5,7 +5,7 @@
 //! from a recording in a pose where gravity does not load the sensor (step 1),
 //! the weight of handle and limb from the first seconds of the test (step 2).
 //! The sensor's orientation per sample comes from the robot's joint angles
-//! (`--robot`), else from `theta` (rotation about y, seed 004's rig), else it
+//! (`--robot`, placed by `--robot-base`), else from `theta` (rotation about y, seed 004's rig), else it
 //! is fixed.
 
 use std::path::PathBuf;
@@ -15,6 +15,7 @@ use limpid_core::frame::GravityCompensation;
 use limpid_core::{Error, Recording};
 use nalgebra::{Matrix3, Vector3};
 
+use crate::estimate::RobotArgs;
 use crate::CliResult;
 
 #[derive(Args)]
@@ -27,9 +28,9 @@ pub struct GravityArgs {
     /// Step 2: the first seconds of the test, before any perturbation.
     #[arg(long, default_value_t = 1.0)]
     pub initial_s: f64,
-    /// Sensor orientation from the robot_q columns by this robot's forward kinematics.
-    #[arg(long, value_name = "ROBOT")]
-    pub robot: Option<String>,
+    /// Sensor orientation from the robot_q columns by forward kinematics.
+    #[command(flatten)]
+    pub robot: RobotArgs,
     /// Output recording with fx, fy, fz written (CSV or Parquet).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -47,11 +48,9 @@ fn readings(rec: &Recording) -> CliResult<Vec<Vector3<f64>>> {
         .collect())
 }
 
-fn rotations(rec: &Recording, robot: Option<&str>) -> CliResult<Vec<Matrix3<f64>>> {
-    if let Some(name) = robot {
-        let robot = limpid_lab::robot::Robot::by_name(name)?;
-        return Ok(robot
-            .poses(rec, "robot joint angles for --robot")?
+fn rotations(rec: &Recording, robot: &RobotArgs) -> CliResult<Vec<Matrix3<f64>>> {
+    if let Some(poses) = robot.poses(rec)? {
+        return Ok(poses
             .iter()
             .map(|t| t.fixed_view::<3, 3>(0, 0).into())
             .collect());
@@ -85,7 +84,7 @@ pub fn run(args: GravityArgs) -> CliResult {
         )
         .into());
     }
-    let rot = rotations(&rec, args.robot.as_deref())?;
+    let rot = rotations(&rec, &args.robot)?;
     // step 2 uses the orientation at the start; the start must be still
     let comp = GravityCompensation::calibrate(&bias_readings, &read[..initial], &rot[0])?;
     let mut out: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(rec.len())).collect();

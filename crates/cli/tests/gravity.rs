@@ -108,3 +108,90 @@ fn bias_and_weight_are_removed_and_the_force_on_the_limb_recovered() {
         out.stderr
     );
 }
+
+#[test]
+fn the_sensor_orientation_comes_from_the_placed_robot() {
+    // puma3 moving its joints; the robot stands rotated 0.7 rad about z and tilted
+    // 0.2 rad about x in the lab, where gravity is along -z
+    let dir = tempfile::tempdir().unwrap();
+    let fs = 500.0;
+    let n = 3000;
+    let base = [0.1, -0.2, 0.3, 0.2, 0.0, 0.7];
+    let robot = limpid_lab::robot::Robot::by_name("puma3")
+        .unwrap()
+        .placed([base[0], base[1], base[2]], [base[3], base[4], base[5]]);
+    let bias = Vector3::new(-0.4, 0.9, 1.6);
+    let weight = Vector3::new(0.0, 0.0, -9.81 * 0.6);
+    let names = [
+        "t",
+        "robot_q1",
+        "robot_q2",
+        "robot_q3",
+        "sensor_fx",
+        "sensor_fy",
+        "sensor_fz",
+    ];
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+    let mut truth = Vec::new();
+    for k in 0..n {
+        let t = k as f64 / fs;
+        let s = if t < 1.0 { 0.0 } else { (t - 1.0).sin() };
+        let q = [0.3 + 0.4 * s, -0.8 + 0.3 * s, 0.5 - 0.5 * s];
+        let f_limb = Vector3::new(2.0 * s, -1.5 * s * s, 0.8 * (3.0 * t).sin() * s);
+        let r: Matrix3<f64> = robot.fk(&q).fixed_view::<3, 3>(0, 0).into();
+        let reading = r.transpose() * (weight - f_limb) + bias;
+        let row = [t, q[0], q[1], q[2], reading[0], reading[1], reading[2]];
+        for (c, v) in cols.iter_mut().zip(row) {
+            c.push(v);
+        }
+        truth.push(f_limb);
+    }
+    let names: Vec<String> = names.map(String::from).to_vec();
+    let rec_path = dir.path().join("robot.csv");
+    limpid_io::write_recording(
+        &limpid_core::Recording::new(&rec_path, names.clone(), cols.clone(), 2).unwrap(),
+        &rec_path,
+    )
+    .unwrap();
+    let bias_cols: Vec<Vec<f64>> = (0..names.len())
+        .map(|c| match c {
+            4..=6 => vec![bias[c - 4]; 100],
+            _ => cols[c][..100].to_vec(),
+        })
+        .collect();
+    let bias_path = dir.path().join("bias.csv");
+    limpid_io::write_recording(
+        &limpid_core::Recording::new(&bias_path, names, bias_cols, 2).unwrap(),
+        &bias_path,
+    )
+    .unwrap();
+    let worst_error = |extra: &[&str]| {
+        let out_path = dir.path().join("out.csv");
+        let mut args = vec![
+            "gravity-compensate",
+            rec_path.to_str().unwrap(),
+            "--bias",
+            bias_path.to_str().unwrap(),
+            "--robot",
+            "puma3",
+            "-o",
+            out_path.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = limpid(&args);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        let got = limpid_io::read_recording(&out_path).unwrap();
+        let mut worst = 0.0f64;
+        for (a, c) in ["fx", "fy", "fz"].iter().enumerate() {
+            for (k, v) in got.column(c).unwrap().iter().enumerate() {
+                worst = worst.max((v - truth[k][a]).abs());
+            }
+        }
+        worst
+    };
+    let placed = worst_error(&["--robot-base", "0.1,-0.2,0.3,0.2,0,0.7"]);
+    assert!(placed < 1e-9, "force error {placed:e} N with the base");
+    // the robot's own frame is not the lab's: the weight leaks into the force
+    let unplaced = worst_error(&[]);
+    assert!(unplaced > 0.1, "force error {unplaced} N without the base");
+}
