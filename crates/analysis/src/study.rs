@@ -99,6 +99,9 @@ pub struct LevelRow {
     pub k1: f64,
     pub k2: f64,
     pub k3: f64,
+    /// Mean stiffness matrix over subjects (N/m) and its ellipsoid (seed 001 Fig. 5).
+    pub stiffness: crate::Mat,
+    pub ellipsoid: Option<crate::Ellipsoid>,
 }
 
 /// Table 5 row (and Fig. 6): highest vs lowest level for one configuration.
@@ -228,6 +231,15 @@ pub fn run_study(
                     .copied()
                     .unwrap_or(f64::NAN)
             };
+            // every recording has x, y, z (checked above): 3 x 3 matrices
+            let n = at.first().map_or(0, |l| l.stiffness.len());
+            let same_shape = at
+                .iter()
+                .all(|l| l.stiffness.len() == n && l.stiffness.iter().all(|r| r.len() == n));
+            let n = if same_shape { n } else { 0 };
+            let mean_k: crate::Mat = (0..n)
+                .map(|r| (0..n).map(|c| mean(&|l| l.stiffness[r][c])).collect())
+                .collect();
             levels_out.push(LevelRow {
                 configuration: c.clone(),
                 level: *level,
@@ -240,6 +252,8 @@ pub fn run_study(
                 k1: mean(&|l| eig(l, 0)),
                 k2: mean(&|l| eig(l, 1)),
                 k3: mean(&|l| eig(l, 2)),
+                ellipsoid: crate::ellipsoid(&mean_k),
+                stiffness: mean_k,
             });
         }
         if let (Some(lo), Some(hi)) = (levels.first(), levels.last()) {

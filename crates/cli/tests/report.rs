@@ -333,4 +333,44 @@ fn study_run_writes_a_report_with_every_configuration() {
         .unwrap();
     assert_eq!(k1.matches("class=\"trace\"").count(), 7);
     assert!(text.contains("28 recordings analysed, 0 failed; 7 configurations"));
+
+    // one mean stiffness ellipsoid per configuration and level (seed 001 Fig. 5):
+    // the mean over the subjects' matrices, with eigenvalues of its own
+    let result = read_json(&dir.path().join("out").join("study.json"));
+    let row = &result["levels"][5];
+    let (config, level) = (row["configuration"].clone(), row["level"].as_f64().unwrap());
+    let mut sum = vec![vec![0.0; 3]; 3];
+    let mut subjects = 0.0;
+    for r in result["recordings"].as_array().unwrap() {
+        if r["configuration"] != config {
+            continue;
+        }
+        for l in r["result"]["levels"].as_array().unwrap() {
+            if l["level"].as_f64() == Some(level) {
+                let k = mat(&l["stiffness"]);
+                for (a, b) in sum.iter_mut().flatten().zip(k.iter().flatten()) {
+                    *a += b;
+                }
+                subjects += 1.0;
+            }
+        }
+    }
+    assert_eq!(subjects, row["subjects"].as_f64().unwrap());
+    let mean = mat(&row["stiffness"]);
+    for (m, s) in mean.iter().flatten().zip(sum.iter().flatten()) {
+        assert!((m - s / subjects).abs() < 1e-9 * s.abs().max(1.0));
+    }
+    let eig: f64 = row["ellipsoid"]["eigenvalues"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .sum();
+    let trace = mean[0][0] + mean[1][1] + mean[2][2];
+    assert!((eig - trace).abs() < 1e-9 * trace, "eigenvalues sum {eig}, trace {trace}");
+    let report = limpid_report::build(&[("study".into(), result)]).unwrap();
+    let views = &report.sections[0].ellipsoids;
+    assert_eq!(views.len(), 28);
+    assert!(views.iter().all(|e| e.kind == "stiffness"));
+    assert!(text.contains("ellipsoid-data"));
 }

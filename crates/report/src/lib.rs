@@ -189,28 +189,29 @@ fn matrix_table(
 const KINDS: [(&str, &str); 3] = [("stiffness", "K"), ("damping", "B"), ("inertia", "M")];
 
 fn ellipsoids_of(point: &str, centre: [f64; 3], result: &Value) -> Vec<EllipsoidView> {
-    let mut out = Vec::new();
-    for (kind, _) in KINDS {
-        let e = &result["ellipsoids"][kind];
-        let (Some(axes), Some(ev)) = (matrix(&e["axes"]), e["eigenvalues"].as_array()) else {
-            continue;
-        };
-        if axes.len() != 3 || ev.len() != 3 {
-            continue;
-        }
-        out.push(EllipsoidView {
-            point: point.into(),
-            kind: kind.into(),
-            centre,
-            eigenvalues: [num(&ev[0]), num(&ev[1]), num(&ev[2])],
-            axes: [
-                [axes[0][0], axes[0][1], axes[0][2]],
-                [axes[1][0], axes[1][1], axes[1][2]],
-                [axes[2][0], axes[2][1], axes[2][2]],
-            ],
-        });
+    KINDS
+        .iter()
+        .filter_map(|(kind, _)| ellipsoid_view(point, kind, centre, &result["ellipsoids"][kind]))
+        .collect()
+}
+
+/// One 3-D ellipsoid (`eigenvalues`, `axes` of an ellipsoid JSON) at `centre`.
+fn ellipsoid_view(point: &str, kind: &str, centre: [f64; 3], e: &Value) -> Option<EllipsoidView> {
+    let (axes, ev) = (matrix(&e["axes"])?, e["eigenvalues"].as_array()?);
+    if axes.len() != 3 || axes.iter().any(|r| r.len() != 3) || ev.len() != 3 {
+        return None;
     }
-    out
+    Some(EllipsoidView {
+        point: point.into(),
+        kind: kind.into(),
+        centre,
+        eigenvalues: [num(&ev[0]), num(&ev[1]), num(&ev[2])],
+        axes: [
+            [axes[0][0], axes[0][1], axes[0][2]],
+            [axes[1][0], axes[1][1], axes[1][2]],
+            [axes[2][0], axes[2][1], axes[2][2]],
+        ],
+    })
 }
 
 /// The verdict of a linear result, in words.
@@ -664,6 +665,19 @@ fn study_section(name: &str, v: &Value) -> Result<Section, String> {
     };
     let mut configs: Vec<String> = rows.iter().map(|r| cell(r, "configuration")).collect();
     configs.dedup();
+    // mean stiffness ellipsoids: levels side by side along x, configurations down z (seed 001 Fig. 5)
+    let mut ellipsoids = Vec::new();
+    for (i, c) in configs.iter().enumerate() {
+        let at: Vec<&Value> = rows
+            .iter()
+            .filter(|r| cell(r, "configuration") == *c)
+            .collect();
+        for (j, r) in at.iter().enumerate() {
+            let point = format!("configuration {c}, level {}", cell(r, "level"));
+            let centre = [0.15 * j as f64, 0.0, -0.15 * i as f64];
+            ellipsoids.extend(ellipsoid_view(&point, "stiffness", centre, &r["ellipsoid"]));
+        }
+    }
     let per_config = |key: &str| -> Vec<Series> {
         configs
             .iter()
@@ -719,7 +733,7 @@ fn study_section(name: &str, v: &Value) -> Result<Section, String> {
         warnings: failures,
         tables: vec![levels, rotation],
         figures,
-        ellipsoids: vec![],
+        ellipsoids,
     })
 }
 
