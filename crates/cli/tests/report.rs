@@ -367,7 +367,10 @@ fn study_run_writes_a_report_with_every_configuration() {
         .map(|v| v.as_f64().unwrap())
         .sum();
     let trace = mean[0][0] + mean[1][1] + mean[2][2];
-    assert!((eig - trace).abs() < 1e-9 * trace, "eigenvalues sum {eig}, trace {trace}");
+    assert!(
+        (eig - trace).abs() < 1e-9 * trace,
+        "eigenvalues sum {eig}, trace {trace}"
+    );
     let report = limpid_report::build(&[("study".into(), result)]).unwrap();
     let views = &report.sections[0].ellipsoids;
     assert_eq!(views.len(), 28);

@@ -310,12 +310,20 @@ pub struct MimoPoint {
 
 /// H1 = G_yu G_uu^-1 with multiple and partial coherences, from a spectral
 /// matrix whose first `inputs` signals are the inputs and the rest outputs.
-/// `None` where G_uu is singular.
+/// `None` where G_uu is singular to working precision (reciprocal condition
+/// number below 1e-12: an input without power there, or inputs fully
+/// coherent), where H would be rounding noise.
 pub fn mimo_point(s: &DMatrix<Complex64>, inputs: usize) -> Option<MimoPoint> {
     let m = s.nrows();
     let q = inputs;
     let guu = s.view((0, 0), (q, q)).into_owned();
     let guy = s.view((0, q), (q, m - q)).into_owned(); // [input][output] = E[conj(U_i) Y_k]
+                                                       // G_uu is Hermitian positive semi-definite: its eigenvalues give the conditioning
+    let eig = guu.clone().symmetric_eigenvalues();
+    let (lo, hi) = (eig.min(), eig.max());
+    if !(hi > 0.0 && lo > 1e-12 * hi) {
+        return None;
+    }
     let inv = guu.clone().try_inverse()?;
     let ht = &inv * &guy; // = H^T
     let h = ht.transpose();

@@ -119,3 +119,33 @@ fn multiple_coherence_is_one_without_noise_and_drops_as_predicted() {
         );
     }
 }
+
+#[test]
+fn nearly_coherent_inputs_give_no_response_instead_of_rounding_noise() {
+    // u2 = u1 up to 1e-9: G_uu is singular to working precision at every frequency
+    let n = 8192;
+    let mut state = 99u64;
+    let mut rnd = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state as f64 / u64::MAX as f64) - 0.5
+    };
+    let u1: Vec<f64> = (0..n).map(|_| rnd()).collect();
+    let u2: Vec<f64> = u1.iter().map(|v| v + 1e-9 * rnd()).collect();
+    let y: Vec<f64> = u1.iter().zip(&u2).map(|(a, b)| a - 2.0 * b).collect();
+    let w = Welch {
+        nperseg: 256,
+        ..Welch::new(1000.0)
+    };
+    let mats = SegmentSpectra::new(&[&u1, &u2, &y], &w).unwrap().matrix();
+    assert!(mats[1..].iter().all(|m| mimo_point(m, 2).is_none()));
+    // with u2 independent the same system is identified exactly
+    let u2: Vec<f64> = (0..n).map(|_| rnd()).collect();
+    let y: Vec<f64> = u1.iter().zip(&u2).map(|(a, b)| a - 2.0 * b).collect();
+    let mats = SegmentSpectra::new(&[&u1, &u2, &y], &w).unwrap().matrix();
+    for m in &mats[1..] {
+        let p = mimo_point(m, 2).expect("independent inputs");
+        assert!((p.h[(0, 1)].re + 2.0).abs() < 1e-9 && (p.multiple[0] - 1.0).abs() < 1e-9);
+    }
+}

@@ -162,12 +162,18 @@ pub fn estimate_stochastic(
     let mut multiple = vec![Vec::new(); 2 * n];
     let mut partial = vec![vec![Vec::new(); n]; 2 * n];
     let mut max_input_coh: f64 = 0.0;
+    let mut singular_in_band = 0usize;
     for k in 1..top {
         let s = &mats[k];
-        let Some(p) = mimo_point(s, n) else { continue };
+        let in_band = freqs[k] >= lo;
+        let Some(p) = mimo_point(s, n) else {
+            singular_in_band += usize::from(in_band);
+            continue;
+        };
         let r = p.h.view((0, 0), (n, n)).into_owned();
         let t = p.h.view((n, 0), (n, n)).into_owned();
         let Some(r_inv) = r.try_inverse() else {
+            singular_in_band += usize::from(in_band);
             continue;
         };
         out_f.push(freqs[k]);
@@ -263,6 +269,9 @@ pub fn estimate_stochastic(
     let mut warnings = Vec::new();
     if min_coh < 0.8 {
         warnings.push(format!("multiple coherence falls to {min_coh:.2} in the band: the linear model does not hold everywhere there (noise, nonlinearity or unmeasured inputs)"));
+    }
+    if singular_in_band > 0 {
+        warnings.push(format!("{singular_in_band} frequencies in the band were left out: the input spectral matrix (or R) is singular there (an input without power, or inputs fully coherent)"));
     }
     if max_input_coh >= 0.6 {
         warnings.push(format!("inputs are correlated (ordinary coherence up to {max_input_coh:.2}, seed 004 asks < 0.6): R and T are poorly separated"));

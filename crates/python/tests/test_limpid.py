@@ -230,3 +230,10 @@ def test_simulate_with_a_subject_file_and_the_robot_controllers(tmp_path):
     with pytest.raises(ValueError, match=r"stiff\.toml: line 1, column 1: unknown field `springs`"):
         subject.write_text("springs = [1.0]\n")
         limpid.simulate("artemiadis-3d", subject=subject)
+
+
+def test_frequency_response_says_where_the_inputs_are_singular():
+    u = RNG.standard_normal(4096)
+    with pytest.warns(RuntimeWarning, match="singular"):
+        f, H, mult, _ = limpid.frequency_response([u, u.copy()], [u], fs=100.0, nperseg=128)
+    assert np.isnan(H[1:]).all() and np.isnan(mult[1:]).all()

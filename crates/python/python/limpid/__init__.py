@@ -19,6 +19,8 @@ one-line message; long computations release the GIL.
 from __future__ import annotations
 
 import json
+import os
+import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -171,7 +173,10 @@ def frequency_response(inputs: Sequence[Any], outputs: Sequence[Any], fs: float 
     with multiple and partial coherences (Welch settings as ``psd``).
 
     Returns ``(f, H, multiple, partial)`` with ``H[f, output, input]`` complex,
-    ``multiple[f, output]`` and ``partial[f, output, input]``."""
+    ``multiple[f, output]`` and ``partial[f, output, input]``. At a frequency
+    where the inputs' spectral matrix is singular (an input without power
+    there, or two inputs fully coherent) nothing can be identified: those rows
+    are NaN (mask them with ``numpy.isfinite``), and a warning says how many."""
     ins = [_vector(x) for x in inputs]
     outs = [_vector(y) for y in outputs]
     n = len(ins[0]) if ins else 0
@@ -180,6 +185,14 @@ def frequency_response(inputs: Sequence[Any], outputs: Sequence[Any], fs: float 
     seg, ov = _welch_args(n, nperseg, noverlap, None, True, -1, "mean")
     f, h, m, p = _limpid.frequency_response(ins, outs, float(fs), window, seg, ov, str(detrend).lower())
     nf, no, ni = len(f), len(outs), len(ins)
+    singular = int(np.count_nonzero(~np.isfinite(m.reshape(nf, no)[:, 0]))) if nf and no else 0
+    if singular:
+        warnings.warn(
+            f"frequency_response: the inputs' spectral matrix is singular at {singular} of {nf} "
+            "frequencies (no input power there, or inputs fully coherent); H and the coherences are NaN there",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     return f, h.reshape(nf, no, ni), m.reshape(nf, no), p.reshape(nf, no, ni)
 
 
@@ -276,5 +289,3 @@ def report(results: Sequence[Union[Result, Mapping[str, Any], List[Any]]], path:
     texts = [json.dumps(r.to_dict() if isinstance(r, Result) else r) for r in results]
     _limpid.report(texts, path)
 
-
-import os  # noqa: E402  (used in annotations only)
