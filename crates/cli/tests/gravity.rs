@@ -195,3 +195,108 @@ fn the_sensor_orientation_comes_from_the_placed_robot() {
     let unplaced = worst_error(&[]);
     assert!(unplaced > 0.1, "force error {unplaced} N without the base");
 }
+
+/// Torques: exact when the load's centre of mass lies on the rotation axis, and
+/// off by exactly W h sin(theta) when it sits h along the sensor's z (the README's
+/// "spurious rotational stiffness W h").
+#[test]
+fn torques_get_the_same_two_steps_and_the_documented_residual() {
+    let dir = tempfile::tempdir().unwrap();
+    let fs = 1000.0;
+    let n = 4000;
+    let w = 6.0;
+    let weight = Vector3::new(0.0, 0.0, -w);
+    let bias_f = Vector3::new(0.2, -0.1, 0.4);
+    let bias_t = Vector3::new(0.03, -0.05, 0.02);
+    let names: Vec<String> = [
+        "t",
+        "theta",
+        "sensor_fx",
+        "sensor_fy",
+        "sensor_fz",
+        "sensor_tx",
+        "sensor_ty",
+        "sensor_tz",
+    ]
+    .map(String::from)
+    .to_vec();
+    let mut residuals = Vec::new();
+    for (case, centre) in [
+        (0, Vector3::new(0.0, 0.04, 0.0)),
+        (1, Vector3::new(0.0, 0.0, 0.05)),
+    ] {
+        let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+        let mut truth = Vec::new();
+        for k in 0..n {
+            let t = k as f64 / fs;
+            let theta = if t < 1.0 {
+                0.0
+            } else {
+                0.1 * (3.0 * (t - 1.0)).sin()
+            };
+            let tau_limb =
+                Vector3::new(0.0, if t < 1.0 { 0.0 } else { 0.5 * (7.0 * t).sin() }, 0.0);
+            let r = ry(theta);
+            let g_sensor = r.transpose() * weight;
+            let force = g_sensor + bias_f;
+            let torque = centre.cross(&g_sensor) - r.transpose() * tau_limb + bias_t;
+            let row = [
+                t, theta, force[0], force[1], force[2], torque[0], torque[1], torque[2],
+            ];
+            for (c, v) in cols.iter_mut().zip(row) {
+                c.push(v);
+            }
+            truth.push((theta, tau_limb));
+        }
+        let rec_path = dir.path().join(format!("rig{case}.csv"));
+        limpid_io::write_recording(
+            &limpid_core::Recording::new(&rec_path, names.clone(), cols, 2).unwrap(),
+            &rec_path,
+        )
+        .unwrap();
+        // step 1: gravity along the sensor's y, which loads neither x, z nor the torque about y
+        let g_step1 = Vector3::new(0.0, -w, 0.0);
+        let f1 = g_step1 + bias_f;
+        let t1 = centre.cross(&g_step1) + bias_t;
+        let step1 = [0.0, 0.0, f1[0], f1[1], f1[2], t1[0], t1[1], t1[2]];
+        let mut bias_cols: Vec<Vec<f64>> = step1.iter().map(|v| vec![*v; 50]).collect();
+        bias_cols[0] = (0..50).map(|k| k as f64 / fs).collect();
+        let bias_path = dir.path().join(format!("bias{case}.csv"));
+        limpid_io::write_recording(
+            &limpid_core::Recording::new(&bias_path, names.clone(), bias_cols, 2).unwrap(),
+            &bias_path,
+        )
+        .unwrap();
+        let out_path = dir.path().join(format!("out{case}.csv"));
+        let out = limpid(&[
+            "gravity-compensate",
+            rec_path.to_str().unwrap(),
+            "--bias",
+            bias_path.to_str().unwrap(),
+            "-o",
+            out_path.to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        assert!(out.stdout.contains("tauy"), "{}", out.stdout);
+        let got = limpid_io::read_recording(&out_path).unwrap();
+        let tauy = got.column("tauy").unwrap();
+        // case 0: exact; case 1: the output is tau_limb - W h sin(theta)
+        let h = centre[2];
+        let worst = truth
+            .iter()
+            .zip(tauy)
+            .map(|((theta, tau), got)| (got - (tau[1] - w * h * theta.sin())).abs())
+            .fold(0.0, f64::max);
+        residuals.push(worst);
+        // the forces come out exact either way (no force on the limb here)
+        for c in ["fx", "fz"] {
+            let worst_f = got
+                .column(c)
+                .unwrap()
+                .iter()
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(worst_f < 1e-9, "case {case}: {c} {worst_f:e} N");
+        }
+    }
+    assert!(residuals.iter().all(|r| *r < 1e-9), "{residuals:?}");
+}
