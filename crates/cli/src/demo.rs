@@ -138,9 +138,9 @@ pub fn run(args: DemoArgs) -> CliResult {
         return Ok(());
     }
     println!(
-        "limpid demo: seed 000 protocol on a virtual subject (Table I, subject 1): 6 start points x {} {:?} perturbations of {} cm, {} s, {} Hz",
+        "limpid demo: seed 000 protocol on a virtual subject (Table I, subject 1): 6 start points x {} {} perturbations of {} cm, {} s, {} Hz",
         protocol.directions.len(),
-        profile,
+        format!("{profile:?}").to_lowercase(),
         protocol.radius_m * 100.0,
         protocol.motion_s,
         protocol.sample_rate
