@@ -10,6 +10,27 @@ fn ry(a: f64) -> Matrix3<f64> {
     Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 }
 
+/// Write columns `names` as a CSV recording at `path`.
+fn write(path: &std::path::Path, names: &[String], cols: Vec<Vec<f64>>) {
+    limpid_io::write_recording(
+        &limpid_core::Recording::new(path, names.to_vec(), cols, 2).unwrap(),
+        path,
+    )
+    .unwrap();
+}
+
+/// Largest deviation of the output's fx, fy, fz from the true force on the limb.
+fn worst_force_error(output: &std::path::Path, truth: &[Vector3<f64>]) -> f64 {
+    let got = limpid_io::read_recording(output).unwrap();
+    let mut worst = 0.0f64;
+    for (a, c) in ["fx", "fy", "fz"].iter().enumerate() {
+        for (k, v) in got.column(c).unwrap().iter().enumerate() {
+            worst = worst.max((v - truth[k][a]).abs());
+        }
+    }
+    worst
+}
+
 #[test]
 fn bias_and_weight_are_removed_and_the_force_on_the_limb_recovered() {
     let dir = tempfile::tempdir().unwrap();
@@ -50,11 +71,7 @@ fn bias_and_weight_are_removed_and_the_force_on_the_limb_recovered() {
         .map(String::from)
         .to_vec();
     let rec_path = dir.path().join("test.csv");
-    limpid_io::write_recording(
-        &limpid_core::Recording::new(&rec_path, names.clone(), cols, 2).unwrap(),
-        &rec_path,
-    )
-    .unwrap();
+    write(&rec_path, &names, cols);
     // step 1: sensor turned so that gravity does not load it: it reads its bias
     let bias_cols = vec![
         (0..200).map(|k| k as f64 / fs).collect(),
@@ -64,11 +81,7 @@ fn bias_and_weight_are_removed_and_the_force_on_the_limb_recovered() {
         vec![bias[2]; 200],
     ];
     let bias_path = dir.path().join("bias.csv");
-    limpid_io::write_recording(
-        &limpid_core::Recording::new(&bias_path, names, bias_cols, 2).unwrap(),
-        &bias_path,
-    )
-    .unwrap();
+    write(&bias_path, &names, bias_cols);
     let out_path = dir.path().join("out.csv");
     let out = limpid(&[
         "gravity-compensate",
@@ -81,13 +94,7 @@ fn bias_and_weight_are_removed_and_the_force_on_the_limb_recovered() {
         out_path.to_str().unwrap(),
     ]);
     assert_eq!(out.code, 0, "{}", out.stderr);
-    let got = limpid_io::read_recording(&out_path).unwrap();
-    let mut worst = 0.0f64;
-    for (a, c) in ["fx", "fy", "fz"].iter().enumerate() {
-        for (k, v) in got.column(c).unwrap().iter().enumerate() {
-            worst = worst.max((v - truth[k][a]).abs());
-        }
-    }
+    let worst = worst_force_error(&out_path, &truth);
     assert!(worst < 1e-9, "force error {worst:e} N");
 
     // without sensor columns: a one-line error naming the file and the column
@@ -148,11 +155,7 @@ fn the_sensor_orientation_comes_from_the_placed_robot() {
     }
     let names: Vec<String> = names.map(String::from).to_vec();
     let rec_path = dir.path().join("robot.csv");
-    limpid_io::write_recording(
-        &limpid_core::Recording::new(&rec_path, names.clone(), cols.clone(), 2).unwrap(),
-        &rec_path,
-    )
-    .unwrap();
+    write(&rec_path, &names, cols.clone());
     let bias_cols: Vec<Vec<f64>> = (0..names.len())
         .map(|c| match c {
             4..=6 => vec![bias[c - 4]; 100],
@@ -160,11 +163,7 @@ fn the_sensor_orientation_comes_from_the_placed_robot() {
         })
         .collect();
     let bias_path = dir.path().join("bias.csv");
-    limpid_io::write_recording(
-        &limpid_core::Recording::new(&bias_path, names, bias_cols, 2).unwrap(),
-        &bias_path,
-    )
-    .unwrap();
+    write(&bias_path, &names, bias_cols);
     let worst_error = |extra: &[&str]| {
         let out_path = dir.path().join("out.csv");
         let mut args = vec![
@@ -180,14 +179,7 @@ fn the_sensor_orientation_comes_from_the_placed_robot() {
         args.extend_from_slice(extra);
         let out = limpid(&args);
         assert_eq!(out.code, 0, "{}", out.stderr);
-        let got = limpid_io::read_recording(&out_path).unwrap();
-        let mut worst = 0.0f64;
-        for (a, c) in ["fx", "fy", "fz"].iter().enumerate() {
-            for (k, v) in got.column(c).unwrap().iter().enumerate() {
-                worst = worst.max((v - truth[k][a]).abs());
-            }
-        }
-        worst
+        worst_force_error(&out_path, &truth)
     };
     let placed = worst_error(&["--robot-base", "0.1,-0.2,0.3,0.2,0,0.7"]);
     assert!(placed < 1e-9, "force error {placed:e} N with the base");
@@ -249,11 +241,7 @@ fn torques_get_the_same_two_steps_and_the_documented_residual() {
             truth.push((theta, tau_limb));
         }
         let rec_path = dir.path().join(format!("rig{case}.csv"));
-        limpid_io::write_recording(
-            &limpid_core::Recording::new(&rec_path, names.clone(), cols, 2).unwrap(),
-            &rec_path,
-        )
-        .unwrap();
+        write(&rec_path, &names, cols);
         // step 1: gravity along the sensor's y, which loads neither x, z nor the torque about y
         let g_step1 = Vector3::new(0.0, -w, 0.0);
         let f1 = g_step1 + bias_f;
@@ -262,11 +250,7 @@ fn torques_get_the_same_two_steps_and_the_documented_residual() {
         let mut bias_cols: Vec<Vec<f64>> = step1.iter().map(|v| vec![*v; 50]).collect();
         bias_cols[0] = (0..50).map(|k| k as f64 / fs).collect();
         let bias_path = dir.path().join(format!("bias{case}.csv"));
-        limpid_io::write_recording(
-            &limpid_core::Recording::new(&bias_path, names.clone(), bias_cols, 2).unwrap(),
-            &bias_path,
-        )
-        .unwrap();
+        write(&bias_path, &names, bias_cols);
         let out_path = dir.path().join(format!("out{case}.csv"));
         let out = limpid(&[
             "gravity-compensate",

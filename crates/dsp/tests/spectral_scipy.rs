@@ -63,17 +63,22 @@ fn welch_csd_coherence_match_scipy() {
     }
 }
 
-#[test]
-fn multiple_coherence_is_one_without_noise_and_drops_as_predicted() {
-    // two independent inputs, two outputs: y1 = u1 + 0.5 u2 (+ noise), y2 = u2 delayed
-    let n = 40_000;
-    let mut state = 12345u64;
-    let mut rnd = || {
+/// Uniform numbers in [-0.5, 0.5) from a xorshift generator (no rand in this crate's tests).
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
         state ^= state << 13;
         state ^= state >> 7;
         state ^= state << 17;
         (state as f64 / u64::MAX as f64) - 0.5
-    };
+    }
+}
+
+#[test]
+fn multiple_coherence_is_one_without_noise_and_drops_as_predicted() {
+    // two independent inputs, two outputs: y1 = u1 + 0.5 u2 (+ noise), y2 = u2 delayed
+    let n = 40_000;
+    let mut rnd = uniform(12345);
     let u1: Vec<f64> = (0..n).map(|_| rnd()).collect();
     let u2: Vec<f64> = (0..n).map(|_| rnd()).collect();
     let noise: Vec<f64> = (0..n).map(|_| rnd()).collect();
@@ -124,13 +129,7 @@ fn multiple_coherence_is_one_without_noise_and_drops_as_predicted() {
 fn nearly_coherent_inputs_give_no_response_instead_of_rounding_noise() {
     // u2 = u1 up to 1e-9: G_uu is singular to working precision at every frequency
     let n = 8192;
-    let mut state = 99u64;
-    let mut rnd = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state as f64 / u64::MAX as f64) - 0.5
-    };
+    let mut rnd = uniform(99);
     let u1: Vec<f64> = (0..n).map(|_| rnd()).collect();
     let u2: Vec<f64> = u1.iter().map(|v| v + 1e-9 * rnd()).collect();
     let y: Vec<f64> = u1.iter().zip(&u2).map(|(a, b)| a - 2.0 * b).collect();
