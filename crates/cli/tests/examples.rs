@@ -226,3 +226,18 @@ fn seed000_frame_change_recovers_the_human_frame_matrices() {
         "the robot frame differs"
     );
 }
+
+#[test]
+fn a_matlab_file_estimates_back_to_its_truth() {
+    // crates/io/tests/fixtures: a simulated recording saved by scipy.io.savemat (-v7, compressed)
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/fixtures");
+    let est = json(&[
+        "estimate",
+        "linear",
+        fixtures.join("small_v7.mat").to_str().unwrap(),
+        "--json",
+    ]);
+    let truth = read_json(&fixtures.join("small.truth.json"));
+    let ek = rel_err(&mat(&est["stiffness"]), &mat(&truth["stiffness"]));
+    assert!(ek < 0.03, "stiffness error {ek} from the MAT-file");
+}

@@ -1,12 +1,17 @@
 //! limpid-io: recordings from and to files (FORMAT.md v1).
 //!
 //! CSV with a header row, or Parquet with the same column names; the format
-//! is chosen by the file extension (`.parquet`/`.pq` for Parquet, anything
-//! else is read as CSV). Every value is parsed as `f64`; the table is then
-//! checked once by [`Recording::new`]. Errors name file, row and column.
+//! is chosen by the file extension (`.parquet`/`.pq` for Parquet, `.mat` for
+//! MATLAB, anything else is read as CSV). Every value is parsed as `f64`; the
+//! table is then checked once by [`Recording::new`]. Errors name file, row and
+//! column.
 //!
-//! MATLAB `.mat` files are not read yet (no maintained pure-Rust reader was
-//! checked in this workspace); convert them to CSV or Parquet.
+//! MATLAB files (read only): level-5 MAT-files, i.e. MATLAB's `-v6` and
+//! default `-v7` (compressed) formats, read with the `matfile` crate. Each
+//! column is a real numeric vector variable (row or column, any numeric
+//! class) named like the column; scalars, matrices, strings, structs and
+//! cells are skipped. `-v7.3` files are HDF5 and are refused with a hint. In
+//! errors, "row" counts samples from 1, as MATLAB indexes them.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -33,23 +38,165 @@ pub fn is_parquet(path: &Path) -> bool {
     )
 }
 
+/// True when the path names a MATLAB MAT-file.
+pub fn is_mat(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("mat"))
+}
+
 /// Read a recording, choosing the format by extension.
 pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     let path = path.as_ref();
     if is_parquet(path) {
         read_parquet(path)
+    } else if is_mat(path) {
+        read_mat(path)
     } else {
         read_csv(path)
     }
 }
 
-/// Write a recording, choosing the format by extension.
+/// Write a recording, choosing the format by extension (CSV or Parquet).
 pub fn write_recording(rec: &Recording, path: impl AsRef<Path>) -> Result<()> {
     let path = path.as_ref();
     if is_parquet(path) {
         write_parquet(rec, path)
+    } else if is_mat(path) {
+        Err(Error::Format {
+            path: path.to_path_buf(),
+            message: "limpid reads MAT-files but does not write them; write .csv or .parquet (MATLAB reads both: readtable, parquetread)".into(),
+        })
     } else {
         write_csv(rec, path)
+    }
+}
+
+/// Read a MATLAB level-5 MAT-file: one real numeric vector per column.
+pub fn read_mat(path: &Path) -> Result<Recording> {
+    let bytes = std::fs::read(path).map_err(io_err(path))?;
+    if bytes.is_empty() {
+        return Err(Error::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let fail = |message: String| Error::Format {
+        path: path.to_path_buf(),
+        message,
+    };
+    let header = String::from_utf8_lossy(&bytes[..bytes.len().min(116)]);
+    if header.starts_with("MATLAB 7.3 MAT-file") {
+        return Err(fail(
+            "a MAT-file v7.3 (HDF5) is not read; save it with save(..., '-v7') or as CSV/Parquet"
+                .into(),
+        ));
+    }
+    if !header.starts_with("MATLAB 5.0 MAT-file") {
+        return Err(fail(
+            "not a MAT-file: the header does not start with \"MATLAB 5.0 MAT-file\"".into(),
+        ));
+    }
+    check_mat_elements(&bytes).map_err(fail)?;
+    let mat = matfile::MatFile::parse(bytes.as_slice())
+        .map_err(|e| fail(format!("not a readable MAT-file: {e}")))?;
+    let (mut names, mut columns, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
+    for array in mat.arrays() {
+        let size = array.size();
+        let samples: usize = size.iter().product();
+        let vector = size.len() == 2 && size.contains(&1) && samples > 1;
+        if !vector {
+            let dims: Vec<String> = size.iter().map(usize::to_string).collect();
+            skipped.push(format!("{} ({})", array.name(), dims.join(" x ")));
+            continue;
+        }
+        let values = mat_real_values(array.data()).ok_or_else(|| {
+            fail(format!(
+                "variable {}: complex values; a recording holds real numbers",
+                array.name()
+            ))
+        })?;
+        names.push(array.name().to_string());
+        columns.push(values);
+    }
+    if names.is_empty() {
+        return Err(fail(format!(
+            "no numeric vector variable to read as a column (found {}); save each column (t, x, fx, ...) as a vector",
+            if skipped.is_empty() {
+                "no numeric variable".to_string()
+            } else {
+                skipped.join(", ")
+            }
+        )));
+    }
+    Recording::new(path, names, columns, 1)
+}
+
+/// Walk the top-level data elements (8-byte tag: type, byte count) and refuse
+/// a file that ends inside one: the parser would return the variables before
+/// the cut as if the file were whole.
+fn check_mat_elements(bytes: &[u8]) -> std::result::Result<(), String> {
+    const HEADER: usize = 128;
+    const COMPRESSED: u32 = 15;
+    if bytes.len() < HEADER {
+        return Err(format!(
+            "truncated: {} bytes, shorter than the 128-byte header",
+            bytes.len()
+        ));
+    }
+    let little = &bytes[126..128] == b"IM";
+    let word = |at: usize| {
+        let b = [bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]];
+        if little {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        }
+    };
+    let mut at = HEADER;
+    while at < bytes.len() {
+        if at + 8 > bytes.len() {
+            return Err(format!(
+                "truncated: the file ends inside the tag at byte {at}"
+            ));
+        }
+        let (kind, size) = (word(at), word(at + 4) as usize);
+        let mut next = at + 8 + size;
+        if kind != COMPRESSED {
+            next = next.div_ceil(8) * 8; // uncompressed elements are padded to 8 bytes
+        }
+        if next > bytes.len() {
+            return Err(format!(
+                "truncated: the variable at byte {at} needs {} bytes, the file has {}",
+                next - at,
+                bytes.len() - at
+            ));
+        }
+        at = next;
+    }
+    Ok(())
+}
+
+/// The values of a real numeric array as f64; `None` if it is complex.
+fn mat_real_values(data: &matfile::NumericData) -> Option<Vec<f64>> {
+    use matfile::NumericData as D;
+    macro_rules! real {
+        ($real:expr, $imag:expr) => {
+            $imag
+                .is_none()
+                .then(|| $real.iter().map(|v| *v as f64).collect())
+        };
+    }
+    match data {
+        D::Int8 { real, imag } => real!(real, imag),
+        D::UInt8 { real, imag } => real!(real, imag),
+        D::Int16 { real, imag } => real!(real, imag),
+        D::UInt16 { real, imag } => real!(real, imag),
+        D::Int32 { real, imag } => real!(real, imag),
+        D::UInt32 { real, imag } => real!(real, imag),
+        D::Int64 { real, imag } => real!(real, imag),
+        D::UInt64 { real, imag } => real!(real, imag),
+        D::Single { real, imag } => real!(real, imag),
+        D::Double { real, imag } => real!(real, imag),
     }
 }
 

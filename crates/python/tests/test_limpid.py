@@ -237,3 +237,14 @@ def test_frequency_response_says_where_the_inputs_are_singular():
     with pytest.warns(RuntimeWarning, match="singular"):
         f, H, mult, _ = limpid.frequency_response([u, u.copy()], [u], fs=100.0, nperseg=128)
     assert np.isnan(H[1:]).all() and np.isnan(mult[1:]).all()
+
+
+def test_matlab_files_read_like_their_csv():
+    fixtures = pathlib.Path(__file__).resolve().parents[2] / "io" / "tests" / "fixtures"
+    csv = limpid.read_recording(fixtures / "small.csv")
+    mat = limpid.read_recording(fixtures / "small_v7.mat")
+    assert list(mat) == list(csv)
+    for name in csv:
+        np.testing.assert_array_equal(mat[name], csv[name])
+    with pytest.raises(ValueError, match="complex values"):
+        limpid.read_recording(fixtures / "complex.mat")
