@@ -106,7 +106,7 @@ def _recording(rec: RecordingLike) -> Any:
 
 
 def read_recording(path: Union[str, "os.PathLike[str]"]) -> Dict[str, np.ndarray]:
-    """Read a CSV or Parquet recording (FORMAT.md) into a dict of arrays."""
+    """Read a CSV, Parquet or MATLAB level-5 (.mat, -v6/-v7) recording (FORMAT.md) into a dict of arrays."""
     return _limpid.read_recording(path)
 
 
