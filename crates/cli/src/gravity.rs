@@ -19,6 +19,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use limpid_core::frame::GravityCompensation;
+use limpid_core::PayloadCalibration;
 use limpid_core::{Error, Recording};
 use nalgebra::{Matrix3, Vector3};
 
@@ -26,15 +27,26 @@ use crate::estimate::RobotArgs;
 use crate::CliResult;
 
 #[derive(Args)]
+#[command(group(clap::ArgGroup::new("load").required(true).args(["bias", "calibration"])))]
 pub struct GravityArgs {
     /// The test recording with `sensor_fx`, `sensor_fy`, `sensor_fz`.
     pub recording: PathBuf,
-    /// Step 1: readings in a pose where gravity does not load the sensor axes.
-    #[arg(long)]
-    pub bias: PathBuf,
+    /// Seed 004's two steps. Step 1: readings in a pose where gravity does not
+    /// load the sensor axes.
+    #[arg(
+        long,
+        required_unless_present = "calibration",
+        conflicts_with = "calibration"
+    )]
+    pub bias: Option<PathBuf>,
     /// Step 2: the first seconds of the test, before any perturbation.
     #[arg(long, default_value_t = 1.0)]
     pub initial_s: f64,
+    /// Instead of the two steps: still readings in several orientations (the
+    /// same sensor and orientation columns), from which the weight, the load's
+    /// centre of mass and the biases are fitted (a limpid extension; see the README).
+    #[arg(long, value_name = "RECORDING")]
+    pub calibration: Option<PathBuf>,
     /// Sensor orientation from the robot_q columns by forward kinematics.
     #[command(flatten)]
     pub robot: RobotArgs,
@@ -77,23 +89,55 @@ fn rotations(rec: &Recording, robot: &RobotArgs) -> CliResult<Vec<Matrix3<f64>>>
 
 pub fn run(args: GravityArgs) -> CliResult {
     let mut rec = limpid_io::read_recording(&args.recording)?;
-    let bias = limpid_io::read_recording(&args.bias)?;
-    // forces, and torques when the sensor's torque columns are there
-    let mut channels = vec![(
-        readings(&rec, "sensor_f")?,
-        readings(&bias, "sensor_f")?,
-        ["fx", "fy", "fz"],
-    )];
-    if ["sensor_tx", "sensor_ty", "sensor_tz"]
+    let with_torques = ["sensor_tx", "sensor_ty", "sensor_tz"]
         .iter()
-        .any(|c| rec.has(c))
-    {
-        channels.push((
-            readings(&rec, "sensor_t")?,
-            readings(&bias, "sensor_t")?,
-            ["taux", "tauy", "tauz"],
-        ));
+        .any(|c| rec.has(c));
+    let forces = readings(&rec, "sensor_f")?;
+    let torques = if with_torques {
+        Some(readings(&rec, "sensor_t")?)
+    } else {
+        None
+    };
+    let rot = rotations(&rec, &args.robot)?;
+    let (force_out, torque_out, summary) = match (&args.calibration, &args.bias) {
+        (Some(path), _) => calibrated(path, &args.robot, &rot, &forces, torques.as_deref())?,
+        (None, Some(path)) => two_steps(path, &args, &rec, &rot, &forces, torques.as_deref())?,
+        (None, None) => return Err("give --bias (two steps) or --calibration".into()),
+    };
+    let mut columns = vec![(["fx", "fy", "fz"], force_out)];
+    columns.extend(torque_out.map(|t| (["taux", "tauy", "tauz"], t)));
+    for (names, values) in columns {
+        for (a, name) in names.iter().enumerate() {
+            rec.set_column(name, values.iter().map(|v| v[a]).collect())?;
+        }
     }
+    limpid_io::write_recording(&rec, &args.output)?;
+    println!(
+        "wrote {}: fx, fy, fz{} = force{} on the limb in the reference frame",
+        args.output.display(),
+        if with_torques {
+            ", taux, tauy, tauz"
+        } else {
+            ""
+        },
+        if with_torques { " and torque" } else { "" }
+    );
+    print!("{summary}");
+    Ok(())
+}
+
+type Compensated = (Vec<Vector3<f64>>, Option<Vec<Vector3<f64>>>, String);
+
+/// Seed 004's two steps, for forces and (the same way) torques.
+fn two_steps(
+    bias_path: &std::path::Path,
+    args: &GravityArgs,
+    rec: &Recording,
+    rot: &[Matrix3<f64>],
+    forces: &[Vector3<f64>],
+    torques: Option<&[Vector3<f64>]>,
+) -> CliResult<Compensated> {
+    let bias = limpid_io::read_recording(bias_path)?;
     let initial = (args.initial_s * rec.sample_rate()).round() as usize;
     if args.initial_s.is_nan() || args.initial_s <= 0.0 || initial == 0 || initial > rec.len() {
         return Err(Error::invalid(
@@ -106,38 +150,91 @@ pub fn run(args: GravityArgs) -> CliResult {
         )
         .into());
     }
-    let rot = rotations(&rec, &args.robot)?;
-    // the same two steps for forces and torques; step 2 uses the orientation
-    // at the start, which must be still
-    let mut calibrations = Vec::new();
-    for (read, bias_read, names) in channels {
-        let comp = GravityCompensation::calibrate(&bias_read, &read[..initial], &rot[0])?;
-        let mut out: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(rec.len())).collect();
-        for (r, m) in read.iter().zip(&rot) {
-            let f = comp.force_on_limb(r, m);
-            for a in 0..3 {
-                out[a].push(f[a]);
-            }
-        }
-        for (name, col) in names.iter().zip(out) {
-            rec.set_column(name, col)?;
-        }
-        calibrations.push(comp);
-    }
-    limpid_io::write_recording(&rec, &args.output)?;
-    let comp = &calibrations[0];
-    println!(
-        "wrote {}: fx, fy, fz = force on the limb in the reference frame; sensor bias [{:.4}, {:.4}, {:.4}] N, weight term [{:.4}, {:.4}, {:.4}] N",
-        args.output.display(),
-        comp.bias_sensor[0], comp.bias_sensor[1], comp.bias_sensor[2],
-        comp.gravity_ref[0], comp.gravity_ref[1], comp.gravity_ref[2]
+    // step 2 uses the orientation at the start, which must be still
+    let compensate = |read: &[Vector3<f64>], prefix: &str| -> CliResult<_> {
+        let comp =
+            GravityCompensation::calibrate(&readings(&bias, prefix)?, &read[..initial], &rot[0])?;
+        let out: Vec<Vector3<f64>> = read
+            .iter()
+            .zip(rot)
+            .map(|(r, m)| comp.force_on_limb(r, m))
+            .collect();
+        Ok((out, comp))
+    };
+    let (force_out, f) = compensate(forces, "sensor_f")?;
+    let mut summary = format!(
+        "two steps: sensor bias [{:.4}, {:.4}, {:.4}] N, weight term [{:.4}, {:.4}, {:.4}] N\n",
+        f.bias_sensor[0],
+        f.bias_sensor[1],
+        f.bias_sensor[2],
+        f.gravity_ref[0],
+        f.gravity_ref[1],
+        f.gravity_ref[2]
     );
-    if let Some(t) = calibrations.get(1) {
-        println!(
-            "taux, tauy, tauz = torque on the limb in the reference frame; sensor bias [{:.4}, {:.4}, {:.4}] N m, weight moment [{:.4}, {:.4}, {:.4}] N m (held constant: see the README)",
-            t.bias_sensor[0], t.bias_sensor[1], t.bias_sensor[2],
-            t.gravity_ref[0], t.gravity_ref[1], t.gravity_ref[2]
-        );
+    let torque_out = match torques {
+        Some(t) => {
+            let (out, c) = compensate(t, "sensor_t")?;
+            summary.push_str(&format!(
+                "torque bias [{:.4}, {:.4}, {:.4}] N m, weight moment [{:.4}, {:.4}, {:.4}] N m, held constant (a load off the rotation axis leaves W h sin(dtheta); --calibration removes it)\n",
+                c.bias_sensor[0], c.bias_sensor[1], c.bias_sensor[2],
+                c.gravity_ref[0], c.gravity_ref[1], c.gravity_ref[2]
+            ));
+            Some(out)
+        }
+        None => None,
+    };
+    Ok((force_out, torque_out, summary))
+}
+
+/// Weight, centre of mass and biases fitted from still poses ([`PayloadCalibration`]).
+fn calibrated(
+    path: &std::path::Path,
+    robot: &RobotArgs,
+    rot: &[Matrix3<f64>],
+    forces: &[Vector3<f64>],
+    torques: Option<&[Vector3<f64>]>,
+) -> CliResult<Compensated> {
+    let cal = limpid_io::read_recording(path)?;
+    let cal_rot = rotations(&cal, robot)?;
+    let cal_torques = match torques {
+        Some(_) => Some(readings(&cal, "sensor_t")?),
+        None => None,
+    };
+    let c = PayloadCalibration::fit(
+        &cal_rot,
+        &readings(&cal, "sensor_f")?,
+        cal_torques.as_deref(),
+    )
+    .map_err(|e| format!("{}: {e}", path.display()))?;
+    let force_out = forces
+        .iter()
+        .zip(rot)
+        .map(|(r, m)| c.force_on_limb(r, m))
+        .collect();
+    let torque_out = torques.map(|t| {
+        t.iter()
+            .zip(rot)
+            .map(|(r, m)| c.torque_on_limb(r, m).unwrap_or_default())
+            .collect()
+    });
+    let w = Vector3::from(c.weight_ref);
+    let mut summary = format!(
+        "calibration ({} still readings): weight {:.4} N ({:.4} kg at 9.81 m/s^2), force bias [{:.4}, {:.4}, {:.4}] N, force residual {:.3e} N rms\n",
+        c.samples,
+        w.norm(),
+        w.norm() / 9.81,
+        c.force_bias[0], c.force_bias[1], c.force_bias[2],
+        c.force_rms_residual
+    );
+    if let (Some(p), Some(b), Some(res)) = (c.centre_of_mass, c.torque_bias, c.torque_rms_residual)
+    {
+        summary.push_str(&format!(
+            "centre of mass [{:.4}, {:.4}, {:.4}] m (sensor frame), torque bias [{:.4}, {:.4}, {:.4}] N m, torque residual {res:.3e} N m rms\n",
+            p[0], p[1], p[2], b[0], b[1], b[2]
+        ));
     }
-    Ok(())
+    for u in &c.unidentified {
+        summary.push_str(&format!("warning: not separated by the poses: {u}\n"));
+    }
+    Ok((force_out, torque_out, summary))
 }

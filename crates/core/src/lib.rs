@@ -8,10 +8,12 @@
 pub mod arm;
 pub mod error;
 pub mod frame;
+pub mod payload;
 pub mod recording;
 pub mod trial;
 
 pub use error::{display_round, Error, Result};
 pub use frame::{FrameTransform, GravityCompensation};
+pub use payload::PayloadCalibration;
 pub use recording::Recording;
 pub use trial::Window;
