@@ -188,6 +188,41 @@ fn the_sensor_orientation_comes_from_the_placed_robot() {
     assert!(unplaced > 0.1, "force error {unplaced} N without the base");
 }
 
+/// Columns of seed 004's rig with a six-axis sensor.
+const RIG_COLUMNS: [&str; 8] = [
+    "t",
+    "theta",
+    "sensor_fx",
+    "sensor_fy",
+    "sensor_fz",
+    "sensor_tx",
+    "sensor_ty",
+    "sensor_tz",
+];
+
+/// A load on the sensor: weight (reference frame), centre of mass (sensor
+/// frame) and the sensor's biases.
+struct Load {
+    weight: Vector3<f64>,
+    centre: Vector3<f64>,
+    bias_f: Vector3<f64>,
+    bias_t: Vector3<f64>,
+}
+
+impl Load {
+    /// One row of RIG_COLUMNS: the sensor turned by `theta` about y while
+    /// the robot applies `f_limb` and `tau_limb` to the limb.
+    fn row(&self, t: f64, theta: f64, f_limb: Vector3<f64>, tau_limb: Vector3<f64>) -> [f64; 8] {
+        let r = ry(theta);
+        let g = r.transpose() * self.weight;
+        let force = g - r.transpose() * f_limb + self.bias_f;
+        let torque = self.centre.cross(&g) - r.transpose() * tau_limb + self.bias_t;
+        [
+            t, theta, force[0], force[1], force[2], torque[0], torque[1], torque[2],
+        ]
+    }
+}
+
 /// Torques: exact when the load's centre of mass lies on the rotation axis, and
 /// off by exactly W h sin(theta) when it sits h along the sensor's z (the README's
 /// "spurious rotational stiffness W h").
@@ -200,18 +235,7 @@ fn torques_get_the_same_two_steps_and_the_documented_residual() {
     let weight = Vector3::new(0.0, 0.0, -w);
     let bias_f = Vector3::new(0.2, -0.1, 0.4);
     let bias_t = Vector3::new(0.03, -0.05, 0.02);
-    let names: Vec<String> = [
-        "t",
-        "theta",
-        "sensor_fx",
-        "sensor_fy",
-        "sensor_fz",
-        "sensor_tx",
-        "sensor_ty",
-        "sensor_tz",
-    ]
-    .map(String::from)
-    .to_vec();
+    let names: Vec<String> = RIG_COLUMNS.map(String::from).to_vec();
     let mut residuals = Vec::new();
     for (case, centre) in [
         (0, Vector3::new(0.0, 0.04, 0.0)),
@@ -228,13 +252,13 @@ fn torques_get_the_same_two_steps_and_the_documented_residual() {
             };
             let tau_limb =
                 Vector3::new(0.0, if t < 1.0 { 0.0 } else { 0.5 * (7.0 * t).sin() }, 0.0);
-            let r = ry(theta);
-            let g_sensor = r.transpose() * weight;
-            let force = g_sensor + bias_f;
-            let torque = centre.cross(&g_sensor) - r.transpose() * tau_limb + bias_t;
-            let row = [
-                t, theta, force[0], force[1], force[2], torque[0], torque[1], torque[2],
-            ];
+            let load = Load {
+                weight,
+                centre,
+                bias_f,
+                bias_t,
+            };
+            let row = load.row(t, theta, Vector3::zeros(), tau_limb);
             for (c, v) in cols.iter_mut().zip(row) {
                 c.push(v);
             }
@@ -295,27 +319,14 @@ fn a_calibration_from_still_poses_removes_the_off_axis_moment() {
     let weight = Vector3::new(0.0, 0.0, -w);
     let bias_f = Vector3::new(0.2, -0.1, 0.4);
     let bias_t = Vector3::new(0.03, -0.05, 0.02);
-    let names: Vec<String> = [
-        "t",
-        "theta",
-        "sensor_fx",
-        "sensor_fy",
-        "sensor_fz",
-        "sensor_tx",
-        "sensor_ty",
-        "sensor_tz",
-    ]
-    .map(String::from)
-    .to_vec();
-    let row = |t: f64, theta: f64, f_limb: Vector3<f64>, tau_limb: Vector3<f64>| {
-        let r = ry(theta);
-        let g = r.transpose() * weight;
-        let force = g - r.transpose() * f_limb + bias_f;
-        let torque = centre.cross(&g) - r.transpose() * tau_limb + bias_t;
-        [
-            t, theta, force[0], force[1], force[2], torque[0], torque[1], torque[2],
-        ]
+    let names: Vec<String> = RIG_COLUMNS.map(String::from).to_vec();
+    let load = Load {
+        weight,
+        centre,
+        bias_f,
+        bias_t,
     };
+    let row = |t, theta, f_limb, tau_limb| load.row(t, theta, f_limb, tau_limb);
     let columns = |rows: &[[f64; 8]]| -> Vec<Vec<f64>> {
         (0..8)
             .map(|c| rows.iter().map(|r| r[c]).collect())
