@@ -174,7 +174,7 @@ def test_virtual_lab_ellipsoid_and_report(tmp_path):
     out = tmp_path / "r.html"
     limpid.report([est], out)
     html = out.read_text()
-    assert "Ellipsoids at their start points" in html and "src=" not in html
+    assert "<h2>Ellipsoids</h2>" in html and "src=" not in html
 
 
 def test_frequency_response_of_a_noiseless_two_input_system():

@@ -1070,7 +1070,7 @@ pub fn to_html(report: &Report) -> String {
         .flat_map(|s| s.ellipsoids.clone())
         .collect();
     if !ellipsoids.is_empty() {
-        h.push_str("<h2>Ellipsoids at their start points</h2><p>Radii proportional to the eigenvalues of the symmetric part (one scale per kind, shown by the dashed sphere); drag to rotate, click a kind to show or hide it.</p><div id=\"ellipsoid-kinds\"></div><div id=\"ellipsoid-view\"></div>");
+        h.push_str("<h2>Ellipsoids</h2><p>Each at its start point; co-contraction levels side by side along x, study configurations down z. Radii proportional to the eigenvalues of the symmetric part (one scale per kind, shown by the dashed sphere); drag to rotate, click a kind to show or hide it.</p><div id=\"ellipsoid-kinds\"></div><div id=\"ellipsoid-view\"></div>");
         let data = viewer_data(&ellipsoids).to_string().replace("</", "<\\/");
         let _ = write!(
             h,
