@@ -333,6 +333,27 @@ fn estimate_linear(
     .map_err(err)
 }
 
+/// The planar arm's trials prepared from a recording (seed 003).
+fn planar_data(
+    rec: &Recording,
+    link_lengths: (f64, f64),
+) -> limpid_core::Result<limpid_ident::planar::PlanarData> {
+    use limpid_ident::planar::{prepare_planar, Arm, PlanarPrepare};
+    prepare_planar(
+        rec,
+        &PlanarPrepare {
+            arm: Arm {
+                l1: link_lengths.0,
+                l2: link_lengths.1,
+                shoulder: [0.0, 0.0],
+            },
+            cutoff_hz: None,
+            order: 4,
+            elbow_positive: true,
+        },
+    )
+}
+
 /// Seed 003's planar-arm estimator; JSON text.
 #[pyfunction]
 #[pyo3(signature = (recording, link_lengths, window_ms=None, inertial_parameters=None))]
@@ -343,22 +364,10 @@ fn estimate_planar(
     window_ms: Option<f64>,
     inertial_parameters: Option<(f64, f64, f64)>,
 ) -> PyResult<String> {
-    use limpid_ident::planar::{fit_planar, leave_one_out_vaf, prepare_planar, Arm, PlanarPrepare};
+    use limpid_ident::planar::{fit_planar, leave_one_out_vaf};
     let rec = self::recording(recording)?;
     py.detach(move || -> limpid_core::Result<String> {
-        let data = prepare_planar(
-            &rec,
-            &PlanarPrepare {
-                arm: Arm {
-                    l1: link_lengths.0,
-                    l2: link_lengths.1,
-                    shoulder: [0.0, 0.0],
-                },
-                cutoff_hz: None,
-                order: 4,
-                elbow_positive: true,
-            },
-        )?;
+        let data = planar_data(&rec, link_lengths)?;
         let window = match window_ms {
             None => usize::MAX,
             Some(ms) if ms > 0.0 => (ms * 1e-3 * data.fs).round() as usize,
@@ -376,6 +385,28 @@ fn estimate_planar(
         let mut v = serde_json::to_value(&est).unwrap_or_default();
         v["leave_one_out_vaf"] = serde_json::json!(loo);
         Ok(v.to_string())
+    })
+    .map_err(err)
+}
+
+/// Seed 003's observation-window sweep (`limpid window-sweep --json`); JSON text.
+#[pyfunction]
+#[pyo3(signature = (recording, link_lengths, from_ms=50.0, to_ms=400.0, step_ms=10.0, inertial_parameters=None))]
+fn window_sweep(
+    py: Python<'_>,
+    recording: &Bound<'_, PyAny>,
+    link_lengths: (f64, f64),
+    from_ms: f64,
+    to_ms: f64,
+    step_ms: f64,
+    inertial_parameters: Option<(f64, f64, f64)>,
+) -> PyResult<String> {
+    let rec = self::recording(recording)?;
+    py.detach(move || -> limpid_core::Result<String> {
+        let data = planar_data(&rec, link_lengths)?;
+        let xi = inertial_parameters.map(|(a, b, c)| [a, b, c]);
+        let sweep = limpid_ident::planar::window_sweep(&data, from_ms, to_ms, step_ms, xi)?;
+        Ok(serde_json::to_string(&sweep).unwrap_or_default())
     })
     .map_err(err)
 }
@@ -522,6 +553,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_linear, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_planar, m)?)?;
+    m.add_function(wrap_pyfunction!(window_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_stochastic, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_cocontraction, m)?)?;
     m.add_function(wrap_pyfunction!(ellipsoid, m)?)?;

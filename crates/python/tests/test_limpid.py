@@ -248,3 +248,20 @@ def test_matlab_files_read_like_their_csv():
         np.testing.assert_array_equal(mat[name], csv[name])
     with pytest.raises(ValueError, match="complex values"):
         limpid.read_recording(fixtures / "complex.mat")
+
+
+def test_window_sweep_rows_match_single_estimates():
+    case = SHARED / "planar" / "ex_joint_180"
+    truth = json.loads(case.with_suffix(".truth.json").read_text())
+    rec = case.with_suffix(".csv")
+    sweep = limpid.window_sweep(rec, truth["link_lengths"], from_ms=50, to_ms=400, step_ms=50)
+    windows = [r["observation_window_ms"] for r in sweep.to_dict()["rows"]]
+    # up to the longest window the trials allow
+    assert len(windows) >= 3 and np.allclose(np.diff(windows), 50.0) and windows[0] == 50.0
+    last = sweep.to_dict()["rows"][-1]["estimate"]
+    single = limpid.estimate_planar(rec, truth["link_lengths"], window_ms=windows[-1])
+    np.testing.assert_allclose(last["stiffness"], single.stiffness, rtol=1e-12)
+    assert rel(single.stiffness, truth["stiffness"]) < 0.03
+    assert sweep.min_positive_definite_ms is not None and sweep.min_positive_definite_ms <= windows[-1]
+    with pytest.raises(ValueError, match="window range"):
+        limpid.window_sweep(rec, truth["link_lengths"], from_ms=0)

@@ -37,6 +37,7 @@ __all__ = [
     "frequency_response",
     "estimate_linear",
     "estimate_planar",
+    "window_sweep",
     "estimate_stochastic",
     "estimate_cocontraction",
     "ellipsoid",
@@ -221,6 +222,18 @@ def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], *,
     l1, l2 = link_lengths
     xi = tuple(inertial_parameters) if inertial_parameters is not None else None
     return Result(json.loads(_limpid.estimate_planar(_recording(recording), (float(l1), float(l2)), window_ms, xi)))
+
+
+def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], *,
+                 from_ms: float = 50.0, to_ms: float = 400.0, step_ms: float = 10.0,
+                 inertial_parameters: Optional[Sequence[float]] = None) -> Result:
+    """Seed 003's observation-window sweep, as ``limpid window-sweep --json``:
+    ``rows`` (one estimate with its criteria per window) and the shortest
+    trustworthy window."""
+    l1, l2 = link_lengths
+    xi = tuple(inertial_parameters) if inertial_parameters is not None else None
+    return Result(json.loads(_limpid.window_sweep(_recording(recording), (float(l1), float(l2)),
+                                                  float(from_ms), float(to_ms), float(step_ms), xi)))
 
 
 def estimate_stochastic(recording: RecordingLike, *, nperseg: Optional[int] = None,
