@@ -29,7 +29,7 @@ use crate::CliResult;
 #[derive(Args)]
 #[command(group(clap::ArgGroup::new("load").required(true).args(["bias", "calibration"])))]
 pub struct GravityArgs {
-    /// The test recording with `sensor_fx`, `sensor_fy`, `sensor_fz`.
+    /// The test recording with `sensor_fx`, `sensor_fy`, `sensor_fz` (and `sensor_tx`, `sensor_ty`, `sensor_tz`).
     pub recording: PathBuf,
     /// Seed 004's two steps. Step 1: readings in a pose where gravity does not
     /// load the sensor axes.
@@ -50,7 +50,7 @@ pub struct GravityArgs {
     /// Sensor orientation from the robot_q columns by forward kinematics.
     #[command(flatten)]
     pub robot: RobotArgs,
-    /// Output recording with fx, fy, fz written (CSV or Parquet).
+    /// Output recording with fx, fy, fz (and taux, tauy, tauz) written (CSV or Parquet).
     #[arg(short, long)]
     pub output: PathBuf,
 }

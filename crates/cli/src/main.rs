@@ -52,7 +52,7 @@ enum Command {
     Live(live::LiveArgs),
     /// One self-contained HTML report (ellipsoids, tables, Bode and coherence plots) from JSON results.
     Report(report::ReportArgs),
-    /// Turn F/T sensor readings into the force on the limb: bias and weight removed in two steps (seed 004 eq. 4-9).
+    /// Turn F/T sensor readings into the force (and torque) on the limb: bias and weight removed in two steps (seed 004 eq. 4-9) or by a calibration from still poses.
     GravityCompensate(gravity::GravityArgs),
     /// Welch PSD, coherence, multiple and partial coherence of outputs on inputs, as CSV.
     Spectra(stochastic::SpectraArgs),
