@@ -4,6 +4,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo test --workspace --release
+# Lab Streaming Layer inlets (cargo feature lsl) on loopback: liblsl is built
+# from source with cmake; its vendored boost needs the define with glibc >= 2.34
+CXXFLAGS="-DPTHREAD_STACK_MIN=16384 ${CXXFLAGS:-}" \
+  cargo test --release -p limpid-live --features lsl --test lsl
 venv=target/venv-test
 python3 -m venv --clear "$venv"
 "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy scipy pytest

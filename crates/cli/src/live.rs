@@ -40,6 +40,11 @@ pub struct LiveArgs {
     /// Replay speed (1: real time).
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
+    /// Also read the Lab Streaming Layer stream of this name (EMG channels in
+    /// order, optionally followed by x, y, z, fx, fy, fz); needs a limpid
+    /// built with `--features lsl`.
+    #[arg(long, value_name = "STREAM")]
+    pub lsl: Option<String>,
 }
 
 pub fn run(args: LiveArgs) -> CliResult {
@@ -89,6 +94,7 @@ pub fn run(args: LiveArgs) -> CliResult {
         target: args.target,
         tolerance: args.tolerance,
         replay: replay.map(|r| (r, args.speed)),
+        lsl: args.lsl.clone(),
     };
     let session = Arc::new(Session::start(&config)?);
     let runtime = tokio::runtime::Builder::new_multi_thread()

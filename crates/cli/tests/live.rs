@@ -168,3 +168,29 @@ fn garbage_is_counted_and_dropped_and_the_stream_goes_on() {
     // no MVC was given: the index waits for a capture, which the page's buttons drive
     assert!(s["index"].is_null());
 }
+
+#[test]
+fn an_lsl_stream_that_cannot_be_read_is_a_one_line_error() {
+    // without the `lsl` feature: how to get it; with it: no such stream
+    let out = limpid(&[
+        "live",
+        "--listen",
+        "127.0.0.1:0",
+        "--udp",
+        "127.0.0.1:0",
+        "--channels",
+        "emg_a",
+        "--rate",
+        "1000",
+        "--lsl",
+        "limpid-no-such-stream",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("--lsl")
+            && (out.stderr.contains("--features lsl") || out.stderr.contains("no stream named")),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
+}

@@ -1,5 +1,6 @@
 //! The live server: a UDP receiver thread (blocking socket with a large
-//! receive buffer, one datagram per sample, processing inline), an optional
+//! receive buffer, one datagram per sample, processing inline), optionally a
+//! Lab Streaming Layer inlet thread (cargo feature `lsl`), an optional
 //! replay thread that streams a recording to that socket at real time or
 //! faster, and an HTTP server (axum) with the page, `/state` (JSON),
 //! `/ws` (the same JSON pushed every 33 ms), and `POST /mvc/start|stop`.
@@ -33,6 +34,9 @@ pub struct Config {
     pub tolerance: f64,
     /// A recording to stream to the UDP address, and the speed-up.
     pub replay: Option<(Recording, f64)>,
+    /// The name of a Lab Streaming Layer stream to read as well (EMG channels
+    /// in order, optionally followed by x, y, z, fx, fy, fz).
+    pub lsl: Option<String>,
 }
 
 /// Latency histogram: 10 µs buckets up to 100 ms.
@@ -179,6 +183,12 @@ impl Session {
             let (shared, stop) = (shared.clone(), stop.clone());
             std::thread::spawn(move || receive(socket, channels, &shared, &stop));
         }
+        if let Some(name) = &config.lsl {
+            if let Err(e) = start_lsl(name, channels, &shared, &stop) {
+                stop.store(true, Ordering::Relaxed);
+                return Err(e);
+            }
+        }
         if let Some((rec, speed)) = &config.replay {
             let (rec, speed, stop) = (rec.clone(), *speed, stop.clone());
             let names = config.channels.clone();
@@ -304,27 +314,135 @@ fn receive(socket: UdpSocket, channels: usize, shared: &Mutex<State>, stop: &Ato
             Err(_) => continue, // timeout: look at the stop flag
         };
         let arrival = Instant::now();
-        let decoded = decode(&buf[..n], channels);
-        let mut s = shared.lock().expect("state lock");
-        match decoded {
-            Err(_) => s.malformed += 1,
+        match decode(&buf[..n], channels) {
+            Err(_) => shared.lock().expect("state lock").malformed += 1,
             Ok(sample) => {
-                if let Some(last) = s.last_seq {
-                    if sample.seq > last + 1 {
-                        s.lost += sample.seq - last - 1;
-                    }
-                }
-                s.last_seq = Some(sample.seq);
-                s.processor.update(&sample.emg, sample.kinematics.as_ref());
-                s.received += 1;
-                s.last_arrival = Some(arrival);
-                s.last_t = Some(sample.t);
                 let now = now_unix_ns();
-                if sample.sent_unix_ns > 0 && now >= sample.sent_unix_ns {
-                    s.latency.add((now - sample.sent_unix_ns) as f64 / 1e3);
-                }
+                let latency_us = (sample.sent_unix_ns > 0 && now >= sample.sent_unix_ns)
+                    .then(|| (now - sample.sent_unix_ns) as f64 / 1e3);
+                ingest(shared, &sample, arrival, latency_us);
             }
         }
+    }
+}
+
+/// One sample into the processor and the stream statistics.
+fn ingest(shared: &Mutex<State>, sample: &Sample, arrival: Instant, latency_us: Option<f64>) {
+    let mut s = shared.lock().expect("state lock");
+    if let Some(last) = s.last_seq {
+        if sample.seq > last + 1 {
+            s.lost += sample.seq - last - 1;
+        }
+    }
+    s.last_seq = Some(sample.seq);
+    s.processor.update(&sample.emg, sample.kinematics.as_ref());
+    s.received += 1;
+    s.last_arrival = Some(arrival);
+    s.last_t = Some(sample.t);
+    if let Some(us) = latency_us {
+        s.latency.add(us);
+    }
+}
+
+/// Resolve the LSL stream `name` (up to 5 s), then pull its samples until
+/// `stop`. The first message on `ready` says whether the inlet is open.
+/// LSL has no sequence numbers: `lost` counts UDP gaps only; the latency is
+/// the LSL clock now minus the sample's time stamp (same machine).
+#[cfg(feature = "lsl")]
+fn receive_lsl(
+    name: &str,
+    channels: usize,
+    shared: &Mutex<State>,
+    stop: &AtomicBool,
+    ready: std::sync::mpsc::Sender<Result<()>>,
+) {
+    use lsl::Pullable;
+    let fail = |message: String| Error::invalid("--lsl", message);
+    let open = || -> Result<lsl::StreamInlet> {
+        let found = lsl::resolve_byprop("name", name, 1, 5.0)
+            .map_err(|e| fail(format!("resolving {name:?}: {e:?}")))?;
+        let info = found.first().ok_or_else(|| {
+            fail(format!(
+                "no stream named {name:?} on the network within 5 s"
+            ))
+        })?;
+        let count = info.channel_count() as usize;
+        if count != channels && count != channels + 6 {
+            return Err(fail(format!(
+                "stream {name:?} has {count} channels; expected {channels} EMG channels, optionally followed by x, y, z, fx, fy, fz ({})",
+                channels + 6
+            )));
+        }
+        let inlet = lsl::StreamInlet::new(info, 360, 0, true)
+            .map_err(|e| fail(format!("opening {name:?}: {e:?}")))?;
+        inlet
+            .open_stream(5.0)
+            .map_err(|e| fail(format!("opening {name:?}: {e:?}")))?;
+        Ok(inlet)
+    };
+    let inlet = match open() {
+        Ok(inlet) => {
+            let _ = ready.send(Ok(()));
+            inlet
+        }
+        Err(e) => {
+            let _ = ready.send(Err(e));
+            return;
+        }
+    };
+    let mut seq = 0u64;
+    while !stop.load(Ordering::Relaxed) {
+        let (values, stamp): (Vec<f64>, f64) = match inlet.pull_sample(0.1) {
+            Ok(pulled) => pulled,
+            Err(_) => continue, // the stream is being recovered
+        };
+        if values.is_empty() {
+            continue; // timeout: look at the stop flag
+        }
+        let arrival = Instant::now();
+        let kinematics = (values.len() == channels + 6).then(|| {
+            let k = &values[channels..];
+            [k[0], k[1], k[2], k[3], k[4], k[5]]
+        });
+        let sample = Sample {
+            seq,
+            t: stamp,
+            sent_unix_ns: 0,
+            emg: values[..channels.min(values.len())].to_vec(),
+            kinematics,
+        };
+        seq += 1;
+        if sample.emg.len() != channels || values.len() > channels + 6 {
+            shared.lock().expect("state lock").malformed += 1;
+            continue;
+        }
+        let latency_us = Some(((lsl::local_clock() - stamp) * 1e6).max(0.0));
+        ingest(shared, &sample, arrival, latency_us);
+    }
+}
+
+/// Start the LSL inlet thread and wait until it is open (or failed).
+fn start_lsl(
+    name: &str,
+    channels: usize,
+    shared: &Arc<Mutex<State>>,
+    stop: &Arc<AtomicBool>,
+) -> Result<()> {
+    #[cfg(feature = "lsl")]
+    {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (name, shared, stop) = (name.to_string(), shared.clone(), stop.clone());
+        std::thread::spawn(move || receive_lsl(&name, channels, &shared, &stop, tx));
+        rx.recv()
+            .unwrap_or_else(|_| Err(Error::invalid("--lsl", "the inlet thread ended")))
+    }
+    #[cfg(not(feature = "lsl"))]
+    {
+        let _ = (name, channels, shared, stop);
+        Err(Error::invalid(
+            "--lsl",
+            "this limpid was built without Lab Streaming Layer support; rebuild with `--features lsl` (needs cmake, a C++ compiler and, with glibc >= 2.34, CXXFLAGS=-DPTHREAD_STACK_MIN=16384)",
+        ))
     }
 }
 
