@@ -158,7 +158,7 @@ impl PrepareArgs {
 
 #[derive(Args)]
 pub struct LinearArgs {
-    /// Recording (CSV or Parquet, FORMAT.md).
+    /// Recording (CSV, Parquet or MATLAB .mat; FORMAT.md).
     pub recording: PathBuf,
     #[command(flatten)]
     pub prepare: PrepareArgs,
