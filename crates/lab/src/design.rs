@@ -82,7 +82,11 @@ impl Design {
                     .find('\n')
                     .map_or(text.len(), |i| span.end + i);
                 let mut body = text.to_string();
-                body.replace_range(start..end, &" ".repeat(end - start));
+                let blank: String = text[start..end]
+                    .chars()
+                    .map(|c| if c == '\n' { c } else { ' ' })
+                    .collect();
+                body.replace_range(start..end, &blank);
                 (kind, body)
             }
         };
