@@ -118,19 +118,16 @@ pub struct RobotArgs {
 }
 
 impl RobotArgs {
-    /// The placed robot's end-effector poses (4 x 4, lab frame) per sample, if `--robot` is given.
-    pub fn poses(
-        &self,
-        rec: &limpid_core::Recording,
-    ) -> CliResult<Option<Vec<nalgebra::Matrix4<f64>>>> {
+    /// The robot, placed as `--robot-base` says, if `--robot` is given.
+    pub fn robot(&self) -> CliResult<Option<limpid_lab::robot::Robot>> {
         let Some(name) = &self.robot else {
             return Ok(None);
         };
-        let mut robot = limpid_lab::robot::Robot::by_name(name)?;
-        match self.robot_base.as_deref() {
-            None => {}
-            Some([x, y, z]) => robot = robot.placed([*x, *y, *z], [0.0; 3]),
-            Some([x, y, z, r, p, w]) => robot = robot.placed([*x, *y, *z], [*r, *p, *w]),
+        let robot = limpid_lab::robot::Robot::by_name(name)?;
+        Ok(Some(match self.robot_base.as_deref() {
+            None => robot,
+            Some([x, y, z]) => robot.placed([*x, *y, *z], [0.0; 3]),
+            Some([x, y, z, r, p, w]) => robot.placed([*x, *y, *z], [*r, *p, *w]),
             Some(other) => {
                 return Err(limpid_core::Error::invalid(
                     "--robot-base",
@@ -138,8 +135,18 @@ impl RobotArgs {
                 )
                 .into())
             }
+        }))
+    }
+
+    /// The placed robot's end-effector poses (4 x 4, lab frame) per sample, if `--robot` is given.
+    pub fn poses(
+        &self,
+        rec: &limpid_core::Recording,
+    ) -> CliResult<Option<Vec<nalgebra::Matrix4<f64>>>> {
+        match self.robot()? {
+            Some(robot) => Ok(Some(robot.poses(rec, "robot joint angles for --robot")?)),
+            None => Ok(None),
         }
-        Ok(Some(robot.poses(rec, "robot joint angles for --robot")?))
     }
 }
 
