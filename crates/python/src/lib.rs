@@ -525,6 +525,65 @@ fn simulate<'py>(
         .collect()
 }
 
+/// Gravity compensation of F/T readings, as `limpid gravity-compensate`:
+/// seed 004's two steps (`bias`, `initial_s`) or a calibration from still
+/// poses (`calibration`); the orientation from `robot` (placed at
+/// `robot_base`), else `theta`. Returns (columns, summary lines).
+#[pyfunction]
+#[pyo3(signature = (recording, bias=None, calibration=None, initial_s=1.0, robot=None, robot_base=None))]
+fn gravity_compensate<'py>(
+    py: Python<'py>,
+    recording: &Bound<'py, PyAny>,
+    bias: Option<&Bound<'py, PyAny>>,
+    calibration: Option<&Bound<'py, PyAny>>,
+    initial_s: f64,
+    robot: Option<&str>,
+    robot_base: Option<Vec<f64>>,
+) -> PyResult<(Bound<'py, PyDict>, Vec<String>)> {
+    use limpid_lab::gravity::{compensate, LoadSource};
+    let mut rec = self::recording(recording)?;
+    let robot = match robot {
+        None => None,
+        Some(name) => {
+            let r = limpid_lab::robot::Robot::by_name(name).map_err(err)?;
+            Some(match robot_base.as_deref() {
+                None => r,
+                Some([x, y, z]) => r.placed([*x, *y, *z], [0.0; 3]),
+                Some([x, y, z, a, b, c]) => r.placed([*x, *y, *z], [*a, *b, *c]),
+                Some(other) => {
+                    return Err(value_err(format!(
+                        "robot_base: expected 3 or 6 numbers, found {}",
+                        other.len()
+                    )))
+                }
+            })
+        }
+    };
+    let load = match (bias, calibration) {
+        (Some(b), None) => self::recording(b).map(|r| (r, true))?,
+        (None, Some(c)) => self::recording(c).map(|r| (r, false))?,
+        _ => return Err(value_err("give exactly one of bias (two steps) and calibration")),
+    };
+    let summary = py
+        .detach(|| {
+            let source = if load.1 {
+                LoadSource::TwoSteps {
+                    bias: &load.0,
+                    initial_s,
+                }
+            } else {
+                LoadSource::Calibration(&load.0)
+            };
+            compensate(&mut rec, source, robot.as_ref())
+        })
+        .map_err(err)?;
+    let columns = PyDict::new(py);
+    for (name, col) in rec.columns() {
+        columns.set_item(name, col.to_vec().into_pyarray(py))?;
+    }
+    Ok((columns, summary))
+}
+
 /// Write the HTML report of JSON results (texts) to `path`.
 #[pyfunction]
 fn report(results: Vec<String>, path: std::path::PathBuf) -> PyResult<()> {
@@ -554,6 +613,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(estimate_linear, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_planar, m)?)?;
     m.add_function(wrap_pyfunction!(window_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(gravity_compensate, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_stochastic, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_cocontraction, m)?)?;
     m.add_function(wrap_pyfunction!(ellipsoid, m)?)?;

@@ -265,3 +265,36 @@ def test_window_sweep_rows_match_single_estimates():
     assert sweep.min_positive_definite_ms is not None and sweep.min_positive_definite_ms <= windows[-1]
     with pytest.raises(ValueError, match="window range"):
         limpid.window_sweep(rec, truth["link_lengths"], from_ms=0)
+
+
+def _rig_readings(theta, f_limb, tau_limb, weight, centre, bias_f, bias_t):
+    """Sensor readings of seed 004's rig turned by theta about y (sensor frame)."""
+    out = []
+    for th, f, tau in zip(theta, f_limb, tau_limb):
+        c, s = np.cos(th), np.sin(th)
+        r = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+        g = r.T @ weight
+        out.append(np.r_[g - r.T @ f + bias_f, np.cross(centre, g) - r.T @ tau + bias_t])
+    out = np.array(out)
+    names = ["sensor_fx", "sensor_fy", "sensor_fz", "sensor_tx", "sensor_ty", "sensor_tz"]
+    return {n: out[:, i] for i, n in enumerate(names)}
+
+
+def test_gravity_compensation_from_still_poses():
+    weight, centre = np.array([0.0, 0.0, -6.0]), np.array([0.01, 0.0, 0.05])
+    bias_f, bias_t = np.array([0.2, -0.1, 0.4]), np.array([0.03, -0.05, 0.02])
+    still = np.repeat([-0.3, -0.1, 0.0, 0.15, 0.3], 20)
+    zeros = np.zeros((len(still), 3))
+    cal = {"t": np.arange(len(still)) / 1000.0, "theta": still,
+           **_rig_readings(still, zeros, zeros, weight, centre, bias_f, bias_t)}
+    t = np.arange(3000) / 1000.0
+    theta = 0.1 * np.sin(3 * t)
+    f_limb = np.c_[2 * np.sin(5 * t), np.zeros_like(t), -np.cos(7 * t)]
+    tau_limb = np.c_[np.zeros_like(t), 0.5 * np.sin(4 * t), np.zeros_like(t)]
+    rec = {"t": t, "theta": theta, **_rig_readings(theta, f_limb, tau_limb, weight, centre, bias_f, bias_t)}
+    cols, summary = limpid.gravity_compensate(rec, calibration=cal)
+    np.testing.assert_allclose(np.c_[cols["fx"], cols["fy"], cols["fz"]], f_limb, atol=1e-9)
+    np.testing.assert_allclose(np.c_[cols["taux"], cols["tauy"], cols["tauz"]], tau_limb, atol=1e-9)
+    assert any("centre of mass" in line for line in summary)
+    with pytest.raises(ValueError, match="exactly one"):
+        limpid.gravity_compensate(rec, bias=cal, calibration=cal)

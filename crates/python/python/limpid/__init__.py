@@ -44,6 +44,7 @@ __all__ = [
     "protocol_preset",
     "protocol_check",
     "simulate",
+    "gravity_compensate",
     "report",
 ]
 
@@ -295,6 +296,25 @@ def simulate(
         (cols, json.loads(truth))
         for cols, truth in _limpid.simulate(text, int(seed), subject_text, subject_name, controller)
     ]
+
+
+def gravity_compensate(recording: RecordingLike, *, bias: Optional[RecordingLike] = None,
+                       calibration: Optional[RecordingLike] = None, initial_s: float = 1.0,
+                       robot: Optional[str] = None,
+                       robot_base: Optional[Sequence[float]] = None) -> Tuple[Dict[str, np.ndarray], List[str]]:
+    """F/T sensor readings (``sensor_fx..z``, optionally ``sensor_tx..z``) to the force
+    (and torque) on the limb, as ``limpid gravity-compensate``: seed 004's two steps
+    (``bias``: readings in a gravity-free pose; ``initial_s``: the still start of the
+    test) or a ``calibration`` from still poses (weight, centre of mass, biases).
+    The orientation comes from ``robot`` (``kuka-lwr4``, ``puma3`` or a URDF path,
+    placed at ``robot_base``) and the ``robot_q*`` columns, else from ``theta``.
+    Returns (columns with ``fx, fy, fz`` [and ``taux, tauy, tauz``], summary lines)."""
+    base = [float(v) for v in robot_base] if robot_base is not None else None
+    return _limpid.gravity_compensate(
+        _recording(recording),
+        None if bias is None else _recording(bias),
+        None if calibration is None else _recording(calibration),
+        float(initial_s), robot, base)
 
 
 def report(results: Sequence[Union[Result, Mapping[str, Any], List[Any]]], path: Union[str, "os.PathLike[str]"]) -> None:
