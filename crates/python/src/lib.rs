@@ -562,7 +562,11 @@ fn gravity_compensate<'py>(
     let load = match (bias, calibration) {
         (Some(b), None) => self::recording(b).map(|r| (r, true))?,
         (None, Some(c)) => self::recording(c).map(|r| (r, false))?,
-        _ => return Err(value_err("give exactly one of bias (two steps) and calibration")),
+        _ => {
+            return Err(value_err(
+                "give exactly one of bias (two steps) and calibration",
+            ))
+        }
     };
     let summary = py
         .detach(|| {
