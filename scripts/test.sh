@@ -6,7 +6,8 @@ cd "$(dirname "$0")/.."
 cargo test --workspace --release
 # Lab Streaming Layer inlets (cargo feature lsl) on loopback: liblsl is built
 # from source with cmake; its vendored boost needs the define with glibc >= 2.34
-CXXFLAGS="-DPTHREAD_STACK_MIN=16384 ${CXXFLAGS:-}" \
+# (LSLAPICFG: resolve on this machine only, without multicast or IPv6)
+CXXFLAGS="-DPTHREAD_STACK_MIN=16384 ${CXXFLAGS:-}" LSLAPICFG="$PWD/crates/live/tests/lsl_api.cfg" \
   cargo test --release -p limpid-live --features lsl --test lsl
 venv=target/venv-test
 python3 -m venv --clear "$venv"
