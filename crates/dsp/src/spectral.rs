@@ -317,14 +317,15 @@ pub fn mimo_point(s: &DMatrix<Complex64>, inputs: usize) -> Option<MimoPoint> {
     let m = s.nrows();
     let q = inputs;
     let guu = s.view((0, 0), (q, q)).into_owned();
-    let guy = s.view((0, q), (q, m - q)).into_owned(); // [input][output] = E[conj(U_i) Y_k]
-                                                       // G_uu is Hermitian positive semi-definite: its eigenvalues give the conditioning
+    // [input][output] = E[conj(U_i) Y_k]
+    let guy = s.view((0, q), (q, m - q)).into_owned();
+    // G_uu is Hermitian positive semi-definite: its eigenvalues give the conditioning
     let eig = guu.clone().symmetric_eigenvalues();
     let (lo, hi) = (eig.min(), eig.max());
     if !(hi > 0.0 && lo > 1e-12 * hi) {
         return None;
     }
-    let inv = guu.clone().try_inverse()?;
+    let inv = guu.try_inverse()?;
     let ht = &inv * &guy; // = H^T
     let h = ht.transpose();
     let outputs = m - q;
