@@ -60,12 +60,6 @@ pub struct DemoPoint {
     pub estimate: LinearResult,
 }
 
-fn rows(m: &Matrix3<f64>) -> Vec<Vec<f64>> {
-    (0..3)
-        .map(|i| (0..3).map(|j| m[(i, j)]).collect())
-        .collect()
-}
-
 fn rel_err(est: &[Vec<f64>], truth: &Matrix3<f64>) -> f64 {
     let mut num = 0.0;
     for i in 0..3 {
@@ -84,9 +78,9 @@ fn run_point(p: &Posture, protocol: &CentreOut, seed: u64) -> CliResult<DemoPoin
     Ok(DemoPoint {
         start_point: p.name.clone(),
         position: [p.start.x, p.start.y, p.start.z],
-        true_stiffness: rows(&p.stiffness),
-        true_damping: rows(&p.damping),
-        true_inertia: rows(&p.inertia),
+        true_stiffness: limpid_lab::session::rows(&p.stiffness),
+        true_damping: limpid_lab::session::rows(&p.damping),
+        true_inertia: limpid_lab::session::rows(&p.inertia),
         stiffness_error_percent: rel_err(&result.stiffness, &p.stiffness),
         damping_error_percent: rel_err(&result.damping, &p.damping),
         inertia_error_percent: rel_err(&result.inertia, &p.inertia),

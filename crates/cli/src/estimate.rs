@@ -126,15 +126,7 @@ impl RobotArgs {
         let robot = limpid_lab::robot::Robot::by_name(name)?;
         Ok(Some(match self.robot_base.as_deref() {
             None => robot,
-            Some([x, y, z]) => robot.placed([*x, *y, *z], [0.0; 3]),
-            Some([x, y, z, r, p, w]) => robot.placed([*x, *y, *z], [*r, *p, *w]),
-            Some(other) => {
-                return Err(limpid_core::Error::invalid(
-                    "--robot-base",
-                    format!("expected 3 or 6 numbers, found {}", other.len()),
-                )
-                .into())
-            }
+            Some(base) => robot.placed_at(base)?,
         }))
     }
 

@@ -416,16 +416,16 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
     let design = read_design(&args.protocol)?.0;
-    let subject_text = match &args.subject {
-        Some(path) => {
-            Some(std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?)
-        }
+    let subject_file = match &args.subject {
+        Some(path) => Some((
+            path,
+            std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?,
+        )),
         None => None,
     };
-    let subject = match (&args.subject, &subject_text) {
-        (Some(path), Some(text)) => Some(SubjectText { text, path }),
-        _ => None,
-    };
+    let subject = subject_file
+        .as_ref()
+        .map(|(path, text)| SubjectText { text, path });
     let controller = match args.controller {
         ControllerArg::Ideal => RigController::Ideal,
         ControllerArg::Imbic => RigController::Imbic,

@@ -242,6 +242,22 @@ impl Robot {
         self
     }
 
+    /// [`Robot::placed`] from a flat list: X, Y, Z (m), optionally followed by
+    /// roll, pitch, yaw (rad), as `--robot-base` and Python's `robot_base` give it.
+    pub fn placed_at(self, base: &[f64]) -> Result<Self> {
+        match *base {
+            [x, y, z] => Ok(self.placed([x, y, z], [0.0; 3])),
+            [x, y, z, r, p, w] => Ok(self.placed([x, y, z], [r, p, w])),
+            _ => Err(Error::invalid(
+                "robot base",
+                format!(
+                    "expected X,Y,Z or X,Y,Z,ROLL,PITCH,YAW, found {} numbers",
+                    base.len()
+                ),
+            )),
+        }
+    }
+
     /// KUKA LWR4+ (7 DoF), standard DH, limits ±170/±120 deg, 1.9 rad/s.
     pub fn kuka_lwr4() -> Self {
         use std::f64::consts::FRAC_PI_2 as H;

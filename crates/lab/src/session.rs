@@ -98,16 +98,11 @@ fn parse<T: for<'de> Deserialize<'de>>(subject: &SubjectText) -> Result<T> {
         .map_err(|e| Error::settings(subject.path, subject.text, e.span(), e.message()))
 }
 
-fn rows3(m: &Matrix3<f64>) -> Vec<Vec<f64>> {
-    (0..3)
-        .map(|r| (0..3).map(|c| m[(r, c)]).collect())
-        .collect()
-}
-
-fn rows2(m: &Matrix2<f64>) -> Vec<Vec<f64>> {
-    (0..2)
-        .map(|r| (0..2).map(|c| m[(r, c)]).collect())
-        .collect()
+/// A matrix as its rows, the layout of the truth files.
+pub fn rows<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(
+    m: &nalgebra::Matrix<f64, R, C, S>,
+) -> Vec<Vec<f64>> {
+    m.row_iter().map(|r| r.iter().copied().collect()).collect()
 }
 
 /// Simulate a (checked) protocol on a subject. `seed` drives the sensor noise.
@@ -153,9 +148,9 @@ fn centre_out(p: &Protocol, subject: Option<&SubjectText>, seed: u64) -> Result<
         let truth = json!({
             "method": "cartesian",
             "sample_rate": p.sample_rate_hz,
-            "inertia": rows3(&posture.inertia),
-            "damping": rows3(&posture.damping),
-            "stiffness": rows3(&posture.stiffness),
+            "inertia": rows(&posture.inertia),
+            "damping": rows(&posture.damping),
+            "stiffness": rows(&posture.stiffness),
             "equilibrium": [start.x, start.y, start.z],
             "profile": p.phases.profile,
             "noise": noise,
@@ -189,8 +184,8 @@ fn planar(p: &PlanarDesign, subject: Option<&SubjectText>, seed: u64) -> Result<
         "variant": "joint",
         "sample_rate": p.sample_rate_hz,
         "inertial_parameters": arm.xi,
-        "stiffness": rows2(&arm.stiffness),
-        "damping": rows2(&arm.damping),
+        "stiffness": rows(&arm.stiffness),
+        "damping": rows(&arm.damping),
         "link_lengths": p.link_lengths_m,
         "q0": arm.q0,
         "interpolation_interval_ms": p.interpolation_s * 1e3,
@@ -230,7 +225,7 @@ fn stochastic(
     };
     let robot = match controller {
         RigController::Ideal => {
-            json!({"model": "linear, desired impedance", "M_rd": rows3(&e.robot_inertia), "B_rd": rows3(&e.robot_damping), "K_rd": rows3(&e.robot_stiffness)})
+            json!({"model": "linear, desired impedance", "M_rd": rows(&e.robot_inertia), "B_rd": rows(&e.robot_damping), "K_rd": rows(&e.robot_stiffness)})
         }
         RigController::Imbic => {
             json!({"model": "PUMA-type vertical-plane chain with joint friction under IMBIC (seed 004 eq. 11-14, the paper's gains)", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous})
@@ -243,9 +238,9 @@ fn stochastic(
         "method": "stochastic",
         "sample_rate": p.sample_rate_hz,
         "coordinates": ["x (m)", "z (m)", "theta (rad, about y)"],
-        "inertia": rows3(&e.inertia),
-        "damping": rows3(&e.damping),
-        "stiffness": rows3(&e.stiffness),
+        "inertia": rows(&e.inertia),
+        "damping": rows(&e.damping),
+        "stiffness": rows(&e.stiffness),
         "equilibrium": [0.0, 0.0, 0.0],
         "springs_N_per_m": springs,
         "robot": robot,

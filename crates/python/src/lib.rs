@@ -242,17 +242,22 @@ fn lowpass_filtfilt<'py>(
     Ok(y.into_pyarray(py))
 }
 
+/// A recording as a dict of numpy arrays (column order kept).
+fn columns_dict<'py>(py: Python<'py>, rec: &Recording) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (name, col) in rec.columns() {
+        d.set_item(name, col.to_vec().into_pyarray(py))?;
+    }
+    Ok(d)
+}
+
 /// A recording file as a dict of numpy arrays (column order kept).
 #[pyfunction]
 fn read_recording<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let rec = py
         .detach(|| limpid_io::read_recording(&path))
         .map_err(err)?;
-    let d = PyDict::new(py);
-    for (name, col) in rec.columns() {
-        d.set_item(name, col.to_vec().into_pyarray(py))?;
-    }
-    Ok(d)
+    columns_dict(py, &rec)
 }
 
 fn prepare_params(options: &str) -> PyResult<limpid_ident::PrepareParams> {
@@ -515,13 +520,7 @@ fn simulate<'py>(
         .detach(|| simulate_design(&d, subject.as_ref(), controller, seed))
         .map_err(err)?;
     runs.into_iter()
-        .map(|run| {
-            let columns = PyDict::new(py);
-            for (name, col) in run.recording.columns() {
-                columns.set_item(name, col.to_vec().into_pyarray(py))?;
-            }
-            Ok((columns, run.truth.to_string()))
-        })
+        .map(|run| Ok((columns_dict(py, &run.recording)?, run.truth.to_string())))
         .collect()
 }
 
@@ -548,20 +547,15 @@ fn gravity_compensate<'py>(
             let r = limpid_lab::robot::Robot::by_name(name).map_err(err)?;
             Some(match robot_base.as_deref() {
                 None => r,
-                Some([x, y, z]) => r.placed([*x, *y, *z], [0.0; 3]),
-                Some([x, y, z, a, b, c]) => r.placed([*x, *y, *z], [*a, *b, *c]),
-                Some(other) => {
-                    return Err(value_err(format!(
-                        "robot_base: expected 3 or 6 numbers, found {}",
-                        other.len()
-                    )))
-                }
+                Some(base) => r.placed_at(base).map_err(err)?,
             })
         }
     };
-    let load = match (bias, calibration) {
-        (Some(b), None) => self::recording(b).map(|r| (r, true))?,
-        (None, Some(c)) => self::recording(c).map(|r| (r, false))?,
+    let bias = bias.map(self::recording).transpose()?;
+    let calibration = calibration.map(self::recording).transpose()?;
+    let source = match (&bias, &calibration) {
+        (Some(bias), None) => LoadSource::TwoSteps { bias, initial_s },
+        (None, Some(cal)) => LoadSource::Calibration(cal),
         _ => {
             return Err(value_err(
                 "give exactly one of bias (two steps) and calibration",
@@ -569,23 +563,9 @@ fn gravity_compensate<'py>(
         }
     };
     let summary = py
-        .detach(|| {
-            let source = if load.1 {
-                LoadSource::TwoSteps {
-                    bias: &load.0,
-                    initial_s,
-                }
-            } else {
-                LoadSource::Calibration(&load.0)
-            };
-            compensate(&mut rec, source, robot.as_ref())
-        })
+        .detach(|| compensate(&mut rec, source, robot.as_ref()))
         .map_err(err)?;
-    let columns = PyDict::new(py);
-    for (name, col) in rec.columns() {
-        columns.set_item(name, col.to_vec().into_pyarray(py))?;
-    }
-    Ok((columns, summary))
+    Ok((columns_dict(py, &rec)?, summary))
 }
 
 /// Write the HTML report of JSON results (texts) to `path`.
