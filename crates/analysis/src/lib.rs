@@ -79,8 +79,13 @@ pub struct Ellipsoid {
     /// Yaw, pitch, roll in degrees (seed 000 eq. (17)); for 2 x 2, one angle of
     /// the major axis from the first coordinate axis.
     pub angles_deg: Vec<f64>,
-    /// 1/sqrt(λ) per axis (seed 000); `None` where λ <= 0 (no real radius).
-    pub radii_inverse_sqrt: Vec<Option<f64>>,
+    /// 1/sqrt(λ) per axis (seed 000); absent when some λ <= 0 (the quadric
+    /// x^T A x = 1 is then no ellipsoid), with the reason in `note`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radii_inverse_sqrt: Option<Vec<f64>>,
+    /// Why a radius convention is absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
     /// λ per axis: length proportional to stiffness (seed 001).
     pub radii_proportional: Vec<f64>,
 }
@@ -92,7 +97,7 @@ pub fn ellipsoid(m: &Mat) -> Option<Ellipsoid> {
         return None;
     }
     let s = to_dm(&symmetric(m));
-    let eig = s.symmetric_eigen();
+    let eig = limpid_core::linalg::symmetric_eigen(s)?;
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     let values: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
@@ -112,8 +117,14 @@ pub fn ellipsoid(m: &Mat) -> Option<Ellipsoid> {
     Some(Ellipsoid {
         radii_inverse_sqrt: values
             .iter()
-            .map(|l| (*l > 0.0).then(|| 1.0 / l.sqrt()))
-            .collect(),
+            .all(|l| *l > 0.0)
+            .then(|| values.iter().map(|l| 1.0 / l.sqrt()).collect()),
+        note: values.iter().any(|l| *l <= 0.0).then(|| {
+            format!(
+                "radii_inverse_sqrt omitted: the smallest eigenvalue is {:.4e} <= 0, so the matrix is not positive definite and x^T A x = 1 is no ellipsoid",
+                values[n - 1]
+            )
+        }),
         radii_proportional: values.clone(),
         eigenvalues: values,
         axes: from_dm(&axes),
@@ -182,7 +193,8 @@ pub struct MatrixCriteria {
 pub fn criteria(m: &Mat) -> MatrixCriteria {
     let s = to_dm(&symmetric(m));
     let a = to_dm(&antisymmetric(m));
-    let min_eigenvalue = s.clone().symmetric_eigen().eigenvalues.min();
+    let min_eigenvalue =
+        limpid_core::linalg::symmetric_eigenvalues(s.clone()).map_or(f64::NAN, |e| e.min());
     let ns = s.norm();
     MatrixCriteria {
         min_eigenvalue,
@@ -240,7 +252,22 @@ mod tests {
         let m = vec![vec![400.0, 0.0], vec![0.0, 100.0]];
         let e = ellipsoid(&m).unwrap();
         assert_eq!(e.radii_proportional, vec![400.0, 100.0]);
-        assert_eq!(e.radii_inverse_sqrt, vec![Some(0.05), Some(0.1)]);
+        assert_eq!(e.radii_inverse_sqrt, Some(vec![0.05, 0.1]));
         assert!(e.angles_deg[0].abs() < 1e-12 || (e.angles_deg[0].abs() - 180.0).abs() < 1e-12);
+        assert!(e.note.is_none());
+    }
+
+    #[test]
+    fn a_matrix_that_is_not_positive_definite_has_no_inverse_radii_and_says_why() {
+        let e = ellipsoid(&vec![vec![400.0, 0.0], vec![0.0, -10.0]]).unwrap();
+        let json = serde_json::to_value(&e).unwrap();
+        assert!(json.get("radii_inverse_sqrt").is_none(), "{json}");
+        assert!(json["note"]
+            .as_str()
+            .unwrap()
+            .contains("not positive definite"));
+        assert!(!json.to_string().contains("null"), "{json}");
+        // a non-finite matrix has no ellipsoid at all, rather than NaN axes
+        assert!(ellipsoid(&vec![vec![f64::NAN, 0.0], vec![0.0, 1.0]]).is_none());
     }
 }

@@ -314,10 +314,7 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
     })?;
     let write = |name: &str, text: String| -> Result<PathBuf> {
         let p = dir.join(name);
-        std::fs::write(&p, text).map_err(|source| Error::Io {
-            path: p.clone(),
-            source,
-        })?;
+        limpid_core::files::write_file(&p, text.as_bytes())?;
         Ok(p)
     };
     let mut csv = String::from(

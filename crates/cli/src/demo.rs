@@ -116,11 +116,12 @@ pub fn run(args: DemoArgs) -> CliResult {
 
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
     let json_path = args.out.join("demo.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&points)?)
-        .map_err(|e| format!("{}: {e}", json_path.display()))?;
+    limpid_core::files::write_file(
+        &json_path,
+        serde_json::to_string_pretty(&points)?.as_bytes(),
+    )?;
     let csv_path = args.out.join("demo.csv");
-    std::fs::write(&csv_path, demo_csv(&points))
-        .map_err(|e| format!("{}: {e}", csv_path.display()))?;
+    limpid_core::files::write_file(&csv_path, demo_csv(&points).as_bytes())?;
     let report_path = args
         .report
         .clone()

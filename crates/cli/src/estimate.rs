@@ -145,7 +145,7 @@ impl RobotArgs {
 impl PrepareArgs {
     /// Read the recording and apply `--robot`.
     pub fn read(&self, path: &std::path::Path) -> CliResult<limpid_core::Recording> {
-        let mut rec = limpid_io::read_recording(path)?;
+        let mut rec = crate::read_recording(path)?;
         if let Some(poses) = self.robot.poses(&rec)? {
             for (a, name) in ["x", "y", "z"].iter().enumerate() {
                 rec.set_column(name, poses.iter().map(|t| t[(a, 3)]).collect())?;
@@ -336,7 +336,7 @@ pub fn run(method: Method) -> CliResult {
             }
             let params = args.prepare.params()?;
             let rec = args.prepare.read(&args.recording)?;
-            let mvc = limpid_io::read_recording(&args.mvc)?;
+            let mvc = crate::read_recording(&args.mvc)?;
             let emg = EmgParams {
                 tolerance: args.tolerance,
                 ..EmgParams::default()

@@ -41,15 +41,15 @@ pub struct GravityArgs {
 
 /// The three sensor columns `prefix` x, y, z (forces `sensor_f`, torques `sensor_t`).
 pub fn run(args: GravityArgs) -> CliResult {
-    let mut rec = limpid_io::read_recording(&args.recording)?;
+    let mut rec = crate::read_recording(&args.recording)?;
     let robot = args.robot.robot()?;
     let summary = match (&args.calibration, &args.bias) {
         (Some(path), _) => {
-            let cal = limpid_io::read_recording(path)?;
+            let cal = crate::read_recording(path)?;
             compensate(&mut rec, LoadSource::Calibration(&cal), robot.as_ref())?
         }
         (None, Some(path)) => {
-            let bias = limpid_io::read_recording(path)?;
+            let bias = crate::read_recording(path)?;
             let source = LoadSource::TwoSteps {
                 bias: &bias,
                 initial_s: args.initial_s,

@@ -63,6 +63,20 @@ enum Command {
     },
 }
 
+/// Read a recording and say on stderr what was accepted but looks wrong.
+pub fn read_recording(
+    path: impl AsRef<std::path::Path>,
+) -> limpid_core::Result<limpid_core::Recording> {
+    let rec = limpid_io::read_recording(path)?;
+    for w in rec.warnings() {
+        eprintln!("limpid: warning: {}: {w}", rec.path().display());
+    }
+    Ok(rec)
+}
+
+/// Where and why the last panic happened (set by the quiet panic hook).
+static PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
 fn main() -> ExitCode {
     // Output piped into `head` etc.: end quietly like other Unix tools instead of
     // panicking on a closed pipe.
@@ -72,18 +86,36 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = Cli::parse();
-    let result = match cli.command {
-        Command::Estimate { method } => estimate::run(method),
-        Command::Demo(args) => demo::run(args),
-        Command::Study { command } => study::run(command),
-        Command::WindowSweep(args) => planar::run_sweep(args),
-        Command::Spectra(args) => stochastic::run_spectra(args),
-        Command::Protocol { command } => protocol::run(command),
-        Command::Simulate(args) => protocol::run_simulate(args),
-        Command::GravityCompensate(args) => gravity::run(args),
-        Command::Report(args) => report::run(args),
-        Command::Live(args) => live::run(args),
-    };
+    // a panic is a bug or an unwritable output: one line and exit 2, never a backtrace
+    std::panic::set_hook(Box::new(|info| {
+        let message = limpid_core::error::panic_message(info.payload());
+        let place = info
+            .location()
+            .map(|l| format!(" (at {}:{})", l.file(), l.line()))
+            .unwrap_or_default();
+        if let Ok(mut slot) = PANIC.lock() {
+            *slot = Some(format!("{message}{place}"));
+        }
+    }));
+    let result = std::panic::catch_unwind(|| run(cli)).unwrap_or_else(|_| {
+        let what = PANIC
+            .lock()
+            .ok()
+            .and_then(|mut s| s.take())
+            .unwrap_or_else(|| "unknown panic".into());
+        Err(
+            if let Some(io) = what.strip_prefix("failed printing to stdout: ") {
+                let io = io.split(" (at ").next().unwrap_or(io);
+                format!("cannot write the output to standard output: {io}").into()
+            } else {
+                format!(
+                    "internal error, please report it: {}",
+                    what.replace('\n', "; ")
+                )
+                .into()
+            },
+        )
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -100,6 +132,21 @@ fn main() -> ExitCode {
             eprintln!("limpid: {msg}");
             ExitCode::from(2)
         }
+    }
+}
+
+fn run(cli: Cli) -> CliResult {
+    match cli.command {
+        Command::Estimate { method } => estimate::run(method),
+        Command::Demo(args) => demo::run(args),
+        Command::Study { command } => study::run(command),
+        Command::WindowSweep(args) => planar::run_sweep(args),
+        Command::Spectra(args) => stochastic::run_spectra(args),
+        Command::Protocol { command } => protocol::run(command),
+        Command::Simulate(args) => protocol::run_simulate(args),
+        Command::GravityCompensate(args) => gravity::run(args),
+        Command::Report(args) => report::run(args),
+        Command::Live(args) => live::run(args),
     }
 }
 

@@ -74,7 +74,7 @@ impl ArmArgs {
             }
             None => None,
         };
-        let rec = limpid_io::read_recording(&self.recording)?;
+        let rec = crate::read_recording(&self.recording)?;
         let data = prepare_planar(
             &rec,
             &PlanarPrepare {

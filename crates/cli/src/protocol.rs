@@ -104,7 +104,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
                 Design::preset(&name)?.to_toml()
             );
             match output {
-                Some(p) => std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?,
+                Some(p) => limpid_core::files::write_file(&p, text.as_bytes())?,
                 None => print!("{text}"),
             }
             Ok(())
@@ -401,8 +401,7 @@ fn export_stochastic(p: &StochasticDesign, output: &Path) -> CliResult {
 /// Write `<recording>.truth.json` beside a written recording and say so.
 fn write_truth(recording: &Path, samples: usize, truth: &serde_json::Value) -> CliResult {
     let path = recording.with_extension("truth.json");
-    std::fs::write(&path, serde_json::to_string_pretty(truth)?)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    limpid_core::files::write_file(&path, serde_json::to_string_pretty(truth)?.as_bytes())?;
     println!(
         "wrote {} ({samples} samples) and {}",
         recording.display(),

@@ -24,8 +24,7 @@ pub struct ReportArgs {
 /// Write the report of named results; returns the report for `--figures`.
 fn write_named(inputs: &[(String, Value)], path: &Path) -> CliResult<limpid_report::Report> {
     let report = limpid_report::build(inputs)?;
-    std::fs::write(path, limpid_report::to_html(&report))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    limpid_core::files::write_file(path, limpid_report::to_html(&report).as_bytes())?;
     Ok(report)
 }
 
@@ -62,7 +61,7 @@ pub fn run(args: ReportArgs) -> CliResult {
         let files = limpid_report::figure_files(&report);
         for (name, svg) in &files {
             let p = dir.join(name);
-            std::fs::write(&p, svg).map_err(|e| format!("{}: {e}", p.display()))?;
+            limpid_core::files::write_file(&p, svg.as_bytes())?;
         }
         println!("wrote {} figures to {}", files.len(), dir.display());
     }

@@ -112,7 +112,7 @@ fn matrix_of(v: &serde_json::Value, key: &str, path: &std::path::Path) -> CliRes
 }
 
 pub fn run_estimate(args: StochasticArgs) -> CliResult {
-    let rec = limpid_io::read_recording(&args.recording)?;
+    let rec = crate::read_recording(&args.recording)?;
     let band = match args.band.as_slice() {
         [lo, hi] => (*lo, *hi),
         _ => {
@@ -206,7 +206,7 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
 }
 
 pub fn run_spectra(args: SpectraArgs) -> CliResult {
-    let rec = limpid_io::read_recording(&args.recording)?;
+    let rec = crate::read_recording(&args.recording)?;
     let mut signals: Vec<&[f64]> = Vec::new();
     for name in args.inputs.iter().chain(&args.outputs) {
         signals.push(rec.require(name, "named in --inputs/--outputs")?);

@@ -125,7 +125,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                             serde_json::json!({"level": l, "stiffness": (0..3).map(|i| (0..3).map(|j| k[(i, j)]).collect::<Vec<f64>>()).collect::<Vec<_>>()})
                         }).collect::<Vec<_>>(),
                     });
-                    std::fs::write(args.out.join(format!("s{s}_c{c}.truth.json")), serde_json::to_string_pretty(&truth)?)?;
+                    limpid_core::files::write_file(&args.out.join(format!("s{s}_c{c}.truth.json")), serde_json::to_string_pretty(&truth)?.as_bytes())?;
                     progress.inc(1);
                     Ok(format!(
                         "[[recording]]\nsubject = \"{s}\"\nconfiguration = \"{c}\"\nfile = \"{file}\"\nmvc = \"{mvc_file}\"\n"
@@ -139,7 +139,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 entries.join("\n")
             );
             let path = args.out.join("study.toml");
-            std::fs::write(&path, manifest)?;
+            limpid_core::files::write_file(&path, manifest.as_bytes())?;
             println!(
                 "wrote {} recordings and {}",
                 population.len(),

@@ -60,6 +60,15 @@ pub enum Error {
         column: String,
         found: String,
     },
+    /// A finite value too large for its unit (a corrupt sample, or the wrong unit).
+    #[error("{path}: row {row}, column {column}: implausible value {found:e}: limpid accepts magnitudes up to {limit} in this column (SI units, FORMAT.md)")]
+    Implausible {
+        path: PathBuf,
+        row: usize,
+        column: String,
+        found: f64,
+        limit: String,
+    },
     /// A row has more or fewer cells than the header.
     #[error("{path}: row {row}: expected {expected} cells like the header, found {found}")]
     RaggedRow {
@@ -116,6 +125,34 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 /// A number rounded to 9 decimals for messages (500 Hz, not 499.99999999999955 Hz).
 pub fn display_round(v: f64) -> f64 {
     (v * 1e9).round() / 1e9
+}
+
+/// Run `f`, turning a panic inside it (a third-party decoder on a corrupt
+/// file) into an error naming `path` instead of aborting the process.
+pub fn catch_panic<T>(
+    path: &std::path::Path,
+    what: &str,
+    f: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(r) => r,
+        Err(payload) => Err(Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "corrupt or unsupported file: the {what} failed ({})",
+                panic_message(payload.as_ref()).replace('\n', "; ")
+            ),
+        }),
+    }
+}
+
+/// The text of a panic payload.
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
 }
 
 impl Error {

@@ -7,7 +7,9 @@
 
 pub mod arm;
 pub mod error;
+pub mod files;
 pub mod frame;
+pub mod linalg;
 pub mod payload;
 pub mod recording;
 pub mod trial;

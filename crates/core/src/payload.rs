@@ -55,7 +55,12 @@ fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 /// Least squares through the SVD with small singular values dropped: the
 /// solution, the RMS residual and the rank deficiency.
 fn solve(a: DMatrix<f64>, b: DVector<f64>) -> Result<(DVector<f64>, f64, usize)> {
-    let svd = a.clone().svd(true, true);
+    let svd = crate::linalg::svd(a.clone(), true, true).ok_or_else(|| {
+        Error::invalid(
+            "payload calibration",
+            "the readings are not finite or too large for double precision",
+        )
+    })?;
     let largest = svd.singular_values.max();
     if largest <= 0.0 || !largest.is_finite() {
         return Err(Error::invalid(

@@ -1,8 +1,12 @@
 //! `Recording`: one table of uniformly sampled time series (FORMAT.md v1).
 //!
 //! The whole table is checked once, when it is built: unique column names,
-//! finite values, a `t` column that is strictly increasing and uniform to
-//! within 1 %. Everything downstream can then trust it.
+//! finite values of a plausible size for their unit ([`magnitude_limit`]), a
+//! `t` column that is strictly increasing and uniform to within 1 % inside
+//! each trial (FORMAT.md: where the `trial` id changes a longer gap is
+//! allowed). Everything downstream can then trust it. What is accepted but
+//! suspicious (a `t` that looks like milliseconds, a column name that looks
+//! like a FORMAT.md name in another alphabet) is kept in [`Recording::warnings`].
 
 use std::path::{Path, PathBuf};
 
@@ -20,6 +24,70 @@ pub struct Recording {
     time_index: usize,
     sample_rate: f64,
     first_row: usize,
+    warnings: Vec<String>,
+}
+
+/// Largest magnitude accepted in a column, by its FORMAT.md unit, with the unit.
+///
+/// The limits are far beyond any limb or robot (a position of 100 m, a force
+/// of 1 MN) but keep every square and sum of squares far from overflow, so a
+/// corrupt sample (1e307) is refused with its row and column instead of
+/// turning an estimate into NaN. Columns limpid does not know get 1e15.
+pub fn magnitude_limit(name: &str) -> (f64, &'static str) {
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    let marker_axis = name
+        .rsplit_once('_')
+        .is_some_and(|(m, a)| !m.is_empty() && matches!(a, "x" | "y" | "z"));
+    match name {
+        "t" => (1e10, "s"),
+        "x" | "y" | "z" => (100.0, "m"),
+        "theta" => (1e4, "rad"),
+        "fx" | "fy" | "fz" | "ux" | "uy" | "uz" => (1e6, "N"),
+        "sensor_fx" | "sensor_fy" | "sensor_fz" => (1e6, "N"),
+        "taux" | "tauy" | "tauz" | "utheta" | "sensor_tx" | "sensor_ty" | "sensor_tz" => {
+            (1e6, "N m")
+        }
+        _ if marker_axis => (100.0, "m"),
+        _ if name.strip_prefix("robot_q").is_some_and(digits) => (1e4, "rad"),
+        _ if name.strip_prefix('q').is_some_and(digits) => (1e4, "rad"),
+        _ if name.strip_prefix("tau").is_some_and(digits) => (1e6, "N m"),
+        "trial" | "level" => (1e12, ""),
+        _ => (1e15, ""),
+    }
+}
+
+/// True for a column name FORMAT.md defines (with a unit limpid knows), or an EMG channel.
+pub fn is_format_column(name: &str) -> bool {
+    magnitude_limit(name).0 < 1e15 || name.starts_with("emg_")
+}
+
+/// FORMAT.md's fixed column names, for the look-alike check.
+const KNOWN_NAMES: [&str; 20] = [
+    "t", "x", "y", "z", "fx", "fy", "fz", "theta", "tauy", "ux", "uy", "uz", "utheta", "trial",
+    "level", "q1", "q2", "tau1", "tau2", "taux",
+];
+
+/// The ASCII letter a non-ASCII look-alike stands for (Cyrillic and Greek
+/// letters that render like Latin ones), if any.
+fn ascii_lookalike(c: char) -> Option<char> {
+    Some(match c {
+        'а' => 'a',
+        'е' => 'e',
+        'о' | 'ο' => 'o',
+        'р' | 'ρ' => 'p',
+        'с' => 'c',
+        'у' => 'y',
+        'х' | 'χ' => 'x',
+        'і' => 'i',
+        'τ' => 't',
+        'ք' => 'q',
+        'ԛ' => 'q',
+        'ν' => 'v',
+        'ѕ' => 's',
+        'ᴢ' | 'ż' => 'z',
+        'ƒ' => 'f',
+        _ => return None,
+    })
 }
 
 impl Recording {
@@ -37,8 +105,9 @@ impl Recording {
         if names.is_empty() {
             return Err(Error::Empty { path });
         }
+        let mut seen = std::collections::HashMap::with_capacity(names.len());
         for (i, name) in names.iter().enumerate() {
-            if let Some(j) = names[..i].iter().position(|n| n == name) {
+            if let Some(j) = seen.insert(name.as_str(), i) {
                 return Err(Error::DuplicateColumn {
                     path,
                     column: name.clone(),
@@ -70,6 +139,43 @@ impl Recording {
                     found: col[i].to_string(),
                 });
             }
+            let (limit, unit) = magnitude_limit(name);
+            if let Some(i) = col.iter().position(|v| v.abs() > limit) {
+                let unit = if unit.is_empty() {
+                    String::new()
+                } else {
+                    format!(" {unit}")
+                };
+                let limit = if limit < 1e4 {
+                    format!("{limit}")
+                } else {
+                    format!("{limit:e}")
+                };
+                return Err(Error::Implausible {
+                    path,
+                    row: i + first_row,
+                    column: name.clone(),
+                    found: col[i],
+                    limit: format!("{limit}{unit}"),
+                });
+            }
+        }
+        let mut warnings = Vec::new();
+        for name in &names {
+            if name.is_ascii() {
+                continue;
+            }
+            let spelt: String = name
+                .chars()
+                .map(|c| ascii_lookalike(c).unwrap_or(c))
+                .collect();
+            if spelt != *name
+                && (KNOWN_NAMES.contains(&spelt.as_str()) || spelt.starts_with("emg_"))
+            {
+                warnings.push(format!(
+                    "column {name:?} is not a FORMAT.md name but looks like {spelt:?} written with non-Latin letters; it is ignored"
+                ));
+            }
         }
         let time_index =
             names
@@ -81,7 +187,17 @@ impl Recording {
                     why: "sample time in s".into(),
                     found: names.join(","),
                 })?;
-        let sample_rate = check_time(&path, &columns[time_index], first_row)?;
+        let trial = names
+            .iter()
+            .position(|n| n == "trial")
+            .map(|i| columns[i].as_slice());
+        let sample_rate = check_time(&path, &columns[time_index], trial, first_row)?;
+        if let Some(unit) = time_unit_hint(sample_rate) {
+            warnings.push(format!(
+                "column t looks like it is in {unit} (sample rate {} Hz); FORMAT.md wants seconds",
+                crate::display_round(sample_rate)
+            ));
+        }
         Ok(Recording {
             path,
             names,
@@ -89,7 +205,18 @@ impl Recording {
             time_index,
             sample_rate,
             first_row,
+            warnings,
         })
+    }
+
+    /// What was accepted but looks wrong (one line each), for the front-ends to show.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Add a warning (readers: what they skipped and why).
+    pub fn warn(&mut self, message: impl Into<String>) {
+        self.warnings.push(message.into());
     }
 
     /// Where the recording came from (used in every error message).
@@ -166,8 +293,10 @@ impl Recording {
     }
 }
 
-/// Check that `t` is strictly increasing and uniform; return the sample rate (Hz).
-fn check_time(path: &Path, t: &[f64], first_row: usize) -> Result<f64> {
+/// Check that `t` is strictly increasing and uniform inside each trial;
+/// return the sample rate (Hz). Intervals where the `trial` id changes may be
+/// longer (FORMAT.md: recordings may keep only the perturbation windows).
+fn check_time(path: &Path, t: &[f64], trial: Option<&[f64]>, first_row: usize) -> Result<f64> {
     if t.len() < 2 {
         return Err(Error::TooFewSamples {
             path: path.to_path_buf(),
@@ -186,12 +315,25 @@ fn check_time(path: &Path, t: &[f64], first_row: usize) -> Result<f64> {
             });
         }
     }
-    let mut dt: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let boundary = |i: usize| trial.is_some_and(|id| id[i] != id[i - 1]);
+    let mut dt: Vec<f64> = (1..t.len())
+        .filter(|&i| !boundary(i))
+        .map(|i| t[i] - t[i - 1])
+        .collect();
+    if dt.is_empty() {
+        return Err(Error::TooFewSamples {
+            path: path.to_path_buf(),
+            what: "deriving the sample rate (two samples of one trial)".into(),
+            needed: 2,
+            found: 1,
+        });
+    }
     let mid = dt.len() / 2;
     let median = *dt.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
     for i in 1..t.len() {
         let d = t[i] - t[i - 1];
-        if (d - median).abs() > SAMPLING_TOLERANCE * median {
+        let gap_allowed = boundary(i) && d > median;
+        if !gap_allowed && (d - median).abs() > SAMPLING_TOLERANCE * median {
             return Err(Error::NonUniformSampling {
                 path: path.to_path_buf(),
                 row: i + first_row,
@@ -200,7 +342,31 @@ fn check_time(path: &Path, t: &[f64], first_row: usize) -> Result<f64> {
             });
         }
     }
-    Ok(1.0 / median)
+    let rate = 1.0 / median;
+    if !rate.is_finite() {
+        return Err(Error::NonUniformSampling {
+            path: path.to_path_buf(),
+            row: first_row + 1,
+            found_s: median,
+            median_s: median,
+        });
+    }
+    Ok(rate)
+}
+
+/// "milliseconds" or "microseconds" when the sample rate in s would be below
+/// 2 Hz (no impedance recording is sampled so slowly) but sensible in that unit.
+fn time_unit_hint(rate: f64) -> Option<&'static str> {
+    let dt = 1.0 / rate;
+    if rate >= 2.0 {
+        None
+    } else if dt < 500.0 {
+        Some("milliseconds")
+    } else if dt < 5e5 {
+        Some("microseconds")
+    } else {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -320,7 +320,7 @@ pub fn mimo_point(s: &DMatrix<Complex64>, inputs: usize) -> Option<MimoPoint> {
     // [input][output] = E[conj(U_i) Y_k]
     let guy = s.view((0, q), (q, m - q)).into_owned();
     // G_uu is Hermitian positive semi-definite: its eigenvalues give the conditioning
-    let eig = guu.clone().symmetric_eigenvalues();
+    let eig = limpid_core::linalg::symmetric_eigenvalues(guu.clone())?;
     let (lo, hi) = (eig.min(), eig.max());
     if !(hi > 0.0 && lo > 1e-12 * hi) {
         return None;

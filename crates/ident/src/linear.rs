@@ -167,7 +167,9 @@ pub(crate) fn solve_triangle(
     let r = r_aug.view((0, 0), (p, p)).into_owned();
     let z = r_aug.view((0, p), (p, n)).into_owned();
     let s_block = r_aug.view((p, p), (n, n)).into_owned();
-    let svd = r.svd(true, true);
+    let Some(svd) = limpid_core::linalg::svd(r, true, true) else {
+        return Err("the least-squares triangle is not finite or its SVD did not converge: the data overflow double precision".into());
+    };
     let sv = &svd.singular_values;
     let (smax, smin) = (sv.max(), sv.min());
     // NaN-safe: a NaN singular value also counts as rank-deficient
@@ -470,7 +472,10 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         let k = DMatrix::from_fn(n, n, |i, j| stiffness[i][j]);
         let c = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);
         match k.clone().lu().solve(&c) {
-            Some(kc) if k.clone().svd(false, false).singular_values.min() > 1e-12 * k.norm() => {
+            Some(kc)
+                if limpid_core::linalg::singular_values(k.clone())
+                    .is_some_and(|s| s.min() > 1e-12 * k.norm()) =>
+            {
                 Some((0..n).map(|i| data.reference[i] - kc[i]).collect())
             }
             _ => {
@@ -514,7 +519,11 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             ));
         }
         let bad: Vec<String> = (0..n)
-            .filter(|&i| value[i][i].abs() < ratio * se[i][i])
+            // NaN-safe; an exact zero (no force at all) identifies nothing
+            .filter(|&i| {
+                let identified = value[i][i].abs() >= ratio * se[i][i];
+                value[i][i] == 0.0 || !identified
+            })
             .map(|i| {
                 format!(
                     "{}{} = {:.3} ± {:.3} {unit}",
@@ -538,6 +547,23 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         }
         bad.is_empty() && noisy.is_empty()
     };
+    let finite = |m: &Mat| m.iter().flatten().all(|v| v.is_finite());
+    if ![
+        &inertia,
+        &damping,
+        &stiffness,
+        &se_out.inertia,
+        &se_out.damping,
+        &se_out.stiffness,
+    ]
+    .into_iter()
+    .all(finite)
+        || !condition_number.is_finite()
+    {
+        return Err(numerical(
+            "the estimate or its standard errors are not finite numbers: the data overflow double precision or do not determine the model".into(),
+        ));
+    }
     let (mu, bu, ku) = units(&data.coordinates);
     let identifiable = Identifiable {
         inertia: check(&inertia, &se_out.inertia, "M", mu, &mut warnings),

@@ -400,7 +400,8 @@ pub fn fit_planar(
         .iter()
         .map(|b| triangle(b.columns(0, p).into_owned(), p))
         .collect();
-    let raw = merge(raw_tris.iter(), p).svd(false, false).singular_values;
+    let raw = limpid_core::linalg::singular_values(merge(raw_tris.iter(), p))
+        .unwrap_or_else(|| DVector::from_element(p, f64::NAN));
     let condition_number = raw.max() / raw.min();
     let off = if xi.is_some() { 0 } else { 3 };
     let (xi_hat, xi_se) = match xi {
@@ -661,7 +662,9 @@ pub fn criteria(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, cond_scaled: f64)
             0.5 * (m[0][1] + m[1][0]),
             m[1][1],
         );
-        let e = s.symmetric_eigenvalues();
+        let s = nalgebra::DMatrix::from_column_slice(2, 2, s.as_slice());
+        let e = limpid_core::linalg::symmetric_eigenvalues(s)
+            .unwrap_or_else(|| nalgebra::DVector::from_element(2, f64::NAN));
         let (a, b) = (e[0].max(e[1]), e[0].min(e[1]));
         [a, b]
     };

@@ -234,6 +234,20 @@ pub fn choose_coordinates(rec: &Recording) -> Result<(Vec<String>, Vec<String>)>
             forces.push(f.to_string());
         }
     }
+    if !coords.is_empty() {
+        for (c, f) in [("x", "fx"), ("y", "fy"), ("z", "fz"), ("theta", "tauy")] {
+            if rec.has(f) && !rec.has(c) {
+                return Err(Error::MissingColumn {
+                    path: rec.path().to_path_buf(),
+                    column: c.into(),
+                    why: format!(
+                        "the recording has force {f} but no position {c}; estimating without it would ignore that force"
+                    ),
+                    found: rec.names().join(","),
+                });
+            }
+        }
+    }
     if coords.is_empty() {
         let mut k = 1;
         while rec.has(&format!("q{k}")) {

@@ -7,16 +7,19 @@
 //! column.
 //!
 //! MATLAB files (read only): level-5 MAT-files, i.e. MATLAB's `-v6` and
-//! default `-v7` (compressed) formats, read with the `matfile` crate. Each
+//! default `-v7` (compressed) formats, read by our own bounded decoder
+//! (`mat.rs`). Each
 //! column is a real numeric vector variable (row or column, any numeric
 //! class) named like the column; scalars, matrices, strings, structs and
 //! cells are skipped. `-v7.3` files are HDF5 and are refused with a hint. In
 //! errors, "row" counts samples from 1, as MATLAB indexes them.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
+
+mod mat;
 
 use limpid_core::{Error, Recording, Result};
 use parquet::basic::{Repetition, Type as PhysicalType};
@@ -72,9 +75,16 @@ pub fn write_recording(rec: &Recording, path: impl AsRef<Path>) -> Result<()> {
     }
 }
 
+/// Largest MAT-file read (bytes).
+pub const MAX_MAT_BYTES: u64 = 4 << 30;
+
 /// Read a MATLAB level-5 MAT-file: one real numeric vector per column.
+///
+/// A variable named like a FORMAT.md column that is not a real numeric vector
+/// (a struct, cell, string, matrix or complex array called `x`) is refused;
+/// other variables that are not vectors are skipped with a warning.
 pub fn read_mat(path: &Path) -> Result<Recording> {
-    let bytes = std::fs::read(path).map_err(io_err(path))?;
+    let bytes = limpid_core::files::read_bytes(path, MAX_MAT_BYTES)?;
     if bytes.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),
@@ -96,27 +106,31 @@ pub fn read_mat(path: &Path) -> Result<Recording> {
             "not a MAT-file: the header does not start with \"MATLAB 5.0 MAT-file\"".into(),
         ));
     }
-    check_mat_elements(&bytes).map_err(fail)?;
-    let mat = matfile::MatFile::parse(bytes.as_slice())
-        .map_err(|e| fail(format!("not a readable MAT-file: {e}")))?;
+    let variables = mat::variables(&bytes).map_err(fail)?;
     let (mut names, mut columns, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
-    for array in mat.arrays() {
-        let size = array.size();
-        let samples: usize = size.iter().product();
-        let vector = size.len() == 2 && size.contains(&1) && samples > 1;
-        if !vector {
-            let dims: Vec<String> = size.iter().map(usize::to_string).collect();
-            skipped.push(format!("{} ({})", array.name(), dims.join(" x ")));
-            continue;
-        }
-        let values = mat_real_values(array.data()).ok_or_else(|| {
-            fail(format!(
+    for var in variables {
+        let samples: usize = var.dims.iter().product();
+        let vector = var.dims.len() == 2 && var.dims.contains(&1) && samples > 1;
+        let dims: Vec<String> = var.dims.iter().map(usize::to_string).collect();
+        let shape = format!("{} ({}), {}", var.name, dims.join(" x "), var.class);
+        if var.complex && vector {
+            return Err(fail(format!(
                 "variable {}: complex values; a recording holds real numbers",
-                array.name()
-            ))
-        })?;
-        names.push(array.name().to_string());
-        columns.push(values);
+                var.name
+            )));
+        }
+        match var.real {
+            Some(values) if vector => {
+                names.push(var.name);
+                columns.push(values);
+            }
+            _ if limpid_core::recording::is_format_column(&var.name) => {
+                return Err(fail(format!(
+                    "variable {shape}: a column must be a real numeric vector (save each column, e.g. x, as an N x 1 double)"
+                )));
+            }
+            _ => skipped.push(shape),
+        }
     }
     if names.is_empty() {
         return Err(fail(format!(
@@ -124,80 +138,19 @@ pub fn read_mat(path: &Path) -> Result<Recording> {
             if skipped.is_empty() {
                 "no numeric variable".to_string()
             } else {
-                skipped.join(", ")
+                skipped.join("; ")
             }
         )));
     }
-    Recording::new(path, names, columns, 1)
-}
-
-/// Walk the top-level data elements (8-byte tag: type, byte count) and refuse
-/// a file that ends inside one: the parser would return the variables before
-/// the cut as if the file were whole.
-fn check_mat_elements(bytes: &[u8]) -> std::result::Result<(), String> {
-    const HEADER: usize = 128;
-    const COMPRESSED: u32 = 15;
-    if bytes.len() < HEADER {
-        return Err(format!(
-            "truncated: {} bytes, shorter than the 128-byte header",
-            bytes.len()
+    let mut rec = Recording::new(path, names, columns, 1)?;
+    if !skipped.is_empty() {
+        rec.warn(format!(
+            "{}: skipped MAT variables that are not numeric vectors: {}",
+            path.display(),
+            skipped.join("; ")
         ));
     }
-    let little = &bytes[126..128] == b"IM";
-    let word = |at: usize| {
-        let b = [bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]];
-        if little {
-            u32::from_le_bytes(b)
-        } else {
-            u32::from_be_bytes(b)
-        }
-    };
-    let mut at = HEADER;
-    while at < bytes.len() {
-        if at + 8 > bytes.len() {
-            return Err(format!(
-                "truncated: the file ends inside the tag at byte {at}"
-            ));
-        }
-        let (kind, size) = (word(at), word(at + 4) as usize);
-        let mut next = at + 8 + size;
-        if kind != COMPRESSED {
-            next = next.div_ceil(8) * 8; // uncompressed elements are padded to 8 bytes
-        }
-        if next > bytes.len() {
-            return Err(format!(
-                "truncated: the variable at byte {at} needs {} bytes, the file has {}",
-                next - at,
-                bytes.len() - at
-            ));
-        }
-        at = next;
-    }
-    Ok(())
-}
-
-/// The values of a real numeric array as f64; `None` if it is complex.
-fn mat_real_values(data: &matfile::NumericData) -> Option<Vec<f64>> {
-    use matfile::NumericData as D;
-    macro_rules! real {
-        ($real:expr, $imag:expr) => {
-            $imag
-                .is_none()
-                .then(|| $real.iter().map(|v| *v as f64).collect())
-        };
-    }
-    match data {
-        D::Int8 { real, imag } => real!(real, imag),
-        D::UInt8 { real, imag } => real!(real, imag),
-        D::Int16 { real, imag } => real!(real, imag),
-        D::UInt16 { real, imag } => real!(real, imag),
-        D::Int32 { real, imag } => real!(real, imag),
-        D::UInt32 { real, imag } => real!(real, imag),
-        D::Int64 { real, imag } => real!(real, imag),
-        D::UInt64 { real, imag } => real!(real, imag),
-        D::Single { real, imag } => real!(real, imag),
-        D::Double { real, imag } => real!(real, imag),
-    }
+    Ok(rec)
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -209,7 +162,7 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 
 /// Read a CSV recording: header row, then one sample per row.
 pub fn read_csv(path: &Path) -> Result<Recording> {
-    let file = File::open(path).map_err(io_err(path))?;
+    let file = limpid_core::files::open_input(path)?;
     if file.metadata().map_err(io_err(path))?.len() == 0 {
         return Err(Error::Empty {
             path: path.to_path_buf(),
@@ -275,27 +228,81 @@ pub fn read_csv(path: &Path) -> Result<Recording> {
     Recording::new(path, names, columns, 2)
 }
 
-/// Read a Parquet recording: numeric columns (double, float, int32, int64), no nulls.
+/// Most rows read from one Parquet file (the footer could claim any number).
+pub const MAX_PARQUET_ROWS: i64 = 1 << 32;
+
+/// Read a Parquet recording: flat numeric columns (double, float, int32,
+/// int64), no nulls; any compression the parquet crate decodes (snappy,
+/// zstd, gzip, lz4, brotli). Timestamp columns are converted to seconds;
+/// nested, repeated, decimal and date columns are refused. A panic inside the
+/// parquet crate (a corrupt file) becomes an error naming the file.
 pub fn read_parquet(path: &Path) -> Result<Recording> {
-    let file = File::open(path).map_err(io_err(path))?;
+    let file = limpid_core::files::open_input(path)?;
     if file.metadata().map_err(io_err(path))?.len() == 0 {
         return Err(Error::Empty {
             path: path.to_path_buf(),
         });
     }
+    limpid_core::error::catch_panic(path, "Parquet decoder", || read_parquet_file(path, file))
+}
+
+fn read_parquet_file(path: &Path, file: File) -> Result<Recording> {
+    use parquet::basic::{LogicalType, TimeUnit};
     let pq_err = |e: parquet::errors::ParquetError| Error::Format {
         path: path.to_path_buf(),
         message: format!("not a readable Parquet file: {e}"),
     };
+    let fail = |message: String| Error::Format {
+        path: path.to_path_buf(),
+        message,
+    };
     let reader = SerializedFileReader::new(file).map_err(pq_err)?;
     let meta = reader.metadata();
     let schema = meta.file_metadata().schema_descr();
-    let names: Vec<String> = schema.columns().iter().map(|c| c.path().string()).collect();
-    let total = meta.file_metadata().num_rows().max(0) as usize;
-    let mut columns: Vec<Vec<f64>> = vec![Vec::with_capacity(total); names.len()];
+    let mut names = Vec::with_capacity(schema.num_columns());
+    // seconds per stored unit, for timestamp columns
+    let mut unit_s: Vec<Option<f64>> = Vec::with_capacity(schema.num_columns());
+    for c in schema.columns() {
+        let name = c.path().string();
+        if c.path().parts().len() > 1 || c.max_rep_level() > 0 {
+            return Err(fail(format!(
+                "column {name}: a nested or repeated (struct/list) column; a recording has flat numeric columns"
+            )));
+        }
+        let scale = match c.logical_type_ref() {
+            Some(LogicalType::Timestamp(ts)) => Some(match ts.unit {
+                TimeUnit::MILLIS => 1e-3,
+                TimeUnit::MICROS => 1e-6,
+                TimeUnit::NANOS => 1e-9,
+            }),
+            Some(LogicalType::Decimal { .. })
+            | Some(LogicalType::Date)
+            | Some(LogicalType::Time(_))
+            | Some(LogicalType::String)
+            | Some(LogicalType::Uuid) => {
+                return Err(fail(format!(
+                    "column {name}: a {:?} column; expected plain numbers in SI units",
+                    c.logical_type_ref()
+                        .map(|l| format!("{l:?}"))
+                        .unwrap_or_default()
+                )));
+            }
+            _ => None,
+        };
+        names.push(name);
+        unit_s.push(scale);
+    }
+    let total = meta.file_metadata().num_rows();
+    if !(0..=MAX_PARQUET_ROWS).contains(&total) {
+        return Err(fail(format!(
+            "the footer claims {total} rows; limpid reads at most {MAX_PARQUET_ROWS}"
+        )));
+    }
+    const BATCH: usize = 1 << 16;
+    let reserve = (total as usize).min(1 << 24);
+    let mut columns: Vec<Vec<f64>> = vec![Vec::with_capacity(reserve); names.len()];
     for g in 0..reader.num_row_groups() {
         let group = reader.get_row_group(g).map_err(pq_err)?;
-        let rows = group.metadata().num_rows().max(0) as usize;
         for (k, out) in columns.iter_mut().enumerate() {
             let start = out.len();
             let mut defs: Vec<i16> = Vec::new();
@@ -303,20 +310,36 @@ pub fn read_parquet(path: &Path) -> Result<Recording> {
             macro_rules! read_all {
                 ($r:expr, $t:ty) => {{
                     let mut r = $r;
-                    let mut vals: Vec<$t> = Vec::with_capacity(rows);
-                    let (n_rec, _, _) = r
-                        .read_records(rows, Some(&mut defs), None, &mut vals)
-                        .map_err(pq_err)?;
-                    if vals.len() != n_rec {
-                        let missing = defs.iter().position(|d| *d == 0).unwrap_or(0);
-                        return Err(Error::NotANumber {
-                            path: path.to_path_buf(),
-                            row: start + missing + 1,
-                            column: names[k].clone(),
-                            found: "null".into(),
-                        });
+                    let mut vals: Vec<$t> = Vec::with_capacity(BATCH);
+                    loop {
+                        vals.clear();
+                        defs.clear();
+                        let (n_rec, _, _) = r
+                            .read_records(BATCH, Some(&mut defs), None, &mut vals)
+                            .map_err(pq_err)?;
+                        if n_rec == 0 {
+                            break;
+                        }
+                        if vals.len() != n_rec {
+                            let missing = defs.iter().position(|d| *d == 0).unwrap_or(0);
+                            return Err(Error::NotANumber {
+                                path: path.to_path_buf(),
+                                row: out.len() + missing + 1,
+                                column: names[k].clone(),
+                                found: "null".into(),
+                            });
+                        }
+                        match unit_s[k] {
+                            Some(u) => out.extend(vals.iter().map(|v| *v as f64 * u)),
+                            None => out.extend(vals.iter().map(|v| *v as f64)),
+                        }
+                        if out.len() as i64 > MAX_PARQUET_ROWS {
+                            return Err(fail(format!(
+                                "column {}: more than {MAX_PARQUET_ROWS} rows",
+                                names[k]
+                            )));
+                        }
                     }
-                    out.extend(vals.into_iter().map(|v| v as f64));
                 }};
             }
             match column_reader {
@@ -331,6 +354,7 @@ pub fn read_parquet(path: &Path) -> Result<Recording> {
                     })
                 }
             }
+            let _ = start;
         }
     }
     Recording::new(path, names, columns, 1)
@@ -338,8 +362,10 @@ pub fn read_parquet(path: &Path) -> Result<Recording> {
 
 /// Write a CSV recording with full round-trip precision.
 pub fn write_csv(rec: &Recording, path: &Path) -> Result<()> {
-    let file = File::create(path).map_err(io_err(path))?;
-    let mut w = BufWriter::new(file);
+    limpid_core::files::write_atomic(path, |w| write_csv_to(rec, path, w))
+}
+
+fn write_csv_to(rec: &Recording, path: &Path, w: &mut impl Write) -> Result<()> {
     let cols: Vec<(&str, &[f64])> = rec.columns().collect();
     let header: Vec<&str> = cols.iter().map(|c| c.0).collect();
     writeln!(w, "{}", header.join(",")).map_err(io_err(path))?;
@@ -382,31 +408,33 @@ pub fn write_parquet(rec: &Recording, path: &Path) -> Result<()> {
             .map_err(pq_err)?,
     );
     let props = Arc::new(WriterProperties::builder().build());
-    let file = File::create(path).map_err(io_err(path))?;
-    let mut writer = SerializedFileWriter::new(file, schema, props).map_err(pq_err)?;
-    const ROWS_PER_GROUP: usize = 1 << 20;
-    let n = rec.len();
-    let cols: Vec<&[f64]> = rec.columns().map(|c| c.1).collect();
-    let mut start = 0;
-    while start < n {
-        let end = (start + ROWS_PER_GROUP).min(n);
-        let mut group = writer.next_row_group().map_err(pq_err)?;
-        for c in &cols {
-            let mut col = group
-                .next_column()
-                .map_err(pq_err)?
-                .ok_or_else(|| Error::Format {
-                    path: path.to_path_buf(),
-                    message: "parquet schema has fewer columns than the recording".into(),
-                })?;
-            col.typed::<DoubleType>()
-                .write_batch(&c[start..end], None, None)
-                .map_err(pq_err)?;
-            col.close().map_err(pq_err)?;
+    limpid_core::files::write_atomic(path, |file| {
+        let mut writer = SerializedFileWriter::new(file, schema, props).map_err(pq_err)?;
+        const ROWS_PER_GROUP: usize = 1 << 20;
+        let n = rec.len();
+        let cols: Vec<&[f64]> = rec.columns().map(|c| c.1).collect();
+        let mut start = 0;
+        while start < n {
+            let end = (start + ROWS_PER_GROUP).min(n);
+            let mut group = writer.next_row_group().map_err(pq_err)?;
+            for c in &cols {
+                let mut col =
+                    group
+                        .next_column()
+                        .map_err(pq_err)?
+                        .ok_or_else(|| Error::Format {
+                            path: path.to_path_buf(),
+                            message: "parquet schema has fewer columns than the recording".into(),
+                        })?;
+                col.typed::<DoubleType>()
+                    .write_batch(&c[start..end], None, None)
+                    .map_err(pq_err)?;
+                col.close().map_err(pq_err)?;
+            }
+            group.close().map_err(pq_err)?;
+            start = end;
         }
-        group.close().map_err(pq_err)?;
-        start = end;
-    }
-    writer.close().map_err(pq_err)?;
-    Ok(())
+        writer.close().map_err(pq_err)?;
+        Ok(())
+    })
 }

@@ -90,21 +90,76 @@ impl Design {
                 (kind, body)
             }
         };
-        match kind.as_str() {
-            "centre-out" => Ok(Design::CentreOut(Protocol::from_toml(&body, path)?)),
+        crate::validate::check_numbers(&body, path)?;
+        let design = match kind.as_str() {
+            "centre-out" => Design::CentreOut(Protocol::from_toml(&body, path)?),
             "planar" => {
                 let d: PlanarDesign = toml::from_str(&body).map_err(|e| located(&body, e))?;
                 d.validate().map_err(fail)?;
-                Ok(Design::Planar(d))
+                Design::Planar(d)
             }
             "stochastic" => {
                 let d: StochasticDesign = toml::from_str(&body).map_err(|e| located(&body, e))?;
                 d.validate().map_err(fail)?;
-                Ok(Design::Stochastic(d))
+                Design::Stochastic(d)
             }
-            other => Err(fail(format!(
-                "unknown kind {other:?}; kinds: centre-out, planar, stochastic"
-            ))),
+            other => {
+                return Err(fail(format!(
+                    "unknown kind {other:?}; kinds: centre-out, planar, stochastic"
+                )))
+            }
+        };
+        design.check_size().map_err(|e| fail(e.to_string()))?;
+        Ok(design)
+    }
+
+    /// Refuse a design that asks for more samples than limpid simulates
+    /// ([`crate::validate::MAX_SAMPLES`]) or motions shorter than 4 samples.
+    pub fn check_size(&self) -> Result<()> {
+        use crate::validate::check_size;
+        let short = |what: &str, s: f64, fs: f64| {
+            if s * fs < 4.0 {
+                Err(Error::invalid(
+                    "protocol",
+                    format!("{what} = {s} s lasts under 4 samples at {fs} Hz: the motion cannot be sampled"),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        match self {
+            Design::CentreOut(p) => {
+                let ph = &p.phases;
+                let per = (ph.rest_s
+                    + ph.centre_out_s
+                    + ph.hold_s
+                    + ph.return_s
+                    + ph.relax_s
+                    + ph.set_rest_s)
+                    * p.sample_rate_hz;
+                let starts = if p.start_points.points.is_empty() {
+                    6
+                } else {
+                    p.start_points.points.len()
+                };
+                check_size(
+                    per * (starts * p.targets.count) as f64,
+                    "start points x targets x trial length x rate",
+                )?;
+                short("phases.centre_out_s", ph.centre_out_s, p.sample_rate_hz)
+            }
+            Design::Planar(p) => {
+                let per = (p.wait_s[1] + p.after_s + p.rest_s) * p.sample_rate_hz;
+                check_size(
+                    per * p.trials as f64,
+                    "trials x (longest wait + after_s) x rate",
+                )?;
+                short("interpolation_s", p.interpolation_s, p.sample_rate_hz)
+            }
+            Design::Stochastic(p) => check_size(
+                p.duration_s * p.sample_rate_hz * p.channels.len().max(1) as f64,
+                "duration x rate x channels",
+            ),
         }
     }
 
@@ -442,6 +497,28 @@ fn check_planar(p: &PlanarDesign) -> Result<PlanarReport> {
                             format!("{limit} {value:.4} exceeds the limit {max} on joint {} in displacement {}, t = {t:.3} s after the onset", j + 1, di + 1),
                         ));
                     }
+                }
+            }
+        }
+        let (_, v, a) = Profile::Quintic.peaks(p.interpolation_s);
+        for (j, amp) in dq.iter().enumerate() {
+            for (limit, value, max) in [
+                (
+                    "joint velocity (rad/s)",
+                    amp.abs() * v,
+                    l.max_joint_velocity_rad_s,
+                ),
+                (
+                    "joint acceleration (rad/s^2)",
+                    amp.abs() * a,
+                    l.max_joint_acceleration_rad_s2,
+                ),
+            ] {
+                if value > max {
+                    return Err(Error::invalid(
+                        "protocol",
+                        format!("{limit} {value:.4} exceeds the limit {max} on joint {} in displacement {} (peak of the continuous quintic)", j + 1, di + 1),
+                    ));
                 }
             }
         }

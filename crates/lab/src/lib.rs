@@ -19,6 +19,7 @@ pub mod session;
 pub mod simulate;
 pub mod sphere;
 pub mod subject;
+pub mod validate;
 
 pub use profile::Profile;
 pub use simulate::{simulate_centre_out, CentreOut, NoiseModel};

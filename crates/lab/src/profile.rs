@@ -33,6 +33,16 @@ impl Profile {
         self.eval_inside(t / duration, duration)
     }
 
+    /// Peak |displacement|, |velocity| and |acceleration| of a unit-amplitude
+    /// motion of `duration`, on a grid of 4001 points including both ends
+    /// (so a motion shorter than a sample period is still checked).
+    pub fn peaks(self, duration: f64) -> (f64, f64, f64) {
+        (0..=4000).fold((0.0f64, 0.0f64, 0.0f64), |(x, v, a), k| {
+            let (px, pv, pa) = self.eval_inside(k as f64 / 4000.0, duration);
+            (x.max(px.abs()), v.max(pv.abs()), a.max(pa.abs()))
+        })
+    }
+
     fn eval_inside(self, tau: f64, d: f64) -> (f64, f64, f64) {
         match self {
             Profile::Cubic => (

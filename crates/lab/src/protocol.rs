@@ -153,6 +153,7 @@ pub fn preset(name: &str) -> Result<Protocol> {
 impl Protocol {
     /// Parse and check the structure of a TOML protocol.
     pub fn from_toml(text: &str, path: &std::path::Path) -> Result<Self> {
+        crate::validate::check_numbers(text, path)?;
         let p: Protocol =
             toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
         if p.sample_rate_hz <= 0.0
@@ -299,6 +300,20 @@ pub fn check(p: &Protocol) -> Result<CheckReport> {
                     }
                 }
             }
+        }
+    }
+    // between samples: the continuous profile's peaks (a motion shorter than a
+    // sample period would otherwise pass with peak velocity 0)
+    let (_, v, a) = p.phases.profile.peaks(p.phases.centre_out_s);
+    for (limit, value, max) in [
+        ("velocity (m/s)", d * v, l.max_velocity_m_s),
+        ("acceleration (m/s^2)", d * a, l.max_acceleration_m_s2),
+    ] {
+        if value > max {
+            return Err(Error::invalid(
+                "protocol",
+                format!("{limit} {value:.4} exceeds the limit {max} during the centre-out motion (peak of the continuous profile)"),
+            ));
         }
     }
     Ok(report)

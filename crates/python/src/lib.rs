@@ -582,8 +582,8 @@ fn report(results: Vec<String>, path: std::path::PathBuf) -> PyResult<()> {
         })
         .collect::<PyResult<_>>()?;
     let r = limpid_report::build(&inputs).map_err(value_err)?;
-    std::fs::write(&path, limpid_report::to_html(&r))
-        .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))
+    limpid_core::files::write_file(&path, limpid_report::to_html(&r).as_bytes())
+        .map_err(|e| PyOSError::new_err(e.to_string()))
 }
 
 #[pymodule]
