@@ -3,6 +3,17 @@
 # tested in a fresh virtual environment (maturin, numpy, scipy, pytest from PyPI).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# prerequisites first: one line on what to install, not a build failure 20 minutes in
+missing=""
+command -v cargo >/dev/null 2>&1 || missing="$missing cargo(rustup)"
+command -v cmake >/dev/null 2>&1 || missing="$missing cmake"
+command -v c++ >/dev/null 2>&1 || missing="$missing g++"
+command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || missing="$missing chromium"
+python3 -c "import venv, ensurepip" >/dev/null 2>&1 || missing="$missing python3-venv"
+if [ -n "$missing" ]; then
+  echo "scripts/test.sh: missing:$missing; install them first (Debian: apt-get install cmake g++ chromium python3-venv; Rust from rustup), or run .ci/run, which installs the Debian ones" >&2
+  exit 2
+fi
 cargo test --workspace --release
 # Lab Streaming Layer inlets (cargo feature lsl) on loopback: liblsl is built
 # from source with cmake; its vendored boost needs the define with glibc >= 2.34

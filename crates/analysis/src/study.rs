@@ -65,10 +65,7 @@ pub struct Entry {
 
 /// Read and check a manifest; relative paths are resolved against its folder.
 pub fn load_manifest(path: &Path) -> Result<Manifest> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = limpid_core::files::read_text(path)?;
     let mut m: Manifest =
         toml::from_str(&text).map_err(|e| Error::settings(path, &text, e.span(), e.message()))?;
     if m.recording.is_empty() {
@@ -169,7 +166,8 @@ pub fn run_study(
                 }
                 estimate_cocontraction(&rec, &mvc, params, &emg)
             };
-            let out = run()
+            // a panic in one recording (a bug) must not abort the study
+            let out = limpid_core::error::catch_panic(&e.file, "estimation", run)
                 .map(|result| Processed {
                     subject: e.subject.clone(),
                     configuration: e.configuration.clone(),
@@ -215,8 +213,12 @@ pub fn run_study(
                 .iter()
                 .filter_map(|p| p.result.levels.iter().find(|l| l.level == *level))
                 .collect();
+            // mean over the recordings that have the value (a matrix without an
+            // ellipsoid has no eigenvalues); NaN only when none has it, which
+            // the tables write as an empty cell
             let mean = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| {
-                at.iter().map(|l| f(l)).sum::<f64>() / at.len() as f64
+                let v: Vec<f64> = at.iter().map(|l| f(l)).filter(|v| v.is_finite()).collect();
+                v.iter().sum::<f64>() / v.len() as f64
             };
             let eig = |l: &crate::cocontraction::LevelResult, i: usize| {
                 l.ellipsoid
@@ -320,21 +322,29 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut csv = String::from(
         "configuration,level,subjects,cocontraction_index,kxx,kyy,kzz,k_max_a,k1,k2,k3\n",
     );
+    // a value no recording has is an empty cell, never "NaN"
+    let cell = |v: f64, decimals: usize| {
+        if v.is_finite() {
+            format!("{v:.decimals$}")
+        } else {
+            String::new()
+        }
+    };
     for l in &r.levels {
         let _ = writeln!(
             csv,
-            "{},{},{},{:.4},{:.2},{:.2},{:.2},{:.2},{:.2},{:.2},{:.2}",
+            "{},{},{},{},{},{},{},{},{},{},{}",
             l.configuration,
             l.level,
             l.subjects,
-            l.cocontraction_index,
-            l.kxx,
-            l.kyy,
-            l.kzz,
-            l.k_max_a,
-            l.k1,
-            l.k2,
-            l.k3
+            cell(l.cocontraction_index, 4),
+            cell(l.kxx, 2),
+            cell(l.kyy, 2),
+            cell(l.kzz, 2),
+            cell(l.k_max_a, 2),
+            cell(l.k1, 2),
+            cell(l.k2, 2),
+            cell(l.k3, 2)
         );
     }
     let mut rot = String::from("configuration,from_level,to_level,subjects,rotation_primary_deg,rotation_secondary_deg,rotation_tertiary_deg,change_primary_percent,change_secondary_percent,change_tertiary_percent\n");

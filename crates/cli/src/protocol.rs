@@ -78,7 +78,7 @@ pub enum ControllerArg {
 
 /// Read a protocol and check it against its limits; the report comes along.
 fn read_design(path: &Path) -> CliResult<(Design, DesignReport)> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text = limpid_core::files::read_text(path)?;
     let d = Design::from_toml(&text, path)?;
     let report = check(&d).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok((d, report))
@@ -416,10 +416,7 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
     }
     let design = read_design(&args.protocol)?.0;
     let subject_file = match &args.subject {
-        Some(path) => Some((
-            path,
-            std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?,
-        )),
+        Some(path) => Some((path, limpid_core::files::read_text(path)?)),
         None => None,
     };
     let subject = subject_file

@@ -43,7 +43,7 @@ pub fn write(results: &[Value], path: &Path) -> CliResult {
 pub fn run(args: ReportArgs) -> CliResult {
     let mut inputs = Vec::new();
     for p in &args.results {
-        let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+        let text = limpid_core::files::read_text(p)?;
         let v: Value = serde_json::from_str(&text).map_err(|e| {
             format!(
                 "{}: line {}, column {}: not JSON ({e})",

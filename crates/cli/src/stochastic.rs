@@ -128,7 +128,7 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
     let est = estimate_stochastic(&rec, &params)?;
     let expected = match &args.expected {
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            let text = limpid_core::files::read_text(p)?;
             let v: serde_json::Value =
                 serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))?;
             let (m, b, k) = (

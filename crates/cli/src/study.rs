@@ -68,11 +68,20 @@ pub fn run(cmd: StudyCommand) -> CliResult {
             let progress = bar(manifest.recording.len(), "processing recordings")?;
             let result = run_study(&manifest, &PrepareParams::default(), &|| progress.inc(1));
             progress.finish_and_clear();
+            let ok = result.recordings.len();
+            if ok == 0 {
+                let first = result
+                    .failures
+                    .first()
+                    .map_or(String::new(), |f| format!(": {}", f.error));
+                return Err(
+                    format!("no recording could be processed (nothing written){first}").into(),
+                );
+            }
             let files = write_tables(&result, &args.out)?;
             if let Some(path) = &args.report {
                 crate::report::write(&[serde_json::to_value(&result)?], path)?;
             }
-            let ok = result.recordings.len();
             println!(
                 "study {}: {ok} of {} recordings processed, {} configurations",
                 result.name,
@@ -96,14 +105,15 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                     .collect::<Vec<_>>()
                     .join(", ")
             );
-            if ok == 0 {
-                return Err("no recording could be processed".into());
-            }
             Ok(())
         }
         StudyCommand::Simulate(args) => {
-            if args.subjects == 0 {
-                return Err(limpid_core::Error::invalid("subjects", "expected at least 1").into());
+            if !(1..=1000).contains(&args.subjects) {
+                return Err(limpid_core::Error::invalid(
+                    "subjects",
+                    format!("expected 1 to 1000, found {}", args.subjects),
+                )
+                .into());
             }
             std::fs::create_dir_all(&args.out)
                 .map_err(|e| format!("{}: {e}", args.out.display()))?;

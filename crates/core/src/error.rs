@@ -139,7 +139,7 @@ pub fn catch_panic<T>(
         Err(payload) => Err(Error::Format {
             path: path.to_path_buf(),
             message: format!(
-                "corrupt or unsupported file: the {what} failed ({})",
+                "the {what} failed unexpectedly ({})",
                 panic_message(payload.as_ref()).replace('\n', "; ")
             ),
         }),

@@ -45,6 +45,12 @@ impl LowPass {
                 format!("expected 1 to 20, found {order}"),
             ));
         }
+        if !(fs_hz.is_finite() && fs_hz > 0.0) {
+            return Err(Error::invalid(
+                "sample rate",
+                format!("expected a finite positive rate in Hz, found {fs_hz}"),
+            ));
+        }
         let nyquist = limpid_core::display_round(fs_hz / 2.0);
         if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
             return Err(Error::invalid(
@@ -52,20 +58,39 @@ impl LowPass {
                 format!("expected 0 < cut-off < {nyquist} Hz (Nyquist), found {cutoff_hz} Hz"),
             ));
         }
-        let filter = butter_dyn(
-            order,
-            vec![cutoff_hz],
-            Some(FilterBandType::Lowpass),
-            Some(false),
-            Some(FilterOutputType::Sos),
-            Some(fs_hz),
-        );
-        let DigitalFilter::Sos(sos) = filter else {
+        // sci-rs asserts (panics) on cut-offs that underflow its pole placement
+        if cutoff_hz / nyquist < 1e-6 {
+            return Err(Error::invalid(
+                "cut-off",
+                format!("{cutoff_hz:.3e} Hz is below 1e-6 of the Nyquist frequency {nyquist} Hz: no usable filter"),
+            ));
+        }
+        let design = std::panic::catch_unwind(|| {
+            butter_dyn(
+                order,
+                vec![cutoff_hz],
+                Some(FilterBandType::Lowpass),
+                Some(false),
+                Some(FilterOutputType::Sos),
+                Some(fs_hz),
+            )
+        });
+        let Ok(DigitalFilter::Sos(sos)) = design else {
             return Err(Error::invalid(
                 "filter",
-                "sci-rs returned no second-order sections",
+                format!("no Butterworth design for order {order}, {cutoff_hz} Hz at {fs_hz} Hz (sci-rs returned no second-order sections)"),
             ));
         };
+        let finite = sos
+            .sos
+            .iter()
+            .all(|s| s.b.iter().chain(&s.a).all(|v| v.is_finite()));
+        if !finite {
+            return Err(Error::invalid(
+                "cut-off",
+                format!("{cutoff_hz} Hz at {fs_hz} Hz sampling gives no usable filter (too close to 0 or to Nyquist)"),
+            ));
+        }
         Ok(LowPass {
             sos: sos.sos,
             order,

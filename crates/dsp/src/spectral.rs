@@ -87,7 +87,7 @@ impl Welch {
     }
 
     fn check(&self, n: usize) -> Result<()> {
-        if self.fs.is_nan() || self.fs <= 0.0 {
+        if !self.fs.is_finite() || self.fs <= 0.0 {
             return Err(Error::invalid(
                 "sample rate",
                 format!("expected a positive rate, found {}", self.fs),

@@ -569,6 +569,13 @@ pub fn window_sweep(
         ));
     }
     let max_ms = 1000.0 * data.max_window_s();
+    let count = (to_ms.min(max_ms) - from_ms) / step_ms;
+    if count > MAX_SWEEP_WINDOWS as f64 {
+        return Err(Error::invalid(
+            "window range",
+            format!("{from_ms}..{to_ms} ms in steps of {step_ms} ms makes {count:.3e} windows; at most {MAX_SWEEP_WINDOWS}"),
+        ));
+    }
     let mut windows = Vec::new();
     let mut t = from_ms;
     while t <= to_ms.min(max_ms) + 1e-9 {
@@ -652,6 +659,9 @@ pub fn window_sweep(
 pub const QUASI_SYMMETRIC: f64 = 0.1;
 /// Largest scaled condition number counted as well-conditioned (our choice).
 pub const MAX_CONDITION: f64 = 1000.0;
+
+/// Most windows one sweep evaluates.
+pub const MAX_SWEEP_WINDOWS: usize = 10_000;
 
 /// Criteria of seed 003 §III-C on a 2 x 2 K and D.
 pub fn criteria(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, cond_scaled: f64) -> PlanarCriteria {

@@ -243,7 +243,11 @@ pub fn read_parquet(path: &Path) -> Result<Recording> {
             path: path.to_path_buf(),
         });
     }
-    limpid_core::error::catch_panic(path, "Parquet decoder", || read_parquet_file(path, file))
+    limpid_core::error::catch_panic(
+        path,
+        "Parquet decoder (corrupt or unsupported file)",
+        || read_parquet_file(path, file),
+    )
 }
 
 fn read_parquet_file(path: &Path, file: File) -> Result<Recording> {

@@ -318,7 +318,10 @@ fn receive(socket: UdpSocket, channels: usize, shared: &Mutex<State>, stop: &Ato
             Err(_) => shared.lock().expect("state lock").malformed += 1,
             Ok(sample) => {
                 let now = now_unix_ns();
-                let latency_us = (sample.sent_unix_ns > 0 && now >= sample.sent_unix_ns)
+                // a sender clock more than a minute off (e.g. 1 ns) is unknown, not a latency
+                let latency_us = (sample.sent_unix_ns > 0
+                    && now >= sample.sent_unix_ns
+                    && now - sample.sent_unix_ns < 60_000_000_000)
                     .then(|| (now - sample.sent_unix_ns) as f64 / 1e3);
                 ingest(shared, &sample, arrival, latency_us);
             }
@@ -412,7 +415,10 @@ fn receive_lsl(
             kinematics,
         };
         seq += 1;
-        if sample.emg.len() != channels || values.len() > channels + 6 {
+        if sample.emg.len() != channels
+            || values.len() > channels + 6
+            || crate::wire::check_values(&sample).is_err()
+        {
             shared.lock().expect("state lock").malformed += 1;
             continue;
         }

@@ -13,7 +13,10 @@
 //! | then | 6 x f64 | if flag bit 0: x, y, z (m), fx, fy, fz (N, on the limb) |
 //!
 //! Anything else (other magic, version, length, channel count) is malformed:
-//! counted and dropped.
+//! counted and dropped. So is a sample with a value no sensor gives (issue
+//! 13: one 1e308 would poison the envelope and the RLS for the rest of the
+//! session): beyond the recording limits of `limpid_core::recording::magnitude_limit`
+//! (t 1e10 s, EMG 1e6 V, positions 100 m, forces 1e6 N).
 
 /// One decoded sample.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,6 +57,8 @@ pub enum Malformed {
     Channels,
     Length,
     NotFinite,
+    /// Finite but beyond what any sensor gives (see the module docs).
+    Implausible,
 }
 
 fn f64_at(b: &[u8], at: usize) -> f64 {
@@ -91,21 +96,37 @@ pub fn decode(b: &[u8], channels: usize) -> Result<Sample, Malformed> {
         }
         k
     });
-    if !t.is_finite()
-        || emg
-            .iter()
-            .chain(kinematics.iter().flatten())
-            .any(|v| !v.is_finite())
-    {
-        return Err(Malformed::NotFinite);
-    }
-    Ok(Sample {
+    let sample = Sample {
         seq,
         t,
         sent_unix_ns,
         emg,
         kinematics,
-    })
+    };
+    check_values(&sample)?;
+    Ok(sample)
+}
+
+/// Refuse a sample with a non-finite value or one no sensor gives (module docs).
+pub fn check_values(s: &Sample) -> Result<(), Malformed> {
+    let values = || s.emg.iter().chain(s.kinematics.iter().flatten());
+    if !s.t.is_finite() || values().any(|v| !v.is_finite()) {
+        return Err(Malformed::NotFinite);
+    }
+    use limpid_core::recording::magnitude_limit;
+    let emg_limit = magnitude_limit("emg_").0;
+    let kin_names = ["x", "y", "z", "fx", "fy", "fz"];
+    if s.t.abs() > magnitude_limit("t").0
+        || s.emg.iter().any(|v| v.abs() > emg_limit)
+        || s.kinematics.is_some_and(|k| {
+            k.iter()
+                .zip(kin_names)
+                .any(|(v, name)| v.abs() > magnitude_limit(name).0)
+        })
+    {
+        return Err(Malformed::Implausible);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -142,5 +163,34 @@ mod tests {
             ..s
         };
         assert_eq!(decode(&encode(&nan), 3), Err(Malformed::NotFinite));
+    }
+
+    #[test]
+    fn finite_extreme_samples_are_malformed_not_processed() {
+        let s = Sample {
+            seq: 1,
+            t: 1.0,
+            sent_unix_ns: 1,
+            emg: vec![0.1, 0.2],
+            kinematics: Some([0.3, 0.0, 0.0, 1.0, 2.0, 3.0]),
+        };
+        assert!(decode(&encode(&s), 2).is_ok());
+        let huge_emg = Sample {
+            emg: vec![1e308, 0.2],
+            ..s.clone()
+        };
+        assert_eq!(decode(&encode(&huge_emg), 2), Err(Malformed::Implausible));
+        let huge_x = Sample {
+            kinematics: Some([1e308, 0.0, 0.0, 1.0, 2.0, 3.0]),
+            ..s.clone()
+        };
+        assert_eq!(decode(&encode(&huge_x), 2), Err(Malformed::Implausible));
+        let huge_force = Sample {
+            kinematics: Some([0.3, 0.0, 0.0, 1e9, 2.0, 3.0]),
+            ..s.clone()
+        };
+        assert_eq!(decode(&encode(&huge_force), 2), Err(Malformed::Implausible));
+        let huge_t = Sample { t: 1e300, ..s };
+        assert_eq!(decode(&encode(&huge_t), 2), Err(Malformed::Implausible));
     }
 }
