@@ -14,7 +14,6 @@
 //! cells are skipped. `-v7.3` files are HDF5 and are refused with a hint. In
 //! errors, "row" counts samples from 1, as MATLAB indexes them.
 
-use std::fs::File;
 use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
@@ -60,6 +59,29 @@ pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     }
 }
 
+/// Read a recording held in memory; `path` names it in errors and picks the
+/// format by its extension, as [`read_recording`] does (used by the fuzzer).
+pub fn read_recording_bytes(path: impl AsRef<Path>, bytes: Vec<u8>) -> Result<Recording> {
+    let path = path.as_ref();
+    if bytes.is_empty() {
+        return Err(Error::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    if is_parquet(path) {
+        let data = bytes::Bytes::from(bytes);
+        limpid_core::error::catch_panic(
+            path,
+            "Parquet decoder (corrupt or unsupported file)",
+            || read_parquet_source(path, data),
+        )
+    } else if is_mat(path) {
+        read_mat_bytes(path, &bytes)
+    } else {
+        read_csv_from(path, bytes.as_slice())
+    }
+}
+
 /// Write a recording, choosing the format by extension (CSV or Parquet).
 pub fn write_recording(rec: &Recording, path: impl AsRef<Path>) -> Result<()> {
     let path = path.as_ref();
@@ -85,6 +107,11 @@ pub const MAX_MAT_BYTES: u64 = 4 << 30;
 /// other variables that are not vectors are skipped with a warning.
 pub fn read_mat(path: &Path) -> Result<Recording> {
     let bytes = limpid_core::files::read_bytes(path, MAX_MAT_BYTES)?;
+    read_mat_bytes(path, &bytes)
+}
+
+/// [`read_mat`] on the file's bytes.
+fn read_mat_bytes(path: &Path, bytes: &[u8]) -> Result<Recording> {
     if bytes.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),
@@ -106,7 +133,7 @@ pub fn read_mat(path: &Path) -> Result<Recording> {
             "not a MAT-file: the header does not start with \"MATLAB 5.0 MAT-file\"".into(),
         ));
     }
-    let variables = mat::variables(&bytes).map_err(fail)?;
+    let variables = mat::variables(bytes).map_err(fail)?;
     let (mut names, mut columns, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
     for var in variables {
         let samples: usize = var.dims.iter().product();
@@ -168,6 +195,11 @@ pub fn read_csv(path: &Path) -> Result<Recording> {
             path: path.to_path_buf(),
         });
     }
+    read_csv_from(path, file)
+}
+
+/// Read CSV text from `file`; `path` names it in errors.
+fn read_csv_from(path: &Path, file: impl std::io::Read) -> Result<Recording> {
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(true)
@@ -246,11 +278,14 @@ pub fn read_parquet(path: &Path) -> Result<Recording> {
     limpid_core::error::catch_panic(
         path,
         "Parquet decoder (corrupt or unsupported file)",
-        || read_parquet_file(path, file),
+        || read_parquet_source(path, file),
     )
 }
 
-fn read_parquet_file(path: &Path, file: File) -> Result<Recording> {
+fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
+    path: &Path,
+    file: R,
+) -> Result<Recording> {
     use parquet::basic::{LogicalType, TimeUnit};
     let pq_err = |e: parquet::errors::ParquetError| Error::Format {
         path: path.to_path_buf(),

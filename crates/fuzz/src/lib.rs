@@ -1,0 +1,397 @@
+//! An in-process mutation fuzzer on stable Rust (issue 13).
+//!
+//! Each execution takes an input of the corpus (`corpus/seeds`: small
+//! recordings as CSV, Parquet and MAT-files, protocol TOML files, live
+//! datagrams; `corpus/regressions`: inputs that once failed), mutates it
+//! (bit flips, byte runs, cuts, and for text the replacement of numbers by
+//! extreme values: 1e307, nan, 1e-320, i64::MAX, ...), and runs it through
+//! what a user's file would meet: the reader chosen by its extension, then
+//! every estimator the columns allow (linear, planar, stochastic,
+//! co-contraction), or the protocol parser and its check, or the datagram
+//! decoder and the live processor. A *finding* is a panic, a non-finite or
+//! null number in a result, or (in the binary) an execution over 10 s; an
+//! input refused with an error is the right answer, not a finding.
+
+use std::path::{Path, PathBuf};
+
+use rand::rngs::StdRng;
+use rand::{Rng, RngCore};
+use serde_json::Value;
+
+/// What one execution did.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Refused with an error (the contract for bad input).
+    Refused,
+    /// Accepted, and every result was finite.
+    Accepted,
+    /// A panic or a non-finite/null number in a result: a bug.
+    Finding(String),
+}
+
+/// The corpus folder of this crate.
+pub fn corpus_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus")
+}
+
+/// Every file of the corpus (seeds and regressions), with its name.
+pub fn corpus() -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    for sub in ["seeds", "regressions"] {
+        let Ok(dir) = std::fs::read_dir(corpus_dir().join(sub)) else {
+            continue;
+        };
+        let mut files: Vec<PathBuf> = dir.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        files.sort();
+        for p in files {
+            if let Ok(bytes) = std::fs::read(&p) {
+                let name = p
+                    .file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into_owned();
+                out.push((name, bytes));
+            }
+        }
+    }
+    out
+}
+
+/// The kind of input, from the file name's extension.
+fn kind(name: &str) -> &str {
+    name.rsplit('.').next().unwrap_or("")
+}
+
+/// Run one input, catching panics.
+pub fn execute(name: &str, bytes: &[u8]) -> Outcome {
+    let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match kind(name) {
+        "toml" => protocol(name, bytes),
+        "wire" => datagrams(bytes),
+        _ => recording(name, bytes),
+    }));
+    match run {
+        Ok(o) => o,
+        Err(payload) => Outcome::Finding(format!(
+            "panic: {}",
+            limpid_core::error::panic_message(payload.as_ref())
+        )),
+    }
+}
+
+/// The first null or non-finite number in `v`, with its path (JSON turns NaN into null).
+/// `allowed` lists keys whose null means "absent" by design (documented Options).
+fn first_null(v: &Value, path: &str, allowed: &[&str]) -> Option<String> {
+    match v {
+        Value::Null => {
+            let absent = allowed.iter().any(|a| path.ends_with(&format!(".{a}")));
+            (!absent).then(|| format!("null at {path}"))
+        }
+        Value::Number(n) => n
+            .as_f64()
+            .filter(|f| !f.is_finite())
+            .map(|_| format!("non-finite at {path}")),
+        Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .find_map(|(i, x)| first_null(x, &format!("{path}[{i}]"), allowed)),
+        Value::Object(o) => o
+            .iter()
+            .find_map(|(k, x)| first_null(x, &format!("{path}.{k}"), allowed)),
+        _ => None,
+    }
+}
+
+/// Options that are `None` by design (documented in their types).
+const ABSENT_BY_DESIGN: &[&str] = &[
+    "equilibrium",
+    "variance_inflation",
+    "constant",
+    "ellipsoid",
+    "arm_configuration",
+    "shoulder",
+    "expected",
+    "accuracy",
+    "parametric",
+    // 1-D matrices have no ellipsoid
+    "ellipsoids.inertia",
+    "ellipsoids.damping",
+    "ellipsoids.stiffness",
+];
+
+fn check(what: &str, v: &impl serde::Serialize) -> Option<String> {
+    let value = serde_json::to_value(v).ok()?;
+    first_null(&value, what, ABSENT_BY_DESIGN)
+}
+
+fn recording(name: &str, bytes: &[u8]) -> Outcome {
+    let Ok(rec) = limpid_io::read_recording_bytes(name, bytes.to_vec()) else {
+        return Outcome::Refused;
+    };
+    let mut findings = Vec::new();
+    let mut any = false;
+    // linear (3-D, planar end-point, joint, rig coordinates)
+    let params = limpid_ident::PrepareParams::default();
+    if let Ok(prepared) = limpid_ident::prepare(&rec, &params) {
+        if let Ok(est) = limpid_ident::fit_linear(&prepared, &limpid_ident::LinearParams::default())
+        {
+            any = true;
+            let result = limpid_analysis::report::linear_result(&est, &prepared);
+            findings.extend(check("linear", &result));
+        }
+    }
+    // planar arm (seed 003)
+    if rec.has("q2") || (rec.has("x") && rec.has("y") && !rec.has("z")) {
+        use limpid_ident::planar::{fit_planar, prepare_planar, Arm, PlanarPrepare};
+        let setup = PlanarPrepare {
+            arm: Arm {
+                l1: 0.30,
+                l2: 0.33,
+                shoulder: [0.0, 0.0],
+            },
+            cutoff_hz: None,
+            order: 4,
+            elbow_positive: true,
+        };
+        if let Ok(data) = prepare_planar(&rec, &setup) {
+            let all: Vec<usize> = (0..data.trials.len()).collect();
+            if let Ok(est) = fit_planar(&data, usize::MAX, None, &all) {
+                any = true;
+                findings.extend(check("planar", &est));
+            }
+        }
+    }
+    // stochastic (seed 004)
+    if rec.has("ux") || rec.has("uz") {
+        use limpid_ident::stochastic::{estimate_stochastic, StochasticParams};
+        let p = StochasticParams {
+            welch: None,
+            band_hz: (0.5, 10.0),
+        };
+        if let Ok(est) = estimate_stochastic(&rec, &p) {
+            any = true;
+            findings.extend(check("stochastic", &est));
+        }
+    }
+    // co-contraction (seed 001), the recording as its own MVC
+    if rec.has("level") && rec.names().iter().any(|n| n.starts_with("emg_")) {
+        let emg = limpid_analysis::emg::EmgParams::default();
+        if let Ok(r) =
+            limpid_analysis::cocontraction::estimate_cocontraction(&rec, &rec, &params, &emg)
+        {
+            any = true;
+            findings.extend(check("cocontraction", &r));
+        }
+    }
+    match findings.into_iter().next() {
+        Some(f) => Outcome::Finding(f),
+        None if any => Outcome::Accepted,
+        None => Outcome::Refused,
+    }
+}
+
+fn protocol(name: &str, bytes: &[u8]) -> Outcome {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return Outcome::Refused;
+    };
+    let Ok(design) = limpid_lab::design::Design::from_toml(text, Path::new(name)) else {
+        return Outcome::Refused;
+    };
+    match limpid_lab::design::check(&design) {
+        Ok(report) => match check("check", &report) {
+            Some(f) => Outcome::Finding(f),
+            None => Outcome::Accepted,
+        },
+        Err(_) => Outcome::Refused,
+    }
+}
+
+/// A `.wire` input: datagrams of 2 EMG channels, each prefixed by its u16 length.
+fn datagrams(bytes: &[u8]) -> Outcome {
+    let mut p = limpid_live::process::Processor::new(2, 1000.0, Some(vec![1.0, 1.0]))
+        .expect("a valid processor");
+    let mut rest = bytes;
+    let mut accepted = false;
+    while rest.len() >= 2 {
+        let n = u16::from_le_bytes([rest[0], rest[1]]) as usize;
+        let take = n.min(rest.len() - 2);
+        let d = &rest[2..2 + take];
+        rest = &rest[2 + take..];
+        if let Ok(s) = limpid_live::wire::decode(d, 2) {
+            accepted = true;
+            p.update(&s.emg, s.kinematics.as_ref());
+        }
+    }
+    let k = p.rls.stiffness();
+    let finite = p
+        .envelopes
+        .iter()
+        .chain(&p.activations)
+        .all(|v| v.is_finite())
+        && (!accepted || p.index.is_finite())
+        && k.iter().flatten().all(|v| v.is_finite())
+        && p.rls.vaf().is_none_or(|v| v.iter().all(|x| x.is_finite()));
+    match (finite, accepted) {
+        (false, _) => Outcome::Finding("live state not finite after the datagrams".into()),
+        (true, true) => Outcome::Accepted,
+        (true, false) => Outcome::Refused,
+    }
+}
+
+/// Numbers a hostile or mistaken file holds.
+const EXTREMES: &[&str] = &[
+    "1e307",
+    "-1e308",
+    "1e308",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "-0",
+    "0",
+    "1e-320",
+    "5e-324",
+    "9223372036854775807",
+    "18446744073709551616",
+    "1e400",
+    "",
+    "x",
+    "1,2",
+    "1e15",
+    "100.0001",
+    "0.5",
+    "-1",
+    "2",
+    "1e6",
+    "1000000.5",
+    "\"nan\"",
+    "[]",
+    "1e9",
+];
+
+/// Mutate `input` 1 to 4 times.
+pub fn mutate(rng: &mut StdRng, input: &[u8], text: bool) -> Vec<u8> {
+    let mut b = input.to_vec();
+    // half the inputs get one mutation, so that many still reach the estimators
+    let rounds = if rng.random_bool(0.5) {
+        1
+    } else {
+        rng.random_range(2..=4)
+    };
+    for _ in 0..rounds {
+        let choice = rng.random_range(0..if text { 10 } else { 7 });
+        let len = b.len();
+        match choice {
+            0 if len > 0 => {
+                let i = rng.random_range(0..len);
+                b[i] ^= 1 << rng.random_range(0..8);
+            }
+            1 if len > 0 => {
+                let i = rng.random_range(0..len);
+                b[i] = [0u8, 0xff, 0x7f, 0x80, b'9', b'-', b'.', b'e'][rng.random_range(0..8)];
+            }
+            2 if len > 1 => {
+                let i = rng.random_range(0..len);
+                let n = rng.random_range(1..=(len - i).min(64));
+                b.drain(i..i + n);
+            }
+            3 if len > 1 => {
+                let i = rng.random_range(0..len);
+                let n = rng.random_range(1..=(len - i).min(64));
+                let copy: Vec<u8> = b[i..i + n].to_vec();
+                let at = rng.random_range(0..=len);
+                b.splice(at..at, copy);
+            }
+            4 if len > 0 => b.truncate(rng.random_range(0..len)),
+            5 if len >= 8 => {
+                // an extreme f64 bit pattern (binary formats store raw doubles)
+                let v: f64 = [1e307, -1e308, f64::NAN, f64::INFINITY, 5e-324, 0.0, 1e15]
+                    [rng.random_range(0..7)];
+                let i = rng.random_range(0..=len - 8);
+                b[i..i + 8].copy_from_slice(&v.to_le_bytes());
+            }
+            6 if len >= 4 => {
+                // a length or count field: an extreme integer
+                let v: u32 =
+                    [0, 1, u32::MAX, 0x7fff_ffff, 0x8000_0000, 65_535][rng.random_range(0..6)];
+                let i = rng.random_range(0..=len - 4);
+                b[i..i + 4].copy_from_slice(&v.to_le_bytes());
+            }
+            7 => replace_number(rng, &mut b),
+            8 => {
+                // delete, duplicate or swap whole lines
+                let mut lines: Vec<Vec<u8>> =
+                    b.split(|c| *c == b'\n').map(<[u8]>::to_vec).collect();
+                if lines.len() > 2 {
+                    let i = rng.random_range(0..lines.len());
+                    let j = rng.random_range(0..lines.len());
+                    match rng.random_range(0..3) {
+                        0 => {
+                            lines.remove(i);
+                        }
+                        1 => {
+                            let l = lines[i].clone();
+                            lines.insert(j, l);
+                        }
+                        _ => lines.swap(i, j),
+                    }
+                    b = lines.join(&b'\n');
+                }
+            }
+            9 => {
+                // a header name spelt with a look-alike, or renamed
+                let names: [&[u8]; 6] = ["х".as_bytes(), b"level", b"trial", b"fx", b"q1", b"ux"];
+                let pick = names[rng.random_range(0..names.len())];
+                if let Some(i) = b.iter().position(|c| *c == b',') {
+                    b.splice(0..i.min(b.len()), pick.iter().copied());
+                }
+            }
+            _ => {
+                let i = rng.random_range(0..=len);
+                b.insert(i, rng.next_u32() as u8);
+            }
+        }
+    }
+    b
+}
+
+/// Replace one number-looking token with an extreme value.
+fn replace_number(rng: &mut StdRng, b: &mut Vec<u8>) {
+    if b.is_empty() {
+        return;
+    }
+    let start = rng.random_range(0..b.len());
+    let Some(s) = (start..b.len()).find(|&i| b[i].is_ascii_digit()) else {
+        return;
+    };
+    let s = (0..s)
+        .rev()
+        .take_while(|&i| matches!(b[i], b'0'..=b'9' | b'.' | b'-' | b'e' | b'E' | b'+'))
+        .last()
+        .unwrap_or(s);
+    let e = (s..b.len())
+        .find(|&i| !matches!(b[i], b'0'..=b'9' | b'.' | b'-' | b'e' | b'E' | b'+'))
+        .unwrap_or(b.len());
+    let with = EXTREMES[rng.random_range(0..EXTREMES.len())];
+    b.splice(s..e, with.bytes());
+}
+
+/// True for inputs mutated as text.
+pub fn is_text(name: &str) -> bool {
+    matches!(kind(name), "csv" | "toml")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_checker_sees_nulls_and_respects_absent_options() {
+        let v = serde_json::json!({"stiffness": [[1.0, null]], "equilibrium": null});
+        assert_eq!(
+            first_null(&v, "r", ABSENT_BY_DESIGN).as_deref(),
+            Some("null at r.stiffness[0][1]")
+        );
+        let v = serde_json::json!({"equilibrium": null, "k": [1.0]});
+        assert!(first_null(&v, "r", ABSENT_BY_DESIGN).is_none());
+    }
+}
