@@ -299,7 +299,7 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
     let meta = reader.metadata();
     let schema = meta.file_metadata().schema_descr();
     let mut names = Vec::with_capacity(schema.num_columns());
-    // seconds per stored unit, for timestamp columns
+    // stored ticks per second, for timestamp columns
     let mut unit_s: Vec<Option<f64>> = Vec::with_capacity(schema.num_columns());
     for c in schema.columns() {
         let name = c.path().string();
@@ -310,9 +310,9 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         }
         let scale = match c.logical_type_ref() {
             Some(LogicalType::Timestamp(ts)) => Some(match ts.unit {
-                TimeUnit::MILLIS => 1e-3,
-                TimeUnit::MICROS => 1e-6,
-                TimeUnit::NANOS => 1e-9,
+                TimeUnit::MILLIS => 1e3,
+                TimeUnit::MICROS => 1e6,
+                TimeUnit::NANOS => 1e9,
             }),
             Some(LogicalType::Decimal { .. })
             | Some(LogicalType::Date)
@@ -338,6 +338,7 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         )));
     }
     const BATCH: usize = 1 << 16;
+    let mut origin: Vec<Option<i64>> = vec![None; names.len()];
     let reserve = (total as usize).min(1 << 24);
     let mut columns: Vec<Vec<f64>> = vec![Vec::with_capacity(reserve); names.len()];
     for g in 0..reader.num_row_groups() {
@@ -369,7 +370,15 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
                             });
                         }
                         match unit_s[k] {
-                            Some(u) => out.extend(vals.iter().map(|v| *v as f64 * u)),
+                            // timestamps: integer ticks since the first sample, then
+                            // seconds (epoch seconds in f64 would lose the sampling interval)
+                            Some(per_s) => {
+                                let first = *origin[k].get_or_insert(vals[0] as i64);
+                                out.extend(
+                                    vals.iter()
+                                        .map(|v| (*v as i64).saturating_sub(first) as f64 / per_s),
+                                )
+                            }
                             None => out.extend(vals.iter().map(|v| *v as f64)),
                         }
                         if out.len() as i64 > MAX_PARQUET_ROWS {
@@ -396,7 +405,15 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
             let _ = start;
         }
     }
-    Recording::new(path, names, columns, 1)
+    let mut rec = Recording::new(path, names.clone(), columns, 1)?;
+    for (name, per_s) in names.iter().zip(&unit_s) {
+        if per_s.is_some() {
+            rec.warn(format!(
+                "column {name}: a Parquet timestamp, converted to seconds since the first sample"
+            ));
+        }
+    }
+    Ok(rec)
 }
 
 /// Write a CSV recording with full round-trip precision.
