@@ -66,6 +66,7 @@ pub struct LinearResult {
     pub damping: Mat,
     pub stiffness: Mat,
     /// Absolute equilibrium position, or null (see `warnings`).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub equilibrium: Option<Vec<f64>>,
     pub standard_errors: StandardErrors,
     pub symmetric: PerMatrix<Mat>,

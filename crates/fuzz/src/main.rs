@@ -34,6 +34,9 @@ fn arg(name: &str, default: u64) -> u64 {
         .unwrap_or(default)
 }
 
+/// What a worker counted (refused, accepted, findings per kind) and its findings.
+type WorkerStats = (BTreeMap<String, [usize; 3]>, Vec<(String, String, Vec<u8>)>);
+
 /// Per worker: the input running now and when it started (ms since start; 0 = idle).
 struct Running {
     started_ms: AtomicU64,
@@ -90,56 +93,54 @@ fn main() {
         });
     }
     let per_thread = executions.div_ceil(threads);
-    let stats: Vec<(BTreeMap<String, [usize; 3]>, Vec<(String, String, Vec<u8>)>)> =
-        std::thread::scope(|scope| {
-            let handles: Vec<_> = (0..threads)
-                .map(|w| {
-                    let inputs = Arc::clone(&inputs);
-                    let running = Arc::clone(&running);
-                    let done = Arc::clone(&done);
-                    scope.spawn(move || {
-                        let mut rng =
-                            StdRng::seed_from_u64(seed.wrapping_mul(1_000_003) + w as u64);
-                        let mut counts: BTreeMap<String, [usize; 3]> = BTreeMap::new();
-                        let mut found = Vec::new();
-                        for _ in 0..per_thread {
-                            let (name, base) = &inputs[rng.random_range(0..inputs.len())];
-                            let input = mutate(&mut rng, base, is_text(name));
-                            let me = &running[w];
-                            if let Ok(mut g) = me.input.lock() {
-                                g.0.clone_from(name);
-                                g.1.clone_from(&input);
-                            }
-                            me.started_ms
-                                .store(clock.elapsed().as_millis() as u64 + 1, Ordering::Relaxed);
-                            let outcome = execute(name, &input);
-                            me.started_ms.store(0, Ordering::Relaxed);
-                            let ext = name.rsplit('.').next().unwrap_or("").to_string();
-                            let c = counts.entry(ext).or_default();
-                            match outcome {
-                                Outcome::Refused => c[0] += 1,
-                                Outcome::Accepted => c[1] += 1,
-                                Outcome::Finding(what) => {
-                                    c[2] += 1;
-                                    if found.len() < 20 {
-                                        found.push((name.clone(), what, input));
-                                    }
+    let stats: Vec<WorkerStats> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads)
+            .map(|w| {
+                let inputs = Arc::clone(&inputs);
+                let running = Arc::clone(&running);
+                let done = Arc::clone(&done);
+                scope.spawn(move || {
+                    let mut rng = StdRng::seed_from_u64(seed.wrapping_mul(1_000_003) + w as u64);
+                    let mut counts: BTreeMap<String, [usize; 3]> = BTreeMap::new();
+                    let mut found = Vec::new();
+                    for _ in 0..per_thread {
+                        let (name, base) = &inputs[rng.random_range(0..inputs.len())];
+                        let input = mutate(&mut rng, base, is_text(name));
+                        let me = &running[w];
+                        if let Ok(mut g) = me.input.lock() {
+                            g.0.clone_from(name);
+                            g.1.clone_from(&input);
+                        }
+                        me.started_ms
+                            .store(clock.elapsed().as_millis() as u64 + 1, Ordering::Relaxed);
+                        let outcome = execute(name, &input);
+                        me.started_ms.store(0, Ordering::Relaxed);
+                        let ext = name.rsplit('.').next().unwrap_or("").to_string();
+                        let c = counts.entry(ext).or_default();
+                        match outcome {
+                            Outcome::Refused => c[0] += 1,
+                            Outcome::Accepted => c[1] += 1,
+                            Outcome::Finding(what) => {
+                                c[2] += 1;
+                                if found.len() < 20 {
+                                    found.push((name.clone(), what, input));
                                 }
                             }
-                            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                            if n % 1_000_000 == 0 {
-                                eprintln!("{n} executions, {:.0} s", clock.elapsed().as_secs_f64());
-                            }
                         }
-                        (counts, found)
-                    })
+                        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                        if n.is_multiple_of(1_000_000) {
+                            eprintln!("{n} executions, {:.0} s", clock.elapsed().as_secs_f64());
+                        }
+                    }
+                    (counts, found)
                 })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().expect("worker"))
-                .collect()
-        });
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("worker"))
+            .collect()
+    });
     // a panic message from a caught panic goes to the default hook's stderr; the count is what matters
     let mut total: BTreeMap<String, [usize; 3]> = BTreeMap::new();
     let mut findings = Vec::new();

@@ -97,6 +97,7 @@ pub struct LinearEstimate {
     pub damping: Mat,
     pub stiffness: Mat,
     /// Equilibrium position (absolute coordinates), when fitted and K is invertible.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub equilibrium: Option<Vec<f64>>,
     /// Standard errors, same layout as the estimates.
     pub standard_errors: StandardErrors,
@@ -108,6 +109,7 @@ pub struct LinearEstimate {
     pub parameters: usize,
     /// Autocorrelation inflation of the residual variance, per force
     /// component, where the analytic standard errors were used (else null).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub variance_inflation: Option<Vec<f64>>,
     /// Share of each regressor's variance that is signal, not propagated
     /// position noise (`[acceleration, velocity, displacement]` per
@@ -127,6 +129,7 @@ pub struct StandardErrors {
     pub damping: Mat,
     pub stiffness: Mat,
     /// Of the constant term (N), when fitted.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub constant: Option<Vec<f64>>,
 }
 

@@ -259,7 +259,7 @@ fn mat_matrix(name: &str, class: u32, dims: &[i32], values: Option<&[f64]>) -> V
         let mut e = kind.to_le_bytes().to_vec();
         e.extend_from_slice(&(data.len() as u32).to_le_bytes());
         e.extend_from_slice(data);
-        while e.len() % 8 != 0 {
+        while !e.len().is_multiple_of(8) {
             e.push(0);
         }
         e

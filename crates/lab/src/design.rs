@@ -249,6 +249,13 @@ impl PlanarDesign {
         {
             return Err("sample_rate_hz, trials, displacements_rad and interpolation_s must be positive, and after_s at least interpolation_s".into());
         }
+        if self.displacements_rad.len() > crate::validate::MAX_TARGETS as usize {
+            return Err(format!(
+                "{} displacements; a protocol has at most {}",
+                self.displacements_rad.len(),
+                crate::validate::MAX_TARGETS
+            ));
+        }
         if !(self.wait_s[0] >= self.rest_s && self.wait_s[1] >= self.wait_s[0]) {
             return Err(format!(
                 "wait_s = {:?} must be an interval starting at or after rest_s = {}",
@@ -349,6 +356,12 @@ impl StochasticDesign {
             return Err(
                 "sample_rate_hz, duration_s and channels must be positive / non-empty".into(),
             );
+        }
+        if self.channels.len() > 16 {
+            return Err(format!(
+                "{} channels; a stochastic protocol has at most 16",
+                self.channels.len()
+            ));
         }
         if self.peak.len() != self.channels.len() {
             return Err(format!(

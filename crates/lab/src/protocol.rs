@@ -156,6 +156,19 @@ impl Protocol {
         crate::validate::check_numbers(text, path)?;
         let p: Protocol =
             toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
+        if p.start_points.points.len() > crate::validate::MAX_TARGETS as usize
+            || p.targets.count > crate::validate::MAX_TARGETS as usize
+        {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{} start points and {} targets; a protocol has at most {} of each",
+                    p.start_points.points.len(),
+                    p.targets.count,
+                    crate::validate::MAX_TARGETS
+                ),
+            });
+        }
         if p.sample_rate_hz <= 0.0
             || p.targets.count == 0
             || p.targets.radius_m <= 0.0
