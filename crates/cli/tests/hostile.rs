@@ -180,7 +180,7 @@ fn long_recording(path: &Path, minutes: usize, huge_at: Option<usize>) {
     let per = 1600; // 0.2 s rest + 3 s motion
     let trials = minutes * 60 * 500 / per;
     let n = trials * per;
-    let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(n); 8];
+    let mut cols: Vec<Vec<f64>> = (0..8).map(|_| Vec::with_capacity(n)).collect();
     let mut seed = 0x2545f4914f6cdd1du64;
     let mut noise = move || {
         seed ^= seed << 13;

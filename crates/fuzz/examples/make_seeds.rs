@@ -94,7 +94,7 @@ fn stochastic() -> Recording {
     let names = [
         "t", "x", "z", "theta", "fx", "fz", "tauy", "ux", "uz", "utheta",
     ];
-    let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(n); names.len()];
+    let mut cols: Vec<Vec<f64>> = (0..names.len()).map(|_| Vec::with_capacity(n)).collect();
     let (mut u, mut x) = ([0.0f64; 3], [0.0f64; 3]);
     for i in 0..n {
         for c in 0..3 {

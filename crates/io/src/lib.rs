@@ -340,7 +340,9 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
     const BATCH: usize = 1 << 16;
     let mut origin: Vec<Option<i64>> = vec![None; names.len()];
     let reserve = (total as usize).min(1 << 24);
-    let mut columns: Vec<Vec<f64>> = vec![Vec::with_capacity(reserve); names.len()];
+    let mut columns: Vec<Vec<f64>> = (0..names.len())
+        .map(|_| Vec::with_capacity(reserve))
+        .collect();
     for g in 0..reader.num_row_groups() {
         let group = reader.get_row_group(g).map_err(pq_err)?;
         for (k, out) in columns.iter_mut().enumerate() {
