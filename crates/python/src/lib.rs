@@ -31,6 +31,27 @@ fn value_err(e: impl std::fmt::Display) -> PyErr {
 
 /// A recording from a path (CSV or Parquet) or a dict of 1-D arrays.
 fn recording(source: &Bound<'_, PyAny>) -> PyResult<Recording> {
+    let rec = recording_unwarned(source)?;
+    warn_about(source.py(), &rec)?;
+    Ok(rec)
+}
+
+/// What the reader accepted but found suspicious: Python warnings, as the CLI's stderr lines.
+fn warn_about(py: Python<'_>, rec: &Recording) -> PyResult<()> {
+    for w in rec.warnings() {
+        let message =
+            std::ffi::CString::new(format!("{}: {w}", rec.path().display())).unwrap_or_default();
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &message,
+            1,
+        )?;
+    }
+    Ok(())
+}
+
+fn recording_unwarned(source: &Bound<'_, PyAny>) -> PyResult<Recording> {
     if let Ok(path) = source.extract::<std::path::PathBuf>() {
         return limpid_io::read_recording(&path).map_err(err);
     }
@@ -257,6 +278,7 @@ fn read_recording<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bo
     let rec = py
         .detach(|| limpid_io::read_recording(&path))
         .map_err(err)?;
+    warn_about(py, &rec)?;
     columns_dict(py, &rec)
 }
 

@@ -156,6 +156,19 @@ def test_dataframes_and_errors():
         limpid.psd(np.ones(1000), window="kaiser")
 
 
+def test_hostile_values_are_refused_and_suspicious_ones_warned(tmp_path):
+    rec = limpid.read_recording(SHARED / "cartesian_slow" / "ex_cubic.csv")
+    bad = dict(rec)
+    bad["x"] = bad["x"].copy()
+    bad["x"][100] = 1e307
+    with pytest.raises(ValueError, match=r"row 101, column x: implausible value 1e307"):
+        limpid.estimate_linear(bad)
+    p = tmp_path / "ms.csv"
+    p.write_text("t,x,fx\n" + "".join(f"{2 * i},0.3,1.0\n" for i in range(100)))
+    with pytest.warns(UserWarning, match="milliseconds"):
+        limpid.read_recording(p)
+
+
 def test_virtual_lab_ellipsoid_and_report(tmp_path):
     text = limpid.protocol_preset("artemiadis-3d")
     assert "kind = \"centre-out\"" in text
