@@ -18,6 +18,13 @@ pub struct PerMatrix<T> {
     pub stiffness: T,
 }
 
+impl<T> PerMatrix<Option<T>> {
+    /// True when no matrix has a value.
+    pub fn all_none(&self) -> bool {
+        self.inertia.is_none() && self.damping.is_none() && self.stiffness.is_none()
+    }
+}
+
 impl<T> PerMatrix<T> {
     fn from_fn(est: &LinearEstimate, f: impl Fn(&Mat) -> T) -> Self {
         PerMatrix {
@@ -71,7 +78,9 @@ pub struct LinearResult {
     pub standard_errors: StandardErrors,
     pub symmetric: PerMatrix<Mat>,
     pub antisymmetric: PerMatrix<Mat>,
-    /// Ellipsoids of the symmetric parts (null for 1 coordinate).
+    /// Ellipsoids of the symmetric parts (2 or 3 coordinates; the key is
+    /// absent for 1 coordinate, where no ellipsoid exists).
+    #[serde(skip_serializing_if = "PerMatrix::all_none")]
     pub ellipsoids: PerMatrix<Option<Ellipsoid>>,
     pub table_ii: PerMatrix<TableII>,
     pub fit: FitQuality,

@@ -112,10 +112,6 @@ const ABSENT_BY_DESIGN: &[&str] = &[
     "expected",
     "accuracy",
     "parametric",
-    // 1-D matrices have no ellipsoid
-    "ellipsoids.inertia",
-    "ellipsoids.damping",
-    "ellipsoids.stiffness",
 ];
 
 fn check(what: &str, v: &impl serde::Serialize) -> Option<String> {

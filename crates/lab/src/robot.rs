@@ -137,7 +137,9 @@ impl Robot {
             path: path.to_path_buf(),
             message,
         };
-        let urdf = urdf_rs::read_file(path).map_err(|e| {
+        // through the capped reader: a FIFO or device is refused, not read for ever
+        let text = limpid_core::files::read_text(path)?;
+        let urdf = urdf_rs::read_from_string(&text).map_err(|e| {
             fail(
                 e.to_string()
                     .lines()
