@@ -380,3 +380,20 @@ fn a_look_alike_header_is_said_not_ignored() {
         out.stderr
     );
 }
+
+#[test]
+fn a_planar_estimate_of_3d_data_is_refused_not_silently_flattened() {
+    let rec = shared().join("examples/cartesian_slow/ex_cubic.csv");
+    let out = limpid(&[
+        "estimate",
+        "planar",
+        rec.to_str().unwrap(),
+        "--link-lengths",
+        "0.3,0.33",
+    ]);
+    let line = one_line_error(&out);
+    assert!(
+        line.contains("the end point moves in z") && line.contains("estimate linear"),
+        "{line}"
+    );
+}

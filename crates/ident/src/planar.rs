@@ -118,6 +118,27 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
         ));
     }
     let from_endpoint = !rec.has("q1");
+    if from_endpoint {
+        if let (Some(x), Some(y), Some(z)) = (rec.column("x"), rec.column("y"), rec.column("z")) {
+            let range = |c: &[f64]| {
+                let (lo, hi) = c
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                        (l.min(*v), h.max(*v))
+                    });
+                hi - lo
+            };
+            let (rz, rxy) = (range(z), range(x).max(range(y)));
+            if rz > 0.1 * rxy {
+                return Err(Error::Format {
+                    path: rec.path().to_path_buf(),
+                    message: format!(
+                        "the end point moves in z (range {rz:.4} m against {rxy:.4} m in x, y): a planar estimate would ignore that motion; use estimate linear for 3-D data"
+                    ),
+                });
+            }
+        }
+    }
     let (q, tau): ([Vec<f64>; 2], [Vec<f64>; 2]) = if from_endpoint {
         let x = rec.require("x", "end-point position (or give q1,q2 joint angles)")?;
         let y = rec.require("y", "end-point position")?;
@@ -429,7 +450,15 @@ pub fn fit_planar(
         fit.vaf[r] = vaf;
         fit.r[r] = rr;
     }
-    let criteria = criteria(stiffness, damping, condition_number, cond_scaled);
+    let mut criteria = criteria(stiffness, damping, condition_number, cond_scaled);
+    // base inertial parameters of a real arm are positive (seed 003 eq. (5))
+    if xi.is_none() && !xi_hat.iter().all(|v| *v > 0.0) {
+        criteria.trusted = false;
+        criteria.reasons.push(format!(
+            "inertial parameters not physical (xi = {:.4}, {:.4}, {:.4} kg m^2; all must be positive)",
+            xi_hat[0], xi_hat[1], xi_hat[2]
+        ));
+    }
     let q0 = {
         let n = data.trials.len() as f64;
         [
@@ -690,29 +719,35 @@ pub fn criteria(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, cond_scaled: f64)
     let (ke, de) = (eig(k), eig(d));
     let (kr, dr) = (ratio(k), ratio(d));
     let mut reasons = Vec::new();
-    if cond_scaled >= MAX_CONDITION {
+    // written so that a NaN fails each test (a NaN must never read as trusted)
+    let well_conditioned = cond_scaled < MAX_CONDITION;
+    if !well_conditioned {
         reasons.push(format!(
             "ill-conditioned: scaled condition number {cond_scaled:.0} >= {MAX_CONDITION:.0}"
         ));
     }
-    if ke[1] <= 0.0 {
+    let k_pd = ke[1] > 0.0;
+    if !k_pd {
         reasons.push(format!(
             "stiffness not positive definite (eigenvalues {:.3}, {:.3})",
             ke[0], ke[1]
         ));
     }
-    if de[1] <= 0.0 {
+    let d_pd = de[1] > 0.0;
+    if !d_pd {
         reasons.push(format!(
             "damping not positive definite (eigenvalues {:.3}, {:.3})",
             de[0], de[1]
         ));
     }
-    if kr >= QUASI_SYMMETRIC {
+    let k_sym = kr < QUASI_SYMMETRIC;
+    if !k_sym {
         reasons.push(format!(
             "stiffness not quasi-symmetric (ratio {kr:.3} >= {QUASI_SYMMETRIC})"
         ));
     }
-    if dr >= QUASI_SYMMETRIC {
+    let d_sym = dr < QUASI_SYMMETRIC;
+    if !d_sym {
         reasons.push(format!(
             "damping not quasi-symmetric (ratio {dr:.3} >= {QUASI_SYMMETRIC})"
         ));
@@ -773,6 +808,19 @@ mod tests {
             (c[0] - cor[0]).abs() < 1e-6 && (c[1] - cor[1]).abs() < 1e-6,
             "{c:?} vs {cor}"
         );
+    }
+
+    #[test]
+    fn a_nan_anywhere_is_never_trusted() {
+        let good_k = [[30.0, 8.0], [8.0, 12.0]];
+        let good_d = [[2.0, 0.4], [0.4, 1.5]];
+        for c in [
+            criteria([[f64::NAN, 8.0], [8.0, 12.0]], good_d, 50.0, 20.0),
+            criteria(good_k, [[2.0, f64::NAN], [0.4, 1.5]], 50.0, 20.0),
+            criteria(good_k, good_d, 50.0, f64::NAN),
+        ] {
+            assert!(!c.trusted, "{:?}", c.reasons);
+        }
     }
 
     #[test]
