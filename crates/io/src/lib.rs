@@ -348,7 +348,19 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         for (k, out) in columns.iter_mut().enumerate() {
             let start = out.len();
             let mut defs: Vec<i16> = Vec::new();
-            let column_reader = group.get_column_reader(k).map_err(pq_err)?;
+            // pages pass a size check before the decoder sees them: a corrupt
+            // dictionary page claiming 2^31 values made it reserve 6 GB (fuzzer)
+            let descr = schema.column(k);
+            let width = match descr.physical_type() {
+                PhysicalType::INT64 | PhysicalType::DOUBLE => 8,
+                _ => 4,
+            };
+            let pages = CheckedPages {
+                inner: group.get_column_page_reader(k).map_err(pq_err)?,
+                max_values: group.metadata().num_rows().max(0) as u64,
+                width,
+            };
+            let column_reader = parquet::column::reader::get_column_reader(descr, Box::new(pages));
             macro_rules! read_all {
                 ($r:expr, $t:ty) => {{
                     let mut r = $r;
@@ -416,6 +428,80 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         }
     }
     Ok(rec)
+}
+
+/// A page reader that refuses pages whose declared value count cannot be
+/// true: a dictionary holding more values than its bytes can store, or a
+/// data page with more values than its row group has rows.
+struct CheckedPages {
+    inner: Box<dyn parquet::column::page::PageReader>,
+    max_values: u64,
+    width: usize,
+}
+
+impl CheckedPages {
+    fn check(&self, page: &parquet::column::page::Page) -> parquet::errors::Result<()> {
+        use parquet::column::page::Page;
+        let bad = |what: String| Err(parquet::errors::ParquetError::General(what));
+        match page {
+            Page::DictionaryPage {
+                buf, num_values, ..
+            } if (*num_values as usize).saturating_mul(self.width) > buf.len() => bad(format!(
+                "a dictionary page claims {num_values} values in {} bytes",
+                buf.len()
+            )),
+            Page::DataPage { num_values, .. } | Page::DataPageV2 { num_values, .. }
+                if u64::from(*num_values) > self.max_values =>
+            {
+                bad(format!(
+                    "a data page claims {num_values} values in a row group of {} rows",
+                    self.max_values
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+impl Iterator for CheckedPages {
+    type Item = parquet::errors::Result<parquet::column::page::Page>;
+    fn next(&mut self) -> Option<Self::Item> {
+        use parquet::column::page::PageReader;
+        self.get_next_page().transpose()
+    }
+}
+
+impl parquet::column::page::PageReader for CheckedPages {
+    fn get_next_page(&mut self) -> parquet::errors::Result<Option<parquet::column::page::Page>> {
+        let page = self.inner.get_next_page()?;
+        if let Some(p) = &page {
+            self.check(p)?;
+        }
+        Ok(page)
+    }
+    fn peek_next_page(
+        &mut self,
+    ) -> parquet::errors::Result<Option<parquet::column::page::PageMetadata>> {
+        self.inner.peek_next_page()
+    }
+    fn skip_next_page(&mut self) -> parquet::errors::Result<()> {
+        self.inner.skip_next_page()
+    }
+    fn supports_deferred_dictionary(&self) -> bool {
+        self.inner.supports_deferred_dictionary()
+    }
+    fn take_deferred_dictionary(
+        &mut self,
+    ) -> parquet::errors::Result<Option<parquet::column::page::Page>> {
+        let page = self.inner.take_deferred_dictionary()?;
+        if let Some(p) = &page {
+            self.check(p)?;
+        }
+        Ok(page)
+    }
+    fn at_record_boundary(&mut self) -> parquet::errors::Result<bool> {
+        self.inner.at_record_boundary()
+    }
 }
 
 /// Write a CSV recording with full round-trip precision.
