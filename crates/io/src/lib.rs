@@ -69,7 +69,7 @@ pub fn read_recording_bytes(path: impl AsRef<Path>, bytes: Vec<u8>) -> Result<Re
         });
     }
     if is_parquet(path) {
-        let data = bytes::Bytes::from(bytes);
+        let data = StrictBytes(bytes::Bytes::from(bytes));
         limpid_core::error::catch_panic(
             path,
             "Parquet decoder (corrupt or unsupported file)",
@@ -269,18 +269,12 @@ pub const MAX_PARQUET_ROWS: i64 = 1 << 32;
 /// nested, repeated, decimal and date columns are refused. A panic inside the
 /// parquet crate (a corrupt file) becomes an error naming the file.
 pub fn read_parquet(path: &Path) -> Result<Recording> {
-    let file = limpid_core::files::open_input(path)?;
-    if file.metadata().map_err(io_err(path))?.len() == 0 {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    limpid_core::error::catch_panic(
-        path,
-        "Parquet decoder (corrupt or unsupported file)",
-        || read_parquet_source(path, file),
-    )
+    let bytes = limpid_core::files::read_bytes(path, MAX_PARQUET_BYTES)?;
+    read_recording_bytes(path, bytes)
 }
+
+/// Largest Parquet file read (bytes; it is decoded from memory).
+pub const MAX_PARQUET_BYTES: u64 = 8 << 30;
 
 fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
     path: &Path,
@@ -428,6 +422,56 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         }
     }
     Ok(rec)
+}
+
+/// The file's bytes for the Parquet decoder, whose readers fail at the end of
+/// the data instead of returning 0 bytes: the decoder's skipping of a
+/// corrupt header with a claimed list of 2^31 elements otherwise looped on
+/// end-of-file for minutes (fuzzer).
+struct StrictBytes(bytes::Bytes);
+
+/// A reader over [`StrictBytes`] from an offset.
+struct StrictRead(bytes::Bytes);
+
+impl std::io::Read for StrictRead {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        if self.0.is_empty() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::UnexpectedEof,
+                "read past the end of the Parquet file",
+            ));
+        }
+        let n = buf.len().min(self.0.len());
+        buf[..n].copy_from_slice(&self.0[..n]);
+        self.0 = self.0.slice(n..);
+        Ok(n)
+    }
+}
+
+impl parquet::file::reader::Length for StrictBytes {
+    fn len(&self) -> u64 {
+        self.0.len() as u64
+    }
+}
+
+impl parquet::file::reader::ChunkReader for StrictBytes {
+    type T = StrictRead;
+    fn get_read(&self, start: u64) -> parquet::errors::Result<StrictRead> {
+        let start = usize::try_from(start).unwrap_or(usize::MAX);
+        if start > self.0.len() {
+            return Err(parquet::errors::ParquetError::EOF(format!(
+                "offset {start} beyond the file's {} bytes",
+                self.0.len()
+            )));
+        }
+        Ok(StrictRead(self.0.slice(start..)))
+    }
+    fn get_bytes(&self, start: u64, length: usize) -> parquet::errors::Result<bytes::Bytes> {
+        self.0.get_bytes(start, length)
+    }
 }
 
 /// A page reader that refuses pages whose declared value count cannot be
