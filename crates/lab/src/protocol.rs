@@ -262,7 +262,8 @@ pub fn check(p: &Protocol) -> Result<CheckReport> {
         peak_velocity_m_s: 0.0,
         peak_acceleration_m_s2: 0.0,
         peak_force_n: 0.0,
-        conditioning_ratios: conditioning_ratios(p.phases.profile, p.phases.centre_out_s, d),
+        // the ratios do not depend on the amplitude; 1 keeps a tiny radius from underflowing to 0/0
+        conditioning_ratios: conditioning_ratios(p.phases.profile, p.phases.centre_out_s, 1.0),
     };
     let breach = |limit: &str, value: f64, max: f64, s: usize, t: usize, time: f64| {
         Err(Error::invalid(

@@ -49,8 +49,9 @@ pub fn even_directions(n: usize) -> Vec<Vector3<f64>> {
 }
 
 /// Smallest angle (degrees) between any two of the unit vectors.
+/// With fewer than two points there is no pair: 180 (never infinite in a report).
 pub fn min_separation_deg(pts: &[Vector3<f64>]) -> f64 {
-    let mut best = f64::INFINITY;
+    let mut best: f64 = 180.0;
     for i in 0..pts.len() {
         for j in i + 1..pts.len() {
             let c = pts[i].dot(&pts[j]).clamp(-1.0, 1.0);
