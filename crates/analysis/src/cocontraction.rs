@@ -21,19 +21,20 @@
 //! by the matrix, and their angles are flagged `ambiguous`.
 
 use nalgebra::{Matrix3, Vector3};
-use serde::Serialize;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 use crate::emg::{cocontraction_index, emg_columns, mvc_maxima, per_level, EmgParams};
-use crate::report::{linear_result, LinearResult};
-use crate::{ellipsoid, Ellipsoid, Mat};
-use limpid_core::{Error, Recording, Result};
+use crate::linear::{linear_result, LinearResult};
+use crate::{ellipsoid, Ellipsoid, Matrix};
+use limpid_core::{Error, Recording, Result, Warning, WarningCode};
 use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
 
 /// Relative eigenvalue gap below which principal axes count as tied.
 pub const TIE_GAP: f64 = 0.05;
 
 /// One condition level.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct LevelResult {
     pub level: f64,
     /// Mean co-contraction index over the samples of this level (fraction of MVC).
@@ -41,9 +42,9 @@ pub struct LevelResult {
     pub cocontraction_sd: f64,
     /// Share of samples within the tolerance band of the target level.
     pub cocontraction_within_band: f64,
-    pub stiffness: Mat,
-    pub damping: Mat,
-    pub inertia: Mat,
+    pub stiffness: Matrix,
+    pub damping: Matrix,
+    pub inertia: Matrix,
     /// Stiffness ellipsoid (symmetric part).
     pub ellipsoid: Option<Ellipsoid>,
     /// The full linear result (standard errors, fit, criteria, warnings).
@@ -51,7 +52,7 @@ pub struct LevelResult {
 }
 
 /// One level compared with the reference (lowest) level.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Comparison {
     pub level: f64,
     pub reference_level: f64,
@@ -66,14 +67,14 @@ pub struct Comparison {
 }
 
 /// Everything `estimate cocontraction` reports.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct CocontractionResult {
     pub recording: String,
     pub mvc: String,
     pub muscles: Vec<String>,
     pub levels: Vec<LevelResult>,
     pub comparisons: Vec<Comparison>,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 /// Change of one stiffness ellipsoid against a reference (3 x 3 or 2 x 2).
@@ -104,12 +105,12 @@ fn permutations(n: usize) -> Vec<Vec<usize>> {
 }
 
 /// Compare two stiffness matrices' ellipsoids, axes matched by direction.
-pub fn compare(reference: &Mat, other: &Mat) -> Option<EllipsoidChange> {
+pub fn compare(reference: &Matrix, other: &Matrix) -> Option<EllipsoidChange> {
     let (a, b) = (ellipsoid(reference)?, ellipsoid(other)?);
     let n = a.eigenvalues.len();
     let cos = |i: usize, j: usize| {
         (0..n)
-            .map(|r| a.axes[r][i] * b.axes[r][j])
+            .map(|r| a.axes[(r, i)] * b.axes[(r, j)])
             .sum::<f64>()
             .abs()
             .min(1.0)
@@ -162,9 +163,12 @@ pub fn estimate_cocontraction(
         let data = match prepare(rec, &params) {
             Ok(d) => d,
             Err(Error::InvalidParameter { .. }) => {
-                warnings.push(format!(
-                    "level {}: no complete trial at this level; skipped",
-                    s.level
+                warnings.push(Warning::new(
+                    WarningCode::LevelSkipped,
+                    format!(
+                        "level {}: no complete trial at this level; skipped",
+                        s.level
+                    ),
                 ));
                 continue;
             }
@@ -226,10 +230,8 @@ pub fn axis_rotation(axis: Vector3<f64>, angle: f64) -> Matrix3<f64> {
 mod tests {
     use super::*;
 
-    fn rows(m: &Matrix3<f64>) -> Mat {
-        (0..3)
-            .map(|i| (0..3).map(|j| m[(i, j)]).collect())
-            .collect()
+    fn rows(m: &Matrix3<f64>) -> Matrix {
+        Matrix::from(*m)
     }
 
     #[test]

@@ -12,42 +12,33 @@
 //!   (smallest eigenvalue > 0) and the symmetry ratio ||Z_a||_F / ||Z_s||_F.
 
 pub mod cocontraction;
+pub mod demo;
 pub mod emg;
+pub mod linear;
 pub mod markers;
-pub mod report;
+pub mod protocol;
+pub mod result;
 pub mod study;
 
 use nalgebra::{DMatrix, Matrix3};
-use serde::Serialize;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
-/// Row-major matrix.
-pub type Mat = Vec<Vec<f64>>;
-
-fn to_dm(m: &Mat) -> DMatrix<f64> {
-    let n = m.len();
-    DMatrix::from_fn(n, n, |i, j| m[i][j])
-}
-
-fn from_dm(m: &DMatrix<f64>) -> Mat {
-    (0..m.nrows())
-        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
-        .collect()
-}
+pub use limpid_core::criteria::{matrix_criteria as criteria, MatrixCriteria};
+pub use limpid_core::Matrix;
 
 /// Symmetric part (Z + Z^T) / 2.
-pub fn symmetric(m: &Mat) -> Mat {
-    let z = to_dm(m);
-    from_dm(&((&z + z.transpose()) * 0.5))
+pub fn symmetric(m: &Matrix) -> Matrix {
+    m.symmetric_part()
 }
 
 /// Antisymmetric part (Z - Z^T) / 2.
-pub fn antisymmetric(m: &Mat) -> Mat {
-    let z = to_dm(m);
-    from_dm(&((&z - z.transpose()) * 0.5))
+pub fn antisymmetric(m: &Matrix) -> Matrix {
+    m.antisymmetric_part()
 }
 
 /// Seed 000 Table II quantities of one matrix.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct TableII {
     /// Largest absolute element of the symmetric part.
     pub max_symmetric: f64,
@@ -58,24 +49,24 @@ pub struct TableII {
 }
 
 /// Table II quantities (seed 000).
-pub fn table_ii(m: &Mat) -> TableII {
+pub fn table_ii(m: &Matrix) -> TableII {
     let s = symmetric(m);
     let a = antisymmetric(m);
-    let abs_s = s.iter().flatten().map(|v| v.abs());
+    let abs_s = s.iter().map(|v| v.abs());
     TableII {
         max_symmetric: abs_s.clone().fold(0.0, f64::max),
         min_symmetric: abs_s.fold(f64::INFINITY, f64::min),
-        max_antisymmetric: a.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max),
+        max_antisymmetric: a.iter().map(|v| v.abs()).fold(0.0, f64::max),
     }
 }
 
 /// The ellipsoid (or ellipse, for 2 x 2) of a symmetric matrix.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Ellipsoid {
     /// Eigenvalues, largest first.
     pub eigenvalues: Vec<f64>,
     /// Principal axes as the columns of a rotation matrix (det +1), row-major.
-    pub axes: Mat,
+    pub axes: Matrix,
     /// Yaw, pitch, roll in degrees (seed 000 eq. (17)); for 2 x 2, one angle of
     /// the major axis from the first coordinate axis.
     pub angles_deg: Vec<f64>,
@@ -91,12 +82,12 @@ pub struct Ellipsoid {
 }
 
 /// Ellipsoid of the symmetric part of `m` (n = 2 or 3); `None` for other sizes.
-pub fn ellipsoid(m: &Mat) -> Option<Ellipsoid> {
-    let n = m.len();
-    if !(2..=3).contains(&n) {
+pub fn ellipsoid(m: &Matrix) -> Option<Ellipsoid> {
+    let n = m.nrows();
+    if !(2..=3).contains(&n) || m.ncols() != n {
         return None;
     }
-    let s = to_dm(&symmetric(m));
+    let s = symmetric(m).0;
     let eig = limpid_core::linalg::symmetric_eigen(s)?;
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
@@ -127,7 +118,7 @@ pub fn ellipsoid(m: &Mat) -> Option<Ellipsoid> {
         }),
         radii_proportional: values.clone(),
         eigenvalues: values,
-        axes: from_dm(&axes),
+        axes: Matrix(axes),
         angles_deg,
     })
 }
@@ -178,34 +169,13 @@ pub fn rotation_from_ypr(yaw: f64, pitch: f64, roll: f64) -> Matrix3<f64> {
     rz * ry * rx
 }
 
-/// Confidence criteria of one matrix (seed 003 §III-C).
-#[derive(Debug, Clone, Serialize)]
-pub struct MatrixCriteria {
-    /// Smallest eigenvalue of the symmetric part.
-    pub min_eigenvalue: f64,
-    /// Symmetric part positive definite (smallest eigenvalue > 0).
-    pub positive_definite: bool,
-    /// ||Z_a||_F / ||Z_s||_F (0 for a symmetric matrix).
-    pub symmetry_ratio: f64,
-}
-
-/// Criteria of one matrix.
-pub fn criteria(m: &Mat) -> MatrixCriteria {
-    let s = to_dm(&symmetric(m));
-    let a = to_dm(&antisymmetric(m));
-    let min_eigenvalue =
-        limpid_core::linalg::symmetric_eigenvalues(s.clone()).map_or(f64::NAN, |e| e.min());
-    let ns = s.norm();
-    MatrixCriteria {
-        min_eigenvalue,
-        positive_definite: min_eigenvalue > 0.0,
-        symmetry_ratio: if ns > 0.0 { a.norm() / ns } else { 0.0 },
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn mat(rows: &[&[f64]]) -> Matrix {
+        Matrix::from_rows(&rows.iter().map(|r| r.to_vec()).collect::<Vec<_>>()).unwrap()
+    }
     use proptest::prelude::*;
 
     proptest! {
@@ -214,11 +184,11 @@ mod tests {
                                        l1 in 500.0f64..1000.0, l2 in 200.0f64..450.0, l3 in 10.0f64..150.0) {
             let r = rotation_from_ypr(yaw, pitch, roll);
             let k = r * Matrix3::from_diagonal(&nalgebra::Vector3::new(l1, l2, l3)) * r.transpose();
-            let m: Mat = (0..3).map(|i| (0..3).map(|j| k[(i, j)]).collect()).collect();
+            let m = Matrix::from(k);
             let e = ellipsoid(&m).unwrap();
             prop_assert!((e.eigenvalues[0] - l1).abs() < 1e-8 * l1);
             prop_assert!((e.eigenvalues[2] - l3).abs() < 1e-8 * l1);
-            let axes = Matrix3::from_fn(|i, j| e.axes[i][j]);
+            let axes = Matrix3::from_fn(|i, j| e.axes[(i, j)]);
             prop_assert!((axes.determinant() - 1.0).abs() < 1e-9, "right-handed");
             // the recovered angles rebuild the principal frame up to axis signs:
             // each rebuilt column is parallel to the true column
@@ -232,9 +202,9 @@ mod tests {
 
     #[test]
     fn split_and_table_ii() {
-        let m = vec![vec![10.0, 3.0], vec![1.0, 5.0]];
-        assert_eq!(symmetric(&m), vec![vec![10.0, 2.0], vec![2.0, 5.0]]);
-        assert_eq!(antisymmetric(&m), vec![vec![0.0, 1.0], vec![-1.0, 0.0]]);
+        let m = mat(&[&[10.0, 3.0], &[1.0, 5.0]]);
+        assert_eq!(symmetric(&m), mat(&[&[10.0, 2.0], &[2.0, 5.0]]));
+        assert_eq!(antisymmetric(&m), mat(&[&[0.0, 1.0], &[-1.0, 0.0]]));
         let t = table_ii(&m);
         assert_eq!(
             (t.max_symmetric, t.min_symmetric, t.max_antisymmetric),
@@ -249,7 +219,7 @@ mod tests {
 
     #[test]
     fn ellipse_radii_conventions() {
-        let m = vec![vec![400.0, 0.0], vec![0.0, 100.0]];
+        let m = mat(&[&[400.0, 0.0], &[0.0, 100.0]]);
         let e = ellipsoid(&m).unwrap();
         assert_eq!(e.radii_proportional, vec![400.0, 100.0]);
         assert_eq!(e.radii_inverse_sqrt, Some(vec![0.05, 0.1]));
@@ -259,7 +229,7 @@ mod tests {
 
     #[test]
     fn a_matrix_that_is_not_positive_definite_has_no_inverse_radii_and_says_why() {
-        let e = ellipsoid(&vec![vec![400.0, 0.0], vec![0.0, -10.0]]).unwrap();
+        let e = ellipsoid(&mat(&[&[400.0, 0.0], &[0.0, -10.0]])).unwrap();
         let json = serde_json::to_value(&e).unwrap();
         assert!(json.get("radii_inverse_sqrt").is_none(), "{json}");
         assert!(json["note"]
@@ -268,6 +238,6 @@ mod tests {
             .contains("not positive definite"));
         assert!(!json.to_string().contains("null"), "{json}");
         // a non-finite matrix has no ellipsoid at all, rather than NaN axes
-        assert!(ellipsoid(&vec![vec![f64::NAN, 0.0], vec![0.0, 1.0]]).is_none());
+        assert!(ellipsoid(&mat(&[&[f64::NAN, 0.0], &[0.0, 1.0]])).is_none());
     }
 }

@@ -1,17 +1,22 @@
-//! The complete result of `estimate linear`: estimate, analysis and quality,
-//! with the keys the CLI's `--json` and the Python package share.
+//! The complete result of `estimate linear`: the estimate of seed 000
+//! eq. (3)-(8), its analysis (symmetric/antisymmetric split eq. (10)-(11),
+//! Table II, ellipsoids eq. (13)-(17)), its quality and verdict, and the
+//! optional joint-space view of seed 004's 3-DoF shoulder.
 
-use serde::Serialize;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
+use crate::markers::MarkerConfiguration;
 use crate::{
-    antisymmetric, criteria, ellipsoid, symmetric, table_ii, Ellipsoid, Mat, MatrixCriteria,
+    antisymmetric, criteria, ellipsoid, symmetric, table_ii, Ellipsoid, Matrix, MatrixCriteria,
     TableII,
 };
+use limpid_core::{Error, Result, Warning, WarningCode};
 use limpid_ident::linear::{units, FitQuality, Identifiable, LinearEstimate, StandardErrors};
 use limpid_ident::Prepared;
 
 /// One value per matrix kind.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PerMatrix<T> {
     pub inertia: T,
     pub damping: T,
@@ -19,6 +24,14 @@ pub struct PerMatrix<T> {
 }
 
 impl<T> PerMatrix<Option<T>> {
+    fn none() -> Self {
+        PerMatrix {
+            inertia: None,
+            damping: None,
+            stiffness: None,
+        }
+    }
+
     /// True when no matrix has a value.
     pub fn all_none(&self) -> bool {
         self.inertia.is_none() && self.damping.is_none() && self.stiffness.is_none()
@@ -26,7 +39,7 @@ impl<T> PerMatrix<Option<T>> {
 }
 
 impl<T> PerMatrix<T> {
-    fn from_fn(est: &LinearEstimate, f: impl Fn(&Mat) -> T) -> Self {
+    fn from_fn(est: &LinearEstimate, f: impl Fn(&Matrix) -> T) -> Self {
         PerMatrix {
             inertia: f(&est.inertia),
             damping: f(&est.damping),
@@ -36,7 +49,7 @@ impl<T> PerMatrix<T> {
 }
 
 /// Quality criteria of the whole estimate.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Criteria {
     pub condition_number: f64,
     pub matrices: PerMatrix<MatrixCriteria>,
@@ -49,7 +62,7 @@ pub struct Criteria {
 }
 
 /// Where the data came from and how it was prepared.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Provenance {
     pub recording: String,
     pub coordinates: Vec<String>,
@@ -67,42 +80,51 @@ pub struct Provenance {
 }
 
 /// Everything `estimate linear --json` prints.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct LinearResult {
-    pub inertia: Mat,
-    pub damping: Mat,
-    pub stiffness: Mat,
-    /// Absolute equilibrium position, or null (see `warnings`).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inertia: Matrix,
+    pub damping: Matrix,
+    pub stiffness: Matrix,
+    /// Absolute equilibrium position; absent when not estimated (see `warnings`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub equilibrium: Option<Vec<f64>>,
     pub standard_errors: StandardErrors,
-    pub symmetric: PerMatrix<Mat>,
-    pub antisymmetric: PerMatrix<Mat>,
+    pub symmetric: PerMatrix<Matrix>,
+    pub antisymmetric: PerMatrix<Matrix>,
     /// Ellipsoids of the symmetric parts (2 or 3 coordinates; the key is
     /// absent for 1 coordinate, where no ellipsoid exists).
-    #[serde(skip_serializing_if = "PerMatrix::all_none")]
+    #[serde(
+        default = "PerMatrix::<Option<Ellipsoid>>::none",
+        skip_serializing_if = "PerMatrix::all_none"
+    )]
     pub ellipsoids: PerMatrix<Option<Ellipsoid>>,
     pub table_ii: PerMatrix<TableII>,
     pub fit: FitQuality,
     pub criteria: Criteria,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
     pub provenance: Provenance,
+    /// The arm's configuration from tracked markers, when the recording has them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub arm_configuration: Option<MarkerConfiguration>,
+    /// The estimate in the shoulder's joint space (seed 004), when asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shoulder: Option<ShoulderImpedance>,
 }
 
 /// Analyse a linear estimate.
 pub fn linear_result(est: &LinearEstimate, data: &Prepared) -> LinearResult {
     let (mu, bu, ku) = units(&data.coordinates);
-    let matrices = PerMatrix::from_fn(est, criteria);
+    let matrices = PerMatrix::from_fn(est, |m| criteria(m));
     let mut warnings = est.warnings.clone();
     for (name, c, identified) in [
         ("stiffness", &matrices.stiffness, est.identifiable.stiffness),
         ("damping", &matrices.damping, est.identifiable.damping),
     ] {
         if identified && !c.positive_definite {
-            warnings.push(format!(
+            warnings.push(Warning::new(WarningCode::NotPositiveDefinite, format!(
                 "the symmetric part of the {name} matrix is not positive definite (smallest eigenvalue {:.4}): not a passive {name}",
                 c.min_eigenvalue
-            ));
+            )));
         }
     }
     LinearResult {
@@ -146,5 +168,175 @@ pub fn linear_result(est: &LinearEstimate, data: &Prepared) -> LinearResult {
             },
             edge_trim_samples: data.trim,
         },
+        arm_configuration: None,
+        shoulder: None,
     }
+}
+
+/// One matrix's verdict: identified from the data, and passive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MatrixVerdict {
+    /// Identifiable and its symmetric part positive definite.
+    Trusted,
+    /// Identifiable but not positive definite: not a passive impedance.
+    NotPassive,
+    /// Not identifiable from this data.
+    NotIdentifiable,
+}
+
+impl Criteria {
+    /// The verdict on one matrix (`"inertia"`, `"damping"`, `"stiffness"`).
+    pub fn verdict_of(&self, kind: MatrixKind) -> MatrixVerdict {
+        let (identified, c) = match kind {
+            MatrixKind::Inertia => (self.identifiable.inertia, &self.matrices.inertia),
+            MatrixKind::Damping => (self.identifiable.damping, &self.matrices.damping),
+            MatrixKind::Stiffness => (self.identifiable.stiffness, &self.matrices.stiffness),
+        };
+        match (identified, c.positive_definite) {
+            (true, true) => MatrixVerdict::Trusted,
+            (true, false) => MatrixVerdict::NotPassive,
+            (false, _) => MatrixVerdict::NotIdentifiable,
+        }
+    }
+}
+
+/// The three matrices of the linear model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MatrixKind {
+    Stiffness,
+    Damping,
+    Inertia,
+}
+
+impl MatrixKind {
+    /// Stiffness, damping, inertia: the order results are read in.
+    pub const ALL: [MatrixKind; 3] = [
+        MatrixKind::Stiffness,
+        MatrixKind::Damping,
+        MatrixKind::Inertia,
+    ];
+
+    /// The lower-case name, as in the JSON keys.
+    pub fn name(self) -> &'static str {
+        match self {
+            MatrixKind::Stiffness => "stiffness",
+            MatrixKind::Damping => "damping",
+            MatrixKind::Inertia => "inertia",
+        }
+    }
+
+    /// The symbol of seed 000: K, B, M.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            MatrixKind::Stiffness => "K",
+            MatrixKind::Damping => "B",
+            MatrixKind::Inertia => "M",
+        }
+    }
+}
+
+impl<T> PerMatrix<T> {
+    /// The value of one kind.
+    pub fn get(&self, kind: MatrixKind) -> &T {
+        match kind {
+            MatrixKind::Stiffness => &self.stiffness,
+            MatrixKind::Damping => &self.damping,
+            MatrixKind::Inertia => &self.inertia,
+        }
+    }
+}
+
+impl LinearResult {
+    /// The matrix of one kind.
+    pub fn matrix(&self, kind: MatrixKind) -> &Matrix {
+        match kind {
+            MatrixKind::Stiffness => &self.stiffness,
+            MatrixKind::Damping => &self.damping,
+            MatrixKind::Inertia => &self.inertia,
+        }
+    }
+
+    /// The standard errors of one kind.
+    pub fn standard_error(&self, kind: MatrixKind) -> &Matrix {
+        match kind {
+            MatrixKind::Stiffness => &self.standard_errors.stiffness,
+            MatrixKind::Damping => &self.standard_errors.damping,
+            MatrixKind::Inertia => &self.standard_errors.inertia,
+        }
+    }
+
+    /// The verdict in words: per matrix, then the fit's VAF per coordinate.
+    pub fn verdict(&self) -> String {
+        let parts: Vec<String> = MatrixKind::ALL
+            .iter()
+            .map(|&kind| {
+                let name = kind.name();
+                match self.criteria.verdict_of(kind) {
+                    MatrixVerdict::Trusted => {
+                        format!("{name} trusted (identifiable, positive definite)")
+                    }
+                    MatrixVerdict::NotPassive => format!(
+                        "{name} identified but not positive definite: not a passive impedance"
+                    ),
+                    MatrixVerdict::NotIdentifiable => {
+                        format!("{name} NOT identifiable from this data: treat it as unknown")
+                    }
+                }
+            })
+            .collect();
+        let vafs: Vec<String> = self
+            .fit
+            .vaf
+            .iter()
+            .map(|v| format!("{} %", limpid_core::short_number(*v)))
+            .collect();
+        format!("{}; fit VAF {}", parts.join("; "), vafs.join(" / "))
+    }
+}
+
+/// Seed 004's 3-DoF shoulder (flexion, abduction, internal rotation): the
+/// hand estimate mapped to joint space, `J_h^T Z J_h`.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct ShoulderImpedance {
+    /// Flexion, abduction, rotation (degrees).
+    pub angles_deg: [f64; 3],
+    /// J_h at the posture (m/rad).
+    pub jacobian: Matrix,
+    /// J_h^T K J_h (N m/rad).
+    pub stiffness: Matrix,
+    /// J_h^T B J_h (N m s/rad).
+    pub damping: Matrix,
+    /// What the mapping leaves out.
+    pub note: String,
+}
+
+/// The shoulder's posture and segments for [`shoulder_impedance`].
+#[derive(Debug, Clone, Copy)]
+pub struct ShoulderPosture {
+    pub upper_arm_m: f64,
+    pub forearm_m: f64,
+    pub elbow_deg: f64,
+    /// Flexion, abduction, rotation (degrees).
+    pub angles_deg: [f64; 3],
+}
+
+/// Map a 3-D end-point estimate to the shoulder's joint space (seed 004).
+pub fn shoulder_impedance(est: &LinearResult, p: &ShoulderPosture) -> Result<ShoulderImpedance> {
+    let (Some(k), Some(b)) = (est.stiffness.to_matrix3(), est.damping.to_matrix3()) else {
+        return Err(Error::invalid("shoulder", "needs a 3-D estimate (x, y, z)"));
+    };
+    let s = limpid_core::arm::Shoulder {
+        upper_arm_m: p.upper_arm_m,
+        forearm_m: p.forearm_m,
+        elbow_rad: p.elbow_deg.to_radians(),
+    };
+    let q = p.angles_deg.map(f64::to_radians);
+    Ok(ShoulderImpedance {
+        angles_deg: p.angles_deg,
+        jacobian: s.jacobian(q).into(),
+        stiffness: s.joint_impedance(&k, q).into(),
+        damping: s.joint_impedance(&b, q).into(),
+        note: "J_h^T Z J_h about the posture; the static-load term dJ^T/dq F is not included"
+            .into(),
+    })
 }

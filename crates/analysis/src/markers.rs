@@ -5,13 +5,14 @@
 //! shoulder is the frame's origin, as in seed 000.
 
 use nalgebra::Vector3;
-use serde::Serialize;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 use limpid_core::arm::arm_configuration;
-use limpid_core::{Error, Recording, Result};
+use limpid_core::{Error, Recording, Result, Warning, WarningCode};
 
 /// Mean configuration over the recording, angles in degrees.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct MarkerConfiguration {
     pub samples: usize,
     pub shoulder_elevation_deg: f64,
@@ -24,7 +25,7 @@ pub struct MarkerConfiguration {
     /// Largest deviation of a segment length from its mean (m): markers on a
     /// rigid segment keep it near 0; centimetres mean slipping markers.
     pub segment_length_spread_m: f64,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 /// None when the recording has no elbow and wrist markers.
@@ -82,9 +83,12 @@ pub fn from_markers(rec: &Recording, up: Vector3<f64>) -> Result<Option<MarkerCo
         .fold(0.0, f64::max);
     let mut warnings = Vec::new();
     if spread > 0.01 {
-        warnings.push(format!(
-            "a segment length varies by {:.1} cm: the markers may have slipped",
-            spread * 100.0
+        warnings.push(Warning::new(
+            WarningCode::MarkersSlipped,
+            format!(
+                "a segment length varies by {:.1} cm: the markers may have slipped",
+                spread * 100.0
+            ),
         ));
     }
     Ok(Some(MarkerConfiguration {
@@ -136,7 +140,7 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!(
-            c.warnings[0].contains("may have slipped"),
+            c.warnings[0].message.contains("may have slipped"),
             "{:?}",
             c.warnings
         );

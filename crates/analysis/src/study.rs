@@ -28,6 +28,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::cocontraction::{compare, estimate_cocontraction, CocontractionResult};
@@ -83,26 +84,27 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
 }
 
 /// Tables 1-4 row: one configuration at one level.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct LevelRow {
     pub configuration: String,
     pub level: f64,
     pub subjects: usize,
-    pub cocontraction_index: f64,
-    pub kxx: f64,
-    pub kyy: f64,
-    pub kzz: f64,
-    pub k_max_a: f64,
-    pub k1: f64,
-    pub k2: f64,
-    pub k3: f64,
+    /// Means over the subjects that have the value; null when none has it.
+    pub cocontraction_index: Option<f64>,
+    pub kxx: Option<f64>,
+    pub kyy: Option<f64>,
+    pub kzz: Option<f64>,
+    pub k_max_a: Option<f64>,
+    pub k1: Option<f64>,
+    pub k2: Option<f64>,
+    pub k3: Option<f64>,
     /// Mean stiffness matrix over subjects (N/m) and its ellipsoid (seed 001 Fig. 5).
-    pub stiffness: crate::Mat,
+    pub stiffness: crate::Matrix,
     pub ellipsoid: Option<crate::Ellipsoid>,
 }
 
 /// Table 5 row (and Fig. 6): highest vs lowest level for one configuration.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct RotationRow {
     pub configuration: String,
     pub from_level: f64,
@@ -115,7 +117,7 @@ pub struct RotationRow {
 }
 
 /// A recording that could not be processed.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Failure {
     pub subject: String,
     pub configuration: String,
@@ -124,7 +126,7 @@ pub struct Failure {
 }
 
 /// One processed recording.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Processed {
     pub subject: String,
     pub configuration: String,
@@ -132,7 +134,7 @@ pub struct Processed {
 }
 
 /// The whole study.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct StudyResult {
     pub name: String,
     pub levels: Vec<LevelRow>,
@@ -218,7 +220,7 @@ pub fn run_study(
             // the tables write as an empty cell
             let mean = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| {
                 let v: Vec<f64> = at.iter().map(|l| f(l)).filter(|v| v.is_finite()).collect();
-                v.iter().sum::<f64>() / v.len() as f64
+                (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
             };
             let eig = |l: &crate::cocontraction::LevelResult, i: usize| {
                 l.ellipsoid
@@ -227,21 +229,15 @@ pub fn run_study(
                     .unwrap_or(f64::NAN)
             };
             let k = |l: &crate::cocontraction::LevelResult, i: usize| {
-                l.stiffness
-                    .get(i)
-                    .and_then(|r| r.get(i))
-                    .copied()
-                    .unwrap_or(f64::NAN)
+                l.stiffness.get((i, i)).copied().unwrap_or(f64::NAN)
             };
             // every recording has x, y, z (checked above): 3 x 3 matrices
-            let n = at.first().map_or(0, |l| l.stiffness.len());
-            let same_shape = at
-                .iter()
-                .all(|l| l.stiffness.len() == n && l.stiffness.iter().all(|r| r.len() == n));
+            let n = at.first().map_or(0, |l| l.stiffness.nrows());
+            let same_shape = at.iter().all(|l| l.stiffness.shape() == (n, n));
             let n = if same_shape { n } else { 0 };
-            let mean_k: crate::Mat = (0..n)
-                .map(|r| (0..n).map(|c| mean(&|l| l.stiffness[r][c])).collect())
-                .collect();
+            let mean_k = crate::Matrix(nalgebra::DMatrix::from_fn(n, n, |r, c| {
+                mean(&|l| l.stiffness[(r, c)]).unwrap_or(f64::NAN)
+            }));
             levels_out.push(LevelRow {
                 configuration: c.clone(),
                 level: *level,
@@ -308,6 +304,12 @@ fn natural(a: &str, b: &str) -> std::cmp::Ordering {
     }
 }
 
+/// A table cell: the value with `decimals`, or `missing` when no recording had it.
+fn cell(v: Option<f64>, decimals: usize, missing: &str) -> String {
+    v.filter(|v| v.is_finite())
+        .map_or(missing.to_string(), |v| format!("{v:.decimals$}"))
+}
+
 /// Write `tables.csv`, `rotation.csv`, `study.json`, `tables.md` into `dir`.
 pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|source| Error::Io {
@@ -323,13 +325,7 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
         "configuration,level,subjects,cocontraction_index,kxx,kyy,kzz,k_max_a,k1,k2,k3\n",
     );
     // a value no recording has is an empty cell, never "NaN"
-    let cell = |v: f64, decimals: usize| {
-        if v.is_finite() {
-            format!("{v:.decimals$}")
-        } else {
-            String::new()
-        }
-    };
+    let cell = |v: Option<f64>, decimals: usize| cell(v, decimals, "");
     for l in &r.levels {
         let _ = writeln!(
             csv,
@@ -365,7 +361,20 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
             g(&x.principal_change_percent, 2)
         );
     }
-    let json = serde_json::to_string_pretty(r).map_err(|e| Error::Format {
+    // the result document of `crate::result` (kind "study"), without a copy
+    #[derive(Serialize)]
+    struct StudyDocument<'a> {
+        schema: u32,
+        kind: &'static str,
+        #[serde(flatten)]
+        study: &'a StudyResult,
+    }
+    let doc = StudyDocument {
+        schema: crate::result::SCHEMA_VERSION,
+        kind: "study",
+        study: r,
+    };
+    let json = serde_json::to_string_pretty(&doc).map_err(|e| Error::Format {
         path: dir.join("study.json"),
         message: e.to_string(),
     })?;
@@ -379,6 +388,8 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
 
 /// Seed 001's tables as Markdown.
 pub fn markdown(r: &StudyResult) -> String {
+    // a value no recording has is a dash, never "NaN"
+    let cell = |v: Option<f64>, decimals: usize| cell(v, decimals, "-");
     let mut md = format!("# {}\n\n", r.name);
     let mut levels: Vec<f64> = r.levels.iter().map(|l| l.level).collect();
     levels.sort_by(f64::total_cmp);
@@ -393,17 +404,17 @@ pub fn markdown(r: &StudyResult) -> String {
         for l in r.levels.iter().filter(|l| l.level == *level) {
             let _ = writeln!(
                 md,
-                "| {} | {} | {:.3} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 l.configuration,
                 l.subjects,
-                l.cocontraction_index,
-                l.kxx,
-                l.kyy,
-                l.kzz,
-                l.k_max_a,
-                l.k1,
-                l.k2,
-                l.k3
+                cell(l.cocontraction_index, 3),
+                cell(l.kxx, 1),
+                cell(l.kyy, 1),
+                cell(l.kzz, 1),
+                cell(l.k_max_a, 1),
+                cell(l.k1, 1),
+                cell(l.k2, 1),
+                cell(l.k3, 1)
             );
         }
         md.push('\n');

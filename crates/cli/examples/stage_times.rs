@@ -10,7 +10,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t2 = Instant::now();
     let est = fit_linear(&prepared, &LinearParams::default())?;
     let t3 = Instant::now();
-    let _ = limpid_analysis::report::linear_result(&est, &prepared);
+    let _ = limpid_analysis::linear::linear_result(&est, &prepared);
     let t4 = Instant::now();
     println!(
         "load {:?} prepare {:?} fit {:?} analyse {:?}",

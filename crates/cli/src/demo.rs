@@ -1,20 +1,15 @@
-//! `limpid demo`: seed 000's 3-D study on a built-in virtual subject.
-//!
-//! Six start points, 16 centre-out perturbations each (3 cm, 3 s; 6 s for the
-//! sinusoid), a position-controlled robot, F/T sensor with per-trial offset,
-//! drift and noise; every start point estimated with the linear estimator and
-//! compared with the subject's true matrices (seed 000 Table I, subject 1).
+//! `limpid demo`: seed 000's 3-D study on a built-in virtual subject
+//! ([`limpid_analysis::demo`] runs it; this prints and writes it).
 
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use limpid_analysis::report::{linear_result, LinearResult};
-use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
-use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
-use nalgebra::Matrix3;
-use rayon::prelude::*;
-use serde::Serialize;
+use limpid_analysis::demo::{demo_csv, run_demo};
+use limpid_analysis::linear::MatrixKind;
+use limpid_analysis::result::{Document, Estimate};
+use limpid_core::Matrix;
+use limpid_lab::Profile;
 
 use crate::table::num;
 use crate::CliResult;
@@ -45,100 +40,48 @@ pub struct DemoArgs {
     pub report: Option<PathBuf>,
 }
 
-/// One start point: truth, estimate, errors.
-#[derive(Serialize)]
-pub struct DemoPoint {
-    pub start_point: String,
-    pub position: [f64; 3],
-    pub true_stiffness: Vec<Vec<f64>>,
-    pub true_damping: Vec<Vec<f64>>,
-    pub true_inertia: Vec<Vec<f64>>,
-    /// Relative Frobenius errors, percent.
-    pub stiffness_error_percent: f64,
-    pub damping_error_percent: f64,
-    pub inertia_error_percent: f64,
-    pub estimate: LinearResult,
-}
-
-fn rel_err(est: &[Vec<f64>], truth: &Matrix3<f64>) -> f64 {
-    let mut num = 0.0;
-    for i in 0..3 {
-        for j in 0..3 {
-            num += (est[i][j] - truth[(i, j)]).powi(2);
-        }
-    }
-    100.0 * num.sqrt() / truth.norm()
-}
-
-fn run_point(p: &Posture, protocol: &CentreOut, seed: u64) -> CliResult<DemoPoint> {
-    let rec = simulate_centre_out(p, protocol, &NoiseModel::default(), seed)?;
-    let prepared = prepare(&rec, &PrepareParams::default())?;
-    let est = fit_linear(&prepared, &LinearParams::default())?;
-    let result = linear_result(&est, &prepared);
-    Ok(DemoPoint {
-        start_point: p.name.clone(),
-        position: [p.start.x, p.start.y, p.start.z],
-        true_stiffness: limpid_lab::session::rows(&p.stiffness),
-        true_damping: limpid_lab::session::rows(&p.damping),
-        true_inertia: limpid_lab::session::rows(&p.inertia),
-        stiffness_error_percent: rel_err(&result.stiffness, &p.stiffness),
-        damping_error_percent: rel_err(&result.damping, &p.damping),
-        inertia_error_percent: rel_err(&result.inertia, &p.inertia),
-        estimate: result,
-    })
-}
-
 pub fn run(args: DemoArgs) -> CliResult {
     let profile = match args.profile {
         ProfileArg::Cubic => Profile::Cubic,
         ProfileArg::Trapezoid => Profile::Trapezoid,
         ProfileArg::Sinusoid => Profile::Sinusoid,
     };
-    let protocol = CentreOut::seed000(profile);
-    let subject = seed000_subject1();
-    let bar = ProgressBar::new(subject.len() as u64);
+    let bar = ProgressBar::new(6);
     bar.set_style(
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} start points ({elapsed})")
             .map_err(|e| e.to_string())?
             .progress_chars("=> "),
     );
     bar.set_message("simulating and estimating");
-    let points: Vec<DemoPoint> = subject
-        .par_iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let r = run_point(p, &protocol, args.seed.wrapping_mul(1000) + i as u64);
-            bar.inc(1);
-            r
-        })
-        .collect::<CliResult<_>>()?;
+    let result = run_demo(profile, args.seed, &|| bar.inc(1))?;
     bar.finish_and_clear();
+    let doc = Document::new(Estimate::Demo(result));
+    let Estimate::Demo(result) = &doc.estimate else {
+        unreachable!("made above")
+    };
 
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
     let json_path = args.out.join("demo.json");
-    limpid_core::files::write_file(
-        &json_path,
-        serde_json::to_string_pretty(&points)?.as_bytes(),
-    )?;
+    limpid_core::files::write_file(&json_path, doc.to_json_pretty().as_bytes())?;
     let csv_path = args.out.join("demo.csv");
-    limpid_core::files::write_file(&csv_path, demo_csv(&points).as_bytes())?;
+    limpid_core::files::write_file(&csv_path, demo_csv(result).as_bytes())?;
     let report_path = args
         .report
         .clone()
         .unwrap_or_else(|| args.out.join("report.html"));
-    crate::report::write(&[serde_json::to_value(&points)?], &report_path)?;
+    crate::report::write(std::slice::from_ref(&doc.estimate), &report_path)?;
 
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&points)?);
+        println!("{}", doc.to_json_pretty());
         return Ok(());
     }
     println!(
         "limpid demo: seed 000 protocol on a virtual subject (Table I, subject 1): 6 start points x {} {} perturbations of {} cm, {} s, {} Hz",
-        protocol.directions.len(),
-        format!("{profile:?}").to_lowercase(),
-        protocol.radius_m * 100.0,
-        protocol.motion_s,
-        protocol.sample_rate
+        result.directions,
+        result.profile,
+        result.radius_m * 100.0,
+        result.motion_s,
+        result.sample_rate_hz
     );
     println!(
         "sensor noise: per-trial force offset 3 N, drift 0.05 N, white 0.1 N, position 20 um\n"
@@ -147,13 +90,13 @@ pub fn run(args: DemoArgs) -> CliResult {
         "{:<6}{:<10}{:>30}{:>30}{:>10}{:>10}  inertia",
         "point", "", "Kxx Kyy Kzz (N/m)", "Bxx Byy Bzz (N s/m)", "K err %", "B err %"
     );
-    for d in &points {
-        let diag = |m: &Vec<Vec<f64>>| {
+    for d in &result.points {
+        let diag = |m: &Matrix| {
             format!(
                 "{:>9} {:>9} {:>9}",
-                num(m[0][0]),
-                num(m[1][1]),
-                num(m[2][2])
+                num(m[(0, 0)]),
+                num(m[(1, 1)]),
+                num(m[(2, 2)])
             )
         };
         let e = &d.estimate;
@@ -180,14 +123,8 @@ pub fn run(args: DemoArgs) -> CliResult {
             inertia
         );
     }
-    let worst_k = points
-        .iter()
-        .map(|d| d.stiffness_error_percent)
-        .fold(0.0, f64::max);
-    let worst_b = points
-        .iter()
-        .map(|d| d.damping_error_percent)
-        .fold(0.0, f64::max);
+    let worst_k = result.worst_error_percent(MatrixKind::Stiffness);
+    let worst_b = result.worst_error_percent(MatrixKind::Damping);
     println!("\nworst stiffness error {worst_k:.2} %, worst damping error {worst_b:.1} % (relative Frobenius norm)");
     println!(
         "results: {} and {}",
@@ -195,49 +132,4 @@ pub fn run(args: DemoArgs) -> CliResult {
         csv_path.display()
     );
     Ok(())
-}
-
-fn demo_csv(points: &[DemoPoint]) -> String {
-    let mut s = String::from("start_point,x,y,z,kind,true_xx,true_yy,true_zz,est_xx,est_yy,est_zz,error_percent,identifiable\n");
-    for d in points {
-        let e = &d.estimate;
-        for (kind, t, m, err, ok) in [
-            (
-                "stiffness",
-                &d.true_stiffness,
-                &e.stiffness,
-                d.stiffness_error_percent,
-                e.criteria.identifiable.stiffness,
-            ),
-            (
-                "damping",
-                &d.true_damping,
-                &e.damping,
-                d.damping_error_percent,
-                e.criteria.identifiable.damping,
-            ),
-            (
-                "inertia",
-                &d.true_inertia,
-                &e.inertia,
-                d.inertia_error_percent,
-                e.criteria.identifiable.inertia,
-            ),
-        ] {
-            s.push_str(&format!(
-                "{},{},{},{},{kind},{},{},{},{},{},{},{err:.4},{ok}\n",
-                d.start_point,
-                d.position[0],
-                d.position[1],
-                d.position[2],
-                t[0][0],
-                t[1][1],
-                t[2][2],
-                m[0][0],
-                m[1][1],
-                m[2][2]
-            ));
-        }
-    }
-    s
 }

@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand, ValueEnum};
 use limpid_analysis::cocontraction::estimate_cocontraction;
 use limpid_analysis::emg::EmgParams;
-use limpid_analysis::report::linear_result;
+use limpid_analysis::linear::{linear_result, shoulder_impedance, ShoulderPosture};
+use limpid_analysis::result::{Document, Estimate};
 use limpid_core::FrameTransform;
 use limpid_ident::{
     fit_linear, prepare, Derivative, LinearParams, Offsets, PrepareParams, Windowing,
@@ -274,48 +275,52 @@ pub fn run(method: Method) -> CliResult {
                     ..LinearParams::default()
                 },
             )?;
-            let result = linear_result(&est, &prepared);
+            let mut result = linear_result(&est, &prepared);
             let up = match args.vertical {
                 AxisArg::X => nalgebra::Vector3::x(),
                 AxisArg::Y => nalgebra::Vector3::y(),
                 AxisArg::Z => nalgebra::Vector3::z(),
             };
-            let arm = limpid_analysis::markers::from_markers(&rec, up)?;
-            let shoulder = match args.shoulder.as_deref() {
-                None => None,
-                Some(v) => Some(shoulder_impedance(v, &est)?),
-            };
-            let mut v = serde_json::to_value(&result)?;
-            if let Some(a) = &arm {
-                v["arm_configuration"] = serde_json::to_value(a)?;
+            result.arm_configuration = limpid_analysis::markers::from_markers(&rec, up)?;
+            if let Some(v) = args.shoulder.as_deref() {
+                let posture = shoulder_posture(v)?;
+                if result.stiffness.shape() != (3, 3) {
+                    return Err(limpid_core::Error::invalid(
+                        "--shoulder",
+                        "needs a 3-D estimate (x, y, z)",
+                    )
+                    .into());
+                }
+                result.shoulder = Some(shoulder_impedance(&result, &posture)?);
             }
-            if let Some(s) = &shoulder {
-                v["shoulder"] = s.clone();
-            }
+            let doc = Document::new(Estimate::Linear(result));
             if let Some(path) = &args.report {
-                crate::report::write(&[v.clone()], path)?;
+                crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
             }
+            let Estimate::Linear(result) = &doc.estimate else {
+                unreachable!("made above")
+            };
             if args.json {
-                println!("{}", serde_json::to_string_pretty(&v)?);
+                println!("{}", doc.to_json_pretty());
             } else {
-                print!("{}", table::linear_text(&result));
-                if let Some(a) = &arm {
+                print!("{}", table::linear_text(result));
+                if let Some(a) = &result.arm_configuration {
                     print!("{}", table::arm_configuration_text(a));
                 }
-                if let Some(s) = &shoulder {
-                    let row = |m: &serde_json::Value, i: usize| {
+                if let Some(s) = &result.shoulder {
+                    let row = |m: &limpid_core::Matrix, i: usize| {
                         (0..3)
-                            .map(|j| table::num(m[i][j].as_f64().unwrap_or(0.0)))
+                            .map(|j| table::num(m[(i, j)]))
                             .collect::<Vec<_>>()
                             .join(", ")
                     };
                     println!("shoulder joint stiffness J_h^T K J_h (N m/rad; flexion, abduction, rotation):");
                     for i in 0..3 {
-                        println!("  [{}]", row(&s["stiffness"], i));
+                        println!("  [{}]", row(&s.stiffness, i));
                     }
                     println!("shoulder joint damping J_h^T B J_h (N m s/rad):");
                     for i in 0..3 {
-                        println!("  [{}]", row(&s["damping"], i));
+                        println!("  [{}]", row(&s.damping, i));
                     }
                 }
             }
@@ -341,25 +346,27 @@ pub fn run(method: Method) -> CliResult {
                 tolerance: args.tolerance,
                 ..EmgParams::default()
             };
-            let result = estimate_cocontraction(&rec, &mvc, &params, &emg)?;
+            let doc = Document::new(Estimate::Cocontraction(estimate_cocontraction(
+                &rec, &mvc, &params, &emg,
+            )?));
             if let Some(path) = &args.report {
-                crate::report::write(&[serde_json::to_value(&result)?], path)?;
+                crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
             }
+            let Estimate::Cocontraction(result) = &doc.estimate else {
+                unreachable!("made above")
+            };
             if args.json {
-                println!("{}", serde_json::to_string_pretty(&result)?);
+                println!("{}", doc.to_json_pretty());
             } else {
-                print!("{}", table::cocontraction_text(&result));
+                print!("{}", table::cocontraction_text(result));
             }
             Ok(())
         }
     }
 }
 
-/// Seed 004's 3-DoF shoulder: the hand estimate mapped to joint space.
-fn shoulder_impedance(
-    v: &[f64],
-    est: &limpid_ident::LinearEstimate,
-) -> CliResult<serde_json::Value> {
+/// `--shoulder L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION`.
+fn shoulder_posture(v: &[f64]) -> CliResult<ShoulderPosture> {
     let [l1, l2, elbow, flex, abd, rot] = v else {
         return Err(limpid_core::Error::invalid(
             "--shoulder",
@@ -370,28 +377,10 @@ fn shoulder_impedance(
         )
         .into());
     };
-    if est.coordinates.len() != 3 {
-        return Err(
-            limpid_core::Error::invalid("--shoulder", "needs a 3-D estimate (x, y, z)").into(),
-        );
-    }
-    let s = limpid_core::arm::Shoulder {
+    Ok(ShoulderPosture {
         upper_arm_m: *l1,
         forearm_m: *l2,
-        elbow_rad: elbow.to_radians(),
-    };
-    let q = [flex.to_radians(), abd.to_radians(), rot.to_radians()];
-    let m3 = |m: &Vec<Vec<f64>>| nalgebra::Matrix3::from_fn(|i, j| m[i][j]);
-    let rows = |m: &nalgebra::Matrix3<f64>| {
-        (0..3)
-            .map(|i| (0..3).map(|j| m[(i, j)]).collect::<Vec<f64>>())
-            .collect::<Vec<_>>()
-    };
-    Ok(serde_json::json!({
-        "angles_deg": [flex, abd, rot],
-        "jacobian": rows(&s.jacobian(q)),
-        "stiffness": rows(&s.joint_impedance(&m3(&est.stiffness), q)),
-        "damping": rows(&s.joint_impedance(&m3(&est.damping), q)),
-        "note": "J_h^T Z J_h about the posture; the static-load term dJ^T/dq F is not included",
-    }))
+        elbow_deg: *elbow,
+        angles_deg: [*flex, *abd, *rot],
+    })
 }

@@ -4,9 +4,10 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::Args;
+use limpid_analysis::result::{Document, Estimate};
+use limpid_core::Matrix;
 use limpid_ident::planar::{
-    fit_planar, leave_one_out_vaf, prepare_planar, window_sweep, Arm, PlanarData, PlanarEstimate,
-    PlanarPrepare,
+    estimate_planar, prepare_planar, window_sweep, Arm, PlanarData, PlanarEstimate, PlanarPrepare,
 };
 
 use crate::table::num;
@@ -84,8 +85,8 @@ impl ArmArgs {
                     shoulder,
                 },
                 cutoff_hz: self.cutoff,
-                order: 4,
                 elbow_positive: !self.elbow_negative,
+                ..PlanarPrepare::new(l[0], l[1])
             },
         )?;
         Ok((data, xi))
@@ -143,20 +144,21 @@ fn window_samples(data: &PlanarData, ms: Option<f64>) -> CliResult<usize> {
     }
 }
 
-fn m2(m: &[[f64; 2]; 2], se: &[[f64; 2]; 2]) -> String {
+fn m2(m: &Matrix, se: &Matrix) -> String {
     let mut s = String::new();
     for i in 0..2 {
         let _ = writeln!(
             s,
             "    {:>20}{:>20}",
-            format!("{} ± {}", num(m[i][0]), num(se[i][0])),
-            format!("{} ± {}", num(m[i][1]), num(se[i][1]))
+            format!("{} ± {}", num(m[(i, 0)]), num(se[(i, 0)])),
+            format!("{} ± {}", num(m[(i, 1)]), num(se[(i, 1)]))
         );
     }
     s
 }
 
-fn text(e: &PlanarEstimate, data: &PlanarData, loo: [f64; 2]) -> String {
+fn text(e: &PlanarEstimate, data: &PlanarData) -> String {
+    let loo = e.leave_one_out_vaf.unwrap_or([f64::NAN; 2]);
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -207,10 +209,10 @@ fn text(e: &PlanarEstimate, data: &PlanarData, loo: [f64; 2]) -> String {
     let _ = writeln!(
         s,
         "end-point stiffness J^-T K J^-1 (N/m): [[{}, {}], [{}, {}]]",
-        num(kx[0][0]),
-        num(kx[0][1]),
-        num(kx[1][0]),
-        num(kx[1][1])
+        num(kx[(0, 0)]),
+        num(kx[(0, 1)]),
+        num(kx[(1, 0)]),
+        num(kx[(1, 1)])
     );
     let c = &e.criteria;
     let _ = writeln!(
@@ -233,32 +235,36 @@ fn text(e: &PlanarEstimate, data: &PlanarData, loo: [f64; 2]) -> String {
 pub fn run_estimate(args: PlanarArgs) -> CliResult {
     let (data, xi) = args.arm.load()?;
     let window = window_samples(&data, args.window_ms)?;
-    let all: Vec<usize> = (0..data.trials.len()).collect();
-    let est = fit_planar(&data, window, xi, &all)?;
-    let loo = leave_one_out_vaf(&data, window, xi)?;
-    let mut v = serde_json::to_value(&est)?;
-    v["leave_one_out_vaf"] = serde_json::json!(loo);
+    let doc = Document::new(Estimate::Planar(estimate_planar(&data, window, xi)?));
     if let Some(path) = &args.report {
-        crate::report::write(&[v.clone()], path)?;
+        crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
     }
+    let Estimate::Planar(est) = &doc.estimate else {
+        unreachable!("made above")
+    };
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!("{}", doc.to_json_pretty());
     } else {
-        print!("{}", text(&est, &data, loo));
+        print!("{}", text(est, &data));
     }
     Ok(())
 }
 
 pub fn run_sweep(args: SweepArgs) -> CliResult {
     let (data, xi) = args.arm.load()?;
-    let sweep = window_sweep(&data, args.from, args.to, args.step, xi)?;
+    let doc = Document::new(Estimate::WindowSweep(window_sweep(
+        &data, args.from, args.to, args.step, xi,
+    )?));
     if let Some(path) = &args.report {
-        crate::report::write(&[serde_json::to_value(&sweep)?], path)?;
+        crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&sweep)?);
+        println!("{}", doc.to_json_pretty());
         return Ok(());
     }
+    let Estimate::WindowSweep(sweep) = &doc.estimate else {
+        unreachable!("made above")
+    };
     let mut s = String::from("t_obs_ms,cond_w,cond_w_scaled,xi1,xi2,xi3,k11,k12,k21,k22,d11,d12,d21,d22,k_eig_min,d_eig_min,k_sym_ratio,d_sym_ratio,vaf1,vaf2,trusted\n");
     for r in &sweep.rows {
         let e = &r.estimate;
@@ -268,8 +274,8 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
             "{},{:.4e},{:.4e},{:.5},{:.5},{:.5},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.5},{:.4},{:.5},{:.4},{:.4},{:.2},{:.2},{}",
             r.observation_window_ms, c.condition_number, c.condition_number_scaled,
             e.inertial_parameters[0], e.inertial_parameters[1], e.inertial_parameters[2],
-            e.stiffness[0][0], e.stiffness[0][1], e.stiffness[1][0], e.stiffness[1][1],
-            e.damping[0][0], e.damping[0][1], e.damping[1][0], e.damping[1][1],
+            e.stiffness[(0, 0)], e.stiffness[(0, 1)], e.stiffness[(1, 0)], e.stiffness[(1, 1)],
+            e.damping[(0, 0)], e.damping[(0, 1)], e.damping[(1, 0)], e.damping[(1, 1)],
             c.stiffness_eigenvalues[1], c.damping_eigenvalues[1], c.stiffness_symmetry_ratio, c.damping_symmetry_ratio,
             e.fit.vaf[0], e.fit.vaf[1], c.trusted
         );
@@ -294,10 +300,10 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
             "{:>8} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8.3}  {}",
             num(r.observation_window_ms),
             num(c.condition_number_scaled),
-            num(e.stiffness[0][0]),
-            num(e.stiffness[1][1]),
-            num(e.damping[0][0]),
-            num(e.damping[1][1]),
+            num(e.stiffness[(0, 0)]),
+            num(e.stiffness[(1, 1)]),
+            num(e.damping[(0, 0)]),
+            num(e.damping[(1, 1)]),
             num(e.inertial_parameters[0]),
             num(c.stiffness_eigenvalues[1]),
             c.stiffness_symmetry_ratio,

@@ -4,12 +4,9 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
 use limpid_lab::design::{check, Design, DesignReport, PlanarDesign, StochasticDesign};
-use limpid_lab::planar::simulate_planar;
+use limpid_lab::export::placed_robot;
 use limpid_lab::protocol::Protocol;
-use limpid_lab::robot::Robot;
 use limpid_lab::session::{simulate_design, RigController, SubjectText};
-use limpid_lab::{seed000_subject1, simulate_centre_out, NoiseModel};
-use nalgebra::Matrix3;
 
 use crate::table::num;
 use crate::CliResult;
@@ -84,15 +81,6 @@ fn read_design(path: &Path) -> CliResult<(Design, DesignReport)> {
     Ok((d, report))
 }
 
-/// The robot of a centre-out protocol, placed as the protocol says.
-fn placed_robot(name: &str, p: &Protocol) -> CliResult<Robot> {
-    let robot = Robot::by_name(name)?;
-    Ok(match p.robot_base {
-        Some(b) => robot.placed(b.xyz_m, b.rpy_rad),
-        None => robot,
-    })
-}
-
 pub fn run(cmd: ProtocolCommand) -> CliResult {
     match cmd {
         ProtocolCommand::New {
@@ -123,7 +111,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
         },
         ProtocolCommand::Check { protocol, json } => {
             let (d, report) = read_design(&protocol)?;
-            let predicted = predicted_condition(&d)?;
+            let predicted = limpid_analysis::protocol::predicted_condition(&d)?;
             if json {
                 let mut v = serde_json::to_value(&report)?;
                 v["predicted_condition_number"] = serde_json::json!(predicted);
@@ -195,133 +183,16 @@ fn print_ratios(c: &[f64; 3]) {
     );
 }
 
-/// The condition number the estimator meets when the protocol is run on a
-/// nominal subject without noise: the scaled 27-parameter regressor of seed 000
-/// on the first start point (seed 000 Table I posture 1), or the planar
-/// regressor W of seed 003 eq. (19) with unit-RMS columns on the seed 003
-/// subject. None for stochastic protocols (their conditioning is the input
-/// coherence, reported above).
-fn predicted_condition(d: &Design) -> CliResult<Option<f64>> {
-    match d {
-        Design::CentreOut(p) => {
-            let mut posture = seed000_subject1().remove(0);
-            posture.start = p.start_points()[0];
-            let rec = simulate_centre_out(&posture, &p.centre_out(), &NoiseModel::none(), 1)?;
-            let prepared = limpid_ident::prepare(&rec, &limpid_ident::PrepareParams::default())?;
-            let est = limpid_ident::fit_linear(&prepared, &limpid_ident::LinearParams::default())?;
-            Ok(Some(est.condition_number))
-        }
-        Design::Planar(p) => {
-            let subject = p.nominal_subject();
-            let rec = simulate_planar(&subject, &p.simulation(), 0.0, 0.0, p.seed)?;
-            let data = limpid_ident::planar::prepare_planar(&rec, &planar_prepare(p))?;
-            let all: Vec<usize> = (0..data.trials.len()).collect();
-            let est = limpid_ident::planar::fit_planar(&data, usize::MAX, Some(subject.xi), &all)?;
-            Ok(Some(est.criteria.condition_number_scaled))
-        }
-        Design::Stochastic(_) => Ok(None),
-    }
-}
-
-fn planar_prepare(p: &PlanarDesign) -> limpid_ident::planar::PlanarPrepare {
-    limpid_ident::planar::PlanarPrepare {
-        arm: limpid_ident::planar::Arm {
-            l1: p.link_lengths_m[0],
-            l2: p.link_lengths_m[1],
-            shoulder: [0.0, 0.0],
-        },
-        cutoff_hz: None,
-        order: 4,
-        elbow_positive: true,
-    }
-}
-
-/// Every phase of every trial (rest, centre-out, hold, return by the same
-/// profile reversed, relax), tracked by the robot with the orientation of its
-/// home pose held (seeds 000, 001).
+/// Write a centre-out schedule (`limpid_lab::export`) and say so.
 fn export(p: &Protocol, robot: &str, output: &Path) -> CliResult {
     let robot = placed_robot(robot, p)?;
-    let home = robot.home();
-    let orientation: Matrix3<f64> = robot.fk(&home).fixed_view::<3, 3>(0, 0).into();
-    let fs = p.sample_rate_hz;
-    let ph = &p.phases;
-    let total_s = ph.rest_s + ph.centre_out_s + ph.hold_s + ph.return_s + ph.relax_s;
-    let per = (total_s * fs).round() as usize;
-    let dirs = p.directions();
-    let n = robot.dof();
-    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 6 + n];
-    let mut sample = 0usize;
-    for (si, start) in p.start_points().iter().enumerate() {
-        let mut q = robot
-            .reach(start, &orientation, &home)
-            .map_err(|e| format!("{}: start point {}: {e}", robot.name, si + 1))?;
-        for (ti, dir) in dirs.iter().enumerate() {
-            let positions: Vec<nalgebra::Vector3<f64>> = (0..per)
-                .map(|i| {
-                    let t = i as f64 / fs - ph.rest_s;
-                    let out = ph.profile.eval(t, ph.centre_out_s).0;
-                    let back = ph
-                        .profile
-                        .eval(t - ph.centre_out_s - ph.hold_s, ph.return_s)
-                        .0;
-                    start + dir * (p.targets.radius_m * (out - back))
-                })
-                .collect();
-            let joints = robot
-                .track(&positions, &orientation, &q)
-                .map_err(|e| format!("start point {}, target {}: {e}", si + 1, ti + 1))?;
-            robot
-                .check_joint_trajectory(&joints, 1.0 / fs)
-                .map_err(|e| {
-                    format!(
-                        "{}: start point {}, target {}: {e}",
-                        robot.name,
-                        si + 1,
-                        ti + 1
-                    )
-                })?;
-            for (x, qk) in positions.iter().zip(&joints) {
-                cols[0].push(sample as f64 / fs);
-                cols[1].push((si + 1) as f64);
-                cols[2].push((ti + 1) as f64);
-                for a in 0..3 {
-                    cols[3 + a].push(x[a]);
-                }
-                for (j, v) in qk.iter().enumerate() {
-                    cols[6 + j].push(*v);
-                }
-                sample += 1;
-            }
-            q = joints.last().cloned().unwrap_or(q);
-            // seed 001: a longer rest between sets, holding the start point
-            let set = p.phases.trials_per_set;
-            if set > 0 && (ti + 1) % set == 0 && ti + 1 < dirs.len() {
-                for _ in 0..(p.phases.set_rest_s * fs).round() as usize {
-                    cols[0].push(sample as f64 / fs);
-                    cols[1].push((si + 1) as f64);
-                    cols[2].push(0.0);
-                    for a in 0..3 {
-                        cols[3 + a].push(start[a]);
-                    }
-                    for (j, v) in q.iter().enumerate() {
-                        cols[6 + j].push(*v);
-                    }
-                    sample += 1;
-                }
-            }
-        }
-    }
-    let mut names: Vec<String> = ["t", "start_point", "trial", "x", "y", "z"]
-        .map(String::from)
-        .to_vec();
-    names.extend((1..=n).map(|i| format!("robot_q{i}")));
-    let rec = limpid_core::Recording::new(output, names, cols, 2)?;
+    let rec = limpid_lab::export::centre_out_schedule(p, &robot, output)?;
     limpid_io::write_recording(&rec, output)?;
     println!(
         "wrote {}: {} samples of end-effector positions and {} joint angles ({})",
         output.display(),
         rec.len(),
-        n,
+        robot.dof(),
         robot.name
     );
     Ok(())
@@ -336,39 +207,12 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}{suffix}.{ext}"))
 }
 
-/// Seed 003's session: the posture held through random waits, each followed by
-/// a quintic displacement held for `after_s`; `trial` is 0 during waits.
+/// Write seed 003's planar schedule and say so.
 fn export_planar(p: &PlanarDesign, output: &Path) -> CliResult {
-    let fs = p.sample_rate_hz;
+    let rec = limpid_lab::export::planar_schedule(p, output)?;
+    limpid_io::write_recording(&rec, output)?;
     let schedule = p.schedule();
     let end = schedule.last().map(|s| s.0 + p.after_s).unwrap_or(0.0);
-    let n = (end * fs).round() as usize + 1;
-    let mut cols: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(n)).collect();
-    let mut next = 0;
-    for k in 0..n {
-        let t = k as f64 / fs;
-        while next + 1 < schedule.len() && t >= schedule[next + 1].0 - 1e-12 {
-            next += 1;
-        }
-        let (onset, d) = schedule[next];
-        let in_trial = t >= onset - 1e-12 && t < onset + p.after_s;
-        let s = if t >= onset - 1e-12 {
-            limpid_lab::Profile::Quintic
-                .eval(t - onset, p.interpolation_s)
-                .0
-        } else {
-            0.0
-        };
-        let s = if in_trial { s } else { 0.0 };
-        let dq = p.displacements_rad[d];
-        cols[0].push(t);
-        cols[1].push(if in_trial { (next + 1) as f64 } else { 0.0 });
-        cols[2].push(p.posture_rad[0] + dq[0] * s);
-        cols[3].push(p.posture_rad[1] + dq[1] * s);
-    }
-    let names = ["t", "trial", "q1", "q2"].map(String::from).to_vec();
-    let rec = limpid_core::Recording::new(output, names, cols, 2)?;
-    limpid_io::write_recording(&rec, output)?;
     println!(
         "wrote {}: {} samples ({:.1} s) of joint angles for {} perturbations",
         output.display(),
@@ -379,15 +223,9 @@ fn export_planar(p: &PlanarDesign, output: &Path) -> CliResult {
     Ok(())
 }
 
-/// Seed 004's commanded inputs, one column per channel.
+/// Write seed 004's commanded inputs and say so.
 fn export_stochastic(p: &StochasticDesign, output: &Path) -> CliResult {
-    let u = p.inputs()?;
-    let fs = p.sample_rate_hz;
-    let mut cols = vec![(0..u[0].len()).map(|k| k as f64 / fs).collect::<Vec<f64>>()];
-    cols.extend(u);
-    let mut names = vec!["t".to_string()];
-    names.extend(p.channels.iter().cloned());
-    let rec = limpid_core::Recording::new(output, names, cols, 2)?;
+    let rec = limpid_lab::export::stochastic_schedule(p, output)?;
     limpid_io::write_recording(&rec, output)?;
     println!(
         "wrote {}: {} samples of {} input channels",

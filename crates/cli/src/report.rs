@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use serde_json::Value;
+use limpid_analysis::result::{Document, Estimate};
 
 use crate::CliResult;
 
@@ -22,15 +22,15 @@ pub struct ReportArgs {
 }
 
 /// Write the report of named results; returns the report for `--figures`.
-fn write_named(inputs: &[(String, Value)], path: &Path) -> CliResult<limpid_report::Report> {
-    let report = limpid_report::build(inputs)?;
+fn write_named(inputs: &[(String, Estimate)], path: &Path) -> CliResult<limpid_report::Report> {
+    let report = limpid_report::build(inputs);
     limpid_core::files::write_file(path, limpid_report::to_html(&report).as_bytes())?;
     Ok(report)
 }
 
 /// `--report FILE` of the other commands: the results of this run.
-pub fn write(results: &[Value], path: &Path) -> CliResult {
-    let named: Vec<(String, Value)> = results
+pub fn write(results: &[Estimate], path: &Path) -> CliResult {
+    let named: Vec<(String, Estimate)> = results
         .iter()
         .enumerate()
         .map(|(i, v)| (format!("result {}", i + 1), v.clone()))
@@ -44,15 +44,9 @@ pub fn run(args: ReportArgs) -> CliResult {
     let mut inputs = Vec::new();
     for p in &args.results {
         let text = limpid_core::files::read_text(p)?;
-        let v: Value = serde_json::from_str(&text).map_err(|e| {
-            format!(
-                "{}: line {}, column {}: not JSON ({e})",
-                p.display(),
-                e.line(),
-                e.column()
-            )
-        })?;
-        inputs.push((p.display().to_string(), v));
+        let name = p.display().to_string();
+        let doc = Document::from_json(&name, &text)?;
+        inputs.push((name, doc.estimate));
     }
     let report = write_named(&inputs, &args.output)?;
     println!("wrote {}", args.output.display());

@@ -4,8 +4,11 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
+use limpid_analysis::result::{Document, Estimate};
 use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch, Window};
-use limpid_ident::stochastic::{accuracy, default_welch, estimate_stochastic, StochasticParams};
+use limpid_ident::stochastic::{
+    accuracy, default_welch, estimate_stochastic, ExpectedModel, StochasticParams,
+};
 
 use crate::table::num;
 use crate::CliResult;
@@ -89,28 +92,6 @@ pub struct SpectraArgs {
     pub json: bool,
 }
 
-fn matrix_of(v: &serde_json::Value, key: &str, path: &std::path::Path) -> CliResult<Vec<Vec<f64>>> {
-    let bad = || {
-        format!(
-            "{}: key {key}: expected a square matrix of numbers",
-            path.display()
-        )
-    };
-    v[key]
-        .as_array()
-        .ok_or_else(bad)?
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .ok_or_else(bad)?
-                .iter()
-                .map(|x| x.as_f64().ok_or_else(bad))
-                .collect::<Result<Vec<f64>, String>>()
-        })
-        .collect::<Result<_, String>>()
-        .map_err(Into::into)
-}
-
 pub fn run_estimate(args: StochasticArgs) -> CliResult {
     let rec = crate::read_recording(&args.recording)?;
     let band = match args.band.as_slice() {
@@ -125,38 +106,21 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         welch: Some(args.welch.welch(rec.len(), rec.sample_rate())),
         band_hz: band,
     };
-    let est = estimate_stochastic(&rec, &params)?;
-    let expected = match &args.expected {
-        Some(p) => {
-            let text = limpid_core::files::read_text(p)?;
-            let v: serde_json::Value =
-                serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))?;
-            let (m, b, k) = (
-                matrix_of(&v, "inertia", p)?,
-                matrix_of(&v, "damping", p)?,
-                matrix_of(&v, "stiffness", p)?,
-            );
-            let acc = accuracy(&est, &m, &b, &k, band);
-            Some((
-                acc.0,
-                acc.1,
-                acc.2,
-                serde_json::json!({"inertia": v["inertia"], "damping": v["damping"], "stiffness": v["stiffness"]}),
-            ))
-        }
-        None => None,
-    };
-    let mut v = serde_json::to_value(&est)?;
-    if let Some((phi_t, phi, rel, model)) = &expected {
-        v["accuracy"] = serde_json::json!({"phi_t": phi_t, "phi_ij": phi, "mean_relative_error": rel, "expected": model});
+    let mut est = estimate_stochastic(&rec, &params)?;
+    if let Some(p) = &args.expected {
+        est.accuracy = Some(accuracy(&est, &ExpectedModel::read(p)?, band)?);
     }
+    let doc = Document::new(Estimate::Stochastic(est));
     if let Some(path) = &args.report {
-        crate::report::write(&[v.clone()], path)?;
+        crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string(&v)?);
+        println!("{}", doc.to_json());
         return Ok(());
     }
+    let Estimate::Stochastic(est) = &doc.estimate else {
+        unreachable!("made above")
+    };
     let c = &est.criteria;
     let coords = &est.coordinates;
     println!("limpid estimate stochastic: {}", args.recording.display());
@@ -174,28 +138,33 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         ("Inertia M", &est.inertia, &est.standard_errors.inertia),
     ] {
         println!("{title} (SI, per coordinate pair)");
-        for (i, row) in m.iter().enumerate() {
-            let cells: String = row
-                .iter()
-                .zip(&se[i])
-                .map(|(v, s)| format!("{:>24}", format!("{} ± {}", num(*v), num(*s))))
+        for (i, name) in coords.iter().enumerate().take(m.nrows()) {
+            let cells: String = (0..m.ncols())
+                .map(|j| {
+                    format!(
+                        "{:>24}",
+                        format!("{} ± {}", num(m[(i, j)]), num(se[(i, j)]))
+                    )
+                })
                 .collect();
-            println!("  {:<6}{cells}", coords[i]);
+            println!("  {name:<6}{cells}");
         }
     }
     println!(
         "quality: multiple coherence mean {:.3}, min {:.3} in the band; input coherence max {:.3}; fit VAF {:.2} %; phi_T(Z vs fit) {}",
         c.mean_multiple_coherence, c.min_multiple_coherence, c.max_input_coherence, c.fit_vaf, num(c.phi_t_vs_fit)
     );
-    if let Some((phi_t, phi, rel, _)) = expected {
-        let cells: Vec<String> = phi
+    if let Some(a) = &est.accuracy {
+        let cells: Vec<String> = a
+            .phi_ij
+            .rows()
             .iter()
             .map(|r| r.iter().map(|v| num(*v)).collect::<Vec<_>>().join(" "))
             .collect();
         println!(
             "accuracy vs expected model: phi_T {} (mean relative error {:.2} %), phi_ij [{}]",
-            num(phi_t),
-            100.0 * rel,
+            num(a.phi_t),
+            100.0 * a.mean_relative_error,
             cells.join("; ")
         );
     }

@@ -79,9 +79,13 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 );
             }
             let files = write_tables(&result, &args.out)?;
+            let result = limpid_analysis::result::Estimate::Study(result);
             if let Some(path) = &args.report {
-                crate::report::write(&[serde_json::to_value(&result)?], path)?;
+                crate::report::write(std::slice::from_ref(&result), path)?;
             }
+            let limpid_analysis::result::Estimate::Study(result) = result else {
+                unreachable!("made above")
+            };
             println!(
                 "study {}: {ok} of {} recordings processed, {} configurations",
                 result.name,

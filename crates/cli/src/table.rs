@@ -3,8 +3,8 @@
 use std::fmt::Write;
 
 use limpid_analysis::cocontraction::CocontractionResult;
-use limpid_analysis::report::LinearResult;
-use limpid_analysis::Mat;
+use limpid_analysis::linear::LinearResult;
+use limpid_analysis::Matrix;
 
 /// A number with 4 significant digits, without exponent for the usual range.
 pub fn num(v: f64) -> String {
@@ -19,17 +19,17 @@ pub fn num(v: f64) -> String {
     }
 }
 
-fn matrix_block(out: &mut String, title: &str, m: &Mat, se: &Mat, coords: &[String]) {
+fn matrix_block(out: &mut String, title: &str, m: &Matrix, se: &Matrix, coords: &[String]) {
     let _ = writeln!(out, "{title}");
     let _ = write!(out, "      ");
     for c in coords {
         let _ = write!(out, "{c:>22}");
     }
     out.push('\n');
-    for (i, row) in m.iter().enumerate() {
+    for i in 0..m.nrows() {
         let _ = write!(out, "  {:<4}", coords[i]);
-        for (j, v) in row.iter().enumerate() {
-            let cell = format!("{} ± {}", num(*v), num(se[i][j]));
+        for j in 0..m.ncols() {
+            let cell = format!("{} ± {}", num(m[(i, j)]), num(se[(i, j)]));
             let _ = write!(out, "{cell:>22}");
         }
         out.push('\n');
@@ -109,9 +109,9 @@ pub fn linear_text(r: &LinearResult) -> String {
             "Symmetric parts (seed 000 Table I layout): K(s) | B(s) | M(s)"
         );
         for i in 0..coords.len() {
-            let row = |m: &Mat| {
-                m[i].iter()
-                    .map(|v| format!("{:>9}", num(*v)))
+            let row = |m: &Matrix| {
+                (0..m.ncols())
+                    .map(|j| format!("{:>9}", num(m[(i, j)])))
                     .collect::<String>()
             };
             let _ = writeln!(
@@ -227,10 +227,10 @@ pub fn cocontraction_text(r: &CocontractionResult) -> String {
     );
     for l in &r.levels {
         let k = &l.stiffness;
-        let n = k.len();
+        let n = k.nrows();
         let get = |i: usize, j: usize| {
             if i < n && j < n {
-                num(k[i][j])
+                num(k[(i, j)])
             } else {
                 "-".into()
             }

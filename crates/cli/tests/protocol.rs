@@ -431,7 +431,7 @@ fn subject_files_of_every_kind_are_simulated_and_estimated_back() {
     let truth = read_json(&dir.path().join("centre_S4.truth.json"));
     assert_eq!(
         mat(&truth["stiffness"]),
-        k_given.map(|r| r.to_vec()).to_vec()
+        limpid_core::Matrix::from_rows(&k_given.map(|r| r.to_vec())).unwrap()
     );
     let est = json(&[
         "estimate",

@@ -87,7 +87,7 @@ fn stochastic_report_figure_data_matches_its_snapshot() {
         example(&format!("{SA3}.truth.json")).to_str().unwrap(),
         "--json",
     ]);
-    let report = limpid_report::build(&[("ex_sa3".into(), est)]).unwrap();
+    let report = limpid_report::build(&[("ex_sa3".into(), document(&est))]);
     let summary = figure_summary(&report);
     // 3 x 3 elements x (magnitude, phase), the multiple coherence, 6 partial coherences
     assert_eq!(summary.as_array().unwrap().len(), 18 + 1 + 6);
@@ -254,7 +254,7 @@ fn cocontraction_report_has_per_level_ellipsoids_and_tables() {
         example(&format!("{case}.mvc.csv")).to_str().unwrap(),
         "--json",
     ]);
-    let report = limpid_report::build(&[("ex_config4".into(), est)]).unwrap();
+    let report = limpid_report::build(&[("ex_config4".into(), document(&est))]);
     let s = &report.sections[0];
     // 4 levels side by side, stiffness, damping and inertia each
     assert_eq!(s.ellipsoids.len(), 12);
@@ -281,7 +281,7 @@ fn linear_report_draws_measured_against_predicted_force() {
             .unwrap(),
         "--json",
     ]);
-    let report = limpid_report::build(&[("ex_cubic".into(), est.clone())]).unwrap();
+    let report = limpid_report::build(&[("ex_cubic".into(), document(&est))]);
     let figs = &report.sections[0].figures;
     let ids: Vec<&str> = figs.iter().map(|f| f.id.as_str()).collect();
     assert_eq!(ids, ["fit-x", "fit-y", "fit-z"]);
@@ -339,7 +339,7 @@ fn study_run_writes_a_report_with_every_configuration() {
     let result = read_json(&dir.path().join("out").join("study.json"));
     let row = &result["levels"][5];
     let (config, level) = (row["configuration"].clone(), row["level"].as_f64().unwrap());
-    let mut sum = vec![vec![0.0; 3]; 3];
+    let mut sum = nalgebra::DMatrix::<f64>::zeros(3, 3);
     let mut subjects = 0.0;
     for r in result["recordings"].as_array().unwrap() {
         if r["configuration"] != config {
@@ -347,17 +347,14 @@ fn study_run_writes_a_report_with_every_configuration() {
         }
         for l in r["result"]["levels"].as_array().unwrap() {
             if l["level"].as_f64() == Some(level) {
-                let k = mat(&l["stiffness"]);
-                for (a, b) in sum.iter_mut().flatten().zip(k.iter().flatten()) {
-                    *a += b;
-                }
+                sum += &mat(&l["stiffness"]).0;
                 subjects += 1.0;
             }
         }
     }
     assert_eq!(subjects, row["subjects"].as_f64().unwrap());
     let mean = mat(&row["stiffness"]);
-    for (m, s) in mean.iter().flatten().zip(sum.iter().flatten()) {
+    for (m, s) in mean.iter().zip(sum.iter()) {
         assert!((m - s / subjects).abs() < 1e-9 * s.abs().max(1.0));
     }
     let eig: f64 = row["ellipsoid"]["eigenvalues"]
@@ -366,12 +363,12 @@ fn study_run_writes_a_report_with_every_configuration() {
         .iter()
         .map(|v| v.as_f64().unwrap())
         .sum();
-    let trace = mean[0][0] + mean[1][1] + mean[2][2];
+    let trace = mean.trace();
     assert!(
         (eig - trace).abs() < 1e-9 * trace,
         "eigenvalues sum {eig}, trace {trace}"
     );
-    let report = limpid_report::build(&[("study".into(), result)]).unwrap();
+    let report = limpid_report::build(&[("study".into(), document(&result))]);
     let views = &report.sections[0].ellipsoids;
     assert_eq!(views.len(), 28);
     assert!(views.iter().all(|e| e.kind == "stiffness"));

@@ -189,6 +189,24 @@ impl Error {
     }
 }
 
+/// A number as a short string for people: four decimals without trailing
+/// zeros, or three significant decimals in scientific notation outside
+/// 1e-3..1e5; a NaN or infinity is written "n/a" (never passed off as a number).
+pub fn short_number(v: f64) -> String {
+    if !v.is_finite() {
+        return "n/a".into();
+    }
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e5).contains(&a) {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,16 +6,21 @@
 //! `M x'' + B x' + K (x - x_eq) = f`; matrices are row-major `[row][col]`.
 
 pub mod arm;
+pub mod criteria;
 pub mod error;
 pub mod files;
 pub mod frame;
 pub mod linalg;
+pub mod matrix;
 pub mod payload;
 pub mod recording;
 pub mod trial;
+pub mod warning;
 
-pub use error::{display_round, Error, Result};
+pub use error::{display_round, short_number, Error, Result};
 pub use frame::{FrameTransform, GravityCompensation};
+pub use matrix::Matrix;
 pub use payload::PayloadCalibration;
 pub use recording::Recording;
 pub use trial::Window;
+pub use warning::{Warning, WarningCode};

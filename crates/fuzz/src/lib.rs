@@ -131,23 +131,14 @@ fn recording(name: &str, bytes: &[u8]) -> Outcome {
         if let Ok(est) = limpid_ident::fit_linear(&prepared, &limpid_ident::LinearParams::default())
         {
             any = true;
-            let result = limpid_analysis::report::linear_result(&est, &prepared);
+            let result = limpid_analysis::linear::linear_result(&est, &prepared);
             findings.extend(check("linear", &result));
         }
     }
     // planar arm (seed 003)
     if rec.has("q2") || (rec.has("x") && rec.has("y") && !rec.has("z")) {
-        use limpid_ident::planar::{fit_planar, prepare_planar, Arm, PlanarPrepare};
-        let setup = PlanarPrepare {
-            arm: Arm {
-                l1: 0.30,
-                l2: 0.33,
-                shoulder: [0.0, 0.0],
-            },
-            cutoff_hz: None,
-            order: 4,
-            elbow_positive: true,
-        };
+        use limpid_ident::planar::{fit_planar, prepare_planar, PlanarPrepare};
+        let setup = PlanarPrepare::new(0.30, 0.33);
         if let Ok(data) = prepare_planar(&rec, &setup) {
             let all: Vec<usize> = (0..data.trials.len()).collect();
             if let Ok(est) = fit_planar(&data, usize::MAX, None, &all) {

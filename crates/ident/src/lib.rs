@@ -4,9 +4,13 @@
 //!   seed 001 "Data Processing").
 //! - [`linear`]: the linear model `M x'' + B x' + K (x - x_eq) = f` by least
 //!   squares (seed 000 eq. (3)-(8), seed 001 eq. (3)-(10)).
+//! - [`planar`]: the planar 2-link arm in joint space (seed 003).
+//! - [`stochastic`]: Z(f) = T R^-1 from Welch spectra (seed 004).
+//! - [`online`]: recursive least squares for the live display.
 
 pub mod linear;
 pub mod lsq;
+pub mod online;
 pub mod planar;
 pub mod prepare;
 pub mod stochastic;

@@ -23,11 +23,12 @@
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-use serde::Serialize;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 use crate::lsq::{merge, triangle};
 use crate::prepare::Prepared;
-use limpid_core::{Error, Result};
+use limpid_core::{Error, Result, Warning, WarningCode};
 
 /// Settings of the linear estimator.
 ///
@@ -50,11 +51,10 @@ impl Default for LinearParams {
     }
 }
 
-/// Matrices as row-major nested vectors (`[row][col]`), SI units.
-pub type Mat = Vec<Vec<f64>>;
+pub use limpid_core::Matrix;
 
 /// Goodness of fit per force component.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct FitQuality {
     /// Correlation coefficient of measured and predicted force.
     pub r: Vec<f64>,
@@ -69,7 +69,7 @@ pub struct FitQuality {
 /// Measured against predicted force (after preparation: offsets removed,
 /// filtered) over the first windows, at most [`TRACE_POINTS`] points per
 /// coordinate (every k-th sample).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct FitTraces {
     /// Time (s) along the concatenated windows.
     pub time: Vec<f64>,
@@ -82,7 +82,7 @@ pub struct FitTraces {
 pub const TRACE_POINTS: usize = 1500;
 
 /// Whether each matrix is identified from the data (every diagonal element >= ratio x SE).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Identifiable {
     pub inertia: bool,
     pub damping: bool,
@@ -90,12 +90,12 @@ pub struct Identifiable {
 }
 
 /// The linear estimate with its quality.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct LinearEstimate {
     pub coordinates: Vec<String>,
-    pub inertia: Mat,
-    pub damping: Mat,
-    pub stiffness: Mat,
+    pub inertia: Matrix,
+    pub damping: Matrix,
+    pub stiffness: Matrix,
     /// Equilibrium position (absolute coordinates), when fitted and K is invertible.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub equilibrium: Option<Vec<f64>>,
@@ -119,15 +119,15 @@ pub struct LinearEstimate {
     pub regressor_reliability: Vec<[f64; 3]>,
     /// How the standard errors were obtained.
     pub standard_error_method: String,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 /// Standard errors of the estimate.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct StandardErrors {
-    pub inertia: Mat,
-    pub damping: Mat,
-    pub stiffness: Mat,
+    pub inertia: Matrix,
+    pub damping: Matrix,
+    pub stiffness: Matrix,
     /// Of the constant term (N), when fitted.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub constant: Option<Vec<f64>>,
@@ -459,20 +459,18 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             "analytic, residual variance inflated by its autocorrelation".to_string(),
         )
     };
-    let block = |m_: &DMatrix<f64>, b: usize| -> Mat {
-        (0..n)
-            .map(|row| (0..n).map(|col| m_[(b * n + col, row)]).collect())
-            .collect()
+    let block = |m_: &DMatrix<f64>, b: usize| {
+        Matrix(DMatrix::from_fn(n, n, |row, col| m_[(b * n + col, row)]))
     };
     let inertia = block(&theta, 0);
     let damping = block(&theta, 1);
     let stiffness = block(&theta, 2);
     let mut warnings = Vec::new();
     if data.demeaned && params.equilibrium {
-        warnings.push("equilibrium not estimated: each trial's force offset was fitted, which absorbs it; use rest offsets (seed 000) to estimate it".into());
+        warnings.push(Warning::new(WarningCode::EquilibriumAbsorbed, "equilibrium not estimated: each trial's force offset was fitted, which absorbs it; use rest offsets (seed 000) to estimate it"));
     }
     let equilibrium = if with_const && params.equilibrium {
-        let k = DMatrix::from_fn(n, n, |i, j| stiffness[i][j]);
+        let k = stiffness.0.clone();
         let c = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);
         match k.clone().lu().solve(&c) {
             Some(kc)
@@ -482,7 +480,10 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
                 Some((0..n).map(|i| data.reference[i] - kc[i]).collect())
             }
             _ => {
-                warnings.push("equilibrium not reported: the stiffness matrix is singular".into());
+                warnings.push(Warning::new(
+                    WarningCode::EquilibriumSingular,
+                    "equilibrium not reported: the stiffness matrix is singular",
+                ));
                 None
             }
         }
@@ -496,7 +497,11 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         constant: with_const.then(|| (0..n).map(|a| se[(3 * n, a)]).collect()),
     };
     let ratio = params.identifiable_ratio;
-    let check = |value: &Mat, se: &Mat, label: &str, unit: &str, warnings: &mut Vec<String>| {
+    let check = |value: &Matrix,
+                 se: &Matrix,
+                 label: &str,
+                 unit: &str,
+                 warnings: &mut Vec<Warning>| {
         let column = match label {
             "M" => 0,
             "B" => 1,
@@ -513,32 +518,32 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             })
             .collect();
         if !noisy.is_empty() {
-            warnings.push(format!(
+            warnings.push(Warning::new(WarningCode::NoisyRegressors, format!(
                 "{} regressors are dominated by position noise (signal share {}; needs {:.0} %): the {} estimate is biased towards zero",
                 ["acceleration", "velocity", "displacement"][column],
                 noisy.join(", "),
                 100.0 * MIN_RELIABILITY,
                 ["inertia", "damping", "stiffness"][column],
-            ));
+            )));
         }
         let bad: Vec<String> = (0..n)
             // NaN-safe; an exact zero (no force at all) identifies nothing
             .filter(|&i| {
-                let identified = value[i][i].abs() >= ratio * se[i][i];
-                value[i][i] == 0.0 || !identified
+                let identified = value[(i, i)].abs() >= ratio * se[(i, i)];
+                value[(i, i)] == 0.0 || !identified
             })
             .map(|i| {
                 format!(
                     "{}{} = {:.3} ± {:.3} {unit}",
                     label,
                     sub(&data.coordinates, i, i),
-                    value[i][i],
-                    se[i][i]
+                    value[(i, i)],
+                    se[(i, i)]
                 )
             })
             .collect();
         if !bad.is_empty() {
-            warnings.push(format!(
+            warnings.push(Warning::new(WarningCode::NotIdentifiable, format!(
                 "{} is not identifiable from this data ({}; |value| < {ratio} SE): treat it as unknown",
                 match label {
                     "M" => "inertia",
@@ -546,11 +551,11 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
                     _ => "stiffness",
                 },
                 bad.join(", ")
-            ));
+            )));
         }
         bad.is_empty() && noisy.is_empty()
     };
-    let finite = |m: &Mat| m.iter().flatten().all(|v| v.is_finite());
+    let finite = |m: &Matrix| m.iter().all(|v| v.is_finite());
     if ![
         &inertia,
         &damping,
@@ -574,18 +579,21 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         stiffness: check(&stiffness, &se_out.stiffness, "K", ku, &mut warnings),
     };
     if !identifiable.inertia {
-        warnings.push("inertial forces are below the noise: perturbations this slow cannot identify inertia (seed 000's 3 s motions are such a case)".into());
+        warnings.push(Warning::new(WarningCode::InertiaBelowNoise, "inertial forces are below the noise: perturbations this slow cannot identify inertia (seed 000's 3 s motions are such a case)"));
     }
     if condition_number > 1e4 {
-        warnings.push(format!(
+        warnings.push(Warning::new(WarningCode::IllConditioned, format!(
             "the scaled regressor is ill-conditioned (condition number {condition_number:.3e}): parameters are strongly correlated"
-        ));
+        )));
     }
     for (a, v) in fit.vaf.iter().enumerate() {
         if *v < 50.0 {
-            warnings.push(format!(
-                "the model explains only {v:.1} % of the force variance along {}",
-                data.coordinates[a]
+            warnings.push(Warning::new(
+                WarningCode::PoorFit,
+                format!(
+                    "the model explains only {v:.1} % of the force variance along {}",
+                    data.coordinates[a]
+                ),
             ));
         }
     }

@@ -22,9 +22,11 @@
 //! below 1000, K_s and D_s are positive definite and both ratios are below 0.1
 //! ("quasi-symmetric", our threshold).
 
+use limpid_core::Matrix;
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use rayon::prelude::*;
-use serde::Serialize;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 use crate::linear::{fit_stats, solve_triangle};
 use crate::lsq::{merge, triangle};
@@ -83,6 +85,23 @@ pub struct PlanarPrepare {
     pub cutoff_hz: Option<f64>,
     pub order: usize,
     pub elbow_positive: bool,
+}
+
+impl PlanarPrepare {
+    /// Link lengths (m), shoulder at the origin, the elbow flexed (q2 > 0),
+    /// the default low-pass and a 4th-order Butterworth.
+    pub fn new(l1: f64, l2: f64) -> Self {
+        PlanarPrepare {
+            arm: Arm {
+                l1,
+                l2,
+                shoulder: [0.0, 0.0],
+            },
+            cutoff_hz: None,
+            order: 4,
+            elbow_positive: true,
+        }
+    }
 }
 
 /// Prepared planar data.
@@ -260,7 +279,7 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
 }
 
 /// Confidence criteria of seed 003 §III-C.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarCriteria {
     /// cond(W) of eq. (19), W as is.
     pub condition_number: f64,
@@ -278,17 +297,17 @@ pub struct PlanarCriteria {
 }
 
 /// A planar estimate.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarEstimate {
     /// ξ1..ξ3 (kg m^2); the given values when fixed.
     pub inertial_parameters: [f64; 3],
     pub inertial_parameters_fixed: bool,
     /// Joint stiffness (N m/rad) and damping (N m s/rad).
-    pub stiffness: [[f64; 2]; 2],
-    pub damping: [[f64; 2]; 2],
+    pub stiffness: Matrix,
+    pub damping: Matrix,
     /// End-point stiffness J^-T K J^-1 at the mean q0 (N/m), without the
     /// geometric term of the baseline force.
-    pub endpoint_stiffness: [[f64; 2]; 2],
+    pub endpoint_stiffness: Matrix,
     /// Jackknife (delete-one-trial) standard errors, same layout.
     pub standard_errors: PlanarErrors,
     /// VAF (%) and r of Δτ per joint.
@@ -297,16 +316,20 @@ pub struct PlanarEstimate {
     pub observation_window_ms: f64,
     pub trials: usize,
     pub samples: usize,
+    /// Leave-one-trial-out VAF (%) per joint (seed 003 Fig. 6), when computed
+    /// ([`estimate_planar`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub leave_one_out_vaf: Option<[f64; 2]>,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarErrors {
     pub inertial_parameters: [f64; 3],
-    pub stiffness: [[f64; 2]; 2],
-    pub damping: [[f64; 2]; 2],
+    pub stiffness: Matrix,
+    pub damping: Matrix,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarFit {
     pub vaf: [f64; 2],
     pub r: [f64; 2],
@@ -429,7 +452,8 @@ pub fn fit_planar(
         Some(x) => (x, [0.0; 3]),
         None => ([theta[0], theta[1], theta[2]], [se[0], se[1], se[2]]),
     };
-    let m2 = |v: &DVector<f64>, s: usize| [[v[s], v[s + 1]], [v[s + 2], v[s + 3]]];
+    let m2 =
+        |v: &DVector<f64>, s: usize| Matrix::from(Matrix2::new(v[s], v[s + 1], v[s + 2], v[s + 3]));
     let damping = m2(&theta, off);
     let stiffness = m2(&theta, off + 4);
     // fit
@@ -450,7 +474,7 @@ pub fn fit_planar(
         fit.vaf[r] = vaf;
         fit.r[r] = rr;
     }
-    let mut criteria = criteria(stiffness, damping, condition_number, cond_scaled);
+    let mut criteria = criteria(&stiffness, &damping, condition_number, cond_scaled);
     // base inertial parameters of a real arm are positive (seed 003 eq. (5))
     if xi.is_none() && !xi_hat.iter().all(|v| *v > 0.0) {
         criteria.trusted = false;
@@ -469,14 +493,8 @@ pub fn fit_planar(
     let j = data.arm.jacobian(q0);
     let kx = match j.try_inverse() {
         Some(ji) => {
-            let k = Matrix2::new(
-                stiffness[0][0],
-                stiffness[0][1],
-                stiffness[1][0],
-                stiffness[1][1],
-            );
-            let kx = ji.transpose() * k * ji;
-            [[kx[(0, 0)], kx[(0, 1)]], [kx[(1, 0)], kx[(1, 1)]]]
+            let k = stiffness.to_matrix2().unwrap_or_else(Matrix2::zeros);
+            Matrix::from(ji.transpose() * k * ji)
         }
         None => {
             return Err(numerical(
@@ -504,7 +522,21 @@ pub fn fit_planar(
             / 10.0,
         trials: use_trials.len(),
         samples: rows / 2,
+        leave_one_out_vaf: None,
     })
+}
+
+/// Seed 003's estimate from every trial's first `window` samples, with its
+/// leave-one-trial-out validation.
+pub fn estimate_planar(
+    data: &PlanarData,
+    window: usize,
+    xi: Option<[f64; 3]>,
+) -> Result<PlanarEstimate> {
+    let all: Vec<usize> = (0..data.trials.len()).collect();
+    let mut est = fit_planar(data, window, xi, &all)?;
+    est.leave_one_out_vaf = Some(leave_one_out_vaf(data, window, xi)?);
+    Ok(est)
 }
 
 /// Leave-one-trial-out prediction of Δτ (seed 003 Fig. 6): each trial
@@ -528,8 +560,9 @@ pub fn leave_one_out_vaf(
             if xi.is_none() {
                 theta.extend(est.inertial_parameters);
             }
-            theta.extend(est.damping.iter().flatten());
-            theta.extend(est.stiffness.iter().flatten());
+            // row-major, as the regressor's columns (seed 003 eq. (8))
+            theta.extend(est.damping.transpose().iter());
+            theta.extend(est.stiffness.transpose().iter());
             let (mut y1, mut h1, mut y2, mut h2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
             for i in 0..rows.nrows() {
                 let pred: f64 = (0..p).map(|j| rows[(i, j)] * theta[j]).sum();
@@ -556,14 +589,14 @@ pub fn leave_one_out_vaf(
 }
 
 /// One observation window of the sweep.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct SweepRow {
     pub observation_window_ms: f64,
     pub estimate: PlanarEstimate,
 }
 
 /// The observation-window study (seed 003 §IV, Fig. 4-5).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Sweep {
     pub rows: Vec<SweepRow>,
     /// Shortest T_obs from which K_s stays positive definite.
@@ -640,16 +673,7 @@ pub fn window_sweep(
         first
     };
     let last = rows.last().map(|r| r.estimate.clone());
-    let rel = |a: &[[f64; 2]; 2], b: &[[f64; 2]; 2]| {
-        let (mut n, mut d) = (0.0, 0.0);
-        for i in 0..2 {
-            for j in 0..2 {
-                n += (a[i][j] - b[i][j]).powi(2);
-                d += b[i][j].powi(2);
-            }
-        }
-        (n / d.max(1e-300)).sqrt()
-    };
+    let rel = |a: &Matrix, b: &Matrix| (&a.0 - &b.0).norm() / b.norm().max(1e-300);
     let constant = |e: &PlanarEstimate| match &last {
         Some(l) => {
             let xi_change = (0..3)
@@ -684,43 +708,24 @@ pub fn window_sweep(
     })
 }
 
-/// Quasi-symmetry threshold of ||X_a|| / ||X_s|| (our choice).
-pub const QUASI_SYMMETRIC: f64 = 0.1;
-/// Largest scaled condition number counted as well-conditioned (our choice).
-pub const MAX_CONDITION: f64 = 1000.0;
+pub use limpid_core::criteria::{MAX_CONDITION, QUASI_SYMMETRIC};
 
 /// Most windows one sweep evaluates.
 pub const MAX_SWEEP_WINDOWS: usize = 10_000;
 
-/// Criteria of seed 003 §III-C on a 2 x 2 K and D.
-pub fn criteria(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, cond_scaled: f64) -> PlanarCriteria {
-    let eig = |m: [[f64; 2]; 2]| {
-        let s = Matrix2::new(
-            m[0][0],
-            0.5 * (m[0][1] + m[1][0]),
-            0.5 * (m[0][1] + m[1][0]),
-            m[1][1],
-        );
-        let s = nalgebra::DMatrix::from_column_slice(2, 2, s.as_slice());
-        let e = limpid_core::linalg::symmetric_eigenvalues(s)
-            .unwrap_or_else(|| nalgebra::DVector::from_element(2, f64::NAN));
-        let (a, b) = (e[0].max(e[1]), e[0].min(e[1]));
-        [a, b]
-    };
-    let ratio = |m: [[f64; 2]; 2]| {
-        let a = 0.5 * (m[0][1] - m[1][0]).abs() * 2f64.sqrt();
-        let sym = (m[0][0].powi(2) + m[1][1].powi(2) + 0.5 * (m[0][1] + m[1][0]).powi(2)).sqrt();
-        if sym > 0.0 {
-            a / sym
-        } else {
-            f64::INFINITY
-        }
+/// Criteria of seed 003 §III-C on a 2 x 2 K and D (through
+/// [`limpid_core::criteria`], shared with every estimator).
+pub fn criteria(k: &Matrix, d: &Matrix, cond: f64, cond_scaled: f64) -> PlanarCriteria {
+    use limpid_core::criteria::{symmetric_part_eigenvalues, symmetry_ratio};
+    let eig = |m: &Matrix| {
+        let e = symmetric_part_eigenvalues(m);
+        [e[0], e[1]]
     };
     let (ke, de) = (eig(k), eig(d));
-    let (kr, dr) = (ratio(k), ratio(d));
+    let (kr, dr) = (symmetry_ratio(k), symmetry_ratio(d));
     let mut reasons = Vec::new();
     // written so that a NaN fails each test (a NaN must never read as trusted)
-    let well_conditioned = cond_scaled < MAX_CONDITION;
+    let well_conditioned = limpid_core::criteria::well_conditioned(cond_scaled);
     if !well_conditioned {
         reasons.push(format!(
             "ill-conditioned: scaled condition number {cond_scaled:.0} >= {MAX_CONDITION:.0}"
@@ -770,6 +775,10 @@ pub fn criteria(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, cond_scaled: f64)
 mod tests {
     use super::*;
 
+    fn crit(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, scaled: f64) -> PlanarCriteria {
+        criteria(&k.into(), &d.into(), cond, scaled)
+    }
+
     #[test]
     fn regressor_matches_inverse_dynamics() {
         // Ψ = M q'' + (C + D) q' + K Δq must equal X ζ, and C must follow from M
@@ -815,9 +824,9 @@ mod tests {
         let good_k = [[30.0, 8.0], [8.0, 12.0]];
         let good_d = [[2.0, 0.4], [0.4, 1.5]];
         for c in [
-            criteria([[f64::NAN, 8.0], [8.0, 12.0]], good_d, 50.0, 20.0),
-            criteria(good_k, [[2.0, f64::NAN], [0.4, 1.5]], 50.0, 20.0),
-            criteria(good_k, good_d, 50.0, f64::NAN),
+            crit([[f64::NAN, 8.0], [8.0, 12.0]], good_d, 50.0, 20.0),
+            crit(good_k, [[2.0, f64::NAN], [0.4, 1.5]], 50.0, 20.0),
+            crit(good_k, good_d, 50.0, f64::NAN),
         ] {
             assert!(!c.trusted, "{:?}", c.reasons);
         }
@@ -825,28 +834,28 @@ mod tests {
 
     #[test]
     fn criteria_flags_hand_made_matrices() {
-        let good = criteria(
+        let good = crit(
             [[30.0, 8.0], [8.0, 12.0]],
             [[2.0, 0.4], [0.4, 1.5]],
             50.0,
             20.0,
         );
         assert!(good.trusted, "{:?}", good.reasons);
-        let indefinite = criteria(
+        let indefinite = crit(
             [[30.0, 25.0], [25.0, 12.0]],
             [[2.0, 0.4], [0.4, 1.5]],
             50.0,
             20.0,
         );
         assert!(!indefinite.stiffness_positive_definite && !indefinite.trusted);
-        let skew = criteria(
+        let skew = crit(
             [[30.0, 8.0], [2.0, 12.0]],
             [[2.0, 0.4], [0.4, 1.5]],
             50.0,
             20.0,
         );
         assert!(skew.stiffness_symmetry_ratio > QUASI_SYMMETRIC && !skew.trusted);
-        let ill = criteria(
+        let ill = crit(
             [[30.0, 8.0], [8.0, 12.0]],
             [[2.0, 0.4], [0.4, 1.5]],
             1e6,

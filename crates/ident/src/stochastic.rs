@@ -18,9 +18,11 @@
 //! the band of the largest singular value of `Z - Z_model`, `phi_ij` the mean of
 //! `|Z_ij - Z_model,ij|`.
 
+use limpid_core::{Matrix, Warning, WarningCode};
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
-use serde::Serialize;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 use crate::prepare::choose_coordinates;
 use limpid_core::{Error, Recording, Result};
@@ -61,7 +63,7 @@ pub fn default_welch(n: usize, fs: f64) -> Welch {
 }
 
 /// Coherences per frequency.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Coherences {
     /// Output names (positions, then forces).
     pub outputs: Vec<String>,
@@ -72,7 +74,7 @@ pub struct Coherences {
 }
 
 /// Non-parametric and parametric impedance with its quality.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct StochasticEstimate {
     pub coordinates: Vec<String>,
     pub inputs: Vec<String>,
@@ -82,22 +84,74 @@ pub struct StochasticEstimate {
     pub impedance: Vec<Vec<Vec<[f64; 2]>>>,
     pub coherence: Coherences,
     /// Parametric fit over the band (SI).
-    pub inertia: Vec<Vec<f64>>,
-    pub damping: Vec<Vec<f64>>,
-    pub stiffness: Vec<Vec<f64>>,
+    pub inertia: Matrix,
+    pub damping: Matrix,
+    pub stiffness: Matrix,
     pub standard_errors: ParametricErrors,
     pub criteria: StochasticCriteria,
-    pub warnings: Vec<String>,
+    /// Accuracy against an expected model (seed 004 eq. (15)-(16)), when one is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accuracy: Option<Accuracy>,
+    pub warnings: Vec<Warning>,
 }
 
-#[derive(Debug, Clone, Serialize)]
+/// The expected model of [`Accuracy`] (e.g. the spring array's M, B, K).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct ExpectedModel {
+    pub inertia: Matrix,
+    pub damping: Matrix,
+    pub stiffness: Matrix,
+}
+
+impl ExpectedModel {
+    /// Read `inertia`, `damping`, `stiffness` from a JSON file such as a
+    /// recording's `*.truth.json` (other keys are ignored).
+    pub fn read(path: &std::path::Path) -> Result<Self> {
+        let text = limpid_core::files::read_text(path)?;
+        let model: ExpectedModel = serde_json::from_str(&text).map_err(|e| Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "line {}, column {}: expected square matrices of numbers under inertia, damping and stiffness ({e})",
+                e.line(),
+                e.column()
+            ),
+        })?;
+        for (key, m) in [
+            ("inertia", &model.inertia),
+            ("damping", &model.damping),
+            ("stiffness", &model.stiffness),
+        ] {
+            if m.nrows() != m.ncols() || m.iter().any(|v| !v.is_finite()) {
+                return Err(Error::Format {
+                    path: path.to_path_buf(),
+                    message: format!("key {key}: expected a square matrix of finite numbers"),
+                });
+            }
+        }
+        Ok(model)
+    }
+}
+
+/// Seed 004 eq. (15)-(16): how far the non-parametric Z is from an expected model.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct Accuracy {
+    /// phi_T: mean over the band of the largest singular value of Z - Z_expected.
+    pub phi_t: f64,
+    /// phi_ij: mean over the band of |Z_ij - Z_expected,ij|.
+    pub phi_ij: Matrix,
+    /// Mean over the band of phi_T(f) / ||Z_expected(f)||_2.
+    pub mean_relative_error: f64,
+    pub expected: ExpectedModel,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct ParametricErrors {
-    pub inertia: Vec<Vec<f64>>,
-    pub damping: Vec<Vec<f64>>,
-    pub stiffness: Vec<Vec<f64>>,
+    pub inertia: Matrix,
+    pub damping: Matrix,
+    pub stiffness: Matrix,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct StochasticCriteria {
     pub band_hz: [f64; 2],
     pub frequency_resolution_hz: f64,
@@ -216,9 +270,9 @@ pub fn estimate_stochastic(
         limpid_dsp::spectral::Window::Hamming => 1.36,
         limpid_dsp::spectral::Window::Boxcar => 1.0,
     };
-    let mut m = vec![vec![0.0; n]; n];
-    let mut b = vec![vec![0.0; n]; n];
-    let mut kk = vec![vec![0.0; n]; n];
+    let mut m = Matrix::zeros(n, n);
+    let mut b = Matrix::zeros(n, n);
+    let mut kk = Matrix::zeros(n, n);
     let mut se = ParametricErrors {
         inertia: m.clone(),
         damping: m.clone(),
@@ -243,12 +297,12 @@ pub fn estimate_stochastic(
             }
             let (th_re, se_re, res_re) = weighted_ls(&a_re, &y_re, enbw_bins);
             let (th_im, se_im, res_im) = weighted_ls(&a_im, &y_im, enbw_bins);
-            kk[i][j] = th_re[0];
-            m[i][j] = th_re[1];
-            b[i][j] = th_im[0];
-            se.stiffness[i][j] = se_re[0];
-            se.inertia[i][j] = se_re[1];
-            se.damping[i][j] = se_im[0];
+            kk[(i, j)] = th_re[0];
+            m[(i, j)] = th_re[1];
+            b[(i, j)] = th_im[0];
+            se.stiffness[(i, j)] = se_re[0];
+            se.inertia[(i, j)] = se_re[1];
+            se.damping[(i, j)] = se_im[0];
             ss_res += res_re + res_im;
             ss_tot += y_re.norm_squared() + y_im.norm_squared();
         }
@@ -256,7 +310,7 @@ pub fn estimate_stochastic(
     let model = |f: f64| {
         let om = 2.0 * std::f64::consts::PI * f;
         DMatrix::from_fn(n, n, |i, j| {
-            Complex64::new(kk[i][j] - om * om * m[i][j], om * b[i][j])
+            Complex64::new(kk[(i, j)] - om * om * m[(i, j)], om * b[(i, j)])
         })
     };
     let phi_t_vs_fit = in_band
@@ -268,13 +322,13 @@ pub fn estimate_stochastic(
     let min_coh = in_band.iter().map(|&k| weight[k]).fold(1.0, f64::min);
     let mut warnings = Vec::new();
     if min_coh < 0.8 {
-        warnings.push(format!("multiple coherence falls to {min_coh:.2} in the band: the linear model does not hold everywhere there (noise, nonlinearity or unmeasured inputs)"));
+        warnings.push(Warning::new(WarningCode::LowCoherence, format!("multiple coherence falls to {min_coh:.2} in the band: the linear model does not hold everywhere there (noise, nonlinearity or unmeasured inputs)")));
     }
     if singular_in_band > 0 {
-        warnings.push(format!("{singular_in_band} frequencies in the band were left out: the input spectral matrix (or R) is singular there (an input without power, or inputs fully coherent)"));
+        warnings.push(Warning::new(WarningCode::SingularFrequencies, format!("{singular_in_band} frequencies in the band were left out: the input spectral matrix (or R) is singular there (an input without power, or inputs fully coherent)")));
     }
     if max_input_coh >= 0.6 {
-        warnings.push(format!("inputs are correlated (ordinary coherence up to {max_input_coh:.2}, seed 004 asks < 0.6): R and T are poorly separated"));
+        warnings.push(Warning::new(WarningCode::CorrelatedInputs, format!("inputs are correlated (ordinary coherence up to {max_input_coh:.2}, seed 004 asks < 0.6): R and T are poorly separated")));
     }
     let outputs: Vec<String> = coords.iter().chain(&force_cols).cloned().collect();
     Ok(StochasticEstimate {
@@ -313,6 +367,7 @@ pub fn estimate_stochastic(
                 0.0
             },
         },
+        accuracy: None,
         warnings,
     })
 }
@@ -347,18 +402,30 @@ fn max_singular(m: &DMatrix<Complex64>) -> f64 {
     limpid_core::linalg::singular_values(m.clone()).map_or(f64::NAN, |s| s.max())
 }
 
-/// Seed 004 eq. (15)-(16): (phi_T, phi_ij) of estimated Z against `M, B, K`
-/// over the frequencies in `band`.
+/// Seed 004 eq. (15)-(16): the accuracy of the estimated Z against the
+/// expected model over the frequencies in `band`; the model's matrices must
+/// be n x n for the estimate's n coordinates.
 pub fn accuracy(
     est: &StochasticEstimate,
-    m: &[Vec<f64>],
-    b: &[Vec<f64>],
-    k: &[Vec<f64>],
+    expected: &ExpectedModel,
     band: (f64, f64),
-) -> (f64, Vec<Vec<f64>>, f64) {
+) -> Result<Accuracy> {
     let n = est.coordinates.len();
+    let (m, b, k) = (&expected.inertia, &expected.damping, &expected.stiffness);
+    for (name, x) in [("inertia", m), ("damping", b), ("stiffness", k)] {
+        if x.shape() != (n, n) {
+            return Err(Error::invalid(
+                "expected model",
+                format!(
+                    "{name} is {} x {}, the estimate has {n} coordinates",
+                    x.nrows(),
+                    x.ncols()
+                ),
+            ));
+        }
+    }
     let mut phi_t = 0.0;
-    let mut phi = vec![vec![0.0; n]; n];
+    let mut phi = DMatrix::<f64>::zeros(n, n);
     let mut rel = 0.0;
     let mut count = 0.0f64;
     for (f, z) in est.frequencies.iter().zip(&est.impedance) {
@@ -367,26 +434,21 @@ pub fn accuracy(
         }
         let om = 2.0 * std::f64::consts::PI * f;
         let zm = DMatrix::from_fn(n, n, |i, j| {
-            Complex64::new(k[i][j] - om * om * m[i][j], om * b[i][j])
+            Complex64::new(k[(i, j)] - om * om * m[(i, j)], om * b[(i, j)])
         });
         let ze = DMatrix::from_fn(n, n, |i, j| Complex64::new(z[i][j][0], z[i][j][1]));
         let d = &ze - &zm;
         let dn = max_singular(&d);
         phi_t += dn;
         rel += dn / max_singular(&zm);
-        for i in 0..n {
-            for j in 0..n {
-                phi[i][j] += d[(i, j)].norm();
-            }
-        }
+        phi += d.map(|c| c.norm());
         count += 1.0;
     }
     let c = count.max(1.0);
-    (
-        phi_t / c,
-        phi.iter()
-            .map(|r| r.iter().map(|v| v / c).collect())
-            .collect(),
-        rel / c,
-    )
+    Ok(Accuracy {
+        phi_t: phi_t / c,
+        phi_ij: Matrix(phi / c),
+        mean_relative_error: rel / c,
+        expected: expected.clone(),
+    })
 }

@@ -70,15 +70,8 @@ fn forces(
         .collect()
 }
 
-fn rel(est: &[Vec<f64>], truth: &DMatrix<f64>) -> f64 {
-    let n = truth.nrows();
-    let mut num = 0.0;
-    for i in 0..n {
-        for j in 0..n {
-            num += (est[i][j] - truth[(i, j)]).powi(2);
-        }
-    }
-    num.sqrt() / truth.norm()
+fn rel(est: &DMatrix<f64>, truth: &DMatrix<f64>) -> f64 {
+    limpid_testkit::rel_err(est, truth)
 }
 
 proptest! {

@@ -2,7 +2,7 @@
 //! mean relative impedance error over 0.5-10 Hz under 10 %, parametric
 //! stiffness within 5 % (issue 6).
 
-use limpid_ident::stochastic::{accuracy, estimate_stochastic, StochasticParams};
+use limpid_ident::stochastic::{accuracy, estimate_stochastic, ExpectedModel, StochasticParams};
 use serde_json::Value;
 
 const EXAMPLES: &str = concat!(
@@ -23,7 +23,13 @@ fn spring_array_examples() {
         let rec = limpid_io::read_recording(format!("{EXAMPLES}/{case}.csv")).unwrap();
         let est = estimate_stochastic(&rec, &StochasticParams::default()).unwrap();
         let (m, b, k) = (mat(&t["inertia"]), mat(&t["damping"]), mat(&t["stiffness"]));
-        let (phi_t, _, mean_rel) = accuracy(&est, &m, &b, &k, (0.5, 10.0));
+        let expected = ExpectedModel {
+            inertia: m,
+            damping: b,
+            stiffness: k.clone(),
+        };
+        let a = accuracy(&est, &expected, (0.5, 10.0)).unwrap();
+        let (phi_t, mean_rel) = (a.phi_t, a.mean_relative_error);
         let ek = rel(&est.stiffness, &k);
         eprintln!("{case}: phi_T {phi_t:.3}, mean relative Z error {mean_rel:.4}, K error {ek:.4}, K {:?}, M {:?}, criteria {:?}", est.stiffness, est.inertia, est.criteria);
         assert!(
@@ -47,9 +53,7 @@ fn eq_10_reproduces_the_examples_spring_arrays() {
         let springs = ["k1a", "k1b", "k2a", "k2b", "k3a", "k3b", "k4a", "k4b"]
             .map(|k| s[k].as_f64().unwrap());
         let k = spring_array_stiffness(&springs, &Geometry::from_k_sa1());
-        let est: Vec<Vec<f64>> = (0..3)
-            .map(|i| (0..3).map(|j| k[(i, j)]).collect())
-            .collect();
+        let est = limpid_core::Matrix::from(k);
         assert!(rel(&est, &mat(&t["stiffness"])) < 1e-6, "{case}: {k}");
     }
 }
@@ -60,9 +64,7 @@ fn virtual_spring_array_experiment_recovers_its_stiffness() {
     let e = RigExperiment::spring_array(&SA1);
     let rec = simulate_rig(&e, [1e-6, 1e-5], 11).unwrap();
     let est = estimate_stochastic(&rec, &StochasticParams::default()).unwrap();
-    let k: Vec<Vec<f64>> = (0..3)
-        .map(|i| (0..3).map(|j| e.stiffness[(i, j)]).collect())
-        .collect();
+    let k = limpid_core::Matrix::from(e.stiffness);
     let ek = rel(&est.stiffness, &k);
     assert!(ek < 0.05, "stiffness error {ek}: {:?}", est.stiffness);
     assert!(est.criteria.max_input_coherence < 0.6);
@@ -78,9 +80,7 @@ fn imbic_recovers_the_spring_array_and_pd_under_friction_loses_coherence() {
     use limpid_lab::rig::{RigExperiment, SA1};
     let e = RigExperiment::spring_array(&SA1);
     let robot = RobotDynamics::seed004();
-    let k: Vec<Vec<f64>> = (0..3)
-        .map(|i| (0..3).map(|j| e.stiffness[(i, j)]).collect())
-        .collect();
+    let k = limpid_core::Matrix::from(e.stiffness);
     let mut coherence = Vec::new();
     for controller in [Controller::imbic_seed004(), Controller::pd_seed004()] {
         let rec = simulate_robot_rig(&e, &robot, &controller, [1e-6, 1e-5], 7).unwrap();

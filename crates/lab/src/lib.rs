@@ -8,6 +8,7 @@
 
 pub mod cocontraction;
 pub mod design;
+pub mod export;
 pub mod gravity;
 pub mod imbic;
 pub mod planar;

@@ -12,6 +12,7 @@ use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use limpid_analysis::result::{Document, Estimate};
 use limpid_core::{Error, Recording};
 use limpid_dsp::spectral::{Detrend, Scaling, Welch, Window};
 
@@ -352,10 +353,9 @@ fn estimate_linear(
                 ..Default::default()
             },
         )?;
-        Ok(
-            serde_json::to_string(&limpid_analysis::report::linear_result(&est, &prepared))
-                .unwrap_or_default(),
-        )
+        Ok(document(Estimate::Linear(
+            limpid_analysis::linear::linear_result(&est, &prepared),
+        )))
     })
     .map_err(err)
 }
@@ -365,20 +365,8 @@ fn planar_data(
     rec: &Recording,
     link_lengths: (f64, f64),
 ) -> limpid_core::Result<limpid_ident::planar::PlanarData> {
-    use limpid_ident::planar::{prepare_planar, Arm, PlanarPrepare};
-    prepare_planar(
-        rec,
-        &PlanarPrepare {
-            arm: Arm {
-                l1: link_lengths.0,
-                l2: link_lengths.1,
-                shoulder: [0.0, 0.0],
-            },
-            cutoff_hz: None,
-            order: 4,
-            elbow_positive: true,
-        },
-    )
+    use limpid_ident::planar::{prepare_planar, PlanarPrepare};
+    prepare_planar(rec, &PlanarPrepare::new(link_lengths.0, link_lengths.1))
 }
 
 /// Seed 003's planar-arm estimator; JSON text.
@@ -391,7 +379,6 @@ fn estimate_planar(
     window_ms: Option<f64>,
     inertial_parameters: Option<(f64, f64, f64)>,
 ) -> PyResult<String> {
-    use limpid_ident::planar::{fit_planar, leave_one_out_vaf};
     let rec = self::recording(recording)?;
     py.detach(move || -> limpid_core::Result<String> {
         let data = planar_data(&rec, link_lengths)?;
@@ -406,12 +393,9 @@ fn estimate_planar(
             }
         };
         let xi = inertial_parameters.map(|(a, b, c)| [a, b, c]);
-        let all: Vec<usize> = (0..data.trials.len()).collect();
-        let est = fit_planar(&data, window, xi, &all)?;
-        let loo = leave_one_out_vaf(&data, window, xi)?;
-        let mut v = serde_json::to_value(&est).unwrap_or_default();
-        v["leave_one_out_vaf"] = serde_json::json!(loo);
-        Ok(v.to_string())
+        Ok(document(Estimate::Planar(
+            limpid_ident::planar::estimate_planar(&data, window, xi)?,
+        )))
     })
     .map_err(err)
 }
@@ -433,7 +417,7 @@ fn window_sweep(
         let data = planar_data(&rec, link_lengths)?;
         let xi = inertial_parameters.map(|(a, b, c)| [a, b, c]);
         let sweep = limpid_ident::planar::window_sweep(&data, from_ms, to_ms, step_ms, xi)?;
-        Ok(serde_json::to_string(&sweep).unwrap_or_default())
+        Ok(document(Estimate::WindowSweep(sweep)))
     })
     .map_err(err)
 }
@@ -463,7 +447,7 @@ fn estimate_stochastic(
                 band_hz,
             },
         )?;
-        Ok(serde_json::to_string(&est).unwrap_or_default())
+        Ok(document(Estimate::Stochastic(est)))
     })
     .map_err(err)
 }
@@ -487,7 +471,7 @@ fn estimate_cocontraction(
             &params,
             &limpid_analysis::emg::EmgParams::default(),
         )?;
-        Ok(serde_json::to_string(&r).unwrap_or_default())
+        Ok(document(Estimate::Cocontraction(r)))
     })
     .map_err(err)
 }
@@ -495,6 +479,8 @@ fn estimate_cocontraction(
 /// The ellipsoid of the symmetric part of a 2 x 2 or 3 x 3 matrix; JSON text.
 #[pyfunction]
 fn ellipsoid(matrix: Vec<Vec<f64>>) -> PyResult<String> {
+    let matrix = limpid_core::Matrix::from_rows(&matrix)
+        .ok_or_else(|| value_err("the matrix's rows differ in length"))?;
     let e = limpid_analysis::ellipsoid(&matrix)
         .ok_or_else(|| value_err("ellipsoids are for 2 x 2 and 3 x 3 matrices"))?;
     serde_json::to_string(&e).map_err(value_err)
@@ -593,19 +579,23 @@ fn gravity_compensate<'py>(
 /// Write the HTML report of JSON results (texts) to `path`.
 #[pyfunction]
 fn report(results: Vec<String>, path: std::path::PathBuf) -> PyResult<()> {
-    let inputs: Vec<(String, serde_json::Value)> = results
+    let inputs: Vec<(String, Estimate)> = results
         .iter()
         .enumerate()
         .map(|(i, t)| {
-            Ok((
-                format!("result {}", i + 1),
-                serde_json::from_str(t).map_err(value_err)?,
-            ))
+            let name = format!("result {}", i + 1);
+            let doc = Document::from_json(&name, t).map_err(value_err)?;
+            Ok((name, doc.estimate))
         })
         .collect::<PyResult<_>>()?;
-    let r = limpid_report::build(&inputs).map_err(value_err)?;
+    let r = limpid_report::build(&inputs);
     limpid_core::files::write_file(&path, limpid_report::to_html(&r).as_bytes())
         .map_err(|e| PyOSError::new_err(e.to_string()))
+}
+
+/// A result as the JSON document of `limpid_analysis::result`.
+fn document(e: Estimate) -> String {
+    Document::new(e).to_json()
 }
 
 #[pymodule]

@@ -1,4 +1,5 @@
-//! limpid-report: one self-contained HTML file from limpid's JSON results.
+//! limpid-report: one self-contained HTML file from limpid's typed results
+//! ([`limpid_analysis::result::Estimate`]).
 //!
 //! What it shows, as the results allow:
 //! - the trust verdict and warnings of every result, in words, at the top;
@@ -21,6 +22,15 @@ pub mod svg;
 
 use std::fmt::Write as _;
 
+use limpid_analysis::cocontraction::CocontractionResult;
+use limpid_analysis::demo::{DemoPoint, DemoResult};
+use limpid_analysis::linear::{LinearResult, MatrixKind};
+use limpid_analysis::result::Estimate;
+use limpid_analysis::study::StudyResult;
+use limpid_analysis::Ellipsoid;
+use limpid_core::{Matrix, Warning};
+use limpid_ident::planar::{PlanarEstimate, Sweep};
+use limpid_ident::stochastic::StochasticEstimate;
 use serde::Serialize;
 use serde_json::Value;
 use svg::{escape, Chart, Series, Stroke, PALETTE};
@@ -69,110 +79,60 @@ pub struct Report {
     pub sections: Vec<Section>,
 }
 
-/// Build the report from named JSON results (`limpid ... --json`, `demo.json`,
-/// `study.json`). Unknown shapes are an error naming the input.
-pub fn build(inputs: &[(String, Value)]) -> Result<Report, String> {
-    let mut sections = Vec::new();
-    for (name, v) in inputs {
-        let section = if v.is_array() && v[0].get("start_point").is_some() {
-            demo_section(name, v)
-        } else if v.get("impedance").is_some() && v.get("frequencies").is_some() {
-            stochastic_section(name, v)
-        } else if v.get("rows").is_some() && v.get("min_positive_definite_ms").is_some() {
-            sweep_section(name, v)
-        } else if v.get("inertial_parameters").is_some() && v.get("criteria").is_some() {
-            planar_section(name, v)
-        } else if v.get("recordings").is_some() && v.get("rotation").is_some() {
-            study_section(name, v)
-        } else if v.get("levels").is_some() && v.get("comparisons").is_some() {
-            cocontraction_section(name, v)
-        } else if v.get("ellipsoids").is_some() && v.get("stiffness").is_some() {
-            linear_section(name, v)
-        } else {
-            return Err(format!(
-                "{name}: not a limpid result this report knows (linear, demo, stochastic, planar, co-contraction, study, window-sweep JSON)"
-            ));
-        };
-        sections.push(section?);
-    }
-    Ok(Report {
+/// Build the report from named results (`limpid ... --json`, `demo.json`,
+/// `study.json`, read with [`Document::from_json`], or passed in directly).
+pub fn build(inputs: &[(String, Estimate)]) -> Report {
+    let sections = inputs
+        .iter()
+        .map(|(name, e)| match e {
+            Estimate::Linear(r) => linear_section(name, r),
+            Estimate::Demo(r) => demo_section(name, r),
+            Estimate::Stochastic(r) => stochastic_section(name, r),
+            Estimate::WindowSweep(r) => sweep_section(name, r),
+            Estimate::Planar(r) => planar_section(name, r),
+            Estimate::Study(r) => study_section(name, r),
+            Estimate::Cocontraction(r) => cocontraction_section(name, r),
+        })
+        .collect();
+    Report {
         title: "limpid report".into(),
         sections,
-    })
+    }
 }
 
-fn num(v: &Value) -> f64 {
-    v.as_f64().unwrap_or(f64::NAN)
-}
-
-fn matrix(v: &Value) -> Option<Vec<Vec<f64>>> {
-    v.as_array()?
-        .iter()
-        .map(|r| r.as_array().map(|r| r.iter().map(num).collect()))
-        .collect()
-}
-
-/// A number as a short string; NaN and missing values are said in words.
+/// A number as a short string; NaN is said in words.
 fn fmt(v: f64) -> String {
-    if !v.is_finite() {
-        return "n/a".into();
-    }
-    let a = v.abs();
-    if a != 0.0 && !(1e-3..1e5).contains(&a) {
-        format!("{v:.3e}")
-    } else {
-        format!("{v:.4}")
-            .trim_end_matches('0')
-            .trim_end_matches('.')
-            .to_string()
-    }
+    limpid_core::short_number(v)
 }
 
-fn strings(v: &Value) -> Vec<String> {
-    v.as_array()
-        .map(|a| {
-            a.iter()
-                .filter_map(|s| s.as_str().map(String::from))
-                .collect()
-        })
-        .unwrap_or_default()
+fn optional(v: Option<f64>) -> String {
+    v.map_or_else(|| "n/a".into(), fmt)
 }
 
-fn coordinates(v: &Value, n: usize) -> Vec<String> {
-    let c = strings(&v["coordinates"]);
-    if c.len() == n {
-        c
-    } else {
-        ["x", "y", "z"]
-            .iter()
-            .take(n)
-            .map(|s| s.to_string())
-            .collect()
-    }
+fn messages(w: &[Warning]) -> Vec<String> {
+    w.iter().map(|w| w.message.clone()).collect()
 }
 
 /// Seed 000 Table I: every element with its standard error, and the truth if given.
 fn matrix_table(
     caption: &str,
     coords: &[String],
-    est: &[Vec<f64>],
-    se: Option<&Vec<Vec<f64>>>,
-    truth: Option<&Vec<Vec<f64>>>,
+    est: &Matrix,
+    se: Option<&Matrix>,
+    truth: Option<&Matrix>,
 ) -> Table {
     let mut header = vec!["".to_string()];
     header.extend(coords.iter().cloned());
-    let rows = est
-        .iter()
-        .enumerate()
-        .map(|(i, row)| {
+    let rows = (0..est.nrows())
+        .map(|i| {
             let mut cells = vec![coords[i].clone()];
-            for (j, v) in row.iter().enumerate() {
-                let mut c = fmt(*v);
+            for j in 0..est.ncols() {
+                let mut c = fmt(est[(i, j)]);
                 if let Some(se) = se {
-                    let _ = write!(c, " ± {}", fmt(se[i][j]));
+                    let _ = write!(c, " ± {}", fmt(se[(i, j)]));
                 }
                 if let Some(t) = truth {
-                    let _ = write!(c, " (true {})", fmt(t[i][j]));
+                    let _ = write!(c, " (true {})", fmt(t[(i, j)]));
                 }
                 cells.push(c);
             }
@@ -186,125 +146,92 @@ fn matrix_table(
     }
 }
 
-const KINDS: [(&str, &str); 3] = [("stiffness", "K"), ("damping", "B"), ("inertia", "M")];
-
-fn ellipsoids_of(point: &str, centre: [f64; 3], result: &Value) -> Vec<EllipsoidView> {
-    KINDS
+fn ellipsoids_of(point: &str, centre: [f64; 3], result: &LinearResult) -> Vec<EllipsoidView> {
+    MatrixKind::ALL
         .iter()
-        .filter_map(|(kind, _)| ellipsoid_view(point, kind, centre, &result["ellipsoids"][kind]))
+        .filter_map(|kind| {
+            let e = result.ellipsoids.get(*kind).as_ref()?;
+            ellipsoid_view(point, kind.name(), centre, e)
+        })
         .collect()
 }
 
-/// One 3-D ellipsoid (`eigenvalues`, `axes` of an ellipsoid JSON) at `centre`.
-fn ellipsoid_view(point: &str, kind: &str, centre: [f64; 3], e: &Value) -> Option<EllipsoidView> {
-    let (axes, ev) = (matrix(&e["axes"])?, e["eigenvalues"].as_array()?);
-    if axes.len() != 3 || axes.iter().any(|r| r.len() != 3) || ev.len() != 3 {
+/// One 3-D ellipsoid at `centre` (none for 2-D ones).
+fn ellipsoid_view(
+    point: &str,
+    kind: &str,
+    centre: [f64; 3],
+    e: &Ellipsoid,
+) -> Option<EllipsoidView> {
+    if e.axes.shape() != (3, 3) || e.eigenvalues.len() != 3 {
         return None;
     }
+    let a = &e.axes;
     Some(EllipsoidView {
         point: point.into(),
         kind: kind.into(),
         centre,
-        eigenvalues: [num(&ev[0]), num(&ev[1]), num(&ev[2])],
+        eigenvalues: [e.eigenvalues[0], e.eigenvalues[1], e.eigenvalues[2]],
         axes: [
-            [axes[0][0], axes[0][1], axes[0][2]],
-            [axes[1][0], axes[1][1], axes[1][2]],
-            [axes[2][0], axes[2][1], axes[2][2]],
+            [a[(0, 0)], a[(0, 1)], a[(0, 2)]],
+            [a[(1, 0)], a[(1, 1)], a[(1, 2)]],
+            [a[(2, 0)], a[(2, 1)], a[(2, 2)]],
         ],
     })
 }
 
-/// The verdict of a linear result, in words.
-fn linear_verdict(v: &Value) -> String {
-    let c = &v["criteria"];
-    let mut parts = Vec::new();
-    for (kind, _) in KINDS {
-        let ident = c["identifiable"][kind].as_bool().unwrap_or(false);
-        let pd = c["matrices"][kind]["positive_definite"]
-            .as_bool()
-            .unwrap_or(false);
-        parts.push(match (ident, pd) {
-            (true, true) => format!("{kind} trusted (identifiable, positive definite)"),
-            (true, false) => {
-                format!("{kind} identified but not positive definite: not a passive impedance")
-            }
-            (false, _) => format!("{kind} NOT identifiable from this data: treat it as unknown"),
-        });
-    }
-    let vaf = c.get("vaf").or(v["fit"].get("vaf"));
-    let vafs: Vec<String> = vaf
-        .and_then(|a| a.as_array())
-        .map(|a| a.iter().map(|x| format!("{} %", fmt(num(x)))).collect())
-        .unwrap_or_default();
-    format!("{}; fit VAF {}", parts.join("; "), vafs.join(" / "))
-}
-
-fn linear_tables(v: &Value, truth: Option<&Value>) -> Vec<Table> {
-    let Some(k) = matrix(&v["stiffness"]) else {
-        return vec![];
-    };
-    let coords = coordinates(v, k.len());
-    let mut tables = Vec::new();
-    for (kind, sym) in KINDS {
-        let Some(m) = matrix(&v[kind]) else { continue };
-        let se = matrix(&v["standard_errors"][kind]);
-        let t = truth.and_then(|t| matrix(&t[kind]));
-        tables.push(matrix_table(
-            &format!("{sym} ({kind}, SI) ± standard error"),
-            &coords,
-            &m,
-            se.as_ref(),
-            t.as_ref(),
-        ));
-    }
-    if let Some(obj) = v["table_ii"].as_object() {
-        let mut rows = Vec::new();
-        for (kind, q) in obj {
-            if let Some(q) = q.as_object() {
-                rows.push(
-                    std::iter::once(kind.clone())
-                        .chain(q.iter().map(|(name, val)| {
-                            format!(
-                                "{name} {}",
-                                val.as_f64().map(fmt).unwrap_or_else(|| val.to_string())
-                            )
-                        }))
-                        .collect(),
-                );
-            }
-        }
-        if !rows.is_empty() {
-            tables.push(Table {
-                caption: "Seed 000 Table II quantities".into(),
-                header: vec!["matrix".into(), "quantities".into()],
-                rows: rows
-                    .into_iter()
-                    .map(|r: Vec<String>| vec![r[0].clone(), r[1..].join(", ")])
-                    .collect(),
-            });
-        }
-    }
+fn linear_tables(v: &LinearResult, truth: Option<&DemoPoint>) -> Vec<Table> {
+    let coords = &v.provenance.coordinates;
+    let mut tables: Vec<Table> = MatrixKind::ALL
+        .iter()
+        .map(|&kind| {
+            matrix_table(
+                &format!("{} ({}, SI) ± standard error", kind.symbol(), kind.name()),
+                coords,
+                v.matrix(kind),
+                Some(v.standard_error(kind)),
+                truth.map(|t| t.truth(kind)),
+            )
+        })
+        .collect();
+    // in the order of the JSON keys: damping, inertia, stiffness
+    let rows = [
+        MatrixKind::Damping,
+        MatrixKind::Inertia,
+        MatrixKind::Stiffness,
+    ]
+    .iter()
+    .map(|&kind| {
+        let q = v.table_ii.get(kind);
+        vec![
+            kind.name().to_string(),
+            format!(
+                "max_antisymmetric {}, max_symmetric {}, min_symmetric {}",
+                fmt(q.max_antisymmetric),
+                fmt(q.max_symmetric),
+                fmt(q.min_symmetric)
+            ),
+        ]
+    })
+    .collect();
+    tables.push(Table {
+        caption: "Seed 000 Table II quantities".into(),
+        header: vec!["matrix".into(), "quantities".into()],
+        rows,
+    });
     tables
 }
 
 /// Measured vs predicted force per coordinate, with r and VAF in the title.
-fn fit_figures(prefix: &str, v: &Value) -> Vec<Figure> {
-    let tr = &v["fit"]["traces"];
-    let Some(time) = tr["time"].as_array() else {
-        return vec![];
-    };
-    let t: Vec<f64> = time.iter().map(num).collect();
-    let n = tr["measured"].as_array().map_or(0, Vec::len);
-    let coords = coordinates(v, n);
-    (0..n)
+fn fit_figures(prefix: &str, v: &LinearResult) -> Vec<Figure> {
+    let tr = &v.fit.traces;
+    let coords = &v.provenance.coordinates;
+    (0..tr.measured.len().min(coords.len()))
         .map(|a| {
-            let series = |key: &str, label: &str, stroke, color: &str| Series {
+            let series = |y: &[f64], label: &str, stroke, color: &str| Series {
                 name: label.into(),
-                x: t.clone(),
-                y: tr[key][a]
-                    .as_array()
-                    .map(|s| s.iter().map(num).collect())
-                    .unwrap_or_default(),
+                x: tr.time.clone(),
+                y: y.to_vec(),
                 stroke,
                 color: color.into(),
             };
@@ -314,8 +241,8 @@ fn fit_figures(prefix: &str, v: &Value) -> Vec<Figure> {
                     title: format!(
                         "{prefix}{}: measured vs predicted force (r {}, VAF {} %)",
                         coords[a],
-                        fmt(num(&v["fit"]["r"][a])),
-                        fmt(num(&v["fit"]["vaf"][a]))
+                        fmt(v.fit.r[a]),
+                        fmt(v.fit.vaf[a])
                     ),
                     x_label: "time along the first windows (s)".into(),
                     y_label: "force (SI)".into(),
@@ -323,8 +250,8 @@ fn fit_figures(prefix: &str, v: &Value) -> Vec<Figure> {
                     y_log: false,
                     y_range: None,
                     series: vec![
-                        series("measured", "measured", Stroke::Solid, PALETTE[0]),
-                        series("predicted", "predicted", Stroke::Dashed, PALETTE[1]),
+                        series(&tr.measured[a], "measured", Stroke::Solid, PALETTE[0]),
+                        series(&tr.predicted[a], "predicted", Stroke::Dashed, PALETTE[1]),
                     ],
                 },
             }
@@ -332,24 +259,22 @@ fn fit_figures(prefix: &str, v: &Value) -> Vec<Figure> {
         .collect()
 }
 
-fn linear_section(name: &str, v: &Value) -> Result<Section, String> {
-    let centre = v["equilibrium"]
-        .as_array()
-        .filter(|a| a.len() == 3)
-        .map(|a| [num(&a[0]), num(&a[1]), num(&a[2])])
-        .unwrap_or([0.0; 3]);
-    Ok(Section {
+fn linear_section(name: &str, v: &LinearResult) -> Section {
+    let centre = match v.equilibrium.as_deref() {
+        Some(&[x, y, z]) => [x, y, z],
+        _ => [0.0; 3],
+    };
+    Section {
         heading: format!("Linear estimate: {name}"),
-        verdict: linear_verdict(v),
-        warnings: strings(&v["warnings"]),
+        verdict: v.verdict(),
+        warnings: messages(&v.warnings),
         tables: linear_tables(v, None),
         figures: fit_figures("", v),
         ellipsoids: ellipsoids_of("estimate", centre, v),
-    })
+    }
 }
 
-fn demo_section(name: &str, v: &Value) -> Result<Section, String> {
-    let points = v.as_array().ok_or("demo result is not a list")?;
+fn demo_section(name: &str, v: &DemoResult) -> Section {
     let mut section = Section {
         heading: format!("Virtual seed 000 study: {name}"),
         verdict: String::new(),
@@ -369,34 +294,27 @@ fn demo_section(name: &str, v: &Value) -> Result<Section, String> {
         ],
         rows: vec![],
     };
-    let mut worst_k: f64 = 0.0;
-    for p in points {
-        let id = p["start_point"].as_str().unwrap_or("?").to_string();
-        let pos = p["position"]
-            .as_array()
-            .map(|a| [num(&a[0]), num(&a[1]), num(&a[2])])
-            .unwrap_or([0.0; 3]);
-        let est = &p["estimate"];
-        worst_k = worst_k.max(num(&p["stiffness_error_percent"]));
+    for p in &v.points {
+        let id = &p.start_point;
+        let est = &p.estimate;
         errors.rows.push(vec![
             id.clone(),
-            fmt(num(&p["stiffness_error_percent"])),
-            fmt(num(&p["damping_error_percent"])),
-            fmt(num(&p["inertia_error_percent"])),
-            linear_verdict(est),
+            fmt(p.stiffness_error_percent),
+            fmt(p.damping_error_percent),
+            fmt(p.inertia_error_percent),
+            est.verdict(),
         ]);
-        section.ellipsoids.extend(ellipsoids_of(&id, pos, est));
+        section
+            .ellipsoids
+            .extend(ellipsoids_of(id, p.position, est));
         if section.figures.is_empty() {
             section.figures = fit_figures(&format!("{id} "), est);
         }
-        let truth = serde_json::json!({
-            "stiffness": p["true_stiffness"], "damping": p["true_damping"], "inertia": p["true_inertia"],
-        });
-        for mut t in linear_tables(est, Some(&truth)).into_iter().take(3) {
+        for mut t in linear_tables(est, Some(p)).into_iter().take(3) {
             t.caption = format!("{id}: {}", t.caption);
             section.tables.push(t);
         }
-        for w in strings(&est["warnings"]) {
+        for w in &est.warnings {
             let w = format!("{id}: {w}");
             if !section.warnings.contains(&w) {
                 section.warnings.push(w);
@@ -405,54 +323,25 @@ fn demo_section(name: &str, v: &Value) -> Result<Section, String> {
     }
     section.verdict = format!(
         "{} start points; worst stiffness error {} % against the known truth",
-        points.len(),
-        fmt(worst_k)
+        v.points.len(),
+        fmt(v.worst_error_percent(MatrixKind::Stiffness))
     );
     section.tables.insert(0, errors);
-    Ok(section)
+    section
 }
 
 /// Z(f) element (i, j) of a model M, B, K: K - ω² M + j ω B.
-fn model_z(
-    m: &[Vec<f64>],
-    b: &[Vec<f64>],
-    k: &[Vec<f64>],
-    i: usize,
-    j: usize,
-    f: f64,
-) -> (f64, f64) {
+fn model_z(m: &Matrix, b: &Matrix, k: &Matrix, i: usize, j: usize, f: f64) -> (f64, f64) {
     let w = 2.0 * std::f64::consts::PI * f;
-    (k[i][j] - w * w * m[i][j], w * b[i][j])
+    (k[(i, j)] - w * w * m[(i, j)], w * b[(i, j)])
 }
 
-fn stochastic_section(name: &str, v: &Value) -> Result<Section, String> {
-    let freqs: Vec<f64> = v["frequencies"]
-        .as_array()
-        .ok_or("frequencies")?
-        .iter()
-        .map(num)
-        .collect();
-    let coords = strings(&v["coordinates"]);
+fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
+    let freqs = &v.frequencies;
+    let coords = &v.coordinates;
     let n = coords.len();
-    let z = v["impedance"].as_array().ok_or("impedance")?;
-    let (m, b, k) = (
-        matrix(&v["inertia"]).ok_or("inertia")?,
-        matrix(&v["damping"]).ok_or("damping")?,
-        matrix(&v["stiffness"]).ok_or("stiffness")?,
-    );
-    let expected = &v["accuracy"]["expected"];
-    let truth = match (
-        matrix(&expected["inertia"]),
-        matrix(&expected["damping"]),
-        matrix(&expected["stiffness"]),
-    ) {
-        (Some(m), Some(b), Some(k)) => Some((m, b, k)),
-        _ => None,
-    };
-    let band = v["criteria"]["band_hz"]
-        .as_array()
-        .map(|a| (num(&a[0]), num(&a[1])))
-        .unwrap_or((0.5, 10.0));
+    let expected = v.accuracy.as_ref().map(|a| &a.expected);
+    let band = (v.criteria.band_hz[0], v.criteria.band_hz[1]);
     let positive: Vec<usize> = (0..freqs.len()).filter(|&i| freqs[i] > 0.0).collect();
     let fx: Vec<f64> = positive.iter().map(|&i| freqs[i]).collect();
     let mut figures = Vec::new();
@@ -461,19 +350,24 @@ fn stochastic_section(name: &str, v: &Value) -> Result<Section, String> {
             let est: Vec<(f64, f64)> = positive
                 .iter()
                 .map(|&f| {
-                    let c = &z[f][i][j];
-                    (num(&c[0]), num(&c[1]))
+                    let c = v.impedance[f][i][j];
+                    (c[0], c[1])
                 })
                 .collect();
-            let fit: Vec<(f64, f64)> = fx.iter().map(|&f| model_z(&m, &b, &k, i, j, f)).collect();
+            let fit: Vec<(f64, f64)> = fx
+                .iter()
+                .map(|&f| model_z(&v.inertia, &v.damping, &v.stiffness, i, j, f))
+                .collect();
             let mut curves = vec![
                 ("estimate Z", est, Stroke::Solid, PALETTE[0]),
                 ("parametric fit", fit, Stroke::Dashed, PALETTE[1]),
             ];
-            if let Some((tm, tb, tk)) = &truth {
+            if let Some(t) = expected {
                 curves.push((
                     "expected",
-                    fx.iter().map(|&f| model_z(tm, tb, tk, i, j, f)).collect(),
+                    fx.iter()
+                        .map(|&f| model_z(&t.inertia, &t.damping, &t.stiffness, i, j, f))
+                        .collect(),
                     Stroke::Dotted,
                     PALETTE[6],
                 ));
@@ -520,9 +414,8 @@ fn stochastic_section(name: &str, v: &Value) -> Result<Section, String> {
         }
     }
     // coherences (seed 004 Fig. 10)
-    let outputs = strings(&v["coherence"]["outputs"]);
-    let inputs = strings(&v["inputs"]);
-    let multiple = &v["coherence"]["multiple"];
+    let outputs = &v.coherence.outputs;
+    let multiple = &v.coherence.multiple;
     figures.push(Figure {
         id: "coherence-multiple".into(),
         chart: Chart {
@@ -538,14 +431,14 @@ fn stochastic_section(name: &str, v: &Value) -> Result<Section, String> {
                 .map(|(o, name)| Series {
                     name: name.clone(),
                     x: fx.clone(),
-                    y: positive.iter().map(|&f| num(&multiple[o][f])).collect(),
+                    y: positive.iter().map(|&f| multiple[o][f]).collect(),
                     stroke: Stroke::Solid,
                     color: PALETTE[o % PALETTE.len()].into(),
                 })
                 .collect(),
         },
     });
-    let partial = &v["coherence"]["partial"];
+    let partial = &v.coherence.partial;
     for (o, name) in outputs.iter().enumerate() {
         figures.push(Figure {
             id: format!("coherence-partial-{name}"),
@@ -556,13 +449,14 @@ fn stochastic_section(name: &str, v: &Value) -> Result<Section, String> {
                 x_log: true,
                 y_log: false,
                 y_range: Some((0.0, 1.0)),
-                series: inputs
+                series: v
+                    .inputs
                     .iter()
                     .enumerate()
                     .map(|(u, input)| Series {
                         name: input.clone(),
                         x: fx.clone(),
-                        y: positive.iter().map(|&f| num(&partial[o][u][f])).collect(),
+                        y: positive.iter().map(|&f| partial[o][u][f]).collect(),
                         stroke: Stroke::Solid,
                         color: PALETTE[u % PALETTE.len()].into(),
                     })
@@ -570,133 +464,158 @@ fn stochastic_section(name: &str, v: &Value) -> Result<Section, String> {
             },
         });
     }
-    let c = &v["criteria"];
+    let c = &v.criteria;
     let mut verdict = format!(
         "mean multiple coherence {} (lowest {}) over {}-{} Hz; largest input coherence {}; parametric fit VAF {} %",
-        fmt(num(&c["mean_multiple_coherence"])),
-        fmt(num(&c["min_multiple_coherence"])),
+        fmt(c.mean_multiple_coherence),
+        fmt(c.min_multiple_coherence),
         fmt(band.0),
         fmt(band.1),
-        fmt(num(&c["max_input_coherence"])),
-        fmt(num(&c["fit_vaf"]))
+        fmt(c.max_input_coherence),
+        fmt(c.fit_vaf)
     );
-    if let Some(rel) = v["accuracy"]["mean_relative_error"].as_f64() {
+    if let Some(a) = &v.accuracy {
         let _ = write!(
             verdict,
             "; mean relative error vs. the expected model {} %",
-            fmt(100.0 * rel)
+            fmt(100.0 * a.mean_relative_error)
         );
     }
-    let se = &v["standard_errors"];
-    let tables = KINDS
-        .iter()
-        .filter_map(|(kind, sym)| {
-            let mat = matrix(&v[*kind])?;
-            Some(matrix_table(
-                &format!("{sym} ({kind}, SI, parametric fit over the band) ± standard error"),
-                &coords,
-                &mat,
-                matrix(&se[*kind]).as_ref(),
-                matrix(&expected[*kind]).as_ref(),
-            ))
-        })
-        .collect();
-    Ok(Section {
+    let se = &v.standard_errors;
+    let tables = [
+        (
+            "stiffness",
+            "K",
+            &v.stiffness,
+            &se.stiffness,
+            expected.map(|e| &e.stiffness),
+        ),
+        (
+            "damping",
+            "B",
+            &v.damping,
+            &se.damping,
+            expected.map(|e| &e.damping),
+        ),
+        (
+            "inertia",
+            "M",
+            &v.inertia,
+            &se.inertia,
+            expected.map(|e| &e.inertia),
+        ),
+    ]
+    .into_iter()
+    .map(|(kind, sym, m, se, truth)| {
+        matrix_table(
+            &format!("{sym} ({kind}, SI, parametric fit over the band) ± standard error"),
+            coords,
+            m,
+            Some(se),
+            truth,
+        )
+    })
+    .collect();
+    Section {
         heading: format!("Stochastic estimate: {name}"),
         verdict,
-        warnings: strings(&v["warnings"]),
+        warnings: messages(&v.warnings),
         tables,
         figures,
         ellipsoids: vec![],
-    })
+    }
 }
 
 /// A whole seed 001 study: means over subjects per configuration and level,
 /// ellipsoid rotation from level 0 to 1, and the stiffness against the index.
-fn study_section(name: &str, v: &Value) -> Result<Section, String> {
-    let rows = v["levels"].as_array().ok_or("levels")?;
-    let cols = [
-        "configuration",
-        "level",
-        "subjects",
-        "cocontraction_index",
-        "kxx",
-        "kyy",
-        "kzz",
-        "k_max_a",
-        "k1",
-        "k2",
-        "k3",
-    ];
-    let cell = |r: &Value, c: &str| match &r[c] {
-        Value::String(s) => s.clone(),
-        other => other.as_f64().map(fmt).unwrap_or_else(|| "n/a".into()),
-    };
+fn study_section(name: &str, v: &StudyResult) -> Section {
     let levels = Table {
         caption: "Means over subjects per configuration and level (seed 001 Tables 1-5): index, diagonal stiffness, largest antisymmetric element, principal stiffnesses (N/m)".into(),
-        header: cols.map(String::from).to_vec(),
-        rows: rows.iter().map(|r| cols.iter().map(|c| cell(r, c)).collect()).collect(),
-    };
-    let rot_cols = ["configuration", "from_level", "to_level", "subjects"];
-    let list = |x: &Value| {
-        x.as_array()
-            .map(|a| {
-                a.iter()
-                    .map(|v| fmt(num(v)))
-                    .collect::<Vec<_>>()
-                    .join(" / ")
-            })
-            .unwrap_or_default()
-    };
-    let rotation = Table {
-        caption: "Stiffness ellipsoid from the lowest to the highest level: axis rotations and principal changes".into(),
-        header: ["configuration", "from", "to", "subjects", "rotation (deg)", "principal change %"].map(String::from).to_vec(),
-        rows: v["rotation"]
-            .as_array()
-            .into_iter()
-            .flatten()
+        header: [
+            "configuration",
+            "level",
+            "subjects",
+            "cocontraction_index",
+            "kxx",
+            "kyy",
+            "kzz",
+            "k_max_a",
+            "k1",
+            "k2",
+            "k3",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: v
+            .levels
+            .iter()
             .map(|r| {
-                let mut row: Vec<String> = rot_cols.iter().map(|c| cell(r, c)).collect();
-                row.push(list(&r["rotation_deg"]));
-                row.push(list(&r["principal_change_percent"]));
-                row
+                vec![
+                    r.configuration.clone(),
+                    fmt(r.level),
+                    r.subjects.to_string(),
+                    optional(r.cocontraction_index),
+                    optional(r.kxx),
+                    optional(r.kyy),
+                    optional(r.kzz),
+                    optional(r.k_max_a),
+                    optional(r.k1),
+                    optional(r.k2),
+                    optional(r.k3),
+                ]
             })
             .collect(),
     };
-    let mut configs: Vec<String> = rows.iter().map(|r| cell(r, "configuration")).collect();
+    let list = |x: &[f64]| x.iter().map(|v| fmt(*v)).collect::<Vec<_>>().join(" / ");
+    let rotation = Table {
+        caption: "Stiffness ellipsoid from the lowest to the highest level: axis rotations and principal changes".into(),
+        header: ["configuration", "from", "to", "subjects", "rotation (deg)", "principal change %"].map(String::from).to_vec(),
+        rows: v
+            .rotation
+            .iter()
+            .map(|r| {
+                vec![
+                    r.configuration.clone(),
+                    fmt(r.from_level),
+                    fmt(r.to_level),
+                    r.subjects.to_string(),
+                    list(&r.rotation_deg),
+                    list(&r.principal_change_percent),
+                ]
+            })
+            .collect(),
+    };
+    let mut configs: Vec<&String> = v.levels.iter().map(|r| &r.configuration).collect();
     configs.dedup();
     // mean stiffness ellipsoids: levels side by side along x, configurations down z (seed 001 Fig. 5)
     let mut ellipsoids = Vec::new();
     for (i, c) in configs.iter().enumerate() {
-        let at: Vec<&Value> = rows
-            .iter()
-            .filter(|r| cell(r, "configuration") == *c)
-            .collect();
-        for (j, r) in at.iter().enumerate() {
-            let point = format!("configuration {c}, level {}", cell(r, "level"));
+        let at = v.levels.iter().filter(|r| &r.configuration == *c);
+        for (j, r) in at.enumerate() {
+            let point = format!("configuration {c}, level {}", fmt(r.level));
             let centre = [0.15 * j as f64, 0.0, -0.15 * i as f64];
-            ellipsoids.extend(ellipsoid_view(&point, "stiffness", centre, &r["ellipsoid"]));
+            if let Some(e) = &r.ellipsoid {
+                ellipsoids.extend(ellipsoid_view(&point, "stiffness", centre, e));
+            }
         }
     }
-    let per_config = |key: &str| -> Vec<Series> {
-        configs
-            .iter()
-            .enumerate()
-            .map(|(k, c)| {
-                let pts: Vec<&Value> = rows
+    let series: Vec<Series> = configs
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let pts: Vec<_> = v.levels.iter().filter(|r| &r.configuration == *c).collect();
+            Series {
+                name: format!("configuration {c}"),
+                x: pts
                     .iter()
-                    .filter(|r| cell(r, "configuration") == *c)
-                    .collect();
-                Series {
-                    name: format!("configuration {c}"),
-                    x: pts.iter().map(|r| num(&r["cocontraction_index"])).collect(),
-                    y: pts.iter().map(|r| num(&r[key])).collect(),
-                    stroke: Stroke::Solid,
-                    color: PALETTE[k % PALETTE.len()].into(),
-                }
-            })
-            .collect()
-    };
+                    .map(|r| r.cocontraction_index.unwrap_or(f64::NAN))
+                    .collect(),
+                y: pts.iter().map(|r| r.k1.unwrap_or(f64::NAN)).collect(),
+                stroke: Stroke::Solid,
+                color: PALETTE[k % PALETTE.len()].into(),
+            }
+        })
+        .collect();
     let figures = vec![Figure {
         id: "study-k1".into(),
         chart: Chart {
@@ -706,27 +625,24 @@ fn study_section(name: &str, v: &Value) -> Result<Section, String> {
             x_log: false,
             y_log: false,
             y_range: None,
-            series: per_config("k1"),
+            series,
         },
     }];
-    let failures: Vec<String> = v["failures"]
-        .as_array()
-        .into_iter()
-        .flatten()
+    let failures: Vec<String> = v
+        .failures
+        .iter()
         .map(|f| {
             format!(
                 "subject {}, configuration {}: {}",
-                cell(f, "subject"),
-                cell(f, "configuration"),
-                f["error"].as_str().unwrap_or("")
+                f.subject, f.configuration, f.error
             )
         })
         .collect();
-    Ok(Section {
-        heading: format!("Study {}: {name}", v["name"].as_str().unwrap_or("")),
+    Section {
+        heading: format!("Study {}: {name}", v.name),
         verdict: format!(
             "{} recordings analysed, {} failed; {} configurations",
-            v["recordings"].as_array().map_or(0, Vec::len),
+            v.recordings.len(),
             failures.len(),
             configs.len()
         ),
@@ -734,16 +650,15 @@ fn study_section(name: &str, v: &Value) -> Result<Section, String> {
         tables: vec![levels, rotation],
         figures,
         ellipsoids,
-    })
+    }
 }
 
 /// Seed 001: index and stiffness per co-contraction level, ellipsoids side by side (Fig. 5).
-fn cocontraction_section(name: &str, v: &Value) -> Result<Section, String> {
-    let levels = v["levels"].as_array().ok_or("levels")?;
+fn cocontraction_section(name: &str, v: &CocontractionResult) -> Section {
     let mut section = Section {
         heading: format!("Co-contraction levels: {name}"),
         verdict: String::new(),
-        warnings: strings(&v["warnings"]),
+        warnings: messages(&v.warnings),
         tables: vec![],
         figures: vec![],
         ellipsoids: vec![],
@@ -762,124 +677,104 @@ fn cocontraction_section(name: &str, v: &Value) -> Result<Section, String> {
         rows: vec![],
     };
     let mut summary = Vec::new();
-    for (k, l) in levels.iter().enumerate() {
-        let level = num(&l["level"]);
-        let id = format!("level {}", fmt(level));
-        let ev: Vec<String> = l["ellipsoid"]["eigenvalues"]
-            .as_array()
-            .map(|a| a.iter().map(|x| fmt(num(x))).collect())
+    for (k, l) in v.levels.iter().enumerate() {
+        let id = format!("level {}", fmt(l.level));
+        let ev: Vec<String> = l
+            .ellipsoid
+            .as_ref()
+            .map(|e| e.eigenvalues.iter().map(|x| fmt(*x)).collect())
             .unwrap_or_default();
         index_table.rows.push(vec![
-            fmt(level),
+            fmt(l.level),
             format!(
                 "{} ± {}",
-                fmt(num(&l["cocontraction_index"])),
-                fmt(num(&l["cocontraction_sd"]))
+                fmt(l.cocontraction_index),
+                fmt(l.cocontraction_sd)
             ),
-            format!("{} %", fmt(100.0 * num(&l["cocontraction_within_band"]))),
+            format!("{} %", fmt(100.0 * l.cocontraction_within_band)),
             ev.join(" / "),
-            linear_verdict(&l["estimate"]),
+            l.estimate.verdict(),
         ]);
         summary.push(format!(
             "{} at level {}",
-            fmt(num(&l["cocontraction_index"])),
-            fmt(level)
+            fmt(l.cocontraction_index),
+            fmt(l.level)
         ));
         // side by side along x, 0.15 m apart (seed 001 Fig. 5)
-        section.ellipsoids.extend(ellipsoids_of(
-            &id,
-            [0.15 * k as f64, 0.0, 0.0],
-            &l["estimate"],
+        section
+            .ellipsoids
+            .extend(ellipsoids_of(&id, [0.15 * k as f64, 0.0, 0.0], &l.estimate));
+        section.tables.push(matrix_table(
+            &format!("{id}: K (N/m) ± standard error"),
+            &l.estimate.provenance.coordinates,
+            &l.stiffness,
+            Some(&l.estimate.standard_errors.stiffness),
+            None,
         ));
-        if let Some(kmat) = matrix(&l["stiffness"]) {
-            let se = matrix(&l["estimate"]["standard_errors"]["stiffness"]);
-            section.tables.push(matrix_table(
-                &format!("{id}: K (N/m) ± standard error"),
-                &coordinates(&l["estimate"], kmat.len()),
-                &kmat,
-                se.as_ref(),
-                None,
-            ));
-        }
     }
     let mut comparisons = Table {
         caption: "Stiffness ellipsoid against the reference level: principal changes and rotations (direction-matched axes)".into(),
         header: ["level", "reference", "principal change %", "axis rotation (deg)", "ambiguous axes"].map(String::from).to_vec(),
         rows: vec![],
     };
-    for c in v["comparisons"].as_array().into_iter().flatten() {
-        let list = |key: &str| {
-            c[key]
-                .as_array()
-                .map(|a| {
-                    a.iter()
-                        .map(|x| x.as_f64().map(fmt).unwrap_or_else(|| x.to_string()))
-                        .collect::<Vec<_>>()
-                        .join(" / ")
-                })
-                .unwrap_or_default()
-        };
+    let list = |x: &[f64]| x.iter().map(|v| fmt(*v)).collect::<Vec<_>>().join(" / ");
+    for c in &v.comparisons {
         comparisons.rows.push(vec![
-            fmt(num(&c["level"])),
-            fmt(num(&c["reference_level"])),
-            list("principal_change_percent"),
-            list("rotation_deg"),
-            list("ambiguous"),
+            fmt(c.level),
+            fmt(c.reference_level),
+            list(&c.principal_change_percent),
+            list(&c.rotation_deg),
+            c.ambiguous
+                .iter()
+                .map(|b| b.to_string())
+                .collect::<Vec<_>>()
+                .join(" / "),
         ]);
     }
     section.verdict = format!("co-contraction index {}", summary.join(", "));
     section.tables.insert(0, index_table);
     section.tables.insert(1, comparisons);
-    Ok(section)
+    section
 }
 
-fn planar_section(name: &str, v: &Value) -> Result<Section, String> {
-    let c = &v["criteria"];
-    let verdict = if c["trusted"].as_bool().unwrap_or(false) {
+fn planar_section(name: &str, v: &PlanarEstimate) -> Section {
+    let c = &v.criteria;
+    let verdict = if c.trusted {
         "trusted: well-conditioned, K and D positive definite and quasi-symmetric".to_string()
     } else {
-        format!("NOT TRUSTED: {}", strings(&c["reasons"]).join("; "))
+        format!("NOT TRUSTED: {}", c.reasons.join("; "))
     };
     let coords = vec!["q1".to_string(), "q2".to_string()];
-    let se = &v["standard_errors"];
-    let tables = ["stiffness", "damping"]
-        .iter()
-        .filter_map(|kind| {
-            Some(matrix_table(
-                &format!("joint {kind} (SI) ± standard error"),
-                &coords,
-                &matrix(&v[*kind])?,
-                matrix(&se[*kind]).as_ref(),
-                None,
-            ))
-        })
-        .collect();
-    Ok(Section {
+    let se = &v.standard_errors;
+    let tables = [
+        ("stiffness", &v.stiffness, &se.stiffness),
+        ("damping", &v.damping, &se.damping),
+    ]
+    .into_iter()
+    .map(|(kind, m, se)| {
+        matrix_table(
+            &format!("joint {kind} (SI) ± standard error"),
+            &coords,
+            m,
+            Some(se),
+            None,
+        )
+    })
+    .collect();
+    Section {
         heading: format!("Planar-arm estimate: {name}"),
         verdict,
         warnings: vec![],
         tables,
         figures: vec![],
         ellipsoids: vec![],
-    })
+    }
 }
 
-fn sweep_section(name: &str, v: &Value) -> Result<Section, String> {
-    let rows = v["rows"].as_array().ok_or("rows")?;
-    let t: Vec<f64> = rows
-        .iter()
-        .map(|r| num(&r["observation_window_ms"]))
-        .collect();
-    let crit = |key: &str, idx: Option<usize>| -> Vec<f64> {
-        rows.iter()
-            .map(|r| {
-                let x = &r["estimate"]["criteria"][key];
-                match idx {
-                    Some(i) => num(&x[i]),
-                    None => num(x),
-                }
-            })
-            .collect()
+fn sweep_section(name: &str, v: &Sweep) -> Section {
+    let t: Vec<f64> = v.rows.iter().map(|r| r.observation_window_ms).collect();
+    let crit = |f: &dyn Fn(&limpid_ident::planar::PlanarCriteria) -> f64| -> Vec<f64> {
+        v.rows.iter().map(|r| f(&r.estimate.criteria)).collect()
     };
     let series = |name: &str, y: Vec<f64>, k: usize| Series {
         name: name.into(),
@@ -899,10 +794,10 @@ fn sweep_section(name: &str, v: &Value) -> Result<Section, String> {
                 y_log: true,
                 y_range: None,
                 series: vec![
-                    series("cond(W)", crit("condition_number", None), 0),
+                    series("cond(W)", crit(&|c| c.condition_number), 0),
                     series(
                         "cond(W), unit-RMS columns",
-                        crit("condition_number_scaled", None),
+                        crit(&|c| c.condition_number_scaled),
                         1,
                     ),
                 ],
@@ -918,8 +813,8 @@ fn sweep_section(name: &str, v: &Value) -> Result<Section, String> {
                 y_log: false,
                 y_range: None,
                 series: vec![
-                    series("K, smallest", crit("stiffness_eigenvalues", Some(1)), 0),
-                    series("D, smallest", crit("damping_eigenvalues", Some(1)), 1),
+                    series("K, smallest", crit(&|c| c.stiffness_eigenvalues[1]), 0),
+                    series("D, smallest", crit(&|c| c.damping_eigenvalues[1]), 1),
                 ],
             },
         },
@@ -933,26 +828,27 @@ fn sweep_section(name: &str, v: &Value) -> Result<Section, String> {
                 y_log: false,
                 y_range: None,
                 series: vec![
-                    series("K", crit("stiffness_symmetry_ratio", None), 0),
-                    series("D", crit("damping_symmetry_ratio", None), 1),
+                    series("K", crit(&|c| c.stiffness_symmetry_ratio), 0),
+                    series("D", crit(&|c| c.damping_symmetry_ratio), 1),
                 ],
             },
         },
     ];
+    let never = |x: Option<f64>| x.map_or_else(|| "never".into(), fmt);
     let verdict = format!(
         "shortest trustworthy windows: positive definite from {} ms, quasi-symmetric from {} ms, quasi-constant from {} ms",
-        v["min_positive_definite_ms"].as_f64().map(fmt).unwrap_or_else(|| "never".into()),
-        v["min_quasi_symmetric_ms"].as_f64().map(fmt).unwrap_or_else(|| "never".into()),
-        v["min_quasi_constant_ms"].as_f64().map(fmt).unwrap_or_else(|| "never".into()),
+        never(v.min_positive_definite_ms),
+        never(v.min_quasi_symmetric_ms),
+        never(v.min_quasi_constant_ms),
     );
-    Ok(Section {
+    Section {
         heading: format!("Observation-window sweep: {name}"),
         verdict,
         warnings: vec![],
         tables: vec![],
         figures,
         ellipsoids: vec![],
-    })
+    }
 }
 
 /// The scale per kind: the largest |eigenvalue| of a kind is drawn with a
@@ -999,7 +895,7 @@ fn viewer_data(ellipsoids: &[EllipsoidView]) -> Value {
     let mut kinds = Vec::new();
     let mut scale = serde_json::Map::new();
     let mut scale_value = serde_json::Map::new();
-    for (kind, _) in KINDS {
+    for kind in MatrixKind::ALL.map(MatrixKind::name) {
         let max = ellipsoids
             .iter()
             .filter(|e| e.kind == kind)

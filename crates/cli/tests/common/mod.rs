@@ -1,14 +1,18 @@
 //! Helpers shared by the CLI tests.
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
 
-use std::path::PathBuf;
 use std::process::Command;
 
 use serde_json::Value;
 
-/// `../shared` as seen from the workspace root (CI clones beside it).
-pub fn shared() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
+pub use limpid_testkit::{mat, read_json, rel_err, shared};
+
+/// A result document (CLI `--json` output or a written JSON file) as the
+/// typed result the report renders.
+pub fn document(v: &Value) -> limpid_analysis::result::Estimate {
+    limpid_analysis::result::Document::from_json("test result", &v.to_string())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .estimate
 }
 
 pub struct Output {
@@ -29,41 +33,42 @@ pub fn limpid(args: &[&str]) -> Output {
     }
 }
 
+/// The output of a `--json` command; a result document (it has a `schema`
+/// key) is validated against the committed JSON Schema on the way.
 pub fn json(args: &[&str]) -> Value {
     let out = limpid(args);
     assert_eq!(out.code, 0, "limpid {args:?} failed: {}", out.stderr);
-    serde_json::from_str(&out.stdout).expect("valid JSON")
-}
-
-pub fn read_json(path: &std::path::Path) -> Value {
-    serde_json::from_str(
-        &std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-    )
-    .unwrap()
-}
-
-pub fn mat(v: &Value) -> Vec<Vec<f64>> {
-    v.as_array()
-        .expect("matrix")
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect()
-        })
-        .collect()
-}
-
-/// Relative Frobenius error.
-pub fn rel_err(est: &[Vec<f64>], truth: &[Vec<f64>]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (a, b) in est.iter().flatten().zip(truth.iter().flatten()) {
-        num += (a - b) * (a - b);
-        den += b * b;
+    let v: Value = serde_json::from_str(&out.stdout).expect("valid JSON");
+    if v.get("schema").is_some() {
+        validate(&v);
     }
-    (num / den).sqrt()
+    v
+}
+
+/// The committed schema of result documents (`schema/`), compiled once.
+fn validator() -> &'static jsonschema::Validator {
+    static VALIDATOR: std::sync::OnceLock<jsonschema::Validator> = std::sync::OnceLock::new();
+    VALIDATOR.get_or_init(|| {
+        let schema = read_json(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../schema/limpid-result.v1.schema.json"
+        ));
+        jsonschema::validator_for(&schema).expect("the committed schema compiles")
+    })
+}
+
+/// Assert that `v` is a valid result document.
+pub fn validate(v: &Value) {
+    let errors: Vec<String> = validator()
+        .iter_errors(v)
+        .take(5)
+        .map(|e| format!("{e} (at {})", e.instance_path))
+        .collect();
+    assert!(
+        errors.is_empty(),
+        "the result does not match schema/limpid-result.v1.schema.json:\n{}",
+        errors.join("\n")
+    );
 }
 
 /// Headless Chromium (Debian's `chromium`, installed by .ci/run) with the

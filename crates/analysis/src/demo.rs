@@ -1,0 +1,169 @@
+//! The virtual experiment behind `limpid demo`: seed 000's 3-D study on a
+//! subject whose matrices are known (seed 000 Table I, subject 1).
+//!
+//! Six start points, 16 centre-out perturbations each (3 cm, 3 s; 6 s for the
+//! sinusoid), a position-controlled robot, an F/T sensor with per-trial
+//! offset, drift and noise (`limpid_lab`); every start point is estimated
+//! with the linear estimator (seed 000 eq. (3)-(8)) and compared with the
+//! subject's true matrices by the relative Frobenius error.
+
+use std::fmt::Write as _;
+
+use limpid_core::{Matrix, Result};
+use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
+use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
+use rayon::prelude::*;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::linear::{linear_result, LinearResult, MatrixKind};
+
+/// One start point: truth, estimate, errors.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct DemoPoint {
+    pub start_point: String,
+    /// Start point (m).
+    pub position: [f64; 3],
+    pub true_stiffness: Matrix,
+    pub true_damping: Matrix,
+    pub true_inertia: Matrix,
+    /// Relative Frobenius errors, percent.
+    pub stiffness_error_percent: f64,
+    pub damping_error_percent: f64,
+    pub inertia_error_percent: f64,
+    pub estimate: LinearResult,
+}
+
+impl DemoPoint {
+    /// The true matrix of one kind.
+    pub fn truth(&self, kind: MatrixKind) -> &Matrix {
+        match kind {
+            MatrixKind::Stiffness => &self.true_stiffness,
+            MatrixKind::Damping => &self.true_damping,
+            MatrixKind::Inertia => &self.true_inertia,
+        }
+    }
+
+    /// The relative error of one kind (percent).
+    pub fn error_percent(&self, kind: MatrixKind) -> f64 {
+        match kind {
+            MatrixKind::Stiffness => self.stiffness_error_percent,
+            MatrixKind::Damping => self.damping_error_percent,
+            MatrixKind::Inertia => self.inertia_error_percent,
+        }
+    }
+}
+
+/// The whole virtual study.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct DemoResult {
+    /// Perturbation profile of the centre-out phase.
+    pub profile: String,
+    /// Target directions per start point.
+    pub directions: usize,
+    /// Perturbation amplitude (m).
+    pub radius_m: f64,
+    /// Duration of one motion (s).
+    pub motion_s: f64,
+    pub sample_rate_hz: f64,
+    /// Random seed of the sensor noise.
+    pub seed: u64,
+    pub points: Vec<DemoPoint>,
+}
+
+impl DemoResult {
+    /// The largest error of one kind over the start points (percent).
+    pub fn worst_error_percent(&self, kind: MatrixKind) -> f64 {
+        self.points
+            .iter()
+            .map(|p| p.error_percent(kind))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Relative Frobenius error, percent.
+pub fn relative_error_percent(estimate: &Matrix, truth: &Matrix) -> f64 {
+    100.0 * (&estimate.0 - &truth.0).norm() / truth.norm()
+}
+
+fn run_point(p: &Posture, protocol: &CentreOut, seed: u64) -> Result<DemoPoint> {
+    let rec = simulate_centre_out(p, protocol, &NoiseModel::default(), seed)?;
+    let prepared = prepare(&rec, &PrepareParams::default())?;
+    let est = fit_linear(&prepared, &LinearParams::default())?;
+    let result = linear_result(&est, &prepared);
+    let (k, b, m) = (
+        Matrix::from(p.stiffness),
+        Matrix::from(p.damping),
+        Matrix::from(p.inertia),
+    );
+    Ok(DemoPoint {
+        start_point: p.name.clone(),
+        position: [p.start.x, p.start.y, p.start.z],
+        stiffness_error_percent: relative_error_percent(&result.stiffness, &k),
+        damping_error_percent: relative_error_percent(&result.damping, &b),
+        inertia_error_percent: relative_error_percent(&result.inertia, &m),
+        true_stiffness: k,
+        true_damping: b,
+        true_inertia: m,
+        estimate: result,
+    })
+}
+
+/// Simulate and estimate every start point (in parallel); `progress` is
+/// called once per start point.
+pub fn run_demo(profile: Profile, seed: u64, progress: &(dyn Fn() + Sync)) -> Result<DemoResult> {
+    let protocol = CentreOut::seed000(profile);
+    let subject = seed000_subject1();
+    let points = subject
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let r = run_point(p, &protocol, seed.wrapping_mul(1000) + i as u64);
+            progress();
+            r
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(DemoResult {
+        profile: format!("{profile:?}").to_lowercase(),
+        directions: protocol.directions.len(),
+        radius_m: protocol.radius_m,
+        motion_s: protocol.motion_s,
+        sample_rate_hz: protocol.sample_rate,
+        seed,
+        points,
+    })
+}
+
+/// One row per start point and matrix kind: diagonal of truth and estimate,
+/// error, identifiability.
+pub fn demo_csv(result: &DemoResult) -> String {
+    let mut s = String::from("start_point,x,y,z,kind,true_xx,true_yy,true_zz,est_xx,est_yy,est_zz,error_percent,identifiable\n");
+    for d in &result.points {
+        let e = &d.estimate;
+        for kind in MatrixKind::ALL {
+            let (t, m) = (d.truth(kind), e.matrix(kind));
+            let ok = match kind {
+                MatrixKind::Stiffness => e.criteria.identifiable.stiffness,
+                MatrixKind::Damping => e.criteria.identifiable.damping,
+                MatrixKind::Inertia => e.criteria.identifiable.inertia,
+            };
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{},{},{},{},{},{},{:.4},{ok}",
+                d.start_point,
+                d.position[0],
+                d.position[1],
+                d.position[2],
+                kind.name(),
+                t[(0, 0)],
+                t[(1, 1)],
+                t[(2, 2)],
+                m[(0, 0)],
+                m[(1, 1)],
+                m[(2, 2)],
+                d.error_percent(kind)
+            );
+        }
+    }
+    s
+}

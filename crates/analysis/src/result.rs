@@ -1,0 +1,121 @@
+//! The result contract: every result limpid hands out, as one typed family.
+//!
+//! [`Document`] is what the CLI prints with `--json`, what the Python
+//! functions return as text and what the report reads: a `schema` version,
+//! a `kind` tag naming the [`Estimate`] variant, and that variant's fields.
+//! The JSON is exactly the serialisation of these types; JSON Schema files
+//! generated from them (`schemars`) are committed under `schema/` and the
+//! tests validate the CLI's output against them.
+//!
+//! A renamed or removed field is a compile error in every consumer (report,
+//! CLI tables, Python), not a blank table; a consumer of the JSON checks
+//! `schema` and gets a one-line error for a result it does not know.
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::cocontraction::CocontractionResult;
+use crate::demo::DemoResult;
+use crate::linear::LinearResult;
+use crate::study::StudyResult;
+use limpid_ident::planar::{PlanarEstimate, Sweep};
+use limpid_ident::stochastic::StochasticEstimate;
+
+/// Version of the result schema; raised when a field changes meaning or is removed.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// One result of any method.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+#[allow(clippy::large_enum_variant)]
+pub enum Estimate {
+    /// `M x'' + B x' + K (x - x_eq) = f` by least squares (seeds 000, 001).
+    Linear(LinearResult),
+    /// Planar 2-link arm, joint space (seed 003).
+    Planar(PlanarEstimate),
+    /// Criteria against the observation window (seed 003 §IV).
+    WindowSweep(Sweep),
+    /// Stochastic MIMO impedance Z(f) (seed 004).
+    Stochastic(StochasticEstimate),
+    /// Impedance per co-contraction level (seed 001).
+    Cocontraction(CocontractionResult),
+    /// A whole co-contraction study (seed 001 Tables 1-5).
+    Study(StudyResult),
+    /// The virtual seed 000 study of `limpid demo`, with its truth.
+    Demo(DemoResult),
+}
+
+impl Estimate {
+    /// The `kind` tag.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Estimate::Linear(_) => "linear",
+            Estimate::Planar(_) => "planar",
+            Estimate::WindowSweep(_) => "window_sweep",
+            Estimate::Stochastic(_) => "stochastic",
+            Estimate::Cocontraction(_) => "cocontraction",
+            Estimate::Study(_) => "study",
+            Estimate::Demo(_) => "demo",
+        }
+    }
+}
+
+/// A result with its schema version: the JSON document.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct Document {
+    /// [`SCHEMA_VERSION`] of the writer.
+    pub schema: u32,
+    #[serde(flatten)]
+    pub estimate: Estimate,
+}
+
+impl Document {
+    /// A document of the current schema.
+    pub fn new(estimate: Estimate) -> Self {
+        Document {
+            schema: SCHEMA_VERSION,
+            estimate,
+        }
+    }
+
+    /// The document as pretty JSON.
+    pub fn to_json_pretty(&self) -> String {
+        serde_json::to_string_pretty(self).expect("results serialise (no map has non-string keys)")
+    }
+
+    /// The document as compact JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("results serialise (no map has non-string keys)")
+    }
+
+    /// Read a document; `name` names the source in the error.
+    pub fn from_json(name: &str, text: &str) -> Result<Self, String> {
+        let v: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| format!("{name}: not JSON: {e}"))?;
+        match v.get("schema").and_then(|s| s.as_u64()) {
+            Some(s) if s == SCHEMA_VERSION as u64 => {}
+            Some(s) => {
+                return Err(format!(
+                    "{name}: result schema {s}, this limpid reads schema {SCHEMA_VERSION}"
+                ))
+            }
+            None => {
+                return Err(format!(
+                    "{name}: not a limpid result (no \"schema\" key; results of limpid before schema 1 must be made again)"
+                ))
+            }
+        }
+        serde_json::from_value(v).map_err(|e| format!("{name}: not a limpid result: {e}"))
+    }
+}
+
+impl From<Estimate> for Document {
+    fn from(e: Estimate) -> Self {
+        Document::new(e)
+    }
+}
+
+/// The JSON Schema of [`Document`].
+pub fn json_schema() -> serde_json::Value {
+    serde_json::to_value(schemars::schema_for!(Document)).expect("a schema is JSON")
+}
