@@ -9,7 +9,7 @@ use limpid_analysis::linear::{linear_result, shoulder_impedance, ShoulderPosture
 use limpid_analysis::result::{Document, Estimate};
 use limpid_core::FrameTransform;
 use limpid_ident::{
-    fit_linear, prepare, Derivative, LinearParams, Offsets, PrepareParams, Windowing,
+    prepare, Derivative, Estimator, LinearParams, Offsets, PrepareParams, Windowing,
 };
 
 use crate::{table, CliResult};
@@ -268,13 +268,11 @@ pub fn run(method: Method) -> CliResult {
             };
             let rec = args.prepare.read(&args.recording)?;
             let prepared = prepare(&rec, &params)?;
-            let est = fit_linear(
-                &prepared,
-                &LinearParams {
-                    equilibrium: !args.no_equilibrium,
-                    ..LinearParams::default()
-                },
-            )?;
+            let est = LinearParams {
+                equilibrium: !args.no_equilibrium,
+                ..LinearParams::default()
+            }
+            .fit(&prepared)?;
             let mut result = linear_result(&est, &prepared);
             let up = match args.vertical {
                 AxisArg::X => nalgebra::Vector3::x(),

@@ -6,9 +6,8 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use limpid_analysis::result::{Document, Estimate};
 use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch, Window};
-use limpid_ident::stochastic::{
-    accuracy, default_welch, estimate_stochastic, ExpectedModel, StochasticParams,
-};
+use limpid_ident::stochastic::{accuracy, default_welch, ExpectedModel, StochasticParams};
+use limpid_ident::Estimator;
 
 use crate::table::num;
 use crate::CliResult;
@@ -106,7 +105,7 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         welch: Some(args.welch.welch(rec.len(), rec.sample_rate())),
         band_hz: band,
     };
-    let mut est = estimate_stochastic(&rec, &params)?;
+    let mut est = params.fit(&rec)?;
     if let Some(p) = &args.expected {
         est.accuracy = Some(accuracy(&est, &ExpectedModel::read(p)?, band)?);
     }

@@ -7,7 +7,9 @@
 //! - [`planar`]: the planar 2-link arm in joint space (seed 003).
 //! - [`stochastic`]: Z(f) = T R^-1 from Welch spectra (seed 004).
 //! - [`online`]: recursive least squares for the live display.
+//! - [`estimator`]: the one shape they share (settings -> check -> fit -> result).
 
+pub mod estimator;
 pub mod linear;
 pub mod lsq;
 pub mod online;
@@ -15,5 +17,6 @@ pub mod planar;
 pub mod prepare;
 pub mod stochastic;
 
+pub use estimator::{Estimator, OnlineParams, PlanarParams};
 pub use linear::{fit_linear, LinearEstimate, LinearParams};
 pub use prepare::{prepare, Derivative, Offsets, PrepareParams, Prepared, Windowing};
