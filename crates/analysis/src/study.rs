@@ -292,6 +292,63 @@ pub fn run_study(
     }
 }
 
+/// A virtual seed 001 study: `subjects` drawn from the seed 001 population,
+/// each in the 7 arm configurations, simulated (`limpid_lab`) and written to
+/// `dir` as `s<subject>_c<config>.parquet`, its MVC recording and a
+/// `.truth.json` with the stiffness per level, with the manifest
+/// `study.toml` that `run_study` reads. Returns the number of recordings and
+/// the manifest's path; `progress` is called once per recording.
+pub fn simulate_study(
+    dir: &Path,
+    subjects: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> Result<(usize, PathBuf)> {
+    use limpid_lab::cocontraction::{
+        seed001_population, simulate_cocontraction, CocontractionProtocol,
+    };
+    std::fs::create_dir_all(dir).map_err(|e| Error::Io {
+        path: dir.to_path_buf(),
+        source: e,
+    })?;
+    let population = seed001_population(subjects, seed);
+    let protocol = CocontractionProtocol::seed001();
+    let entries: Vec<String> = population
+        .par_iter()
+        .map(|(s, c, subject)| -> Result<String> {
+            let seed = seed.wrapping_mul(10_000) + (*s as u64) * 100 + *c as u64;
+            let (rec, mvc) = simulate_cocontraction(
+                subject,
+                &protocol,
+                &limpid_lab::NoiseModel::default(),
+                seed,
+            )?;
+            let file = format!("s{s}_c{c}.parquet");
+            let mvc_file = format!("s{s}_c{c}.mvc.parquet");
+            limpid_io::write_recording(&rec, dir.join(&file))?;
+            limpid_io::write_recording(&mvc, dir.join(&mvc_file))?;
+            let truth = serde_json::json!({
+                "levels": protocol.levels.iter().map(|l| {
+                    serde_json::json!({"level": l, "stiffness": crate::Matrix::from(subject.stiffness(*l))})
+                }).collect::<Vec<_>>(),
+            });
+            let text = serde_json::to_string_pretty(&truth).expect("truth serialises");
+            limpid_core::files::write_file(&dir.join(format!("s{s}_c{c}.truth.json")), text.as_bytes())?;
+            progress();
+            Ok(format!(
+                "[[recording]]\nsubject = \"{s}\"\nconfiguration = \"{c}\"\nfile = \"{file}\"\nmvc = \"{mvc_file}\"\n"
+            ))
+        })
+        .collect::<Result<_>>()?;
+    let manifest = format!(
+        "# virtual seed 001 study: {subjects} subjects x 7 configurations x 4 levels x 18 perturbations\n[study]\nname = \"virtual seed 001 study\"\n\n{}",
+        entries.join("\n")
+    );
+    let path = dir.join("study.toml");
+    limpid_core::files::write_file(&path, manifest.as_bytes())?;
+    Ok((population.len(), path))
+}
+
 fn limpid_io_read(path: &Path) -> Result<limpid_core::Recording> {
     limpid_io::read_recording(path)
 }

@@ -4,13 +4,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use limpid_analysis::study::{load_manifest, run_study, write_tables};
+use limpid_analysis::study::{load_manifest, run_study, simulate_study, write_tables};
 use limpid_ident::PrepareParams;
-use limpid_lab::cocontraction::{
-    seed001_population, simulate_cocontraction, CocontractionProtocol,
-};
-use limpid_lab::NoiseModel;
-use rayon::prelude::*;
 
 use crate::CliResult;
 
@@ -119,46 +114,11 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 )
                 .into());
             }
-            std::fs::create_dir_all(&args.out)
-                .map_err(|e| format!("{}: {e}", args.out.display()))?;
-            let population = seed001_population(args.subjects, args.seed);
-            let protocol = CocontractionProtocol::seed001();
-            let progress = bar(population.len(), "simulating recordings")?;
-            let entries: Vec<String> = population
-                .par_iter()
-                .map(|(s, c, subject)| -> CliResult<String> {
-                    let seed = args.seed.wrapping_mul(10_000) + (*s as u64) * 100 + *c as u64;
-                    let (rec, mvc) = simulate_cocontraction(subject, &protocol, &NoiseModel::default(), seed)?;
-                    let file = format!("s{s}_c{c}.parquet");
-                    let mvc_file = format!("s{s}_c{c}.mvc.parquet");
-                    limpid_io::write_recording(&rec, args.out.join(&file))?;
-                    limpid_io::write_recording(&mvc, args.out.join(&mvc_file))?;
-                    let truth = serde_json::json!({
-                        "levels": protocol.levels.iter().map(|l| {
-                            let k = subject.stiffness(*l);
-                            serde_json::json!({"level": l, "stiffness": (0..3).map(|i| (0..3).map(|j| k[(i, j)]).collect::<Vec<f64>>()).collect::<Vec<_>>()})
-                        }).collect::<Vec<_>>(),
-                    });
-                    limpid_core::files::write_file(&args.out.join(format!("s{s}_c{c}.truth.json")), serde_json::to_string_pretty(&truth)?.as_bytes())?;
-                    progress.inc(1);
-                    Ok(format!(
-                        "[[recording]]\nsubject = \"{s}\"\nconfiguration = \"{c}\"\nfile = \"{file}\"\nmvc = \"{mvc_file}\"\n"
-                    ))
-                })
-                .collect::<CliResult<_>>()?;
+            let progress = bar(7 * args.subjects, "simulating recordings")?;
+            let (recordings, path) =
+                simulate_study(&args.out, args.subjects, args.seed, &|| progress.inc(1))?;
             progress.finish_and_clear();
-            let manifest = format!(
-                "# virtual seed 001 study: {} subjects x 7 configurations x 4 levels x 18 perturbations\n[study]\nname = \"virtual seed 001 study\"\n\n{}",
-                args.subjects,
-                entries.join("\n")
-            );
-            let path = args.out.join("study.toml");
-            limpid_core::files::write_file(&path, manifest.as_bytes())?;
-            println!(
-                "wrote {} recordings and {}",
-                population.len(),
-                path.display()
-            );
+            println!("wrote {} recordings and {}", recordings, path.display());
             Ok(())
         }
     }

@@ -496,65 +496,6 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         stiffness: block(&se, 2),
         constant: with_const.then(|| (0..n).map(|a| se[(3 * n, a)]).collect()),
     };
-    let ratio = params.identifiable_ratio;
-    let check = |value: &Matrix,
-                 se: &Matrix,
-                 label: &str,
-                 unit: &str,
-                 warnings: &mut Vec<Warning>| {
-        let column = match label {
-            "M" => 0,
-            "B" => 1,
-            _ => 2,
-        };
-        let noisy: Vec<String> = (0..n)
-            .filter(|&i| reliability[i][column] < MIN_RELIABILITY)
-            .map(|i| {
-                format!(
-                    "{} {:.0} %",
-                    data.coordinates[i],
-                    100.0 * reliability[i][column]
-                )
-            })
-            .collect();
-        if !noisy.is_empty() {
-            warnings.push(Warning::new(WarningCode::NoisyRegressors, format!(
-                "{} regressors are dominated by position noise (signal share {}; needs {:.0} %): the {} estimate is biased towards zero",
-                ["acceleration", "velocity", "displacement"][column],
-                noisy.join(", "),
-                100.0 * MIN_RELIABILITY,
-                ["inertia", "damping", "stiffness"][column],
-            )));
-        }
-        let bad: Vec<String> = (0..n)
-            // NaN-safe; an exact zero (no force at all) identifies nothing
-            .filter(|&i| {
-                let identified = value[(i, i)].abs() >= ratio * se[(i, i)];
-                value[(i, i)] == 0.0 || !identified
-            })
-            .map(|i| {
-                format!(
-                    "{}{} = {:.3} ± {:.3} {unit}",
-                    label,
-                    sub(&data.coordinates, i, i),
-                    value[(i, i)],
-                    se[(i, i)]
-                )
-            })
-            .collect();
-        if !bad.is_empty() {
-            warnings.push(Warning::new(WarningCode::NotIdentifiable, format!(
-                "{} is not identifiable from this data ({}; |value| < {ratio} SE): treat it as unknown",
-                match label {
-                    "M" => "inertia",
-                    "B" => "damping",
-                    _ => "stiffness",
-                },
-                bad.join(", ")
-            )));
-        }
-        bad.is_empty() && noisy.is_empty()
-    };
     let finite = |m: &Matrix| m.iter().all(|v| v.is_finite());
     if ![
         &inertia,
@@ -572,31 +513,29 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             "the estimate or its standard errors are not finite numbers: the data overflow double precision or do not determine the model".into(),
         ));
     }
-    let (mu, bu, ku) = units(&data.coordinates);
-    let identifiable = Identifiable {
-        inertia: check(&inertia, &se_out.inertia, "M", mu, &mut warnings),
-        damping: check(&damping, &se_out.damping, "B", bu, &mut warnings),
-        stiffness: check(&stiffness, &se_out.stiffness, "K", ku, &mut warnings),
+    let judge = |kind: usize, value: &Matrix, se: &Matrix, warnings: &mut Vec<Warning>| {
+        identified(
+            kind,
+            value,
+            se,
+            &data.coordinates,
+            &reliability,
+            params.identifiable_ratio,
+            warnings,
+        )
     };
-    if !identifiable.inertia {
-        warnings.push(Warning::new(WarningCode::InertiaBelowNoise, "inertial forces are below the noise: perturbations this slow cannot identify inertia (seed 000's 3 s motions are such a case)"));
-    }
-    if condition_number > 1e4 {
-        warnings.push(Warning::new(WarningCode::IllConditioned, format!(
-            "the scaled regressor is ill-conditioned (condition number {condition_number:.3e}): parameters are strongly correlated"
-        )));
-    }
-    for (a, v) in fit.vaf.iter().enumerate() {
-        if *v < 50.0 {
-            warnings.push(Warning::new(
-                WarningCode::PoorFit,
-                format!(
-                    "the model explains only {v:.1} % of the force variance along {}",
-                    data.coordinates[a]
-                ),
-            ));
-        }
-    }
+    let identifiable = Identifiable {
+        inertia: judge(0, &inertia, &se_out.inertia, &mut warnings),
+        damping: judge(1, &damping, &se_out.damping, &mut warnings),
+        stiffness: judge(2, &stiffness, &se_out.stiffness, &mut warnings),
+    };
+    quality_warnings(
+        &identifiable,
+        condition_number,
+        &fit,
+        &data.coordinates,
+        &mut warnings,
+    );
     Ok(LinearEstimate {
         coordinates: data.coordinates.clone(),
         inertia,
@@ -614,6 +553,89 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         standard_error_method: se_method,
         warnings,
     })
+}
+
+/// Whether one matrix (`kind` 0 inertia, 1 damping, 2 stiffness) is
+/// identified: every diagonal element at least `ratio` standard errors from
+/// zero (NaN-safe; an exact zero, no force at all, identifies nothing) and
+/// its regressors carrying signal, not propagated position noise. Says why
+/// not in `warnings`.
+fn identified(
+    kind: usize,
+    value: &Matrix,
+    se: &Matrix,
+    coords: &[String],
+    reliability: &[[f64; 3]],
+    ratio: f64,
+    warnings: &mut Vec<Warning>,
+) -> bool {
+    let n = coords.len();
+    let (label, name) = [("M", "inertia"), ("B", "damping"), ("K", "stiffness")][kind];
+    let (mu, bu, ku) = units(coords);
+    let unit = [mu, bu, ku][kind];
+    let noisy: Vec<String> = (0..n)
+        .filter(|&i| reliability[i][kind] < MIN_RELIABILITY)
+        .map(|i| format!("{} {:.0} %", coords[i], 100.0 * reliability[i][kind]))
+        .collect();
+    if !noisy.is_empty() {
+        warnings.push(Warning::new(WarningCode::NoisyRegressors, format!(
+            "{} regressors are dominated by position noise (signal share {}; needs {:.0} %): the {name} estimate is biased towards zero",
+            ["acceleration", "velocity", "displacement"][kind],
+            noisy.join(", "),
+            100.0 * MIN_RELIABILITY,
+        )));
+    }
+    let bad: Vec<String> = (0..n)
+        .filter(|&i| {
+            let identified = value[(i, i)].abs() >= ratio * se[(i, i)];
+            value[(i, i)] == 0.0 || !identified
+        })
+        .map(|i| {
+            format!(
+                "{label}{} = {:.3} ± {:.3} {unit}",
+                sub(coords, i, i),
+                value[(i, i)],
+                se[(i, i)]
+            )
+        })
+        .collect();
+    if !bad.is_empty() {
+        warnings.push(Warning::new(WarningCode::NotIdentifiable, format!(
+            "{name} is not identifiable from this data ({}; |value| < {ratio} SE): treat it as unknown",
+            bad.join(", ")
+        )));
+    }
+    bad.is_empty() && noisy.is_empty()
+}
+
+/// Warnings on the whole fit: inertia below the noise, an ill-conditioned
+/// regressor, a force the model explains poorly.
+fn quality_warnings(
+    identifiable: &Identifiable,
+    condition_number: f64,
+    fit: &FitQuality,
+    coords: &[String],
+    warnings: &mut Vec<Warning>,
+) {
+    if !identifiable.inertia {
+        warnings.push(Warning::new(WarningCode::InertiaBelowNoise, "inertial forces are below the noise: perturbations this slow cannot identify inertia (seed 000's 3 s motions are such a case)"));
+    }
+    if condition_number > 1e4 {
+        warnings.push(Warning::new(WarningCode::IllConditioned, format!(
+            "the scaled regressor is ill-conditioned (condition number {condition_number:.3e}): parameters are strongly correlated"
+        )));
+    }
+    for (a, v) in fit.vaf.iter().enumerate() {
+        if *v < 50.0 {
+            warnings.push(Warning::new(
+                WarningCode::PoorFit,
+                format!(
+                    "the model explains only {v:.1} % of the force variance along {}",
+                    coords[a]
+                ),
+            ));
+        }
+    }
 }
 
 /// Correlation r, VAF (%) and RMS error of measured `f` against predicted `fhat`.
