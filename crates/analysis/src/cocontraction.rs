@@ -36,14 +36,19 @@ pub const TIE_GAP: f64 = 0.05;
 /// One condition level.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct LevelResult {
+    /// The condition level (the recording's `level` value).
     pub level: f64,
     /// Mean co-contraction index over the samples of this level (fraction of MVC).
     pub cocontraction_index: f64,
+    /// Standard deviation of the index over the level's samples.
     pub cocontraction_sd: f64,
     /// Share of samples within the tolerance band of the target level.
     pub cocontraction_within_band: f64,
+    /// K (N/m), seed 001's 9-column form.
     pub stiffness: Matrix,
+    /// B (N s/m).
     pub damping: Matrix,
+    /// M (kg).
     pub inertia: Matrix,
     /// Stiffness ellipsoid (symmetric part).
     pub ellipsoid: Option<Ellipsoid>,
@@ -54,7 +59,9 @@ pub struct LevelResult {
 /// One level compared with the reference (lowest) level.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Comparison {
+    /// The compared level.
     pub level: f64,
+    /// The reference (lowest) level.
     pub reference_level: f64,
     /// Percent change of the primary, secondary, tertiary principal stiffness.
     pub principal_change_percent: Vec<f64>,
@@ -69,11 +76,17 @@ pub struct Comparison {
 /// Everything `estimate cocontraction` reports.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct CocontractionResult {
+    /// The recording's path.
     pub recording: String,
+    /// The MVC recording's path.
     pub mvc: String,
+    /// EMG columns used.
     pub muscles: Vec<String>,
+    /// One result per level, lowest first.
     pub levels: Vec<LevelResult>,
+    /// Every level against the lowest.
     pub comparisons: Vec<Comparison>,
+    /// What the reader should know about this analysis.
     pub warnings: Vec<Warning>,
 }
 
@@ -84,6 +97,7 @@ pub struct EllipsoidChange {
     pub change_percent: Vec<f64>,
     /// Angle (deg, 0-90) between each reference axis and its matched axis.
     pub rotation_deg: Vec<f64>,
+    /// Reference axes whose direction is undefined (tied eigenvalues).
     pub ambiguous: Vec<bool>,
     /// `partner[i]`: rank of the axis matched to reference axis i.
     pub partner: Vec<usize>,

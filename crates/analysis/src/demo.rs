@@ -21,16 +21,23 @@ use crate::linear::{linear_result, LinearResult, MatrixKind};
 /// One start point: truth, estimate, errors.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct DemoPoint {
+    /// Start point name (S1..S6).
     pub start_point: String,
     /// Start point (m).
     pub position: [f64; 3],
+    /// The subject's K at this start point (N/m).
     pub true_stiffness: Matrix,
+    /// The subject's B (N s/m).
     pub true_damping: Matrix,
+    /// The subject's M (kg).
     pub true_inertia: Matrix,
     /// Relative Frobenius errors, percent.
     pub stiffness_error_percent: f64,
+    /// Damping error (%).
     pub damping_error_percent: f64,
+    /// Inertia error (%).
     pub inertia_error_percent: f64,
+    /// The full linear result.
     pub estimate: LinearResult,
 }
 
@@ -65,9 +72,11 @@ pub struct DemoResult {
     pub radius_m: f64,
     /// Duration of one motion (s).
     pub motion_s: f64,
+    /// Sample rate (Hz).
     pub sample_rate_hz: f64,
     /// Random seed of the sensor noise.
     pub seed: u64,
+    /// One entry per start point.
     pub points: Vec<DemoPoint>,
 }
 

@@ -22,9 +22,13 @@ use serde::Serialize;
 /// | `tolerance` | 0.1 | half-width of the band around the target level | > 0 |
 #[derive(Debug, Clone)]
 pub struct EmgParams {
+    /// Low-pass cut-off of the rectified EMG (Hz).
     pub cutoff_hz: f64,
+    /// Butterworth order.
     pub order: usize,
+    /// One causal pass (live) instead of zero-phase.
     pub causal: bool,
+    /// Half-width of the band around the target level (fraction of MVC).
     pub tolerance: f64,
 }
 
@@ -115,6 +119,7 @@ pub fn cocontraction_index(
 /// Statistics of the index over the samples of one level.
 #[derive(Debug, Clone, Serialize)]
 pub struct LevelIndex {
+    /// The level.
     pub level: f64,
     /// Mean co-contraction index (fraction of MVC).
     pub mean: f64,
@@ -122,6 +127,7 @@ pub struct LevelIndex {
     pub sd: f64,
     /// Share of samples within `tolerance` of the target level (0..1).
     pub within_band: f64,
+    /// Samples at this level.
     pub samples: usize,
 }
 

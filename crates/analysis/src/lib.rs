@@ -11,6 +11,8 @@
 //! - criteria (seed 003 §III-C): positive definiteness of the symmetric part
 //!   (smallest eigenvalue > 0) and the symmetry ratio ||Z_a||_F / ||Z_s||_F.
 
+#![warn(missing_docs)]
+
 pub mod cocontraction;
 pub mod demo;
 pub mod emg;

@@ -18,8 +18,11 @@ use limpid_ident::Prepared;
 /// One value per matrix kind.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PerMatrix<T> {
+    /// Of the inertia M.
     pub inertia: T,
+    /// Of the damping B.
     pub damping: T,
+    /// Of the stiffness K.
     pub stiffness: T,
 }
 
@@ -51,45 +54,68 @@ impl<T> PerMatrix<T> {
 /// Quality criteria of the whole estimate.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Criteria {
+    /// Condition number of the column-scaled regressor.
     pub condition_number: f64,
+    /// Positive definiteness and symmetry per matrix.
     pub matrices: PerMatrix<MatrixCriteria>,
+    /// Which matrices the data identify.
     pub identifiable: Identifiable,
     /// `[acceleration, velocity, displacement]` signal share per coordinate.
     pub regressor_reliability: Vec<[f64; 3]>,
+    /// How the standard errors were obtained.
     pub standard_error_method: String,
+    /// Samples used.
     pub samples: usize,
+    /// Parameters fitted.
     pub parameters: usize,
 }
 
 /// Where the data came from and how it was prepared.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Provenance {
+    /// The recording's path.
     pub recording: String,
+    /// Coordinate names, in the order of the matrices' rows and columns.
     pub coordinates: Vec<String>,
+    /// Force column of each coordinate.
     pub force_columns: Vec<String>,
     /// Units of inertia, damping, stiffness entries.
     pub units: [String; 3],
+    /// Sample rate (Hz).
     pub sample_rate_hz: f64,
+    /// Windows (trials) used.
     pub windows: usize,
+    /// One continuous window (no trials).
     pub continuous: bool,
+    /// Low-pass cut-off (Hz).
     pub cutoff_hz: f64,
+    /// Butterworth order per pass.
     pub filter_order: usize,
+    /// Derivative method (`central`, `savgol`).
     pub derivative: String,
+    /// Force offsets (`rest`, `fit`, `constant`).
     pub offsets: String,
+    /// Samples dropped at each window edge.
     pub edge_trim_samples: usize,
 }
 
 /// Everything `estimate linear --json` prints.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct LinearResult {
+    /// M (kg, or kg m^2 for angles), row = force component, column = coordinate.
     pub inertia: Matrix,
+    /// B (N s/m, N m s/rad).
     pub damping: Matrix,
+    /// K (N/m, N m/rad).
     pub stiffness: Matrix,
     /// Absolute equilibrium position; absent when not estimated (see `warnings`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub equilibrium: Option<Vec<f64>>,
+    /// Standard errors, same layout.
     pub standard_errors: StandardErrors,
+    /// Symmetric parts (seed 000 eq. (10)).
     pub symmetric: PerMatrix<Matrix>,
+    /// Antisymmetric parts (seed 000 eq. (11)).
     pub antisymmetric: PerMatrix<Matrix>,
     /// Ellipsoids of the symmetric parts (2 or 3 coordinates; the key is
     /// absent for 1 coordinate, where no ellipsoid exists).
@@ -98,10 +124,15 @@ pub struct LinearResult {
         skip_serializing_if = "PerMatrix::all_none"
     )]
     pub ellipsoids: PerMatrix<Option<Ellipsoid>>,
+    /// Seed 000 Table II quantities.
     pub table_ii: PerMatrix<TableII>,
+    /// Goodness of fit per force component.
     pub fit: FitQuality,
+    /// Quality criteria and identifiability.
     pub criteria: Criteria,
+    /// What the reader should know about this estimate.
     pub warnings: Vec<Warning>,
+    /// Where the data came from and how they were prepared.
     pub provenance: Provenance,
     /// The arm's configuration from tracked markers, when the recording has them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -203,8 +234,11 @@ impl Criteria {
 /// The three matrices of the linear model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MatrixKind {
+    /// K.
     Stiffness,
+    /// B.
     Damping,
+    /// M.
     Inertia,
 }
 
@@ -313,8 +347,11 @@ pub struct ShoulderImpedance {
 /// The shoulder's posture and segments for [`shoulder_impedance`].
 #[derive(Debug, Clone, Copy)]
 pub struct ShoulderPosture {
+    /// Upper-arm length (m).
     pub upper_arm_m: f64,
+    /// Forearm length (m).
     pub forearm_m: f64,
+    /// Elbow angle (degrees).
     pub elbow_deg: f64,
     /// Flexion, abduction, rotation (degrees).
     pub angles_deg: [f64; 3],

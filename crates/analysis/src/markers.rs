@@ -14,17 +14,24 @@ use limpid_core::{Error, Recording, Result, Warning, WarningCode};
 /// Mean configuration over the recording, angles in degrees.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct MarkerConfiguration {
+    /// Samples with every marker present.
     pub samples: usize,
+    /// Shoulder elevation (deg).
     pub shoulder_elevation_deg: f64,
+    /// Shoulder azimuth (deg).
     pub shoulder_azimuth_deg: f64,
     /// Absent when the elbow is straight or the upper arm vertical in any sample.
     pub humeral_rotation_deg: Option<f64>,
+    /// Elbow flexion (deg).
     pub elbow_flexion_deg: f64,
+    /// Mean upper-arm length (m).
     pub upper_arm_length_m: f64,
+    /// Mean forearm length (m).
     pub forearm_length_m: f64,
     /// Largest deviation of a segment length from its mean (m): markers on a
     /// rigid segment keep it near 0; centimetres mean slipping markers.
     pub segment_length_spread_m: f64,
+    /// What the reader should know (slipping markers).
     pub warnings: Vec<Warning>,
 }
 

@@ -66,6 +66,7 @@ pub struct Document {
     /// [`SCHEMA_VERSION`] of the writer.
     pub schema: u32,
     #[serde(flatten)]
+    /// The result.
     pub estimate: Estimate,
 }
 

@@ -41,8 +41,10 @@ use limpid_ident::PrepareParams;
 #[serde(deny_unknown_fields)]
 pub struct Manifest {
     #[serde(default)]
+    /// Study-wide settings.
     pub study: StudyMeta,
     #[serde(default)]
+    /// The recordings.
     pub recording: Vec<Entry>,
 }
 
@@ -50,7 +52,9 @@ pub struct Manifest {
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct StudyMeta {
+    /// Study name for the tables.
     pub name: Option<String>,
+    /// Half-width of the band around each target level (default 0.1).
     pub tolerance: Option<f64>,
 }
 
@@ -58,9 +62,13 @@ pub struct StudyMeta {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Entry {
+    /// Subject id.
     pub subject: String,
+    /// Arm configuration id.
     pub configuration: String,
+    /// The recording.
     pub file: PathBuf,
+    /// Its MVC recording.
     pub mvc: PathBuf,
 }
 
@@ -86,29 +94,44 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
 /// Tables 1-4 row: one configuration at one level.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct LevelRow {
+    /// Arm configuration.
     pub configuration: String,
+    /// Co-contraction level.
     pub level: f64,
+    /// Subjects averaged.
     pub subjects: usize,
     /// Means over the subjects that have the value; null when none has it.
     pub cocontraction_index: Option<f64>,
+    /// Mean Kxx (N/m).
     pub kxx: Option<f64>,
+    /// Mean Kyy (N/m).
     pub kyy: Option<f64>,
+    /// Mean Kzz (N/m).
     pub kzz: Option<f64>,
+    /// Mean largest antisymmetric element (N/m).
     pub k_max_a: Option<f64>,
+    /// Mean primary principal stiffness (N/m).
     pub k1: Option<f64>,
+    /// Mean secondary principal stiffness (N/m).
     pub k2: Option<f64>,
+    /// Mean tertiary principal stiffness (N/m).
     pub k3: Option<f64>,
     /// Mean stiffness matrix over subjects (N/m) and its ellipsoid (seed 001 Fig. 5).
     pub stiffness: crate::Matrix,
+    /// Ellipsoid of the mean matrix; absent when it is not 2 x 2 or 3 x 3.
     pub ellipsoid: Option<crate::Ellipsoid>,
 }
 
 /// Table 5 row (and Fig. 6): highest vs lowest level for one configuration.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct RotationRow {
+    /// Arm configuration.
     pub configuration: String,
+    /// Lowest level.
     pub from_level: f64,
+    /// Highest level.
     pub to_level: f64,
+    /// Subjects with both levels.
     pub subjects: usize,
     /// Mean rotation of primary, secondary, tertiary axes (deg).
     pub rotation_deg: Vec<f64>,
@@ -119,27 +142,39 @@ pub struct RotationRow {
 /// A recording that could not be processed.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Failure {
+    /// Subject id.
     pub subject: String,
+    /// Arm configuration id.
     pub configuration: String,
+    /// The recording.
     pub file: String,
+    /// The error, in one line.
     pub error: String,
 }
 
 /// One processed recording.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Processed {
+    /// Subject id.
     pub subject: String,
+    /// Arm configuration id.
     pub configuration: String,
+    /// Its co-contraction analysis.
     pub result: CocontractionResult,
 }
 
 /// The whole study.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct StudyResult {
+    /// Study name.
     pub name: String,
+    /// Tables 1-4 rows.
     pub levels: Vec<LevelRow>,
+    /// Table 5 rows.
     pub rotation: Vec<RotationRow>,
+    /// Recordings left out, with their errors.
     pub failures: Vec<Failure>,
+    /// Every processed recording.
     pub recordings: Vec<Processed>,
 }
 

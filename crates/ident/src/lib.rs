@@ -9,6 +9,8 @@
 //! - [`online`]: recursive least squares for the live display.
 //! - [`estimator`]: the one shape they share (settings -> check -> fit -> result).
 
+#![warn(missing_docs)]
+
 pub mod estimator;
 pub mod linear;
 pub mod lsq;

@@ -38,7 +38,9 @@ use limpid_core::{Error, Result, Warning, WarningCode};
 /// | `identifiable_ratio` | 2 | a diagonal element counts as identified when `|value| >= ratio * SE` | > 0 |
 #[derive(Debug, Clone)]
 pub struct LinearParams {
+    /// Fit a constant and report the equilibrium x_eq (seed 000); false: the 9-column form of seed 001.
     pub equilibrium: bool,
+    /// A diagonal element counts as identified when |value| >= ratio x SE.
     pub identifiable_ratio: f64,
 }
 
@@ -75,6 +77,7 @@ pub struct FitTraces {
     pub time: Vec<f64>,
     /// `[coordinate][point]`.
     pub measured: Vec<Vec<f64>>,
+    /// Predicted force, `[coordinate][point]`.
     pub predicted: Vec<Vec<f64>>,
 }
 
@@ -84,28 +87,39 @@ pub const TRACE_POINTS: usize = 1500;
 /// Whether each matrix is identified from the data (every diagonal element >= ratio x SE).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Identifiable {
+    /// Every diagonal element of M at least `identifiable_ratio` SE from zero.
     pub inertia: bool,
+    /// The same for B.
     pub damping: bool,
+    /// The same for K.
     pub stiffness: bool,
 }
 
 /// The linear estimate with its quality.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct LinearEstimate {
+    /// Coordinate names, in the order of the matrices' rows and columns.
     pub coordinates: Vec<String>,
+    /// M (kg, or kg m^2 for angles), row = force component, column = coordinate.
     pub inertia: Matrix,
+    /// B (N s/m, N m s/rad).
     pub damping: Matrix,
+    /// K (N/m, N m/rad).
     pub stiffness: Matrix,
     /// Equilibrium position (absolute coordinates), when fitted and K is invertible.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub equilibrium: Option<Vec<f64>>,
     /// Standard errors, same layout as the estimates.
     pub standard_errors: StandardErrors,
+    /// Goodness of fit per force component.
     pub fit: FitQuality,
     /// Condition number of the column-scaled regressor.
     pub condition_number: f64,
+    /// Which matrices the data identify.
     pub identifiable: Identifiable,
+    /// Samples used.
     pub samples: usize,
+    /// Parameters fitted (n x columns of the regressor).
     pub parameters: usize,
     /// Autocorrelation inflation of the residual variance, per force
     /// component, where the analytic standard errors were used (else null).
@@ -119,14 +133,18 @@ pub struct LinearEstimate {
     pub regressor_reliability: Vec<[f64; 3]>,
     /// How the standard errors were obtained.
     pub standard_error_method: String,
+    /// What the reader should know about this estimate.
     pub warnings: Vec<Warning>,
 }
 
 /// Standard errors of the estimate.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct StandardErrors {
+    /// Of M.
     pub inertia: Matrix,
+    /// Of B.
     pub damping: Matrix,
+    /// Of K.
     pub stiffness: Matrix,
     /// Of the constant term (N), when fitted.
     #[serde(skip_serializing_if = "Option::is_none")]

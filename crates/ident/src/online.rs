@@ -16,6 +16,7 @@ pub struct Rls {
     err_power: [f64; 3],
     f_mean: [f64; 3],
     f_power: [f64; 3],
+    /// Samples processed.
     pub updates: u64,
 }
 

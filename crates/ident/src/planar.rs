@@ -59,15 +59,21 @@ pub fn regressor(q2: f64, qd: [f64; 2], qdd: [f64; 2], dq: [f64; 2]) -> [[f64; 1
 /// One prepared trial: samples from the perturbation onset to the end of the window.
 #[derive(Debug, Clone)]
 pub struct PlanarTrial {
+    /// Trial id (the recording's `trial` column).
     pub id: i64,
+    /// Joint angles q1, q2 (rad).
     pub q: [Vec<f64>; 2],
+    /// Joint velocities (rad/s).
     pub qd: [Vec<f64>; 2],
+    /// Joint accelerations (rad/s^2).
     pub qdd: [Vec<f64>; 2],
     /// Δq = q - q0.
     pub dq: [Vec<f64>; 2],
     /// Δτ = τ - τ0.
     pub dtau: [Vec<f64>; 2],
+    /// Posture before the onset: mean over the rest (rad).
     pub q0: [f64; 2],
+    /// Joint torques before the onset: mean over the rest (N m).
     pub tau0: [f64; 2],
 }
 
@@ -81,9 +87,13 @@ pub struct PlanarTrial {
 /// | `elbow_positive` | true | inverse-kinematics branch for end-point data | |
 #[derive(Debug, Clone)]
 pub struct PlanarPrepare {
+    /// Link lengths and shoulder position.
     pub arm: Arm,
+    /// Low-pass cut-off (Hz); `None`: 30 Hz, at most 0.4 fs.
     pub cutoff_hz: Option<f64>,
+    /// Butterworth order.
     pub order: usize,
+    /// Elbow branch of the inverse kinematics: q2 > 0 (flexed).
     pub elbow_positive: bool,
 }
 
@@ -107,12 +117,17 @@ impl PlanarPrepare {
 /// Prepared planar data.
 #[derive(Debug, Clone)]
 pub struct PlanarData {
+    /// The recording's path.
     pub path: std::path::PathBuf,
+    /// Sample rate (Hz).
     pub fs: f64,
+    /// The arm the data were converted with.
     pub arm: Arm,
+    /// Prepared trials.
     pub trials: Vec<PlanarTrial>,
     /// True when the recording held end-point data converted to joint space.
     pub from_endpoint: bool,
+    /// Low-pass cut-off used (Hz).
     pub cutoff_hz: f64,
 }
 
@@ -285,14 +300,21 @@ pub struct PlanarCriteria {
     pub condition_number: f64,
     /// cond(W) with unit-RMS columns.
     pub condition_number_scaled: f64,
+    /// Eigenvalues of the symmetric part of K, largest first (N m/rad).
     pub stiffness_eigenvalues: [f64; 2],
+    /// Eigenvalues of the symmetric part of D, largest first (N m s/rad).
     pub damping_eigenvalues: [f64; 2],
+    /// K_s positive definite.
     pub stiffness_positive_definite: bool,
+    /// D_s positive definite.
     pub damping_positive_definite: bool,
     /// ||K_a|| / ||K_s||.
     pub stiffness_symmetry_ratio: f64,
+    /// ||D_a|| / ||D_s||.
     pub damping_symmetry_ratio: f64,
+    /// Every criterion met: well-conditioned, K and D positive definite and quasi-symmetric, physical inertial parameters.
     pub trusted: bool,
+    /// Why not trusted, one sentence per failed criterion.
     pub reasons: Vec<String>,
 }
 
@@ -301,9 +323,11 @@ pub struct PlanarCriteria {
 pub struct PlanarEstimate {
     /// ξ1..ξ3 (kg m^2); the given values when fixed.
     pub inertial_parameters: [f64; 3],
+    /// True when the inertial parameters were given (reduced model, eq. (23)-(25)).
     pub inertial_parameters_fixed: bool,
     /// Joint stiffness (N m/rad) and damping (N m s/rad).
     pub stiffness: Matrix,
+    /// Joint damping D (N m s/rad).
     pub damping: Matrix,
     /// End-point stiffness J^-T K J^-1 at the mean q0 (N/m), without the
     /// geometric term of the baseline force.
@@ -312,9 +336,13 @@ pub struct PlanarEstimate {
     pub standard_errors: PlanarErrors,
     /// VAF (%) and r of Δτ per joint.
     pub fit: PlanarFit,
+    /// Confidence criteria of seed 003 §III-C.
     pub criteria: PlanarCriteria,
+    /// Observation window after each onset (ms).
     pub observation_window_ms: f64,
+    /// Trials used.
     pub trials: usize,
+    /// Samples per joint used.
     pub samples: usize,
     /// Leave-one-trial-out VAF (%) per joint (seed 003 Fig. 6), when computed
     /// ([`estimate_planar`]).
@@ -322,16 +350,23 @@ pub struct PlanarEstimate {
     pub leave_one_out_vaf: Option<[f64; 2]>,
 }
 
+/// Standard errors of a planar estimate (delete-one-trial jackknife).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarErrors {
+    /// Of ξ1..ξ3 (kg m^2); zeros when given.
     pub inertial_parameters: [f64; 3],
+    /// Of K (N m/rad).
     pub stiffness: Matrix,
+    /// Of D (N m s/rad).
     pub damping: Matrix,
 }
 
+/// Fit of Δτ per joint.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarFit {
+    /// Variance accounted for (%).
     pub vaf: [f64; 2],
+    /// Correlation of measured and predicted Δτ.
     pub r: [f64; 2],
 }
 
@@ -591,13 +626,16 @@ pub fn leave_one_out_vaf(
 /// One observation window of the sweep.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct SweepRow {
+    /// T_obs (ms).
     pub observation_window_ms: f64,
+    /// The estimate from this window.
     pub estimate: PlanarEstimate,
 }
 
 /// The observation-window study (seed 003 §IV, Fig. 4-5).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Sweep {
+    /// One row per observation window.
     pub rows: Vec<SweepRow>,
     /// Shortest T_obs from which K_s stays positive definite.
     pub min_positive_definite_ms: Option<f64>,

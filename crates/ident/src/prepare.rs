@@ -93,14 +93,23 @@ pub enum Windowing {
 /// | `level` | none | keep only windows of this `level` | a value of the `level` column |
 #[derive(Debug, Clone)]
 pub struct PrepareParams {
+    /// How the data are cut into windows.
     pub windowing: Windowing,
+    /// Low-pass cut-off (Hz); `None`: 30 Hz, at most 0.4 fs.
     pub cutoff_hz: Option<f64>,
+    /// Butterworth order per pass.
     pub filter_order: usize,
+    /// How velocity and acceleration are computed.
     pub derivative: Derivative,
+    /// How per-trial force offsets are removed.
     pub offsets: Offsets,
+    /// The force columns hold the hand's force on the sensor: negate them.
     pub negate_force: bool,
+    /// Frame change applied to positions and forces.
     pub transform: Option<FrameTransform>,
+    /// Shortest rest before an onset (s).
     pub min_rest_s: f64,
+    /// Column with trial ids.
     pub trial_column: String,
     /// Keep only windows whose samples all carry this `level` (condition label).
     pub level: Option<f64>,
@@ -169,6 +178,7 @@ pub struct PreparedWindow {
 /// Prepared data: per coordinate, concatenated over windows.
 #[derive(Debug, Clone)]
 pub struct Prepared {
+    /// The recording's path.
     pub path: PathBuf,
     /// Coordinate names (`x`, `y`, `z`, `theta`, `q1`, ...).
     pub coordinates: Vec<String>,
@@ -178,10 +188,13 @@ pub struct Prepared {
     pub fs: f64,
     /// Displacement from the window's reference position.
     pub disp: Vec<Vec<f64>>,
+    /// Velocity, per coordinate.
     pub vel: Vec<Vec<f64>>,
+    /// Acceleration, per coordinate.
     pub acc: Vec<Vec<f64>>,
     /// Force with the rest offset removed (perturbation windows) or raw (continuous).
     pub force: Vec<Vec<f64>>,
+    /// The windows, in the order of the concatenated samples.
     pub windows: Vec<PreparedWindow>,
     /// True when the data is one continuous window (a constant term is needed).
     pub continuous: bool,
@@ -189,7 +202,9 @@ pub struct Prepared {
     pub demeaned: bool,
     /// Effective settings, for reports.
     pub cutoff_hz: f64,
+    /// Butterworth order used.
     pub filter_order: usize,
+    /// Derivative method used.
     pub derivative: Derivative,
     /// Samples dropped at each window edge.
     pub trim: usize,

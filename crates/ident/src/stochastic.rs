@@ -36,7 +36,9 @@ use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch};
 /// | `band_hz` | 0.5-10 Hz | band of the parametric fit and of the accuracy measures (seed 004: 10 Hz) | 0 < lo < hi < fs/2 |
 #[derive(Debug, Clone)]
 pub struct StochasticParams {
+    /// Welch settings; `None`: [`default_welch`].
     pub welch: Option<Welch>,
+    /// Band of the parametric fit and the accuracy measures (Hz).
     pub band_hz: (f64, f64),
 }
 
@@ -76,30 +78,41 @@ pub struct Coherences {
 /// Non-parametric and parametric impedance with its quality.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct StochasticEstimate {
+    /// Coordinates (displacement columns).
     pub coordinates: Vec<String>,
+    /// Input columns (`u*`), one per coordinate.
     pub inputs: Vec<String>,
     /// Frequencies (Hz) up to the band's upper edge.
     pub frequencies: Vec<f64>,
     /// `impedance[f][i][j] = [re, im]` of Z (force per displacement).
     pub impedance: Vec<Vec<Vec<[f64; 2]>>>,
+    /// Multiple and partial coherences.
     pub coherence: Coherences,
     /// Parametric fit over the band (SI).
     pub inertia: Matrix,
+    /// B (SI), parametric fit over the band.
     pub damping: Matrix,
+    /// K (SI), parametric fit over the band.
     pub stiffness: Matrix,
+    /// Standard errors of the parametric fit.
     pub standard_errors: ParametricErrors,
+    /// Quality of the spectra and of the fit.
     pub criteria: StochasticCriteria,
     /// Accuracy against an expected model (seed 004 eq. (15)-(16)), when one is given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub accuracy: Option<Accuracy>,
+    /// What the reader should know about this estimate.
     pub warnings: Vec<Warning>,
 }
 
 /// The expected model of [`Accuracy`] (e.g. the spring array's M, B, K).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct ExpectedModel {
+    /// M (SI).
     pub inertia: Matrix,
+    /// B (SI).
     pub damping: Matrix,
+    /// K (SI).
     pub stiffness: Matrix,
 }
 
@@ -141,21 +154,31 @@ pub struct Accuracy {
     pub phi_ij: Matrix,
     /// Mean over the band of phi_T(f) / ||Z_expected(f)||_2.
     pub mean_relative_error: f64,
+    /// The model compared with.
     pub expected: ExpectedModel,
 }
 
+/// Standard errors of the parametric fit (least squares over the band, inflated by the window's equivalent noise bandwidth).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct ParametricErrors {
+    /// Of M.
     pub inertia: Matrix,
+    /// Of B.
     pub damping: Matrix,
+    /// Of K.
     pub stiffness: Matrix,
 }
 
+/// Quality of a stochastic estimate.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct StochasticCriteria {
+    /// Band of the parametric fit (Hz).
     pub band_hz: [f64; 2],
+    /// Welch frequency resolution (Hz).
     pub frequency_resolution_hz: f64,
+    /// Welch segments averaged.
     pub segments: usize,
+    /// Samples per segment.
     pub nperseg: usize,
     /// Mean over the band of the smallest multiple coherence of the outputs.
     pub mean_multiple_coherence: f64,
