@@ -9,8 +9,11 @@ use serde::Serialize;
 /// Planar arm geometry: link lengths (m) and shoulder position (m).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Arm {
+    /// Upper-arm length (m).
     pub l1: f64,
+    /// Forearm length (m).
     pub l2: f64,
+    /// Shoulder position in the plane (m).
     pub shoulder: [f64; 2],
 }
 
@@ -120,11 +123,17 @@ mod tests {
 /// - segment lengths (m), which a rigid marker set keeps constant.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ArmConfiguration {
+    /// Elevation of the upper arm from the downward vertical (rad).
     pub shoulder_elevation: f64,
+    /// Azimuth of the upper arm about the vertical (rad).
     pub shoulder_azimuth: f64,
+    /// Rotation of the humerus about its axis (rad); `None` when undefined.
     pub humeral_rotation: Option<f64>,
+    /// Elbow flexion (rad); 0 with the arm straight.
     pub elbow_flexion: f64,
+    /// Shoulder-elbow distance (m).
     pub upper_arm_length: f64,
+    /// Elbow-wrist distance (m).
     pub forearm_length: f64,
 }
 
@@ -222,8 +231,11 @@ mod configuration_tests {
 /// term (∂J_h^T/∂q) F of a static load is left out).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Shoulder {
+    /// Upper-arm length (m).
     pub upper_arm_m: f64,
+    /// Forearm length (m).
     pub forearm_m: f64,
+    /// Elbow flexion (rad).
     pub elbow_rad: f64,
 }
 

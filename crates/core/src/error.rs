@@ -13,110 +13,176 @@ pub enum Error {
     /// The file could not be opened or read.
     #[error("{path}: {source}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
     /// The file is not a table of the expected format.
     #[error("{path}: {message}")]
-    Format { path: PathBuf, message: String },
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, in words.
+        message: String,
+    },
     /// The file has no content at all.
     #[error("{path}: the file is empty; expected a header row and samples")]
-    Empty { path: PathBuf },
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
     /// The file has a header but no sample.
     #[error("{path}: the file has a header row but no samples")]
-    HeaderOnly { path: PathBuf },
+    HeaderOnly {
+        /// The file.
+        path: PathBuf,
+    },
     /// A column name appears twice in the header.
     #[error(
         "{path}: row 1, column {column}: duplicate column name (columns {first} and {second})"
     )]
     DuplicateColumn {
+        /// The file.
         path: PathBuf,
+        /// The column's name.
         column: String,
+        /// Position of its first occurrence (1-based).
         first: usize,
+        /// Position of its second occurrence (1-based).
         second: usize,
     },
     /// A required column is absent.
     #[error("{path}: missing required column {column} ({why}); found columns: {found}")]
     MissingColumn {
+        /// The file.
         path: PathBuf,
+        /// The column's name.
         column: String,
+        /// What the column is needed for.
         why: String,
+        /// What was found.
         found: String,
     },
     /// A cell does not hold a number.
     #[error("{path}: row {row}, column {column}: expected a number, found {found:?}")]
     NotANumber {
+        /// The file.
         path: PathBuf,
+        /// Row, counted as in a spreadsheet (the CSV header is row 1).
         row: usize,
+        /// The column's name.
         column: String,
+        /// What was found.
         found: String,
     },
     /// A cell holds NaN or an infinity.
     #[error("{path}: row {row}, column {column}: expected a finite number, found {found}")]
     NotFinite {
+        /// The file.
         path: PathBuf,
+        /// Row, counted as in a spreadsheet (the CSV header is row 1).
         row: usize,
+        /// The column's name.
         column: String,
+        /// What was found.
         found: String,
     },
     /// A finite value too large for its unit (a corrupt sample, or the wrong unit).
     #[error("{path}: row {row}, column {column}: implausible value {found:e}: limpid accepts magnitudes up to {limit} in this column (SI units, FORMAT.md)")]
     Implausible {
+        /// The file.
         path: PathBuf,
+        /// Row, counted as in a spreadsheet (the CSV header is row 1).
         row: usize,
+        /// The column's name.
         column: String,
+        /// The value found.
         found: f64,
+        /// The largest magnitude accepted, with its unit.
         limit: String,
     },
     /// A row has more or fewer cells than the header.
     #[error("{path}: row {row}: expected {expected} cells like the header, found {found}")]
     RaggedRow {
+        /// The file.
         path: PathBuf,
+        /// Row, counted as in a spreadsheet (the CSV header is row 1).
         row: usize,
+        /// Cells expected (those of the header).
         expected: usize,
+        /// How many were found.
         found: usize,
     },
     /// Time goes backwards or stands still.
     #[error("{path}: row {row}, column t: time must be strictly increasing, found {found} after {previous}")]
     TimeNotIncreasing {
+        /// The file.
         path: PathBuf,
+        /// Row, counted as in a spreadsheet (the CSV header is row 1).
         row: usize,
+        /// The time of the row before (s).
         previous: f64,
+        /// The value found.
         found: f64,
     },
     /// One sampling interval differs from the typical one by more than 1 %.
     #[error("{path}: row {row}, column t: non-uniform sampling, interval {found_s:.6} s differs from the median {median_s:.6} s by more than 1 %")]
     NonUniformSampling {
+        /// The file.
         path: PathBuf,
+        /// Row, counted as in a spreadsheet (the CSV header is row 1).
         row: usize,
+        /// The interval found (s).
         found_s: f64,
+        /// The median interval (s).
         median_s: f64,
     },
     /// Not enough samples for what was asked.
     #[error("{path}: {found} samples usable for {what}, but at least {needed} are needed")]
     TooFewSamples {
+        /// The file.
         path: PathBuf,
+        /// What the samples are for.
         what: String,
+        /// How many are needed.
         needed: usize,
+        /// How many were found.
         found: usize,
     },
     /// A perturbation starts without a rest period before it.
     #[error("{path}: row {row}, column {column}: trial {trial} has no rest before its perturbation onset (found {rest_samples} rest samples, need {needed}); start each trial at rest")]
     NoRestBeforeOnset {
+        /// The file.
         path: PathBuf,
+        /// Row, counted as in a spreadsheet (the CSV header is row 1).
         row: usize,
+        /// The column's name.
         column: String,
+        /// The trial id.
         trial: i64,
+        /// Rest samples before the onset.
         rest_samples: usize,
+        /// How many are needed.
         needed: usize,
     },
     /// A parameter given by the user is out of range.
     #[error("invalid {name}: {message}")]
-    InvalidParameter { name: String, message: String },
+    InvalidParameter {
+        /// The setting.
+        name: String,
+        /// What was expected and found.
+        message: String,
+    },
     /// The numerical problem cannot be solved (e.g. a singular regressor).
     #[error("{path}: {message}")]
-    Numerical { path: PathBuf, message: String },
+    Numerical {
+        /// The recording.
+        path: PathBuf,
+        /// What failed, in words.
+        message: String,
+    },
 }
 
 /// Result with limpid's [`Error`].

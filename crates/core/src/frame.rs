@@ -13,7 +13,9 @@ use crate::recording::Recording;
 /// A rigid (homogeneous) transform: rotation `rotation` and translation `translation` (m).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameTransform {
+    /// Rotation (det +1).
     pub rotation: Matrix3<f64>,
+    /// Translation (m).
     pub translation: Vector3<f64>,
 }
 
@@ -120,7 +122,9 @@ mod tests {
 /// sensor (eq. (9): -F_sΔ); its negative is the force applied to the limb.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GravityCompensation {
+    /// Sensor bias, sensor frame (N).
     pub bias_sensor: Vector3<f64>,
+    /// The weight term -F_G in the reference frame (N).
     pub gravity_ref: Vector3<f64>,
 }
 

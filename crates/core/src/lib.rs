@@ -5,6 +5,8 @@
 //! force applied **to the limb** (FORMAT.md sign convention), so the model is
 //! `M x'' + B x' + K (x - x_eq) = f`; matrices are row-major `[row][col]`.
 
+#![warn(missing_docs)]
+
 pub mod arm;
 pub mod criteria;
 pub mod error;

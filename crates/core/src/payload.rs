@@ -41,6 +41,7 @@ pub struct PayloadCalibration {
     pub torque_bias: Option<[f64; 3]>,
     /// RMS of the force residuals (N) and, with torques, of the torque residuals (N m).
     pub force_rms_residual: f64,
+    /// RMS of the torque residuals (N m), with torque readings.
     pub torque_rms_residual: Option<f64>,
     /// Readings used.
     pub samples: usize,
