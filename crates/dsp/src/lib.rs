@@ -12,6 +12,8 @@
 //! odd extension of length `3 * (2 * sections + 1)` exactly as
 //! `scipy.signal.sosfiltfilt`; Savitzky-Golay edges use `mode='nearest'`.
 
+#![warn(missing_docs)]
+
 pub mod spectral;
 
 use limpid_core::{Error, Result};

@@ -35,6 +35,7 @@ pub enum Window {
 /// Trend removed from each segment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Detrend {
+    /// Leave the segment as it is.
     None,
     /// Subtract the mean (scipy's default).
     Constant,
@@ -45,7 +46,9 @@ pub enum Detrend {
 /// Density (unit²/Hz) or power spectrum (unit²).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scaling {
+    /// Power spectral density (unit²/Hz).
     Density,
+    /// Power spectrum (unit²).
     Spectrum,
 }
 
@@ -61,11 +64,17 @@ pub enum Scaling {
 /// | `scaling` | Density | density or spectrum | |
 #[derive(Debug, Clone)]
 pub struct Welch {
+    /// Sample rate (Hz).
     pub fs: f64,
+    /// Samples per segment.
     pub nperseg: usize,
+    /// Samples shared by consecutive segments; `None`: half a segment.
     pub noverlap: Option<usize>,
+    /// Taper applied to each segment.
     pub window: Window,
+    /// Trend removed from each segment.
     pub detrend: Detrend,
+    /// Density or spectrum.
     pub scaling: Scaling,
 }
 
@@ -143,6 +152,7 @@ pub struct SegmentSpectra {
     /// `spectra[signal][segment][bin]`.
     spectra: Vec<Vec<Vec<Complex64>>>,
     scale: Vec<f64>,
+    /// Frequencies of the bins (Hz).
     pub frequencies: Vec<f64>,
 }
 

@@ -14,6 +14,8 @@
 //! cells are skipped. `-v7.3` files are HDF5 and are refused with a hint. In
 //! errors, "row" counts samples from 1, as MATLAB indexes them.
 
+#![warn(missing_docs)]
+
 use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;

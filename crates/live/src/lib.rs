@@ -2,6 +2,8 @@
 //! from the lab's acquisition system over UDP (or a replayed recording), with
 //! an online stiffness estimate, served as a web page (axum, WebSocket).
 
+#![warn(missing_docs)]
+
 pub mod process;
 pub mod server;
 pub mod wire;

@@ -19,6 +19,7 @@ pub struct Processor {
     capture: Option<Vec<f64>>,
     /// Envelope per muscle (V) and normalised activation (fraction of MVC).
     pub envelopes: Vec<f64>,
+    /// Normalised activation per muscle (fraction of MVC).
     pub activations: Vec<f64>,
     /// Co-contraction index (fraction of MVC); NaN until an MVC is known.
     pub index: f64,
@@ -26,6 +27,7 @@ pub struct Processor {
     /// the bar shows, since the raw 8 Hz envelope flickers at display rate.
     pub index_display: f64,
     display_weight: f64,
+    /// The online stiffness estimate.
     pub rls: Rls,
 }
 
@@ -110,10 +112,12 @@ impl Processor {
         Ok(())
     }
 
+    /// True while MVC maxima are being captured.
     pub fn capturing(&self) -> bool {
         self.capture.is_some()
     }
 
+    /// True once MVC maxima are known.
     pub fn has_mvc(&self) -> bool {
         self.maxima.is_some()
     }

@@ -25,12 +25,15 @@ use limpid_core::{Error, Recording, Result};
 pub struct Config {
     /// UDP address the samples arrive at.
     pub udp: SocketAddr,
+    /// Channel names, in the order of the datagram's values.
     pub channels: Vec<String>,
+    /// Sample rate of the stream (Hz).
     pub sample_rate: f64,
     /// MVC maxima per channel (None: capture live with the page's button).
     pub maxima: Option<Vec<f64>>,
     /// Target co-contraction level shown as a band (fraction of MVC).
     pub target: Option<f64>,
+    /// Half-width of the target band (fraction of MVC).
     pub tolerance: f64,
     /// A recording to stream to the UDP address, and the speed-up.
     pub replay: Option<(Recording, f64)>,
@@ -97,31 +100,45 @@ struct State {
 /// What the page and `/state` show.
 #[derive(Debug, Clone, Serialize)]
 pub struct Snapshot {
+    /// Channel names.
     pub channels: Vec<String>,
     /// Co-contraction index (fraction of MVC); absent until an MVC is known.
     pub index: Option<f64>,
     /// The index averaged over about 1 s, as the bar shows it.
     pub index_display: Option<f64>,
+    /// Normalised activation per muscle (fraction of MVC).
     pub activations: Vec<f64>,
+    /// Target level (fraction of MVC).
     pub target: Option<f64>,
+    /// Half-width of the target band.
     pub tolerance: f64,
+    /// MVC maxima are known.
     pub mvc: bool,
+    /// MVC capture running.
     pub capturing: bool,
+    /// Datagrams received.
     pub received: u64,
+    /// Datagrams dropped as malformed.
     pub malformed: u64,
+    /// Datagrams lost (gaps in the sequence numbers).
     pub lost: u64,
+    /// Sample rate measured over the last second (Hz).
     pub rate_hz: f64,
     /// No sample for more than 0.5 s (or none yet).
     pub stalled: bool,
+    /// Time since the last sample (ms).
     pub since_last_ms: Option<f64>,
     /// Sample time of the last sample (s).
     pub last_t: Option<f64>,
     /// Datagram-to-index-update latency (µs), from the sender's clock stamp.
     pub latency_p50_us: Option<f64>,
+    /// 99th percentile of the latency (µs).
     pub latency_p99_us: Option<f64>,
+    /// Largest latency (µs).
     pub latency_max_us: Option<f64>,
     /// Online stiffness (N/m) and its one-step VAF (%), once kinematics arrive.
     pub stiffness: Option<[[f64; 3]; 3]>,
+    /// One-step VAF of the online stiffness per axis (%).
     pub stiffness_vaf: Option<[f64; 3]>,
 }
 
@@ -132,6 +149,7 @@ pub struct Session {
     channels: Vec<String>,
     target: Option<f64>,
     tolerance: f64,
+    /// The UDP address the session listens on.
     pub udp: SocketAddr,
 }
 

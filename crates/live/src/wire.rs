@@ -21,15 +21,21 @@
 /// One decoded sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sample {
+    /// Sequence number (gaps count as lost datagrams).
     pub seq: u64,
+    /// Sample time (s).
     pub t: f64,
+    /// Sender's clock at sending (ns since the Unix epoch), for latency.
     pub sent_unix_ns: u64,
+    /// EMG value per channel (V).
     pub emg: Vec<f64>,
     /// x, y, z, fx, fy, fz when present.
     pub kinematics: Option<[f64; 6]>,
 }
 
+/// The first four bytes of every datagram.
 pub const MAGIC: &[u8; 4] = b"LMPD";
+/// Bytes before the values.
 pub const HEADER: usize = 32;
 
 /// Encode a sample.
@@ -51,11 +57,17 @@ pub fn encode(s: &Sample) -> Vec<u8> {
 /// Why a datagram was dropped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Malformed {
+    /// Shorter than the header.
     Short,
+    /// Wrong magic bytes.
     Magic,
+    /// Unknown format version.
     Version,
+    /// Channel count differs from the session's.
     Channels,
+    /// Length differs from what the header announces.
     Length,
+    /// A value is NaN or infinite.
     NotFinite,
     /// Finite but beyond what any sensor gives (see the module docs).
     Implausible,

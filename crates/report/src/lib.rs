@@ -18,6 +18,8 @@
 //! Figures are static SVG written by [`svg`]; every trace is a
 //! `<path class="trace">`, so the figure data can be checked without pixels.
 
+#![warn(missing_docs)]
+
 pub mod svg;
 
 use std::fmt::Write as _;
@@ -38,17 +40,24 @@ use svg::{escape, Chart, Series, Stroke, PALETTE};
 /// A table: caption, header, rows of text cells.
 #[derive(Debug, Clone, Serialize)]
 pub struct Table {
+    /// Caption above the table.
     pub caption: String,
+    /// Column headings.
     pub header: Vec<String>,
+    /// Rows of cells.
     pub rows: Vec<Vec<String>>,
 }
 
 /// One ellipsoid for the 3-D view.
 #[derive(Debug, Clone, Serialize)]
 pub struct EllipsoidView {
+    /// Start point or level the ellipsoid belongs to.
     pub point: String,
+    /// `stiffness`, `damping` or `inertia`.
     pub kind: String,
+    /// Where it is drawn (m).
     pub centre: [f64; 3],
+    /// Eigenvalues of the symmetric part, largest first.
     pub eigenvalues: [f64; 3],
     /// Principal axes as columns (row-major).
     pub axes: [[f64; 3]; 3],
@@ -57,25 +66,35 @@ pub struct EllipsoidView {
 /// A named figure.
 #[derive(Debug, Clone, Serialize)]
 pub struct Figure {
+    /// HTML id of the figure.
     pub id: String,
+    /// The chart.
     pub chart: Chart,
 }
 
 /// One section per input result.
 #[derive(Debug, Clone, Serialize)]
 pub struct Section {
+    /// Section heading (kind and name of the result).
     pub heading: String,
+    /// The verdict in words.
     pub verdict: String,
+    /// The result's warnings.
     pub warnings: Vec<String>,
+    /// Tables of the section.
     pub tables: Vec<Table>,
+    /// Figures of the section.
     pub figures: Vec<Figure>,
+    /// Ellipsoids for the 3-D view.
     pub ellipsoids: Vec<EllipsoidView>,
 }
 
 /// The whole report.
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
+    /// Title of the page.
     pub title: String,
+    /// One section per result.
     pub sections: Vec<Section>,
 }
 

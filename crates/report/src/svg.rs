@@ -9,31 +9,45 @@ use std::fmt::Write as _;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Stroke {
+    /// A solid line.
     Solid,
+    /// A dashed line.
     Dashed,
+    /// A dotted line.
     Dotted,
 }
 
 /// One trace.
 #[derive(Debug, Clone, Serialize)]
 pub struct Series {
+    /// Legend entry.
     pub name: String,
+    /// Abscissae.
     pub x: Vec<f64>,
+    /// Ordinates.
     pub y: Vec<f64>,
+    /// Line style.
     pub stroke: Stroke,
+    /// CSS colour.
     pub color: String,
 }
 
 /// One chart: axes and traces.
 #[derive(Debug, Clone, Serialize)]
 pub struct Chart {
+    /// Title above the chart.
     pub title: String,
+    /// Label of the x axis (with unit).
     pub x_label: String,
+    /// Label of the y axis (with unit).
     pub y_label: String,
+    /// Logarithmic x axis.
     pub x_log: bool,
+    /// Logarithmic y axis.
     pub y_log: bool,
     /// Fixed y range; None: from the data.
     pub y_range: Option<(f64, f64)>,
+    /// The traces.
     pub series: Vec<Series>,
 }
 
