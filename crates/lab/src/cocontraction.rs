@@ -29,9 +29,13 @@ pub const MUSCLES: [&str; 6] = [
 /// A subject in one arm configuration.
 #[derive(Debug, Clone)]
 pub struct CocontractionSubject {
+    /// Configuration name.
     pub name: String,
+    /// Start point (m).
     pub start: Vector3<f64>,
+    /// M (kg).
     pub inertia: Matrix3<f64>,
+    /// B (N s/m).
     pub damping: Matrix3<f64>,
     /// Stiffness at level 0 (N/m).
     pub stiffness0: Matrix3<f64>,
@@ -53,12 +57,19 @@ impl CocontractionSubject {
 /// Protocol of a co-contraction session.
 #[derive(Debug, Clone)]
 pub struct CocontractionProtocol {
+    /// Co-contraction levels (fraction of MVC), one block of trials each.
     pub levels: Vec<f64>,
+    /// Unit target directions.
     pub directions: Vec<Vector3<f64>>,
+    /// Perturbation amplitude (m).
     pub radius_m: f64,
+    /// Rest before each motion (s).
     pub rest_s: f64,
+    /// Duration of the motion (s).
     pub move_s: f64,
+    /// Hold at the target (s).
     pub hold_s: f64,
+    /// Sample rate (Hz).
     pub sample_rate: f64,
 }
 

@@ -25,8 +25,11 @@ use limpid_dsp::spectral::{coherence, Welch};
 /// Any protocol.
 #[derive(Debug, Clone)]
 pub enum Design {
+    /// Centre-out (seeds 000, 001).
     CentreOut(Protocol),
+    /// Planar 2-link arm (seed 003).
     Planar(PlanarDesign),
+    /// Stochastic inputs (seed 004).
     Stochastic(StochasticDesign),
 }
 
@@ -178,23 +181,29 @@ impl Design {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlanarDesign {
+    /// Protocol name.
     pub name: String,
+    /// Sample rate (Hz).
     pub sample_rate_hz: f64,
+    /// Upper-arm and forearm lengths (m).
     pub link_lengths_m: [f64; 2],
     /// Posture q0 (shoulder, relative elbow; rad) held between perturbations.
     pub posture_rad: [f64; 2],
     /// Displacements Δq_f (rad); trials cycle through them in a random order.
     pub displacements_rad: Vec<[f64; 2]>,
+    /// Number of perturbations.
     pub trials: usize,
     /// Interpolation interval T_k of the quintic (s).
     pub interpolation_s: f64,
     /// Recorded before and after each onset (s).
     pub rest_s: f64,
+    /// Recorded after each onset (s).
     pub after_s: f64,
     /// Random wait before each perturbation, uniform in [min, max] (s).
     pub wait_s: [f64; 2],
     /// Seed of the trial order and the waits.
     pub seed: u64,
+    /// Safety limits.
     pub limits: PlanarLimits,
 }
 
@@ -202,9 +211,13 @@ pub struct PlanarDesign {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlanarLimits {
+    /// Largest joint displacement (rad).
     pub max_joint_displacement_rad: f64,
+    /// Largest joint velocity (rad/s).
     pub max_joint_velocity_rad_s: f64,
+    /// Largest joint acceleration (rad/s^2).
     pub max_joint_acceleration_rad_s2: f64,
+    /// Largest predicted joint torque (N m).
     pub max_torque_nm: f64,
     /// Joint stiffness used to predict the torque (N m/rad).
     pub nominal_joint_stiffness_nm_per_rad: f64,
@@ -305,8 +318,11 @@ impl PlanarDesign {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StochasticDesign {
+    /// Protocol name.
     pub name: String,
+    /// Sample rate (Hz).
     pub sample_rate_hz: f64,
+    /// Duration of the input (s).
     pub duration_s: f64,
     /// Input channel names (FORMAT.md: `u<coordinate>`).
     pub channels: Vec<String>,
@@ -314,9 +330,11 @@ pub struct StochasticDesign {
     pub peak: Vec<f64>,
     /// Cut-off of the 8th-order Butterworth low-pass (Hz).
     pub cutoff_hz: f64,
+    /// Seed of the random inputs.
     pub seed: u64,
     /// Largest coherence allowed between any two inputs below the cut-off.
     pub max_input_coherence: f64,
+    /// Safety limits.
     pub limits: StochasticLimits,
 }
 
@@ -324,9 +342,11 @@ pub struct StochasticDesign {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StochasticLimits {
+    /// Largest commanded force (N).
     pub max_force_n: f64,
     /// Stiffness used to predict the displacement (N/m).
     pub nominal_stiffness_n_per_m: f64,
+    /// Largest predicted displacement (m).
     pub max_displacement_m: f64,
 }
 
@@ -418,31 +438,47 @@ impl StochasticDesign {
 #[derive(Debug, Clone, Serialize)]
 #[serde(tag = "kind", rename_all = "kebab-case")]
 pub enum DesignReport {
+    /// Centre-out report.
     CentreOut(protocol::CheckReport),
+    /// Planar report.
     Planar(PlanarReport),
+    /// Stochastic report.
     Stochastic(StochasticReport),
 }
 
+/// What `check` found in a planar protocol.
 #[derive(Debug, Clone, Serialize)]
 pub struct PlanarReport {
+    /// Perturbations.
     pub trials: usize,
+    /// Duration of the session, waits included (s).
     pub session_s: f64,
+    /// Largest joint displacement (rad).
     pub peak_joint_displacement_rad: f64,
+    /// Largest joint velocity (rad/s).
     pub peak_joint_velocity_rad_s: f64,
+    /// Largest joint acceleration (rad/s^2).
     pub peak_joint_acceleration_rad_s2: f64,
+    /// Largest predicted joint torque (N m).
     pub peak_torque_nm: f64,
     /// Seed 003 eq. (17) of the quintic: [C_12, C_13, C_23].
     pub conditioning_ratios: [f64; 3],
 }
 
+/// What `check` found in a stochastic protocol.
 #[derive(Debug, Clone, Serialize)]
 pub struct StochasticReport {
+    /// Samples per channel.
     pub samples: usize,
+    /// Peak input per channel (N or N m).
     pub peak_force: Vec<f64>,
+    /// Displacement the nominal stiffness predicts for the peak force (m).
     pub predicted_peak_displacement_m: f64,
     /// Largest coherence between two inputs below the cut-off, the pair and the frequency.
     pub max_input_coherence: f64,
+    /// The two inputs of the largest coherence.
     pub max_coherence_pair: [String; 2],
+    /// Frequency of the largest coherence (Hz).
     pub max_coherence_hz: f64,
 }
 

@@ -27,7 +27,12 @@ use crate::robot::Robot;
 pub enum LoadSource<'a> {
     /// Seed 004's two steps: readings in a gravity-free pose, and the first
     /// `initial_s` seconds of the test (still, unperturbed).
-    TwoSteps { bias: &'a Recording, initial_s: f64 },
+    TwoSteps {
+        /// Readings in a gravity-free pose.
+        bias: &'a Recording,
+        /// Still, unperturbed seconds at the start of the test.
+        initial_s: f64,
+    },
     /// Still readings in several orientations ([`PayloadCalibration`]).
     Calibration(&'a Recording),
 }

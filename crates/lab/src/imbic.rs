@@ -40,6 +40,7 @@ use limpid_core::{Error, Recording, Result};
 /// The robot's dynamics and friction.
 #[derive(Debug, Clone)]
 pub struct RobotDynamics {
+    /// Kinematics of the robot.
     pub robot: Robot,
     /// Joint angles of the test location (rad).
     pub posture: Vec<f64>,
@@ -49,6 +50,7 @@ pub struct RobotDynamics {
     pub known_inertia: [f64; 3],
     /// Coulomb (N m) and viscous (N m s/rad) joint friction.
     pub coulomb: [f64; 3],
+    /// Viscous joint friction (N m s/rad).
     pub viscous: [f64; 3],
 }
 
@@ -115,13 +117,22 @@ pub fn vertical_plane_chain() -> Robot {
 pub enum Controller {
     /// Seed 004 eq. (11)-(14) with desired impedance M_rd, B_rd, K_rd and forgetting Γ.
     Imbic {
+        /// Desired inertia M_rd.
         m_rd: Vector3<f64>,
+        /// Desired damping B_rd.
         b_rd: Vector3<f64>,
+        /// Desired stiffness K_rd.
         k_rd: Vector3<f64>,
+        /// Forgetting Γ of the time-delay estimate.
         gamma: Vector3<f64>,
     },
     /// F_u = F_Δ − B ẋ − K x.
-    Pd { b: Vector3<f64>, k: Vector3<f64> },
+    Pd {
+        /// Damping B.
+        b: Vector3<f64>,
+        /// Stiffness K.
+        k: Vector3<f64>,
+    },
 }
 
 impl Controller {

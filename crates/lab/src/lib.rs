@@ -6,6 +6,8 @@
 //! and [`session`], which runs a protocol on a subject; each module names the
 //! seed and equation it implements.
 
+#![warn(missing_docs)]
+
 pub mod cocontraction;
 pub mod design;
 pub mod export;

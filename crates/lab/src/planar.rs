@@ -19,8 +19,11 @@ use limpid_core::{Recording, Result};
 #[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Reflex {
+    /// Delay from the onset to the reflex (s).
     pub latency_s: f64,
+    /// Relative change of K after the latency.
     pub stiffness_gain: f64,
+    /// Relative change of D after the latency.
     pub damping_gain: f64,
 }
 
@@ -29,10 +32,15 @@ pub struct Reflex {
 pub struct PlanarSubject {
     /// Base inertial parameters ξ1..ξ3 (kg m^2).
     pub xi: [f64; 3],
+    /// Joint stiffness K (N m/rad).
     pub stiffness: Matrix2<f64>,
+    /// Joint damping D (N m s/rad).
     pub damping: Matrix2<f64>,
+    /// Posture q0 (rad).
     pub q0: [f64; 2],
+    /// Joint torques at q0 (N m).
     pub tau0: [f64; 2],
+    /// A stretch reflex, if any.
     pub reflex: Option<Reflex>,
 }
 
@@ -55,11 +63,15 @@ impl PlanarSubject {
 pub struct PlanarProtocol {
     /// Displacements Δq_f (rad), seed 003: (±0.05, 0), (0, ±0.05), ±(0.05, -0.05).
     pub directions: Vec<[f64; 2]>,
+    /// Number of perturbations.
     pub trials: usize,
     /// Interpolation interval T_k (s).
     pub interpolation_s: f64,
+    /// Rest recorded before each onset (s).
     pub rest_s: f64,
+    /// Recorded after each onset (s).
     pub after_s: f64,
+    /// Sample rate (Hz).
     pub sample_rate: f64,
 }
 

@@ -20,11 +20,17 @@ use limpid_core::{Error, Result};
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Protocol {
+    /// Protocol name.
     pub name: String,
+    /// Sample rate (Hz).
     pub sample_rate_hz: f64,
+    /// Where the perturbations start.
     pub start_points: StartPoints,
+    /// Where they go.
     pub targets: Targets,
+    /// Timing and profile.
     pub phases: Phases,
+    /// Safety limits.
     pub limits: Limits,
     /// Where the robot's base sits in the protocol frame (for `protocol export`
     /// and `--robot`); absent: the robot's base frame is the protocol frame.
@@ -36,8 +42,10 @@ pub struct Protocol {
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Placement {
+    /// Translation (m).
     pub xyz_m: [f64; 3],
     #[serde(default)]
+    /// Roll, pitch, yaw (rad).
     pub rpy_rad: [f64; 3],
 }
 
@@ -49,8 +57,10 @@ pub struct StartPoints {
     #[serde(default)]
     pub points: Vec<[f64; 3]>,
     #[serde(default)]
+    /// Centre of the sphere of start points (m).
     pub centre_m: [f64; 3],
     #[serde(default)]
+    /// Radius of that sphere (m).
     pub radius_m: f64,
 }
 
@@ -58,7 +68,9 @@ pub struct StartPoints {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Targets {
+    /// Number of target directions.
     pub count: usize,
+    /// Distance from start to target (m).
     pub radius_m: f64,
 }
 
@@ -66,13 +78,17 @@ pub struct Targets {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Phases {
+    /// Profile of the centre-out motion.
     pub profile: Profile,
     /// Rest recorded before each perturbation.
     pub rest_s: f64,
+    /// Duration of the centre-out motion.
     pub centre_out_s: f64,
     /// Hold at the target, return duration, relax after the return (not recorded).
     pub hold_s: f64,
+    /// Duration of the return.
     pub return_s: f64,
+    /// Relax after the return (not recorded).
     pub relax_s: f64,
     /// Record the hold and the return too (seed 001 style); otherwise only the
     /// rest and the centre-out motion are recorded (seed 000, where the subject
@@ -84,6 +100,7 @@ pub struct Phases {
     #[serde(default)]
     pub trials_per_set: usize,
     #[serde(default)]
+    /// Rest between sets (s).
     pub set_rest_s: f64,
 }
 
@@ -91,13 +108,19 @@ pub struct Phases {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Limits {
+    /// Largest displacement (m).
     pub max_displacement_m: f64,
+    /// Largest velocity (m/s).
     pub max_velocity_m_s: f64,
+    /// Largest acceleration (m/s^2).
     pub max_acceleration_m_s2: f64,
+    /// Largest predicted force (N).
     pub max_force_n: f64,
     /// Stiffness used to predict the force (N/m).
     pub nominal_stiffness_n_per_m: f64,
+    /// Lower corner of the allowed workspace (m).
     pub workspace_min_m: [f64; 3],
+    /// Upper corner of the allowed workspace (m).
     pub workspace_max_m: [f64; 3],
 }
 
@@ -234,12 +257,19 @@ impl Protocol {
 /// What `check` found.
 #[derive(Debug, Clone, Serialize)]
 pub struct CheckReport {
+    /// Trials in the protocol.
     pub trials: usize,
+    /// Samples per recorded trial.
     pub samples_per_trial: usize,
+    /// Smallest angle between two target directions (deg).
     pub min_separation_deg: f64,
+    /// Largest displacement (m).
     pub peak_displacement_m: f64,
+    /// Largest velocity (m/s).
     pub peak_velocity_m_s: f64,
+    /// Largest acceleration (m/s^2).
     pub peak_acceleration_m_s2: f64,
+    /// Largest predicted force (N).
     pub peak_force_n: f64,
     /// Seed 003 eq. (17) ratios of the profile: [C_12, C_13, C_23] (mean squares of
     /// velocity/acceleration/jerk, over the centre-out phase).

@@ -34,9 +34,13 @@ pub const SPRING_SET_SA3: Springs = [50.0, 50.0, 30.0, 30.0, 0.0, 66.3707, 0.0, 
 /// Geometry constants of eq. (10).
 #[derive(Debug, Clone, Copy)]
 pub struct Geometry {
+    /// Free length over l of the horizontal and vertical springs.
     pub r_hv: f64,
+    /// Free length over l of the diagonal springs.
     pub r_d: f64,
+    /// c1 = L - l (m).
     pub c1: f64,
+    /// c2 = (L - l) L (m^2).
     pub c2: f64,
 }
 
@@ -112,14 +116,21 @@ pub fn stochastic_input(
 /// The rig and robot of a virtual stochastic experiment (3 coordinates x, z, θ).
 #[derive(Debug, Clone)]
 pub struct RigExperiment {
+    /// Inertia of the rig (SI).
     pub inertia: Matrix3<f64>,
+    /// Damping of the rig (SI).
     pub damping: Matrix3<f64>,
+    /// Stiffness of the spring array (SI).
     pub stiffness: Matrix3<f64>,
     /// Desired robot impedance (seed 004 §III-B).
     pub robot_inertia: Matrix3<f64>,
+    /// Desired robot damping (SI).
     pub robot_damping: Matrix3<f64>,
+    /// Desired robot stiffness (SI).
     pub robot_stiffness: Matrix3<f64>,
+    /// Duration (s).
     pub seconds: f64,
+    /// Sample rate (Hz).
     pub sample_rate: f64,
     /// Peak commanded force/torque per channel (N, N, N m).
     pub peak: [f64; 3],

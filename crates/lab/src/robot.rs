@@ -30,12 +30,17 @@ pub enum Convention {
 /// One revolute joint of a DH table: DH parameters (m, rad), joint offset, limits.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub struct Joint {
+    /// DH link length a (m).
     pub a: f64,
+    /// DH link twist α (rad).
     pub alpha: f64,
+    /// DH link offset d (m).
     pub d: f64,
     /// Added to the joint angle.
     pub theta_offset: f64,
+    /// Lower joint limit (rad).
     pub min: f64,
+    /// Upper joint limit (rad).
     pub max: f64,
     /// Largest joint speed (rad/s).
     pub max_speed: f64,
@@ -45,14 +50,21 @@ pub struct Joint {
 /// T_i = before · Rot(axis, q_i + offset) · after.
 #[derive(Debug, Clone)]
 pub struct RevoluteJoint {
+    /// Joint name.
     pub name: String,
+    /// Fixed transform before the joint's rotation.
     pub before: Matrix4<f64>,
     /// Unit rotation axis in the joint frame.
     pub axis: Vector3<f64>,
+    /// Fixed transform after the rotation.
     pub after: Matrix4<f64>,
+    /// Added to the joint angle (rad).
     pub offset: f64,
+    /// Lower joint limit (rad).
     pub min: f64,
+    /// Upper joint limit (rad).
     pub max: f64,
+    /// Largest joint speed (rad/s).
     pub max_speed: f64,
 }
 
@@ -62,9 +74,11 @@ type JointAxis = (Vector3<f64>, Vector3<f64>);
 /// A serial robot of revolute joints, placed in the lab by `base`.
 #[derive(Debug, Clone)]
 pub struct Robot {
+    /// Robot name.
     pub name: String,
     /// Pose of the robot's base in the lab (protocol) frame.
     pub base: Matrix4<f64>,
+    /// Joints, base to tip.
     pub joints: Vec<RevoluteJoint>,
     /// Fixed transform from the last joint to the end effector.
     pub tip: Matrix4<f64>,

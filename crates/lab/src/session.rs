@@ -53,7 +53,9 @@ impl std::str::FromStr for RigController {
 
 /// A subject given as TOML text, with the name errors should carry.
 pub struct SubjectText<'a> {
+    /// The subject file's text.
     pub text: &'a str,
+    /// Its path, for error messages.
     pub path: &'a Path,
 }
 
@@ -61,7 +63,9 @@ pub struct SubjectText<'a> {
 pub struct Simulated {
     /// `S1`, `S2`, ... for the start points of a centre-out protocol; `None` for a single recording.
     pub label: Option<String>,
+    /// The recording.
     pub recording: Recording,
+    /// Its truth (the `*.truth.json` content).
     pub truth: Value,
 }
 

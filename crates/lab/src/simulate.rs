@@ -31,12 +31,19 @@ use limpid_dsp::LowPass;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct NoiseModel {
+    /// Position noise (m, s.d.).
     pub position_std_m: f64,
+    /// Force offset per trial (N, s.d.).
     pub offset_per_trial_std_n: f64,
+    /// White force noise (N, s.d.).
     pub white_std_n: f64,
+    /// Slow force drift (N, s.d.).
     pub drift_std_n: f64,
+    /// Bandwidth of the drift (Hz).
     pub drift_lowpass_hz: f64,
+    /// Force resolution (N); forces are rounded to it.
     pub force_quantum_n: f64,
+    /// Natural frequency of the robot's position servo (Hz); 0: ideal tracking.
     pub servo_bandwidth_hz: f64,
 }
 
@@ -81,6 +88,7 @@ impl NoiseModel {
 /// The centre-out part of a protocol.
 #[derive(Debug, Clone, Serialize)]
 pub struct CentreOut {
+    /// Profile of the motion.
     pub profile: Profile,
     /// Distance from start to target (m).
     pub radius_m: f64,
@@ -94,6 +102,7 @@ pub struct CentreOut {
     /// Recorded hold at the target after the motion, then a recorded return
     /// by the same profile (s); 0 and 0 record only rest and motion (seed 000).
     pub hold_s: f64,
+    /// Duration of the return (s).
     pub return_s: f64,
     /// Sample rate (Hz).
     pub sample_rate: f64,

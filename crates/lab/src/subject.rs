@@ -5,10 +5,15 @@ use nalgebra::{Matrix3, Vector3};
 /// One posture: start point and the impedance there (SI, force applied to the limb).
 #[derive(Debug, Clone)]
 pub struct Posture {
+    /// Start point name.
     pub name: String,
+    /// Start point (m).
     pub start: Vector3<f64>,
+    /// M (kg).
     pub inertia: Matrix3<f64>,
+    /// B (N s/m).
     pub damping: Matrix3<f64>,
+    /// K (N/m).
     pub stiffness: Matrix3<f64>,
 }
 
