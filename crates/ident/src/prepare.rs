@@ -317,21 +317,7 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
     let position_noise: Vec<f64> = pos.iter().map(|c| noise_sigma(c)).collect();
     let mut windows = make_windows(rec, params, &pos, &frc, &position_noise, min_rest)?;
     if let Some(level) = params.level {
-        let levels = rec.require("level", "selecting windows by --level")?;
-        windows.retain(|w| {
-            levels[w.range.clone()]
-                .iter()
-                .all(|l| (l - level).abs() < 1e-9)
-        });
-        if windows.is_empty() {
-            let mut found: Vec<f64> = levels.to_vec();
-            found.sort_by(f64::total_cmp);
-            found.dedup();
-            return Err(Error::invalid(
-                "level",
-                format!("no window has level {level} throughout; levels present: {found:?}"),
-            ));
-        }
+        keep_level(rec, &mut windows, level)?;
     }
     let continuous = windows.iter().all(|w| w.onset.is_none());
 
@@ -360,16 +346,7 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         force: vec![Vec::new(); n],
         windows: Vec::new(),
         continuous,
-        demeaned: !continuous
-            && match params.offsets {
-                Offsets::Fit => true,
-                Offsets::Rest => false,
-                Offsets::Auto => {
-                    let mut lengths: Vec<usize> = windows.iter().map(|w| w.range.len()).collect();
-                    lengths.sort_unstable();
-                    lengths[lengths.len() / 2] as f64 / fs > AUTO_FIT_ABOVE_S
-                }
-            },
+        demeaned: !continuous && fits_offsets(params.offsets, &windows, fs),
         cutoff_hz: cutoff,
         filter_order: params.filter_order,
         derivative: params.derivative,
@@ -446,20 +423,15 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
                 .iter()
                 .map(|v| sign * v - offset)
                 .collect();
-            let (xs, v, a, fs_) = match params.derivative {
-                Derivative::Central => {
-                    let xs = lowpass.filtfilt_edges(&x, left, right, extra)?;
-                    let v = central_first(&xs, dt);
-                    let a = central_second(&xs, dt);
-                    (xs, v, a, lowpass.filtfilt_edges(&f, left, right, extra)?)
-                }
-                Derivative::Savgol => (
-                    savgol(&x, sg_window, 3, 0, dt)?,
-                    savgol(&x, sg_window, 3, 1, dt)?,
-                    savgol(&x, sg_window, 3, 2, dt)?,
-                    savgol(&f, sg_window, 3, 0, dt)?,
-                ),
-            };
+            let [xs, v, a, fs_] = filter_and_differentiate(
+                &x,
+                &f,
+                params.derivative,
+                &lowpass,
+                (left, right, extra),
+                sg_window,
+                dt,
+            )?;
             let keep = trim..r.len() - end_trim;
             let demean = out.demeaned;
             for (dst, src) in [
@@ -489,6 +461,70 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
             out.windows.iter().map(|w| w.reference[k]).sum::<f64>() / out.windows.len() as f64;
     }
     Ok(out)
+}
+
+/// Keep only the windows whose samples all carry `level` (seed 001's
+/// condition label); an error listing the levels present when none does.
+fn keep_level(rec: &Recording, windows: &mut Vec<Window>, level: f64) -> Result<()> {
+    let levels = rec.require("level", "selecting windows by --level")?;
+    windows.retain(|w| {
+        levels[w.range.clone()]
+            .iter()
+            .all(|l| (l - level).abs() < 1e-9)
+    });
+    if windows.is_empty() {
+        let mut found: Vec<f64> = levels.to_vec();
+        found.sort_by(f64::total_cmp);
+        found.dedup();
+        return Err(Error::invalid(
+            "level",
+            format!("no window has level {level} throughout; levels present: {found:?}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Whether each window's force offset is fitted (demeaned) rather than
+/// taken from its rest: `auto` fits when the median window lasts over
+/// [`AUTO_FIT_ABOVE_S`] (slow drift then dominates the rest mean).
+fn fits_offsets(offsets: Offsets, windows: &[Window], fs: f64) -> bool {
+    match offsets {
+        Offsets::Fit => true,
+        Offsets::Rest => false,
+        Offsets::Auto => {
+            let mut lengths: Vec<usize> = windows.iter().map(|w| w.range.len()).collect();
+            lengths.sort_unstable();
+            lengths[lengths.len() / 2] as f64 / fs > AUTO_FIT_ABOVE_S
+        }
+    }
+}
+
+/// One window's displacement, velocity, acceleration and force: zero-phase
+/// low-pass with extended edges and central differences, or Savitzky-Golay
+/// (cubic) smoothing and derivatives.
+fn filter_and_differentiate(
+    x: &[f64],
+    f: &[f64],
+    derivative: Derivative,
+    lowpass: &LowPass,
+    (left, right, extra): (Edge, Edge, usize),
+    sg_window: usize,
+    dt: f64,
+) -> Result<[Vec<f64>; 4]> {
+    Ok(match derivative {
+        Derivative::Central => {
+            let xs = lowpass.filtfilt_edges(x, left, right, extra)?;
+            let v = central_first(&xs, dt);
+            let a = central_second(&xs, dt);
+            [xs, v, a, lowpass.filtfilt_edges(f, left, right, extra)?]
+        }
+        Derivative::Savgol => [
+            savgol(x, sg_window, 3, 0, dt)?,
+            savgol(x, sg_window, 3, 1, dt)?,
+            savgol(x, sg_window, 3, 2, dt)?,
+            savgol(f, sg_window, 3, 0, dt)?,
+        ],
+    })
 }
 
 /// Extension for one window end: a mirror where the limb is (nearly) still

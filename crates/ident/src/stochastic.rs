@@ -231,45 +231,14 @@ pub fn estimate_stochastic(
         ));
     }
     let spectra = SegmentSpectra::new(&signals, &welch)?;
-    let mats = spectra.matrix();
-    let freqs = &spectra.frequencies;
-    let top = freqs.iter().position(|f| *f > hi).unwrap_or(freqs.len());
-    let mut out_f = Vec::new();
-    let mut z_all: Vec<DMatrix<Complex64>> = Vec::new();
-    let mut multiple = vec![Vec::new(); 2 * n];
-    let mut partial = vec![vec![Vec::new(); n]; 2 * n];
-    let mut max_input_coh: f64 = 0.0;
-    let mut singular_in_band = 0usize;
-    for k in 1..top {
-        let s = &mats[k];
-        let in_band = freqs[k] >= lo;
-        let Some(p) = mimo_point(s, n) else {
-            singular_in_band += usize::from(in_band);
-            continue;
-        };
-        let r = p.h.view((0, 0), (n, n)).into_owned();
-        let t = p.h.view((n, 0), (n, n)).into_owned();
-        let Some(r_inv) = r.try_inverse() else {
-            singular_in_band += usize::from(in_band);
-            continue;
-        };
-        out_f.push(freqs[k]);
-        z_all.push(t * r_inv);
-        for (o, (mult, part)) in multiple.iter_mut().zip(partial.iter_mut()).enumerate() {
-            mult.push(p.multiple[o]);
-            for (series, value) in part.iter_mut().zip(&p.partial[o]) {
-                series.push(*value);
-            }
-        }
-        if freqs[k] >= lo {
-            for i in 0..n {
-                for j in i + 1..n {
-                    let c = s[(i, j)].norm_sqr() / (s[(i, i)].re * s[(j, j)].re);
-                    max_input_coh = max_input_coh.max(c);
-                }
-            }
-        }
-    }
+    let NonParametric {
+        frequencies: out_f,
+        impedance: z_all,
+        multiple,
+        partial,
+        max_input_coherence: max_input_coh,
+        singular_in_band,
+    } = nonparametric(&spectra, n, (lo, hi));
     let in_band: Vec<usize> = (0..out_f.len())
         .filter(|&k| out_f[k] >= lo && out_f[k] <= hi)
         .collect();
@@ -287,49 +256,18 @@ pub fn estimate_stochastic(
     let weight: Vec<f64> = (0..out_f.len())
         .map(|k| (0..2 * n).map(|o| multiple[o][k]).fold(1.0, f64::min))
         .collect();
-    // parametric fit per element
     let enbw_bins = match welch.window {
         limpid_dsp::spectral::Window::Hann => 1.5,
         limpid_dsp::spectral::Window::Hamming => 1.36,
         limpid_dsp::spectral::Window::Boxcar => 1.0,
     };
-    let mut m = Matrix::zeros(n, n);
-    let mut b = Matrix::zeros(n, n);
-    let mut kk = Matrix::zeros(n, n);
-    let mut se = ParametricErrors {
-        inertia: m.clone(),
-        damping: m.clone(),
-        stiffness: m.clone(),
-    };
-    let (mut ss_res, mut ss_tot) = (0.0, 0.0);
-    for i in 0..n {
-        for j in 0..n {
-            let rows = in_band.len();
-            let mut a_re = DMatrix::<f64>::zeros(rows, 2);
-            let mut y_re = DVector::<f64>::zeros(rows);
-            let mut a_im = DMatrix::<f64>::zeros(rows, 1);
-            let mut y_im = DVector::<f64>::zeros(rows);
-            for (r, &k) in in_band.iter().enumerate() {
-                let w = weight[k].max(1e-6).sqrt();
-                let om = 2.0 * std::f64::consts::PI * out_f[k];
-                a_re[(r, 0)] = w;
-                a_re[(r, 1)] = -om * om * w;
-                y_re[r] = z_all[k][(i, j)].re * w;
-                a_im[(r, 0)] = om * w;
-                y_im[r] = z_all[k][(i, j)].im * w;
-            }
-            let (th_re, se_re, res_re) = weighted_ls(&a_re, &y_re, enbw_bins);
-            let (th_im, se_im, res_im) = weighted_ls(&a_im, &y_im, enbw_bins);
-            kk[(i, j)] = th_re[0];
-            m[(i, j)] = th_re[1];
-            b[(i, j)] = th_im[0];
-            se.stiffness[(i, j)] = se_re[0];
-            se.inertia[(i, j)] = se_re[1];
-            se.damping[(i, j)] = se_im[0];
-            ss_res += res_re + res_im;
-            ss_tot += y_re.norm_squared() + y_im.norm_squared();
-        }
-    }
+    let Parametric {
+        inertia: m,
+        damping: b,
+        stiffness: kk,
+        standard_errors: se,
+        fit_vaf,
+    } = parametric_fit(&z_all, &out_f, &in_band, &weight, enbw_bins);
     let model = |f: f64| {
         let om = 2.0 * std::f64::consts::PI * f;
         DMatrix::from_fn(n, n, |i, j| {
@@ -384,15 +322,146 @@ pub fn estimate_stochastic(
             min_multiple_coherence: min_coh,
             max_input_coherence: max_input_coh,
             phi_t_vs_fit,
-            fit_vaf: if ss_tot > 0.0 {
-                100.0 * (1.0 - ss_res / ss_tot)
-            } else {
-                0.0
-            },
+            fit_vaf,
         },
         accuracy: None,
         warnings,
     })
+}
+
+/// Z(f) = T R^-1 and the coherences at every frequency up to the band's
+/// upper edge (seed 004 eq. (1)-(2), §III-E); frequencies where the input
+/// spectral matrix or R is singular are left out and counted.
+struct NonParametric {
+    frequencies: Vec<f64>,
+    impedance: Vec<DMatrix<Complex64>>,
+    /// `[output][frequency]`.
+    multiple: Vec<Vec<f64>>,
+    /// `[output][input][frequency]`.
+    partial: Vec<Vec<Vec<f64>>>,
+    /// Largest ordinary coherence between two inputs in the band.
+    max_input_coherence: f64,
+    singular_in_band: usize,
+}
+
+fn nonparametric(spectra: &SegmentSpectra, n: usize, (lo, hi): (f64, f64)) -> NonParametric {
+    let mats = spectra.matrix();
+    let freqs = &spectra.frequencies;
+    let top = freqs.iter().position(|f| *f > hi).unwrap_or(freqs.len());
+    let mut out_f = Vec::new();
+    let mut z_all: Vec<DMatrix<Complex64>> = Vec::new();
+    let mut multiple = vec![Vec::new(); 2 * n];
+    let mut partial = vec![vec![Vec::new(); n]; 2 * n];
+    let mut max_input_coh: f64 = 0.0;
+    let mut singular_in_band = 0usize;
+    for k in 1..top {
+        let s = &mats[k];
+        let in_band = freqs[k] >= lo;
+        let Some(p) = mimo_point(s, n) else {
+            singular_in_band += usize::from(in_band);
+            continue;
+        };
+        let r = p.h.view((0, 0), (n, n)).into_owned();
+        let t = p.h.view((n, 0), (n, n)).into_owned();
+        let Some(r_inv) = r.try_inverse() else {
+            singular_in_band += usize::from(in_band);
+            continue;
+        };
+        out_f.push(freqs[k]);
+        z_all.push(t * r_inv);
+        for (o, (mult, part)) in multiple.iter_mut().zip(partial.iter_mut()).enumerate() {
+            mult.push(p.multiple[o]);
+            for (series, value) in part.iter_mut().zip(&p.partial[o]) {
+                series.push(*value);
+            }
+        }
+        if freqs[k] >= lo {
+            for i in 0..n {
+                for j in i + 1..n {
+                    let c = s[(i, j)].norm_sqr() / (s[(i, i)].re * s[(j, j)].re);
+                    max_input_coh = max_input_coh.max(c);
+                }
+            }
+        }
+    }
+    NonParametric {
+        frequencies: out_f,
+        impedance: z_all,
+        multiple,
+        partial,
+        max_input_coherence: max_input_coh,
+        singular_in_band,
+    }
+}
+
+/// The parametric model `Z(f) = K - w^2 M + j w B` fitted per element over
+/// the band by least squares weighted by the smallest multiple coherence:
+/// real parts give K and M, imaginary parts B.
+struct Parametric {
+    inertia: Matrix,
+    damping: Matrix,
+    stiffness: Matrix,
+    standard_errors: ParametricErrors,
+    /// Weighted VAF (%) of the fit over the band.
+    fit_vaf: f64,
+}
+
+fn parametric_fit(
+    z_all: &[DMatrix<Complex64>],
+    out_f: &[f64],
+    in_band: &[usize],
+    weight: &[f64],
+    enbw_bins: f64,
+) -> Parametric {
+    let n = z_all.first().map_or(0, |z| z.nrows());
+    let mut m = Matrix::zeros(n, n);
+    let mut b = Matrix::zeros(n, n);
+    let mut kk = Matrix::zeros(n, n);
+    let mut se = ParametricErrors {
+        inertia: m.clone(),
+        damping: m.clone(),
+        stiffness: m.clone(),
+    };
+    let (mut ss_res, mut ss_tot) = (0.0, 0.0);
+    for i in 0..n {
+        for j in 0..n {
+            let rows = in_band.len();
+            let mut a_re = DMatrix::<f64>::zeros(rows, 2);
+            let mut y_re = DVector::<f64>::zeros(rows);
+            let mut a_im = DMatrix::<f64>::zeros(rows, 1);
+            let mut y_im = DVector::<f64>::zeros(rows);
+            for (r, &k) in in_band.iter().enumerate() {
+                let w = weight[k].max(1e-6).sqrt();
+                let om = 2.0 * std::f64::consts::PI * out_f[k];
+                a_re[(r, 0)] = w;
+                a_re[(r, 1)] = -om * om * w;
+                y_re[r] = z_all[k][(i, j)].re * w;
+                a_im[(r, 0)] = om * w;
+                y_im[r] = z_all[k][(i, j)].im * w;
+            }
+            let (th_re, se_re, res_re) = weighted_ls(&a_re, &y_re, enbw_bins);
+            let (th_im, se_im, res_im) = weighted_ls(&a_im, &y_im, enbw_bins);
+            kk[(i, j)] = th_re[0];
+            m[(i, j)] = th_re[1];
+            b[(i, j)] = th_im[0];
+            se.stiffness[(i, j)] = se_re[0];
+            se.inertia[(i, j)] = se_re[1];
+            se.damping[(i, j)] = se_im[0];
+            ss_res += res_re + res_im;
+            ss_tot += y_re.norm_squared() + y_im.norm_squared();
+        }
+    }
+    Parametric {
+        inertia: m,
+        damping: b,
+        stiffness: kk,
+        standard_errors: se,
+        fit_vaf: if ss_tot > 0.0 {
+            100.0 * (1.0 - ss_res / ss_tot)
+        } else {
+            0.0
+        },
+    }
 }
 
 /// Least squares with standard errors (variance times `inflation`); returns (θ, SE, RSS).
