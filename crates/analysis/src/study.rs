@@ -453,20 +453,7 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
             g(&x.principal_change_percent, 2)
         );
     }
-    // the result document of `crate::result` (kind "study"), without a copy
-    #[derive(Serialize)]
-    struct StudyDocument<'a> {
-        schema: u32,
-        kind: &'static str,
-        #[serde(flatten)]
-        study: &'a StudyResult,
-    }
-    let doc = StudyDocument {
-        schema: crate::result::SCHEMA_VERSION,
-        kind: "study",
-        study: r,
-    };
-    let json = serde_json::to_string_pretty(&doc).map_err(|e| Error::Format {
+    let json = study_json(r).map_err(|e| Error::Format {
         path: dir.join("study.json"),
         message: e.to_string(),
     })?;
@@ -476,6 +463,23 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
         write("study.json", json)?,
         write("tables.md", markdown(r))?,
     ])
+}
+
+/// The study's result document (`crate::result`, kind "study"), serialised
+/// without copying the study.
+fn study_json(r: &StudyResult) -> serde_json::Result<String> {
+    #[derive(Serialize)]
+    struct StudyDocument<'a> {
+        schema: u32,
+        kind: &'static str,
+        #[serde(flatten)]
+        study: &'a StudyResult,
+    }
+    serde_json::to_string_pretty(&StudyDocument {
+        schema: crate::result::SCHEMA_VERSION,
+        kind: "study",
+        study: r,
+    })
 }
 
 /// Seed 001's tables as Markdown.
@@ -539,4 +543,30 @@ pub fn markdown(r: &StudyResult) -> String {
         }
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::result::{Document, Estimate};
+
+    #[test]
+    fn the_borrowed_study_document_is_the_result_contract() {
+        let study = StudyResult {
+            name: "t".into(),
+            levels: vec![],
+            rotation: vec![],
+            failures: vec![Failure {
+                subject: "s1".into(),
+                configuration: "c1".into(),
+                file: "a.csv".into(),
+                error: "bad".into(),
+            }],
+            recordings: vec![],
+        };
+        let borrowed = study_json(&study).unwrap();
+        let owned = serde_json::to_string_pretty(&Document::new(Estimate::Study(study))).unwrap();
+        assert_eq!(borrowed, owned);
+        assert!(Document::from_json("study.json", &borrowed).is_ok());
+    }
 }

@@ -231,202 +231,236 @@ pub(crate) fn solve_triangle(
     })
 }
 
-/// Fit the linear model to prepared data.
-pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstimate> {
-    let n = data.dims();
-    let m = data.len();
-    // a constant term: the equilibrium (seed 000), or the unknown offset of continuous data;
-    // demeaned windows already had their per-trial constants removed
-    let with_const = !data.demeaned && (params.equilibrium || data.continuous);
-    let absorbed = if data.demeaned { data.windows.len() } else { 0 };
-    let p = 3 * n + usize::from(with_const);
-    let q = p + n;
-    let numerical = |message: String| Error::Numerical {
-        path: data.path.clone(),
-        message,
-    };
-    if m < 2 * (p + absorbed) {
-        return Err(Error::TooFewSamples {
-            path: data.path.clone(),
-            what: format!("a {p}-parameter linear fit"),
-            needed: 2 * (p + absorbed),
-            found: m,
-        });
-    }
-    // regressor columns: acc, vel, disp per coordinate, then constant; then forces
-    let mut cols: Vec<&[f64]> = Vec::with_capacity(q);
-    cols.extend(data.acc.iter().map(Vec::as_slice));
-    cols.extend(data.vel.iter().map(Vec::as_slice));
-    cols.extend(data.disp.iter().map(Vec::as_slice));
-    let names = column_names(&data.coordinates, with_const);
-    let scales: Vec<f64> = (0..q)
-        .map(|j| {
-            if j == 3 * n && with_const {
-                1.0
-            } else {
-                let c = if j < 3 * n {
-                    cols[j]
-                } else {
-                    &data.force[j - p]
-                };
-                (c.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()
-            }
-        })
-        .collect();
-    for (j, s) in scales.iter().enumerate().take(p) {
-        if *s == 0.0 {
+/// The scaled regression problem of one fit: regressor and force columns,
+/// their RMS scales, and the noise model of the regressors.
+struct Regression<'a> {
+    /// Coordinates.
+    n: usize,
+    /// Samples.
+    m: usize,
+    /// Parameters per force component (3n, plus the constant).
+    p: usize,
+    /// Columns of the augmented matrix `[L | F]`.
+    q: usize,
+    with_const: bool,
+    /// acc, vel, disp per coordinate.
+    cols: Vec<&'a [f64]>,
+    forces: Vec<&'a [f64]>,
+    /// RMS of each column of `[L | F]` (1 for the constant).
+    scales: Vec<f64>,
+    /// Per coordinate: signal share of its acceleration, velocity and displacement regressors.
+    reliability: Vec<[f64; 3]>,
+    /// Per-sample noise covariance of the scaled regressors (errors-in-variables).
+    noise: DMatrix<f64>,
+}
+
+impl<'a> Regression<'a> {
+    fn new(
+        data: &'a Prepared,
+        with_const: bool,
+        numerical: impl Fn(String) -> Error,
+    ) -> Result<Self> {
+        let n = data.dims();
+        let m = data.len();
+        let p = 3 * n + usize::from(with_const);
+        let q = p + n;
+        let mut cols: Vec<&[f64]> = Vec::with_capacity(3 * n);
+        cols.extend(data.acc.iter().map(Vec::as_slice));
+        cols.extend(data.vel.iter().map(Vec::as_slice));
+        cols.extend(data.disp.iter().map(Vec::as_slice));
+        let forces: Vec<&[f64]> = data.force.iter().map(Vec::as_slice).collect();
+        let rms = |c: &[f64]| (c.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
+        let scales: Vec<f64> = (0..q)
+            .map(|j| match j {
+                j if j < 3 * n => rms(cols[j]),
+                j if j < p => 1.0,
+                j => rms(forces[j - p]),
+            })
+            .collect();
+        let names = column_names(&data.coordinates, with_const);
+        if let Some(j) = (0..p).find(|&j| scales[j] == 0.0) {
             return Err(numerical(format!(
                 "regressor column {} is zero in every sample: that coordinate never moves, so its parameters cannot be estimated",
                 names[j]
             )));
         }
-    }
-    let forces: Vec<&[f64]> = data.force.iter().map(Vec::as_slice).collect();
-    let reliability: Vec<[f64; 3]> = (0..n)
-        .map(|k| {
+        let reliability: Vec<[f64; 3]> = (0..n)
+            .map(|k| {
+                let nv = data.regressor_noise_var.get(k).copied().unwrap_or([0.0; 4]);
+                let rel =
+                    |col: usize, noise: f64| (1.0 - noise / (scales[col] * scales[col])).max(0.0);
+                [rel(k, nv[2]), rel(n + k, nv[1]), rel(2 * n + k, nv[0])]
+            })
+            .collect();
+        // errors-in-variables: only the columns reliable enough to correct (bias-compensated LS)
+        let mut noise = DMatrix::<f64>::zeros(p, p);
+        let correctable = |k: usize, kind: usize| reliability[k][kind] >= MIN_CORRECTABLE;
+        for k in 0..n {
             let nv = data.regressor_noise_var.get(k).copied().unwrap_or([0.0; 4]);
-            let rel = |col: usize, noise: f64| (1.0 - noise / (scales[col] * scales[col])).max(0.0);
-            [rel(k, nv[2]), rel(n + k, nv[1]), rel(2 * n + k, nv[0])]
+            let (ia, iv, ix) = (k, n + k, 2 * n + k);
+            if correctable(k, 0) {
+                noise[(ia, ia)] = nv[2] / (scales[ia] * scales[ia]);
+            }
+            if correctable(k, 1) {
+                noise[(iv, iv)] = nv[1] / (scales[iv] * scales[iv]);
+            }
+            if correctable(k, 2) {
+                noise[(ix, ix)] = nv[0] / (scales[ix] * scales[ix]);
+            }
+            if correctable(k, 0) && correctable(k, 2) {
+                let c = nv[3] / (scales[ia] * scales[ix]);
+                noise[(ia, ix)] = c;
+                noise[(ix, ia)] = c;
+            }
+        }
+        Ok(Self {
+            n,
+            m,
+            p,
+            q,
+            with_const,
+            cols,
+            forces,
+            scales,
+            reliability,
+            noise,
         })
-        .collect();
-    let fill_row = |mat: &mut DMatrix<f64>, r: usize, i: usize| {
-        for j in 0..q {
+    }
+
+    /// Row `i` of the scaled `[L | F]` into row `r` of `mat`.
+    fn fill_row(&self, mat: &mut DMatrix<f64>, r: usize, i: usize) {
+        let (n, p) = (self.n, self.p);
+        for j in 0..self.q {
             let v = if j < 3 * n {
-                cols[j][i]
+                self.cols[j][i]
             } else if j < p {
                 1.0
             } else {
-                forces[j - p][i]
+                self.forces[j - p][i]
             };
-            let s = if scales[j] > 0.0 { scales[j] } else { 1.0 };
+            let s = if self.scales[j] > 0.0 {
+                self.scales[j]
+            } else {
+                1.0
+            };
             mat[(r, j)] = v / s;
         }
-    };
-    // errors-in-variables: noise covariance of the scaled regressor columns, per
-    // sample, for the columns reliable enough to correct (bias-compensated LS)
-    let mut noise = DMatrix::<f64>::zeros(p, p);
-    let correctable = |col: usize, kind: usize| reliability[col][kind] >= MIN_CORRECTABLE;
-    for k in 0..n {
-        let nv = data.regressor_noise_var.get(k).copied().unwrap_or([0.0; 4]);
-        let (ia, iv, ix) = (k, n + k, 2 * n + k);
-        if correctable(k, 0) {
-            noise[(ia, ia)] = nv[2] / (scales[ia] * scales[ia]);
-        }
-        if correctable(k, 1) {
-            noise[(iv, iv)] = nv[1] / (scales[iv] * scales[iv]);
-        }
-        if correctable(k, 2) {
-            noise[(ix, ix)] = nv[0] / (scales[ix] * scales[ix]);
-        }
-        if correctable(k, 0) && correctable(k, 2) {
-            let c = nv[3] / (scales[ia] * scales[ix]);
-            noise[(ia, ix)] = c;
-            noise[(ix, ia)] = c;
-        }
     }
-    // jackknife groups: the windows (contiguous runs of them when there are more
-    // than MAX_JACKKNIFE_GROUPS), else contiguous pieces of the data
-    let blocks: Vec<std::ops::Range<usize>> = if data.windows.len() >= MIN_JACKKNIFE_BLOCKS {
-        let w = &data.windows;
-        let g = w.len().min(MAX_JACKKNIFE_GROUPS);
-        (0..g)
-            .map(|b| w[b * w.len() / g].samples.start..w[(b + 1) * w.len() / g - 1].samples.end)
-            .collect()
-    } else {
-        let g = CONTIGUOUS_BLOCKS.min(m / (4 * q)).max(1);
-        (0..g).map(|b| b * m / g..(b + 1) * m / g).collect()
-    };
-    // tall-skinny QR: each block reduced to its q x q triangle (in parallel), then merged
-    let triangles: Vec<DMatrix<f64>> = blocks
-        .par_iter()
-        .map(|range| {
-            let mut acc: Option<DMatrix<f64>> = None;
-            let mut lo = range.start;
-            while lo < range.end {
-                let hi = (lo + CHUNK).min(range.end);
-                let rows = hi - lo + acc.as_ref().map_or(0, |_| q);
-                let mut a = DMatrix::<f64>::zeros(rows, q);
-                let mut r0 = 0;
-                if let Some(prev) = &acc {
-                    a.rows_mut(0, q).copy_from(prev);
-                    r0 = q;
-                }
-                for i in lo..hi {
-                    fill_row(&mut a, r0 + i - lo, i);
-                }
-                acc = Some(triangle(a, q));
-                lo = hi;
-            }
-            acc.unwrap_or_else(|| DMatrix::zeros(q, q))
-        })
-        .collect();
-    let block_rows: Vec<usize> = blocks.iter().map(|b| b.len()).collect();
-    let r_aug = merge(triangles.iter(), q);
-    let solved = solve_triangle(&r_aug, p, n, &scales, &noise, m as f64)
-        .map_err(|e| numerical(e.to_string()))?;
-    let theta = solved.theta.clone();
-    let condition_number = solved.condition_number;
-    let rss = solved.rss.clone();
 
-    // second pass: predictions for r/VAF and residual autocorrelation
-    let lags = data.correlation_lags().min(m / 4).max(1);
-    // the first (up to) three windows, decimated to TRACE_POINTS
-    let trace_len = data
-        .windows
-        .get(data.windows.len().min(3).saturating_sub(1))
-        .map_or(m, |w| w.samples.end)
-        .min(m);
-    let trace_step = trace_len.div_ceil(TRACE_POINTS).max(1);
-    let trace_idx: Vec<usize> = (0..trace_len).step_by(trace_step).collect();
-    let mut fit = FitQuality {
-        r: Vec::with_capacity(n),
-        vaf: Vec::with_capacity(n),
-        rmse: Vec::with_capacity(n),
-        traces: FitTraces {
-            time: trace_idx.iter().map(|&i| i as f64 / data.fs).collect(),
-            measured: Vec::with_capacity(n),
-            predicted: Vec::with_capacity(n),
-        },
-    };
-    let mut inflation = Vec::with_capacity(n);
-    let mut predicted = vec![0.0; m];
-    let mut resid = vec![0.0; m];
-    for a in 0..n {
-        let coef: Vec<f64> = (0..p).map(|j| theta[(j, a)]).collect();
-        predicted
-            .par_iter_mut()
-            .with_min_len(1 << 14)
-            .enumerate()
-            .for_each(|(i, out)| {
-                let mut s = if with_const { coef[3 * n] } else { 0.0 };
-                for j in 0..3 * n {
-                    s += coef[j] * cols[j][i];
+    /// Tall-skinny QR: each block reduced to its q x q triangle, chunk by chunk, blocks in parallel.
+    fn block_triangles(&self, blocks: &[std::ops::Range<usize>]) -> Vec<DMatrix<f64>> {
+        let q = self.q;
+        blocks
+            .par_iter()
+            .map(|range| {
+                let mut acc: Option<DMatrix<f64>> = None;
+                let mut lo = range.start;
+                while lo < range.end {
+                    let hi = (lo + CHUNK).min(range.end);
+                    let rows = hi - lo + acc.as_ref().map_or(0, |_| q);
+                    let mut a = DMatrix::<f64>::zeros(rows, q);
+                    let mut r0 = 0;
+                    if let Some(prev) = &acc {
+                        a.rows_mut(0, q).copy_from(prev);
+                        r0 = q;
+                    }
+                    for i in lo..hi {
+                        self.fill_row(&mut a, r0 + i - lo, i);
+                    }
+                    acc = Some(triangle(a, q));
+                    lo = hi;
                 }
-                *out = s;
-            });
-        let f = forces[a];
-        let (r_coef, vaf, rmse) = fit_stats(f, &predicted);
-        fit.r.push(r_coef);
-        fit.vaf.push(vaf);
-        fit.rmse.push(rmse);
-        fit.traces
-            .measured
-            .push(trace_idx.iter().map(|&i| f[i]).collect());
-        fit.traces
-            .predicted
-            .push(trace_idx.iter().map(|&i| predicted[i]).collect());
-        for ((e, y), yh) in resid.iter_mut().zip(f).zip(&predicted) {
-            *e = y - yh;
-        }
-        if blocks.len() < MIN_JACKKNIFE_BLOCKS {
-            // only the analytic standard errors need it
-            inflation.push(autocorrelation_inflation(&resid, &data.windows, lags));
-        }
+                acc.unwrap_or_else(|| DMatrix::zeros(q, q))
+            })
+            .collect()
     }
-    // standard errors: delete-one-block jackknife (robust to slow force drift, which
-    // correlates residuals over whole trials), or the analytic ones when blocks are too few
-    let g = blocks.len();
-    let (se, se_method) = if g >= MIN_JACKKNIFE_BLOCKS {
+
+    /// Solve from merged triangles holding `rows` samples.
+    fn solve<'t>(
+        &self,
+        triangles: impl Iterator<Item = &'t DMatrix<f64>>,
+        rows: usize,
+    ) -> std::result::Result<Solved, String> {
+        let r_aug = merge(triangles, self.q);
+        solve_triangle(
+            &r_aug,
+            self.p,
+            self.n,
+            &self.scales,
+            &self.noise,
+            rows as f64,
+        )
+    }
+
+    /// Second pass over the data: r, VAF, RMSE and decimated traces per force
+    /// component, and (when `inflate`) the autocorrelation inflation of its residuals.
+    fn fit_quality(
+        &self,
+        data: &Prepared,
+        theta: &DMatrix<f64>,
+        inflate: bool,
+    ) -> (FitQuality, Vec<f64>) {
+        let (n, m, p) = (self.n, self.m, self.p);
+        let lags = data.correlation_lags().min(m / 4).max(1);
+        // the first (up to) three windows, decimated to TRACE_POINTS
+        let trace_len = data
+            .windows
+            .get(data.windows.len().min(3).saturating_sub(1))
+            .map_or(m, |w| w.samples.end)
+            .min(m);
+        let trace_step = trace_len.div_ceil(TRACE_POINTS).max(1);
+        let trace_idx: Vec<usize> = (0..trace_len).step_by(trace_step).collect();
+        let mut fit = FitQuality {
+            r: Vec::with_capacity(n),
+            vaf: Vec::with_capacity(n),
+            rmse: Vec::with_capacity(n),
+            traces: FitTraces {
+                time: trace_idx.iter().map(|&i| i as f64 / data.fs).collect(),
+                measured: Vec::with_capacity(n),
+                predicted: Vec::with_capacity(n),
+            },
+        };
+        let mut inflation = Vec::with_capacity(n);
+        let mut predicted = vec![0.0; m];
+        let mut resid = vec![0.0; m];
+        for a in 0..n {
+            let coef: Vec<f64> = (0..p).map(|j| theta[(j, a)]).collect();
+            predicted
+                .par_iter_mut()
+                .with_min_len(1 << 14)
+                .enumerate()
+                .for_each(|(i, out)| {
+                    let mut s = if self.with_const { coef[3 * n] } else { 0.0 };
+                    for (c, col) in coef.iter().zip(&self.cols) {
+                        s += c * col[i];
+                    }
+                    *out = s;
+                });
+            let f = self.forces[a];
+            let (r_coef, vaf, rmse) = fit_stats(f, &predicted);
+            fit.r.push(r_coef);
+            fit.vaf.push(vaf);
+            fit.rmse.push(rmse);
+            fit.traces
+                .measured
+                .push(trace_idx.iter().map(|&i| f[i]).collect());
+            fit.traces
+                .predicted
+                .push(trace_idx.iter().map(|&i| predicted[i]).collect());
+            if inflate {
+                for ((e, y), yh) in resid.iter_mut().zip(f).zip(&predicted) {
+                    *e = y - yh;
+                }
+                inflation.push(autocorrelation_inflation(&resid, &data.windows, lags));
+            }
+        }
+        (fit, inflation)
+    }
+
+    /// Delete-one-block jackknife standard errors from the per-block triangles
+    /// (robust to slow force drift, which correlates residuals over whole trials).
+    fn jackknife(&self, triangles: &[DMatrix<f64>], block_rows: &[usize]) -> DMatrix<f64> {
+        let (p, n, g) = (self.p, self.n, triangles.len());
         let replicates: Vec<DMatrix<f64>> = (0..g)
             .into_par_iter()
             .filter_map(|b| {
@@ -435,8 +469,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
                     .enumerate()
                     .filter(|(k, _)| *k != b)
                     .map(|(_, t)| t);
-                let rows = (m - block_rows[b]) as f64;
-                solve_triangle(&merge(others, q), p, n, &scales, &noise, rows)
+                self.solve(others, self.m - block_rows[b])
                     .ok()
                     .map(|s| s.theta)
             })
@@ -452,6 +485,103 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
                 acc + (t - &mean).map(|v| v * v)
             })
             * ((g_ok - 1.0) / g_ok);
+        var.map(f64::sqrt)
+    }
+
+    /// Analytic standard errors: residual variance, inflated by its
+    /// autocorrelation, times the diagonal of `(L^T L)^-1`.
+    fn analytic_se(&self, solved: &Solved, dof: f64, inflation: &[f64]) -> DMatrix<f64> {
+        let (p, n) = (self.p, self.n);
+        let mut se = DMatrix::<f64>::zeros(p, n);
+        for a in 0..n {
+            let sigma2 = solved.rss[a] / dof * inflation[a];
+            for j in 0..p {
+                se[(j, a)] = (sigma2 * solved.cov_unit[(j, j)]).sqrt() / self.scales[j];
+            }
+        }
+        se
+    }
+}
+
+/// Jackknife groups: the windows (contiguous runs of them when there are
+/// more than MAX_JACKKNIFE_GROUPS), else contiguous pieces of the data.
+fn jackknife_blocks(data: &Prepared, q: usize) -> Vec<std::ops::Range<usize>> {
+    let m = data.len();
+    let w = &data.windows;
+    if w.len() >= MIN_JACKKNIFE_BLOCKS {
+        let g = w.len().min(MAX_JACKKNIFE_GROUPS);
+        (0..g)
+            .map(|b| w[b * w.len() / g].samples.start..w[(b + 1) * w.len() / g - 1].samples.end)
+            .collect()
+    } else {
+        let g = CONTIGUOUS_BLOCKS.min(m / (4 * q)).max(1);
+        (0..g).map(|b| b * m / g..(b + 1) * m / g).collect()
+    }
+}
+
+/// `x_eq = x_ref - K^-1 c` (seed 000), or None with a warning when K is singular.
+fn equilibrium_position(
+    stiffness: &Matrix,
+    constant: DVector<f64>,
+    reference: &[f64],
+    warnings: &mut Vec<Warning>,
+) -> Option<Vec<f64>> {
+    let k = stiffness.0.clone();
+    match k.clone().lu().solve(&constant) {
+        Some(kc)
+            if limpid_core::linalg::singular_values(k.clone())
+                .is_some_and(|s| s.min() > 1e-12 * k.norm()) =>
+        {
+            Some(
+                reference
+                    .iter()
+                    .zip(kc.iter())
+                    .map(|(r, v)| r - v)
+                    .collect(),
+            )
+        }
+        _ => {
+            warnings.push(Warning::new(
+                WarningCode::EquilibriumSingular,
+                "equilibrium not reported: the stiffness matrix is singular",
+            ));
+            None
+        }
+    }
+}
+
+/// Fit the linear model to prepared data.
+pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstimate> {
+    let n = data.dims();
+    let m = data.len();
+    // a constant term: the equilibrium (seed 000), or the unknown offset of continuous data;
+    // demeaned windows already had their per-trial constants removed
+    let with_const = !data.demeaned && (params.equilibrium || data.continuous);
+    let absorbed = if data.demeaned { data.windows.len() } else { 0 };
+    let p = 3 * n + usize::from(with_const);
+    let numerical = |message: String| Error::Numerical {
+        path: data.path.clone(),
+        message,
+    };
+    if m < 2 * (p + absorbed) {
+        return Err(Error::TooFewSamples {
+            path: data.path.clone(),
+            what: format!("a {p}-parameter linear fit"),
+            needed: 2 * (p + absorbed),
+            found: m,
+        });
+    }
+    let reg = Regression::new(data, with_const, numerical)?;
+    let blocks = jackknife_blocks(data, reg.q);
+    let triangles = reg.block_triangles(&blocks);
+    let solved = reg.solve(triangles.iter(), m).map_err(numerical)?;
+    let theta = &solved.theta;
+    let condition_number = solved.condition_number;
+    let g = blocks.len();
+    let use_jackknife = g >= MIN_JACKKNIFE_BLOCKS;
+    let (fit, inflation) = reg.fit_quality(data, theta, !use_jackknife);
+    let (se, se_method) = if use_jackknife {
+        let block_rows: Vec<usize> = blocks.iter().map(|b| b.len()).collect();
         let unit = if g == data.windows.len() {
             "trials"
         } else if data.windows.len() >= MIN_JACKKNIFE_BLOCKS {
@@ -460,54 +590,30 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             "contiguous pieces"
         };
         (
-            var.map(f64::sqrt),
+            reg.jackknife(&triangles, &block_rows),
             format!("jackknife over {g} blocks ({unit})"),
         )
     } else {
-        let dof = (m - p - absorbed) as f64;
-        let mut se = DMatrix::<f64>::zeros(p, n);
-        for a in 0..n {
-            let sigma2 = rss[a] / dof * inflation[a];
-            for j in 0..p {
-                se[(j, a)] = (sigma2 * solved.cov_unit[(j, j)]).sqrt() / scales[j];
-            }
-        }
         (
-            se,
+            reg.analytic_se(&solved, (m - p - absorbed) as f64, &inflation),
             "analytic, residual variance inflated by its autocorrelation".to_string(),
         )
     };
     let block = |m_: &DMatrix<f64>, b: usize| {
         Matrix(DMatrix::from_fn(n, n, |row, col| m_[(b * n + col, row)]))
     };
-    let inertia = block(&theta, 0);
-    let damping = block(&theta, 1);
-    let stiffness = block(&theta, 2);
+    let inertia = block(theta, 0);
+    let damping = block(theta, 1);
+    let stiffness = block(theta, 2);
     let mut warnings = Vec::new();
     if data.demeaned && params.equilibrium {
         warnings.push(Warning::new(WarningCode::EquilibriumAbsorbed, "equilibrium not estimated: each trial's force offset was fitted, which absorbs it; use rest offsets (seed 000) to estimate it"));
     }
-    let equilibrium = if with_const && params.equilibrium {
-        let k = stiffness.0.clone();
-        let c = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);
-        match k.clone().lu().solve(&c) {
-            Some(kc)
-                if limpid_core::linalg::singular_values(k.clone())
-                    .is_some_and(|s| s.min() > 1e-12 * k.norm()) =>
-            {
-                Some((0..n).map(|i| data.reference[i] - kc[i]).collect())
-            }
-            _ => {
-                warnings.push(Warning::new(
-                    WarningCode::EquilibriumSingular,
-                    "equilibrium not reported: the stiffness matrix is singular",
-                ));
-                None
-            }
-        }
-    } else {
-        None
-    };
+    let equilibrium = (with_const && params.equilibrium).then(|| {
+        let constant = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);
+        equilibrium_position(&stiffness, constant, &data.reference, &mut warnings)
+    });
+    let equilibrium = equilibrium.flatten();
     let se_out = StandardErrors {
         inertia: block(&se, 0),
         damping: block(&se, 1),
@@ -537,7 +643,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             value,
             se,
             &data.coordinates,
-            &reliability,
+            &reg.reliability,
             params.identifiable_ratio,
             warnings,
         )
@@ -567,7 +673,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         samples: m,
         parameters: p * n,
         variance_inflation: (!inflation.is_empty()).then_some(inflation),
-        regressor_reliability: reliability,
+        regressor_reliability: reg.reliability,
         standard_error_method: se_method,
         warnings,
     })
