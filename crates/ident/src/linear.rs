@@ -157,6 +157,15 @@ pub const MIN_RELIABILITY: f64 = 0.8;
 /// Smallest regressor reliability at which its noise bias is compensated;
 /// below it the compensation would amplify noise more than it removes bias.
 pub const MIN_CORRECTABLE: f64 = 0.5;
+/// Prior standard deviation of an end-point inertia the data cannot identify
+/// (kg, diagonal elements; off-diagonal elements get a fifth of it). The human
+/// arm's end-point inertia lies between about 0.1 and 2 kg along its principal
+/// axes (seed 000 Table I: 0.14-0.75 kg; seed 001's subjects 1.4-2 kg).
+pub const UNIDENTIFIED_INERTIA_SD_KG: f64 = 0.5;
+/// The same for joint coordinates (kg m^2; upper arm and forearm about a joint: 0.02-0.3).
+pub const UNIDENTIFIED_INERTIA_SD_KG_M2: f64 = 0.05;
+/// Share of the diagonal prior given to off-diagonal inertia elements.
+const OFF_DIAGONAL_INERTIA_SHARE: f64 = 0.2;
 /// Fewest blocks for a jackknife standard error.
 const MIN_JACKKNIFE_BLOCKS: usize = 8;
 /// Most jackknife groups; more trials are grouped into consecutive runs.
@@ -503,6 +512,56 @@ impl<'a> Regression<'a> {
     }
 }
 
+/// Variance that an inertia the data cannot identify adds to the damping and
+/// stiffness estimates, per parameter row (p) and force component (n).
+///
+/// The fit reports B and K conditional on its own M; when M is not
+/// identified, a wrong M moves them along the regression of the acceleration
+/// columns on the others: `dθ_j/dM_k = C_jM (C_MM)^-1` with `C` the unit
+/// covariance `(L^T L)^-1`. (A pure sinusoid makes acceleration proportional to
+/// displacement, so K absorbs `-ω² M` exactly; block jackknife standard errors
+/// cannot see such a bias, every trial sharing it.) Each M element gets the
+/// prior s.d. of [`UNIDENTIFIED_INERTIA_SD_KG`].
+fn inertia_confounding(reg: &Regression, solved: &Solved, coords: &[String]) -> DMatrix<f64> {
+    let (n, p) = (reg.n, reg.p);
+    let c = &solved.cov_unit;
+    let mut out = DMatrix::<f64>::zeros(p, n);
+    let c_mm = c.view((0, 0), (n, n)).into_owned();
+    let Some(c_mm_inv) = c_mm.try_inverse() else {
+        return out;
+    };
+    let prior = |k: usize| {
+        if matches!(coords[k].as_str(), "x" | "y" | "z") {
+            UNIDENTIFIED_INERTIA_SD_KG
+        } else {
+            UNIDENTIFIED_INERTIA_SD_KG_M2
+        }
+    };
+    for j in n..3 * n {
+        // sensitivity of parameter j to each inertia column k, unscaled
+        let sens: Vec<f64> = (0..n)
+            .map(|k| {
+                let scaled: f64 = (0..n).map(|l| c[(j, l)] * c_mm_inv[(l, k)]).sum();
+                scaled * reg.scales[k] / reg.scales[j]
+            })
+            .collect();
+        for a in 0..n {
+            out[(j, a)] = (0..n)
+                .map(|k| {
+                    let sd = (prior(a) * prior(k)).sqrt()
+                        * if k == a {
+                            1.0
+                        } else {
+                            OFF_DIAGONAL_INERTIA_SHARE
+                        };
+                    (sens[k] * sd).powi(2)
+                })
+                .sum();
+        }
+    }
+    out
+}
+
 /// Jackknife groups: the windows (contiguous runs of them when there are
 /// more than MAX_JACKKNIFE_GROUPS), else contiguous pieces of the data.
 fn jackknife_blocks(data: &Prepared, q: usize) -> Vec<std::ops::Range<usize>> {
@@ -580,7 +639,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
     let g = blocks.len();
     let use_jackknife = g >= MIN_JACKKNIFE_BLOCKS;
     let (fit, inflation) = reg.fit_quality(data, theta, !use_jackknife);
-    let (se, se_method) = if use_jackknife {
+    let (mut se, mut se_method) = if use_jackknife {
         let block_rows: Vec<usize> = blocks.iter().map(|b| b.len()).collect();
         let unit = if g == data.windows.len() {
             "trials"
@@ -614,8 +673,26 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         equilibrium_position(&stiffness, constant, &data.reference, &mut warnings)
     });
     let equilibrium = equilibrium.flatten();
+    // inertia first: when it is not identified, B and K carry its uncertainty too
+    let inertia_se = block(&se, 0);
+    let inertia_identified = identified(
+        0,
+        &inertia,
+        &inertia_se,
+        &data.coordinates,
+        &reg.reliability,
+        params.identifiable_ratio,
+        &mut warnings,
+    );
+    if !inertia_identified {
+        let extra = inertia_confounding(&reg, &solved, &data.coordinates);
+        se.zip_apply(&extra, |v, e| *v = (*v * *v + e).sqrt());
+        se_method.push_str(
+            "; B and K include the effect of an unidentified inertia (prior s.d. 0.5 kg or 0.05 kg m^2)",
+        );
+    }
     let se_out = StandardErrors {
-        inertia: block(&se, 0),
+        inertia: inertia_se,
         damping: block(&se, 1),
         stiffness: block(&se, 2),
         constant: with_const.then(|| (0..n).map(|a| se[(3 * n, a)]).collect()),
@@ -649,7 +726,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         )
     };
     let identifiable = Identifiable {
-        inertia: judge(0, &inertia, &se_out.inertia, &mut warnings),
+        inertia: inertia_identified,
         damping: judge(1, &damping, &se_out.damping, &mut warnings),
         stiffness: judge(2, &stiffness, &se_out.stiffness, &mut warnings),
     };
