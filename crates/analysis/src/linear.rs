@@ -68,6 +68,8 @@ pub struct Criteria {
     pub samples: usize,
     /// Parameters fitted.
     pub parameters: usize,
+    /// The verdict on each matrix ([`MatrixVerdict`]; thresholds in its docs).
+    pub verdicts: PerMatrix<MatrixVerdict>,
 }
 
 /// Where the data came from and how it was prepared.
@@ -171,6 +173,11 @@ pub fn linear_result(est: &LinearEstimate, data: &Prepared) -> LinearResult {
         fit: est.fit.clone(),
         criteria: Criteria {
             condition_number: est.condition_number,
+            verdicts: PerMatrix {
+                inertia: judge(est, &matrices.inertia, MatrixKind::Inertia),
+                damping: judge(est, &matrices.damping, MatrixKind::Damping),
+                stiffness: judge(est, &matrices.stiffness, MatrixKind::Stiffness),
+            },
             matrices,
             identifiable: est.identifiable.clone(),
             regressor_reliability: est.regressor_reliability.clone(),
@@ -204,29 +211,89 @@ pub fn linear_result(est: &LinearEstimate, data: &Prepared) -> LinearResult {
     }
 }
 
-/// One matrix's verdict: identified from the data, and passive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Smallest VAF (%) of every force component for any matrix to be trusted:
+/// below it the model misses most of the force (wrong model, reflexes,
+/// trials cut mid-motion), and its parameters absorb what it misses.
+pub const VAF_FLOOR_PERCENT: f64 = 50.0;
+
+/// Documented error tolerance of a trusted matrix (relative Frobenius norm):
+/// K 10 %, B 25 %, M 25 %. A matrix is trusted only when twice its standard
+/// error stays within it; `limpid calibrate` measures how often a trusted
+/// matrix is nevertheless further from the truth.
+pub fn tolerance(kind: MatrixKind) -> f64 {
+    match kind {
+        MatrixKind::Stiffness => 0.10,
+        MatrixKind::Damping | MatrixKind::Inertia => 0.25,
+    }
+}
+
+/// One matrix's verdict, in the order it is checked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
 pub enum MatrixVerdict {
-    /// Identifiable and its symmetric part positive definite.
+    /// Identified, passive, precise, from a fit that explains the force.
     Trusted,
-    /// Identifiable but not positive definite: not a passive impedance.
-    NotPassive,
-    /// Not identifiable from this data.
+    /// A force component varies too little or the model explains less than
+    /// [`VAF_FLOOR_PERCENT`] of it: no matrix of this fit is trusted.
+    PoorFit,
+    /// Not identifiable from this data (a diagonal element within 2 SE of
+    /// zero, or its regressors dominated by noise).
     NotIdentifiable,
+    /// Identified, but its symmetric part is not positive definite (negative
+    /// inertia, damping or stiffness): not a passive impedance.
+    NotPassive,
+    /// Identified and passive, but 2 SE exceed the tolerance ([`tolerance`]).
+    Imprecise,
+}
+
+impl MatrixVerdict {
+    /// Whether the matrix may be used.
+    pub fn trusted(self) -> bool {
+        self == MatrixVerdict::Trusted
+    }
+}
+
+/// The verdict on one matrix of a fit.
+fn judge(est: &LinearEstimate, c: &MatrixCriteria, kind: MatrixKind) -> MatrixVerdict {
+    let (value, se, identified) = match kind {
+        MatrixKind::Inertia => (
+            &est.inertia,
+            &est.standard_errors.inertia,
+            est.identifiable.inertia,
+        ),
+        MatrixKind::Damping => (
+            &est.damping,
+            &est.standard_errors.damping,
+            est.identifiable.damping,
+        ),
+        MatrixKind::Stiffness => (
+            &est.stiffness,
+            &est.standard_errors.stiffness,
+            est.identifiable.stiffness,
+        ),
+    };
+    let fit_ok = est.fit.vaf.iter().all(|v| *v >= VAF_FLOOR_PERCENT);
+    let relative_se = se.norm() / value.norm();
+    if !fit_ok {
+        MatrixVerdict::PoorFit
+    } else if !identified {
+        MatrixVerdict::NotIdentifiable
+    } else if !c.positive_definite {
+        MatrixVerdict::NotPassive
+    } else if relative_se.is_nan() || 2.0 * relative_se > tolerance(kind) {
+        MatrixVerdict::Imprecise
+    } else {
+        MatrixVerdict::Trusted
+    }
 }
 
 impl Criteria {
-    /// The verdict on one matrix (`"inertia"`, `"damping"`, `"stiffness"`).
+    /// The verdict on one matrix.
     pub fn verdict_of(&self, kind: MatrixKind) -> MatrixVerdict {
-        let (identified, c) = match kind {
-            MatrixKind::Inertia => (self.identifiable.inertia, &self.matrices.inertia),
-            MatrixKind::Damping => (self.identifiable.damping, &self.matrices.damping),
-            MatrixKind::Stiffness => (self.identifiable.stiffness, &self.matrices.stiffness),
-        };
-        match (identified, c.positive_definite) {
-            (true, true) => MatrixVerdict::Trusted,
-            (true, false) => MatrixVerdict::NotPassive,
-            (false, _) => MatrixVerdict::NotIdentifiable,
+        match kind {
+            MatrixKind::Inertia => self.verdicts.inertia,
+            MatrixKind::Damping => self.verdicts.damping,
+            MatrixKind::Stiffness => self.verdicts.stiffness,
         }
     }
 }
@@ -305,16 +372,23 @@ impl LinearResult {
             .iter()
             .map(|&kind| {
                 let name = kind.name();
+                let tol = 100.0 * tolerance(kind);
                 match self.criteria.verdict_of(kind) {
-                    MatrixVerdict::Trusted => {
-                        format!("{name} trusted (identifiable, positive definite)")
-                    }
+                    MatrixVerdict::Trusted => format!(
+                        "{name} trusted (identifiable, positive definite, 2 SE within {tol:.0} %)"
+                    ),
+                    MatrixVerdict::PoorFit => format!(
+                        "{name} NOT trusted: the model explains less than {VAF_FLOOR_PERCENT:.0} % of a force component"
+                    ),
                     MatrixVerdict::NotPassive => format!(
                         "{name} identified but not positive definite: not a passive impedance"
                     ),
                     MatrixVerdict::NotIdentifiable => {
                         format!("{name} NOT identifiable from this data: treat it as unknown")
                     }
+                    MatrixVerdict::Imprecise => format!(
+                        "{name} imprecise: 2 SE exceed {tol:.0} % of its norm"
+                    ),
                 }
             })
             .collect();

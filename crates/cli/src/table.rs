@@ -3,7 +3,7 @@
 use std::fmt::Write;
 
 use limpid_analysis::cocontraction::CocontractionResult;
-use limpid_analysis::linear::LinearResult;
+use limpid_analysis::linear::{LinearResult, MatrixKind, MatrixVerdict};
 use limpid_analysis::Matrix;
 
 /// A number with 4 significant digits, without exponent for the usual range.
@@ -60,32 +60,31 @@ pub fn linear_text(r: &LinearResult) -> String {
         p.offsets
     );
     out.push('\n');
-    let ident = &r.criteria.identifiable;
-    let flag = |ok: bool| {
-        if ok {
-            ""
-        } else {
-            "   [NOT IDENTIFIABLE: see warnings]"
-        }
+    let flag = |kind: MatrixKind| match r.criteria.verdict_of(kind) {
+        MatrixVerdict::Trusted => "   [trusted]",
+        MatrixVerdict::PoorFit => "   [NOT TRUSTED: the model misses most of the force]",
+        MatrixVerdict::NotIdentifiable => "   [NOT IDENTIFIABLE: see warnings]",
+        MatrixVerdict::NotPassive => "   [NOT PASSIVE: not positive definite]",
+        MatrixVerdict::Imprecise => "   [IMPRECISE: 2 SE above the tolerance]",
     };
     let [mu, bu, ku] = &p.units;
     matrix_block(
         &mut out,
-        &format!("Stiffness K ({ku}){}", flag(ident.stiffness)),
+        &format!("Stiffness K ({ku}){}", flag(MatrixKind::Stiffness)),
         &r.stiffness,
         &r.standard_errors.stiffness,
         coords,
     );
     matrix_block(
         &mut out,
-        &format!("Damping B ({bu}){}", flag(ident.damping)),
+        &format!("Damping B ({bu}){}", flag(MatrixKind::Damping)),
         &r.damping,
         &r.standard_errors.damping,
         coords,
     );
     matrix_block(
         &mut out,
-        &format!("Inertia M ({mu}){}", flag(ident.inertia)),
+        &format!("Inertia M ({mu}){}", flag(MatrixKind::Inertia)),
         &r.inertia,
         &r.standard_errors.inertia,
         coords,

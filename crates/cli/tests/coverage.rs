@@ -128,3 +128,76 @@ fn the_truth_lies_within_two_standard_errors_of_nine_elements_in_ten() {
     assert!((0.90..=0.99).contains(&covered), "coverage {covered}");
     assert!(z[0].0 < 4.0, "worst |z| {:.2}: {}", z[0].0, z[0].1);
 }
+
+/// ex_cubic with its force columns rewritten by `f`.
+fn with_forces(
+    dir: &std::path::Path,
+    name: &str,
+    mut f: impl FnMut(f64) -> f64,
+) -> std::path::PathBuf {
+    let src =
+        std::fs::read_to_string(shared().join("examples/cartesian_slow/ex_cubic.csv")).unwrap();
+    let mut out = String::new();
+    for (i, line) in src.lines().enumerate() {
+        if i == 0 {
+            out.push_str(line);
+        } else {
+            let cells: Vec<String> = line
+                .split(',')
+                .enumerate()
+                .map(|(j, c)| {
+                    if (4..7).contains(&j) {
+                        f(c.parse().unwrap()).to_string()
+                    } else {
+                        c.to_string()
+                    }
+                })
+                .collect();
+            out.push_str(&cells.join(","));
+        }
+        out.push('\n');
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+#[test]
+fn verdicts_trust_only_a_fit_that_explains_a_passive_force() {
+    let d = tempfile::tempdir().unwrap();
+    let verdicts = |path: &std::path::Path| {
+        let r = json(&["estimate", "linear", path.to_str().unwrap(), "--json"]);
+        let v = &r["criteria"]["verdicts"];
+        (
+            v["stiffness"].as_str().unwrap().to_string(),
+            v["damping"].as_str().unwrap().to_string(),
+            r,
+        )
+    };
+    let (k, b, _) = verdicts(&shared().join("examples/cartesian_slow/ex_cubic.csv"));
+    assert_eq!((k.as_str(), b.as_str()), ("trusted", "trusted"));
+    // a constant force: nothing to fit, nothing trusted, and it says why
+    let (k, b, r) = verdicts(&with_forces(d.path(), "constant.csv", |_| 5.0));
+    assert_eq!((k.as_str(), b.as_str()), ("poor_fit", "poor_fit"));
+    assert!(r["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w["message"]
+            .as_str()
+            .unwrap()
+            .contains("the same in every sample")));
+    // the force's sign flipped: K and B come out negative definite, identified but not passive
+    let (k, b, _) = verdicts(&with_forces(d.path(), "flipped.csv", |f| -f));
+    assert_eq!((k.as_str(), b.as_str()), ("not_passive", "not_passive"));
+    // force buried in noise 20 times its size: the model misses most of it
+    let mut state = 12345u64;
+    let (k, _, _) = verdicts(&with_forces(d.path(), "noisy.csv", move |f| {
+        // a deterministic uniform(-1, 1) sequence (xorshift)
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        f + 200.0 * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+    }));
+    assert_ne!(k, "trusted");
+}

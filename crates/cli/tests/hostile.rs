@@ -397,3 +397,35 @@ fn a_planar_estimate_of_3d_data_is_refused_not_silently_flattened() {
         "{line}"
     );
 }
+
+#[test]
+fn methods_refuse_data_they_cannot_use_and_name_what_is_missing() {
+    let d = tempfile::tempdir().unwrap();
+    // co-contraction without EMG: the index cannot be computed
+    let src =
+        std::fs::read_to_string(shared().join("examples/cocontraction/ex_config4.csv")).unwrap();
+    let no_emg: String = src
+        .lines()
+        .map(|l| l.split(',').take(9).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    let rec = d.path().join("no_emg.csv");
+    std::fs::write(&rec, no_emg).unwrap();
+    let mvc = shared().join("examples/cocontraction/ex_config4.mvc.csv");
+    let out = limpid(&[
+        "estimate",
+        "cocontraction",
+        rec.to_str().unwrap(),
+        "--mvc",
+        mvc.to_str().unwrap(),
+    ]);
+    let line = one_line_error(&out);
+    assert!(
+        line.contains("no_emg.csv") && line.contains("emg_"),
+        "{line}"
+    );
+    // stochastic without the commanded inputs: the spectra Z = T R^-1 need them
+    let rec = shared().join("examples/cartesian_slow/ex_cubic.csv");
+    let out = limpid(&["estimate", "stochastic", rec.to_str().unwrap()]);
+    let line = one_line_error(&out);
+    assert!(line.contains("missing required column ux"), "{line}");
+}

@@ -21,6 +21,8 @@
 //! filtered residuals are not white. This inflation is exact when the
 //! regressors change slowly over that length, and conservative otherwise.
 
+use std::fmt::Write as _;
+
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use schemars::JsonSchema;
@@ -177,6 +179,9 @@ pub(crate) struct Solved {
     pub(crate) theta: DMatrix<f64>,
     pub(crate) rss: Vec<f64>,
     pub(crate) cov_unit: DMatrix<f64>,
+    /// Per-sample variance of each scaled column's part that the other columns
+    /// do not explain (`1 / (rows [(R^T R)^-1]_jj)`): what identifies its parameter.
+    pub(crate) partial_variance: Vec<f64>,
     pub(crate) condition_number: f64,
 }
 
@@ -215,6 +220,7 @@ pub(crate) fn solve_triangle(
     let r_pinv = v_t.transpose() * &inv_s * u.transpose();
     let mut theta_scaled = &r_pinv * &z;
     let mut cov_unit = &r_pinv * r_pinv.transpose();
+    let partial_variance = (0..p).map(|j| 1.0 / (rows * cov_unit[(j, j)])).collect();
     if noise.iter().any(|v| *v != 0.0) {
         let r_owned = r_aug.view((0, 0), (p, p)).into_owned();
         let gram = r_owned.transpose() * &r_owned - noise * rows;
@@ -236,6 +242,7 @@ pub(crate) fn solve_triangle(
         theta,
         rss,
         cov_unit,
+        partial_variance,
         condition_number: smax / smin,
     })
 }
@@ -520,8 +527,10 @@ impl<'a> Regression<'a> {
 /// columns on the others: `dθ_j/dM_k = C_jM (C_MM)^-1` with `C` the unit
 /// covariance `(L^T L)^-1`. (A pure sinusoid makes acceleration proportional to
 /// displacement, so K absorbs `-ω² M` exactly; block jackknife standard errors
-/// cannot see such a bias, every trial sharing it.) Each M element gets the
-/// prior s.d. of [`UNIDENTIFIED_INERTIA_SD_KG`].
+/// cannot see such a bias, every trial sharing it.) Applied when less than
+/// [`MIN_RELIABILITY`] of some acceleration column's own part (what the other
+/// columns do not explain) is signal rather than propagated position noise;
+/// each M element then gets the prior s.d. of [`UNIDENTIFIED_INERTIA_SD_KG`].
 fn inertia_confounding(reg: &Regression, solved: &Solved, coords: &[String]) -> DMatrix<f64> {
     let (n, p) = (reg.n, reg.p);
     let c = &solved.cov_unit;
@@ -684,11 +693,23 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         params.identifiable_ratio,
         &mut warnings,
     );
-    if !inertia_identified {
+    // the share of each acceleration column's own part (not explained by
+    // velocity, displacement and constant) that is signal rather than noise
+    let partial_reliability: Vec<f64> = (0..n)
+        .map(|k| {
+            let nv = data.regressor_noise_var.get(k).map_or(0.0, |v| v[2]);
+            let noise = nv / (reg.scales[k] * reg.scales[k]);
+            (1.0 - noise / solved.partial_variance[k]).max(0.0)
+        })
+        .collect();
+    let least = partial_reliability.iter().copied().fold(1.0, f64::min);
+    if partial_reliability.iter().any(|r| *r < MIN_RELIABILITY) {
         let extra = inertia_confounding(&reg, &solved, &data.coordinates);
         se.zip_apply(&extra, |v, e| *v = (*v * *v + e).sqrt());
-        se_method.push_str(
-            "; B and K include the effect of an unidentified inertia (prior s.d. 0.5 kg or 0.05 kg m^2)",
+        let _ = write!(
+            se_method,
+            "; B and K include an unknown inertia's effect (prior s.d. {UNIDENTIFIED_INERTIA_SD_KG} kg or {UNIDENTIFIED_INERTIA_SD_KG_M2} kg m^2): only {:.0} % of the acceleration the motion does not tie to displacement and velocity is signal",
+            100.0 * least
         );
     }
     let se_out = StandardErrors {
@@ -730,10 +751,16 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         damping: judge(1, &damping, &se_out.damping, &mut warnings),
         stiffness: judge(2, &stiffness, &se_out.stiffness, &mut warnings),
     };
+    let constant_force: Vec<bool> = reg
+        .forces
+        .iter()
+        .map(|f| f.iter().all(|v| *v == f[0]))
+        .collect();
     quality_warnings(
         &identifiable,
         condition_number,
         &fit,
+        &constant_force,
         &data.coordinates,
         &mut warnings,
     );
@@ -815,6 +842,7 @@ fn quality_warnings(
     identifiable: &Identifiable,
     condition_number: f64,
     fit: &FitQuality,
+    constant_force: &[bool],
     coords: &[String],
     warnings: &mut Vec<Warning>,
 ) {
@@ -827,7 +855,15 @@ fn quality_warnings(
         )));
     }
     for (a, v) in fit.vaf.iter().enumerate() {
-        if *v < 50.0 {
+        if constant_force[a] {
+            warnings.push(Warning::new(
+                WarningCode::PoorFit,
+                format!(
+                    "the force along {} is the same in every sample: there is nothing to fit (check the force columns)",
+                    coords[a]
+                ),
+            ));
+        } else if *v < 50.0 {
             warnings.push(Warning::new(
                 WarningCode::PoorFit,
                 format!(
