@@ -13,6 +13,7 @@
 
 #![warn(missing_docs)]
 
+pub mod calibrate;
 pub mod cocontraction;
 pub mod demo;
 pub mod emg;

@@ -43,6 +43,8 @@ pub enum Estimate {
     Study(StudyResult),
     /// The virtual seed 000 study of `limpid demo`, with its truth.
     Demo(DemoResult),
+    /// Coverage and verdict calibration over virtual subjects (`limpid calibrate`).
+    Calibration(crate::calibrate::Calibration),
 }
 
 impl Estimate {
@@ -56,6 +58,7 @@ impl Estimate {
             Estimate::Cocontraction(_) => "cocontraction",
             Estimate::Study(_) => "study",
             Estimate::Demo(_) => "demo",
+            Estimate::Calibration(_) => "calibration",
         }
     }
 }

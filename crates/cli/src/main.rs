@@ -2,6 +2,7 @@
 //! into the library crates, then printing. Errors print as `limpid: <chain>`
 //! and exit with status 2.
 
+mod calibrate;
 mod demo;
 mod estimate;
 mod gravity;
@@ -56,6 +57,8 @@ enum Command {
     GravityCompensate(gravity::GravityArgs),
     /// Welch PSD, coherence, multiple and partial coherence of outputs on inputs, as CSV.
     Spectra(stochastic::SpectraArgs),
+    /// Check that standard errors cover the truth and verdicts hold, by Monte Carlo over virtual subjects of every method.
+    Calibrate(calibrate::CalibrateArgs),
     /// Whole co-contraction studies: tables across subjects and configurations (seed 001).
     Study {
         #[command(subcommand)]
@@ -139,6 +142,7 @@ fn run(cli: Cli) -> CliResult {
     match cli.command {
         Command::Estimate { method } => estimate::run(method),
         Command::Demo(args) => demo::run(args),
+        Command::Calibrate(args) => calibrate::run(args),
         Command::Study { command } => study::run(command),
         Command::WindowSweep(args) => planar::run_sweep(args),
         Command::Spectra(args) => stochastic::run_spectra(args),

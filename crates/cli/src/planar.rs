@@ -307,7 +307,11 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
             num(e.inertial_parameters[0]),
             num(c.stiffness_eigenvalues[1]),
             c.stiffness_symmetry_ratio,
-            if c.trusted { "trusted" } else { "not trusted" }
+            if r.trusted {
+                "trusted".to_string()
+            } else {
+                format!("not trusted: {}", r.reasons.join("; "))
+            }
         );
     }
     let show = |v: Option<f64>| {
@@ -315,8 +319,22 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
             format!("{} ms", num(t))
         })
     };
+    match sweep.shortest_trusted_ms {
+        Some(t) => println!("\nshortest trusted window: {} ms", num(t)),
+        None => println!("\nno window earns trust"),
+    }
+    println!("  (trusted: {})", sweep.trust_definition);
+    if let Some(c) = &sweep.impedance_change {
+        println!(
+            "the impedance changes within the trials at about {} ms after the onset (a reflex?): K by {:.0} %, D by {:.0} % (z = {:.1}); windows reaching past it are not trusted",
+            num(c.onset_ms),
+            100.0 * c.stiffness_change,
+            100.0 * c.damping_change,
+            c.z
+        );
+    }
     println!(
-        "\nK positive definite from T_obs = {}",
+        "K positive definite from T_obs = {}",
         show(sweep.min_positive_definite_ms)
     );
     println!(

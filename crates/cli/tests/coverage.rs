@@ -201,3 +201,32 @@ fn verdicts_trust_only_a_fit_that_explains_a_passive_force() {
     }));
     assert_ne!(k, "trusted");
 }
+
+#[test]
+fn calibrate_measures_coverage_and_wrong_verdicts_of_every_method() {
+    let r = json(&["calibrate", "--recordings", "12", "--seed", "7", "--json"]);
+    assert_eq!(r["kind"], "calibration");
+    let methods = r["methods"].as_array().unwrap();
+    assert_eq!(methods.len(), 6);
+    for m in methods {
+        assert_eq!(m["refused"], 0, "{}", m["method"]);
+        for c in m["matrices"].as_array().unwrap() {
+            let cov = c["coverage_percent"].as_f64().unwrap();
+            assert!((0.0..=100.0).contains(&cov), "{m}");
+            // a trusted stiffness is never further than its tolerance in these subjects
+            if c["matrix"] == "stiffness" {
+                let wrong = c["trusted_beyond_tolerance_percent"]
+                    .as_f64()
+                    .unwrap_or(0.0);
+                assert_eq!(wrong, 0.0, "{}", m["method"]);
+            }
+        }
+    }
+    let w = &r["window_sweep"];
+    assert_eq!(w["trusted_but_wrong"], 0, "{w}");
+    assert!(w["trusted_windows"].as_u64().unwrap() > 0, "{w}");
+    // refused: fewer than 10 recordings cannot measure a coverage
+    let out = limpid(&["calibrate", "--recordings", "3"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("--recordings"), "{}", out.stderr);
+}

@@ -476,16 +476,12 @@ impl<'a> Regression<'a> {
     /// Delete-one-block jackknife standard errors from the per-block triangles
     /// (robust to slow force drift, which correlates residuals over whole trials).
     fn jackknife(&self, triangles: &[DMatrix<f64>], block_rows: &[usize]) -> DMatrix<f64> {
-        let (p, n, g) = (self.p, self.n, triangles.len());
-        let replicates: Vec<DMatrix<f64>> = (0..g)
-            .into_par_iter()
-            .filter_map(|b| {
-                let others = triangles
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != b)
-                    .map(|(_, t)| t);
-                self.solve(others, self.m - block_rows[b])
+        let (p, n) = (self.p, self.n);
+        let replicates: Vec<DMatrix<f64>> = crate::lsq::leave_one_out(triangles, self.q)
+            .par_iter()
+            .zip(block_rows)
+            .filter_map(|(t, rows)| {
+                self.solve(std::iter::once(t), self.m - rows)
                     .ok()
                     .map(|s| s.theta)
             })

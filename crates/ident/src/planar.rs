@@ -402,7 +402,6 @@ pub fn fit_planar(
     use_trials: &[usize],
 ) -> Result<PlanarEstimate> {
     let p = if xi.is_some() { 8 } else { 11 };
-    let q = p + 1;
     let blocks: Vec<DMatrix<f64>> = use_trials
         .iter()
         .map(|&k| trial_rows(&data.trials[k], window, xi))
@@ -416,57 +415,16 @@ pub fn fit_planar(
             found: rows,
         });
     }
-    // column scales (RMS over all rows)
-    let mut scales = vec![0.0; q];
-    for b in &blocks {
-        for (j, s) in scales.iter_mut().enumerate() {
-            *s += b.column(j).norm_squared();
-        }
-    }
-    for s in &mut scales {
-        *s = (*s / rows as f64).sqrt();
-        if *s == 0.0 {
-            *s = 1.0;
-        }
-    }
-    let tris: Vec<DMatrix<f64>> = blocks
-        .par_iter()
-        .map(|b| {
-            let mut b = b.clone();
-            for (j, s) in scales.iter().enumerate() {
-                b.column_mut(j).scale_mut(1.0 / s);
-            }
-            triangle(b, q)
-        })
-        .collect();
     let numerical = |m: String| Error::Numerical {
         path: data.path.clone(),
         message: m,
     };
-    // the linear estimator's triangle solver, with one right-hand side and no noise compensation
-    let no_noise = DMatrix::<f64>::zeros(p, p);
-    let solve = |r_aug: &DMatrix<f64>| -> std::result::Result<(DVector<f64>, f64), String> {
-        solve_triangle(r_aug, p, 1, &scales, &no_noise, rows as f64)
-            .map(|s| (s.theta.column(0).into_owned(), s.condition_number))
-            .map_err(|_| "the observation matrix W is rank-deficient: the perturbations do not excite every parameter".to_string())
-    };
-    let (theta, cond_scaled) = solve(&merge(tris.iter(), q)).map_err(numerical)?;
-    // jackknife over trials
-    let g = tris.len();
-    let reps: Vec<DVector<f64>> = (0..g)
-        .into_par_iter()
-        .filter_map(|b| {
-            solve(&merge(
-                tris.iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != b)
-                    .map(|(_, t)| t),
-                q,
-            ))
-            .ok()
-            .map(|s| s.0)
-        })
-        .collect();
+    let BlockSolution {
+        theta,
+        condition_number_scaled: cond_scaled,
+        replicates: reps,
+        ..
+    } = solve_blocks(&blocks).map_err(numerical)?;
     let gn = reps.len() as f64;
     let mean = reps.iter().fold(DVector::zeros(p), |a, t| a + t) / gn.max(1.0);
     let se = (reps
@@ -630,6 +588,25 @@ pub struct SweepRow {
     pub observation_window_ms: f64,
     /// The estimate from this window.
     pub estimate: PlanarEstimate,
+    /// Whether this window's estimate may be used (see `Sweep::trust_definition`).
+    pub trusted: bool,
+    /// Why not, one sentence per failed condition (empty when trusted).
+    pub reasons: Vec<String>,
+}
+
+/// A change of the joint impedance within the trials, such as a stretch
+/// reflex: K and D fitted separately before and after `onset_ms` differ by
+/// more than the tolerance and by more than 3 jackknife standard errors.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct ImpedanceChange {
+    /// Time after the perturbation onset at which the change is clearest (ms).
+    pub onset_ms: f64,
+    /// ||K_after - K_before|| / ||K_before|| (relative Frobenius norm).
+    pub stiffness_change: f64,
+    /// The same for D.
+    pub damping_change: f64,
+    /// The clearer of the two changes over its jackknife standard error.
+    pub z: f64,
 }
 
 /// The observation-window study (seed 003 §IV, Fig. 4-5).
@@ -647,6 +624,171 @@ pub struct Sweep {
     pub quasi_constant_definition: String,
     /// Leave-one-trial-out VAF (%) per joint at the longest window.
     pub leave_one_out_vaf: [f64; 2],
+    /// Shortest trusted window (ms); none when no window earns trust.
+    pub shortest_trusted_ms: Option<f64>,
+    /// A change of K or D within the trials (a reflex), when the data show one.
+    pub impedance_change: Option<ImpedanceChange>,
+    /// What "trusted" means for a window.
+    pub trust_definition: String,
+}
+
+/// Relative precision a trusted window needs: twice the standard error of K
+/// within 10 % of K (relative Frobenius norm), of D within 25 % of D.
+pub const SWEEP_TOLERANCE_K: f64 = 0.10;
+/// The same for D.
+pub const SWEEP_TOLERANCE_D: f64 = 0.25;
+/// Windows this close (ms) count as neighbours for the stability test.
+pub const NEIGHBOURHOOD_MS: f64 = 10.0;
+/// Jackknife z above which a change of K or D within the trials is real.
+pub const CHANGE_Z: f64 = 3.0;
+
+/// Columns of the split model: `trial_rows` with D and K duplicated into a
+/// "before sample `split`" and an "after" copy (xi shared).
+fn split_rows(t: &PlanarTrial, n: usize, split: usize, xi: Option<[f64; 3]>) -> DMatrix<f64> {
+    let base = trial_rows(t, n, xi);
+    let p = base.ncols() - 1;
+    let first = p - 8;
+    let mut a = DMatrix::<f64>::zeros(base.nrows(), p + 9);
+    for row in 0..base.nrows() {
+        for c in 0..first {
+            a[(row, c)] = base[(row, c)];
+        }
+        let off = if row / 2 < split { first } else { first + 8 };
+        for c in 0..8 {
+            a[(row, off + c)] = base[(row, first + c)];
+        }
+        a[(row, p + 8)] = base[(row, p)];
+    }
+    a
+}
+
+/// Least squares on per-trial blocks `[W | y]` (columns scaled to unit RMS,
+/// tall-skinny QR), with delete-one-trial jackknife replicates.
+struct BlockSolution {
+    theta: DVector<f64>,
+    condition_number_scaled: f64,
+    replicates: Vec<DVector<f64>>,
+}
+
+fn solve_blocks(blocks: &[DMatrix<f64>]) -> std::result::Result<BlockSolution, String> {
+    let q = blocks.first().map_or(1, |b| b.ncols());
+    let p = q - 1;
+    let rows: usize = blocks.iter().map(|b| b.nrows()).sum();
+    let mut scales = vec![0.0; q];
+    for b in blocks {
+        for (j, s) in scales.iter_mut().enumerate() {
+            *s += b.column(j).norm_squared();
+        }
+    }
+    for s in &mut scales {
+        *s = (*s / rows.max(1) as f64).sqrt();
+        if *s == 0.0 {
+            *s = 1.0;
+        }
+    }
+    let tris: Vec<DMatrix<f64>> = blocks
+        .par_iter()
+        .map(|b| {
+            let mut b = b.clone();
+            for (j, s) in scales.iter().enumerate() {
+                b.column_mut(j).scale_mut(1.0 / s);
+            }
+            triangle(b, q)
+        })
+        .collect();
+    // the linear estimator's triangle solver, with one right-hand side and no noise compensation
+    let no_noise = DMatrix::<f64>::zeros(p, p);
+    let solve = |r_aug: &DMatrix<f64>| {
+        solve_triangle(r_aug, p, 1, &scales, &no_noise, rows as f64)
+            .map(|s| (s.theta.column(0).into_owned(), s.condition_number))
+            .map_err(|_| "the observation matrix W is rank-deficient: the perturbations do not excite every parameter".to_string())
+    };
+    let (theta, condition_number_scaled) = solve(&merge(tris.iter(), q))?;
+    let replicates: Vec<DVector<f64>> = crate::lsq::leave_one_out(&tris, q)
+        .par_iter()
+        .filter_map(|t| solve(t).ok().map(|s| s.0))
+        .collect();
+    Ok(BlockSolution {
+        theta,
+        condition_number_scaled,
+        replicates,
+    })
+}
+
+/// Jackknife standard deviation of replicate values.
+fn jackknife_sd(values: &[f64]) -> f64 {
+    let g = values.len() as f64;
+    if g < 2.0 {
+        return f64::INFINITY;
+    }
+    let mean = values.iter().sum::<f64>() / g;
+    ((g - 1.0) / g * values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()).sqrt()
+}
+
+/// Scan the split time over the longest window: where K or D before and
+/// after differ most clearly (seed 003 §IV: reflexes bound the observation
+/// window). None when no split shows a change beyond the tolerance and
+/// [`CHANGE_Z`] jackknife standard errors.
+pub fn impedance_change(
+    data: &PlanarData,
+    longest: usize,
+    step: usize,
+    xi: Option<[f64; 3]>,
+) -> Option<ImpedanceChange> {
+    let margin = ((0.03 * data.fs).round() as usize).max(1);
+    let first = if xi.is_some() { 0 } else { 3 };
+    let rel = |th: &DVector<f64>, before: usize| {
+        let b = th.rows(before, 4);
+        (th.rows(before + 8, 4) - b).norm() / b.norm().max(1e-300)
+    };
+    let splits: Vec<usize> = (margin..=longest.saturating_sub(margin))
+        .step_by(step.max(1))
+        .collect();
+    splits
+        .par_iter()
+        .filter_map(|&split| {
+            let blocks: Vec<DMatrix<f64>> = data
+                .trials
+                .iter()
+                .map(|t| split_rows(t, longest, split, xi))
+                .collect();
+            let sol = solve_blocks(&blocks).ok()?;
+            // relative jackknife SE of the 4 parameters from `at` (||SE|| / ||value||)
+            let rel_se = |at: usize| {
+                let var: f64 = (at..at + 4)
+                    .map(|j| {
+                        let v: Vec<f64> = sol.replicates.iter().map(|t| t[j]).collect();
+                        jackknife_sd(&v).powi(2)
+                    })
+                    .sum();
+                var.sqrt() / sol.theta.rows(at, 4).norm().max(1e-300)
+            };
+            // a change counts only between two precise estimates: a part
+            // without motion (the hold) or only a few samples long identifies nothing
+            let precise =
+                |at: usize, tol: f64| rel_se(at) <= tol / 2.0 && rel_se(at + 8) <= tol / 2.0;
+            let (k, d) = (rel(&sol.theta, first + 4), rel(&sol.theta, first));
+            let kr: Vec<f64> = sol.replicates.iter().map(|t| rel(t, first + 4)).collect();
+            let dr: Vec<f64> = sol.replicates.iter().map(|t| rel(t, first)).collect();
+            let zk = if k > SWEEP_TOLERANCE_K / 2.0 && precise(first + 4, SWEEP_TOLERANCE_K) {
+                k / jackknife_sd(&kr)
+            } else {
+                0.0
+            };
+            let zd = if d > SWEEP_TOLERANCE_D / 2.0 && precise(first, SWEEP_TOLERANCE_D) {
+                d / jackknife_sd(&dr)
+            } else {
+                0.0
+            };
+            let z = zk.max(zd);
+            (z > CHANGE_Z).then(|| ImpedanceChange {
+                onset_ms: 1000.0 * split as f64 / data.fs,
+                stiffness_change: k,
+                damping_change: d,
+                z,
+            })
+        })
+        .max_by(|a, b| a.z.total_cmp(&b.z))
 }
 
 /// Relative change below which a parameter group counts as constant.
@@ -696,9 +838,19 @@ pub fn window_sweep(
             fit_planar(data, n, xi, &all).ok().map(|estimate| SweepRow {
                 observation_window_ms: *ms,
                 estimate,
+                trusted: false,
+                reasons: Vec::new(),
             })
         })
         .collect();
+    let mut rows = rows;
+    let longest = rows.last().map_or(0, |r| {
+        (r.observation_window_ms * data.fs / 1000.0).round() as usize
+    });
+    // split times on a grid of the sweep's step, at least 10 ms
+    let step = ((step_ms.max(10.0) * data.fs / 1000.0).round() as usize).max(1);
+    let change = impedance_change(data, longest, step, xi);
+    judge_windows(&mut rows, change.as_ref());
     let from_which = |ok: &dyn Fn(&PlanarEstimate) -> bool| -> Option<f64> {
         let mut first = None;
         for r in rows.iter().rev() {
@@ -730,10 +882,19 @@ pub fn window_sweep(
         }
         None => false,
     };
-    let longest = rows.last().map_or(0, |r| {
-        (r.observation_window_ms * data.fs / 1000.0).round() as usize
-    });
     Ok(Sweep {
+        shortest_trusted_ms: rows
+            .iter()
+            .find(|r| r.trusted)
+            .map(|r| r.observation_window_ms),
+        impedance_change: change,
+        trust_definition: format!(
+            "the estimate's own criteria met (well-conditioned, K and D positive definite and quasi-symmetric, physical inertial parameters); 2 SE of K within {:.0} % and of D within {:.0} % (relative Frobenius norm); K within {:.0} % and D within {:.1} % of every window within {NEIGHBOURHOOD_MS} ms; and the window ends before any change of K or D within the trials (a reflex)",
+            100.0 * SWEEP_TOLERANCE_K,
+            100.0 * SWEEP_TOLERANCE_D,
+            100.0 * SWEEP_TOLERANCE_K / 2.0,
+            100.0 * SWEEP_TOLERANCE_D / 2.0,
+        ),
         min_positive_definite_ms: from_which(&|e| e.criteria.stiffness_positive_definite),
         min_quasi_symmetric_ms: from_which(&|e| e.criteria.stiffness_symmetry_ratio < QUASI_SYMMETRIC && e.criteria.damping_symmetry_ratio < QUASI_SYMMETRIC),
         min_quasi_constant_ms: from_which(&constant),
@@ -744,6 +905,65 @@ pub fn window_sweep(
         leave_one_out_vaf: leave_one_out_vaf(data, longest, xi)?,
         rows,
     })
+}
+
+/// Mark each window trusted or not, with the reasons.
+fn judge_windows(rows: &mut [SweepRow], change: Option<&ImpedanceChange>) {
+    let rel = |a: &Matrix, b: &Matrix| (&a.0 - &b.0).norm() / b.norm().max(1e-300);
+    let verdicts: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            let e = &r.estimate;
+            let mut why = e.criteria.reasons.clone();
+            let (k_se, d_se) = (
+                e.standard_errors.stiffness.norm() / e.stiffness.norm().max(1e-300),
+                e.standard_errors.damping.norm() / e.damping.norm().max(1e-300),
+            );
+            if k_se.is_nan() || 2.0 * k_se > SWEEP_TOLERANCE_K {
+                why.push(format!(
+                    "imprecise: 2 SE of K are {:.0} % of K (at most {:.0} %)",
+                    200.0 * k_se,
+                    100.0 * SWEEP_TOLERANCE_K
+                ));
+            }
+            if d_se.is_nan() || 2.0 * d_se > SWEEP_TOLERANCE_D {
+                why.push(format!(
+                    "imprecise: 2 SE of D are {:.0} % of D (at most {:.0} %)",
+                    200.0 * d_se,
+                    100.0 * SWEEP_TOLERANCE_D
+                ));
+            }
+            let (mut dk, mut dd) = (0.0f64, 0.0f64);
+            for o in rows.iter().filter(|o| {
+                (o.observation_window_ms - r.observation_window_ms).abs() <= NEIGHBOURHOOD_MS + 1e-9
+            }) {
+                dk = dk.max(rel(&o.estimate.stiffness, &e.stiffness));
+                dd = dd.max(rel(&o.estimate.damping, &e.damping));
+            }
+            if dk.is_nan() || dk > SWEEP_TOLERANCE_K / 2.0 || dd.is_nan() || dd > SWEEP_TOLERANCE_D / 2.0 {
+                why.push(format!(
+                    "unstable: within {NEIGHBOURHOOD_MS} ms K changes by {:.0} % and D by {:.0} %",
+                    100.0 * dk,
+                    100.0 * dd
+                ));
+            }
+            if let Some(c) = change {
+                if r.observation_window_ms > c.onset_ms {
+                    why.push(format!(
+                        "the window reaches past a change of the impedance at {:.0} ms (a reflex?): K changes by {:.0} %, D by {:.0} %",
+                        c.onset_ms,
+                        100.0 * c.stiffness_change,
+                        100.0 * c.damping_change
+                    ));
+                }
+            }
+            why
+        })
+        .collect();
+    for (r, why) in rows.iter_mut().zip(verdicts) {
+        r.trusted = why.is_empty();
+        r.reasons = why;
+    }
 }
 
 pub use limpid_core::criteria::{MAX_CONDITION, QUASI_SYMMETRIC};

@@ -155,3 +155,70 @@ fn reflex_after_60_ms_makes_the_stiffness_estimate_grow_with_the_window() {
         "quasi-constant from {quasi} ms despite the reflex at 60 ms"
     );
 }
+
+/// Every window the sweep trusts has K within 10 % and D within 25 % of the truth.
+fn assert_trusted_windows_are_right(
+    sweep: &limpid_ident::planar::Sweep,
+    k: &limpid_core::Matrix,
+    d: &limpid_core::Matrix,
+) -> usize {
+    let mut trusted = 0;
+    for r in sweep.rows.iter().filter(|r| r.trusted) {
+        trusted += 1;
+        let ek = limpid_testkit::rel_err(&r.estimate.stiffness, k);
+        let ed = limpid_testkit::rel_err(&r.estimate.damping, d);
+        assert!(
+            ek <= 0.10 && ed <= 0.25,
+            "{} ms trusted with K error {ek}, D error {ed}",
+            r.observation_window_ms
+        );
+    }
+    trusted
+}
+
+#[test]
+fn the_sweep_trusts_precise_stable_windows_and_none_past_a_reflex() {
+    use limpid_ident::planar::window_sweep;
+    use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject, Reflex};
+    // the example: trusted from a window where K is precise, never the 50-80 ms ones (K11 +46 % at 50 ms)
+    let t = truth("ex_joint_180");
+    let rec = limpid_io::read_recording(format!("{EXAMPLES}/ex_joint_180.csv")).unwrap();
+    let data = prepare_planar(&rec, &PlanarPrepare::new(0.28, 0.35)).unwrap();
+    let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
+    let (k, d) = (
+        limpid_testkit::mat(&t["stiffness"]),
+        limpid_testkit::mat(&t["damping"]),
+    );
+    assert!(assert_trusted_windows_are_right(&sweep, &k, &d) >= 10);
+    let first = sweep.shortest_trusted_ms.unwrap();
+    assert!((80.0..=120.0).contains(&first), "trusted from {first} ms");
+    assert!(sweep.impedance_change.is_none());
+    // a reflex raising K and D by 50 % after 60 ms: detected, and no window trusted
+    let mut subject = PlanarSubject::seed003();
+    subject.reflex = Some(Reflex {
+        latency_s: 0.06,
+        stiffness_gain: 0.5,
+        damping_gain: 0.5,
+    });
+    let rec = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.02, 1e-5, 4).unwrap();
+    let data = prepare_planar(&rec, &PlanarPrepare::new(0.28, 0.35)).unwrap();
+    let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
+    let change = sweep
+        .impedance_change
+        .as_ref()
+        .expect("the reflex is detected");
+    assert!(
+        (50.0..=100.0).contains(&change.onset_ms),
+        "change at {} ms",
+        change.onset_ms
+    );
+    let (k, d) = (
+        limpid_core::Matrix::from(subject.stiffness),
+        limpid_core::Matrix::from(subject.damping),
+    );
+    assert_trusted_windows_are_right(&sweep, &k, &d);
+    assert!(sweep
+        .rows
+        .iter()
+        .all(|r| r.observation_window_ms <= change.onset_ms || !r.trusted));
+}

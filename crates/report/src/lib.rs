@@ -111,6 +111,7 @@ pub fn build(inputs: &[(String, Estimate)]) -> Report {
             Estimate::Planar(r) => planar_section(name, r),
             Estimate::Study(r) => study_section(name, r),
             Estimate::Cocontraction(r) => cocontraction_section(name, r),
+            Estimate::Calibration(r) => calibration_section(name, r),
         })
         .collect();
     Report {
@@ -290,6 +291,26 @@ fn linear_section(name: &str, v: &LinearResult) -> Section {
         tables: linear_tables(v, None),
         figures: fit_figures("", v),
         ellipsoids: ellipsoids_of("estimate", centre, v),
+    }
+}
+
+fn calibration_section(name: &str, v: &limpid_analysis::calibrate::Calibration) -> Section {
+    let (header, rows) = v.table();
+    let w = &v.window_sweep;
+    Section {
+        heading: format!("Calibration of standard errors and verdicts: {name}"),
+        verdict: format!(
+            "{} virtual recordings per method (seed {}); window sweep: {} of {} trusted windows beyond K 10 % / D 25 % of the truth",
+            v.recordings_per_method, v.seed, w.trusted_but_wrong, w.trusted_windows
+        ),
+        warnings: vec![],
+        tables: vec![Table {
+            caption: "Per method and matrix: truth within ±2 reported SE, and how often a verdict is wrong".into(),
+            header,
+            rows,
+        }],
+        figures: vec![],
+        ellipsoids: vec![],
     }
 }
 
@@ -854,12 +875,22 @@ fn sweep_section(name: &str, v: &Sweep) -> Section {
         },
     ];
     let never = |x: Option<f64>| x.map_or_else(|| "never".into(), fmt);
-    let verdict = format!(
-        "shortest trustworthy windows: positive definite from {} ms, quasi-symmetric from {} ms, quasi-constant from {} ms",
+    let mut verdict = format!(
+        "shortest trusted window: {} ms (precise, stable across neighbouring windows, before any change of the impedance within the trials); positive definite from {} ms, quasi-symmetric from {} ms, quasi-constant from {} ms",
+        never(v.shortest_trusted_ms),
         never(v.min_positive_definite_ms),
         never(v.min_quasi_symmetric_ms),
         never(v.min_quasi_constant_ms),
     );
+    if let Some(c) = &v.impedance_change {
+        let _ = write!(
+            verdict,
+            "; the impedance changes at about {} ms after the onset (a reflex?): K by {:.0} %, D by {:.0} %",
+            fmt(c.onset_ms),
+            100.0 * c.stiffness_change,
+            100.0 * c.damping_change
+        );
+    }
     Section {
         heading: format!("Observation-window sweep: {name}"),
         verdict,
