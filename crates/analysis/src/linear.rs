@@ -273,12 +273,26 @@ fn judge(est: &LinearEstimate, c: &MatrixCriteria, kind: MatrixKind) -> MatrixVe
         ),
     };
     let fit_ok = est.fit.vaf.iter().all(|v| *v >= VAF_FLOOR_PERCENT);
+    matrix_verdict(kind, value, se, fit_ok, identified, c.positive_definite)
+}
+
+/// The verdict rules, in the order they are checked, for any estimator's
+/// matrix: the fit explains the data, the matrix is identified, its
+/// symmetric part positive definite, and 2 SE within [`tolerance`].
+pub fn matrix_verdict(
+    kind: MatrixKind,
+    value: &Matrix,
+    se: &Matrix,
+    fit_ok: bool,
+    identified: bool,
+    positive_definite: bool,
+) -> MatrixVerdict {
     let relative_se = se.norm() / value.norm();
     if !fit_ok {
         MatrixVerdict::PoorFit
     } else if !identified {
         MatrixVerdict::NotIdentifiable
-    } else if !c.positive_definite {
+    } else if !positive_definite {
         MatrixVerdict::NotPassive
     } else if relative_se.is_nan() || 2.0 * relative_se > tolerance(kind) {
         MatrixVerdict::Imprecise

@@ -133,7 +133,7 @@ fn report_command_writes_html_without_external_urls_and_svg_figures() {
         !text.contains("src=") && !text.contains("href="),
         "no src/href at all"
     );
-    assert!(text.contains("shortest trustworthy windows"));
+    assert!(text.contains("shortest trusted window"));
     let svgs: Vec<_> = std::fs::read_dir(&figs).unwrap().collect();
     assert_eq!(svgs.len(), 3, "condition number, eigenvalues, symmetry");
     // something that is not a result: one line naming the file
