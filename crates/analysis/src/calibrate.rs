@@ -331,9 +331,13 @@ fn planar_subject(rng: &mut StdRng, reflex: bool) -> PlanarSubject {
 /// Seed 003's torque and angle noise (../shared/examples/planar).
 const PLANAR_NOISE: (f64, f64) = (0.02, 1e-5);
 
-fn planar(seed: u64) -> std::result::Result<Outcome, String> {
+/// A random planar subject, its seed 003 session, prepared.
+fn planar_session(
+    seed: u64,
+    reflex: bool,
+) -> std::result::Result<(PlanarSubject, limpid_ident::planar::PlanarData), String> {
     let mut rng = StdRng::seed_from_u64(seed);
-    let subject = planar_subject(&mut rng, false);
+    let subject = planar_subject(&mut rng, reflex);
     let rec = simulate_planar(
         &subject,
         &PlanarProtocol::seed003(),
@@ -343,6 +347,11 @@ fn planar(seed: u64) -> std::result::Result<Outcome, String> {
     )
     .map_err(|e| e.to_string())?;
     let data = prepare_planar(&rec, &PlanarPrepare::new(0.3, 0.33)).map_err(|e| e.to_string())?;
+    Ok((subject, data))
+}
+
+fn planar(seed: u64) -> std::result::Result<Outcome, String> {
+    let (subject, data) = planar_session(seed, false)?;
     let all: Vec<usize> = (0..data.trials.len()).collect();
     // the whole window; the leave-one-trial-out VAF of `estimate_planar` is not needed here
     let est = limpid_ident::planar::fit_planar(&data, usize::MAX, None, &all)
@@ -370,17 +379,7 @@ fn planar(seed: u64) -> std::result::Result<Outcome, String> {
 type SweepOutcome = (usize, usize, usize, bool);
 
 fn sweep(seed: u64, reflex: bool) -> Option<SweepOutcome> {
-    let mut rng = StdRng::seed_from_u64(seed);
-    let subject = planar_subject(&mut rng, reflex);
-    let rec = simulate_planar(
-        &subject,
-        &PlanarProtocol::seed003(),
-        PLANAR_NOISE.0,
-        PLANAR_NOISE.1,
-        seed,
-    )
-    .ok()?;
-    let data = prepare_planar(&rec, &PlanarPrepare::new(0.3, 0.33)).ok()?;
+    let (subject, data) = planar_session(seed, reflex).ok()?;
     let s = window_sweep(&data, 50.0, 400.0, 10.0, None).ok()?;
     let (k, d) = (
         Matrix::from(subject.stiffness),
@@ -531,7 +530,7 @@ impl Calibration {
             "matrix",
             "elements",
             "within ±2 SE",
-            "worst |z|",
+            "largest abs z",
             "median error",
             "trusted",
             "trusted beyond tolerance",
