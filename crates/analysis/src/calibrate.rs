@@ -434,7 +434,17 @@ fn stochastic(seed: u64) -> std::result::Result<Outcome, String> {
     Ok(o)
 }
 
-/// Run the whole study: `recordings` virtual recordings per method, in parallel.
+/// Methods of the study (each `recordings` virtual recordings).
+pub const METHODS: usize = 6;
+
+/// Window sweeps run beside `recordings` per method: half as many (each fits
+/// some 70 windows and split models), at least 10.
+pub fn sweeps_for(recordings: usize) -> usize {
+    (recordings / 2).max(10)
+}
+
+/// Run the whole study: `recordings` virtual recordings per method, in
+/// parallel; `progress` is called once per recording and sweep.
 pub fn calibrate(
     recordings: usize,
     seed: u64,
@@ -476,9 +486,10 @@ pub fn calibrate(
         run("planar arm, whole window (seed 003)", &planar, 5),
         run("stochastic spring array (seed 004)", &stochastic, 6),
     ];
+    debug_assert_eq!(methods.len(), METHODS);
     let started = std::time::Instant::now();
     // half as many sweeps: each fits some 70 windows and split models
-    let sweeps: Vec<(bool, Option<SweepOutcome>)> = (0..(recordings as u64 / 2).max(10))
+    let sweeps: Vec<(bool, Option<SweepOutcome>)> = (0..sweeps_for(recordings) as u64)
         .into_par_iter()
         .map(|i| {
             let reflex = i % 3 == 0;

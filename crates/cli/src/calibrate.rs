@@ -3,7 +3,7 @@
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use limpid_analysis::calibrate::calibrate;
+use limpid_analysis::calibrate::{calibrate, sweeps_for, METHODS};
 use limpid_analysis::result::{Document, Estimate};
 
 use crate::CliResult;
@@ -29,7 +29,8 @@ pub fn run(args: CalibrateArgs) -> CliResult {
         )
         .into());
     }
-    let bar = ProgressBar::new(7 * args.recordings as u64);
+    let total = METHODS * args.recordings + sweeps_for(args.recordings);
+    let bar = ProgressBar::new(total as u64);
     bar.set_style(
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} recordings ({elapsed})")
             .map_err(|e| e.to_string())?

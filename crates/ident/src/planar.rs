@@ -912,7 +912,8 @@ fn judge_windows(rows: &mut [SweepRow], change: Option<&ImpedanceChange>) {
     let rel = |a: &Matrix, b: &Matrix| (&a.0 - &b.0).norm() / b.norm().max(1e-300);
     let verdicts: Vec<Vec<String>> = rows
         .iter()
-        .map(|r| {
+        .enumerate()
+        .map(|(i, r)| {
             let e = &r.estimate;
             let mut why = e.criteria.reasons.clone();
             let (k_se, d_se) = (
@@ -934,9 +935,13 @@ fn judge_windows(rows: &mut [SweepRow], change: Option<&ImpedanceChange>) {
                 ));
             }
             let (mut dk, mut dd) = (0.0f64, 0.0f64);
-            for o in rows.iter().filter(|o| {
+            // rows are in increasing T_obs: the neighbours are a contiguous run around row i
+            let near = |o: &&SweepRow| {
                 (o.observation_window_ms - r.observation_window_ms).abs() <= NEIGHBOURHOOD_MS + 1e-9
-            }) {
+            };
+            let before = rows[..i].iter().rev().take_while(near);
+            let after = rows[i..].iter().take_while(near);
+            for o in before.chain(after) {
                 dk = dk.max(rel(&o.estimate.stiffness, &e.stiffness));
                 dd = dd.max(rel(&o.estimate.damping, &e.damping));
             }

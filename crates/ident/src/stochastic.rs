@@ -232,15 +232,15 @@ pub fn estimate_stochastic(
     }
     let spectra = SegmentSpectra::new(&signals, &welch)?;
     let NonParametric {
-        frequencies: out_f,
-        impedance: z_all,
+        frequencies,
+        impedance,
         multiple,
         partial,
-        max_input_coherence: max_input_coh,
+        max_input_coherence,
         singular_in_band,
     } = nonparametric(&spectra, n, (lo, hi));
-    let in_band: Vec<usize> = (0..out_f.len())
-        .filter(|&k| out_f[k] >= lo && out_f[k] <= hi)
+    let in_band: Vec<usize> = (0..frequencies.len())
+        .filter(|&k| frequencies[k] >= lo && frequencies[k] <= hi)
         .collect();
     if in_band.len() < 4 {
         return Err(Error::TooFewSamples {
@@ -253,7 +253,7 @@ pub fn estimate_stochastic(
             found: in_band.len(),
         });
     }
-    let weight: Vec<f64> = (0..out_f.len())
+    let weight: Vec<f64> = (0..frequencies.len())
         .map(|k| (0..2 * n).map(|o| multiple[o][k]).fold(1.0, f64::min))
         .collect();
     let enbw_bins = match welch.window {
@@ -267,7 +267,7 @@ pub fn estimate_stochastic(
         stiffness: kk,
         standard_errors: se,
         fit_vaf,
-    } = parametric_fit(&z_all, &out_f, &in_band, &weight, enbw_bins);
+    } = parametric_fit(&impedance, &frequencies, &in_band, &weight, enbw_bins);
     let model = |f: f64| {
         let om = 2.0 * std::f64::consts::PI * f;
         DMatrix::from_fn(n, n, |i, j| {
@@ -276,7 +276,7 @@ pub fn estimate_stochastic(
     };
     let phi_t_vs_fit = in_band
         .iter()
-        .map(|&k| max_singular(&(&z_all[k] - model(out_f[k]))))
+        .map(|&k| max_singular(&(&impedance[k] - model(frequencies[k]))))
         .sum::<f64>()
         / in_band.len() as f64;
     let mean_coh = in_band.iter().map(|&k| weight[k]).sum::<f64>() / in_band.len() as f64;
@@ -288,14 +288,14 @@ pub fn estimate_stochastic(
     if singular_in_band > 0 {
         warnings.push(Warning::new(WarningCode::SingularFrequencies, format!("{singular_in_band} frequencies in the band were left out: the input spectral matrix (or R) is singular there (an input without power, or inputs fully coherent)")));
     }
-    if max_input_coh >= 0.6 {
-        warnings.push(Warning::new(WarningCode::CorrelatedInputs, format!("inputs are correlated (ordinary coherence up to {max_input_coh:.2}, seed 004 asks < 0.6): R and T are poorly separated")));
+    if max_input_coherence >= 0.6 {
+        warnings.push(Warning::new(WarningCode::CorrelatedInputs, format!("inputs are correlated (ordinary coherence up to {max_input_coherence:.2}, seed 004 asks < 0.6): R and T are poorly separated")));
     }
     let outputs: Vec<String> = coords.iter().chain(&force_cols).cloned().collect();
     Ok(StochasticEstimate {
         coordinates: coords,
         inputs,
-        impedance: z_all
+        impedance: impedance
             .iter()
             .map(|z| {
                 (0..n)
@@ -303,7 +303,7 @@ pub fn estimate_stochastic(
                     .collect()
             })
             .collect(),
-        frequencies: out_f,
+        frequencies,
         coherence: Coherences {
             outputs,
             multiple,
@@ -320,7 +320,7 @@ pub fn estimate_stochastic(
             nperseg: welch.nperseg,
             mean_multiple_coherence: mean_coh,
             min_multiple_coherence: min_coh,
-            max_input_coherence: max_input_coh,
+            max_input_coherence,
             phi_t_vs_fit,
             fit_vaf,
         },
@@ -348,11 +348,11 @@ fn nonparametric(spectra: &SegmentSpectra, n: usize, (lo, hi): (f64, f64)) -> No
     let mats = spectra.matrix();
     let freqs = &spectra.frequencies;
     let top = freqs.iter().position(|f| *f > hi).unwrap_or(freqs.len());
-    let mut out_f = Vec::new();
-    let mut z_all: Vec<DMatrix<Complex64>> = Vec::new();
+    let mut frequencies = Vec::new();
+    let mut impedance: Vec<DMatrix<Complex64>> = Vec::new();
     let mut multiple = vec![Vec::new(); 2 * n];
     let mut partial = vec![vec![Vec::new(); n]; 2 * n];
-    let mut max_input_coh: f64 = 0.0;
+    let mut max_input_coherence: f64 = 0.0;
     let mut singular_in_band = 0usize;
     for k in 1..top {
         let s = &mats[k];
@@ -367,29 +367,29 @@ fn nonparametric(spectra: &SegmentSpectra, n: usize, (lo, hi): (f64, f64)) -> No
             singular_in_band += usize::from(in_band);
             continue;
         };
-        out_f.push(freqs[k]);
-        z_all.push(t * r_inv);
+        frequencies.push(freqs[k]);
+        impedance.push(t * r_inv);
         for (o, (mult, part)) in multiple.iter_mut().zip(partial.iter_mut()).enumerate() {
             mult.push(p.multiple[o]);
             for (series, value) in part.iter_mut().zip(&p.partial[o]) {
                 series.push(*value);
             }
         }
-        if freqs[k] >= lo {
+        if in_band {
             for i in 0..n {
                 for j in i + 1..n {
                     let c = s[(i, j)].norm_sqr() / (s[(i, i)].re * s[(j, j)].re);
-                    max_input_coh = max_input_coh.max(c);
+                    max_input_coherence = max_input_coherence.max(c);
                 }
             }
         }
     }
     NonParametric {
-        frequencies: out_f,
-        impedance: z_all,
+        frequencies,
+        impedance,
         multiple,
         partial,
-        max_input_coherence: max_input_coh,
+        max_input_coherence,
         singular_in_band,
     }
 }
