@@ -6,6 +6,7 @@
 //!   squares (seed 000 eq. (3)-(8), seed 001 eq. (3)-(10)).
 //! - [`planar`]: the planar 2-link arm in joint space (seed 003).
 //! - [`stochastic`]: Z(f) = T R^-1 from Welch spectra (seed 004).
+//! - [`reflex`]: intrinsic and reflex stiffness, parallel cascade (Kearney et al. 1997).
 //! - [`online`]: recursive least squares for the live display.
 //! - [`estimator`]: the one shape they share (settings -> check -> fit -> result).
 
@@ -17,6 +18,7 @@ pub mod lsq;
 pub mod online;
 pub mod planar;
 pub mod prepare;
+pub mod reflex;
 pub mod stochastic;
 
 pub use estimator::{Estimator, OnlineParams, PlanarParams};

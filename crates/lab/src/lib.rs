@@ -8,6 +8,7 @@
 
 #![warn(missing_docs)]
 
+pub mod ankle;
 pub mod cocontraction;
 pub mod design;
 pub mod export;

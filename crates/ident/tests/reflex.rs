@@ -1,0 +1,150 @@
+//! Parallel-cascade estimator (Kearney et al. 1997): ground truth on the
+//! virtual ankle, and the real REKLAB ankle recordings.
+
+use limpid_ident::reflex::{estimate_reflex, Polarity, ReflexParams};
+use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleSubject};
+
+const REAL: &str = "../../../shared/real/reklab_ankle";
+
+#[test]
+fn virtual_ankle_reflex_delay_and_gains_are_recovered() {
+    for (seed, delay, gain, k, positive) in [
+        (1u64, 0.045, 30.0, 80.0, true),
+        (2, 0.060, 20.0, 120.0, true),
+        (3, 0.035, 40.0, 50.0, false),
+    ] {
+        let mut s = AnkleSubject {
+            stiffness: k,
+            ..AnkleSubject::default()
+        };
+        if let Some(r) = s.reflex.as_mut() {
+            r.delay_s = delay;
+            r.gain = gain;
+            r.positive = positive;
+        }
+        let rec = simulate_ankle(&s, &AnkleExperiment::default(), seed).unwrap();
+        let e = estimate_reflex(&rec, &ReflexParams::default()).unwrap();
+        let r = &e.reflex;
+        let label = format!("seed {seed}: {e:?}");
+        assert_eq!(
+            r.polarity,
+            if positive {
+                Polarity::Positive
+            } else {
+                Polarity::Negative
+            },
+            "{label}"
+        );
+        assert!(
+            (r.delay_s - delay).abs() <= 0.005,
+            "delay {} vs {delay}",
+            r.delay_s
+        );
+        assert!(r.delay_identifiable, "{:?}", e.warnings);
+        assert!(
+            r.delay_interval_s[0] <= r.delay_s && r.delay_s <= r.delay_interval_s[1],
+            "{:?}",
+            r.delay_interval_s
+        );
+        assert!(
+            (r.gain - gain).abs() / gain < 0.1,
+            "gain {} vs {gain}",
+            r.gain
+        );
+        assert!(
+            (r.natural_frequency_hz - 2.0).abs() < 0.3,
+            "{}",
+            r.natural_frequency_hz
+        );
+        let ki = e.intrinsic.stiffness;
+        assert!((ki - k).abs() / k < 0.1, "intrinsic K {ki} vs {k}");
+        assert!(e.intrinsic.standard_errors.stiffness > 0.0);
+        assert!(
+            e.fit.vaf_total > 99.0 && e.cross_validated_vaf > 99.0,
+            "{:?}",
+            e.fit
+        );
+        // the reflex-free fit puts reflex torque into K: the cascade is the closer
+        assert!(
+            (e.reflex_free.parameters.stiffness - k).abs() > (ki - k).abs(),
+            "plain {} vs cascade {ki}",
+            e.reflex_free.parameters.stiffness
+        );
+        // rectifying in the physical order removes most of the bias
+        let first = estimate_reflex(
+            &rec,
+            &ReflexParams {
+                rectify_first: true,
+                ..ReflexParams::default()
+            },
+        )
+        .unwrap();
+        assert!(
+            (first.reflex.gain - gain).abs() / gain < 0.04,
+            "{}",
+            first.reflex.gain
+        );
+        assert!(
+            (first.intrinsic.stiffness - k).abs() / k < 0.02,
+            "{}",
+            first.intrinsic.stiffness
+        );
+        assert!(
+            (first.reflex.delay_s - delay).abs() <= 0.0015,
+            "{}",
+            first.reflex.delay_s
+        );
+    }
+}
+
+#[test]
+fn without_a_reflex_the_delay_is_not_identifiable_and_k_is_right() {
+    let s = AnkleSubject {
+        reflex: None,
+        ..AnkleSubject::default()
+    };
+    let rec = simulate_ankle(&s, &AnkleExperiment::default(), 7).unwrap();
+    let e = estimate_reflex(&rec, &ReflexParams::default()).unwrap();
+    assert!(!e.reflex.delay_identifiable);
+    assert!(e
+        .warnings
+        .iter()
+        .any(|w| w.message.contains("not identifiable")));
+    assert!(
+        (e.intrinsic.stiffness - 80.0).abs() / 80.0 < 0.05,
+        "{}",
+        e.intrinsic.stiffness
+    );
+    assert!(e.fit.vaf_total - e.fit.vaf_intrinsic < 1.0, "{:?}", e.fit);
+}
+
+#[test]
+fn real_ankle_recordings_match_the_method_s_known_behaviour() {
+    for name in ["df", "df2", "df3", "pf", "pf2"] {
+        let rec = limpid_io::read_recording(format!("{REAL}/{name}.csv")).unwrap();
+        let e = estimate_reflex(&rec, &ReflexParams::default()).unwrap();
+        // total VAF 86-96 %, well above the reflex-free fit's
+        assert!(
+            (85.0..97.0).contains(&e.fit.vaf_total),
+            "{name}: {:?}",
+            e.fit
+        );
+        assert!(e.fit.vaf_total > e.reflex_free.vaf + 1.0, "{name}");
+        assert!(
+            e.cross_validated_vaf > e.fit.vaf_total - 5.0,
+            "{name}: over-fitted"
+        );
+        // intrinsic K below the reflex-free fit's (the reflex torque leaves it)
+        let drop = 1.0 - e.intrinsic.stiffness / e.reflex_free.parameters.stiffness;
+        assert!((0.05..0.5).contains(&drop), "{name}: K drop {drop}");
+        // inertia of foot and actuator, of the order of 0.015-0.02 kg m^2
+        assert!((0.008..0.03).contains(&e.intrinsic.inertia), "{name}");
+        if name.starts_with("pf") {
+            assert!(
+                (0.035..0.065).contains(&e.reflex.delay_s),
+                "{name}: delay {}",
+                e.reflex.delay_s
+            );
+        }
+    }
+}
