@@ -19,6 +19,7 @@ use crate::demo::DemoResult;
 use crate::linear::LinearResult;
 use crate::study::StudyResult;
 use limpid_ident::planar::{PlanarEstimate, Sweep};
+use limpid_ident::reflex::ReflexEstimate;
 use limpid_ident::stochastic::StochasticEstimate;
 
 /// Version of the result schema; raised when a field changes meaning or is removed.
@@ -37,6 +38,8 @@ pub enum Estimate {
     WindowSweep(Sweep),
     /// Stochastic MIMO impedance Z(f) (seed 004).
     Stochastic(StochasticEstimate),
+    /// Intrinsic and reflex joint stiffness, parallel cascade (Kearney et al. 1997).
+    Reflex(ReflexEstimate),
     /// Impedance per co-contraction level (seed 001).
     Cocontraction(CocontractionResult),
     /// A whole co-contraction study (seed 001 Tables 1-5).
@@ -55,6 +58,7 @@ impl Estimate {
             Estimate::Planar(_) => "planar",
             Estimate::WindowSweep(_) => "window_sweep",
             Estimate::Stochastic(_) => "stochastic",
+            Estimate::Reflex(_) => "reflex",
             Estimate::Cocontraction(_) => "cocontraction",
             Estimate::Study(_) => "study",
             Estimate::Demo(_) => "demo",

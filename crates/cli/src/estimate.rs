@@ -24,6 +24,8 @@ pub enum Method {
     Planar(crate::planar::PlanarArgs),
     /// Stochastic MIMO impedance Z = T R^-1 from Welch spectra, with a parametric fit (seed 004).
     Stochastic(crate::stochastic::StochasticArgs),
+    /// Intrinsic and reflex joint stiffness by the parallel cascade (Kearney et al. 1997): IRFs, delay, gain, VAF split.
+    Reflex(crate::reflex::ReflexArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -326,6 +328,7 @@ pub fn run(method: Method) -> CliResult {
         }
         Method::Planar(args) => crate::planar::run_estimate(args),
         Method::Stochastic(args) => crate::stochastic::run_estimate(args),
+        Method::Reflex(args) => crate::reflex::run(args),
         Method::Cocontraction(args) => {
             if args.tolerance.is_nan() || args.tolerance <= 0.0 {
                 return Err(limpid_core::Error::invalid(

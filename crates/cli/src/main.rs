@@ -9,6 +9,7 @@ mod gravity;
 mod live;
 mod planar;
 mod protocol;
+mod reflex;
 mod report;
 mod stochastic;
 mod study;

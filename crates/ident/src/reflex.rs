@@ -280,8 +280,10 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             ),
         ));
     }
-    for (name, x) in [(&p.position, &d.position), (&p.torque, &d.torque)] {
-        if variance(x) <= 0.0 || !variance(x).is_finite() {
+    for (name, raw) in [(&p.position, q), (&p.torque, tq)] {
+        let scale = raw.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let sd = variance(raw).sqrt();
+        if !(sd.is_finite() && sd > 1e-9 * scale && sd > 0.0) {
             return Err(Error::invalid(
                 rec.path().display().to_string(),
                 format!(
@@ -967,13 +969,7 @@ fn phases(y: &[f64], ratio: usize, n: usize) -> Vec<Vec<f64>> {
 
 /// The reflex regressor over the fitted rows `skip..n` for a delay of
 /// `delay` recorded samples: a slice of one decimation phase.
-fn delayed(
-    phases: &[Vec<f64>],
-    ratio: usize,
-    delay: usize,
-    skip: usize,
-    n: usize,
-) -> &[f64] {
+fn delayed(phases: &[Vec<f64>], ratio: usize, delay: usize, skip: usize, n: usize) -> &[f64] {
     let (m, r) = (delay / ratio, delay % ratio);
     &phases[r][skip - m..n - m]
 }

@@ -452,6 +452,35 @@ fn estimate_stochastic(
     .map_err(err)
 }
 
+/// Intrinsic and reflex stiffness by the parallel cascade (Kearney et al. 1997); JSON text.
+#[pyfunction]
+#[pyo3(signature = (recording, position="q1", torque="tau1", rate_hz=100.0, max_delay_s=0.15, rectify_first=false))]
+fn estimate_reflex(
+    py: Python<'_>,
+    recording: &Bound<'_, PyAny>,
+    position: &str,
+    torque: &str,
+    rate_hz: f64,
+    max_delay_s: f64,
+    rectify_first: bool,
+) -> PyResult<String> {
+    use limpid_ident::reflex::ReflexParams;
+    use limpid_ident::Estimator;
+    let rec = self::recording(recording)?;
+    let params = ReflexParams {
+        position: position.into(),
+        torque: torque.into(),
+        decimated_rate_hz: rate_hz,
+        max_delay_s,
+        rectify_first,
+        ..ReflexParams::default()
+    };
+    py.detach(move || -> limpid_core::Result<String> {
+        Ok(document(Estimate::Reflex(params.fit(&rec)?)))
+    })
+    .map_err(err)
+}
+
 /// Seed 001's co-contraction analysis; JSON text.
 #[pyfunction]
 #[pyo3(signature = (recording, mvc, options))]
@@ -611,6 +640,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(window_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(gravity_compensate, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_stochastic, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate_reflex, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_cocontraction, m)?)?;
     m.add_function(wrap_pyfunction!(ellipsoid, m)?)?;
     m.add_function(wrap_pyfunction!(protocol_preset, m)?)?;

@@ -311,3 +311,13 @@ def test_gravity_compensation_from_still_poses():
     assert any("centre of mass" in line for line in summary)
     with pytest.raises(ValueError, match="exactly one"):
         limpid.gravity_compensate(rec, bias=cal, calibration=cal)
+
+
+def test_reflex_on_the_real_ankle_recording():
+    real = SHARED.parent / "real" / "reklab_ankle" / "pf.csv"
+    est = limpid.estimate_reflex(real)
+    d = est.to_dict()
+    assert d["kind"] == "reflex"
+    assert 85.0 < d["fit"]["vaf_total"] < 97.0
+    assert 0.035 < d["reflex"]["delay_s"] < 0.065
+    assert d["intrinsic"]["stiffness"] < d["reflex_free"]["parameters"]["stiffness"]

@@ -39,6 +39,7 @@ __all__ = [
     "estimate_planar",
     "window_sweep",
     "estimate_stochastic",
+    "estimate_reflex",
     "estimate_cocontraction",
     "ellipsoid",
     "protocol_preset",
@@ -242,6 +243,37 @@ def estimate_stochastic(recording: RecordingLike, *, nperseg: Optional[int] = No
                         band_hz: Tuple[float, float] = (0.5, 10.0)) -> Result:
     """Seed 004's stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric fit."""
     return Result(json.loads(_limpid.estimate_stochastic(_recording(recording), nperseg, noverlap, tuple(band_hz))))
+
+
+def estimate_reflex(recording: RecordingLike, *, position: str = "q1", torque: str = "tau1",
+                    rate_hz: float = 100.0, max_delay_s: float = 0.15,
+                    rectify_first: bool = False) -> Result:
+    """Intrinsic and reflex joint stiffness by the parallel cascade (Kearney et al. 1997),
+    as ``limpid estimate reflex --json``.
+
+    Parameters
+    ----------
+    recording : path, dict of arrays or DataFrame
+        Joint angle ``position`` (rad) and torque ``torque`` applied to the joint (N m)
+        under a stochastic perturbation, with time ``t`` (s).
+    rate_hz : float
+        Rate the data are decimated to before identification (default 100 Hz).
+    max_delay_s : float
+        Largest reflex delay scanned (default 0.15 s).
+    rectify_first : bool
+        Rectify the velocity before anti-aliasing (physical order) instead of after
+        (Kearney et al.'s method, default).
+
+    Returns
+    -------
+    Result
+        ``intrinsic`` (inertia, damping, stiffness with standard errors, IRF),
+        ``reflex`` (polarity, gain N m s/rad, delay_s, delay_interval_s, IRF),
+        ``fit`` (VAF in percent), ``cross_validated_vaf``, ``warnings``.
+    """
+    return Result(json.loads(_limpid.estimate_reflex(_recording(recording), position, torque,
+                                                     float(rate_hz), float(max_delay_s),
+                                                     bool(rectify_first))))
 
 
 def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, *, window: str = "auto",

@@ -1,0 +1,125 @@
+//! `limpid estimate reflex` (issue 17): the parallel cascade on the real
+//! ankle recordings, its report, and its refusals.
+
+mod common;
+use common::*;
+
+#[test]
+fn reflex_on_the_real_ankle_recordings() {
+    let dir = shared().join("real/reklab_ankle");
+    for name in ["pf", "df2"] {
+        let rec = dir.join(format!("{name}.csv"));
+        let r = json(&["estimate", "reflex", rec.to_str().unwrap(), "--json"]);
+        assert_eq!(r["kind"], "reflex");
+        let total = r["fit"]["vaf_total"].as_f64().unwrap();
+        assert!((85.0..97.0).contains(&total), "{name}: VAF {total}");
+        let k = r["intrinsic"]["stiffness"].as_f64().unwrap();
+        let plain = r["reflex_free"]["parameters"]["stiffness"]
+            .as_f64()
+            .unwrap();
+        assert!(
+            k < plain,
+            "{name}: intrinsic K {k} not below the reflex-free {plain}"
+        );
+        assert!(
+            r["intrinsic"]["standard_errors"]["stiffness"]
+                .as_f64()
+                .unwrap()
+                > 0.0
+        );
+        let lags = r["intrinsic"]["irf"]["lags_s"].as_array().unwrap();
+        assert_eq!(lags.len(), 9, "+-40 ms at 100 Hz");
+        assert_eq!(r["reflex"]["irf"]["values"].as_array().unwrap().len(), 100);
+        assert!(r["cross_validated_vaf"].as_f64().unwrap() > 80.0);
+        if name == "pf" {
+            let d = r["reflex"]["delay_s"].as_f64().unwrap();
+            assert!((0.035..0.065).contains(&d), "pf delay {d}");
+            assert_eq!(r["reflex"]["delay_identifiable"], true);
+        }
+    }
+}
+
+#[test]
+fn reflex_text_and_report() {
+    let rec = shared().join("real/reklab_ankle/pf.csv");
+    let dir = tempfile::tempdir().unwrap();
+    let html = dir.path().join("pf.html");
+    let out = limpid(&[
+        "estimate",
+        "reflex",
+        rec.to_str().unwrap(),
+        "--report",
+        html.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("N m/rad") && out.stdout.contains("cross-validated"));
+    assert!(!out.stdout.contains("NaN"));
+    let page = std::fs::read_to_string(&html).unwrap();
+    for want in [
+        "Intrinsic IRF",
+        "Reflex IRF",
+        "half-wave rectifier",
+        "Measured and predicted torque",
+    ] {
+        assert!(page.contains(want), "report lacks {want}");
+    }
+}
+
+#[test]
+fn reflex_refusals() {
+    // no joint angle column: names the column
+    let planar = shared().join("examples/planar/ex_endpoint_220.csv");
+    let out = limpid(&["estimate", "reflex", planar.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("q1") && out.stderr.lines().count() == 1,
+        "{}",
+        out.stderr
+    );
+    // too short for the method
+    let dir = tempfile::tempdir().unwrap();
+    let short = dir.path().join("short.csv");
+    let mut text = String::from("t,q1,tau1\n");
+    for i in 0..2000 {
+        let t = i as f64 / 1000.0;
+        text.push_str(&format!(
+            "{t},{},{}\n",
+            (t * 7.0).sin() * 0.01,
+            (t * 7.0).sin()
+        ));
+    }
+    std::fs::write(&short, text).unwrap();
+    let out = limpid(&["estimate", "reflex", short.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("at least 5 reflex-IRF lengths"),
+        "{}",
+        out.stderr
+    );
+    // settings that cannot work
+    let pf = shared().join("real/reklab_ankle/pf.csv");
+    let out = limpid(&[
+        "estimate",
+        "reflex",
+        pf.to_str().unwrap(),
+        "--max-delay",
+        "2",
+    ]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("shorter than the reflex IRF"),
+        "{}",
+        out.stderr
+    );
+    // constant torque
+    let flat = dir.path().join("flat.csv");
+    let mut text = String::from("t,q1,tau1\n");
+    for i in 0..20000 {
+        let t = i as f64 / 1000.0;
+        text.push_str(&format!("{t},{},1.5\n", (t * 7.0).sin() * 0.01));
+    }
+    std::fs::write(&flat, text).unwrap();
+    let out = limpid(&["estimate", "reflex", flat.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("does not vary"), "{}", out.stderr);
+}
