@@ -193,7 +193,7 @@ pub struct ReflexFreeFit {
     pub vaf: f64,
 }
 
-/// Decimated torque traces for plots (at most 1500 points).
+/// Decimated torque over 10 s (after the first reflex-IRF length), for plots.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct ReflexTraces {
     /// Time (s).
@@ -446,12 +446,14 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         values: h.iter().map(|v| v / dt).collect(),
         order,
     };
-    let stride = n.div_ceil(1500).max(1);
+    // a 10 s stretch after the left-out first reflex-IRF length, every
+    // decimated sample: a whole record at this scale is unreadable
+    let shown = skip..(skip + (10.0 * d.fs).round() as usize).min(n);
     let traces = ReflexTraces {
-        t_s: (0..n).step_by(stride).map(|i| i as f64 * dt).collect(),
-        measured: d.torque.iter().step_by(stride).copied().collect(),
-        intrinsic: c.intrinsic_torque.iter().step_by(stride).copied().collect(),
-        reflex: c.reflex_torque.iter().step_by(stride).copied().collect(),
+        t_s: shown.clone().map(|i| i as f64 * dt).collect(),
+        measured: d.torque[shown.clone()].to_vec(),
+        intrinsic: c.intrinsic_torque[shown.clone()].to_vec(),
+        reflex: c.reflex_torque[shown].to_vec(),
     };
     let est = ReflexEstimate {
         position: p.position.clone(),

@@ -934,7 +934,7 @@ fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimate) -> Secti
         ),
         line(
             "reflex-torque",
-            "Measured and predicted torque",
+            "Measured and predicted torque (10 s)",
             "time (s)",
             "torque (N m)",
             vec![
