@@ -123,3 +123,26 @@ fn reflex_refusals() {
     assert_eq!(out.code, 2);
     assert!(out.stderr.contains("does not vary"), "{}", out.stderr);
 }
+
+#[test]
+fn reflex_refuses_columns_it_cannot_square() {
+    let dir = tempfile::tempdir().unwrap();
+    let tiny = dir.path().join("tiny.csv");
+    let mut text = String::from("t,q1,tau1\n");
+    for i in 0..20000 {
+        let t = i as f64 / 1000.0;
+        text.push_str(&format!(
+            "{t},{:e},{}\n",
+            (t * 7.0).sin() * 1e-300,
+            (t * 3.0).cos()
+        ));
+    }
+    std::fs::write(&tiny, text).unwrap();
+    let out = limpid(&["estimate", "reflex", tiny.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.contains("column q1 varies by") && out.stderr.contains("rescale"),
+        "{}",
+        out.stderr
+    );
+}

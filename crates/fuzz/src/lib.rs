@@ -6,7 +6,7 @@
 //! (bit flips, byte runs, cuts, and for text the replacement of numbers by
 //! extreme values: 1e307, nan, 1e-320, i64::MAX, ...), and runs it through
 //! what a user's file would meet: the reader chosen by its extension, then
-//! every estimator the columns allow (linear, planar, stochastic,
+//! every estimator the columns allow (linear, planar, stochastic, reflex,
 //! co-contraction), or the protocol parser and its check, or the datagram
 //! decoder and the live processor. A *finding* is a panic, a non-finite or
 //! null number in a result, or (in the binary) an execution over 10 s; an
@@ -157,6 +157,14 @@ fn recording(name: &str, bytes: &[u8]) -> Outcome {
         if let Ok(est) = estimate_stochastic(&rec, &p) {
             any = true;
             findings.extend(check("stochastic", &est));
+        }
+    }
+    // parallel cascade (Kearney et al. 1997) on joint angle and torque
+    if rec.has("q1") && rec.has("tau1") {
+        use limpid_ident::reflex::{estimate_reflex, ReflexParams};
+        if let Ok(est) = estimate_reflex(&rec, &ReflexParams::default()) {
+            any = true;
+            findings.extend(check("reflex", &est));
         }
     }
     // co-contraction (seed 001), the recording as its own MVC

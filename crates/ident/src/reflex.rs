@@ -275,20 +275,33 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             format!(
                 "the parallel-cascade method needs at least 5 reflex-IRF lengths ({:.1} s at {} Hz), found {:.1} s",
                 5.0 * n_reflex as f64 / d.fs,
-                d.fs,
+                limpid_core::short_number(d.fs),
                 n as f64 / d.fs
             ),
         ));
     }
     for (name, raw) in [(&p.position, q), (&p.torque, tq)] {
         let scale = raw.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        let sd = variance(raw).sqrt();
-        if !(sd.is_finite() && sd > 1e-9 * scale && sd > 0.0) {
+        // scaled first, so that tiny or huge columns do not under- or overflow here
+        let scaled: Vec<f64> = raw
+            .iter()
+            .map(|v| v / scale.max(f64::MIN_POSITIVE))
+            .collect();
+        let sd = variance(&scaled).sqrt() * scale;
+        let problem = if !(sd > 1e-9 * scale && sd > 0.0) {
+            Some("does not vary: nothing to identify".to_string())
+        } else if !(1e-150..1e150).contains(&sd) {
+            Some(format!(
+                "varies by {} (standard deviation), outside 1e-150..1e150 where its squares are computed exactly: rescale the column",
+                limpid_core::short_number(sd)
+            ))
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
             return Err(Error::invalid(
                 rec.path().display().to_string(),
-                format!(
-                    "column {name} does not vary (or is too large to square): nothing to identify"
-                ),
+                format!("column {name} {problem}"),
             ));
         }
     }
