@@ -116,19 +116,46 @@ impl LowPass {
         3 * (2 * n + 1 - bzeros.min(azeros))
     }
 
-    /// Forward-backward (zero-phase) filtering, as `scipy.signal.sosfiltfilt`.
+    /// Forward-backward (zero-phase) filtering, as `scipy.signal.sosfiltfilt`
+    /// (odd extension of [`LowPass::padlen`] samples, each pass started in
+    /// the steady state of its first sample, as `sosfilt_zi`). One buffer,
+    /// filtered in place forward then backward, all sections per sample.
     pub fn filtfilt(&self, x: &[f64]) -> Result<Vec<f64>> {
         let pad = self.padlen();
-        if x.len() <= pad {
+        let n = x.len();
+        if n <= pad {
             return Err(Error::invalid(
                 "signal length",
-                format!(
-                    "zero-phase filtering needs more than {pad} samples, found {}",
-                    x.len()
-                ),
+                format!("zero-phase filtering needs more than {pad} samples, found {n}"),
             ));
         }
-        Ok(sci_rs::signal::filter::sosfiltfilt_dyn(x.iter(), &self.sos))
+        let sections = self.sections();
+        let zi = steady_state(&sections);
+        let mut y = Vec::with_capacity(n + 2 * pad);
+        y.extend((1..=pad).rev().map(|i| 2.0 * x[0] - x[i]));
+        y.extend_from_slice(x);
+        y.extend((1..=pad).map(|i| 2.0 * x[n - 1] - x[n - 1 - i]));
+        let first = y[0];
+        run_sections(y.iter_mut(), &sections, &zi, first);
+        let last = y[y.len() - 1];
+        run_sections(y.iter_mut().rev(), &sections, &zi, last);
+        y.truncate(pad + n);
+        y.drain(..pad);
+        Ok(y)
+    }
+
+    /// Sections normalised to `a0 = 1`: `([b0, b1, b2], [a1, a2])`.
+    fn sections(&self) -> Vec<([f64; 3], [f64; 2])> {
+        self.sos
+            .iter()
+            .map(|s| {
+                let a0 = s.a[0];
+                (
+                    [s.b[0] / a0, s.b[1] / a0, s.b[2] / a0],
+                    [s.a[1] / a0, s.a[2] / a0],
+                )
+            })
+            .collect()
     }
 
     /// Zero-phase filtering after extending each end by its own reflection:
@@ -182,19 +209,70 @@ impl LowPass {
     /// The same causal filter, one sample at a time (live use): no allocation per sample.
     pub fn streaming(&self) -> StreamingFilter {
         StreamingFilter {
-            sections: self
-                .sos
-                .iter()
-                .map(|s| {
-                    let a0 = s.a[0];
-                    (
-                        [s.b[0] / a0, s.b[1] / a0, s.b[2] / a0],
-                        [s.a[1] / a0, s.a[2] / a0],
-                    )
-                })
-                .collect(),
+            sections: self.sections(),
             state: vec![[0.0; 2]; self.sos.len()],
         }
+    }
+}
+
+/// `scipy.signal.sosfilt_zi`: per-section states of the steady state for a
+/// unit input (transposed direct form II; `lfilter_zi` of each section,
+/// scaled by the DC gain of the sections before it).
+fn steady_state(sections: &[([f64; 3], [f64; 2])]) -> Vec<[f64; 2]> {
+    let mut scale = 1.0;
+    sections
+        .iter()
+        .map(|(b, a)| {
+            let (b0, b1) = (b[1] - a[0] * b[0], b[2] - a[1] * b[0]);
+            let z0 = (b0 + b1) / (1.0 + a[0] + a[1]);
+            let z = [scale * z0, scale * (b1 - a[1] * z0)];
+            scale *= (b[0] + b[1] + b[2]) / (1.0 + a[0] + a[1]);
+            z
+        })
+        .collect()
+}
+
+/// Filter the samples in place through every section (transposed direct
+/// form II), starting from the steady state `zi * x0`. Dispatched on the
+/// section count so the per-sample loop over sections is unrolled with its
+/// state in registers.
+fn run_sections<'a>(
+    samples: impl Iterator<Item = &'a mut f64>,
+    sections: &[([f64; 3], [f64; 2])],
+    zi: &[[f64; 2]],
+    x0: f64,
+) {
+    fn fixed<'a, const N: usize>(
+        samples: impl Iterator<Item = &'a mut f64>,
+        sections: &[([f64; 3], [f64; 2])],
+        zi: &[[f64; 2]],
+        x0: f64,
+    ) {
+        let sec: [([f64; 3], [f64; 2]); N] = std::array::from_fn(|i| sections[i]);
+        let mut state: [[f64; 2]; N] = std::array::from_fn(|i| [zi[i][0] * x0, zi[i][1] * x0]);
+        for v in samples {
+            let mut y = *v;
+            for i in 0..N {
+                let ((b, a), z) = (&sec[i], &mut state[i]);
+                let out = b[0] * y + z[0];
+                z[0] = b[1] * y - a[0] * out + z[1];
+                z[1] = b[2] * y - a[1] * out;
+                y = out;
+            }
+            *v = y;
+        }
+    }
+    match sections.len() {
+        1 => fixed::<1>(samples, sections, zi, x0),
+        2 => fixed::<2>(samples, sections, zi, x0),
+        3 => fixed::<3>(samples, sections, zi, x0),
+        4 => fixed::<4>(samples, sections, zi, x0),
+        5 => fixed::<5>(samples, sections, zi, x0),
+        6 => fixed::<6>(samples, sections, zi, x0),
+        7 => fixed::<7>(samples, sections, zi, x0),
+        8 => fixed::<8>(samples, sections, zi, x0),
+        9 => fixed::<9>(samples, sections, zi, x0),
+        _ => fixed::<10>(samples, sections, zi, x0),
     }
 }
 

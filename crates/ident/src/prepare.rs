@@ -26,6 +26,7 @@ use limpid_core::trial::{
 };
 use limpid_core::{Error, FrameTransform, Recording, Result, Window};
 use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// How velocity and acceleration are obtained.
@@ -379,86 +380,143 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
             buf.reserve_exact(total);
         }
     }
-    for w in &windows {
-        let r = w.range.clone();
-        // the end of a perturbation window is trimmed by one cut-off period more (see END_TRIM_PERIODS)
-        let end_trim = trim + end_trim_extra;
-        let need = (trim + end_trim + 1)
-            .max(lowpass.padlen() + 1)
-            .max(sg_window);
-        if r.len() < need {
-            return Err(Error::TooFewSamples {
-                path: rec.path().to_path_buf(),
-                what: format!(
-                    "trial {} (rows {}-{}) with zero-phase filtering and differences",
-                    w.id,
-                    rec.row_of(r.start),
-                    rec.row_of(r.end - 1)
-                ),
-                needed: need,
-                found: r.len(),
+    // windows are filtered in parallel, a bounded batch at a time so the
+    // per-window buffers stay small beside the output
+    let end_trim = trim + end_trim_extra;
+    let demean = out.demeaned;
+    let batch = 16 * rayon::current_num_threads().max(1);
+    for chunk in windows.chunks(batch) {
+        let done: Vec<Result<WindowSignals>> = chunk
+            .par_iter()
+            .map(|w| {
+                window_signals(
+                    rec,
+                    w,
+                    &pos,
+                    &frc,
+                    sign,
+                    params,
+                    &lowpass,
+                    (trim, end_trim),
+                    sg_window,
+                    dt,
+                    demean,
+                )
+            })
+            .collect();
+        for (w, signals) in chunk.iter().zip(done) {
+            let signals = signals?;
+            let start = out.disp[0].len();
+            for (k, [xs, v, a, f]) in signals.per_coordinate.into_iter().enumerate() {
+                out.disp[k].extend(xs);
+                out.vel[k].extend(v);
+                out.acc[k].extend(a);
+                out.force[k].extend(f);
+            }
+            let r = &w.range;
+            out.windows.push(PreparedWindow {
+                id: w.id,
+                samples: start..out.disp[0].len(),
+                rows: r.start + trim..r.end - end_trim,
+                rest_samples: w.rest_len(),
+                force_offset: signals.offsets,
+                reference: signals.references,
             });
         }
-        let rest = match w.onset {
-            Some(onset) => r.start..onset,
-            None => r.clone(),
-        };
-        let start = out.disp[0].len();
-        // one extension per window end, shared by every signal so that the model holds across coordinates
-        let edge_samples = ((fs / cutoff).round() as usize).max(3);
-        let left = edge_kind(&pos, r.start, r.clone(), edge_samples, dt);
-        let right = edge_kind(&pos, r.end - 1, r.clone(), edge_samples, dt);
-        let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
-        let mut offsets = Vec::with_capacity(n);
-        let mut refs = Vec::with_capacity(n);
-        for k in 0..n {
-            let reference = mean(&pos[k][rest.clone()]);
-            let offset = if w.onset.is_some() {
-                sign * mean(&frc[k][rest.clone()])
-            } else {
-                0.0
-            };
-            let x: Vec<f64> = pos[k][r.clone()].iter().map(|p| p - reference).collect();
-            let f: Vec<f64> = frc[k][r.clone()]
-                .iter()
-                .map(|v| sign * v - offset)
-                .collect();
-            let [xs, v, a, fs_] = filter_and_differentiate(
-                &x,
-                &f,
-                params.derivative,
-                &lowpass,
-                (left, right, extra),
-                sg_window,
-                dt,
-            )?;
-            let keep = trim..r.len() - end_trim;
-            let demean = out.demeaned;
-            for (dst, src) in [
-                (&mut out.disp[k], &xs),
-                (&mut out.vel[k], &v),
-                (&mut out.acc[k], &a),
-                (&mut out.force[k], &fs_),
-            ] {
-                let part = &src[keep.clone()];
-                let m = if demean { mean(part) } else { 0.0 };
-                dst.extend(part.iter().map(|v| v - m));
-            }
-            offsets.push(offset);
-            refs.push(reference);
-        }
-        out.windows.push(PreparedWindow {
-            id: w.id,
-            samples: start..out.disp[0].len(),
-            rows: r.start + trim..r.end - end_trim,
-            rest_samples: w.rest_len(),
-            force_offset: offsets,
-            reference: refs,
-        });
     }
     for k in 0..n {
         out.reference[k] =
             out.windows.iter().map(|w| w.reference[k]).sum::<f64>() / out.windows.len() as f64;
+    }
+    Ok(out)
+}
+
+/// One window's filtered signals (trimmed, per coordinate: displacement,
+/// velocity, acceleration, force), its force offsets and reference positions.
+struct WindowSignals {
+    per_coordinate: Vec<[Vec<f64>; 4]>,
+    offsets: Vec<f64>,
+    references: Vec<f64>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn window_signals(
+    rec: &Recording,
+    w: &Window,
+    pos: &[&[f64]],
+    frc: &[&[f64]],
+    sign: f64,
+    params: &PrepareParams,
+    lowpass: &LowPass,
+    (trim, end_trim): (usize, usize),
+    sg_window: usize,
+    dt: f64,
+    demean: bool,
+) -> Result<WindowSignals> {
+    let fs = 1.0 / dt;
+    let cutoff = lowpass.cutoff_hz();
+    let r = w.range.clone();
+    // the end of a perturbation window is trimmed by one cut-off period more (see END_TRIM_PERIODS)
+    let need = (trim + end_trim + 1)
+        .max(lowpass.padlen() + 1)
+        .max(sg_window);
+    if r.len() < need {
+        return Err(Error::TooFewSamples {
+            path: rec.path().to_path_buf(),
+            what: format!(
+                "trial {} (rows {}-{}) with zero-phase filtering and differences",
+                w.id,
+                rec.row_of(r.start),
+                rec.row_of(r.end - 1)
+            ),
+            needed: need,
+            found: r.len(),
+        });
+    }
+    let rest = match w.onset {
+        Some(onset) => r.start..onset,
+        None => r.clone(),
+    };
+    // one extension per window end, shared by every signal so that the model holds across coordinates
+    let edge_samples = ((fs / cutoff).round() as usize).max(3);
+    let left = edge_kind(pos, r.start, r.clone(), edge_samples, dt);
+    let right = edge_kind(pos, r.end - 1, r.clone(), edge_samples, dt);
+    let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
+    let n = pos.len();
+    let mut out = WindowSignals {
+        per_coordinate: Vec::with_capacity(n),
+        offsets: Vec::with_capacity(n),
+        references: Vec::with_capacity(n),
+    };
+    for k in 0..n {
+        let reference = mean(&pos[k][rest.clone()]);
+        let offset = if w.onset.is_some() {
+            sign * mean(&frc[k][rest.clone()])
+        } else {
+            0.0
+        };
+        let x: Vec<f64> = pos[k][r.clone()].iter().map(|p| p - reference).collect();
+        let f: Vec<f64> = frc[k][r.clone()]
+            .iter()
+            .map(|v| sign * v - offset)
+            .collect();
+        let signals = filter_and_differentiate(
+            &x,
+            &f,
+            params.derivative,
+            lowpass,
+            (left, right, extra),
+            sg_window,
+            dt,
+        )?;
+        let keep = trim..r.len() - end_trim;
+        out.per_coordinate.push(signals.map(|src| {
+            let part = &src[keep.clone()];
+            let m = if demean { mean(part) } else { 0.0 };
+            part.iter().map(|v| v - m).collect()
+        }));
+        out.offsets.push(offset);
+        out.references.push(reference);
     }
     Ok(out)
 }

@@ -259,8 +259,15 @@ fn lowpass_filtfilt<'py>(
     order: usize,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let lp = limpid_dsp::LowPass::butterworth(order, cutoff_hz, fs).map_err(err)?;
-    let x = x.as_array().to_vec();
-    let y = py.detach(|| lp.filtfilt(&x)).map_err(err)?;
+    // a contiguous array is read in place; others are copied once
+    let y = match x.as_slice() {
+        Ok(slice) => py.detach(|| lp.filtfilt(slice)),
+        Err(_) => {
+            let owned = x.as_array().to_vec();
+            py.detach(|| lp.filtfilt(&owned))
+        }
+    }
+    .map_err(err)?;
     Ok(y.into_pyarray(py))
 }
 
