@@ -4,6 +4,7 @@
 //! least-squares IK), seed 003's planar joint trajectories with their waits,
 //! and seed 004's commanded stochastic inputs.
 
+use rayon::prelude::*;
 use std::path::Path;
 
 use nalgebra::Matrix3;
@@ -40,68 +41,75 @@ pub fn centre_out_schedule(p: &Protocol, robot: &Robot, output: &Path) -> Result
     let per = (total_s * fs).round() as usize;
     let dirs = p.directions();
     let n = robot.dof();
-    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 6 + n];
-    let mut sample = 0usize;
-    for (si, start) in p.start_points().iter().enumerate() {
-        let mut q = robot
-            .reach(start, &orientation, &home)
-            .map_err(|e| fail(format!("{}: start point {}: {e}", robot.name, si + 1)))?;
-        for (ti, dir) in dirs.iter().enumerate() {
-            let positions: Vec<nalgebra::Vector3<f64>> = (0..per)
-                .map(|i| {
-                    let t = i as f64 / fs - ph.rest_s;
-                    let out = ph.profile.eval(t, ph.centre_out_s).0;
-                    let back = ph
-                        .profile
-                        .eval(t - ph.centre_out_s - ph.hold_s, ph.return_s)
-                        .0;
-                    start + dir * (p.targets.radius_m * (out - back))
-                })
-                .collect();
-            let joints = robot
-                .track(&positions, &orientation, &q)
-                .map_err(|e| fail(format!("start point {}, target {}: {e}", si + 1, ti + 1)))?;
-            robot
-                .check_joint_trajectory(&joints, 1.0 / fs)
-                .map_err(|e| {
-                    fail(format!(
-                        "{}: start point {}, target {}: {e}",
-                        robot.name,
-                        si + 1,
-                        ti + 1
-                    ))
-                })?;
-            for (x, qk) in positions.iter().zip(&joints) {
-                cols[0].push(sample as f64 / fs);
-                cols[1].push((si + 1) as f64);
-                cols[2].push((ti + 1) as f64);
+    // start points in parallel (each tracks its trials in order, every trial
+    // starting from the joints where the previous one ended); the time column
+    // is numbered once they are joined
+    let starts = p.start_points();
+    let per_start: Vec<Result<Vec<Vec<f64>>>> = starts
+        .par_iter()
+        .enumerate()
+        .map(|(si, start)| {
+            let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 5 + n];
+            let mut push = |trial: f64, x: &nalgebra::Vector3<f64>, qk: &[f64]| {
+                cols[0].push((si + 1) as f64);
+                cols[1].push(trial);
                 for a in 0..3 {
-                    cols[3 + a].push(x[a]);
+                    cols[2 + a].push(x[a]);
                 }
                 for (j, v) in qk.iter().enumerate() {
-                    cols[6 + j].push(*v);
+                    cols[5 + j].push(*v);
                 }
-                sample += 1;
-            }
-            q = joints.last().cloned().unwrap_or(q);
-            // seed 001: a longer rest between sets, holding the start point
-            let set = p.phases.trials_per_set;
-            if set > 0 && (ti + 1) % set == 0 && ti + 1 < dirs.len() {
-                for _ in 0..(p.phases.set_rest_s * fs).round() as usize {
-                    cols[0].push(sample as f64 / fs);
-                    cols[1].push((si + 1) as f64);
-                    cols[2].push(0.0);
-                    for a in 0..3 {
-                        cols[3 + a].push(start[a]);
+            };
+            let mut q = robot
+                .reach(start, &orientation, &home)
+                .map_err(|e| fail(format!("{}: start point {}: {e}", robot.name, si + 1)))?;
+            for (ti, dir) in dirs.iter().enumerate() {
+                let positions: Vec<nalgebra::Vector3<f64>> = (0..per)
+                    .map(|i| {
+                        let t = i as f64 / fs - ph.rest_s;
+                        let out = ph.profile.eval(t, ph.centre_out_s).0;
+                        let back = ph
+                            .profile
+                            .eval(t - ph.centre_out_s - ph.hold_s, ph.return_s)
+                            .0;
+                        start + dir * (p.targets.radius_m * (out - back))
+                    })
+                    .collect();
+                let joints = robot
+                    .track(&positions, &orientation, &q)
+                    .map_err(|e| fail(format!("start point {}, target {}: {e}", si + 1, ti + 1)))?;
+                robot
+                    .check_joint_trajectory(&joints, 1.0 / fs)
+                    .map_err(|e| {
+                        fail(format!(
+                            "{}: start point {}, target {}: {e}",
+                            robot.name,
+                            si + 1,
+                            ti + 1
+                        ))
+                    })?;
+                for (x, qk) in positions.iter().zip(&joints) {
+                    push((ti + 1) as f64, x, qk.as_slice());
+                }
+                q = joints.last().cloned().unwrap_or(q);
+                // seed 001: a longer rest between sets, holding the start point
+                let set = p.phases.trials_per_set;
+                if set > 0 && (ti + 1) % set == 0 && ti + 1 < dirs.len() {
+                    for _ in 0..(p.phases.set_rest_s * fs).round() as usize {
+                        push(0.0, start, q.as_slice());
                     }
-                    for (j, v) in q.iter().enumerate() {
-                        cols[6 + j].push(*v);
-                    }
-                    sample += 1;
                 }
             }
+            Ok(cols)
+        })
+        .collect();
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 6 + n];
+    for part in per_start {
+        for (dst, src) in cols[1..].iter_mut().zip(part?) {
+            dst.extend(src);
         }
     }
+    cols[0] = (0..cols[1].len()).map(|i| i as f64 / fs).collect();
     let mut names: Vec<String> = ["t", "start_point", "trial", "x", "y", "z"]
         .map(String::from)
         .to_vec();
