@@ -4,6 +4,17 @@
 mod common;
 use common::*;
 
+/// A 1 kHz joint recording `t,q1,tau1` of `n` samples with the given cells.
+fn joint_csv(path: &std::path::Path, n: usize, row: impl Fn(f64) -> (String, String)) {
+    let mut text = String::from("t,q1,tau1\n");
+    for i in 0..n {
+        let t = i as f64 / 1000.0;
+        let (q, tau) = row(t);
+        text.push_str(&format!("{t},{q},{tau}\n"));
+    }
+    std::fs::write(path, text).unwrap();
+}
+
 #[test]
 fn reflex_on_the_real_ankle_recordings() {
     let dir = shared().join("real/reklab_ankle");
@@ -79,16 +90,12 @@ fn reflex_refusals() {
     // too short for the method
     let dir = tempfile::tempdir().unwrap();
     let short = dir.path().join("short.csv");
-    let mut text = String::from("t,q1,tau1\n");
-    for i in 0..2000 {
-        let t = i as f64 / 1000.0;
-        text.push_str(&format!(
-            "{t},{},{}\n",
-            (t * 7.0).sin() * 0.01,
-            (t * 7.0).sin()
-        ));
-    }
-    std::fs::write(&short, text).unwrap();
+    joint_csv(&short, 2000, |t| {
+        (
+            ((t * 7.0).sin() * 0.01).to_string(),
+            (t * 7.0).sin().to_string(),
+        )
+    });
     let out = limpid(&["estimate", "reflex", short.to_str().unwrap()]);
     assert_eq!(out.code, 2);
     assert!(
@@ -113,12 +120,9 @@ fn reflex_refusals() {
     );
     // constant torque
     let flat = dir.path().join("flat.csv");
-    let mut text = String::from("t,q1,tau1\n");
-    for i in 0..20000 {
-        let t = i as f64 / 1000.0;
-        text.push_str(&format!("{t},{},1.5\n", (t * 7.0).sin() * 0.01));
-    }
-    std::fs::write(&flat, text).unwrap();
+    joint_csv(&flat, 20000, |t| {
+        (((t * 7.0).sin() * 0.01).to_string(), "1.5".into())
+    });
     let out = limpid(&["estimate", "reflex", flat.to_str().unwrap()]);
     assert_eq!(out.code, 2);
     assert!(out.stderr.contains("does not vary"), "{}", out.stderr);
@@ -128,16 +132,12 @@ fn reflex_refusals() {
 fn reflex_refuses_columns_it_cannot_square() {
     let dir = tempfile::tempdir().unwrap();
     let tiny = dir.path().join("tiny.csv");
-    let mut text = String::from("t,q1,tau1\n");
-    for i in 0..20000 {
-        let t = i as f64 / 1000.0;
-        text.push_str(&format!(
-            "{t},{:e},{}\n",
-            (t * 7.0).sin() * 1e-300,
-            (t * 3.0).cos()
-        ));
-    }
-    std::fs::write(&tiny, text).unwrap();
+    joint_csv(&tiny, 20000, |t| {
+        (
+            format!("{:e}", (t * 7.0).sin() * 1e-300),
+            (t * 3.0).cos().to_string(),
+        )
+    });
     let out = limpid(&["estimate", "reflex", tiny.to_str().unwrap()]);
     assert_eq!(out.code, 2);
     assert!(
