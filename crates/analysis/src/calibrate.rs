@@ -434,8 +434,67 @@ fn stochastic(seed: u64) -> std::result::Result<Outcome, String> {
     Ok(o)
 }
 
+/// A virtual ankle with a stretch reflex (Kearney et al. 1997): random
+/// intrinsic I-B-K, reflex delay, gain, low-pass and polarity; 30 s at 1 kHz.
+fn reflex(seed: u64) -> std::result::Result<Outcome, String> {
+    use limpid_ident::reflex::{estimate_reflex, ReflexParams};
+    use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleReflex, AnkleSubject};
+    let mut rng = StdRng::seed_from_u64(seed);
+    let subject = AnkleSubject {
+        inertia: uniform(&mut rng, 0.01, 0.025),
+        damping: uniform(&mut rng, 0.4, 1.5),
+        stiffness: uniform(&mut rng, 40.0, 180.0),
+        reflex: Some(AnkleReflex {
+            gain: uniform(&mut rng, 5.0, 45.0),
+            delay_s: uniform(&mut rng, 0.03, 0.07),
+            natural_hz: uniform(&mut rng, 1.5, 4.0),
+            damping_ratio: uniform(&mut rng, 0.5, 1.0),
+            positive: rng.random::<bool>(),
+        }),
+    };
+    let experiment = AnkleExperiment {
+        duration_s: 30.0,
+        torque_noise_nm: uniform(&mut rng, 0.05, 0.4),
+        ..AnkleExperiment::default()
+    };
+    let rec = simulate_ankle(&subject, &experiment, seed).map_err(|e| e.to_string())?;
+    let est = estimate_reflex(&rec, &ReflexParams::default()).map_err(|e| e.to_string())?;
+    let i = &est.intrinsic;
+    let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
+    let fit_ok = est.fit.vaf_parametric >= crate::linear::VAF_FLOOR_PERCENT;
+    let mut o = Outcome::default();
+    for (kind, k, v, se, truth) in [
+        (
+            0,
+            MatrixKind::Stiffness,
+            i.stiffness,
+            i.standard_errors.stiffness,
+            subject.stiffness,
+        ),
+        (
+            1,
+            MatrixKind::Damping,
+            i.damping,
+            i.standard_errors.damping,
+            subject.damping,
+        ),
+    ] {
+        let trusted = crate::linear::matrix_verdict(
+            k,
+            &one(v),
+            &one(se),
+            fit_ok,
+            v.abs() >= 2.0 * se,
+            v > 0.0,
+        )
+        .trusted();
+        o.add(kind, &one(v), &one(se), &one(truth), trusted);
+    }
+    Ok(o)
+}
+
 /// Methods of the study (each `recordings` virtual recordings).
-pub const METHODS: usize = 6;
+pub const METHODS: usize = 7;
 
 /// Window sweeps run beside `recordings` per method: half as many (each fits
 /// some 70 windows and split models), at least 10.
@@ -485,6 +544,7 @@ pub fn calibrate(
         run("co-contraction, 4 levels (seed 001)", &cocontraction, 4),
         run("planar arm, whole window (seed 003)", &planar, 5),
         run("stochastic spring array (seed 004)", &stochastic, 6),
+        run("ankle with reflex, parallel cascade", &reflex, 8),
     ];
     debug_assert_eq!(methods.len(), METHODS);
     let started = std::time::Instant::now();

@@ -27,6 +27,10 @@
 //!   standard errors by a 10-block jackknife (the residuals are coloured);
 //!   `intrinsic.irf_fit` is the I-B-K least-squares fit of the torque the
 //!   nonparametric reflex pathway leaves, for comparison;
+//! - the rectifier's order is a choice the data cannot settle: the joint fit
+//!   is repeated with the other order and the differences of I, B, K and G
+//!   are added (in quadrature) to their standard errors, the other delay to
+//!   the delay interval;
 //! - joint parametric model: `tq = I q'' + B q' + K q + G LP2(rect v)(t - d)`,
 //!   the reflex a rectified velocity -> delay -> gain -> unit-DC
 //!   second-order low-pass; linear in I, B, K, G for a given delay and
@@ -193,6 +197,19 @@ pub struct ReflexFreeFit {
     pub vaf: f64,
 }
 
+/// The joint parametric fit with the other rectifier order.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema)]
+pub struct OtherOrder {
+    /// True: rectified before anti-aliasing.
+    pub rectify_first: bool,
+    /// I, B, K.
+    pub intrinsic: Ibk,
+    /// Reflex gain (N m s/rad).
+    pub gain: f64,
+    /// Reflex delay (s).
+    pub delay_s: f64,
+}
+
 /// Decimated torque over 10 s (after the first reflex-IRF length), for plots.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct ReflexTraces {
@@ -231,6 +248,9 @@ pub struct ReflexEstimate {
     pub iterations: usize,
     /// The reflex-free I-B-K fit, to see what the reflex pathway changes.
     pub reflex_free: ReflexFreeFit,
+    /// The joint parametric fit with the rectifier on the other side of the
+    /// anti-alias filter; its differences are included in the standard errors.
+    pub other_rectifier_order: Option<OtherOrder>,
     /// Torque traces.
     pub traces: ReflexTraces,
     /// What the reader should know.
@@ -335,12 +355,59 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
 
     let dt = 1.0 / d.fs;
     // the fully parametric model, fitted jointly (I-B-K, delay, gain, low-pass)
-    let Some(param) = reflex_parametric(&d, best, skip, p, fs) else {
+    let Some(mut param) = reflex_parametric(&d, best, skip, p, fs) else {
         return Err(Error::invalid(
             rec.path().display().to_string(),
             "position, velocity and acceleration are collinear: I, B and K cannot be separated",
         ));
     };
+    // Rectifying before or after anti-aliasing is a modelling choice the data
+    // cannot settle (the reflex acts on the true velocity, the method
+    // rectifies the decimated one); the fit with the other order is reported
+    // and its difference added to the standard errors and the delay interval.
+    let other_order = {
+        let alt = ReflexParams {
+            rectify_first: !p.rectify_first,
+            ..p.clone()
+        };
+        reflex_parametric(&decimate(q, tq, fs, &alt)?, best, skip, p, fs)
+    };
+    let mut order_warning = None;
+    if let Some(o) = &other_order {
+        let z = (param.intrinsic.stiffness - o.intrinsic.stiffness).abs()
+            / param.intrinsic_se.stiffness.max(f64::MIN_POSITIVE);
+        if z > 2.0 {
+            order_warning = Some(Warning::new(
+                WarningCode::NoisyRegressors,
+                format!(
+                    "rectifying {} anti-aliasing changes K by {} N m/rad ({z:.1} jackknife SE): the standard errors include this difference",
+                    if p.rectify_first { "after" } else { "before" },
+                    limpid_core::short_number(o.intrinsic.stiffness - param.intrinsic.stiffness)
+                ),
+            ));
+        }
+        let widen = |se: &mut f64, a: f64, b: f64| *se = se.hypot(a - b);
+        widen(
+            &mut param.intrinsic_se.inertia,
+            param.intrinsic.inertia,
+            o.intrinsic.inertia,
+        );
+        widen(
+            &mut param.intrinsic_se.damping,
+            param.intrinsic.damping,
+            o.intrinsic.damping,
+        );
+        widen(
+            &mut param.intrinsic_se.stiffness,
+            param.intrinsic.stiffness,
+            o.intrinsic.stiffness,
+        );
+        widen(&mut param.gain_se, param.gain, o.gain);
+        param.interval = [
+            param.interval[0].min(o.delay_s),
+            param.interval[1].max(o.delay_s),
+        ];
+    }
     let fit = VafSplit {
         vaf_total: c.vaf_total,
         vaf_intrinsic: vaf(&d.torque, &c.intrinsic_torque, skip),
@@ -381,6 +448,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     let (plain, _, plain_vaf) = ibk_fit(&regressors, &d.torque, skip);
     let reflex_gain_points = param.total_vaf - param.intrinsic_only_vaf;
     let mut delay_identifiable = true;
+    warnings.extend(order_warning);
     if reflex_gain_points < REFLEX_PRESENT_VAF {
         delay_identifiable = false;
         warnings.push(Warning::new(
@@ -506,6 +574,12 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             parameters: plain,
             vaf: plain_vaf,
         },
+        other_rectifier_order: other_order.as_ref().map(|o| OtherOrder {
+            rectify_first: !p.rectify_first,
+            intrinsic: o.intrinsic,
+            gain: o.gain,
+            delay_s: o.delay_s,
+        }),
         traces,
         warnings,
     };

@@ -58,7 +58,20 @@ fn virtual_ankle_reflex_delay_and_gains_are_recovered() {
         );
         let ki = e.intrinsic.stiffness;
         assert!((ki - k).abs() / k < 0.1, "intrinsic K {ki} vs {k}");
-        assert!(e.intrinsic.standard_errors.stiffness > 0.0);
+        // the standard errors carry the rectifier-order term: the truth within 2 SE
+        let se = e.intrinsic.standard_errors.stiffness;
+        assert!((ki - k).abs() <= 2.0 * se, "K {ki} +- {se} vs {k}");
+        assert!(
+            (r.gain - gain).abs() <= 2.0 * r.gain_se,
+            "G {} +- {} vs {gain}",
+            r.gain,
+            r.gain_se
+        );
+        assert!(
+            r.delay_interval_s[0] <= delay + 1e-9 && delay <= r.delay_interval_s[1] + 1e-9,
+            "delay {delay} outside {:?}",
+            r.delay_interval_s
+        );
         assert!(
             e.fit.vaf_total > 99.0 && e.cross_validated_vaf > 99.0,
             "{:?}",
