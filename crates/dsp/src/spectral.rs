@@ -13,6 +13,7 @@
 //! The FFT of each signal's segments is computed once and reused for every
 //! pair; the plan is made once per segment length.
 
+use std::ops::Range;
 use std::sync::Arc;
 
 use nalgebra::DMatrix;
@@ -214,12 +215,22 @@ impl SegmentSpectra {
 
     /// Cross-spectrum `P_ab = mean over segments of conj(A) B`, scaled.
     pub fn cross(&self, a: usize, b: usize) -> Vec<Complex64> {
+        self.cross_without(a, b, 0..0)
+    }
+
+    /// The cross-spectrum averaged over every segment outside `skip` (for
+    /// delete-a-group jackknife replicates); all segments when `skip` is empty.
+    pub fn cross_without(&self, a: usize, b: usize, skip: Range<usize>) -> Vec<Complex64> {
         let sa = &self.spectra[a];
         let sb = &self.spectra[b];
-        let m = sa.len() as f64;
+        let kept = |i: &usize| !skip.contains(i);
+        let m = (0..sa.len()).filter(kept).count().max(1) as f64;
         (0..self.scale.len())
             .map(|k| {
-                let s: Complex64 = sa.iter().zip(sb).map(|(x, y)| x[k].conj() * y[k]).sum();
+                let s: Complex64 = (0..sa.len())
+                    .filter(kept)
+                    .map(|i| sa[i][k].conj() * sb[i][k])
+                    .sum();
                 s / m * self.scale[k]
             })
             .collect()
@@ -232,10 +243,19 @@ impl SegmentSpectra {
 
     /// The spectral matrix `S[f][i][j] = P_{s_i s_j}(f)` of all signals.
     pub fn matrix(&self) -> Vec<DMatrix<Complex64>> {
+        self.matrix_without(0..0)
+    }
+
+    /// The spectral matrix averaged over every segment outside `skip`.
+    pub fn matrix_without(&self, skip: Range<usize>) -> Vec<DMatrix<Complex64>> {
         let m = self.spectra.len();
         // the upper triangle; the lower one is its conjugate (Hermitian matrix)
         let upper: Vec<Vec<Vec<Complex64>>> = (0..m)
-            .map(|i| (i..m).map(|j| self.cross(i, j)).collect())
+            .map(|i| {
+                (i..m)
+                    .map(|j| self.cross_without(i, j, skip.clone()))
+                    .collect()
+            })
             .collect();
         let at = |i: usize, j: usize, k: usize| {
             if i <= j {

@@ -172,6 +172,11 @@ pub const DERIVATIVE_ERROR_FLOOR: f64 = 0.01;
 pub const UNIDENTIFIED_INERTIA_SD_KG: f64 = 0.5;
 /// The same for joint coordinates (kg m^2; upper arm and forearm about a joint: 0.02-0.3).
 pub const UNIDENTIFIED_INERTIA_SD_KG_M2: f64 = 0.05;
+/// Prior mean of a diagonal end-point inertia the data cannot identify (kg):
+/// the middle of the 0.1-2 kg range above, so that ±2 prior s.d. span it.
+pub const UNIDENTIFIED_INERTIA_MEAN_KG: f64 = 1.0;
+/// The same for joint coordinates (kg m^2).
+pub const UNIDENTIFIED_INERTIA_MEAN_KG_M2: f64 = 0.1;
 /// Share of the diagonal prior given to off-diagonal inertia elements.
 const OFF_DIAGONAL_INERTIA_SHARE: f64 = 0.2;
 /// Fewest blocks for a jackknife standard error.
@@ -521,51 +526,98 @@ impl<'a> Regression<'a> {
     }
 }
 
-/// Variance that an inertia the data cannot identify adds to the damping and
-/// stiffness estimates, per parameter row (p) and force component (n).
-///
-/// The fit reports B and K conditional on its own M; when M is not
-/// identified, a wrong M moves them along the regression of the acceleration
-/// columns on the others: `dθ_j/dM_k = C_jM (C_MM)^-1` with `C` the unit
-/// covariance `(L^T L)^-1`. (A pure sinusoid makes acceleration proportional to
-/// displacement, so K absorbs `-ω² M` exactly; block jackknife standard errors
-/// cannot see such a bias, every trial sharing it.) Applied when less than
-/// [`MIN_RELIABILITY`] of some acceleration column's own part (what the other
-/// columns do not explain) is signal rather than propagated position noise;
-/// each M element then gets the prior s.d. of [`UNIDENTIFIED_INERTIA_SD_KG`].
-fn inertia_confounding(reg: &Regression, solved: &Solved, coords: &[String]) -> DMatrix<f64> {
+/// Sensitivity of every parameter row to the inertia columns, unscaled:
+/// `dθ_j/dM_k = C_jM (C_MM)^-1` with `C` the unit covariance `(L^T L)^-1`
+/// (partitioned inverse: minus the regression of the acceleration columns on
+/// the others). Rows 0..n (the inertia itself) are left zero. None when the
+/// inertia block of `C` is singular.
+fn inertia_sensitivity(reg: &Regression, solved: &Solved) -> Option<DMatrix<f64>> {
     let (n, p) = (reg.n, reg.p);
     let c = &solved.cov_unit;
-    let mut out = DMatrix::<f64>::zeros(p, n);
-    let c_mm = c.view((0, 0), (n, n)).into_owned();
-    let Some(c_mm_inv) = c_mm.try_inverse() else {
-        return out;
-    };
-    let prior = |k: usize| {
-        if matches!(coords[k].as_str(), "x" | "y" | "z") {
-            UNIDENTIFIED_INERTIA_SD_KG
-        } else {
-            UNIDENTIFIED_INERTIA_SD_KG_M2
+    let c_mm_inv = c.view((0, 0), (n, n)).into_owned().try_inverse()?;
+    let mut sens = DMatrix::<f64>::zeros(p, n);
+    for j in n..p {
+        for k in 0..n {
+            let scaled: f64 = (0..n).map(|l| c[(j, l)] * c_mm_inv[(l, k)]).sum();
+            sens[(j, k)] = scaled * reg.scales[k] / reg.scales[j];
         }
-    };
-    for j in n..3 * n {
-        // sensitivity of parameter j to each inertia column k, unscaled
-        let sens: Vec<f64> = (0..n)
-            .map(|k| {
-                let scaled: f64 = (0..n).map(|l| c[(j, l)] * c_mm_inv[(l, k)]).sum();
-                scaled * reg.scales[k] / reg.scales[j]
-            })
-            .collect();
+    }
+    Some(sens)
+}
+
+/// Prior (mean, s.d.) of an inertia element the data cannot identify, for
+/// coordinate `k` (end-point kg or joint kg m^2).
+fn inertia_prior(coords: &[String], k: usize) -> (f64, f64) {
+    if matches!(coords[k].as_str(), "x" | "y" | "z") {
+        (UNIDENTIFIED_INERTIA_MEAN_KG, UNIDENTIFIED_INERTIA_SD_KG)
+    } else {
+        (
+            UNIDENTIFIED_INERTIA_MEAN_KG_M2,
+            UNIDENTIFIED_INERTIA_SD_KG_M2,
+        )
+    }
+}
+
+/// B, K and the constant conditional on the prior mean inertia instead of an
+/// attenuated estimate, for every acceleration column too noisy to be
+/// bias-compensated (reliability below [`MIN_CORRECTABLE`]): such a column's
+/// M comes out near zero whatever the truth (`limpid calibrate`: 0.02 kg for a
+/// true 1.5 kg on seed 000's cubic ramps), and since the ramps tie
+/// acceleration to displacement (`Σ a x = -Σ v²`), K absorbed `-M Σv²/Σx²`:
+/// cubic and trapezoid K diagonals were 1.2 SE low on average (coverage 89 %).
+/// Returns the shifted columns' names.
+fn condition_on_prior_inertia(
+    theta: &mut DMatrix<f64>,
+    sens: &DMatrix<f64>,
+    reliability: &[[f64; 3]],
+    coords: &[String],
+) -> Vec<String> {
+    let n = coords.len();
+    let mut shifted = Vec::new();
+    for k in 0..n {
+        if reliability[k][0] >= MIN_CORRECTABLE {
+            continue;
+        }
+        let (mean, _) = inertia_prior(coords, k);
+        for a in 0..n {
+            let target = if a == k { mean } else { 0.0 };
+            let delta = target - theta[(k, a)];
+            for j in n..theta.nrows() {
+                theta[(j, a)] += sens[(j, k)] * delta;
+            }
+        }
+        shifted.push(coords[k].clone());
+    }
+    shifted
+}
+
+/// The variance a not-identified inertia adds to the damping and stiffness
+/// estimates, per parameter row (p) and force component (n).
+///
+/// The fit reports B and K conditional on an M (its own, or the prior mean,
+/// see [`condition_on_prior_inertia`]); when M is not identified, a wrong M
+/// moves them along `sens` ([`inertia_sensitivity`]). (A pure sinusoid makes
+/// acceleration proportional to displacement, so K absorbs `-ω² M` exactly;
+/// block jackknife standard errors cannot see such a bias, every trial
+/// sharing it.) Applied when less than [`MIN_RELIABILITY`] of some
+/// acceleration column's own part (what the other columns do not explain) is
+/// signal rather than propagated position noise; each M element then gets the
+/// prior s.d. of [`UNIDENTIFIED_INERTIA_SD_KG`].
+fn inertia_confounding(sens: &DMatrix<f64>, coords: &[String]) -> DMatrix<f64> {
+    let (p, n) = (sens.nrows(), sens.ncols());
+    let mut out = DMatrix::<f64>::zeros(p, n);
+    let sd = |k: usize| inertia_prior(coords, k).1;
+    for j in n..p.min(3 * n) {
         for a in 0..n {
             out[(j, a)] = (0..n)
                 .map(|k| {
-                    let sd = (prior(a) * prior(k)).sqrt()
+                    let s = (sd(a) * sd(k)).sqrt()
                         * if k == a {
                             1.0
                         } else {
                             OFF_DIAGONAL_INERTIA_SHARE
                         };
-                    (sens[k] * sd).powi(2)
+                    (sens[(j, k)] * s).powi(2)
                 })
                 .sum();
         }
@@ -672,7 +724,15 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
     let block = |m_: &DMatrix<f64>, b: usize| {
         Matrix(DMatrix::from_fn(n, n, |row, col| m_[(b * n + col, row)]))
     };
-    let inertia = block(theta, 0);
+    let sensitivity = inertia_sensitivity(&reg, &solved);
+    // the inertia stays the data's (flagged when not identified); B, K and the
+    // constant are reported for the prior inertia where the data give none
+    let mut theta = solved.theta.clone();
+    let prior_inertia = sensitivity.as_ref().map_or_else(Vec::new, |sens| {
+        condition_on_prior_inertia(&mut theta, sens, &reg.reliability, &data.coordinates)
+    });
+    let theta = &theta;
+    let inertia = block(&solved.theta, 0);
     let damping = block(theta, 1);
     let stiffness = block(theta, 2);
     let mut warnings = Vec::new();
@@ -705,13 +765,23 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         })
         .collect();
     let least = partial_reliability.iter().copied().fold(1.0, f64::min);
-    if partial_reliability.iter().any(|r| *r < MIN_RELIABILITY) {
-        let extra = inertia_confounding(&reg, &solved, &data.coordinates);
+    if let Some(sens) = sensitivity
+        .as_ref()
+        .filter(|_| partial_reliability.iter().any(|r| *r < MIN_RELIABILITY))
+    {
+        let extra = inertia_confounding(sens, &data.coordinates);
         se.zip_apply(&extra, |v, e| *v = (*v * *v + e).sqrt());
         let _ = write!(
             se_method,
             "; B and K include an unknown inertia's effect (prior s.d. {UNIDENTIFIED_INERTIA_SD_KG} kg or {UNIDENTIFIED_INERTIA_SD_KG_M2} kg m^2): only {:.0} % of the acceleration the motion does not tie to displacement and velocity is signal",
             100.0 * least
+        );
+    }
+    if !prior_inertia.is_empty() {
+        let _ = write!(
+            se_method,
+            "; B and K are given for the prior mean inertia ({UNIDENTIFIED_INERTIA_MEAN_KG} kg or {UNIDENTIFIED_INERTIA_MEAN_KG_M2} kg m^2 on the diagonal) along {}: the acceleration there is mostly noise",
+            prior_inertia.join(", ")
         );
     }
     for j in 0..2 * n {

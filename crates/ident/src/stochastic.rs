@@ -27,6 +27,12 @@ use serde::{Deserialize, Serialize};
 use crate::prepare::choose_coordinates;
 use limpid_core::{Error, Recording, Result};
 use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch};
+use rayon::prelude::*;
+
+/// Groups of consecutive Welch segments for the jackknife standard errors.
+pub const JACKKNIFE_GROUPS: usize = 10;
+/// Fewest segments (one per group) for a jackknife; below, least-squares SEs.
+pub const MIN_JACKKNIFE_GROUPS: usize = 8;
 
 /// Settings of the stochastic estimator.
 ///
@@ -158,9 +164,16 @@ pub struct Accuracy {
     pub expected: ExpectedModel,
 }
 
-/// Standard errors of the parametric fit (least squares over the band, inflated by the window's equivalent noise bandwidth).
+/// Standard errors of the parametric fit: delete-a-group jackknife over the
+/// Welch segments ([`JACKKNIFE_GROUPS`] groups of consecutive segments, each
+/// replicate refitting Z and its parametric model without one group); with
+/// fewer than [`MIN_JACKKNIFE_GROUPS`] segments, least squares over the band
+/// inflated by the window's equivalent noise bandwidth.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct ParametricErrors {
+    /// How they were obtained.
+    #[serde(default)]
+    pub method: String,
     /// Of M.
     pub inertia: Matrix,
     /// Of B.
@@ -231,6 +244,16 @@ pub fn estimate_stochastic(
         ));
     }
     let spectra = SegmentSpectra::new(&signals, &welch)?;
+    let in_band_of = |freqs: &[f64]| -> Vec<usize> {
+        (0..freqs.len())
+            .filter(|&k| freqs[k] >= lo && freqs[k] <= hi)
+            .collect()
+    };
+    let weight_of = |multiple: &[Vec<f64>], len: usize| -> Vec<f64> {
+        (0..len)
+            .map(|k| (0..2 * n).map(|o| multiple[o][k]).fold(1.0, f64::min))
+            .collect()
+    };
     let NonParametric {
         frequencies,
         impedance,
@@ -238,10 +261,8 @@ pub fn estimate_stochastic(
         partial,
         max_input_coherence,
         singular_in_band,
-    } = nonparametric(&spectra, n, (lo, hi));
-    let in_band: Vec<usize> = (0..frequencies.len())
-        .filter(|&k| frequencies[k] >= lo && frequencies[k] <= hi)
-        .collect();
+    } = nonparametric(spectra.matrix(), &spectra.frequencies, n, (lo, hi));
+    let in_band = in_band_of(&frequencies);
     if in_band.len() < 4 {
         return Err(Error::TooFewSamples {
             path: rec.path().to_path_buf(),
@@ -253,9 +274,7 @@ pub fn estimate_stochastic(
             found: in_band.len(),
         });
     }
-    let weight: Vec<f64> = (0..frequencies.len())
-        .map(|k| (0..2 * n).map(|o| multiple[o][k]).fold(1.0, f64::min))
-        .collect();
+    let weight = weight_of(&multiple, frequencies.len());
     let enbw_bins = match welch.window {
         limpid_dsp::spectral::Window::Hann => 1.5,
         limpid_dsp::spectral::Window::Hamming => 1.36,
@@ -268,6 +287,54 @@ pub fn estimate_stochastic(
         standard_errors: se,
         fit_vaf,
     } = parametric_fit(&impedance, &frequencies, &in_band, &weight, enbw_bins);
+    // delete-a-group jackknife over the Welch segments: the least-squares SE
+    // over frequencies treats neighbouring bins as independent and the
+    // residual as noise, which `limpid calibrate` found about twice too large
+    let segments = spectra.segments();
+    let groups = JACKKNIFE_GROUPS.min(segments);
+    let se = if groups >= MIN_JACKKNIFE_GROUPS {
+        let replicates: Vec<[Matrix; 3]> = (0..groups)
+            .into_par_iter()
+            .filter_map(|g| {
+                let skip = g * segments / groups..(g + 1) * segments / groups;
+                let np = nonparametric(
+                    spectra.matrix_without(skip),
+                    &spectra.frequencies,
+                    n,
+                    (lo, hi),
+                );
+                let band = in_band_of(&np.frequencies);
+                (band.len() >= 4).then(|| {
+                    let w = weight_of(&np.multiple, np.frequencies.len());
+                    let f = parametric_fit(&np.impedance, &np.frequencies, &band, &w, 1.0);
+                    [f.stiffness, f.damping, f.inertia]
+                })
+            })
+            .collect();
+        if replicates.len() == groups {
+            let spread = |which: usize| {
+                let g = groups as f64;
+                Matrix(nalgebra::DMatrix::from_fn(n, n, |i, j| {
+                    let mean = replicates.iter().map(|r| r[which][(i, j)]).sum::<f64>() / g;
+                    let ss = replicates
+                        .iter()
+                        .map(|r| (r[which][(i, j)] - mean).powi(2))
+                        .sum::<f64>();
+                    ((g - 1.0) / g * ss).sqrt()
+                }))
+            };
+            ParametricErrors {
+                stiffness: spread(0),
+                damping: spread(1),
+                inertia: spread(2),
+                method: format!("jackknife over {groups} groups of Welch segments"),
+            }
+        } else {
+            se
+        }
+    } else {
+        se
+    };
     let model = |f: f64| {
         let om = 2.0 * std::f64::consts::PI * f;
         DMatrix::from_fn(n, n, |i, j| {
@@ -344,9 +411,12 @@ struct NonParametric {
     singular_in_band: usize,
 }
 
-fn nonparametric(spectra: &SegmentSpectra, n: usize, (lo, hi): (f64, f64)) -> NonParametric {
-    let mats = spectra.matrix();
-    let freqs = &spectra.frequencies;
+fn nonparametric(
+    mats: Vec<DMatrix<Complex64>>,
+    freqs: &[f64],
+    n: usize,
+    (lo, hi): (f64, f64),
+) -> NonParametric {
     let top = freqs.iter().position(|f| *f > hi).unwrap_or(freqs.len());
     let mut frequencies = Vec::new();
     let mut impedance: Vec<DMatrix<Complex64>> = Vec::new();
@@ -418,6 +488,7 @@ fn parametric_fit(
     let mut b = Matrix::zeros(n, n);
     let mut kk = Matrix::zeros(n, n);
     let mut se = ParametricErrors {
+        method: "least squares over the band, variance times the window's equivalent noise bandwidth (too few Welch segments for a jackknife)".into(),
         inertia: m.clone(),
         damping: m.clone(),
         stiffness: m.clone(),
