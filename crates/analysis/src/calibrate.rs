@@ -405,31 +405,21 @@ fn stochastic(seed: u64) -> std::result::Result<Outcome, String> {
     let rec = simulate_rig(&e, [1e-6, 1e-5], seed).map_err(|e| e.to_string())?;
     let est = estimate_stochastic(&rec, &StochasticParams::default()).map_err(|e| e.to_string())?;
     let mut o = Outcome::default();
-    // the linear estimator's verdict rules on the parametric fit: VAF of Z over the band
-    // at least the floor with coherent data (mean multiple coherence >= 0.5), diagonal
-    // elements at least 2 SE from zero, positive definite, 2 SE within the tolerance
-    let fit_ok = est.criteria.fit_vaf >= crate::linear::VAF_FLOOR_PERCENT
-        && est.criteria.mean_multiple_coherence >= 0.5;
-    let trusted = |kind: MatrixKind, v: &Matrix, se: &Matrix| {
-        let identified = (0..v.nrows()).all(|i| v[(i, i)].abs() >= 2.0 * se[(i, i)]);
-        let pd = crate::criteria(v).positive_definite;
-        crate::linear::matrix_verdict(kind, v, se, fit_ok, identified, pd).trusted()
-    };
+    let (v, se) = (&est.criteria.verdicts, &est.standard_errors);
     let (k, b) = (&est.stiffness, &est.damping);
-    let se = &est.standard_errors;
     o.add(
         0,
         k,
         &se.stiffness,
         &Matrix::from(e.stiffness),
-        trusted(MatrixKind::Stiffness, k, &se.stiffness),
+        v.stiffness.trusted(),
     );
     o.add(
         1,
         b,
         &se.damping,
         &Matrix::from(e.damping),
-        trusted(MatrixKind::Damping, b, &se.damping),
+        v.damping.trusted(),
     );
     Ok(o)
 }

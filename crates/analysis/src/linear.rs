@@ -11,6 +11,9 @@ use crate::{
     antisymmetric, criteria, ellipsoid, symmetric, table_ii, Ellipsoid, Matrix, MatrixCriteria,
     TableII,
 };
+pub use limpid_core::criteria::{
+    matrix_verdict, tolerance, MatrixKind, MatrixVerdict, VAF_FLOOR_PERCENT,
+};
 use limpid_core::{Error, Result, Warning, WarningCode};
 use limpid_ident::linear::{units, FitQuality, Identifiable, LinearEstimate, StandardErrors};
 use limpid_ident::Prepared;
@@ -211,48 +214,6 @@ pub fn linear_result(est: &LinearEstimate, data: &Prepared) -> LinearResult {
     }
 }
 
-/// Smallest VAF (%) of every force component for any matrix to be trusted:
-/// below it the model misses most of the force (wrong model, reflexes,
-/// trials cut mid-motion), and its parameters absorb what it misses.
-pub const VAF_FLOOR_PERCENT: f64 = 50.0;
-
-/// Documented error tolerance of a trusted matrix (relative Frobenius norm):
-/// K 10 %, B 25 %, M 25 %. A matrix is trusted only when twice its standard
-/// error stays within it; `limpid calibrate` measures how often a trusted
-/// matrix is nevertheless further from the truth.
-pub fn tolerance(kind: MatrixKind) -> f64 {
-    match kind {
-        MatrixKind::Stiffness => 0.10,
-        MatrixKind::Damping | MatrixKind::Inertia => 0.25,
-    }
-}
-
-/// One matrix's verdict, in the order it is checked.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum MatrixVerdict {
-    /// Identified, passive, precise, from a fit that explains the force.
-    Trusted,
-    /// A force component varies too little or the model explains less than
-    /// [`VAF_FLOOR_PERCENT`] of it: no matrix of this fit is trusted.
-    PoorFit,
-    /// Not identifiable from this data (a diagonal element within 2 SE of
-    /// zero, or its regressors dominated by noise).
-    NotIdentifiable,
-    /// Identified, but its symmetric part is not positive definite (negative
-    /// inertia, damping or stiffness): not a passive impedance.
-    NotPassive,
-    /// Identified and passive, but 2 SE exceed the tolerance ([`tolerance`]).
-    Imprecise,
-}
-
-impl MatrixVerdict {
-    /// Whether the matrix may be used.
-    pub fn trusted(self) -> bool {
-        self == MatrixVerdict::Trusted
-    }
-}
-
 /// The verdict on one matrix of a fit.
 fn judge(est: &LinearEstimate, c: &MatrixCriteria, kind: MatrixKind) -> MatrixVerdict {
     let (value, se, identified) = match kind {
@@ -276,31 +237,6 @@ fn judge(est: &LinearEstimate, c: &MatrixCriteria, kind: MatrixKind) -> MatrixVe
     matrix_verdict(kind, value, se, fit_ok, identified, c.positive_definite)
 }
 
-/// The verdict rules, in the order they are checked, for any estimator's
-/// matrix: the fit explains the data, the matrix is identified, its
-/// symmetric part positive definite, and 2 SE within [`tolerance`].
-pub fn matrix_verdict(
-    kind: MatrixKind,
-    value: &Matrix,
-    se: &Matrix,
-    fit_ok: bool,
-    identified: bool,
-    positive_definite: bool,
-) -> MatrixVerdict {
-    let relative_se = se.norm() / value.norm();
-    if !fit_ok {
-        MatrixVerdict::PoorFit
-    } else if !identified {
-        MatrixVerdict::NotIdentifiable
-    } else if !positive_definite {
-        MatrixVerdict::NotPassive
-    } else if relative_se.is_nan() || 2.0 * relative_se > tolerance(kind) {
-        MatrixVerdict::Imprecise
-    } else {
-        MatrixVerdict::Trusted
-    }
-}
-
 impl Criteria {
     /// The verdict on one matrix.
     pub fn verdict_of(&self, kind: MatrixKind) -> MatrixVerdict {
@@ -308,44 +244,6 @@ impl Criteria {
             MatrixKind::Inertia => self.verdicts.inertia,
             MatrixKind::Damping => self.verdicts.damping,
             MatrixKind::Stiffness => self.verdicts.stiffness,
-        }
-    }
-}
-
-/// The three matrices of the linear model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MatrixKind {
-    /// K.
-    Stiffness,
-    /// B.
-    Damping,
-    /// M.
-    Inertia,
-}
-
-impl MatrixKind {
-    /// Stiffness, damping, inertia: the order results are read in.
-    pub const ALL: [MatrixKind; 3] = [
-        MatrixKind::Stiffness,
-        MatrixKind::Damping,
-        MatrixKind::Inertia,
-    ];
-
-    /// The lower-case name, as in the JSON keys.
-    pub fn name(self) -> &'static str {
-        match self {
-            MatrixKind::Stiffness => "stiffness",
-            MatrixKind::Damping => "damping",
-            MatrixKind::Inertia => "inertia",
-        }
-    }
-
-    /// The symbol of seed 000: K, B, M.
-    pub fn symbol(self) -> &'static str {
-        match self {
-            MatrixKind::Stiffness => "K",
-            MatrixKind::Damping => "B",
-            MatrixKind::Inertia => "M",
         }
     }
 }

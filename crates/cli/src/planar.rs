@@ -224,7 +224,7 @@ fn text(e: &PlanarEstimate, data: &PlanarData) -> String {
     if c.trusted {
         let _ = writeln!(
             s,
-            "verdict: trusted (well-conditioned, K and D positive definite and quasi-symmetric)"
+            "verdict: trusted (the fit explains the torques; well-conditioned; K and D identified, precise, positive definite and quasi-symmetric)"
         );
     } else {
         let _ = writeln!(s, "verdict: NOT TRUSTED: {}", c.reasons.join("; "));
@@ -350,5 +350,34 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
         "leave-one-trial-out VAF at the longest window: {:.1} / {:.1} %",
         sweep.leave_one_out_vaf[0], sweep.leave_one_out_vaf[1]
     );
+    if !sweep.intervals.is_empty() {
+        println!(
+            "\ninterpolation-interval study (seed 003 §IV: the trials of each T_k, observed over T_obs = T_k + 70 ms)"
+        );
+        println!(
+            "{:>6} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8}  verdict",
+            "T_k", "T_obs", "trials", "cond(W)s", "K11", "K22", "D11", "D22", "Kmin"
+        );
+        for r in &sweep.intervals {
+            let (e, c) = (&r.estimate, &r.estimate.criteria);
+            println!(
+                "{:>6} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8}  {}",
+                num(r.interpolation_ms),
+                num(r.observation_window_ms),
+                r.trials,
+                num(c.condition_number_scaled),
+                num(e.stiffness[(0, 0)]),
+                num(e.stiffness[(1, 1)]),
+                num(e.damping[(0, 0)]),
+                num(e.damping[(1, 1)]),
+                num(c.stiffness_eigenvalues[1]),
+                if r.trusted {
+                    "trusted".to_string()
+                } else {
+                    format!("not trusted: {}", r.reasons.join("; "))
+                }
+            );
+        }
+    }
     Ok(())
 }

@@ -127,16 +127,29 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         "coordinates {} driven by {} | Welch: {} segments of {} samples (resolution {:.3} Hz), Hann | fit band {}-{} Hz",
         coords.join(", "), est.inputs.join(", "), c.segments, c.nperseg, c.frequency_resolution_hz, num(band.0), num(band.1)
     );
-    for (title, m, se) in [
+    let v = &c.verdicts;
+    for (title, m, se, verdict) in [
         (
             "Stiffness K",
             &est.stiffness,
             &est.standard_errors.stiffness,
+            Some(v.stiffness),
         ),
-        ("Damping B", &est.damping, &est.standard_errors.damping),
-        ("Inertia M", &est.inertia, &est.standard_errors.inertia),
+        (
+            "Damping B",
+            &est.damping,
+            &est.standard_errors.damping,
+            Some(v.damping),
+        ),
+        (
+            "Inertia M",
+            &est.inertia,
+            &est.standard_errors.inertia,
+            v.inertia,
+        ),
     ] {
-        println!("{title} (SI, per coordinate pair)");
+        let flag = verdict.map_or("", crate::table::verdict_flag);
+        println!("{title} (SI, per coordinate pair){flag}");
         for (i, name) in coords.iter().enumerate().take(m.nrows()) {
             let cells: String = (0..m.ncols())
                 .map(|j| {
@@ -150,8 +163,8 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         }
     }
     println!(
-        "quality: multiple coherence mean {:.3}, min {:.3} in the band; input coherence max {:.3}; fit VAF {:.2} %; phi_T(Z vs fit) {}",
-        c.mean_multiple_coherence, c.min_multiple_coherence, c.max_input_coherence, c.fit_vaf, num(c.phi_t_vs_fit)
+        "quality ({}): multiple coherence mean {:.3}, min {:.3} in the band; input coherence max {:.3}; fit VAF {:.2} %; phi_T(Z vs fit) {}",
+        est.standard_errors.method, c.mean_multiple_coherence, c.min_multiple_coherence, c.max_input_coherence, c.fit_vaf, num(c.phi_t_vs_fit)
     );
     if let Some(a) = &est.accuracy {
         let cells: Vec<String> = a

@@ -60,13 +60,7 @@ pub fn linear_text(r: &LinearResult) -> String {
         p.offsets
     );
     out.push('\n');
-    let flag = |kind: MatrixKind| match r.criteria.verdict_of(kind) {
-        MatrixVerdict::Trusted => "   [trusted]",
-        MatrixVerdict::PoorFit => "   [NOT TRUSTED: the model misses most of the force]",
-        MatrixVerdict::NotIdentifiable => "   [NOT IDENTIFIABLE: see warnings]",
-        MatrixVerdict::NotPassive => "   [NOT PASSIVE: not positive definite]",
-        MatrixVerdict::Imprecise => "   [IMPRECISE: 2 SE above the tolerance]",
-    };
+    let flag = |kind: MatrixKind| verdict_flag(r.criteria.verdict_of(kind));
     let [mu, bu, ku] = &p.units;
     matrix_block(
         &mut out,
@@ -317,4 +311,15 @@ pub fn arm_configuration_text(a: &limpid_analysis::markers::MarkerConfiguration)
         s.push_str(&format!("warning: {w}\n"));
     }
     s
+}
+
+/// The tag printed after a matrix's heading.
+pub(crate) fn verdict_flag(v: MatrixVerdict) -> &'static str {
+    match v {
+        MatrixVerdict::Trusted => "   [trusted]",
+        MatrixVerdict::PoorFit => "   [NOT TRUSTED: the model misses most of the force]",
+        MatrixVerdict::NotIdentifiable => "   [NOT IDENTIFIABLE: see warnings]",
+        MatrixVerdict::NotPassive => "   [NOT PASSIVE: not positive definite]",
+        MatrixVerdict::Imprecise => "   [IMPRECISE: 2 SE above the tolerance]",
+    }
 }

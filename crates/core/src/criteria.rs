@@ -8,6 +8,10 @@
 //! - the condition number of the regressor, "well-conditioned" below
 //!   [`MAX_CONDITION`] (seed 003 eq. (19)).
 //!
+//! - the verdict on a matrix ([`matrix_verdict`]): fit, identifiability,
+//!   passivity and precision against a documented [`tolerance`], the same
+//!   rules for every estimator (issue 15).
+//!
 //! Every test is written so that a NaN fails it: a NaN never reads as trusted.
 
 use nalgebra::DMatrix;
@@ -89,6 +93,139 @@ pub fn matrix_criteria(m: &DMatrix<f64>) -> MatrixCriteria {
 /// Scaled condition number below [`MAX_CONDITION`] (NaN fails).
 pub fn well_conditioned(condition_number_scaled: f64) -> bool {
     condition_number_scaled < MAX_CONDITION
+}
+
+/// Smallest VAF (%) of every force component for any matrix to be trusted:
+/// below it the model misses most of the force (wrong model, reflexes,
+/// trials cut mid-motion), and its parameters absorb what it misses.
+pub const VAF_FLOOR_PERCENT: f64 = 50.0;
+
+/// Documented error tolerance of a trusted matrix (relative Frobenius norm):
+/// K 10 %, B 25 %, M 25 %. A matrix is trusted only when twice its standard
+/// error stays within it; `limpid calibrate` measures how often a trusted
+/// matrix is nevertheless further from the truth.
+pub fn tolerance(kind: MatrixKind) -> f64 {
+    match kind {
+        MatrixKind::Stiffness => 0.10,
+        MatrixKind::Damping | MatrixKind::Inertia => 0.25,
+    }
+}
+
+/// One matrix's verdict, in the order it is checked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum MatrixVerdict {
+    /// Identified, passive, precise, from a fit that explains the force.
+    Trusted,
+    /// A force component varies too little or the model explains less than
+    /// [`VAF_FLOOR_PERCENT`] of it: no matrix of this fit is trusted.
+    PoorFit,
+    /// Not identifiable from this data (a diagonal element within 2 SE of
+    /// zero, or its regressors dominated by noise).
+    NotIdentifiable,
+    /// Identified, but its symmetric part is not positive definite (negative
+    /// inertia, damping or stiffness): not a passive impedance.
+    NotPassive,
+    /// Identified and passive, but 2 SE exceed the tolerance ([`tolerance`]).
+    Imprecise,
+}
+
+impl MatrixVerdict {
+    /// Whether the matrix may be used.
+    pub fn trusted(self) -> bool {
+        self == MatrixVerdict::Trusted
+    }
+}
+
+/// The verdict rules, in the order they are checked, for any estimator's
+/// matrix: the fit explains the data, the matrix is identified, its
+/// symmetric part positive definite, and 2 SE within [`tolerance`].
+pub fn matrix_verdict(
+    kind: MatrixKind,
+    value: &crate::Matrix,
+    se: &crate::Matrix,
+    fit_ok: bool,
+    identified: bool,
+    positive_definite: bool,
+) -> MatrixVerdict {
+    let relative_se = se.norm() / value.norm();
+    if !fit_ok {
+        MatrixVerdict::PoorFit
+    } else if !identified {
+        MatrixVerdict::NotIdentifiable
+    } else if !positive_definite {
+        MatrixVerdict::NotPassive
+    } else if relative_se.is_nan() || 2.0 * relative_se > tolerance(kind) {
+        MatrixVerdict::Imprecise
+    } else {
+        MatrixVerdict::Trusted
+    }
+}
+
+/// The three matrices of the linear model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MatrixKind {
+    /// K.
+    Stiffness,
+    /// B.
+    Damping,
+    /// M.
+    Inertia,
+}
+
+impl MatrixKind {
+    /// Stiffness, damping, inertia: the order results are read in.
+    pub const ALL: [MatrixKind; 3] = [
+        MatrixKind::Stiffness,
+        MatrixKind::Damping,
+        MatrixKind::Inertia,
+    ];
+
+    /// The lower-case name, as in the JSON keys.
+    pub fn name(self) -> &'static str {
+        match self {
+            MatrixKind::Stiffness => "stiffness",
+            MatrixKind::Damping => "damping",
+            MatrixKind::Inertia => "inertia",
+        }
+    }
+
+    /// The symbol of seed 000: K, B, M.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            MatrixKind::Stiffness => "K",
+            MatrixKind::Damping => "B",
+            MatrixKind::Inertia => "M",
+        }
+    }
+}
+
+/// The verdicts on one fit's matrices, for estimators other than the linear
+/// one (which reports all three in its own criteria).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub struct Verdicts {
+    /// On K.
+    pub stiffness: MatrixVerdict,
+    /// On B.
+    pub damping: MatrixVerdict,
+    /// On M, where the estimator fits an inertia matrix.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia: Option<MatrixVerdict>,
+}
+
+/// [`matrix_verdict`] with identifiability read from the estimate itself:
+/// every diagonal element at least 2 SE from zero (NaN-safe), and passivity
+/// from the symmetric part's eigenvalues.
+pub fn judge_matrix(
+    kind: MatrixKind,
+    value: &crate::Matrix,
+    se: &crate::Matrix,
+    fit_ok: bool,
+) -> MatrixVerdict {
+    let identified =
+        (0..value.nrows().min(value.ncols())).all(|i| value[(i, i)].abs() >= 2.0 * se[(i, i)]);
+    let passive = matrix_criteria(&value.0).positive_definite;
+    matrix_verdict(kind, value, se, fit_ok, identified, passive)
 }
 
 #[cfg(test)]

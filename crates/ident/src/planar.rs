@@ -22,6 +22,9 @@
 //! below 1000, K_s and D_s are positive definite and both ratios are below 0.1
 //! ("quasi-symmetric", our threshold).
 
+use limpid_core::criteria::{
+    judge_matrix, tolerance, MatrixKind, MatrixVerdict, Verdicts, VAF_FLOOR_PERCENT,
+};
 use limpid_core::Matrix;
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use rayon::prelude::*;
@@ -312,10 +315,12 @@ pub struct PlanarCriteria {
     pub stiffness_symmetry_ratio: f64,
     /// ||D_a|| / ||D_s||.
     pub damping_symmetry_ratio: f64,
-    /// Every criterion met: well-conditioned, K and D positive definite and quasi-symmetric, physical inertial parameters.
+    /// Every criterion met: a fit explaining the torques, well-conditioned, K and D identified, precise, positive definite and quasi-symmetric, physical inertial parameters.
     pub trusted: bool,
     /// Why not trusted, one sentence per failed criterion.
     pub reasons: Vec<String>,
+    /// The verdict on K and D (the rules every estimator shares).
+    pub verdicts: Verdicts,
 }
 
 /// A planar estimate.
@@ -467,7 +472,16 @@ pub fn fit_planar(
         fit.vaf[r] = vaf;
         fit.r[r] = rr;
     }
-    let mut criteria = criteria(&stiffness, &damping, condition_number, cond_scaled);
+    let (stiffness_se, damping_se) = (m2(&se, off + 4), m2(&se, off));
+    let fit_ok = fit.vaf.iter().all(|v| *v >= VAF_FLOOR_PERCENT);
+    let mut criteria = criteria(
+        &stiffness,
+        &damping,
+        (&stiffness_se, &damping_se),
+        fit_ok,
+        condition_number,
+        cond_scaled,
+    );
     // base inertial parameters of a real arm are positive (seed 003 eq. (5))
     if xi.is_none() && !xi_hat.iter().all(|v| *v > 0.0) {
         criteria.trusted = false;
@@ -503,8 +517,8 @@ pub fn fit_planar(
         endpoint_stiffness: kx,
         standard_errors: PlanarErrors {
             inertial_parameters: xi_se,
-            stiffness: m2(&se, off + 4),
-            damping: m2(&se, off),
+            stiffness: stiffness_se,
+            damping: damping_se,
         },
         fit,
         criteria,
@@ -594,6 +608,117 @@ pub struct SweepRow {
     pub reasons: Vec<String>,
 }
 
+/// One interpolation interval of seed 003's experiment (§IV): the trials
+/// whose perturbation lasted T_k, observed over T_obs = T_k + 70 ms.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct IntervalRow {
+    /// T_k (ms), measured from the trials' motion and rounded to 10 ms.
+    pub interpolation_ms: f64,
+    /// T_obs = T_k + 70 ms (shorter when the trials end sooner).
+    pub observation_window_ms: f64,
+    /// Trials with this T_k.
+    pub trials: usize,
+    /// The estimate from these trials and this window.
+    pub estimate: PlanarEstimate,
+    /// The estimate's criteria met (with precision) and the window ends
+    /// before any change of K or D within the trials.
+    pub trusted: bool,
+    /// Why not, one sentence per failed condition (empty when trusted).
+    pub reasons: Vec<String>,
+}
+
+/// Observation after the end of the interpolation (seed 003: T_obs = T_k + 70 ms).
+pub const OBSERVATION_AFTER_INTERPOLATION_MS: f64 = 70.0;
+/// Fewest trials of one T_k for its own estimate.
+pub const MIN_TRIALS_PER_INTERVAL: usize = 4;
+/// Share of the speed peak that marks the start and end of a trial's motion.
+const MOTION_SPEED_SHARE: f64 = 0.05;
+
+/// A trial's interpolation interval T_k (s), from its joint speed: seed
+/// 003's quintic `s(τ) = 10τ³ - 15τ⁴ + 6τ⁵` moves faster than 5 % of its
+/// peak speed for a share `1 - 2τ₅` of T_k, with `30τ₅²(1-τ₅)² = 0.05 ×
+/// 30/16`; T_k is that span divided by the share. None when the motion does
+/// not settle within the trial.
+pub fn interpolation_interval_s(t: &PlanarTrial, fs: f64) -> Option<f64> {
+    let speed: Vec<f64> = (0..t.qd[0].len())
+        .map(|i| t.qd[0][i].hypot(t.qd[1][i]))
+        .collect();
+    let (peak_at, peak) = speed
+        .iter()
+        .copied()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    if peak.is_nan() || peak <= 0.0 {
+        return None;
+    }
+    let level = MOTION_SPEED_SHARE * peak;
+    let start = (0..peak_at)
+        .rev()
+        .find(|&i| speed[i] < level)
+        .map_or(0, |i| i + 1);
+    let end = (peak_at..speed.len()).find(|&i| speed[i] < level)?;
+    // τ(1-τ) = sqrt(share × 30/16 / 30) at the 5 % crossings
+    let tau = (1.0 - (1.0 - 4.0 * (MOTION_SPEED_SHARE / 16.0).sqrt()).sqrt()) / 2.0;
+    Some((end - start) as f64 / fs / (1.0 - 2.0 * tau))
+}
+
+/// Seed 003's T_k study: the trials grouped by their interpolation interval
+/// (rounded to 10 ms), each group fitted over T_obs = T_k + 70 ms. Empty
+/// unless the recording holds at least two intervals with
+/// [`MIN_TRIALS_PER_INTERVAL`] trials each.
+///
+/// Each group gets its own search for a change of K or D within its trials
+/// ([`impedance_change`] on split times `step` samples apart), since fast
+/// and slow perturbations mixed in one fit do not share one model.
+pub fn interval_sweep(data: &PlanarData, xi: Option<[f64; 3]>, step: usize) -> Vec<IntervalRow> {
+    let mut groups: std::collections::BTreeMap<i64, Vec<usize>> = Default::default();
+    for (i, t) in data.trials.iter().enumerate() {
+        if let Some(tk) = interpolation_interval_s(t, data.fs) {
+            groups
+                .entry((tk * 100.0).round() as i64)
+                .or_default()
+                .push(i);
+        }
+    }
+    groups.retain(|_, v| v.len() >= MIN_TRIALS_PER_INTERVAL);
+    if groups.len() < 2 {
+        return Vec::new();
+    }
+    let groups: Vec<(i64, Vec<usize>)> = groups.into_iter().collect();
+    groups
+        .par_iter()
+        .filter_map(|(tk_cs, trials)| {
+            let tk_ms = *tk_cs as f64 * 10.0;
+            let shortest = trials
+                .iter()
+                .map(|&i| data.trials[i].dq[0].len())
+                .min()
+                .unwrap_or(0);
+            let n = (((tk_ms + OBSERVATION_AFTER_INTERPOLATION_MS) * data.fs / 1000.0).round()
+                as usize)
+                .min(shortest);
+            let estimate = fit_planar(data, n, xi, trials).ok()?;
+            let window_ms = estimate.observation_window_ms;
+            let mut reasons = estimate.criteria.reasons.clone();
+            let change = impedance_change(data, trials, shortest, step, xi);
+            if let Some(c) = change.filter(|c| window_ms > c.onset_ms) {
+                reasons.push(format!(
+                    "the window reaches past a change of the impedance at {:.0} ms (a reflex?)",
+                    c.onset_ms
+                ));
+            }
+            Some(IntervalRow {
+                interpolation_ms: tk_ms,
+                observation_window_ms: window_ms,
+                trials: trials.len(),
+                trusted: estimate.criteria.trusted && reasons.is_empty(),
+                reasons,
+                estimate,
+            })
+        })
+        .collect()
+}
+
 /// A change of the joint impedance within the trials, such as a stretch
 /// reflex: K and D fitted separately before and after `onset_ms` differ by
 /// more than the tolerance and by more than 3 jackknife standard errors.
@@ -630,6 +755,10 @@ pub struct Sweep {
     pub impedance_change: Option<ImpedanceChange>,
     /// What "trusted" means for a window.
     pub trust_definition: String,
+    /// Seed 003's T_k study ([`interval_sweep`]), when the recording holds
+    /// several interpolation intervals.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub intervals: Vec<IntervalRow>,
 }
 
 /// Relative precision a trusted window needs: twice the standard error of K
@@ -731,6 +860,7 @@ fn jackknife_sd(values: &[f64]) -> f64 {
 /// [`CHANGE_Z`] jackknife standard errors.
 pub fn impedance_change(
     data: &PlanarData,
+    trials: &[usize],
     longest: usize,
     step: usize,
     xi: Option<[f64; 3]>,
@@ -747,10 +877,9 @@ pub fn impedance_change(
     splits
         .par_iter()
         .filter_map(|&split| {
-            let blocks: Vec<DMatrix<f64>> = data
-                .trials
+            let blocks: Vec<DMatrix<f64>> = trials
                 .iter()
-                .map(|t| split_rows(t, longest, split, xi))
+                .map(|&i| split_rows(&data.trials[i], longest, split, xi))
                 .collect();
             let sol = solve_blocks(&blocks).ok()?;
             // relative jackknife SE of the 4 parameters from `at` (||SE|| / ||value||)
@@ -849,7 +978,7 @@ pub fn window_sweep(
     });
     // split times on a grid of the sweep's step, at least 10 ms
     let step = ((step_ms.max(10.0) * data.fs / 1000.0).round() as usize).max(1);
-    let change = impedance_change(data, longest, step, xi);
+    let change = impedance_change(data, &all, longest, step, xi);
     judge_windows(&mut rows, change.as_ref());
     let from_which = |ok: &dyn Fn(&PlanarEstimate) -> bool| -> Option<f64> {
         let mut first = None;
@@ -882,7 +1011,9 @@ pub fn window_sweep(
         }
         None => false,
     };
+    let intervals = interval_sweep(data, xi, step);
     Ok(Sweep {
+        intervals,
         shortest_trusted_ms: rows
             .iter()
             .find(|r| r.trusted)
@@ -978,7 +1109,19 @@ pub const MAX_SWEEP_WINDOWS: usize = 10_000;
 
 /// Criteria of seed 003 §III-C on a 2 x 2 K and D (through
 /// [`limpid_core::criteria`], shared with every estimator).
-pub fn criteria(k: &Matrix, d: &Matrix, cond: f64, cond_scaled: f64) -> PlanarCriteria {
+///
+/// `se` are the standard errors of K and D and `fit_ok` whether the fit
+/// explains the torques (every VAF at least [`VAF_FLOOR_PERCENT`]): with them
+/// each matrix gets its [`Verdicts`] (the rules every estimator shares), and
+/// a matrix that is not identified or not precise is not trusted either.
+pub fn criteria(
+    k: &Matrix,
+    d: &Matrix,
+    se: (&Matrix, &Matrix),
+    fit_ok: bool,
+    cond: f64,
+    cond_scaled: f64,
+) -> PlanarCriteria {
     use limpid_core::criteria::{symmetric_part_eigenvalues, symmetry_ratio};
     let eig = |m: &Matrix| {
         let e = symmetric_part_eigenvalues(m);
@@ -1020,7 +1163,37 @@ pub fn criteria(k: &Matrix, d: &Matrix, cond: f64, cond_scaled: f64) -> PlanarCr
             "damping not quasi-symmetric (ratio {dr:.3} >= {QUASI_SYMMETRIC})"
         ));
     }
+    let verdicts = Verdicts {
+        stiffness: judge_matrix(MatrixKind::Stiffness, k, se.0, fit_ok),
+        damping: judge_matrix(MatrixKind::Damping, d, se.1, fit_ok),
+        inertia: None,
+    };
+    if !fit_ok {
+        reasons.push(format!(
+            "poor fit: the model explains less than {VAF_FLOOR_PERCENT:.0} % of a joint torque"
+        ));
+    }
+    for (name, v, tol) in [
+        (
+            "stiffness",
+            verdicts.stiffness,
+            tolerance(MatrixKind::Stiffness),
+        ),
+        ("damping", verdicts.damping, tolerance(MatrixKind::Damping)),
+    ] {
+        match v {
+            MatrixVerdict::NotIdentifiable => reasons.push(format!(
+                "{name} not identifiable: a diagonal element within 2 SE of zero"
+            )),
+            MatrixVerdict::Imprecise => reasons.push(format!(
+                "{name} imprecise: 2 SE exceed {:.0} % of it",
+                100.0 * tol
+            )),
+            _ => {}
+        }
+    }
     PlanarCriteria {
+        verdicts,
         condition_number: cond,
         condition_number_scaled: cond_scaled,
         stiffness_eigenvalues: ke,
@@ -1039,7 +1212,8 @@ mod tests {
     use super::*;
 
     fn crit(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, scaled: f64) -> PlanarCriteria {
-        criteria(&k.into(), &d.into(), cond, scaled)
+        let zero = Matrix::zeros(2, 2);
+        criteria(&k.into(), &d.into(), (&zero, &zero), true, cond, scaled)
     }
 
     #[test]

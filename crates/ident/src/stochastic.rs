@@ -18,6 +18,7 @@
 //! the band of the largest singular value of `Z - Z_model`, `phi_ij` the mean of
 //! `|Z_ij - Z_model,ij|`.
 
+use limpid_core::criteria::{judge_matrix, MatrixKind, Verdicts, VAF_FLOOR_PERCENT};
 use limpid_core::{Matrix, Warning, WarningCode};
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
@@ -203,7 +204,14 @@ pub struct StochasticCriteria {
     pub phi_t_vs_fit: f64,
     /// Weighted VAF (%) of the parametric fit of Z over the band.
     pub fit_vaf: f64,
+    /// The verdict on K, B and M: the fit explains Z ([`VAF_FLOOR_PERCENT`]
+    /// of it, with a mean multiple coherence of at least
+    /// [`MIN_MEAN_COHERENCE`]), then the rules of [`judge_matrix`].
+    pub verdicts: Verdicts,
 }
+
+/// Smallest mean multiple coherence over the band for any matrix to be trusted.
+pub const MIN_MEAN_COHERENCE: f64 = 0.5;
 
 fn input_name(coord: &str) -> String {
     match coord {
@@ -358,6 +366,12 @@ pub fn estimate_stochastic(
     if max_input_coherence >= 0.6 {
         warnings.push(Warning::new(WarningCode::CorrelatedInputs, format!("inputs are correlated (ordinary coherence up to {max_input_coherence:.2}, seed 004 asks < 0.6): R and T are poorly separated")));
     }
+    let fit_ok = fit_vaf >= VAF_FLOOR_PERCENT && mean_coh >= MIN_MEAN_COHERENCE;
+    let verdicts = Verdicts {
+        stiffness: judge_matrix(MatrixKind::Stiffness, &kk, &se.stiffness, fit_ok),
+        damping: judge_matrix(MatrixKind::Damping, &b, &se.damping, fit_ok),
+        inertia: Some(judge_matrix(MatrixKind::Inertia, &m, &se.inertia, fit_ok)),
+    };
     let outputs: Vec<String> = coords.iter().chain(&force_cols).cloned().collect();
     Ok(StochasticEstimate {
         coordinates: coords,
@@ -390,6 +404,7 @@ pub fn estimate_stochastic(
             max_input_coherence,
             phi_t_vs_fit,
             fit_vaf,
+            verdicts,
         },
         accuracy: None,
         warnings,

@@ -104,6 +104,33 @@ pub fn simulate_planar(
     angle_std: f64,
     seed: u64,
 ) -> Result<Recording> {
+    simulate_planar_intervals(
+        subject,
+        protocol,
+        &[protocol.interpolation_s],
+        torque_std,
+        angle_std,
+        seed,
+    )
+}
+
+/// [`simulate_planar`] with trial `i` using the interpolation interval
+/// `intervals_s[i % len]` instead of the protocol's (seed 003 §IV varies T_k
+/// from 50 to 300 ms); every trial records `protocol.after_s` after its onset.
+pub fn simulate_planar_intervals(
+    subject: &PlanarSubject,
+    protocol: &PlanarProtocol,
+    intervals_s: &[f64],
+    torque_std: f64,
+    angle_std: f64,
+    seed: u64,
+) -> Result<Recording> {
+    if intervals_s.is_empty() || intervals_s.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err(limpid_core::Error::invalid(
+            "interpolation intervals",
+            "expected at least one positive duration",
+        ));
+    }
     let mut rng = StdRng::seed_from_u64(seed);
     let unit = Normal::new(0.0, 1.0).expect("unit normal is valid");
     let mut order: Vec<usize> = (0..protocol.trials)
@@ -119,7 +146,8 @@ pub fn simulate_planar(
         let dir = protocol.directions[d];
         for i in 0..per {
             let t_on = i as f64 / fs - protocol.rest_s;
-            let (s, sd, sdd) = Profile::Quintic.eval(t_on, protocol.interpolation_s);
+            let tk = intervals_s[trial % intervals_s.len()];
+            let (s, sd, sdd) = Profile::Quintic.eval(t_on, tk);
             let q = [subject.q0[0] + dir[0] * s, subject.q0[1] + dir[1] * s];
             let qd = [dir[0] * sd, dir[1] * sd];
             let qdd = [dir[0] * sdd, dir[1] * sdd];
