@@ -284,7 +284,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     )?;
     let tq = rec.require(&p.torque, "the torque of the parallel-cascade method")?;
     let fs = rec.sample_rate();
-    let d = decimate(q, tq, fs, p)?;
+    let [d, other_decimation] = decimate(q, tq, fs, p)?;
     let n = d.position.len();
     let lag = |s: f64| (s * d.fs).round() as usize;
     let half = lag(p.intrinsic_half_width_s).max(1);
@@ -365,13 +365,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     // cannot settle (the reflex acts on the true velocity, the method
     // rectifies the decimated one); the fit with the other order is reported
     // and its difference added to the standard errors and the delay interval.
-    let other_order = {
-        let alt = ReflexParams {
-            rectify_first: !p.rectify_first,
-            ..p.clone()
-        };
-        reflex_parametric(&decimate(q, tq, fs, &alt)?, best, skip, p, fs)
-    };
+    let other_order = reflex_parametric(&other_decimation, best, skip, p, fs);
     let mut order_warning = None;
     if let Some(o) = &other_order {
         let z = (param.intrinsic.stiffness - o.intrinsic.stiffness).abs()
@@ -659,18 +653,26 @@ pub fn vaf(y: &[f64], yhat: &[f64], skip: usize) -> f64 {
     }
 }
 
-fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Result<Decimated> {
+/// Anti-alias and decimate angle, torque, velocity and acceleration, with the
+/// rectified velocity in both orders: `[p.rectify_first's order, the other]`
+/// (the two share every filtered column but the rectified ones).
+fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Result<[Decimated; 2]> {
     let ratio = ((fs / p.decimated_rate_hz).round() as usize).max(1);
     let fsd = fs / ratio as f64;
     let velocity = limpid_dsp::central_first(q, 1.0 / fs);
     let acceleration = limpid_dsp::central_second(q, 1.0 / fs);
     let rectify =
         |v: &[f64], sign: f64| -> Vec<f64> { v.iter().map(|x| (sign * x).max(0.0)).collect() };
-    let mut columns: Vec<Vec<f64>> = vec![q.to_vec(), tq.to_vec(), velocity, acceleration];
-    if p.rectify_first {
-        columns.push(rectify(&columns[2], 1.0));
-        columns.push(rectify(&columns[2], -1.0));
-    }
+    // rectified before anti-aliasing: the physical order
+    let (pos_raw, neg_raw) = (rectify(&velocity, 1.0), rectify(&velocity, -1.0));
+    let columns: Vec<Vec<f64>> = vec![
+        q.to_vec(),
+        tq.to_vec(),
+        velocity,
+        acceleration,
+        pos_raw,
+        neg_raw,
+    ];
     let mut filtered: Vec<Vec<f64>> = if ratio > 1 {
         let lp = LowPass::butterworth(8, 0.8 * fsd / 2.0, fs)?;
         columns
@@ -680,21 +682,18 @@ fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Result<Decimate
     } else {
         columns
     };
-    if !p.rectify_first {
-        // rectified after anti-aliasing, so that every decimation phase of it
-        // is the rectified decimated velocity (Kearney et al.)
-        let (pos, neg) = (rectify(&filtered[2], 1.0), rectify(&filtered[2], -1.0));
-        filtered.push(pos);
-        filtered.push(neg);
-    }
+    // rectified after anti-aliasing, so that every decimation phase of it
+    // is the rectified decimated velocity (Kearney et al.)
+    let after = [rectify(&filtered[2], 1.0), rectify(&filtered[2], -1.0)];
+    let negative = filtered.pop().unwrap_or_default();
+    let positive = filtered.pop().unwrap_or_default();
+    let before = [positive, negative];
     let pick = |x: &[f64]| -> Vec<f64> {
         let mut d: Vec<f64> = x.iter().step_by(ratio).copied().collect();
         centre(&mut d);
         d
     };
-    let negative = filtered.pop().unwrap_or_default();
-    let positive = filtered.pop().unwrap_or_default();
-    Ok(Decimated {
+    let with = |[positive, negative]: [Vec<f64>; 2]| Decimated {
         fs: fsd,
         ratio,
         position: pick(&filtered[0]),
@@ -703,6 +702,11 @@ fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Result<Decimate
         torque: pick(&filtered[1]),
         rectified: [pick(&positive), pick(&negative)],
         rectified_full: [positive, negative],
+    };
+    Ok(if p.rectify_first {
+        [with(before), with(after)]
+    } else {
+        [with(after), with(before)]
     })
 }
 
