@@ -99,6 +99,23 @@ fn stochastic_report_figure_data_matches_its_snapshot() {
             f["id"]
         );
     }
+    // seed 004's Bode phase, unwrapped: no jump above 180 degrees between neighbouring points
+    for f in report.sections.iter().flat_map(|s| &s.figures) {
+        if f.id.starts_with("bode-phase") {
+            for series in &f.chart.series {
+                for w in series.y.windows(2) {
+                    assert!(
+                        (w[1] - w[0]).abs() <= 180.0,
+                        "{} {}: phase jumps from {} to {} degrees",
+                        f.id,
+                        series.name,
+                        w[0],
+                        w[1]
+                    );
+                }
+            }
+        }
+    }
     check_snapshot("report_ex_sa3", &summary);
 }
 

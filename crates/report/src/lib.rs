@@ -371,6 +371,22 @@ fn demo_section(name: &str, v: &DemoResult) -> Section {
     section
 }
 
+/// Phase along frequency without ±360° jumps: each point is moved by whole
+/// turns to lie within 180° of the previous one (numpy's `unwrap`, degrees).
+pub fn unwrap_degrees(phase: impl IntoIterator<Item = f64>) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::new();
+    for p in phase {
+        let v = match out.last() {
+            Some(prev) if p.is_finite() && prev.is_finite() => {
+                p - 360.0 * ((p - prev) / 360.0).round()
+            }
+            _ => p,
+        };
+        out.push(v);
+    }
+    out
+}
+
 /// Z(f) element (i, j) of a model M, B, K: K - ω² M + j ω B.
 fn model_z(m: &Matrix, b: &Matrix, k: &Matrix, i: usize, j: usize, f: f64) -> (f64, f64) {
     let w = 2.0 * std::f64::consts::PI * f;
@@ -424,21 +440,17 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
                 },
                 x_log: true,
                 y_log: !phase,
-                y_range: if phase { Some((-180.0, 180.0)) } else { None },
+                y_range: None,
                 series: curves
                     .iter()
                     .map(|(label, c, stroke, color)| Series {
                         name: (*label).into(),
                         x: fx.clone(),
-                        y: c.iter()
-                            .map(|(re, im)| {
-                                if phase {
-                                    im.atan2(*re).to_degrees()
-                                } else {
-                                    re.hypot(*im)
-                                }
-                            })
-                            .collect(),
+                        y: if phase {
+                            unwrap_degrees(c.iter().map(|(re, im)| im.atan2(*re).to_degrees()))
+                        } else {
+                            c.iter().map(|(re, im)| re.hypot(*im)).collect()
+                        },
                         stroke: *stroke,
                         color: (*color).into(),
                     })
@@ -1261,4 +1273,16 @@ pub fn figure_files(report: &Report) -> Vec<(String, String)> {
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unwrap_degrees;
+
+    #[test]
+    fn phase_is_unwrapped_by_whole_turns() {
+        let u = unwrap_degrees([170.0, -175.0, -160.0, 179.0, -179.0, f64::NAN, 10.0]);
+        assert_eq!(&u[..5], &[170.0, 185.0, 200.0, 179.0, 181.0]);
+        assert!(u[5].is_nan() && u[6] == 10.0);
+    }
 }
