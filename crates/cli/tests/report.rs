@@ -102,6 +102,18 @@ fn stochastic_report_figure_data_matches_its_snapshot() {
     // seed 004's Bode phase, unwrapped: no jump above 180 degrees between neighbouring points
     for f in report.sections.iter().flat_map(|s| &s.figures) {
         if f.id.starts_with("bode-phase") {
+            // estimate, fit and truth drawn in the same turn
+            let start = |k: usize| f.chart.series[k].y[0];
+            for k in 1..f.chart.series.len() {
+                assert!(
+                    (start(k) - start(0)).abs() <= 180.0,
+                    "{}: {} starts at {} degrees, the estimate at {}",
+                    f.id,
+                    f.chart.series[k].name,
+                    start(k),
+                    start(0)
+                );
+            }
             for series in &f.chart.series {
                 for w in series.y.windows(2) {
                     assert!(

@@ -387,6 +387,22 @@ pub fn unwrap_degrees(phase: impl IntoIterator<Item = f64>) -> Vec<f64> {
     out
 }
 
+/// Phase traces drawn together, each moved by whole turns so that it starts
+/// within 180° of the first trace (an estimate at -179° and its fit at +180°
+/// are the same phase); magnitudes (`phase` false) are returned as they are.
+fn align_turns(mut traces: Vec<Vec<f64>>, phase: bool) -> Vec<Vec<f64>> {
+    let first = |t: &[f64]| t.iter().copied().find(|v| v.is_finite());
+    if let (true, Some(reference)) = (phase, traces.first().and_then(|t| first(t))) {
+        for t in traces.iter_mut().skip(1) {
+            if let Some(start) = first(t) {
+                let turns = 360.0 * ((reference - start) / 360.0).round();
+                t.iter_mut().for_each(|v| *v += turns);
+            }
+        }
+    }
+    traces
+}
+
 /// Z(f) element (i, j) of a model M, B, K: K - ω² M + j ω B.
 fn model_z(m: &Matrix, b: &Matrix, k: &Matrix, i: usize, j: usize, f: f64) -> (f64, f64) {
     let w = 2.0 * std::f64::consts::PI * f;
@@ -443,14 +459,25 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
                 y_range: None,
                 series: curves
                     .iter()
-                    .map(|(label, c, stroke, color)| Series {
+                    .zip(align_turns(
+                        curves
+                            .iter()
+                            .map(|(_, c, _, _)| {
+                                if phase {
+                                    unwrap_degrees(
+                                        c.iter().map(|(re, im)| im.atan2(*re).to_degrees()),
+                                    )
+                                } else {
+                                    c.iter().map(|(re, im)| re.hypot(*im)).collect()
+                                }
+                            })
+                            .collect(),
+                        phase,
+                    ))
+                    .map(|((label, _, stroke, color), y)| Series {
                         name: (*label).into(),
                         x: fx.clone(),
-                        y: if phase {
-                            unwrap_degrees(c.iter().map(|(re, im)| im.atan2(*re).to_degrees()))
-                        } else {
-                            c.iter().map(|(re, im)| re.hypot(*im)).collect()
-                        },
+                        y,
                         stroke: *stroke,
                         color: (*color).into(),
                     })
@@ -1284,5 +1311,13 @@ mod tests {
         let u = unwrap_degrees([170.0, -175.0, -160.0, 179.0, -179.0, f64::NAN, 10.0]);
         assert_eq!(&u[..5], &[170.0, 185.0, 200.0, 179.0, 181.0]);
         assert!(u[5].is_nan() && u[6] == 10.0);
+    }
+
+    #[test]
+    fn traces_drawn_together_start_within_half_a_turn() {
+        let t = super::align_turns(vec![vec![-179.0, -178.0], vec![180.0, 181.0]], true);
+        assert_eq!(t[1], vec![-180.0, -179.0]);
+        let m = super::align_turns(vec![vec![1.0], vec![500.0]], false);
+        assert_eq!(m[1], vec![500.0]);
     }
 }
