@@ -132,16 +132,17 @@ impl Recording {
                     ),
                 });
             }
-            if let Some(i) = col.iter().position(|v| !v.is_finite()) {
-                return Err(Error::NotFinite {
-                    path,
-                    row: i + first_row,
-                    column: name.clone(),
-                    found: col[i].to_string(),
-                });
-            }
             let (limit, unit) = magnitude_limit(name);
-            if let Some(i) = col.iter().position(|v| v.abs() > limit) {
+            // one pass over the column for both checks
+            if let Some(i) = col.iter().position(|v| !v.is_finite() || v.abs() > limit) {
+                if !col[i].is_finite() {
+                    return Err(Error::NotFinite {
+                        path,
+                        row: i + first_row,
+                        column: name.clone(),
+                        found: col[i].to_string(),
+                    });
+                }
                 let unit = if unit.is_empty() {
                     String::new()
                 } else {

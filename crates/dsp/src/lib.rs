@@ -200,6 +200,63 @@ impl LowPass {
         Ok(y[e..e + n].to_vec())
     }
 
+    /// [`LowPass::filtfilt_edges`] of several signals of one window at once
+    /// (same length, same edges): up to four signals are interleaved and
+    /// filtered together, so the recursive sections run one lane per signal
+    /// instead of waiting on one signal's dependency chain. Every lane does
+    /// exactly the arithmetic of the one-signal call (equal results).
+    pub fn filtfilt_edges_many(
+        &self,
+        xs: &[&[f64]],
+        left: Edge,
+        right: Edge,
+        extra: usize,
+    ) -> Result<Vec<Vec<f64>>> {
+        let n = xs.first().map_or(0, |x| x.len());
+        if n < 2 {
+            return Err(Error::invalid(
+                "signal length",
+                format!("need at least 2 samples, found {n}"),
+            ));
+        }
+        if xs.iter().any(|x| x.len() != n) {
+            return Err(Error::invalid(
+                "signal length",
+                "signals filtered together must have one length",
+            ));
+        }
+        let e = extra.min(n - 1);
+        let pad = self.padlen();
+        if n + 2 * e <= pad {
+            return Err(Error::invalid(
+                "signal length",
+                format!(
+                    "zero-phase filtering needs more than {pad} samples, found {}",
+                    n + 2 * e
+                ),
+            ));
+        }
+        let layout = Padding {
+            n,
+            e,
+            pad,
+            left,
+            right,
+        };
+        let sections = self.sections();
+        let zi = steady_state(&sections);
+        let mut out = Vec::with_capacity(xs.len());
+        for group in xs.chunks(4) {
+            match group.len() {
+                1 => lanes::<1>(group, &layout, &sections, &zi, &mut out),
+                2 => lanes::<2>(group, &layout, &sections, &zi, &mut out),
+                3 => lanes::<3>(group, &layout, &sections, &zi, &mut out),
+                _ => lanes::<4>(group, &layout, &sections, &zi, &mut out),
+            }
+        }
+        Ok(out)
+    }
+
     /// One causal pass, as `scipy.signal.sosfilt` with zero initial state.
     pub fn filter_causal(&self, x: &[f64]) -> Vec<f64> {
         let mut sos = self.sos.clone();
@@ -273,6 +330,128 @@ fn run_sections<'a>(
         8 => fixed::<8>(samples, sections, zi, x0),
         9 => fixed::<9>(samples, sections, zi, x0),
         _ => fixed::<10>(samples, sections, zi, x0),
+    }
+}
+
+/// Where each sample of a window's filtering buffer comes from: `e` edge
+/// samples per end ([`Edge`]), then scipy's odd padding of `pad` samples.
+struct Padding {
+    n: usize,
+    e: usize,
+    pad: usize,
+    left: Edge,
+    right: Edge,
+}
+
+impl Padding {
+    fn total(&self) -> usize {
+        self.n + 2 * self.e + 2 * self.pad
+    }
+    /// Sample `i` of the edge-extended signal (length n + 2e).
+    fn extended(&self, x: &[f64], i: usize) -> f64 {
+        let (n, e) = (self.n, self.e);
+        if i < e {
+            let k = e - i;
+            match self.left {
+                Edge::Odd => 2.0 * x[0] - x[k],
+                Edge::Even => x[k],
+            }
+        } else if i < e + n {
+            x[i - e]
+        } else {
+            let k = i - (e + n) + 1;
+            match self.right {
+                Edge::Odd => 2.0 * x[n - 1] - x[n - 1 - k],
+                Edge::Even => x[n - 1 - k],
+            }
+        }
+    }
+    /// Sample `i` of the padded buffer (as `filtfilt` builds it).
+    fn padded(&self, x: &[f64], i: usize) -> f64 {
+        let len = self.n + 2 * self.e;
+        let pad = self.pad;
+        if i < pad {
+            2.0 * self.extended(x, 0) - self.extended(x, pad - i)
+        } else if i < pad + len {
+            self.extended(x, i - pad)
+        } else {
+            let j = i - (pad + len) + 1;
+            2.0 * self.extended(x, len - 1) - self.extended(x, len - 1 - j)
+        }
+    }
+}
+
+/// Forward-backward filtering of `L` interleaved signals (see `filtfilt_edges_many`).
+fn lanes<const L: usize>(
+    group: &[&[f64]],
+    layout: &Padding,
+    sections: &[([f64; 3], [f64; 2])],
+    zi: &[[f64; 2]],
+    out: &mut Vec<Vec<f64>>,
+) {
+    let total = layout.total();
+    let mut buf = vec![[0.0f64; L]; total];
+    for (l, x) in group.iter().enumerate() {
+        let (lo, hi) = (layout.pad, layout.pad + layout.e + layout.n + layout.e);
+        for (i, v) in buf.iter_mut().enumerate() {
+            v[l] = if i >= lo + layout.e && i < hi - layout.e {
+                x[i - lo - layout.e]
+            } else {
+                layout.padded(x, i)
+            };
+        }
+    }
+    let first = buf[0];
+    run_lanes::<L>(buf.iter_mut(), sections, zi, first);
+    let last = buf[total - 1];
+    run_lanes::<L>(buf.iter_mut().rev(), sections, zi, last);
+    let start = layout.pad + layout.e;
+    for l in 0..group.len() {
+        out.push(buf[start..start + layout.n].iter().map(|v| v[l]).collect());
+    }
+}
+
+/// [`run_sections`] for `L` interleaved signals, dispatched on the section count.
+fn run_lanes<'a, const L: usize>(
+    samples: impl Iterator<Item = &'a mut [f64; L]>,
+    sections: &[([f64; 3], [f64; 2])],
+    zi: &[[f64; 2]],
+    x0: [f64; L],
+) {
+    fn fixed<'a, const N: usize, const L: usize>(
+        samples: impl Iterator<Item = &'a mut [f64; L]>,
+        sections: &[([f64; 3], [f64; 2])],
+        zi: &[[f64; 2]],
+        x0: [f64; L],
+    ) {
+        let sec: [([f64; 3], [f64; 2]); N] = std::array::from_fn(|i| sections[i]);
+        let mut z0: [[f64; L]; N] = std::array::from_fn(|i| x0.map(|x| zi[i][0] * x));
+        let mut z1: [[f64; L]; N] = std::array::from_fn(|i| x0.map(|x| zi[i][1] * x));
+        for v in samples {
+            let mut y = *v;
+            for i in 0..N {
+                let (b, a) = &sec[i];
+                for l in 0..L {
+                    let out = b[0] * y[l] + z0[i][l];
+                    z0[i][l] = b[1] * y[l] - a[0] * out + z1[i][l];
+                    z1[i][l] = b[2] * y[l] - a[1] * out;
+                    y[l] = out;
+                }
+            }
+            *v = y;
+        }
+    }
+    match sections.len() {
+        1 => fixed::<1, L>(samples, sections, zi, x0),
+        2 => fixed::<2, L>(samples, sections, zi, x0),
+        3 => fixed::<3, L>(samples, sections, zi, x0),
+        4 => fixed::<4, L>(samples, sections, zi, x0),
+        5 => fixed::<5, L>(samples, sections, zi, x0),
+        6 => fixed::<6, L>(samples, sections, zi, x0),
+        7 => fixed::<7, L>(samples, sections, zi, x0),
+        8 => fixed::<8, L>(samples, sections, zi, x0),
+        9 => fixed::<9, L>(samples, sections, zi, x0),
+        _ => fixed::<10, L>(samples, sections, zi, x0),
     }
 }
 
@@ -384,6 +563,33 @@ pub fn central_second(x: &[f64], dt: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn signals_filtered_together_equal_one_at_a_time() {
+        for order in [2, 4, 7] {
+            let lp = LowPass::butterworth(order, 30.0, 500.0).unwrap();
+            let signals: Vec<Vec<f64>> = (0..6)
+                .map(|c| {
+                    (0..700)
+                        .map(|i| ((i * (c + 3)) as f64 * 0.013).sin() + c as f64 * 0.5)
+                        .collect()
+                })
+                .collect();
+            let refs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
+            for (left, right, extra) in [
+                (Edge::Odd, Edge::Even, 50),
+                (Edge::Even, Edge::Odd, 0),
+                (Edge::Even, Edge::Even, 5000),
+            ] {
+                let together = lp.filtfilt_edges_many(&refs, left, right, extra).unwrap();
+                assert_eq!(together.len(), 6);
+                for (x, y) in refs.iter().zip(&together) {
+                    let alone = lp.filtfilt_edges(x, left, right, extra).unwrap();
+                    assert_eq!(&alone, y, "order {order}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn streaming_filter_equals_the_causal_block_filter() {

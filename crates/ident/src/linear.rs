@@ -153,7 +153,7 @@ pub struct StandardErrors {
     pub constant: Option<Vec<f64>>,
 }
 
-const CHUNK: usize = 4096;
+const CHUNK: usize = 1024;
 /// Smallest regressor reliability at which a parameter counts as identifiable.
 pub const MIN_RELIABILITY: f64 = 0.8;
 /// Smallest regressor reliability at which its noise bias is compensated;
@@ -298,6 +298,7 @@ impl<'a> Regression<'a> {
         let forces: Vec<&[f64]> = data.force.iter().map(Vec::as_slice).collect();
         let rms = |c: &[f64]| (c.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
         let scales: Vec<f64> = (0..q)
+            .into_par_iter()
             .map(|j| match j {
                 j if j < 3 * n => rms(cols[j]),
                 j if j < p => 1.0,
@@ -354,23 +355,29 @@ impl<'a> Regression<'a> {
         })
     }
 
-    /// Row `i` of the scaled `[L | F]` into row `r` of `mat`.
-    fn fill_row(&self, mat: &mut DMatrix<f64>, r: usize, i: usize) {
+    /// Rows `range` of the scaled `[L | F]` into `mat` from row `r0`, column by column.
+    fn fill_rows(&self, mat: &mut DMatrix<f64>, r0: usize, range: std::ops::Range<usize>) {
         let (n, p) = (self.n, self.p);
+        let len = range.len();
         for j in 0..self.q {
-            let v = if j < 3 * n {
-                self.cols[j][i]
-            } else if j < p {
-                1.0
-            } else {
-                self.forces[j - p][i]
-            };
             let s = if self.scales[j] > 0.0 {
                 self.scales[j]
             } else {
                 1.0
             };
-            mat[(r, j)] = v / s;
+            let rows = mat.nrows();
+            let out = &mut mat.as_mut_slice()[j * rows + r0..j * rows + r0 + len];
+            if j < 3 * n {
+                for (o, v) in out.iter_mut().zip(&self.cols[j][range.clone()]) {
+                    *o = v / s;
+                }
+            } else if j < p {
+                out.fill(1.0 / s);
+            } else {
+                for (o, v) in out.iter_mut().zip(&self.forces[j - p][range.clone()]) {
+                    *o = v / s;
+                }
+            }
         }
     }
 
@@ -391,9 +398,7 @@ impl<'a> Regression<'a> {
                         a.rows_mut(0, q).copy_from(prev);
                         r0 = q;
                     }
-                    for i in lo..hi {
-                        self.fill_row(&mut a, r0 + i - lo, i);
-                    }
+                    self.fill_rows(&mut a, r0, lo..hi);
                     acc = Some(triangle(a, q));
                     lo = hi;
                 }
@@ -452,16 +457,18 @@ impl<'a> Regression<'a> {
         let mut resid = vec![0.0; m];
         for a in 0..n {
             let coef: Vec<f64> = (0..p).map(|j| theta[(j, a)]).collect();
+            const ROWS: usize = 1 << 13;
             predicted
-                .par_iter_mut()
-                .with_min_len(1 << 14)
+                .par_chunks_mut(ROWS)
                 .enumerate()
-                .for_each(|(i, out)| {
-                    let mut s = if self.with_const { coef[3 * n] } else { 0.0 };
+                .for_each(|(b, out)| {
+                    let rows = b * ROWS..b * ROWS + out.len();
+                    out.fill(if self.with_const { coef[3 * n] } else { 0.0 });
                     for (c, col) in coef.iter().zip(&self.cols) {
-                        s += c * col[i];
+                        for (o, v) in out.iter_mut().zip(&col[rows.clone()]) {
+                            *o += c * v;
+                        }
                     }
-                    *out = s;
                 });
             let f = self.forces[a];
             let (r_coef, vaf, rmse) = fit_stats(f, &predicted);
@@ -956,18 +963,33 @@ fn quality_warnings(
 /// Correlation r, VAF (%) and RMS error of measured `f` against predicted `fhat`.
 pub(crate) fn fit_stats(f: &[f64], fhat: &[f64]) -> (f64, f64, f64) {
     let m = f.len() as f64;
-    let mf = f.iter().sum::<f64>() / m;
-    let mh = fhat.iter().sum::<f64>() / m;
-    let (mut sff, mut shh, mut sfh, mut see, mut sum_e) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (y, yh) in f.iter().zip(fhat) {
-        let (dy, dh) = (y - mf, yh - mh);
-        sff += dy * dy;
-        shh += dh * dh;
-        sfh += dy * dh;
-        let e = y - yh;
-        see += e * e;
-        sum_e += e;
-    }
+    // two passes (means, then centred sums), each over row chunks in parallel
+    const ROWS: usize = 1 << 15;
+    let sum = |x: &[f64]| {
+        x.par_chunks(ROWS)
+            .map(|c| c.iter().sum::<f64>())
+            .sum::<f64>()
+    };
+    let mf = sum(f) / m;
+    let mh = sum(fhat) / m;
+    let add = |a: [f64; 5], b: [f64; 5]| std::array::from_fn(|i| a[i] + b[i]);
+    let [sff, shh, sfh, see, sum_e] = f
+        .par_chunks(ROWS)
+        .zip(fhat.par_chunks(ROWS))
+        .map(|(fc, hc)| {
+            let mut acc = [0.0; 5];
+            for (y, yh) in fc.iter().zip(hc) {
+                let (dy, dh) = (y - mf, yh - mh);
+                acc[0] += dy * dy;
+                acc[1] += dh * dh;
+                acc[2] += dy * dh;
+                let e = y - yh;
+                acc[3] += e * e;
+                acc[4] += e;
+            }
+            acc
+        })
+        .reduce(|| [0.0; 5], add);
     let var_e = see / m - (sum_e / m).powi(2);
     let r = if sff > 0.0 && shh > 0.0 {
         sfh / (sff * shh).sqrt()

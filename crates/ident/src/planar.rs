@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::linear::{fit_stats, solve_triangle};
 use crate::lsq::{merge, triangle};
-use crate::prepare::edge_kind;
+use crate::prepare::edge_kinds;
 pub use limpid_core::arm::{coriolis, mass_matrix, Arm};
 use limpid_core::trial::{change_floors, detect_onset, noise_sigma, windows_from_trial_column};
 use limpid_core::{Error, Recording, Result};
@@ -247,8 +247,7 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
             }
             let rest_end = onset.saturating_sub(2).max(r.start + 1);
             let span = ((fs / cutoff).round() as usize).max(3);
-            let left = edge_kind(&qs, r.start, r.clone(), span, dt);
-            let right = edge_kind(&qs, r.end - 1, r.clone(), span, dt);
+            let (left, right) = edge_kinds(&qs, r.clone(), span, dt);
             let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
             let mut t = PlanarTrial {
                 id: w.id,

@@ -315,7 +315,7 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
         .collect();
     let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
 
-    let position_noise: Vec<f64> = pos.iter().map(|c| noise_sigma(c)).collect();
+    let position_noise: Vec<f64> = pos.par_iter().map(|c| noise_sigma(c)).collect();
     let mut windows = make_windows(rec, params, &pos, &frc, &position_noise, min_rest)?;
     if let Some(level) = params.level {
         keep_level(rec, &mut windows, level)?;
@@ -369,60 +369,66 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
             ]
         })
         .collect();
-    let total: usize = windows.iter().map(|w| w.range.len()).sum();
-    for k in 0..n {
-        for buf in [
-            &mut out.disp[k],
-            &mut out.vel[k],
-            &mut out.acc[k],
-            &mut out.force[k],
-        ] {
-            buf.reserve_exact(total);
-        }
-    }
-    // windows are filtered in parallel, a bounded batch at a time so the
-    // per-window buffers stay small beside the output
+    // every window writes its trimmed signals straight into its own part of
+    // the output columns, windows in parallel (no per-window copies, and the
+    // fresh pages are first touched by the threads that fill them)
     let end_trim = trim + end_trim_extra;
     let demean = out.demeaned;
-    let batch = 16 * rayon::current_num_threads().max(1);
-    for chunk in windows.chunks(batch) {
-        let done: Vec<Result<WindowSignals>> = chunk
-            .par_iter()
-            .map(|w| {
-                window_signals(
-                    rec,
-                    w,
-                    &pos,
-                    &frc,
-                    sign,
-                    params,
-                    &lowpass,
-                    (trim, end_trim),
-                    sg_window,
-                    dt,
-                    demean,
-                )
-            })
-            .collect();
-        for (w, signals) in chunk.iter().zip(done) {
-            let signals = signals?;
-            let start = out.disp[0].len();
-            for (k, [xs, v, a, f]) in signals.per_coordinate.into_iter().enumerate() {
-                out.disp[k].extend(xs);
-                out.vel[k].extend(v);
-                out.acc[k].extend(a);
-                out.force[k].extend(f);
-            }
-            let r = &w.range;
-            out.windows.push(PreparedWindow {
-                id: w.id,
-                samples: start..out.disp[0].len(),
-                rows: r.start + trim..r.end - end_trim,
-                rest_samples: w.rest_len(),
-                force_offset: signals.offsets,
-                reference: signals.references,
-            });
+    let lens: Vec<usize> = windows
+        .iter()
+        .map(|w| w.range.len().saturating_sub(trim + end_trim))
+        .collect();
+    let total: usize = lens.iter().sum();
+    // kind-major: disp of each coordinate, then vel, acc, force
+    let mut columns: Vec<Vec<f64>> = (0..4 * n).map(|_| vec![0.0; total]).collect();
+    let mut destinations: Vec<Vec<&mut [f64]>> = (0..windows.len())
+        .map(|_| Vec::with_capacity(4 * n))
+        .collect();
+    for column in columns.iter_mut() {
+        let mut rest: &mut [f64] = column;
+        for (dest, len) in destinations.iter_mut().zip(&lens) {
+            let (head, tail) = std::mem::take(&mut rest).split_at_mut(*len);
+            dest.push(head);
+            rest = tail;
         }
+    }
+    let done: Vec<Result<WindowSignals>> = windows
+        .par_iter()
+        .zip(destinations.into_par_iter())
+        .map(|(w, mut dest)| {
+            window_signals(
+                rec,
+                w,
+                &pos,
+                &frc,
+                sign,
+                params,
+                &lowpass,
+                (trim, end_trim),
+                sg_window,
+                dt,
+                demean,
+                &mut dest,
+            )
+        })
+        .collect();
+    let mut start = 0;
+    for ((w, signals), len) in windows.iter().zip(done).zip(&lens) {
+        let signals = signals?;
+        let r = &w.range;
+        out.windows.push(PreparedWindow {
+            id: w.id,
+            samples: start..start + len,
+            rows: r.start + trim..r.end - end_trim,
+            rest_samples: w.rest_len(),
+            force_offset: signals.offsets,
+            reference: signals.references,
+        });
+        start += len;
+    }
+    let mut columns = columns.into_iter();
+    for kind in [&mut out.disp, &mut out.vel, &mut out.acc, &mut out.force] {
+        *kind = columns.by_ref().take(n).collect();
     }
     for k in 0..n {
         out.reference[k] =
@@ -431,10 +437,9 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
     Ok(out)
 }
 
-/// One window's filtered signals (trimmed, per coordinate: displacement,
-/// velocity, acceleration, force), its force offsets and reference positions.
+/// One window's force offsets and reference positions (its filtered signals
+/// are written into the output columns).
 struct WindowSignals {
-    per_coordinate: Vec<[Vec<f64>; 4]>,
     offsets: Vec<f64>,
     references: Vec<f64>,
 }
@@ -452,6 +457,7 @@ fn window_signals(
     sg_window: usize,
     dt: f64,
     demean: bool,
+    dest: &mut [&mut [f64]],
 ) -> Result<WindowSignals> {
     let fs = 1.0 / dt;
     let cutoff = lowpass.cutoff_hz();
@@ -479,44 +485,45 @@ fn window_signals(
     };
     // one extension per window end, shared by every signal so that the model holds across coordinates
     let edge_samples = ((fs / cutoff).round() as usize).max(3);
-    let left = edge_kind(pos, r.start, r.clone(), edge_samples, dt);
-    let right = edge_kind(pos, r.end - 1, r.clone(), edge_samples, dt);
+    let (left, right) = edge_kinds(pos, r.clone(), edge_samples, dt);
     let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
     let n = pos.len();
     let mut out = WindowSignals {
-        per_coordinate: Vec::with_capacity(n),
         offsets: Vec::with_capacity(n),
         references: Vec::with_capacity(n),
     };
-    for k in 0..n {
-        let reference = mean(&pos[k][rest.clone()]);
+    let mut shifted: Vec<Vec<f64>> = Vec::with_capacity(2 * n);
+    for p in pos {
+        let reference = mean(&p[rest.clone()]);
+        out.references.push(reference);
+        shifted.push(p[r.clone()].iter().map(|v| v - reference).collect());
+    }
+    for f in frc {
         let offset = if w.onset.is_some() {
-            sign * mean(&frc[k][rest.clone()])
+            sign * mean(&f[rest.clone()])
         } else {
             0.0
         };
-        let x: Vec<f64> = pos[k][r.clone()].iter().map(|p| p - reference).collect();
-        let f: Vec<f64> = frc[k][r.clone()]
-            .iter()
-            .map(|v| sign * v - offset)
-            .collect();
-        let signals = filter_and_differentiate(
-            &x,
-            &f,
-            params.derivative,
-            lowpass,
-            (left, right, extra),
-            sg_window,
-            dt,
-        )?;
-        let keep = trim..r.len() - end_trim;
-        out.per_coordinate.push(signals.map(|src| {
+        out.offsets.push(offset);
+        shifted.push(f[r.clone()].iter().map(|v| sign * v - offset).collect());
+    }
+    let signals = filter_and_differentiate(
+        &shifted,
+        params.derivative,
+        lowpass,
+        (left, right, extra),
+        sg_window,
+        dt,
+    )?;
+    let keep = trim..r.len() - end_trim;
+    for (k, per_coordinate) in signals.iter().enumerate() {
+        for (kind, src) in per_coordinate.iter().enumerate() {
             let part = &src[keep.clone()];
             let m = if demean { mean(part) } else { 0.0 };
-            part.iter().map(|v| v - m).collect()
-        }));
-        out.offsets.push(offset);
-        out.references.push(reference);
+            for (o, v) in dest[kind * n + k].iter_mut().zip(part) {
+                *o = v - m;
+            }
+        }
     }
     Ok(out)
 }
@@ -557,63 +564,71 @@ fn fits_offsets(offsets: Offsets, windows: &[Window], fs: f64) -> bool {
     }
 }
 
-/// One window's displacement, velocity, acceleration and force: zero-phase
-/// low-pass with extended edges and central differences, or Savitzky-Golay
-/// (cubic) smoothing and derivatives.
+/// One window's displacement, velocity, acceleration and force per
+/// coordinate (`signals`: the n displacements, then the n forces): zero-phase
+/// low-pass with extended edges (all 2n signals filtered together) and
+/// central differences, or Savitzky-Golay (cubic) smoothing and derivatives.
 fn filter_and_differentiate(
-    x: &[f64],
-    f: &[f64],
+    signals: &[Vec<f64>],
     derivative: Derivative,
     lowpass: &LowPass,
     (left, right, extra): (Edge, Edge, usize),
     sg_window: usize,
     dt: f64,
-) -> Result<[Vec<f64>; 4]> {
-    Ok(match derivative {
+) -> Result<Vec<[Vec<f64>; 4]>> {
+    let n = signals.len() / 2;
+    match derivative {
         Derivative::Central => {
-            let xs = lowpass.filtfilt_edges(x, left, right, extra)?;
-            let v = central_first(&xs, dt);
-            let a = central_second(&xs, dt);
-            [xs, v, a, lowpass.filtfilt_edges(f, left, right, extra)?]
+            let refs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
+            let mut filtered = lowpass.filtfilt_edges_many(&refs, left, right, extra)?;
+            let forces = filtered.split_off(n);
+            Ok(filtered
+                .into_iter()
+                .zip(forces)
+                .map(|(xs, f)| {
+                    let v = central_first(&xs, dt);
+                    let a = central_second(&xs, dt);
+                    [xs, v, a, f]
+                })
+                .collect())
         }
-        Derivative::Savgol => [
-            savgol(x, sg_window, 3, 0, dt)?,
-            savgol(x, sg_window, 3, 1, dt)?,
-            savgol(x, sg_window, 3, 2, dt)?,
-            savgol(f, sg_window, 3, 0, dt)?,
-        ],
-    })
+        Derivative::Savgol => (0..n)
+            .map(|k| {
+                let (x, f) = (&signals[k], &signals[n + k]);
+                Ok([
+                    savgol(x, sg_window, 3, 0, dt)?,
+                    savgol(x, sg_window, 3, 1, dt)?,
+                    savgol(x, sg_window, 3, 2, dt)?,
+                    savgol(f, sg_window, 3, 0, dt)?,
+                ])
+            })
+            .collect(),
+    }
 }
 
-/// Extension for one window end: a mirror where the limb is (nearly) still
-/// there, a point reflection where it still moves. The speed at the end is the
-/// slope of a least-squares line through the last `span` samples, compared with
-/// the window's largest such slope.
-pub(crate) fn edge_kind(
+/// Extension for each window end (start, end): a mirror where the limb is
+/// (nearly) still there, a point reflection where it still moves. The speed at
+/// an end is the slope of a least-squares line through its `span` samples,
+/// compared with the window's largest such slope (one scan for both ends).
+pub(crate) fn edge_kinds(
     pos: &[&[f64]],
-    at: usize,
     window: Range<usize>,
     span: usize,
     dt: f64,
-) -> Edge {
+) -> (Edge, Edge) {
     let span = span.min(window.len() / 4).max(2);
+    let tm = (span as f64 - 1.0) / 2.0;
+    let den: f64 = (0..span).map(|k| (k as f64 - tm).powi(2)).sum();
+    // Σ (k - tm)(v - xm) = Σ (k - tm) v, the weights summing to zero
     let slope = |c: &[f64], s: usize| {
-        let seg = &c[s..s + span];
-        let tm = (span as f64 - 1.0) / 2.0;
-        let xm = seg.iter().sum::<f64>() / span as f64;
-        let (mut num, mut den) = (0.0, 0.0);
-        for (k, v) in seg.iter().enumerate() {
-            num += (k as f64 - tm) * (v - xm);
-            den += (k as f64 - tm).powi(2);
-        }
+        let num: f64 = c[s..s + span]
+            .iter()
+            .enumerate()
+            .map(|(k, v)| (k as f64 - tm) * v)
+            .sum();
         num / den / dt
     };
-    let s_end = if at == window.start {
-        window.start
-    } else {
-        window.end - span
-    };
-    let mut moving = false;
+    let (mut left_moving, mut right_moving) = (false, false);
     for c in pos {
         let mut peak = 0.0f64;
         let mut s = window.start;
@@ -621,15 +636,13 @@ pub(crate) fn edge_kind(
             peak = peak.max(slope(c, s).abs());
             s += span / 2;
         }
-        if peak > 0.0 && slope(c, s_end).abs() > 0.2 * peak {
-            moving = true;
+        if peak > 0.0 {
+            left_moving |= slope(c, window.start).abs() > 0.2 * peak;
+            right_moving |= slope(c, window.end - span).abs() > 0.2 * peak;
         }
     }
-    if moving {
-        Edge::Odd
-    } else {
-        Edge::Even
-    }
+    let kind = |moving: bool| if moving { Edge::Odd } else { Edge::Even };
+    (kind(left_moving), kind(right_moving))
 }
 
 /// Savitzky-Golay window (odd, samples) whose cubic smoother has about the given cut-off.
@@ -705,7 +718,7 @@ fn make_windows(
             let sigmas: Vec<f64> = position_noise
                 .iter()
                 .copied()
-                .chain(frc.iter().map(|c| noise_sigma(c)))
+                .chain(frc.par_iter().map(|c| noise_sigma(c)).collect::<Vec<_>>())
                 .collect();
             let floors = change_floors(&signals);
             let mut windows = windows_from_trial_column(rec, &params.trial_column)?;

@@ -30,6 +30,7 @@ use parquet::file::properties::WriterProperties;
 use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::file::writer::SerializedFileWriter;
 use parquet::schema::types::Type;
+use rayon::prelude::*;
 
 /// True when the path names a Parquet file.
 pub fn is_parquet(path: &Path) -> bool {
@@ -334,15 +335,15 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         )));
     }
     const BATCH: usize = 1 << 16;
-    let mut origin: Vec<Option<i64>> = vec![None; names.len()];
     let reserve = (total as usize).min(1 << 24);
-    let mut columns: Vec<Vec<f64>> = (0..names.len())
-        .map(|_| Vec::with_capacity(reserve))
-        .collect();
-    for g in 0..reader.num_row_groups() {
-        let group = reader.get_row_group(g).map_err(pq_err)?;
-        for (k, out) in columns.iter_mut().enumerate() {
-            let start = out.len();
+    // columns are independent: each decoded (over all row groups) on its own task
+    let groups: Vec<_> = (0..reader.num_row_groups())
+        .map(|g| reader.get_row_group(g).map_err(pq_err))
+        .collect::<Result<_>>()?;
+    let decode_column = |k: usize| -> Result<Vec<f64>> {
+        let mut out: Vec<f64> = Vec::with_capacity(reserve);
+        let mut origin: Option<i64> = None;
+        for group in &groups {
             let mut defs: Vec<i16> = Vec::new();
             // pages pass a size check before the decoder sees them: a corrupt
             // dictionary page claiming 2^31 values made it reserve 6 GB (fuzzer)
@@ -383,7 +384,7 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
                             // timestamps: integer ticks since the first sample, then
                             // seconds (epoch seconds in f64 would lose the sampling interval)
                             Some(per_s) => {
-                                let first = *origin[k].get_or_insert(vals[0] as i64);
+                                let first = *origin.get_or_insert(vals[0] as i64);
                                 out.extend(
                                     vals.iter()
                                         .map(|v| (*v as i64).saturating_sub(first) as f64 / per_s),
@@ -412,9 +413,13 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
                     })
                 }
             }
-            let _ = start;
         }
-    }
+        Ok(out)
+    };
+    let columns: Vec<Vec<f64>> = (0..names.len())
+        .into_par_iter()
+        .map(decode_column)
+        .collect::<Result<_>>()?;
     let mut rec = Recording::new(path, names.clone(), columns, 1)?;
     for (name, per_s) in names.iter().zip(&unit_s) {
         if per_s.is_some() {
