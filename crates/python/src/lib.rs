@@ -26,6 +26,43 @@ fn err(e: Error) -> PyErr {
     }
 }
 
+/// This process's thread pool. Rayon's global pool does not survive `fork`:
+/// a child inherits the pool's state but not its threads, and its first
+/// parallel call waits for ever (Python's default start method on Linux
+/// before 3.14). So the package keeps its own pool, tagged with the process
+/// id; a forked child finds a foreign tag and builds a fresh pool.
+fn pool() -> Result<std::sync::Arc<rayon::ThreadPool>, rayon::ThreadPoolBuildError> {
+    use std::sync::{Arc, Mutex};
+    static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
+    let pid = std::process::id();
+    let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((owner, pool)) = slot.as_ref() {
+        if *owner == pid {
+            return Ok(pool.clone());
+        }
+    }
+    if let Some((_, inherited)) = slot.take() {
+        // its threads exist only in the parent: never signal or wait for them
+        std::mem::forget(inherited);
+    }
+    let fresh = Arc::new(
+        rayon::ThreadPoolBuilder::new()
+            .thread_name(|i| format!("limpid-{i}"))
+            .build()?,
+    );
+    *slot = Some((pid, fresh.clone()));
+    Ok(fresh)
+}
+
+/// Run `work` without the GIL on this process's thread pool (on the calling
+/// thread alone if no pool can be started).
+fn detached<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> T {
+    match pool() {
+        Ok(pool) => py.detach(|| pool.install(work)),
+        Err(_) => py.detach(work),
+    }
+}
+
 fn value_err(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
@@ -130,8 +167,7 @@ fn psd<'py>(
 ) -> Spectrum<'py, f64> {
     let p = welch(fs, window, nperseg, noverlap, detrend, scaling)?;
     let x = x.as_array().to_vec();
-    let (f, v) = py
-        .detach(|| limpid_dsp::spectral::psd(&x, &p))
+    let (f, v) = detached(py, || limpid_dsp::spectral::psd(&x, &p))
         .map_err(err)?;
     Ok((f.into_pyarray(py), v.into_pyarray(py)))
 }
@@ -153,8 +189,7 @@ fn csd<'py>(
 ) -> Spectrum<'py, num_complex::Complex64> {
     let p = welch(fs, window, nperseg, noverlap, detrend, scaling)?;
     let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
-    let (f, v) = py
-        .detach(|| limpid_dsp::spectral::csd(&x, &y, &p))
+    let (f, v) = detached(py, || limpid_dsp::spectral::csd(&x, &y, &p))
         .map_err(err)?;
     Ok((f.into_pyarray(py), v.into_pyarray(py)))
 }
@@ -175,8 +210,7 @@ fn coherence<'py>(
 ) -> Spectrum<'py, f64> {
     let p = welch(fs, window, nperseg, noverlap, detrend, "density")?;
     let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
-    let (f, v) = py
-        .detach(|| limpid_dsp::spectral::coherence(&x, &y, &p))
+    let (f, v) = detached(py, || limpid_dsp::spectral::coherence(&x, &y, &p))
         .map_err(err)?;
     Ok((f.into_pyarray(py), v.into_pyarray(py)))
 }
@@ -214,8 +248,7 @@ fn frequency_response<'py>(
         .map(|a| a.as_array().to_vec())
         .collect();
     let nan = num_complex::Complex64::new(f64::NAN, f64::NAN);
-    let (f, h, multiple, partial) = py
-        .detach(|| -> limpid_core::Result<_> {
+    let (f, h, multiple, partial) = detached(py, || -> limpid_core::Result<_> {
             let refs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
             let s = limpid_dsp::spectral::SegmentSpectra::new(&refs, &p)?;
             // flat, row-major [f][output][input]; the Python side reshapes
@@ -261,10 +294,10 @@ fn lowpass_filtfilt<'py>(
     let lp = limpid_dsp::LowPass::butterworth(order, cutoff_hz, fs).map_err(err)?;
     // a contiguous array is read in place; others are copied once
     let y = match x.as_slice() {
-        Ok(slice) => py.detach(|| lp.filtfilt(slice)),
+        Ok(slice) => detached(py, || lp.filtfilt(slice)),
         Err(_) => {
             let owned = x.as_array().to_vec();
-            py.detach(|| lp.filtfilt(&owned))
+            detached(py, || lp.filtfilt(&owned))
         }
     }
     .map_err(err)?;
@@ -283,8 +316,7 @@ fn columns_dict<'py>(py: Python<'py>, rec: &Recording) -> PyResult<Bound<'py, Py
 /// A recording file as a dict of numpy arrays (column order kept).
 #[pyfunction]
 fn read_recording<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
-    let rec = py
-        .detach(|| limpid_io::read_recording(&path))
+    let rec = detached(py, || limpid_io::read_recording(&path))
         .map_err(err)?;
     warn_about(py, &rec)?;
     columns_dict(py, &rec)
@@ -351,7 +383,7 @@ fn estimate_linear(
     let params = prepare_params(options)?;
     let o: serde_json::Value = serde_json::from_str(options).map_err(value_err)?;
     let equilibrium = o["equilibrium"].as_bool().unwrap_or(true);
-    py.detach(move || {
+    detached(py, move || {
         let prepared = limpid_ident::prepare(&rec, &params)?;
         let est = limpid_ident::fit_linear(
             &prepared,
@@ -387,7 +419,7 @@ fn estimate_planar(
     inertial_parameters: Option<(f64, f64, f64)>,
 ) -> PyResult<String> {
     let rec = self::recording(recording)?;
-    py.detach(move || -> limpid_core::Result<String> {
+    detached(py, move || -> limpid_core::Result<String> {
         let data = planar_data(&rec, link_lengths)?;
         let window = match window_ms {
             None => usize::MAX,
@@ -420,7 +452,7 @@ fn window_sweep(
     inertial_parameters: Option<(f64, f64, f64)>,
 ) -> PyResult<String> {
     let rec = self::recording(recording)?;
-    py.detach(move || -> limpid_core::Result<String> {
+    detached(py, move || -> limpid_core::Result<String> {
         let data = planar_data(&rec, link_lengths)?;
         let xi = inertial_parameters.map(|(a, b, c)| [a, b, c]);
         let sweep = limpid_ident::planar::window_sweep(&data, from_ms, to_ms, step_ms, xi)?;
@@ -441,7 +473,7 @@ fn estimate_stochastic(
 ) -> PyResult<String> {
     use limpid_ident::stochastic::{default_welch, estimate_stochastic, StochasticParams};
     let rec = self::recording(recording)?;
-    py.detach(move || -> limpid_core::Result<String> {
+    detached(py, move || -> limpid_core::Result<String> {
         let mut w = default_welch(rec.len(), rec.sample_rate());
         if let Some(n) = nperseg {
             w.nperseg = n;
@@ -482,7 +514,7 @@ fn estimate_reflex(
         rectify_first,
         ..ReflexParams::default()
     };
-    py.detach(move || -> limpid_core::Result<String> {
+    detached(py, move || -> limpid_core::Result<String> {
         Ok(document(Estimate::Reflex(params.fit(&rec)?)))
     })
     .map_err(err)
@@ -500,7 +532,7 @@ fn estimate_cocontraction(
     let rec = self::recording(recording)?;
     let mvc = self::recording(mvc)?;
     let params = prepare_params(options)?;
-    py.detach(move || {
+    detached(py, move || {
         let r = limpid_analysis::cocontraction::estimate_cocontraction(
             &rec,
             &mvc,
@@ -532,10 +564,10 @@ fn protocol_preset(name: &str) -> PyResult<String> {
 
 /// Check a protocol (TOML text); JSON text of the report.
 #[pyfunction]
-fn protocol_check(toml_text: &str) -> PyResult<String> {
+fn protocol_check(py: Python<'_>, toml_text: &str) -> PyResult<String> {
     let d =
         limpid_lab::design::Design::from_toml(toml_text, Path::new("<protocol>")).map_err(err)?;
-    let r = limpid_lab::design::check(&d).map_err(err)?;
+    let r = detached(py, || limpid_lab::design::check(&d)).map_err(err)?;
     serde_json::to_string(&r).map_err(value_err)
 }
 
@@ -560,8 +592,7 @@ fn simulate<'py>(
     let controller: RigController = controller.parse().map_err(value_err)?;
     let name = Path::new(subject_name);
     let subject = subject.map(|text| SubjectText { text, path: name });
-    let runs = py
-        .detach(|| simulate_design(&d, subject.as_ref(), controller, seed))
+    let runs = detached(py, || simulate_design(&d, subject.as_ref(), controller, seed))
         .map_err(err)?;
     runs.into_iter()
         .map(|run| Ok((columns_dict(py, &run.recording)?, run.truth.to_string())))
@@ -606,15 +637,14 @@ fn gravity_compensate<'py>(
             ))
         }
     };
-    let summary = py
-        .detach(|| compensate(&mut rec, source, robot.as_ref()))
+    let summary = detached(py, || compensate(&mut rec, source, robot.as_ref()))
         .map_err(err)?;
     Ok((columns_dict(py, &rec)?, summary))
 }
 
 /// Write the HTML report of JSON results (texts) to `path`.
 #[pyfunction]
-fn report(results: Vec<String>, path: std::path::PathBuf) -> PyResult<()> {
+fn report(py: Python<'_>, results: Vec<String>, path: std::path::PathBuf) -> PyResult<()> {
     let inputs: Vec<(String, Estimate)> = results
         .iter()
         .enumerate()
@@ -624,7 +654,7 @@ fn report(results: Vec<String>, path: std::path::PathBuf) -> PyResult<()> {
             Ok((name, doc.estimate))
         })
         .collect::<PyResult<_>>()?;
-    let r = limpid_report::build(&inputs);
+    let r = detached(py, || limpid_report::build(&inputs));
     limpid_core::files::write_file(&path, limpid_report::to_html(&r).as_bytes())
         .map_err(|e| PyOSError::new_err(e.to_string()))
 }

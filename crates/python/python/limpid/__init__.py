@@ -18,7 +18,9 @@ one-line message; long computations release the GIL.
 
 from __future__ import annotations
 
+import copy
 import json
+import operator
 import os
 import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
@@ -66,13 +68,28 @@ def _arrayish(v: Any) -> Any:
 
 class Result:
     """An estimate: attribute access to its fields (numeric lists as numpy
-    arrays, nested objects as Results); ``to_dict()`` gives the plain dict
-    with the CLI's JSON keys."""
+    arrays, nested objects as Results); ``to_dict()`` gives a copy of the
+    plain dict with the CLI's JSON keys, ``Result.from_dict`` makes one back.
+
+    Results pickle and copy (``pickle``, ``copy.copy``, ``copy.deepcopy``), so
+    they travel between processes (``concurrent.futures``, dask)."""
+
+    __slots__ = ("_data",)
 
     def __init__(self, data: Dict[str, Any]):
-        self._data = data
+        if not isinstance(data, dict):
+            raise ValueError(f"a Result is made from a dict, found {type(data).__name__}")
+        object.__setattr__(self, "_data", data)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Result":
+        """A Result from a plain dict (as ``to_dict()`` or the CLI's ``--json`` give); the dict is copied."""
+        return cls(copy.deepcopy(dict(data)))
 
     def __getattr__(self, name: str) -> Any:
+        # private and dunder names are never fields (pickle and copy probe them)
+        if name.startswith("_"):
+            raise AttributeError(name)
         try:
             v = self._data[name]
         except KeyError:
@@ -82,7 +99,13 @@ class Result:
         return _arrayish(v)
 
     def __getitem__(self, name: str) -> Any:
-        return self.__getattr__(name)
+        if name not in self._data:
+            raise KeyError(name)
+        v = self._data[name]
+        return Result(v) if isinstance(v, dict) else _arrayish(v)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._data
 
     def __dir__(self) -> List[str]:
         return sorted(self._data.keys())
@@ -91,10 +114,66 @@ class Result:
         return list(self._data.keys())
 
     def to_dict(self) -> Dict[str, Any]:
-        return self._data
+        """A deep copy of the fields (changing it does not change the Result)."""
+        return copy.deepcopy(self._data)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Result):
+            return NotImplemented
+        return bool(self._data == other._data)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Dict[str, Any]]]:
+        return (Result, (self._data,))
+
+    def __copy__(self) -> "Result":
+        return Result(self._data)
+
+    def __deepcopy__(self, memo: Dict[int, Any]) -> "Result":
+        return Result(copy.deepcopy(self._data, memo))
 
     def __repr__(self) -> str:
         return f"limpid.Result({', '.join(self._data.keys())})"
+
+
+def _integer(name: str, value: Any, *, minimum: Optional[int] = None) -> int:
+    """An integer option: int, numpy integer or an integral float; anything else is a ValueError."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name}: expected an integer, found a boolean {value!r}")
+    try:
+        v = operator.index(value)
+    except TypeError:
+        if isinstance(value, (float, np.floating)) and float(value).is_integer():
+            v = int(value)
+        else:
+            raise ValueError(f"{name}: expected an integer, found {value!r}") from None
+    if minimum is not None and v < minimum:
+        raise ValueError(f"{name}: expected at least {minimum}, found {v}")
+    return int(v)
+
+
+def _number(name: str, value: Any) -> float:
+    """A real option: int, float or numpy number (not a string or boolean); finite."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name}: expected a number, found {value!r}")
+    v = float(value)
+    if not np.isfinite(v):
+        raise ValueError(f"{name}: expected a finite number, found {v}")
+    return v
+
+
+def _flag(name: str, value: Any) -> bool:
+    """A boolean option: True/False (numpy booleans too); anything else is a ValueError."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ValueError(f"{name}: expected True or False, found {value!r}")
+
+
+def _choice(name: str, value: Any, choices: Sequence[str]) -> str:
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{name}: expected one of {', '.join(choices)}, found {value!r}")
+    return value
 
 
 def _recording(rec: RecordingLike) -> Any:
@@ -202,7 +281,8 @@ def frequency_response(inputs: Sequence[Any], outputs: Sequence[Any], fs: float 
 def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4) -> np.ndarray:
     """Zero-phase Butterworth low-pass, as
     ``scipy.signal.sosfiltfilt(scipy.signal.butter(order, cutoff_hz, fs=fs, output='sos'), x)``."""
-    return _limpid.lowpass_filtfilt(_vector(x), float(cutoff_hz), float(fs), int(order))
+    return _limpid.lowpass_filtfilt(_vector(x), _number("cutoff_hz", cutoff_hz), _number("fs", fs),
+                                    _integer("order", order, minimum=1))
 
 
 def estimate_linear(recording: RecordingLike, *, cutoff_hz: Optional[float] = None,
@@ -211,9 +291,14 @@ def estimate_linear(recording: RecordingLike, *, cutoff_hz: Optional[float] = No
                     negate_force: bool = False, equilibrium: bool = True) -> Result:
     """Seed 000's linear estimator (M, B, K with standard errors, fit, criteria,
     ellipsoids); the options of ``limpid estimate linear``."""
-    opts = {"cutoff_hz": cutoff_hz, "order": order, "window": window, "offsets": offsets,
-            "derivative": derivative, "level": level, "negate_force": negate_force,
-            "equilibrium": equilibrium}
+    opts = {"cutoff_hz": None if cutoff_hz is None else _number("cutoff_hz", cutoff_hz),
+            "order": None if order is None else _integer("order", order, minimum=1),
+            "window": _choice("window", window, ("auto", "trials", "onsets", "continuous")),
+            "offsets": _choice("offsets", offsets, ("auto", "fit", "rest")),
+            "derivative": _choice("derivative", derivative, ("central", "savgol")),
+            "level": None if level is None else _number("level", level),
+            "negate_force": _flag("negate_force", negate_force),
+            "equilibrium": _flag("equilibrium", equilibrium)}
     return Result(json.loads(_limpid.estimate_linear(_recording(recording), json.dumps(opts))))
 
 
@@ -223,7 +308,8 @@ def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], *,
     """Seed 003's planar-arm estimator (joint K, D, inertial parameters, criteria)."""
     l1, l2 = link_lengths
     xi = tuple(inertial_parameters) if inertial_parameters is not None else None
-    return Result(json.loads(_limpid.estimate_planar(_recording(recording), (float(l1), float(l2)), window_ms, xi)))
+    window = None if window_ms is None else _number("window_ms", window_ms)
+    return Result(json.loads(_limpid.estimate_planar(_recording(recording), (_number("link_lengths", l1), _number("link_lengths", l2)), window, xi)))
 
 
 def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], *,
@@ -234,15 +320,20 @@ def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], *,
     trustworthy window."""
     l1, l2 = link_lengths
     xi = tuple(inertial_parameters) if inertial_parameters is not None else None
-    return Result(json.loads(_limpid.window_sweep(_recording(recording), (float(l1), float(l2)),
-                                                  float(from_ms), float(to_ms), float(step_ms), xi)))
+    return Result(json.loads(_limpid.window_sweep(_recording(recording), (_number("link_lengths", l1), _number("link_lengths", l2)),
+                                                  _number("from_ms", from_ms), _number("to_ms", to_ms),
+                                                  _number("step_ms", step_ms), xi)))
 
 
 def estimate_stochastic(recording: RecordingLike, *, nperseg: Optional[int] = None,
                         noverlap: Optional[int] = None,
                         band_hz: Tuple[float, float] = (0.5, 10.0)) -> Result:
     """Seed 004's stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric fit."""
-    return Result(json.loads(_limpid.estimate_stochastic(_recording(recording), nperseg, noverlap, tuple(band_hz))))
+    seg = None if nperseg is None else _integer("nperseg", nperseg, minimum=2)
+    ov = None if noverlap is None else _integer("noverlap", noverlap, minimum=0)
+    lo, hi = band_hz
+    band = (_number("band_hz", lo), _number("band_hz", hi))
+    return Result(json.loads(_limpid.estimate_stochastic(_recording(recording), seg, ov, band)))
 
 
 def estimate_reflex(recording: RecordingLike, *, position: str = "q1", torque: str = "tau1",
@@ -272,14 +363,16 @@ def estimate_reflex(recording: RecordingLike, *, position: str = "q1", torque: s
         ``fit`` (VAF in percent), ``cross_validated_vaf``, ``warnings``.
     """
     return Result(json.loads(_limpid.estimate_reflex(_recording(recording), position, torque,
-                                                     float(rate_hz), float(max_delay_s),
-                                                     bool(rectify_first))))
+                                                     _number("rate_hz", rate_hz),
+                                                     _number("max_delay_s", max_delay_s),
+                                                     _flag("rectify_first", rectify_first))))
 
 
 def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, *, window: str = "auto",
                            offsets: str = "auto") -> Result:
     """Seed 001's co-contraction analysis: index and stiffness per level."""
-    opts = {"window": window, "offsets": offsets}
+    opts = {"window": _choice("window", window, ("auto", "trials", "onsets", "continuous")),
+            "offsets": _choice("offsets", offsets, ("auto", "fit", "rest"))}
     return Result(json.loads(_limpid.estimate_cocontraction(_recording(recording), _recording(mvc), json.dumps(opts))))
 
 
