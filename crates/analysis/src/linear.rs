@@ -308,7 +308,7 @@ impl LinearResult {
             .fit
             .vaf
             .iter()
-            .map(|v| format!("{} %", limpid_core::short_number(*v)))
+            .map(|v| format!("{} %", limpid_core::significant(*v, 4)))
             .collect();
         format!("{}; fit VAF {}", parts.join("; "), vafs.join(" / "))
     }

@@ -65,6 +65,15 @@ impl Estimate {
             Estimate::Calibration(_) => "calibration",
         }
     }
+
+    /// The recording it was estimated from, where the result names one.
+    pub fn recording(&self) -> Option<&str> {
+        match self {
+            Estimate::Linear(r) => Some(r.provenance.recording.as_str()),
+            Estimate::Cocontraction(r) => Some(r.recording.as_str()),
+            _ => None,
+        }
+    }
 }
 
 /// A result with its schema version: the JSON document.

@@ -28,12 +28,23 @@ fn write_named(inputs: &[(String, Estimate)], path: &Path) -> CliResult<limpid_r
     Ok(report)
 }
 
+/// A section's name: the recording's file name where the result names it.
+fn section_name(v: &Estimate, i: usize) -> String {
+    v.recording()
+        .map(|r| {
+            Path::new(r)
+                .file_name()
+                .map_or_else(|| r.to_string(), |f| f.to_string_lossy().into_owned())
+        })
+        .unwrap_or_else(|| format!("result {}", i + 1))
+}
+
 /// `--report FILE` of the other commands: the results of this run.
 pub fn write(results: &[Estimate], path: &Path) -> CliResult {
     let named: Vec<(String, Estimate)> = results
         .iter()
         .enumerate()
-        .map(|(i, v)| (format!("result {}", i + 1), v.clone()))
+        .map(|(i, v)| (section_name(v, i), v.clone()))
         .collect();
     write_named(&named, path)?;
     eprintln!("report: {}", path.display());

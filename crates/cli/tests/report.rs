@@ -403,3 +403,91 @@ fn study_run_writes_a_report_with_every_configuration() {
     assert!(views.iter().all(|e| e.kind == "stiffness"));
     assert!(text.contains("ellipsoid-data"));
 }
+
+/// Issue 20: units instead of "SI", values rounded to their standard error,
+/// warnings grouped across start points, "n/i" for unidentified matrices.
+#[test]
+fn demo_report_reads_like_a_paper_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = limpid(&["demo", "--out", dir.path().to_str().unwrap()]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let demo: Value = read_json(&dir.path().join("demo.json"));
+    let report = limpid_report::build(&[("demo".into(), document(&demo))]);
+    let s = &report.sections[0];
+    // one line per kind of warning, naming the start points
+    assert!(s.warnings.len() <= 6, "{:#?}", s.warnings);
+    assert!(
+        s.warnings.iter().any(|w| w.starts_with("S1-S6: ")),
+        "{:#?}",
+        s.warnings
+    );
+    // inertia is flagged not identifiable in every start point: no error percentage for it
+    let errors = &s.tables[0];
+    for row in &errors.rows {
+        let verdict = &row[4];
+        if verdict.contains("inertia NOT identifiable") {
+            assert_eq!(row[3], "n/i", "{row:?}");
+        } else {
+            assert_ne!(row[3], "n/i", "{row:?}");
+        }
+    }
+    // K tables: unit in the caption, each cell "value ± se (true t)" with a 2-digit SE
+    let k = s
+        .tables
+        .iter()
+        .find(|t| t.caption.starts_with("S1: K"))
+        .expect("S1's K table");
+    assert!(k.caption.contains("N/m"), "{}", k.caption);
+    for cell in k.rows.iter().flat_map(|r| r.iter().skip(1)) {
+        let (value, rest) = cell.split_once(" ± ").expect(cell);
+        let se = rest.split(' ').next().unwrap();
+        let digits = |t: &str| t.split('.').nth(1).map_or(0, str::len);
+        assert_eq!(
+            digits(value),
+            digits(se),
+            "{cell}: value and SE to one decimal place"
+        );
+        let significant: String = se
+            .chars()
+            .filter(char::is_ascii_digit)
+            .collect::<String>()
+            .trim_start_matches('0')
+            .to_string();
+        assert_eq!(
+            significant.len(),
+            2,
+            "{cell}: two significant digits of the SE"
+        );
+    }
+    let html = limpid_report::to_html(&report);
+    assert!(
+        !html.contains("(SI)") && !html.contains(", SI)"),
+        "a unit written as SI"
+    );
+}
+
+#[test]
+fn reports_name_the_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("r.html");
+    let out = limpid(&[
+        "estimate",
+        "linear",
+        example("../../../shared/examples/cartesian_slow/ex_cubic.csv")
+            .to_str()
+            .unwrap(),
+        "--report",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(
+        html.contains("Linear estimate: ex_cubic.csv"),
+        "section not named after the recording"
+    );
+    assert!(!html.contains("result 1"));
+    assert!(
+        html.contains("500 Hz") && html.contains("trials"),
+        "recording details"
+    );
+}

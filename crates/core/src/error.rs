@@ -273,9 +273,75 @@ pub fn short_number(v: f64) -> String {
     }
 }
 
+/// `v` to `digits` significant digits (trailing zeros dropped; exponent
+/// form below 1e-3 and from 1e6); a non-finite value is "n/a".
+pub fn significant(v: f64, digits: usize) -> String {
+    if !v.is_finite() {
+        return "n/a".into();
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let digits = digits.max(1);
+    let e = v.abs().log10().floor() as i32;
+    if !(-3..6).contains(&e) {
+        return format!("{v:.*e}", digits - 1);
+    }
+    let decimals = (digits as i32 - 1 - e).max(0) as usize;
+    let text = format!("{v:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
+/// A value with its standard error, rounded to the error: two significant
+/// digits of the error and the value to the same decimal place
+/// (`1001.3895, 1.2655` -> `1001.4 ± 1.3`); a shared power of ten outside
+/// 1e-3..1e6. Without a usable error, the value to 4 significant digits.
+pub fn with_standard_error(v: f64, se: f64) -> String {
+    if !v.is_finite() {
+        return "n/a".into();
+    }
+    if !(se.is_finite() && se > 0.0) {
+        return format!("{} ± n/a", significant(v, 4));
+    }
+    // decimal place of the error's second significant digit
+    let place = se.log10().floor() as i32 - 1;
+    let unit = 10f64.powi(place);
+    let (vr, sr) = ((v / unit).round() * unit, (se / unit).round() * unit);
+    let magnitude = vr.abs().max(sr);
+    if !(1e-3..1e6).contains(&magnitude) {
+        let e = magnitude.log10().floor() as i32;
+        let p = 10f64.powi(e);
+        let d = (e - place).max(0) as usize;
+        return format!("({:.d$} ± {:.d$})e{e}", vr / p, sr / p);
+    }
+    let d = (-place).max(0) as usize;
+    format!("{vr:.d$} ± {sr:.d$}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn values_are_rounded_to_their_standard_error() {
+        assert_eq!(with_standard_error(1001.3895, 1.2655), "1001.4 ± 1.3");
+        assert_eq!(with_standard_error(0.5, 0.0123), "0.500 ± 0.012");
+        assert_eq!(with_standard_error(123456.0, 2345.0), "123500 ± 2300");
+        assert_eq!(with_standard_error(-12.3456, 0.98), "-12.35 ± 0.98");
+        assert_eq!(with_standard_error(2.5e-5, 3.1e-6), "(2.50 ± 0.31)e-5");
+        assert_eq!(with_standard_error(3.0e7, 1.2e5), "(3.000 ± 0.012)e7");
+        assert_eq!(with_standard_error(7.0, f64::NAN), "7 ± n/a");
+        assert_eq!(with_standard_error(f64::NAN, 1.0), "n/a");
+        assert_eq!(significant(99.9847, 4), "99.98");
+        assert_eq!(significant(0.5, 4), "0.5");
+        assert_eq!(significant(1001.3895, 4), "1001");
+        assert_eq!(significant(0.00012895775, 4), "1.290e-4");
+        assert_eq!(significant(-0.0, 4), "0");
+    }
 
     #[test]
     fn settings_errors_give_line_and_column_of_the_span() {

@@ -167,8 +167,7 @@ fn psd<'py>(
 ) -> Spectrum<'py, f64> {
     let p = welch(fs, window, nperseg, noverlap, detrend, scaling)?;
     let x = x.as_array().to_vec();
-    let (f, v) = detached(py, || limpid_dsp::spectral::psd(&x, &p))
-        .map_err(err)?;
+    let (f, v) = detached(py, || limpid_dsp::spectral::psd(&x, &p)).map_err(err)?;
     Ok((f.into_pyarray(py), v.into_pyarray(py)))
 }
 
@@ -189,8 +188,7 @@ fn csd<'py>(
 ) -> Spectrum<'py, num_complex::Complex64> {
     let p = welch(fs, window, nperseg, noverlap, detrend, scaling)?;
     let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
-    let (f, v) = detached(py, || limpid_dsp::spectral::csd(&x, &y, &p))
-        .map_err(err)?;
+    let (f, v) = detached(py, || limpid_dsp::spectral::csd(&x, &y, &p)).map_err(err)?;
     Ok((f.into_pyarray(py), v.into_pyarray(py)))
 }
 
@@ -210,8 +208,7 @@ fn coherence<'py>(
 ) -> Spectrum<'py, f64> {
     let p = welch(fs, window, nperseg, noverlap, detrend, "density")?;
     let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
-    let (f, v) = detached(py, || limpid_dsp::spectral::coherence(&x, &y, &p))
-        .map_err(err)?;
+    let (f, v) = detached(py, || limpid_dsp::spectral::coherence(&x, &y, &p)).map_err(err)?;
     Ok((f.into_pyarray(py), v.into_pyarray(py)))
 }
 
@@ -249,30 +246,30 @@ fn frequency_response<'py>(
         .collect();
     let nan = num_complex::Complex64::new(f64::NAN, f64::NAN);
     let (f, h, multiple, partial) = detached(py, || -> limpid_core::Result<_> {
-            let refs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
-            let s = limpid_dsp::spectral::SegmentSpectra::new(&refs, &p)?;
-            // flat, row-major [f][output][input]; the Python side reshapes
-            let (mut h, mut multiple, mut partial) = (Vec::new(), Vec::new(), Vec::new());
-            let no = signals.len() - q;
-            for m in s.matrix() {
-                match limpid_dsp::spectral::mimo_point(&m, q) {
-                    Some(pt) => {
-                        for o in 0..no {
-                            h.extend((0..q).map(|i| pt.h[(o, i)]));
-                            partial.extend_from_slice(&pt.partial[o]);
-                        }
-                        multiple.extend_from_slice(&pt.multiple);
+        let refs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
+        let s = limpid_dsp::spectral::SegmentSpectra::new(&refs, &p)?;
+        // flat, row-major [f][output][input]; the Python side reshapes
+        let (mut h, mut multiple, mut partial) = (Vec::new(), Vec::new(), Vec::new());
+        let no = signals.len() - q;
+        for m in s.matrix() {
+            match limpid_dsp::spectral::mimo_point(&m, q) {
+                Some(pt) => {
+                    for o in 0..no {
+                        h.extend((0..q).map(|i| pt.h[(o, i)]));
+                        partial.extend_from_slice(&pt.partial[o]);
                     }
-                    None => {
-                        h.extend(std::iter::repeat_n(nan, no * q));
-                        partial.extend(std::iter::repeat_n(f64::NAN, no * q));
-                        multiple.extend(std::iter::repeat_n(f64::NAN, no));
-                    }
+                    multiple.extend_from_slice(&pt.multiple);
+                }
+                None => {
+                    h.extend(std::iter::repeat_n(nan, no * q));
+                    partial.extend(std::iter::repeat_n(f64::NAN, no * q));
+                    multiple.extend(std::iter::repeat_n(f64::NAN, no));
                 }
             }
-            Ok((s.frequencies.clone(), h, multiple, partial))
-        })
-        .map_err(err)?;
+        }
+        Ok((s.frequencies.clone(), h, multiple, partial))
+    })
+    .map_err(err)?;
     Ok((
         f.into_pyarray(py),
         h.into_pyarray(py),
@@ -316,8 +313,7 @@ fn columns_dict<'py>(py: Python<'py>, rec: &Recording) -> PyResult<Bound<'py, Py
 /// A recording file as a dict of numpy arrays (column order kept).
 #[pyfunction]
 fn read_recording<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
-    let rec = detached(py, || limpid_io::read_recording(&path))
-        .map_err(err)?;
+    let rec = detached(py, || limpid_io::read_recording(&path)).map_err(err)?;
     warn_about(py, &rec)?;
     columns_dict(py, &rec)
 }
@@ -592,8 +588,10 @@ fn simulate<'py>(
     let controller: RigController = controller.parse().map_err(value_err)?;
     let name = Path::new(subject_name);
     let subject = subject.map(|text| SubjectText { text, path: name });
-    let runs = detached(py, || simulate_design(&d, subject.as_ref(), controller, seed))
-        .map_err(err)?;
+    let runs = detached(py, || {
+        simulate_design(&d, subject.as_ref(), controller, seed)
+    })
+    .map_err(err)?;
     runs.into_iter()
         .map(|run| Ok((columns_dict(py, &run.recording)?, run.truth.to_string())))
         .collect()
@@ -637,8 +635,7 @@ fn gravity_compensate<'py>(
             ))
         }
     };
-    let summary = detached(py, || compensate(&mut rec, source, robot.as_ref()))
-        .map_err(err)?;
+    let summary = detached(py, || compensate(&mut rec, source, robot.as_ref())).map_err(err)?;
     Ok((columns_dict(py, &rec)?, summary))
 }
 
@@ -649,8 +646,15 @@ fn report(py: Python<'_>, results: Vec<String>, path: std::path::PathBuf) -> PyR
         .iter()
         .enumerate()
         .map(|(i, t)| {
-            let name = format!("result {}", i + 1);
-            let doc = Document::from_json(&name, t).map_err(value_err)?;
+            let doc = Document::from_json(&format!("result {}", i + 1), t).map_err(value_err)?;
+            let name = doc.estimate.recording().map_or_else(
+                || format!("result {}", i + 1),
+                |r| {
+                    Path::new(r)
+                        .file_name()
+                        .map_or_else(|| r.to_string(), |f| f.to_string_lossy().into_owned())
+                },
+            );
             Ok((name, doc.estimate))
         })
         .collect::<PyResult<_>>()?;

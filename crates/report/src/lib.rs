@@ -26,7 +26,7 @@ use std::fmt::Write as _;
 
 use limpid_analysis::cocontraction::CocontractionResult;
 use limpid_analysis::demo::{DemoPoint, DemoResult};
-use limpid_analysis::linear::{LinearResult, MatrixKind};
+use limpid_analysis::linear::{LinearResult, MatrixKind, MatrixVerdict};
 use limpid_analysis::result::Estimate;
 use limpid_analysis::study::StudyResult;
 use limpid_analysis::Ellipsoid;
@@ -121,9 +121,28 @@ pub fn build(inputs: &[(String, Estimate)]) -> Report {
     }
 }
 
-/// A number as a short string; NaN is said in words.
+/// A number to 4 significant digits; NaN is said in words.
 fn fmt(v: f64) -> String {
-    limpid_core::short_number(v)
+    limpid_core::significant(v, 4)
+}
+
+/// Unit of a force-like signal for these coordinates (forces on positions, torques on angles).
+fn force_unit(coords: &[String]) -> &'static str {
+    if coords.iter().all(|c| c == "theta" || c.starts_with('q')) {
+        "N m"
+    } else {
+        "N"
+    }
+}
+
+/// Unit of one element of a matrix kind for these coordinates.
+fn kind_unit(kind: MatrixKind, coords: &[String]) -> &'static str {
+    let (m, b, k) = limpid_ident::linear::units(coords);
+    match kind {
+        MatrixKind::Inertia => m,
+        MatrixKind::Damping => b,
+        MatrixKind::Stiffness => k,
+    }
 }
 
 fn optional(v: Option<f64>) -> String {
@@ -132,6 +151,76 @@ fn optional(v: Option<f64>) -> String {
 
 fn messages(w: &[Warning]) -> Vec<String> {
     w.iter().map(|w| w.message.clone()).collect()
+}
+
+/// Warnings of several results, one line per kind: messages that differ only
+/// in their first parenthesis (the numbers) share a line, which names the
+/// results and gives each one's numbers
+/// (`S1-S6: inertia is not identifiable ... — S1 (Mzz = ...); S3 (...)`).
+pub fn group_warnings(items: &[(String, String)]) -> Vec<String> {
+    struct Group<'a> {
+        key: String,
+        first: &'a str,
+        members: Vec<(&'a str, Option<&'a str>)>,
+    }
+    let mut groups: Vec<Group> = Vec::new();
+    for (id, message) in items {
+        let (key, numbers) = match (message.find(" ("), message.find(')')) {
+            (Some(a), Some(b)) if b > a => (
+                format!("{}{}", &message[..a], &message[b + 1..]),
+                Some(&message[a + 2..b]),
+            ),
+            _ => (message.clone(), None),
+        };
+        match groups.iter_mut().find(|g| g.key == key) {
+            Some(g) => {
+                if !g.members.contains(&(id.as_str(), numbers)) {
+                    g.members.push((id, numbers));
+                }
+            }
+            None => groups.push(Group {
+                key,
+                first: message,
+                members: vec![(id, numbers)],
+            }),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|g| {
+            let mut ids: Vec<&str> = g.members.iter().map(|(m, _)| *m).collect();
+            ids.dedup();
+            let same = g.members.windows(2).all(|w| w[0].1 == w[1].1);
+            if same {
+                return format!("{}: {}", id_range(&ids), g.first);
+            }
+            let detail: Vec<String> = g
+                .members
+                .iter()
+                .filter_map(|(m, n)| n.map(|n| format!("{m} ({n})")))
+                .collect();
+            format!("{}: {} — {}", id_range(&ids), g.key, detail.join("; "))
+        })
+        .collect()
+}
+
+/// `S1, S2, S3` as `S1-S3` when they are consecutive numbers with one prefix.
+fn id_range(ids: &[&str]) -> String {
+    let split = |s: &str| {
+        let digits = s.trim_start_matches(|c: char| !c.is_ascii_digit());
+        let prefix = &s[..s.len() - digits.len()];
+        digits.parse::<u64>().ok().map(|n| (prefix.to_string(), n))
+    };
+    let parsed: Option<Vec<(String, u64)>> = ids.iter().map(|s| split(s)).collect();
+    if let Some(p) = parsed {
+        let consecutive = p.len() > 2
+            && p.windows(2)
+                .all(|w| w[0].0 == w[1].0 && w[1].1 == w[0].1 + 1);
+        if consecutive {
+            return format!("{}-{}", ids[0], ids[ids.len() - 1]);
+        }
+    }
+    ids.join(", ")
 }
 
 /// Seed 000 Table I: every element with its standard error, and the truth if given.
@@ -148,10 +237,10 @@ fn matrix_table(
         .map(|i| {
             let mut cells = vec![coords[i].clone()];
             for j in 0..est.ncols() {
-                let mut c = fmt(est[(i, j)]);
-                if let Some(se) = se {
-                    let _ = write!(c, " ± {}", fmt(se[(i, j)]));
-                }
+                let mut c = match se {
+                    Some(se) => limpid_core::with_standard_error(est[(i, j)], se[(i, j)]),
+                    None => fmt(est[(i, j)]),
+                };
                 if let Some(t) = truth {
                     let _ = write!(c, " (true {})", fmt(t[(i, j)]));
                 }
@@ -207,7 +296,12 @@ fn linear_tables(v: &LinearResult, truth: Option<&DemoPoint>) -> Vec<Table> {
         .iter()
         .map(|&kind| {
             matrix_table(
-                &format!("{} ({}, SI) ± standard error", kind.symbol(), kind.name()),
+                &format!(
+                    "{} ({}, {}) ± standard error",
+                    kind.symbol(),
+                    kind.name(),
+                    kind_unit(kind, coords)
+                ),
                 coords,
                 v.matrix(kind),
                 Some(v.standard_error(kind)),
@@ -266,7 +360,7 @@ fn fit_figures(prefix: &str, v: &LinearResult) -> Vec<Figure> {
                         fmt(v.fit.vaf[a])
                     ),
                     x_label: "time along the first windows (s)".into(),
-                    y_label: "force (SI)".into(),
+                    y_label: format!("force ({})", force_unit(coords)),
                     x_log: false,
                     y_log: false,
                     y_range: None,
@@ -285,11 +379,43 @@ fn linear_section(name: &str, v: &LinearResult) -> Section {
         Some(&[x, y, z]) => [x, y, z],
         _ => [0.0; 3],
     };
+    let p = &v.provenance;
+    let source = Table {
+        caption: "Recording and settings".into(),
+        header: vec!["item".into(), "value".into()],
+        rows: vec![
+            vec!["recording".into(), p.recording.clone()],
+            vec![
+                "sample rate".into(),
+                format!("{} Hz", fmt(p.sample_rate_hz)),
+            ],
+            vec![
+                "windows".into(),
+                if p.continuous {
+                    "one continuous window".into()
+                } else {
+                    format!("{} trials", p.windows)
+                },
+            ],
+            vec![
+                "low-pass".into(),
+                format!(
+                    "Butterworth order {} at {} Hz, zero-phase; derivatives {}",
+                    p.filter_order,
+                    fmt(p.cutoff_hz),
+                    p.derivative
+                ),
+            ],
+            vec!["force offsets".into(), p.offsets.clone()],
+        ],
+    };
+    let mut tables = vec![source];
+    tables.extend(linear_tables(v, None));
     Section {
         heading: format!("Linear estimate: {name}"),
         verdict: v.verdict(),
         warnings: messages(&v.warnings),
-        tables: linear_tables(v, None),
+        tables,
         figures: fit_figures("", v),
         ellipsoids: ellipsoids_of("estimate", centre, v),
     }
@@ -335,14 +461,24 @@ fn demo_section(name: &str, v: &DemoResult) -> Section {
         ],
         rows: vec![],
     };
+    // (start point, warning), grouped below
+    let mut grouped: Vec<(String, String)> = Vec::new();
     for p in &v.points {
         let id = &p.start_point;
         let est = &p.estimate;
+        // an error against the truth means nothing for a matrix the data do not identify
+        let error = |kind: MatrixKind, percent: f64| {
+            if est.criteria.verdict_of(kind) == MatrixVerdict::NotIdentifiable {
+                "n/i".to_string()
+            } else {
+                fmt(percent)
+            }
+        };
         errors.rows.push(vec![
             id.clone(),
-            fmt(p.stiffness_error_percent),
-            fmt(p.damping_error_percent),
-            fmt(p.inertia_error_percent),
+            error(MatrixKind::Stiffness, p.stiffness_error_percent),
+            error(MatrixKind::Damping, p.damping_error_percent),
+            error(MatrixKind::Inertia, p.inertia_error_percent),
             est.verdict(),
         ]);
         section
@@ -356,12 +492,11 @@ fn demo_section(name: &str, v: &DemoResult) -> Section {
             section.tables.push(t);
         }
         for w in &est.warnings {
-            let w = format!("{id}: {w}");
-            if !section.warnings.contains(&w) {
-                section.warnings.push(w);
-            }
+            grouped.push((id.clone(), w.message.clone()));
         }
     }
+    section.warnings = group_warnings(&grouped);
+    errors.caption.push_str("; n/i: the matrix is not identifiable from the data (its error against the truth is not meaningful)");
     section.verdict = format!(
         "{} start points; worst stiffness error {} % against the known truth",
         v.points.len(),
@@ -452,7 +587,7 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
                 y_label: if phase {
                     "phase (deg)".into()
                 } else {
-                    "|Z| (SI)".into()
+                    format!("|Z| ({})", kind_unit(MatrixKind::Stiffness, coords))
                 },
                 x_log: true,
                 y_log: !phase,
@@ -1019,8 +1154,13 @@ fn planar_section(name: &str, v: &PlanarEstimate) -> Section {
     ]
     .into_iter()
     .map(|(kind, m, se)| {
+        let unit = if kind == "stiffness" {
+            "N m/rad"
+        } else {
+            "N m s/rad"
+        };
         matrix_table(
-            &format!("joint {kind} (SI) ± standard error"),
+            &format!("joint {kind} ({unit}) ± standard error"),
             &coords,
             m,
             Some(se),
@@ -1075,7 +1215,7 @@ fn sweep_section(name: &str, v: &Sweep) -> Section {
             chart: Chart {
                 title: "Smallest eigenvalues of K and D (positive definiteness)".into(),
                 x_label: "T_obs (ms)".into(),
-                y_label: "eigenvalue (SI)".into(),
+                y_label: "eigenvalue (N m/rad; N m s/rad)".into(),
                 x_log: false,
                 y_log: false,
                 y_range: None,
