@@ -146,6 +146,7 @@ pub fn run_demo(profile: Profile, seed: u64, progress: &(dyn Fn() + Sync)) -> Re
 /// One row per start point and matrix kind: diagonal of truth and estimate,
 /// error, identifiability.
 pub fn demo_csv(result: &DemoResult) -> String {
+    use limpid_core::CsvNumber;
     let mut s = String::from("start_point,x,y,z,kind,true_xx,true_yy,true_zz,est_xx,est_yy,est_zz,error_percent,identifiable\n");
     for d in &result.points {
         let e = &d.estimate;
@@ -160,16 +161,16 @@ pub fn demo_csv(result: &DemoResult) -> String {
                 s,
                 "{},{},{},{},{},{},{},{},{},{},{},{:.4},{ok}",
                 d.start_point,
-                d.position[0],
-                d.position[1],
-                d.position[2],
+                CsvNumber(d.position[0]),
+                CsvNumber(d.position[1]),
+                CsvNumber(d.position[2]),
                 kind.name(),
-                t[(0, 0)],
-                t[(1, 1)],
-                t[(2, 2)],
-                m[(0, 0)],
-                m[(1, 1)],
-                m[(2, 2)],
+                CsvNumber(t[(0, 0)]),
+                CsvNumber(t[(1, 1)]),
+                CsvNumber(t[(2, 2)]),
+                CsvNumber(m[(0, 0)]),
+                CsvNumber(m[(1, 1)]),
+                CsvNumber(m[(2, 2)]),
                 d.error_percent(kind)
             );
         }

@@ -273,6 +273,24 @@ pub fn short_number(v: f64) -> String {
     }
 }
 
+/// A number for CSV output: the shortest text that reads back to the same
+/// double, with an exponent below 1e-4 and from 1e15 in magnitude
+/// (`1.2895775544584347e-16`, not 32 zeros and digits).
+#[derive(Debug, Clone, Copy)]
+pub struct CsvNumber(pub f64);
+
+impl std::fmt::Display for CsvNumber {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        let a = v.abs();
+        if v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&a) {
+            write!(f, "{v}")
+        } else {
+            write!(f, "{v:e}")
+        }
+    }
+}
+
 /// `v` to `digits` significant digits (trailing zeros dropped; exponent
 /// form below 1e-3 and from 1e6); a non-finite value is "n/a".
 pub fn significant(v: f64, digits: usize) -> String {
@@ -325,6 +343,22 @@ pub fn with_standard_error(v: f64, se: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn csv_numbers_are_short_and_read_back_exactly() {
+        for (v, text) in [
+            (1.2895775544584347e-16, "1.2895775544584347e-16"),
+            (0.25, "0.25"),
+            (-3.0, "-3"),
+            (0.0, "0"),
+            (6.02e23, "6.02e23"),
+            (1e-4, "0.0001"),
+        ] {
+            let s = CsvNumber(v).to_string();
+            assert_eq!(s, text);
+            assert_eq!(s.parse::<f64>().unwrap(), v);
+        }
+    }
 
     #[test]
     fn values_are_rounded_to_their_standard_error() {

@@ -19,7 +19,9 @@ pub mod recording;
 pub mod trial;
 pub mod warning;
 
-pub use error::{display_round, short_number, significant, with_standard_error, Error, Result};
+pub use error::{
+    display_round, short_number, significant, with_standard_error, CsvNumber, Error, Result,
+};
 pub use frame::{FrameTransform, GravityCompensation};
 pub use matrix::Matrix;
 pub use payload::PayloadCalibration;

@@ -16,6 +16,7 @@
 
 #![warn(missing_docs)]
 
+use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
@@ -571,7 +572,7 @@ fn write_csv_to(rec: &Recording, path: &Path, w: &mut impl Write) -> Result<()> 
             if k > 0 {
                 line.push(',');
             }
-            line.push_str(&format!("{}", c[i]));
+            let _ = write!(line, "{}", limpid_core::CsvNumber(c[i]));
         }
         line.push('\n');
         w.write_all(line.as_bytes()).map_err(io_err(path))?;
