@@ -116,10 +116,35 @@ pub struct LevelRow {
     pub k2: Option<f64>,
     /// Mean tertiary principal stiffness (N/m).
     pub k3: Option<f64>,
+    /// Sample standard deviation over the subjects of each mean above (as
+    /// seed 001's tables give mean ± sd); null with fewer than two values.
+    #[serde(default)]
+    pub sd: LevelSpread,
     /// Mean stiffness matrix over subjects (N/m) and its ellipsoid (seed 001 Fig. 5).
     pub stiffness: crate::Matrix,
     /// Ellipsoid of the mean matrix; absent when it is not 2 x 2 or 3 x 3.
     pub ellipsoid: Option<crate::Ellipsoid>,
+}
+
+/// Standard deviations over subjects of one [`LevelRow`]'s means (same units).
+#[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
+pub struct LevelSpread {
+    /// Of the co-contraction index.
+    pub cocontraction_index: Option<f64>,
+    /// Of Kxx (N/m).
+    pub kxx: Option<f64>,
+    /// Of Kyy (N/m).
+    pub kyy: Option<f64>,
+    /// Of Kzz (N/m).
+    pub kzz: Option<f64>,
+    /// Of the largest antisymmetric element (N/m).
+    pub k_max_a: Option<f64>,
+    /// Of the primary principal stiffness (N/m).
+    pub k1: Option<f64>,
+    /// Of the secondary principal stiffness (N/m).
+    pub k2: Option<f64>,
+    /// Of the tertiary principal stiffness (N/m).
+    pub k3: Option<f64>,
 }
 
 /// Table 5 row (and Fig. 6): highest vs lowest level for one configuration.
@@ -257,6 +282,13 @@ pub fn run_study(
                 let v: Vec<f64> = at.iter().map(|l| f(l)).filter(|v| v.is_finite()).collect();
                 (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
             };
+            let sd = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| {
+                let v: Vec<f64> = at.iter().map(|l| f(l)).filter(|v| v.is_finite()).collect();
+                (v.len() >= 2).then(|| {
+                    let m = v.iter().sum::<f64>() / v.len() as f64;
+                    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+                })
+            };
             let eig = |l: &crate::cocontraction::LevelResult, i: usize| {
                 l.ellipsoid
                     .as_ref()
@@ -285,6 +317,16 @@ pub fn run_study(
                 k1: mean(&|l| eig(l, 0)),
                 k2: mean(&|l| eig(l, 1)),
                 k3: mean(&|l| eig(l, 2)),
+                sd: LevelSpread {
+                    cocontraction_index: sd(&|l| l.cocontraction_index),
+                    kxx: sd(&|l| k(l, 0)),
+                    kyy: sd(&|l| k(l, 1)),
+                    kzz: sd(&|l| k(l, 2)),
+                    k_max_a: sd(&|l| l.estimate.table_ii.stiffness.max_antisymmetric),
+                    k1: sd(&|l| eig(l, 0)),
+                    k2: sd(&|l| eig(l, 1)),
+                    k3: sd(&|l| eig(l, 2)),
+                },
                 ellipsoid: crate::ellipsoid(&mean_k),
                 stiffness: mean_k,
             });
@@ -414,25 +456,33 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
         Ok(p)
     };
     let mut csv = String::from(
-        "configuration,level,subjects,cocontraction_index,kxx,kyy,kzz,k_max_a,k1,k2,k3\n",
+        "configuration,level,subjects,cocontraction_index,cocontraction_index_sd,kxx,kxx_sd,kyy,kyy_sd,kzz,kzz_sd,k_max_a,k_max_a_sd,k1,k1_sd,k2,k2_sd,k3,k3_sd\n",
     );
     // a value no recording has is an empty cell, never "NaN"
     let cell = |v: Option<f64>, decimals: usize| cell(v, decimals, "");
     for l in &r.levels {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             l.configuration,
             l.level,
             l.subjects,
             cell(l.cocontraction_index, 4),
+            cell(l.sd.cocontraction_index, 4),
             cell(l.kxx, 2),
+            cell(l.sd.kxx, 2),
             cell(l.kyy, 2),
+            cell(l.sd.kyy, 2),
             cell(l.kzz, 2),
+            cell(l.sd.kzz, 2),
             cell(l.k_max_a, 2),
+            cell(l.sd.k_max_a, 2),
             cell(l.k1, 2),
+            cell(l.sd.k1, 2),
             cell(l.k2, 2),
-            cell(l.k3, 2)
+            cell(l.sd.k2, 2),
+            cell(l.k3, 2),
+            cell(l.sd.k3, 2)
         );
     }
     let mut rot = String::from("configuration,from_level,to_level,subjects,rotation_primary_deg,rotation_secondary_deg,rotation_tertiary_deg,change_primary_percent,change_secondary_percent,change_tertiary_percent\n");
@@ -493,24 +543,30 @@ pub fn markdown(r: &StudyResult) -> String {
     for (i, level) in levels.iter().enumerate() {
         let _ = writeln!(
             md,
-            "## Table {}: stiffness at co-contraction level {level}, mean across subjects (N/m)\n",
+            "## Table {}: stiffness at co-contraction level {level}, mean ± sd across subjects (N/m)\n",
             i + 1
         );
         md.push_str("| configuration | subjects | C | Kxx | Kyy | Kzz | K_maxA | K1 | K2 | K3 |\n|---|---|---|---|---|---|---|---|---|---|\n");
+        let pm =
+            |v: Option<f64>, sd: Option<f64>, decimals: usize| match sd.filter(|s| s.is_finite()) {
+                Some(sd) if v.is_some() => format!("{} ± {sd:.decimals$}", cell(v, decimals)),
+                _ => cell(v, decimals),
+            };
         for l in r.levels.iter().filter(|l| l.level == *level) {
+            let d = &l.sd;
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 l.configuration,
                 l.subjects,
-                cell(l.cocontraction_index, 3),
-                cell(l.kxx, 1),
-                cell(l.kyy, 1),
-                cell(l.kzz, 1),
-                cell(l.k_max_a, 1),
-                cell(l.k1, 1),
-                cell(l.k2, 1),
-                cell(l.k3, 1)
+                pm(l.cocontraction_index, d.cocontraction_index, 3),
+                pm(l.kxx, d.kxx, 1),
+                pm(l.kyy, d.kyy, 1),
+                pm(l.kzz, d.kzz, 1),
+                pm(l.k_max_a, d.k_max_a, 1),
+                pm(l.k1, d.k1, 1),
+                pm(l.k2, d.k2, 1),
+                pm(l.k3, d.k3, 1)
             );
         }
         md.push('\n');

@@ -125,6 +125,31 @@ fn virtual_study_tables_show_the_anisotropic_increase() {
     for f in ["tables.csv", "rotation.csv", "tables.md"] {
         assert!(tables.join(f).exists(), "{f}");
     }
+    // issue 20: each mean comes with its sd over subjects (seed 001's tables give mean ± sd)
+    let recordings = study["recordings"].as_array().unwrap();
+    for row in levels {
+        let values: Vec<f64> = recordings
+            .iter()
+            .filter(|r| r["configuration"] == row["configuration"])
+            .filter_map(|r| {
+                r["result"]["levels"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .find(|l| l["level"] == row["level"])
+                    .and_then(|l| l["ellipsoid"]["eigenvalues"][0].as_f64())
+            })
+            .collect();
+        assert_eq!(values.len(), 4);
+        let m = values.iter().sum::<f64>() / 4.0;
+        let sd = (values.iter().map(|v| (v - m).powi(2)).sum::<f64>() / 3.0).sqrt();
+        let got = row["sd"]["k1"].as_f64().unwrap();
+        assert!((got - sd).abs() <= 1e-9 * sd, "{got} vs {sd}");
+    }
+    let csv = std::fs::read_to_string(tables.join("tables.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().contains(",k1,k1_sd,"), "{csv}");
+    let md = std::fs::read_to_string(tables.join("tables.md")).unwrap();
+    assert!(md.contains("mean ± sd across subjects") && md.contains(" ± "));
 }
 
 #[test]
