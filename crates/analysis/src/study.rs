@@ -117,7 +117,7 @@ pub struct LevelRow {
     /// Mean tertiary principal stiffness (N/m).
     pub k3: Option<f64>,
     /// Sample standard deviation over the subjects of each mean above (as
-    /// seed 001's tables give mean ± sd); null with fewer than two values.
+    /// seed 001's tables give mean ± sd); a field is absent with fewer than two values.
     #[serde(default)]
     pub sd: LevelSpread,
     /// Mean stiffness matrix over subjects (N/m) and its ellipsoid (seed 001 Fig. 5).
@@ -126,24 +126,33 @@ pub struct LevelRow {
     pub ellipsoid: Option<crate::Ellipsoid>,
 }
 
-/// Standard deviations over subjects of one [`LevelRow`]'s means (same units).
+/// Standard deviations over subjects of one [`LevelRow`]'s means (same
+/// units); a field is absent with fewer than two values (never null).
 #[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
 pub struct LevelSpread {
     /// Of the co-contraction index.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cocontraction_index: Option<f64>,
     /// Of Kxx (N/m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kxx: Option<f64>,
     /// Of Kyy (N/m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kyy: Option<f64>,
     /// Of Kzz (N/m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kzz: Option<f64>,
     /// Of the largest antisymmetric element (N/m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k_max_a: Option<f64>,
     /// Of the primary principal stiffness (N/m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k1: Option<f64>,
     /// Of the secondary principal stiffness (N/m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k2: Option<f64>,
     /// Of the tertiary principal stiffness (N/m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k3: Option<f64>,
 }
 
