@@ -14,6 +14,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cross_spectra;
 pub mod spectral;
 
 use limpid_core::{Error, Result};
@@ -28,6 +29,20 @@ pub enum Edge {
     Odd,
     /// Mirror about the end sample (scipy's `padtype='even'`).
     Even,
+}
+
+/// How [`LowPass::filtfilt_into`] extends the signal before filtering
+/// (scipy's `padtype`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pad {
+    /// Point reflection about the end sample (`'odd'`, scipy's default).
+    Odd,
+    /// Mirror about the end sample (`'even'`).
+    Even,
+    /// The end sample repeated (`'constant'`).
+    Constant,
+    /// No extension (`padtype=None`).
+    None,
 }
 
 /// A designed zero-phase low-pass filter (second-order sections).
@@ -121,27 +136,67 @@ impl LowPass {
     /// the steady state of its first sample, as `sosfilt_zi`). One buffer,
     /// filtered in place forward then backward, all sections per sample.
     pub fn filtfilt(&self, x: &[f64]) -> Result<Vec<f64>> {
-        let pad = self.padlen();
+        self.filtfilt_padded(x, Pad::Odd, self.padlen())
+    }
+
+    /// [`LowPass::filtfilt`] with scipy's `padtype` and `padlen`
+    /// (`sosfiltfilt(sos, x, padtype=..., padlen=...)`). The signal must be
+    /// longer than `padlen` ([`Pad::None`] pads nothing).
+    pub fn filtfilt_padded(&self, x: &[f64], pad: Pad, padlen: usize) -> Result<Vec<f64>> {
+        let (mut y, padlen) = self.filtered_buffer(x, pad, padlen)?;
+        // the filtered signal moved to the front of its own buffer: no second allocation
+        y.copy_within(padlen..padlen + x.len(), 0);
+        y.truncate(x.len());
+        Ok(y)
+    }
+
+    /// [`LowPass::filtfilt_padded`] written into `out` (as long as `x`).
+    pub fn filtfilt_into(&self, x: &[f64], pad: Pad, padlen: usize, out: &mut [f64]) -> Result<()> {
+        if out.len() != x.len() {
+            return Err(Error::invalid(
+                "output",
+                format!("expected {} samples of room, found {}", x.len(), out.len()),
+            ));
+        }
+        let (y, padlen) = self.filtered_buffer(x, pad, padlen)?;
+        out.copy_from_slice(&y[padlen..padlen + x.len()]);
+        Ok(())
+    }
+
+    /// The extended signal, filtered forward then backward (each pass started
+    /// in the steady state of its first sample, as `sosfilt_zi`), and the
+    /// extension length per end.
+    fn filtered_buffer(&self, x: &[f64], pad: Pad, padlen: usize) -> Result<(Vec<f64>, usize)> {
         let n = x.len();
-        if n <= pad {
+        let padlen = if pad == Pad::None { 0 } else { padlen };
+        if n <= padlen {
             return Err(Error::invalid(
                 "signal length",
-                format!("zero-phase filtering needs more than {pad} samples, found {n}"),
+                format!(
+                    "zero-phase filtering needs more than padlen = {padlen} samples, found {n}"
+                ),
             ));
         }
         let sections = self.sections();
         let zi = steady_state(&sections);
-        let mut y = Vec::with_capacity(n + 2 * pad);
-        y.extend((1..=pad).rev().map(|i| 2.0 * x[0] - x[i]));
+        let (first, last) = (x[0], x[n - 1]);
+        let mut y = Vec::with_capacity(n + 2 * padlen);
+        y.extend((1..=padlen).rev().map(|i| match pad {
+            Pad::Odd => 2.0 * first - x[i],
+            Pad::Even => x[i],
+            Pad::Constant | Pad::None => first,
+        }));
         y.extend_from_slice(x);
-        y.extend((1..=pad).map(|i| 2.0 * x[n - 1] - x[n - 1 - i]));
-        let first = y[0];
-        run_sections(y.iter_mut(), &sections, &zi, first);
-        let last = y[y.len() - 1];
-        run_sections(y.iter_mut().rev(), &sections, &zi, last);
-        y.truncate(pad + n);
-        y.drain(..pad);
-        Ok(y)
+        y.extend((1..=padlen).map(|i| match pad {
+            Pad::Odd => 2.0 * last - x[n - 1 - i],
+            Pad::Even => x[n - 1 - i],
+            Pad::Constant | Pad::None => last,
+        }));
+        let start = y[0];
+        run_sections(y.iter_mut(), &sections, &zi, start);
+        let end = y[y.len() - 1];
+        run_sections(y.iter_mut().rev(), &sections, &zi, end);
+        Ok((y, padlen))
     }
 
     /// Sections normalised to `a0 = 1`: `([b0, b1, b2], [a1, a2])`.

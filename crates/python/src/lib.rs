@@ -7,7 +7,10 @@
 
 use std::path::Path;
 
-use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -15,9 +18,6 @@ use pyo3::types::PyDict;
 use limpid_analysis::result::{Document, Estimate};
 use limpid_core::{Error, Recording};
 use limpid_dsp::spectral::{Detrend, Scaling, Welch, Window};
-
-/// Frequencies and one spectrum, as numpy arrays.
-type Spectrum<'py, T> = PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<T>>)>;
 
 fn err(e: Error) -> PyErr {
     match e {
@@ -151,65 +151,114 @@ fn welch(
     })
 }
 
-/// Welch power spectral density (scipy.signal.welch conventions).
+/// Welch cross-spectra of row pairs (`limpid_dsp::cross_spectra`), the
+/// engine of the package's `psd`, `csd` and `coherence`: `sources` are
+/// C-contiguous 2-D float64 or complex128 arrays with rows of one length;
+/// rows are numbered through the sources in order; returns
+/// `[pair, bin]` complex128.
 #[pyfunction]
-#[pyo3(signature = (x, fs, window, nperseg, noverlap, detrend, scaling))]
+#[pyo3(signature = (sources, pairs_a, pairs_b, window, hop, nfft, onesided, detrend, scaling, fs, average))]
 #[allow(clippy::too_many_arguments)]
-fn psd<'py>(
+fn cross_spectra<'py>(
     py: Python<'py>,
-    x: PyReadonlyArray1<'py, f64>,
-    fs: f64,
-    window: &str,
-    nperseg: usize,
-    noverlap: Option<usize>,
+    sources: Vec<Bound<'py, PyAny>>,
+    pairs_a: PyReadonlyArray1<'py, i64>,
+    pairs_b: PyReadonlyArray1<'py, i64>,
+    window: PyReadonlyArray1<'py, f64>,
+    hop: usize,
+    nfft: usize,
+    onesided: bool,
     detrend: &str,
     scaling: &str,
-) -> Spectrum<'py, f64> {
-    let p = welch(fs, window, nperseg, noverlap, detrend, scaling)?;
-    let x = x.as_array().to_vec();
-    let (f, v) = detached(py, || limpid_dsp::spectral::psd(&x, &p)).map_err(err)?;
-    Ok((f.into_pyarray(py), v.into_pyarray(py)))
-}
-
-/// Welch cross spectral density (scipy.signal.csd conventions).
-#[pyfunction]
-#[pyo3(signature = (x, y, fs, window, nperseg, noverlap, detrend, scaling))]
-#[allow(clippy::too_many_arguments)]
-fn csd<'py>(
-    py: Python<'py>,
-    x: PyReadonlyArray1<'py, f64>,
-    y: PyReadonlyArray1<'py, f64>,
     fs: f64,
-    window: &str,
-    nperseg: usize,
-    noverlap: Option<usize>,
-    detrend: &str,
-    scaling: &str,
-) -> Spectrum<'py, num_complex::Complex64> {
-    let p = welch(fs, window, nperseg, noverlap, detrend, scaling)?;
-    let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
-    let (f, v) = detached(py, || limpid_dsp::spectral::csd(&x, &y, &p)).map_err(err)?;
-    Ok((f.into_pyarray(py), v.into_pyarray(py)))
-}
-
-/// Magnitude-squared coherence (scipy.signal.coherence conventions).
-#[pyfunction]
-#[pyo3(signature = (x, y, fs, window, nperseg, noverlap, detrend))]
-#[allow(clippy::too_many_arguments)]
-fn coherence<'py>(
-    py: Python<'py>,
-    x: PyReadonlyArray1<'py, f64>,
-    y: PyReadonlyArray1<'py, f64>,
-    fs: f64,
-    window: &str,
-    nperseg: usize,
-    noverlap: Option<usize>,
-    detrend: &str,
-) -> Spectrum<'py, f64> {
-    let p = welch(fs, window, nperseg, noverlap, detrend, "density")?;
-    let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
-    let (f, v) = detached(py, || limpid_dsp::spectral::coherence(&x, &y, &p)).map_err(err)?;
-    Ok((f.into_pyarray(py), v.into_pyarray(py)))
+    average: &str,
+) -> PyResult<Bound<'py, PyArray2<num_complex::Complex64>>> {
+    use limpid_dsp::cross_spectra::{Average, Rows, Settings};
+    enum Held<'py> {
+        Real(PyReadonlyArray2<'py, f64>),
+        Complex(PyReadonlyArray2<'py, num_complex::Complex64>),
+    }
+    let mut held = Vec::with_capacity(sources.len());
+    let mut len = None;
+    for s in &sources {
+        let h = if let Ok(a) = s.extract::<PyReadonlyArray2<f64>>() {
+            Held::Real(a)
+        } else if let Ok(a) = s.extract::<PyReadonlyArray2<num_complex::Complex64>>() {
+            Held::Complex(a)
+        } else {
+            return Err(value_err(
+                "sources must be 2-D float64 or complex128 arrays",
+            ));
+        };
+        let cols = match &h {
+            Held::Real(a) => a.shape()[1],
+            Held::Complex(a) => a.shape()[1],
+        };
+        if *len.get_or_insert(cols) != cols {
+            return Err(value_err("all sources must have rows of one length"));
+        }
+        held.push(h);
+    }
+    let mut rows = Vec::with_capacity(held.len());
+    for h in &held {
+        rows.push(match h {
+            Held::Real(a) => Rows::Real(
+                a.as_slice()
+                    .map_err(|_| value_err("sources must be C-contiguous"))?,
+            ),
+            Held::Complex(a) => Rows::Complex(
+                a.as_slice()
+                    .map_err(|_| value_err("sources must be C-contiguous"))?,
+            ),
+        });
+    }
+    let (pa, pb) = (pairs_a.as_array(), pairs_b.as_array());
+    if pa.len() != pb.len() || pa.iter().chain(pb.iter()).any(|&i| i < 0) {
+        return Err(value_err(
+            "pairs: two index arrays of one length, no negative index",
+        ));
+    }
+    let pairs: Vec<(usize, usize)> = pa
+        .iter()
+        .zip(pb.iter())
+        .map(|(&a, &b)| (a as usize, b as usize))
+        .collect();
+    let window = window.as_array().to_vec();
+    let settings = Settings {
+        fs,
+        window: &window,
+        hop,
+        nfft,
+        onesided,
+        detrend: match detrend {
+            "constant" => Detrend::Constant,
+            "linear" => Detrend::Linear,
+            "none" => Detrend::None,
+            other => {
+                return Err(value_err(format!(
+                    "detrend {other:?}: constant, linear or none"
+                )))
+            }
+        },
+        scaling: match scaling {
+            "density" => Scaling::Density,
+            "spectrum" => Scaling::Spectrum,
+            other => return Err(value_err(format!("scaling {other:?}: density or spectrum"))),
+        },
+        average: match average {
+            "mean" => Average::Mean,
+            "median" => Average::Median,
+            other => return Err(value_err(format!("average {other:?}: mean or median"))),
+        },
+    };
+    let len = len.unwrap_or(0);
+    let bins = settings.bins();
+    let values = detached(py, || {
+        limpid_dsp::cross_spectra::cross_spectra(&rows, len, &pairs, &settings)
+    })
+    .map_err(err)?;
+    let array = values.into_pyarray(py);
+    array.reshape([pairs.len(), bins])
 }
 
 /// MIMO H1 frequency response of outputs on inputs with multiple and partial
@@ -280,25 +329,53 @@ fn frequency_response<'py>(
 
 /// Zero-phase Butterworth low-pass (scipy: sosfiltfilt(butter(order, cutoff, fs=fs, output='sos'), x)).
 #[pyfunction]
-#[pyo3(signature = (x, cutoff_hz, fs, order))]
+#[pyo3(signature = (x, cutoff_hz, fs, order, padtype, padlen))]
 fn lowpass_filtfilt<'py>(
     py: Python<'py>,
-    x: PyReadonlyArray1<'py, f64>,
+    x: PyReadonlyArray2<'py, f64>,
     cutoff_hz: f64,
     fs: f64,
     order: usize,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    padtype: Option<&str>,
+    padlen: Option<usize>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    use limpid_dsp::Pad;
+    use rayon::prelude::*;
     let lp = limpid_dsp::LowPass::butterworth(order, cutoff_hz, fs).map_err(err)?;
-    // a contiguous array is read in place; others are copied once
-    let y = match x.as_slice() {
-        Ok(slice) => detached(py, || lp.filtfilt(slice)),
-        Err(_) => {
-            let owned = x.as_array().to_vec();
-            detached(py, || lp.filtfilt(&owned))
+    let pad = match padtype {
+        Some("odd") => Pad::Odd,
+        Some("even") => Pad::Even,
+        Some("constant") => Pad::Constant,
+        None => Pad::None,
+        Some(other) => {
+            return Err(value_err(format!(
+                "padtype {other:?}: expected 'odd', 'even', 'constant' or None"
+            )))
         }
+    };
+    let padlen = padlen.unwrap_or_else(|| lp.padlen());
+    let [rows, n] = [x.shape()[0], x.shape()[1]];
+    let x = x
+        .as_slice()
+        .map_err(|_| value_err("x must be C-contiguous"))?;
+    let effective = if pad == Pad::None { 0 } else { padlen };
+    if n <= effective {
+        return Err(value_err(format!(
+            "the signal must be longer than padlen = {effective} samples, found {n}"
+        )));
     }
+    if rows == 1 {
+        let y = detached(py, || lp.filtfilt_padded(x, pad, padlen)).map_err(err)?;
+        return y.into_pyarray(py).reshape([rows, n]);
+    }
+    let mut out = vec![0.0; rows * n];
+    detached(py, || {
+        out.par_chunks_mut(n)
+            .zip(x.par_chunks(n))
+            .try_for_each(|(o, r)| lp.filtfilt_into(r, pad, padlen, o))
+    })
     .map_err(err)?;
-    Ok(y.into_pyarray(py))
+    out.into_pyarray(py).reshape([rows, n])
 }
 
 /// A recording as a dict of numpy arrays (column order kept).
@@ -670,9 +747,7 @@ fn document(e: Estimate) -> String {
 
 #[pymodule]
 fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(psd, m)?)?;
-    m.add_function(wrap_pyfunction!(csd, m)?)?;
-    m.add_function(wrap_pyfunction!(coherence, m)?)?;
+    m.add_function(wrap_pyfunction!(cross_spectra, m)?)?;
     m.add_function(wrap_pyfunction!(lowpass_filtfilt, m)?)?;
     m.add_function(wrap_pyfunction!(frequency_response, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;

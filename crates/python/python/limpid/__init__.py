@@ -27,7 +27,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from . import _limpid
+from . import _limpid, _spectral
 
 __all__ = [
     "Result",
@@ -214,37 +214,123 @@ def _vector(x: Any) -> np.ndarray:
     return a
 
 
-def psd(x: Any, fs: float = 1.0, window: str = "hann", nperseg: Optional[int] = None,
-        noverlap: Optional[int] = None, nfft: Optional[int] = None, detrend: Union[str, bool] = "constant",
-        return_onesided: bool = True, scaling: str = "density", axis: int = -1,
-        average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
-    """Welch power spectral density, as ``scipy.signal.welch``."""
-    x = _vector(x)
-    seg, ov = _welch_args(len(x), nperseg, noverlap, nfft, return_onesided, axis, average)
-    return _limpid.psd(x, float(fs), window, seg, ov, str(detrend).lower(), scaling)
+_WELCH_PARAMETERS = """
+    fs : float, default 1.0
+        Sample rate of the signal (Hz); frequencies are returned in Hz.
+    window : str, tuple or array_like, default 'hann'
+        A name or ``(name, parameter, ...)`` tuple as accepted by
+        ``scipy.signal.get_window`` (periodic), or the window's samples (then
+        ``nperseg`` defaults to their count). Without scipy installed, the
+        names hann, hamming and boxcar are built in.
+    nperseg : int, optional
+        Samples per segment; default 256 for a named window, shortened with a
+        ``UserWarning`` to the signal length when longer.
+    noverlap : int, optional
+        Samples shared by neighbouring segments; default ``nperseg // 2``.
+    nfft : int, optional
+        FFT length (zero padding); default ``nperseg``.
+    detrend : {'constant', 'linear', False, None} or callable, default 'constant'
+        Trend removed from each segment before windowing. A callable is called
+        once per segment with the samples on the last axis.
+"""
 
 
-def csd(x: Any, y: Any, fs: float = 1.0, window: str = "hann", nperseg: Optional[int] = None,
-        noverlap: Optional[int] = None, nfft: Optional[int] = None, detrend: Union[str, bool] = "constant",
-        return_onesided: bool = True, scaling: str = "density", axis: int = -1,
-        average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
-    """Welch cross spectral density, as ``scipy.signal.csd``."""
-    x, y = _vector(x), _vector(y)
-    if len(x) != len(y):
-        raise ValueError(f"x has {len(x)} samples, y has {len(y)}")
-    seg, ov = _welch_args(len(x), nperseg, noverlap, nfft, return_onesided, axis, average)
-    return _limpid.csd(x, y, float(fs), window, seg, ov, str(detrend).lower(), scaling)
+def psd(x: Any, fs: float = 1.0, window: _spectral.WindowLike = "hann", nperseg: Optional[int] = None,
+        noverlap: Optional[int] = None, nfft: Optional[int] = None,
+        detrend: _spectral.DetrendLike = "constant", return_onesided: bool = True,
+        scaling: str = "density", axis: int = -1, average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
+    """Welch power spectral density, as ``scipy.signal.welch``.
+
+    Parameters
+    ----------
+    x : array_like
+        Signal(s), real or complex, any number of dimensions; samples along ``axis``.
+    {params}    return_onesided : bool, default True
+        One-sided spectrum (doubled except at 0 Hz and Nyquist); complex
+        input always gives the two-sided spectrum.
+    scaling : {{'density', 'spectrum'}}, default 'density'
+        Power spectral density (unit^2/Hz) or power spectrum (unit^2).
+    axis : int, default -1
+        Axis of the samples.
+    average : {{'mean', 'median'}}, default 'mean'
+        Mean of the segments' periodograms, or their median divided by the
+        median's bias.
+
+    Returns
+    -------
+    f : ndarray
+        Frequencies (Hz).
+    Pxx : ndarray
+        Spectral density or spectrum, with the frequencies along ``axis``;
+        float32 for float32 or complex64 input, else float64.
+    """
+    return _spectral.spectra(x, None, "psd", fs, window, nperseg, noverlap, nfft, detrend, return_onesided,
+                             scaling, axis, average)
 
 
-def coherence(x: Any, y: Any, fs: float = 1.0, window: str = "hann", nperseg: Optional[int] = None,
-              noverlap: Optional[int] = None, nfft: Optional[int] = None,
-              detrend: Union[str, bool] = "constant", axis: int = -1) -> Tuple[np.ndarray, np.ndarray]:
-    """Magnitude-squared coherence, as ``scipy.signal.coherence``."""
-    x, y = _vector(x), _vector(y)
-    if len(x) != len(y):
-        raise ValueError(f"x has {len(x)} samples, y has {len(y)}")
-    seg, ov = _welch_args(len(x), nperseg, noverlap, nfft, True, axis, "mean")
-    return _limpid.coherence(x, y, float(fs), window, seg, ov, str(detrend).lower())
+def csd(x: Any, y: Any, fs: float = 1.0, window: _spectral.WindowLike = "hann", nperseg: Optional[int] = None,
+        noverlap: Optional[int] = None, nfft: Optional[int] = None,
+        detrend: _spectral.DetrendLike = "constant", return_onesided: bool = True,
+        scaling: str = "density", axis: int = -1, average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
+    """Welch cross spectral density ``P_xy = avg conj(X) Y``, as ``scipy.signal.csd``.
+
+    ``x`` and ``y`` broadcast against each other outside ``axis`` (so
+    ``csd(s[:, None, :], s[None, :, :])`` is the full cross-spectral matrix of
+    the channels of ``s``, each channel's FFT computed once per segment); the
+    shorter is zero-padded along ``axis`` to the longer.
+
+    Parameters
+    ----------
+    x, y : array_like
+        Signals, real or complex; samples along ``axis``.
+    {params}    return_onesided : bool, default True
+        One-sided spectrum; complex input gives the two-sided one.
+    scaling : {{'density', 'spectrum'}}, default 'density'
+        Cross spectral density (unit_x unit_y/Hz) or cross spectrum.
+    axis : int, default -1
+        Axis of the samples.
+    average : {{'mean', 'median'}}, default 'mean'
+        Mean over segments, or the bias-corrected median of the real and
+        imaginary parts.
+
+    Returns
+    -------
+    f : ndarray
+        Frequencies (Hz).
+    Pxy : ndarray
+        Complex cross-spectral density (real when ``y is x``), complex64 for
+        single-precision input.
+    """
+    return _spectral.spectra(x, y, "csd", fs, window, nperseg, noverlap, nfft, detrend, return_onesided,
+                             scaling, axis, average)
+
+
+def coherence(x: Any, y: Any, fs: float = 1.0, window: _spectral.WindowLike = "hann",
+              nperseg: Optional[int] = None, noverlap: Optional[int] = None, nfft: Optional[int] = None,
+              detrend: _spectral.DetrendLike = "constant", axis: int = -1) -> Tuple[np.ndarray, np.ndarray]:
+    """Magnitude-squared coherence ``|P_xy|^2 / (P_xx P_yy)``, as ``scipy.signal.coherence``.
+
+    Parameters
+    ----------
+    x, y : array_like
+        Signals; broadcast outside ``axis`` as in :func:`csd`.
+    {params}    axis : int, default -1
+        Axis of the samples.
+
+    Returns
+    -------
+    f : ndarray
+        Frequencies (Hz).
+    Cxy : ndarray
+        Coherence in [0, 1]; NaN (with numpy's RuntimeWarning) where a
+        signal has no power, as scipy.
+    """
+    return _spectral.spectra(x, y, "coherence", fs, window, nperseg, noverlap, nfft, detrend, True,
+                             "density", axis, "mean")
+
+
+for _f in (psd, csd, coherence):
+    _f.__doc__ = (_f.__doc__ or "").replace("{params}", _WELCH_PARAMETERS.strip() + "\n").replace("{{", "{").replace("}}", "}")
 
 
 def frequency_response(inputs: Sequence[Any], outputs: Sequence[Any], fs: float = 1.0,
@@ -278,11 +364,58 @@ def frequency_response(inputs: Sequence[Any], outputs: Sequence[Any], fs: float 
     return f, h.reshape(nf, no, ni), m.reshape(nf, no), p.reshape(nf, no, ni)
 
 
-def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4) -> np.ndarray:
+def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4, axis: int = -1,
+                     padtype: Optional[str] = "odd", padlen: Optional[int] = None) -> np.ndarray:
     """Zero-phase Butterworth low-pass, as
-    ``scipy.signal.sosfiltfilt(scipy.signal.butter(order, cutoff_hz, fs=fs, output='sos'), x)``."""
-    return _limpid.lowpass_filtfilt(_vector(x), _number("cutoff_hz", cutoff_hz), _number("fs", fs),
-                                    _integer("order", order, minimum=1))
+    ``scipy.signal.sosfiltfilt(scipy.signal.butter(order, cutoff_hz, fs=fs, output='sos'), x,
+    axis=axis, padtype=padtype, padlen=padlen)``.
+
+    Parameters
+    ----------
+    x : array_like
+        Signal(s), any number of dimensions, filtered along ``axis``; complex
+        input has its real and imaginary parts filtered (the filter is real).
+    cutoff_hz : float
+        -3 dB frequency of each pass (Hz), below Nyquist (``fs / 2``).
+    fs : float
+        Sample rate (Hz).
+    order : int, default 4
+        Butterworth order per pass (the forward-backward result has twice
+        the attenuation slope and zero phase).
+    axis : int, default -1
+        Axis of the samples.
+    padtype : {'odd', 'even', 'constant', None}, default 'odd'
+        Extension of each end before filtering, as scipy's.
+    padlen : int, optional
+        Samples of extension per end; default ``3 * (2 * sections + 1)``
+        (scipy's, 27 for order 4). The signal must be longer.
+
+    Returns
+    -------
+    ndarray
+        The filtered signal, float64 (complex128 for complex input), in the shape of ``x``.
+    """
+    a = np.asarray(x)
+    if a.dtype.kind not in "biufc":
+        raise ValueError(f"x: expected numbers, found dtype {a.dtype}")
+    if a.ndim == 0:
+        raise ValueError("x: expected an array of samples, found a scalar")
+    ax = _spectral._axis(axis, a.ndim, "x")
+    if padtype not in ("odd", "even", "constant", None):
+        raise ValueError(f"padtype={padtype!r}: expected 'odd', 'even', 'constant' or None")
+    pl = None if padlen is None else _spectral._whole("padlen", padlen)
+    if pl is not None and pl < 0:
+        raise ValueError(f"padlen={pl} must not be negative")
+    args = (_number("cutoff_hz", cutoff_hz), _number("fs", fs), _integer("order", order, minimum=1), padtype, pl)
+    moved = np.moveaxis(a, ax, -1)
+
+    def run(part: np.ndarray) -> np.ndarray:
+        rows = np.ascontiguousarray(part.reshape(-1, moved.shape[-1]) if moved.size else
+                                    np.empty((0, moved.shape[-1])), dtype=np.float64)
+        return _limpid.lowpass_filtfilt(rows, *args).reshape(moved.shape)
+
+    y = run(moved.real) + 1j * run(moved.imag) if np.iscomplexobj(moved) else run(moved)
+    return np.moveaxis(y, -1, ax)
 
 
 def estimate_linear(recording: RecordingLike, *, cutoff_hz: Optional[float] = None,
