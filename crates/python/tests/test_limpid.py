@@ -132,7 +132,7 @@ class FakeFrame:
             def __init__(self, v):
                 self.v = v
 
-            def to_numpy(self, dtype=float):
+            def to_numpy(self, dtype=None):
                 return np.asarray(self.v, dtype=dtype)
         return Col(self._d[k])
 
@@ -321,3 +321,9 @@ def test_reflex_on_the_real_ankle_recording():
     assert 85.0 < d["fit"]["vaf_total"] < 97.0
     assert 0.035 < d["reflex"]["delay_s"] < 0.065
     assert d["intrinsic"]["stiffness"] < d["reflex_free"]["parameters"]["stiffness"]
+
+
+def test_a_text_column_is_named_with_its_row():
+    rec = FakeFrame({"t": np.arange(4) / 100, "x": [0.0, 0.1, "slip", 0.2], "fx": np.zeros(4)})
+    with pytest.raises(ValueError, match=r"column x, row 3: expected a number, found 'slip'"):
+        limpid.estimate_linear(rec)

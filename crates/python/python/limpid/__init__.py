@@ -176,14 +176,29 @@ def _choice(name: str, value: Any, choices: Sequence[str]) -> str:
     return value
 
 
+def _column(name: str, values: Any) -> np.ndarray:
+    """One column as a contiguous float array; text or objects are refused by
+    name, with the first value that is not a number (rows count from 1)."""
+    try:
+        a = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        for row, v in enumerate(np.asarray(values, dtype=object).ravel(), start=1):
+            try:
+                float(v)
+            except (TypeError, ValueError):
+                raise ValueError(f"column {name}, row {row}: expected a number, found {v!r}") from None
+        raise ValueError(f"column {name}: expected a 1-D array of numbers") from None
+    return np.ascontiguousarray(a)
+
+
 def _recording(rec: RecordingLike) -> Any:
     """A path stays a path; a DataFrame or mapping becomes a dict of float arrays."""
     if isinstance(rec, (str, bytes)) or hasattr(rec, "__fspath__"):
         return rec
     if hasattr(rec, "columns") and not isinstance(rec, Mapping):  # a pandas DataFrame
-        return {str(c): np.ascontiguousarray(rec[c].to_numpy(dtype=float)) for c in rec.columns}
+        return {str(c): _column(str(c), rec[c].to_numpy()) for c in rec.columns}
     if isinstance(rec, Mapping):
-        return {str(k): np.ascontiguousarray(np.asarray(v, dtype=float)) for k, v in rec.items()}
+        return {str(k): _column(str(k), v) for k, v in rec.items()}
     raise ValueError("a recording is a path, a dict of 1-D arrays or a pandas DataFrame")
 
 
