@@ -450,12 +450,22 @@ def estimate_linear(recording: RecordingLike, *, cutoff_hz: Optional[float] = No
     return Result(json.loads(_limpid.estimate_linear(_recording(recording), json.dumps(opts))))
 
 
+def _inertial(values: Optional[Sequence[float]]) -> Optional[Tuple[float, float, float]]:
+    """Seed 003's three inertial parameters (kg m^2), or None to estimate them."""
+    if values is None:
+        return None
+    v = [_number("inertial_parameters", x) for x in values]
+    if len(v) != 3:
+        raise ValueError(f"inertial_parameters: expected 3 numbers (kg m^2), found {len(v)}")
+    return (v[0], v[1], v[2])
+
+
 def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], *,
                     window_ms: Optional[float] = None,
                     inertial_parameters: Optional[Sequence[float]] = None) -> Result:
     """Seed 003's planar-arm estimator (joint K, D, inertial parameters, criteria)."""
     l1, l2 = link_lengths
-    xi = tuple(inertial_parameters) if inertial_parameters is not None else None
+    xi = _inertial(inertial_parameters)
     window = None if window_ms is None else _number("window_ms", window_ms)
     return Result(json.loads(_limpid.estimate_planar(_recording(recording), (_number("link_lengths", l1), _number("link_lengths", l2)), window, xi)))
 
@@ -467,7 +477,7 @@ def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], *,
     ``rows`` (one estimate with its criteria per window) and the shortest
     trustworthy window."""
     l1, l2 = link_lengths
-    xi = tuple(inertial_parameters) if inertial_parameters is not None else None
+    xi = _inertial(inertial_parameters)
     return Result(json.loads(_limpid.window_sweep(_recording(recording), (_number("link_lengths", l1), _number("link_lengths", l2)),
                                                   _number("from_ms", from_ms), _number("to_ms", to_ms),
                                                   _number("step_ms", step_ms), xi)))

@@ -10,6 +10,7 @@ shape. Choices where scipy is silent or differs are listed in the README
 
 from __future__ import annotations
 
+import importlib
 import operator
 import warnings
 from typing import Any, Callable, Optional, Sequence, Tuple, Union
@@ -40,7 +41,7 @@ def _window(window: Union[str, Tuple[Any, ...]], n: int) -> np.ndarray:
     """Window samples of a name or a (name, parameter...) tuple: scipy's
     ``get_window`` when scipy is installed, else the built-in cosine windows."""
     try:
-        from scipy.signal import get_window
+        get_window = importlib.import_module("scipy.signal").get_window
     except ImportError:
         a = _COSINE_WINDOWS.get(window) if isinstance(window, str) else None
         if a is None:
