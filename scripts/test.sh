@@ -22,8 +22,8 @@ CXXFLAGS="-DPTHREAD_STACK_MIN=16384 ${CXXFLAGS:-}" LSLAPICFG="$PWD/crates/live/t
   cargo test --release -p limpid-live --features lsl --test lsl
 venv=target/venv-test
 python3 -m venv --clear "$venv"
-"$venv/bin/pip" install -q --disable-pip-version-check maturin numpy scipy pytest mypy
+"$venv/bin/pip" install -q --disable-pip-version-check maturin numpy scipy pytest mypy "dask[distributed]"
 rm -rf target/wheels
 "$venv/bin/maturin" build --release -q -m crates/python/Cargo.toml -o target/wheels
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps target/wheels/limpid-*.whl
-"$venv/bin/python" -m pytest -q crates/python/tests
+LIMPID_REQUIRE_DASK=1 "$venv/bin/python" -m pytest -q crates/python/tests

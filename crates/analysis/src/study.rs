@@ -212,48 +212,77 @@ pub struct StudyResult {
     pub recordings: Vec<Processed>,
 }
 
+/// The EMG settings of a study (its tolerance band around each level).
+pub fn study_emg(m: &Manifest) -> EmgParams {
+    EmgParams {
+        tolerance: m.study.tolerance.unwrap_or(0.1),
+        ..EmgParams::default()
+    }
+}
+
+/// One recording of a study: its co-contraction analysis, or why it failed
+/// (in one line; a panic in one recording, a bug, is caught as a failure too,
+/// so it cannot abort the study). Runs anywhere: a study may be spread over
+/// processes or machines and its outcomes joined by [`summarise`].
+pub fn process_entry(
+    e: &Entry,
+    params: &PrepareParams,
+    emg: &EmgParams,
+) -> std::result::Result<Processed, Failure> {
+    let run = || -> Result<CocontractionResult> {
+        let rec = limpid_io_read(&e.file)?;
+        let mvc = limpid_io_read(&e.mvc)?;
+        if !["x", "y", "z"].iter().all(|c| rec.has(c)) {
+            return Err(Error::Format {
+                path: e.file.clone(),
+                message: "study tables need 3-D recordings (x, y, z)".into(),
+            });
+        }
+        estimate_cocontraction(&rec, &mvc, params, emg)
+    };
+    limpid_core::error::catch_panic(&e.file, "estimation", run)
+        .map(|result| Processed {
+            subject: e.subject.clone(),
+            configuration: e.configuration.clone(),
+            result,
+        })
+        .map_err(|err| Failure {
+            subject: e.subject.clone(),
+            configuration: e.configuration.clone(),
+            file: e.file.display().to_string(),
+            error: err.to_string(),
+        })
+}
+
 /// Process every recording (in parallel); `progress` is called once per recording.
 pub fn run_study(
     m: &Manifest,
     params: &PrepareParams,
     progress: &(dyn Fn() + Sync),
 ) -> StudyResult {
-    let emg = EmgParams {
-        tolerance: m.study.tolerance.unwrap_or(0.1),
-        ..EmgParams::default()
-    };
+    let emg = study_emg(m);
     let outcomes: Vec<std::result::Result<Processed, Failure>> = m
         .recording
         .par_iter()
         .map(|e| {
-            let run = || -> Result<CocontractionResult> {
-                let rec = limpid_io_read(&e.file)?;
-                let mvc = limpid_io_read(&e.mvc)?;
-                if !["x", "y", "z"].iter().all(|c| rec.has(c)) {
-                    return Err(Error::Format {
-                        path: e.file.clone(),
-                        message: "study tables need 3-D recordings (x, y, z)".into(),
-                    });
-                }
-                estimate_cocontraction(&rec, &mvc, params, &emg)
-            };
-            // a panic in one recording (a bug) must not abort the study
-            let out = limpid_core::error::catch_panic(&e.file, "estimation", run)
-                .map(|result| Processed {
-                    subject: e.subject.clone(),
-                    configuration: e.configuration.clone(),
-                    result,
-                })
-                .map_err(|err| Failure {
-                    subject: e.subject.clone(),
-                    configuration: e.configuration.clone(),
-                    file: e.file.display().to_string(),
-                    error: err.to_string(),
-                });
+            let out = process_entry(e, params, &emg);
             progress();
             out
         })
         .collect();
+    summarise(
+        m.study.name.clone().unwrap_or_else(|| "study".into()),
+        outcomes,
+    )
+}
+
+/// Tables 1-5 from the outcomes of a study's recordings (in the manifest's
+/// order): per configuration and level the means and spreads over subjects,
+/// per configuration the rotation from the lowest to the highest level.
+pub fn summarise(
+    name: String,
+    outcomes: Vec<std::result::Result<Processed, Failure>>,
+) -> StudyResult {
     let mut recordings = Vec::new();
     let mut failures = Vec::new();
     for o in outcomes {
@@ -370,7 +399,7 @@ pub fn run_study(
         }
     }
     StudyResult {
-        name: m.study.name.clone().unwrap_or_else(|| "study".into()),
+        name,
         levels: levels_out,
         rotation,
         failures,

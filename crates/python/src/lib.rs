@@ -617,6 +617,92 @@ fn estimate_cocontraction(
     .map_err(err)
 }
 
+/// A study manifest with its paths resolved: JSON text of
+/// `{"study": {"name", "tolerance"}, "recording": [{subject, configuration, file, mvc}]}`.
+#[pyfunction]
+fn study_entries(manifest: std::path::PathBuf) -> PyResult<String> {
+    let m = limpid_analysis::study::load_manifest(&manifest).map_err(err)?;
+    serde_json::to_string(&m).map_err(value_err)
+}
+
+/// One study recording (JSON text of a manifest entry) processed with the
+/// study's tolerance: JSON text of `{"Ok": processed}` or `{"Err": failure}`.
+#[pyfunction]
+fn study_process(py: Python<'_>, entry: &str, tolerance: f64) -> PyResult<String> {
+    use limpid_analysis::study::{process_entry, Entry};
+    let e: Entry = serde_json::from_str(entry).map_err(value_err)?;
+    let emg = limpid_analysis::emg::EmgParams {
+        tolerance,
+        ..limpid_analysis::emg::EmgParams::default()
+    };
+    let out = detached(py, || {
+        process_entry(&e, &limpid_ident::PrepareParams::default(), &emg)
+    });
+    serde_json::to_string(&out).map_err(value_err)
+}
+
+/// Study tables from outcomes of `study_process` (JSON texts), written to
+/// `out` when given; JSON text of the study document.
+#[pyfunction]
+#[pyo3(signature = (name, outcomes, out=None))]
+fn study_combine(
+    py: Python<'_>,
+    name: String,
+    outcomes: Vec<String>,
+    out: Option<std::path::PathBuf>,
+) -> PyResult<String> {
+    use limpid_analysis::study::{Failure, Processed};
+    let parsed = outcomes
+        .iter()
+        .enumerate()
+        .map(|(i, text)| {
+            serde_json::from_str::<std::result::Result<Processed, Failure>>(text).map_err(|e| {
+                value_err(format!(
+                    "outcome {}: not a study_process outcome ({e})",
+                    i + 1
+                ))
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let result = detached(py, || limpid_analysis::study::summarise(name, parsed));
+    finish_study(result, out)
+}
+
+/// `limpid study run`: every recording of the manifest (in parallel), the
+/// tables written to `out` when given; JSON text of the study document.
+#[pyfunction]
+#[pyo3(signature = (manifest, out=None))]
+fn study_run(
+    py: Python<'_>,
+    manifest: std::path::PathBuf,
+    out: Option<std::path::PathBuf>,
+) -> PyResult<String> {
+    let m = limpid_analysis::study::load_manifest(&manifest).map_err(err)?;
+    let result = detached(py, || {
+        limpid_analysis::study::run_study(&m, &limpid_ident::PrepareParams::default(), &|| {})
+    });
+    finish_study(result, out)
+}
+
+fn finish_study(
+    result: limpid_analysis::study::StudyResult,
+    out: Option<std::path::PathBuf>,
+) -> PyResult<String> {
+    if result.recordings.is_empty() {
+        let first = result
+            .failures
+            .first()
+            .map_or(String::new(), |f| format!(": {}", f.error));
+        return Err(value_err(format!(
+            "no recording could be processed (nothing written){first}"
+        )));
+    }
+    if let Some(dir) = out {
+        limpid_analysis::study::write_tables(&result, &dir).map_err(err)?;
+    }
+    Ok(document(Estimate::Study(result)))
+}
+
 /// The ellipsoid of the symmetric part of a 2 x 2 or 3 x 3 matrix; JSON text.
 #[pyfunction]
 fn ellipsoid(matrix: Vec<Vec<f64>>) -> PyResult<String> {
@@ -759,6 +845,10 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(estimate_reflex, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_cocontraction, m)?)?;
     m.add_function(wrap_pyfunction!(ellipsoid, m)?)?;
+    m.add_function(wrap_pyfunction!(study_entries, m)?)?;
+    m.add_function(wrap_pyfunction!(study_process, m)?)?;
+    m.add_function(wrap_pyfunction!(study_combine, m)?)?;
+    m.add_function(wrap_pyfunction!(study_run, m)?)?;
     m.add_function(wrap_pyfunction!(protocol_preset, m)?)?;
     m.add_function(wrap_pyfunction!(protocol_check, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;

@@ -44,6 +44,11 @@ __all__ = [
     "estimate_reflex",
     "estimate_cocontraction",
     "ellipsoid",
+    "StudyOutcome",
+    "study_entries",
+    "study_process",
+    "study_combine",
+    "study_run",
     "protocol_preset",
     "protocol_check",
     "simulate",
@@ -532,6 +537,98 @@ def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, *, wind
     opts = {"window": _choice("window", window, ("auto", "trials", "onsets", "continuous")),
             "offsets": _choice("offsets", offsets, ("auto", "fit", "rest"))}
     return Result(json.loads(_limpid.estimate_cocontraction(_recording(recording), _recording(mvc), json.dumps(opts))))
+
+
+class StudyOutcome:
+    """One recording of a study, processed (``ok``) or failed (``error``):
+    what :func:`study_process` returns and :func:`study_combine` joins.
+    Picklable, so it can come back from another process or machine."""
+
+    __slots__ = ("subject", "configuration", "file", "ok", "error", "_json")
+
+    def __init__(self, text: str) -> None:
+        d = json.loads(text)
+        body = d.get("Ok") or d.get("Err") or {}
+        self.ok: bool = "Ok" in d
+        self.subject: str = body.get("subject", "")
+        self.configuration: str = body.get("configuration", "")
+        self.file: str = body.get("file", "")
+        self.error: Optional[str] = None if self.ok else body.get("error")
+        self._json = text
+
+    def result(self) -> "Result":
+        """The recording's co-contraction result (``ValueError`` if it failed)."""
+        if not self.ok:
+            raise ValueError(f"subject {self.subject}, configuration {self.configuration}: {self.error}")
+        return Result(json.loads(self._json)["Ok"]["result"])
+
+    def __getstate__(self) -> str:
+        return self._json
+
+    def __setstate__(self, text: str) -> None:
+        self.__init__(text)  # type: ignore[misc]
+
+    def __repr__(self) -> str:
+        state = "ok" if self.ok else f"failed: {self.error}"
+        return f"StudyOutcome(subject={self.subject!r}, configuration={self.configuration!r}, {state})"
+
+
+def study_entries(manifest: Union[str, "os.PathLike[str]"]) -> List[Dict[str, Any]]:
+    """The recordings of a study manifest (``limpid study run``'s TOML), paths
+    resolved, each a dict ready for :func:`study_process` on any worker.
+
+    Parameters
+    ----------
+    manifest : path
+        The study's TOML manifest (``[[recording]]`` with subject,
+        configuration, file, mvc).
+
+    Returns
+    -------
+    list of dict
+        ``{"subject", "configuration", "file", "mvc", "tolerance", "study"}`` per recording.
+    """
+    m = json.loads(_limpid.study_entries(os.fspath(manifest)))
+    meta = m.get("study", {})
+    tolerance = meta.get("tolerance")
+    name = meta.get("name") or "study"
+    return [dict(e, tolerance=0.1 if tolerance is None else tolerance, study=name) for e in m["recording"]]
+
+
+def study_process(entry: Mapping[str, Any]) -> StudyOutcome:
+    """Process one study recording (one entry of :func:`study_entries`):
+    seed 001's co-contraction analysis, or the reason it failed. Never
+    raises for a bad recording: the failure is kept for the study's table
+    of failures, as ``limpid study run`` does."""
+    e = {k: os.fspath(entry[k]) if k in ("file", "mvc") else str(entry[k])
+         for k in ("subject", "configuration", "file", "mvc")}
+    tol = _number("tolerance", entry.get("tolerance", 0.1))
+    return StudyOutcome(_limpid.study_process(json.dumps(e), tol))
+
+
+def study_combine(outcomes: Sequence[StudyOutcome], *, name: str = "study",
+                  out: Optional[Union[str, "os.PathLike[str]"]] = None) -> Result:
+    """Seed 001's Tables 1-5 from the outcomes of :func:`study_process`
+    (gathered from any executor), as ``limpid study run``; the tables
+    (tables.csv, rotation.csv, study.json, tables.md) are written to ``out``
+    when given. ``ValueError`` when no recording could be processed."""
+    texts = []
+    for o in outcomes:
+        if not isinstance(o, StudyOutcome):
+            raise ValueError(f"study_combine takes StudyOutcome objects (from study_process), found {type(o).__name__}")
+        texts.append(o._json)
+    return Result(json.loads(_limpid.study_combine(str(name), texts, None if out is None else os.fspath(out))))
+
+
+def study_run(manifest: Union[str, "os.PathLike[str]"], *,
+              out: Optional[Union[str, "os.PathLike[str]"]] = None) -> Result:
+    """``limpid study run``: every recording of the manifest processed in
+    parallel on this machine, seed 001's Tables 1-5 returned (``levels``,
+    ``rotation``, ``failures``, ``recordings``) and written to ``out`` when
+    given. For a study spread over processes or a cluster, use
+    :func:`study_entries`, :func:`study_process` and :func:`study_combine`
+    (README, "Studies on a cluster")."""
+    return Result(json.loads(_limpid.study_run(os.fspath(manifest), None if out is None else os.fspath(out))))
 
 
 def ellipsoid(matrix: Any) -> Result:

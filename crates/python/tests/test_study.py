@@ -1,0 +1,79 @@
+"""Studies: limpid.study_run as `limpid study run`, and the same study spread
+over processes (concurrent.futures) and over a dask LocalCluster of processes
+with study_entries / study_process / study_combine — same tables."""
+import concurrent.futures as cf
+import importlib.util
+import os
+import pickle
+from pathlib import Path
+
+import pytest
+
+import limpid
+
+SHARED = Path(__file__).resolve().parents[3] / ".." / "shared" / "examples" / "cocontraction"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.fixture()
+def manifest(tmp_path):
+    rows = []
+    for subject in ("1", "2"):
+        for config in ("4", "7"):
+            case = SHARED / f"ex_config{config}"
+            rows.append(f'[[recording]]\nsubject = "{subject}"\nconfiguration = "{config}"\n'
+                        f'file = "{case}.csv"\nmvc = "{case}.mvc.csv"\n')
+    # a recording that is missing: listed as a failure, not an abort
+    rows.append('[[recording]]\nsubject = "3"\nconfiguration = "4"\nfile = "gone.csv"\nmvc = "gone.mvc.csv"\n')
+    path = tmp_path / "study.toml"
+    path.write_text('[study]\nname = "two examples"\n\n' + "\n".join(rows))
+    return path
+
+
+def test_study_run_gives_the_tables_and_lists_the_failure(manifest, tmp_path):
+    study = limpid.study_run(manifest, out=tmp_path / "tables")
+    d = study.to_dict()
+    assert d["kind"] == "study" and d["name"] == "two examples"
+    assert len(d["recordings"]) == 4
+    assert len(d["failures"]) == 1 and "gone.csv" in d["failures"][0]["file"]
+    assert {row["configuration"] for row in d["levels"]} == {"4", "7"}
+    # two identical subjects per configuration: the spread over subjects is zero
+    row = d["levels"][0]
+    assert row["subjects"] == 2 and abs(row["sd"]["kxx"]) < 1e-9 * abs(row["kxx"])
+    for name in ("tables.csv", "rotation.csv", "study.json", "tables.md"):
+        assert (tmp_path / "tables" / name).exists()
+
+
+def test_a_study_over_a_process_pool_equals_study_run(manifest):
+    entries = limpid.study_entries(manifest)
+    assert len(entries) == 5 and entries[0]["study"] == "two examples" and entries[0]["tolerance"] == 0.1
+    with cf.ProcessPoolExecutor(2) as pool:
+        outcomes = list(pool.map(limpid.study_process, entries))
+    assert [o.ok for o in outcomes] == [True] * 4 + [False]
+    assert "gone.csv" in outcomes[-1].error
+    back = pickle.loads(pickle.dumps(outcomes[0]))
+    assert back.ok and back.result().to_dict() == outcomes[0].result().to_dict()
+    combined = limpid.study_combine(outcomes, name="two examples")
+    assert combined.to_dict()["levels"] == limpid.study_run(manifest).to_dict()["levels"]
+    with pytest.raises(ValueError, match="StudyOutcome"):
+        limpid.study_combine([{"subject": "1"}])
+    with pytest.raises(ValueError, match="no recording could be processed"):
+        limpid.study_combine(outcomes[-1:])
+
+
+def test_the_dask_example_on_a_local_cluster_of_processes(manifest, tmp_path):
+    # scripts/test.sh (CI) installs dask and requires this test to run
+    if os.environ.get("LIMPID_REQUIRE_DASK"):
+        import dask.distributed as distributed
+    else:
+        distributed = pytest.importorskip("dask.distributed")
+    spec = importlib.util.spec_from_file_location("study_dask", EXAMPLES / "study_dask.py")
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        study = example.run_study(str(manifest), str(tmp_path / "dask"), client)
+    assert study.to_dict()["levels"] == limpid.study_run(manifest).to_dict()["levels"]
+    assert len(study.to_dict()["failures"]) == 1
+    assert (tmp_path / "dask" / "tables.csv").read_text() == (
+        limpid.study_run(manifest, out=tmp_path / "local") and (tmp_path / "local" / "tables.csv").read_text())
