@@ -83,7 +83,7 @@ pub enum Windowing {
 /// | Name | Default | Purpose | Range |
 /// |---|---|---|---|
 /// | `windowing` | `Auto` | how windows are formed | see [`Windowing`] |
-/// | `cutoff_hz` | 20 Hz (capped at 0.4 fs) | zero-phase low-pass cut-off | (0, fs/2) |
+/// | `cutoff_hz` | 30 Hz (capped at 0.4 fs, [`default_cutoff`]) | zero-phase low-pass cut-off | (0, fs/2) |
 /// | `filter_order` | 4 | Butterworth order per pass | 1..=20 |
 /// | `derivative` | `Central` | derivative scheme | see [`Derivative`] |
 /// | `offsets` | `Auto` | per-trial force offsets: rest mean or fitted | see [`Offsets`] |
