@@ -23,7 +23,7 @@ import json
 import operator
 import os
 import warnings
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -80,6 +80,25 @@ class Result:
     they travel between processes (``concurrent.futures``, dask)."""
 
     __slots__ = ("_data",)
+
+    if TYPE_CHECKING:
+        # the fields most results have, for type checkers (served by __getattr__;
+        # which a Result has depends on its ``kind``: see ``keys()``)
+        schema: str
+        kind: str
+        inertia: np.ndarray
+        damping: np.ndarray
+        stiffness: np.ndarray
+        standard_errors: "Result"
+        fit: "Result"
+        criteria: "Result"
+        warnings: List[Any]
+        provenance: "Result"
+        frequencies: np.ndarray
+        impedance: np.ndarray
+        coherence: "Result"
+        levels: List[Any]
+        rows: List[Any]
 
     def __init__(self, data: Dict[str, Any]):
         if not isinstance(data, dict):
