@@ -69,7 +69,8 @@ def test_bad_arguments_are_value_errors():
     x = np.ones(100)
     for kw in [dict(nperseg=4.5), dict(nperseg="8"), dict(nfft=7.0, nperseg=8), dict(noverlap=-1, nperseg=8),
                dict(fs=0.0), dict(fs="x"), dict(axis=1.5), dict(axis=3), dict(detrend="cubic"), dict(detrend=True),
-               dict(window=np.ones((2, 3))), dict(window=np.ones(4) * 1j), dict(average="max")]:
+               dict(window=np.ones((2, 3))), dict(window=np.ones(4) * 1j), dict(average="max"),
+               dict(nfft=2**70), dict(nfft=2**40), dict(nperseg=-3), dict(fs=1e400), dict(fs=np.nan)]:
         with pytest.raises(ValueError):
             limpid.psd(x, **kw)
     with pytest.raises(ValueError, match="cannot be broadcast"):
@@ -113,9 +114,13 @@ def test_lowpass_filtfilt_refuses_what_sosfiltfilt_refuses():
         with pytest.raises(ValueError):
             signal.sosfiltfilt(signal.butter(4, 10, fs=100, output="sos"), x, **kw)
     # stricter than scipy (which runs padlen=-1 and raises IndexError for the axis)
-    for kw in [dict(padlen=-1), dict(padlen=3.5), dict(axis=1)]:
+    for kw in [dict(padlen=-1), dict(padlen=3.5), dict(axis=1), dict(padlen=2**70), dict(order=2**70),
+               dict(order=0)]:
         with pytest.raises(ValueError):
             limpid.lowpass_filtfilt(x, 10, 100, **kw)
+    for cutoff in (1e400, float("nan"), "10", 60.0):
+        with pytest.raises(ValueError):
+            limpid.lowpass_filtfilt(x, cutoff, 100)
     # padtype=None pads nothing, so any length above zero works, as in scipy
     np.testing.assert_allclose(limpid.lowpass_filtfilt(np.arange(5.0), 10, 100, padtype=None),
                                signal.sosfiltfilt(signal.butter(4, 10, fs=100, output="sos"), np.arange(5.0), padtype=None),

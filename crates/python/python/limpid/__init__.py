@@ -174,6 +174,8 @@ def _integer(name: str, value: Any, *, minimum: Optional[int] = None) -> int:
             raise ValueError(f"{name}: expected an integer, found {value!r}") from None
     if minimum is not None and v < minimum:
         raise ValueError(f"{name}: expected at least {minimum}, found {v}")
+    if v > 2**53:  # no count limpid takes is this large; the Rust side would overflow
+        raise ValueError(f"{name}: {v} is too large")
     return int(v)
 
 
@@ -445,8 +447,12 @@ def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4, axis: 
     pl = None if padlen is None else _spectral._whole("padlen", padlen)
     if pl is not None and pl < 0:
         raise ValueError(f"padlen={pl} must not be negative")
-    args = (_number("cutoff_hz", cutoff_hz), _number("fs", fs), _integer("order", order, minimum=1), padtype, pl)
     moved = np.moveaxis(a, ax, -1)
+    if pl is not None and padtype is not None and pl >= moved.shape[-1]:
+        raise ValueError(f"the signal must be longer than padlen={pl} samples, found {moved.shape[-1]}")
+    if padtype is None:
+        pl = 0
+    args = (_number("cutoff_hz", cutoff_hz), _number("fs", fs), _integer("order", order, minimum=1), padtype, pl)
 
     def run(part: np.ndarray) -> np.ndarray:
         rows = np.ascontiguousarray(part.reshape(-1, moved.shape[-1]) if moved.size else
@@ -693,7 +699,8 @@ def simulate(
                 subject_text = f.read()
     return [
         (cols, json.loads(truth))
-        for cols, truth in _limpid.simulate(text, int(seed), subject_text, subject_name, controller)
+        for cols, truth in _limpid.simulate(text, _integer("seed", seed, minimum=0), subject_text, subject_name,
+                                            _choice("controller", controller, ("ideal", "imbic", "pd")))
     ]
 
 
@@ -721,3 +728,30 @@ def report(results: Sequence[Union[Result, Mapping[str, Any], List[Any]]], path:
     texts = [json.dumps(r.to_dict() if isinstance(r, Result) else r) for r in results]
     _limpid.report(texts, path)
 
+
+def _value_errors(f: Any) -> Any:
+    """Bad argument values raise ValueError, whatever their type: a TypeError,
+    OverflowError or IndexError raised while a call's arguments are read
+    becomes a ValueError naming the function (chained to the original). A
+    call with the wrong arguments for the signature stays a TypeError."""
+    import functools
+    import inspect
+
+    sig = inspect.signature(f)
+
+    @functools.wraps(f)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        sig.bind(*args, **kwargs)
+        try:
+            return f(*args, **kwargs)
+        except (TypeError, OverflowError, IndexError) as e:
+            raise ValueError(f"{f.__name__}: {e}") from e
+
+    return checked
+
+
+for _name in __all__:
+    _obj = globals()[_name]
+    if callable(_obj) and not isinstance(_obj, type):
+        globals()[_name] = _value_errors(_obj)
+del _name, _obj

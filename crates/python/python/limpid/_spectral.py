@@ -19,6 +19,9 @@ import numpy as np
 
 from . import _limpid
 
+# one FFT of 2^28 complex bins is 4 GiB: beyond that, refuse instead of running out of memory
+MAX_NFFT = 1 << 28
+
 WindowLike = Union[str, Tuple[Any, ...], Sequence[float], np.ndarray]
 DetrendLike = Union[str, bool, None, Callable[[np.ndarray], np.ndarray]]
 
@@ -182,6 +185,8 @@ def spectra(x: Any, y: Any, kind: str, fs: Any, window: WindowLike, nperseg: Any
     nfft = nperseg if nfft is None else _whole("nfft", nfft)
     if nfft < nperseg:
         raise ValueError(f"nfft={nfft} must be greater than or equal to nperseg={nperseg}!")
+    if nfft > MAX_NFFT:
+        raise ValueError(f"nfft={nfft} is larger than limpid's limit of {MAX_NFFT} (2^28) bins")
     noverlap = nperseg // 2 if noverlap is None else _whole("noverlap", noverlap)
     if noverlap >= nperseg:
         raise ValueError(f"noverlap={noverlap} must be less than nperseg={nperseg}!")

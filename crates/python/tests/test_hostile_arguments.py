@@ -1,0 +1,53 @@
+"""Every public function, given a value of the wrong kind or size for one
+argument, raises ValueError (OSError for files, KeyError for a missing field)
+with a message: never TypeError, OverflowError, IndexError or a Rust panic."""
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import limpid
+
+S = Path(__file__).resolve().parents[3] / ".." / "shared" / "examples"
+VALUES = [None, 0, -1, 2**70, 1e400, float("nan"), "x", True, 1.5, [], np.array([]), np.ones((2, 2)), {}, b"x"]
+CALLS = {
+    "psd fs": lambda v: limpid.psd(np.ones(100), fs=v),
+    "psd nperseg": lambda v: limpid.psd(np.ones(100), nperseg=v),
+    "psd x": lambda v: limpid.psd(v),
+    "csd y": lambda v: limpid.csd(np.ones(100), v),
+    "coherence window": lambda v: limpid.coherence(np.ones(100), np.ones(100), window=v),
+    "lowpass fs": lambda v: limpid.lowpass_filtfilt(np.ones(100), 10, v),
+    "lowpass x": lambda v: limpid.lowpass_filtfilt(v, 10, 100),
+    "linear cutoff": lambda v: limpid.estimate_linear(S / "cartesian_slow" / "ex_cubic.csv", cutoff_hz=v),
+    "linear recording": lambda v: limpid.estimate_linear(v),
+    "stochastic band": lambda v: limpid.estimate_stochastic(S / "stochastic" / "ex_sa3.csv", band_hz=(v, 10)),
+    "planar links": lambda v: limpid.estimate_planar(S / "planar" / "ex_joint_180.csv", (v, 0.3)),
+    "ellipsoid": lambda v: limpid.ellipsoid(v),
+    "simulate seed": lambda v: limpid.simulate("artemiadis-3d", seed=v),
+    "study_entries": lambda v: limpid.study_entries(v),
+    "study_process": lambda v: limpid.study_process(v),
+    "study_combine": lambda v: limpid.study_combine(v),
+    "protocol_preset": lambda v: limpid.protocol_preset(v),
+    "protocol_check": lambda v: limpid.protocol_check(v),
+    "frequency_response": lambda v: limpid.frequency_response([v], [np.ones(100)]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CALLS))
+def test_bad_values_are_value_errors(name):
+    for v in VALUES:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                CALLS[name](v)
+        except (ValueError, OSError, KeyError) as e:
+            assert str(e), f"{name}({v!r}): empty message"
+        # anything else (TypeError, OverflowError, PanicException) fails the test
+
+
+def test_a_wrong_call_signature_stays_a_type_error():
+    with pytest.raises(TypeError):
+        limpid.psd()
+    with pytest.raises(TypeError):
+        limpid.psd(np.ones(10), bogus=1)
