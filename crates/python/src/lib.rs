@@ -111,6 +111,25 @@ fn recording_unwarned(source: &Bound<'_, PyAny>) -> PyResult<Recording> {
     Recording::new("<arrays>", names, cols, 1).map_err(err)
 }
 
+fn parse_detrend(detrend: &str) -> PyResult<Detrend> {
+    match detrend {
+        "constant" => Ok(Detrend::Constant),
+        "linear" => Ok(Detrend::Linear),
+        "none" | "false" => Ok(Detrend::None),
+        other => Err(value_err(format!(
+            "detrend {other:?}: constant, linear or none"
+        ))),
+    }
+}
+
+fn parse_scaling(scaling: &str) -> PyResult<Scaling> {
+    match scaling {
+        "density" => Ok(Scaling::Density),
+        "spectrum" => Ok(Scaling::Spectrum),
+        other => Err(value_err(format!("scaling {other:?}: density or spectrum"))),
+    }
+}
+
 fn welch(
     fs: f64,
     window: &str,
@@ -133,21 +152,8 @@ fn welch(
                 )))
             }
         },
-        detrend: match detrend {
-            "constant" => Detrend::Constant,
-            "linear" => Detrend::Linear,
-            "none" | "false" => Detrend::None,
-            other => {
-                return Err(value_err(format!(
-                    "detrend {other:?}: constant, linear or none"
-                )))
-            }
-        },
-        scaling: match scaling {
-            "density" => Scaling::Density,
-            "spectrum" => Scaling::Spectrum,
-            other => return Err(value_err(format!("scaling {other:?}: density or spectrum"))),
-        },
+        detrend: parse_detrend(detrend)?,
+        scaling: parse_scaling(scaling)?,
     })
 }
 
@@ -230,21 +236,8 @@ fn cross_spectra<'py>(
         hop,
         nfft,
         onesided,
-        detrend: match detrend {
-            "constant" => Detrend::Constant,
-            "linear" => Detrend::Linear,
-            "none" => Detrend::None,
-            other => {
-                return Err(value_err(format!(
-                    "detrend {other:?}: constant, linear or none"
-                )))
-            }
-        },
-        scaling: match scaling {
-            "density" => Scaling::Density,
-            "spectrum" => Scaling::Spectrum,
-            other => return Err(value_err(format!("scaling {other:?}: density or spectrum"))),
-        },
+        detrend: parse_detrend(detrend)?,
+        scaling: parse_scaling(scaling)?,
         average: match average {
             "mean" => Average::Mean,
             "median" => Average::Median,
