@@ -194,3 +194,94 @@ fn an_lsl_stream_that_cannot_be_read_is_a_one_line_error() {
     );
     assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
 }
+
+/// Issue 19 end to end: a 4x replay of ex_config4; `/state` shows each
+/// level's stiffness within 10 % (relative Frobenius) of the offline estimate
+/// of that level 3 s of data after the level starts, a reason instead of a
+/// number before, and the earlier levels in its history.
+#[test]
+fn replay_at_4x_shows_each_levels_stiffness_within_10_percent_of_offline() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_limpid"))
+        .args([
+            "estimate",
+            "cocontraction",
+            &example(".csv"),
+            "--mvc",
+            &example(".mvc.csv"),
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let offline: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let k_of = |v: &serde_json::Value| -> Vec<f64> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+            .collect()
+    };
+    let rel = |a: &[f64], b: &[f64]| {
+        let d: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
+        (d / b.iter().map(|y| y * y).sum::<f64>()).sqrt()
+    };
+    let levels: Vec<Vec<f64>> = offline["levels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| k_of(&l["stiffness"]))
+        .collect();
+    assert_eq!(levels.len(), 4);
+    let live = start(&[
+        "--mvc",
+        &example(".mvc.csv"),
+        "--replay",
+        &example(".csv"),
+        "--speed",
+        "4",
+    ]);
+    let phase_s = 13.5;
+    let mut saw_waiting = false;
+    for (k, offline_k) in levels.iter().enumerate() {
+        let due = k as f64 * phase_s + 3.0;
+        let state = loop {
+            let s = get_json(&live.http, "/state");
+            let t = s["last_t"].as_f64().unwrap_or(0.0);
+            let o = &s["online"];
+            if t > k as f64 * phase_s + 0.5 && t < due && o["stiffness"].is_null() {
+                assert!(o["status"].as_str().unwrap().starts_with("waiting"), "{o}");
+                saw_waiting = true;
+            }
+            if t >= due {
+                break s;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        let o = &state["online"];
+        assert_eq!(o["status"], "estimating", "level {k}: {o}");
+        let err = rel(&k_of(&o["stiffness"]), offline_k);
+        eprintln!(
+            "level {k}: 3 s in (t = {}), online K within {:.1} % of offline",
+            state["last_t"],
+            100.0 * err
+        );
+        assert!(err < 0.10, "level {k}: {:.1} %", 100.0 * err);
+        assert_eq!(o["history"].as_array().unwrap().len(), k, "{o}");
+        assert!(o["vaf"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|v| v.is_null() || (0.0..=100.0).contains(&v.as_f64().unwrap())));
+    }
+    assert!(saw_waiting, "the page said why before it had a number");
+    let (dom, log) = chromium_dom(&live.page, None);
+    assert!(!log.contains("Uncaught"), "{log}");
+    assert!(
+        dom.contains("K (N/m)") && dom.contains("earlier level"),
+        "table and history on the page"
+    );
+}

@@ -318,6 +318,18 @@ impl LowPass {
         sci_rs::signal::filter::sosfilt_dyn(x.iter(), &mut sos)
     }
 
+    /// The causal filter one sample at a time, started in the steady state of
+    /// a constant input `x0` (as `sosfilt` with `zi = sosfilt_zi * x0`): a
+    /// signal that starts at `x0` shows no start-up transient.
+    pub fn streaming_from(&self, x0: f64) -> StreamingFilter {
+        let sections = self.sections();
+        let state = steady_state(&sections)
+            .iter()
+            .map(|z| [z[0] * x0, z[1] * x0])
+            .collect();
+        StreamingFilter { sections, state }
+    }
+
     /// The same causal filter, one sample at a time (live use): no allocation per sample.
     pub fn streaming(&self) -> StreamingFilter {
         StreamingFilter {

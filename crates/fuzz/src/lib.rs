@@ -216,15 +216,21 @@ fn datagrams(bytes: &[u8]) -> Outcome {
             p.update(&s.emg, s.kinematics.as_ref());
         }
     }
-    let k = p.rls.stiffness();
+    let shown = p.online.estimate();
     let finite = p
         .envelopes
         .iter()
         .chain(&p.activations)
         .all(|v| v.is_finite())
         && (!accepted || p.index.is_finite())
-        && k.iter().flatten().all(|v| v.is_finite())
-        && p.rls.vaf().is_none_or(|v| v.iter().all(|x| x.is_finite()));
+        && shown.is_none_or(|e| {
+            e.stiffness
+                .iter()
+                .chain(&e.stiffness_se)
+                .flatten()
+                .all(|v| v.is_finite())
+                && e.vaf.iter().flatten().all(|v| (0.0..=100.0).contains(v))
+        });
     match (finite, accepted) {
         (false, _) => Outcome::Finding("live state not finite after the datagrams".into()),
         (true, true) => Outcome::Accepted,

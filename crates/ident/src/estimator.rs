@@ -8,12 +8,10 @@
 //! | [`PlanarParams`] | [`PlanarData`] trials | [`PlanarEstimate`] (seed 003) |
 //! | [`StochasticParams`] | a [`Recording`] with `u*` inputs | [`StochasticEstimate`] (seed 004) |
 //! | [`ReflexParams`] | a [`Recording`] with joint angle and torque | [`ReflexEstimate`] (Kearney et al. 1997) |
-//! | [`OnlineParams`] | position and force samples | [`Rls`] (live display) |
 
 use limpid_core::{Error, Recording, Result};
 
 use crate::linear::{fit_linear, LinearEstimate, LinearParams};
-use crate::online::Rls;
 use crate::planar::{estimate_planar, PlanarData, PlanarEstimate};
 use crate::prepare::Prepared;
 use crate::reflex::{estimate_reflex, ReflexEstimate, ReflexParams};
@@ -121,39 +119,6 @@ impl Estimator for StochasticParams {
     }
 }
 
-/// Settings of the online (recursive least-squares) stiffness estimate.
-#[derive(Debug, Clone)]
-pub struct OnlineParams {
-    /// Forgetting factor λ in (0, 1]: a memory of about 1 / (1 - λ) samples.
-    pub forgetting: f64,
-}
-
-impl Estimator for OnlineParams {
-    /// Samples of position (m) and force on the limb (N).
-    type Data = [([f64; 3], [f64; 3])];
-    type Fitted = Rls;
-
-    fn check(&self) -> Result<()> {
-        let l = self.forgetting;
-        if l.is_finite() && 0.0 < l && l <= 1.0 {
-            Ok(())
-        } else {
-            Err(Error::invalid(
-                "forgetting factor",
-                format!("expected 0 < lambda <= 1, found {l}"),
-            ))
-        }
-    }
-
-    fn fit_checked(&self, samples: &Self::Data) -> Result<Rls> {
-        let mut rls = Rls::new(self.forgetting);
-        for (x, f) in samples {
-            rls.update(*x, *f);
-        }
-        Ok(rls)
-    }
-}
-
 impl Estimator for ReflexParams {
     type Data = Recording;
     type Fitted = ReflexEstimate;
@@ -212,43 +177,11 @@ mod tests {
             ..StochasticParams::default()
         };
         assert!(bad.check().is_err());
-        assert!(OnlineParams { forgetting: 1.5 }.check().is_err());
         assert!(PlanarParams {
             window_samples: Some(0),
             ..PlanarParams::default()
         }
         .check()
         .is_err());
-    }
-
-    #[test]
-    fn the_online_estimator_fits_a_static_stiffness_through_the_shared_shape() {
-        // f = K (x - x0) with K = diag(600, 400, 200), x moving on three sines
-        let samples: Vec<([f64; 3], [f64; 3])> = (0..5000)
-            .map(|n| {
-                let t = n as f64 * 1e-3;
-                let x = [
-                    0.004 * (3.1 * t).sin(),
-                    0.004 * (4.3 * t).cos(),
-                    0.004 * (5.7 * t).sin(),
-                ];
-                let x0 = [0.0, 0.004, 0.0];
-                let f = [
-                    600.0 * (x[0] - x0[0]),
-                    400.0 * (x[1] - x0[1]),
-                    200.0 * (x[2] - x0[2]),
-                ];
-                (x, f)
-            })
-            .collect();
-        let rls = OnlineParams { forgetting: 0.999 }.fit(&samples).unwrap();
-        let k = rls.stiffness();
-        for (i, want) in [600.0, 400.0, 200.0].iter().enumerate() {
-            assert!(
-                (k[i][i] - want).abs() < 1e-3 * want,
-                "K{i}{i} = {}",
-                k[i][i]
-            );
-        }
     }
 }

@@ -7,7 +7,7 @@
 //! - [`planar`]: the planar 2-link arm in joint space (seed 003).
 //! - [`stochastic`]: Z(f) = T R^-1 from Welch spectra (seed 004).
 //! - [`reflex`]: intrinsic and reflex stiffness, parallel cascade (Kearney et al. 1997).
-//! - [`online`]: recursive least squares for the live display.
+//! - [`online`]: per-perturbation impedance for the live display.
 //! - [`estimator`]: the one shape they share (settings -> check -> fit -> result).
 
 #![warn(missing_docs)]
@@ -21,6 +21,6 @@ pub mod prepare;
 pub mod reflex;
 pub mod stochastic;
 
-pub use estimator::{Estimator, OnlineParams, PlanarParams};
+pub use estimator::{Estimator, PlanarParams};
 pub use linear::{fit_linear, LinearEstimate, LinearParams};
 pub use prepare::{prepare, Derivative, Offsets, PrepareParams, Prepared, Windowing};

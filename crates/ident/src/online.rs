@@ -1,154 +1,681 @@
-//! Online stiffness (seed 001 Fig. 3 shows its feedback bar; the estimator
-//! is limpid's): recursive least squares with exponential forgetting on
-//! `f = K (x - x_ref) + c`, one sample at a time, for the live display.
-//! The offline estimators are in [`crate::linear`]; this one trades their
-//! standard errors for constant time per sample.
+//! Online impedance for the live display (seed 001 Fig. 3 shows the
+//! feedback bar; the online estimator is limpid's). It fits seed 000's model
+//! `f = M x'' + B x' + K x + c_j` (eq. 1 with a force offset per
+//! perturbation, the offline path's `offsets = fit`) to the last completed
+//! perturbations, so inertial and viscous forces of short perturbations are
+//! modelled instead of leaking into K.
+//!
+//! Per sample (constant time, no allocation): positions and forces through
+//! one causal Butterworth low-pass (the same filter on both keeps the linear
+//! model exact between the filtered signals, as offline), velocity and
+//! acceleration by central differences (one sample late), and the regression
+//! sums of the perturbation in progress. Perturbations are segmented online:
+//! one starts when the limb leaves its rest by 0.3 mm and takes the 25 ms of
+//! rest before it along (its force offset, as offline's rest offsets); it
+//! ends when the limb, having moved at least 0.5 mm, is back within 10 % of
+//! its largest displacement at under 10 % of its peak speed, or after
+//! `max_trial_s`. Rest between perturbations is left out, so a force offset
+//! that changes there does not enter. Closed segments keep their centred
+//! sums (the per-perturbation offset eliminated); the estimate solves the
+//! sums of the last `window_trials` segments since the last level reset.
+//!
+//! Honesty: no number before `min_trials` perturbations whose directions
+//! span the space (scaled condition number below 1e6); standard errors from
+//! the residual variance with the sample count reduced to the filter's
+//! bandwidth (`n 2 f_c / f_s` independent samples); a VAF only when in
+//! [0, 100] %; a sample no limb gives (non-finite, beyond 10 m or 1e4 N) is
+//! refused before the filters and drops the segment it falls in, as does a
+//! displacement over 0.5 m within a segment.
 
-/// Recursive least squares with exponential forgetting, one regressor
-/// [x - x_ref, y - y_ref, z - z_ref, 1] shared by the three force outputs.
+use std::collections::VecDeque;
+
+use nalgebra::{SMatrix, SVector};
+
+use limpid_core::{Error, Result};
+use limpid_dsp::{LowPass, StreamingFilter};
+
+/// Regressors per force axis: acceleration, velocity, position (3 each).
+const P: usize = 9;
+/// Rest kept before an onset (s): the perturbation's own force offset.
+const PRE_ONSET_S: f64 = 0.025;
+/// Displacement from rest that starts a perturbation (m).
+const ONSET_M: f64 = 3e-4;
+/// Displacement a perturbation must reach to count (m).
+const MOVED_M: f64 = 5e-4;
+/// Samples beyond these are refused (counted in `rejected`).
+const POSITION_LIMIT_M: f64 = 10.0;
+const FORCE_LIMIT_N: f64 = 1e4;
+
+/// Settings of [`OnlineImpedance`].
 #[derive(Debug, Clone)]
-pub struct Rls {
-    lambda: f64,
-    theta: [[f64; 3]; 4],
-    p: [[f64; 4]; 4],
-    x_ref: Option<[f64; 3]>,
-    /// Exponentially weighted a-priori error power and force variance per axis.
-    err_power: [f64; 3],
-    f_mean: [f64; 3],
-    f_power: [f64; 3],
-    /// Samples processed.
-    pub updates: u64,
+pub struct OnlineSettings {
+    /// Sample rate (Hz).
+    pub fs: f64,
+    /// Low-pass cut-off for positions and forces (Hz); default as offline
+    /// ([`crate::prepare::default_cutoff`]).
+    pub cutoff_hz: f64,
+    /// Butterworth order (one causal pass).
+    pub order: usize,
+    /// Perturbations in the estimate (the most recent ones).
+    pub window_trials: usize,
+    /// Perturbations needed before a number is shown.
+    pub min_trials: usize,
+    /// Longest segment (s): a perturbation that does not return is closed here.
+    pub max_trial_s: f64,
 }
 
-/// The covariance is not allowed to grow past this trace while nothing excites it.
-const P_TRACE_CAP: f64 = 1e10;
-
-impl Rls {
-    /// Forgetting factor λ (memory of about 1 / (1 - λ) samples).
-    pub fn new(lambda: f64) -> Self {
-        let mut p = [[0.0; 4]; 4];
-        for (i, row) in p.iter_mut().enumerate() {
-            row[i] = if i < 3 { 1e8 } else { 1e4 };
+impl OnlineSettings {
+    /// Defaults at sample rate `fs`: offline cut-off, order 4, the last 8
+    /// perturbations, a number from 3 on, segments of at most 3 s.
+    pub fn new(fs: f64) -> Self {
+        OnlineSettings {
+            fs,
+            cutoff_hz: crate::prepare::default_cutoff(fs),
+            order: 4,
+            window_trials: 8,
+            min_trials: 3,
+            max_trial_s: 3.0,
         }
-        Rls {
-            lambda,
-            theta: [[0.0; 3]; 4],
-            p,
-            x_ref: None,
-            err_power: [0.0; 3],
-            f_mean: [0.0; 3],
-            f_power: [0.0; 3],
-            updates: 0,
+    }
+}
+
+/// Centred regression sums of one closed segment (or of several, added).
+#[derive(Debug, Clone, Copy)]
+struct Sums {
+    n: f64,
+    xtx: SMatrix<f64, P, P>,
+    xtf: SMatrix<f64, P, 3>,
+    ftf: SVector<f64, 3>,
+}
+
+impl Sums {
+    fn zero() -> Self {
+        Sums {
+            n: 0.0,
+            xtx: SMatrix::zeros(),
+            xtf: SMatrix::zeros(),
+            ftf: SVector::zeros(),
+        }
+    }
+    fn add(&mut self, o: &Sums) {
+        self.n += o.n;
+        self.xtx += o.xtx;
+        self.xtf += o.xtf;
+        self.ftf += o.ftf;
+    }
+}
+
+/// Raw sums of the segment in progress (centred when it closes).
+#[derive(Debug, Clone)]
+struct Segment {
+    n: f64,
+    sx: SVector<f64, P>,
+    sf: SVector<f64, 3>,
+    xtx: SMatrix<f64, P, P>,
+    xtf: SMatrix<f64, P, 3>,
+    ftf: SVector<f64, 3>,
+    start: [f64; 3],
+    max_disp: f64,
+    max_speed: f64,
+    plausible: bool,
+    discard: bool,
+    /// Sample count at the onset (the first rest sample taken along).
+    onset: u64,
+}
+
+impl Segment {
+    fn new(start: [f64; 3], onset: u64) -> Self {
+        Segment {
+            n: 0.0,
+            sx: SVector::zeros(),
+            sf: SVector::zeros(),
+            xtx: SMatrix::zeros(),
+            xtf: SMatrix::zeros(),
+            ftf: SVector::zeros(),
+            start,
+            max_disp: 0.0,
+            max_speed: 0.0,
+            plausible: true,
+            discard: false,
+            onset,
         }
     }
 
-    /// One sample of position (m) and force on the limb (N).
-    // index loops mirror the RLS equations on these 4 x 4 and 4 x 3 arrays
-    #[allow(clippy::needless_range_loop)]
-    #[inline]
-    pub fn update(&mut self, x: [f64; 3], f: [f64; 3]) {
-        let r = *self.x_ref.get_or_insert(x);
-        let phi = [x[0] - r[0], x[1] - r[1], x[2] - r[2], 1.0];
-        let mut p_phi = [0.0; 4];
-        for i in 0..4 {
-            p_phi[i] = (0..4).map(|j| self.p[i][j] * phi[j]).sum();
-        }
-        let denom = self.lambda + (0..4).map(|i| phi[i] * p_phi[i]).sum::<f64>();
-        let gain = p_phi.map(|v| v / denom);
-        let w = 1.0 - self.lambda;
-        for o in 0..3 {
-            let pred: f64 = (0..4).map(|i| self.theta[i][o] * phi[i]).sum();
-            let e = f[o] - pred;
-            for i in 0..4 {
-                self.theta[i][o] += gain[i] * e;
-            }
-            self.err_power[o] += w * (e * e - self.err_power[o]);
-            self.f_mean[o] += w * (f[o] - self.f_mean[o]);
-            let d = f[o] - self.f_mean[o];
-            self.f_power[o] += w * (d * d - self.f_power[o]);
-        }
-        let trace: f64 = (0..4).map(|i| self.p[i][i]).sum();
-        let forget = if trace > P_TRACE_CAP {
-            1.0
-        } else {
-            self.lambda
-        };
-        for i in 0..4 {
-            for j in 0..4 {
-                self.p[i][j] = (self.p[i][j] - gain[i] * p_phi[j]) / forget;
-            }
-        }
-        self.updates += 1;
+    fn add(&mut self, row: &SVector<f64, P>, force: &SVector<f64, 3>) {
+        self.n += 1.0;
+        self.sx += row;
+        self.sf += force;
+        self.xtx.syger(1.0, row, row, 1.0);
+        self.xtf.ger(1.0, row, force, 1.0);
+        self.ftf += force.component_mul(force);
     }
 
-    /// K (N/m): row = force axis, column = position axis.
-    pub fn stiffness(&self) -> [[f64; 3]; 3] {
-        let mut k = [[0.0; 3]; 3];
-        for (o, row) in k.iter_mut().enumerate() {
-            for (i, v) in row.iter_mut().enumerate() {
-                *v = self.theta[i][o];
-            }
+    /// Sums about the segment's own means: its force offset fitted away.
+    fn centred(&self) -> Sums {
+        let n = self.n.max(1.0);
+        let mx = self.sx / n;
+        let mf = self.sf / n;
+        Sums {
+            n: self.n,
+            xtx: self.xtx - mx * self.sx.transpose(),
+            xtf: self.xtf - mx * self.sf.transpose(),
+            ftf: self.ftf - mf.component_mul(&self.sf),
         }
-        k
     }
+}
 
-    /// Variance accounted for by the one-step prediction, per axis (%);
-    /// None before the first 100 samples.
-    pub fn vaf(&self) -> Option<[f64; 3]> {
-        (self.updates >= 100).then(|| {
-            [0, 1, 2].map(|o| {
-                if self.f_power[o] > 0.0 {
-                    100.0 * (1.0 - self.err_power[o] / self.f_power[o])
-                } else {
-                    0.0
-                }
-            })
+/// What the live display may show.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OnlineState {
+    /// No number: why not (e.g. "waiting for perturbations: 1 of 3").
+    Waiting(String),
+    /// An estimate from the last perturbations.
+    Estimating,
+}
+
+/// One estimate of the online model.
+#[derive(Debug, Clone)]
+pub struct OnlineEstimate {
+    /// Stiffness (N/m): row = force axis, column = position axis.
+    pub stiffness: [[f64; 3]; 3],
+    /// Standard errors of the stiffness entries (N/m).
+    pub stiffness_se: [[f64; 3]; 3],
+    /// Damping (N s/m).
+    pub damping: [[f64; 3]; 3],
+    /// Inertia (kg).
+    pub inertia: [[f64; 3]; 3],
+    /// Variance accounted for per force axis (%), where it lies in [0, 100].
+    pub vaf: [Option<f64>; 3],
+    /// Perturbations in the estimate.
+    pub trials: usize,
+}
+
+/// The online estimator (see the module documentation).
+#[derive(Debug, Clone)]
+pub struct OnlineImpedance {
+    settings: OnlineSettings,
+    lowpass: LowPass,
+    filters: Option<Vec<StreamingFilter>>,
+    /// Filtered samples n-1 and n-2 (x, y, z, fx, fy, fz).
+    previous: [[f64; 6]; 2],
+    filtered_samples: u64,
+    segment: Option<Segment>,
+    /// The last samples at rest (row, force, position), while no segment is open.
+    rest: VecDeque<(SVector<f64, P>, SVector<f64, 3>, [f64; 3])>,
+    closed: VecDeque<Sums>,
+    estimate: Option<OnlineEstimate>,
+    state: OnlineState,
+    /// Samples taken.
+    pub samples: u64,
+    /// Samples refused: non-finite, a position beyond 10 m or a force beyond 1e4 N.
+    pub rejected: u64,
+    /// Perturbations (segments with movement) since the start.
+    pub perturbations: u64,
+    /// Segments dropped for implausible values.
+    pub dropped: u64,
+}
+
+impl OnlineImpedance {
+    /// A new estimator; errors for settings no filter can be designed for.
+    pub fn new(settings: OnlineSettings) -> Result<Self> {
+        if settings.min_trials == 0 || settings.window_trials < settings.min_trials {
+            return Err(Error::invalid(
+                "online window",
+                format!(
+                    "expected 1 <= min_trials <= window_trials, found {} and {}",
+                    settings.min_trials, settings.window_trials
+                ),
+            ));
+        }
+        let lowpass = LowPass::butterworth(settings.order, settings.cutoff_hz, settings.fs)?;
+        let waiting = OnlineState::Waiting(format!(
+            "waiting for perturbations: 0 of {}",
+            settings.min_trials
+        ));
+        Ok(OnlineImpedance {
+            settings,
+            lowpass,
+            filters: None,
+            previous: [[0.0; 6]; 2],
+            filtered_samples: 0,
+            segment: None,
+            rest: VecDeque::new(),
+            closed: VecDeque::new(),
+            estimate: None,
+            state: waiting,
+            samples: 0,
+            rejected: 0,
+            perturbations: 0,
+            dropped: 0,
         })
     }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &OnlineSettings {
+        &self.settings
+    }
+
+    /// What may be shown now.
+    pub fn state(&self) -> &OnlineState {
+        &self.state
+    }
+
+    /// The estimate, only while [`OnlineState::Estimating`].
+    pub fn estimate(&self) -> Option<&OnlineEstimate> {
+        match self.state {
+            OnlineState::Estimating => self.estimate.as_ref(),
+            OnlineState::Waiting(_) => None,
+        }
+    }
+
+    /// Perturbations in the current window.
+    pub fn window_trials(&self) -> usize {
+        self.closed.len()
+    }
+
+    /// Forget every perturbation (a new co-contraction level): the estimate
+    /// restarts from the next perturbation. The filters keep running.
+    pub fn reset(&mut self) {
+        self.reset_from(u64::MAX);
+    }
+
+    /// [`OnlineImpedance::reset`] for a change that happened at sample
+    /// `first` (a count of [`OnlineImpedance::samples`]): a perturbation in
+    /// progress that started at or after it is kept; one that started
+    /// before is followed to its end (so the next one is recognised) but not
+    /// used, since part of it belongs to the old level.
+    pub fn reset_from(&mut self, first: u64) {
+        self.closed.clear();
+        if let Some(seg) = &mut self.segment {
+            seg.discard = seg.onset < first;
+        }
+        self.estimate = None;
+        self.state = OnlineState::Waiting(format!(
+            "waiting for perturbations: 0 of {}",
+            self.settings.min_trials
+        ));
+    }
+
+    /// One sample: position (m) and force on the limb (N).
+    #[inline]
+    pub fn update(&mut self, x: [f64; 3], f: [f64; 3]) {
+        // a value no limb gives never reaches the filters (it would ring in
+        // them for seconds); the segment it interrupts is dropped
+        let within = |v: &f64, limit: f64| v.is_finite() && v.abs() <= limit;
+        let implausible = !x.iter().all(|v| within(v, POSITION_LIMIT_M))
+            || !f.iter().all(|v| within(v, FORCE_LIMIT_N));
+        if implausible {
+            self.rejected += 1;
+            if let Some(seg) = &mut self.segment {
+                seg.plausible = false;
+            }
+            return;
+        }
+        self.samples += 1;
+        let raw = [x[0], x[1], x[2], f[0], f[1], f[2]];
+        let lowpass = &self.lowpass;
+        let filters = self
+            .filters
+            .get_or_insert_with(|| raw.iter().map(|&v| lowpass.streaming_from(v)).collect());
+        let mut y = [0.0; 6];
+        for ((out, filter), v) in y.iter_mut().zip(filters.iter_mut()).zip(raw) {
+            *out = filter.step(v);
+        }
+        let [p1, p2] = self.previous;
+        self.previous = [y, p1];
+        self.filtered_samples += 1;
+        if self.filtered_samples < 3 {
+            return;
+        }
+        // central differences at the previous sample
+        let fs = self.settings.fs;
+        let mut row = SVector::<f64, P>::zeros();
+        let mut force = SVector::<f64, 3>::zeros();
+        let mut pos = [0.0; 3];
+        let mut speed2 = 0.0;
+        for i in 0..3 {
+            let v = (y[i] - p2[i]) * 0.5 * fs;
+            row[i] = (y[i] - 2.0 * p1[i] + p2[i]) * fs * fs;
+            row[3 + i] = v;
+            row[6 + i] = p1[i];
+            pos[i] = p1[i];
+            force[i] = p1[3 + i];
+            speed2 += v * v;
+        }
+        self.accumulate(row, force, pos, speed2.sqrt());
+    }
+
+    fn accumulate(
+        &mut self,
+        row: SVector<f64, P>,
+        force: SVector<f64, 3>,
+        pos: [f64; 3],
+        speed: f64,
+    ) {
+        let fs = self.settings.fs;
+        let Some(seg) = self.segment.as_mut() else {
+            // at rest: keep the last PRE_ONSET_S of samples; an onset takes them
+            // as the perturbation's own rest (its force offset), as offline
+            let cap = ((PRE_ONSET_S * fs).round() as usize).max(2);
+            self.rest.push_back((row, force, pos));
+            while self.rest.len() > cap {
+                self.rest.pop_front();
+            }
+            let origin = self.rest.front().map_or(pos, |r| r.2);
+            if distance(pos, origin) > ONSET_M {
+                let first = self.samples.saturating_sub(self.rest.len() as u64);
+                let mut seg = Segment::new(origin, first);
+                for (r, f, _) in self.rest.drain(..) {
+                    seg.add(&r, &f);
+                }
+                self.segment = Some(seg);
+            }
+            return;
+        };
+        seg.add(&row, &force);
+        let disp = distance(pos, seg.start);
+        if disp > 0.5 {
+            seg.plausible = false;
+        }
+        seg.max_disp = seg.max_disp.max(disp);
+        seg.max_speed = seg.max_speed.max(speed);
+        let moved = seg.max_disp >= MOVED_M;
+        // back where it started and nearly still: the perturbation is over
+        let back = moved && disp < 0.1 * seg.max_disp && speed < 0.1 * seg.max_speed;
+        let too_long = seg.n >= self.settings.max_trial_s * fs;
+        if !(back || too_long) {
+            return;
+        }
+        let seg = self.segment.take().expect("matched above");
+        if !seg.plausible {
+            self.dropped += 1;
+        } else if moved && !seg.discard {
+            self.perturbations += 1;
+            self.closed.push_back(seg.centred());
+            while self.closed.len() > self.settings.window_trials {
+                self.closed.pop_front();
+            }
+            self.refit();
+        }
+    }
+
+    /// Solve the window's sums; decide what may be shown.
+    fn refit(&mut self) {
+        let s = &self.settings;
+        if self.closed.len() < s.min_trials {
+            self.state = OnlineState::Waiting(format!(
+                "waiting for perturbations: {} of {}",
+                self.closed.len(),
+                s.min_trials
+            ));
+            return;
+        }
+        let mut sum = Sums::zero();
+        for c in &self.closed {
+            sum.add(c);
+        }
+        match solve(&sum, s.fs, s.cutoff_hz, self.closed.len()) {
+            Ok(e) => {
+                self.estimate = Some(e);
+                self.state = OnlineState::Estimating;
+            }
+            Err(why) => {
+                self.estimate = None;
+                self.state = OnlineState::Waiting(why);
+            }
+        }
+    }
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Least squares on the sums, scaled to unit diagonal (so the condition
+/// number compares directions, not units).
+fn solve(
+    sum: &Sums,
+    fs: f64,
+    cutoff_hz: f64,
+    trials: usize,
+) -> std::result::Result<OnlineEstimate, String> {
+    let d: SVector<f64, P> = sum
+        .xtx
+        .diagonal()
+        .map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 });
+    if d.iter().any(|v| *v == 0.0 || !v.is_finite()) {
+        return Err(format!(
+            "waiting for perturbations in more directions ({trials} so far moved not every axis)"
+        ));
+    }
+    let scaled = SMatrix::<f64, P, P>::from_fn(|i, j| sum.xtx[(i, j)] * d[i] * d[j]);
+    let eig = scaled.symmetric_eigenvalues();
+    let (lo, hi) = (eig.min(), eig.max());
+    if !(lo > 0.0 && hi / lo < 1e6) {
+        return Err(format!(
+            "waiting for perturbations in more directions ({trials} so far do not identify K, B and M)"
+        ));
+    }
+    let Some(chol) = scaled.cholesky() else {
+        return Err("waiting for perturbations in more directions".into());
+    };
+    let inverse = chol.inverse();
+    let rhs = SMatrix::<f64, P, 3>::from_fn(|i, o| sum.xtf[(i, o)] * d[i]);
+    let theta_scaled = inverse * rhs;
+    let theta = SMatrix::<f64, P, 3>::from_fn(|i, o| theta_scaled[(i, o)] * d[i]);
+    // independent samples in the filtered signals: about 2 f_c per second
+    let n_eff = (sum.n * (2.0 * cutoff_hz / fs).min(1.0)).max(P as f64 + 1.0);
+    let mut out = OnlineEstimate {
+        stiffness: [[0.0; 3]; 3],
+        stiffness_se: [[0.0; 3]; 3],
+        damping: [[0.0; 3]; 3],
+        inertia: [[0.0; 3]; 3],
+        vaf: [None; 3],
+        trials,
+    };
+    for o in 0..3 {
+        let explained: f64 = (0..P).map(|i| theta[(i, o)] * sum.xtf[(i, o)]).sum();
+        let sse = (sum.ftf[o] - explained).max(0.0);
+        let sst = sum.ftf[o];
+        let vaf = 100.0 * (1.0 - sse / sst);
+        out.vaf[o] = (sst > 0.0 && (0.0..=100.0).contains(&vaf)).then_some(vaf);
+        // residual variance per independent sample, spread over the n samples' sums
+        let sigma2 = sse / (n_eff - P as f64) * (sum.n / n_eff);
+        for j in 0..3 {
+            out.inertia[o][j] = theta[(j, o)];
+            out.damping[o][j] = theta[(3 + j, o)];
+            out.stiffness[o][j] = theta[(6 + j, o)];
+            let var = sigma2 * inverse[(6 + j, 6 + j)] * d[6 + j] * d[6 + j];
+            out.stiffness_se[o][j] = var.max(0.0).sqrt();
+        }
+    }
+    let finite = out
+        .stiffness
+        .iter()
+        .chain(&out.damping)
+        .chain(&out.inertia)
+        .chain(&out.stiffness_se)
+        .flatten()
+        .all(|v| v.is_finite());
+    if !finite {
+        return Err("waiting: the last perturbations gave no finite estimate".into());
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)] // 3 x 3 matrices indexed as in the equations
 mod tests {
     use super::*;
 
-    #[test]
-    #[allow(clippy::needless_range_loop)]
-    fn rls_recovers_a_static_stiffness() {
-        let k = [[800.0, 40.0, 10.0], [30.0, 500.0, 20.0], [5.0, 25.0, 300.0]];
-        let mut rls = Rls::new(0.999);
-        let mut s = 1u64;
-        let mut rand = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        for n in 0..20_000 {
-            let t = n as f64 * 1e-3;
-            let x = [
-                0.3 + 0.004 * (3.1 * t).sin(),
-                -0.2 + 0.004 * (4.3 * t).cos(),
-                0.05 + 0.004 * (5.7 * t + 1.0).sin(),
+    /// A 3-D mass-spring-damper pushed by ramp-and-hold perturbations along
+    /// changing directions, with a different force offset per perturbation.
+    fn run(k: [[f64; 3]; 3], trials: usize, est: &mut OnlineImpedance) {
+        let (m, b) = (1.5, 15.0);
+        let fs = 1000.0;
+        let dirs = [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.6, 0.8, 0.0],
+            [0.0, 0.6, -0.8],
+            [0.57, -0.57, 0.57],
+        ];
+        let rest = [0.3, -0.2, 0.05];
+        let mut n = 0usize;
+        for t in 0..trials {
+            let d = dirs[t % dirs.len()];
+            let offset = [
+                3.0 * ((t * 7) % 5) as f64 - 6.0,
+                2.0 - (t % 3) as f64,
+                1.5 * (t % 2) as f64,
             ];
-            let mut f = [2.0, -1.0, 0.5];
-            for (o, fo) in f.iter_mut().enumerate() {
-                for i in 0..3 {
-                    *fo += k[o][i] * (x[i] - [0.3, -0.2, 0.05][i]);
-                }
-                *fo += 0.01 * rand();
+            // rest 50 ms, minimum-jerk out 100 ms, hold 500 ms, back 100 ms
+            let len = 750;
+            for i in 0..len {
+                let s = i as f64 / fs;
+                let (p, v, a) = profile(s);
+                let x: [f64; 3] = std::array::from_fn(|j| rest[j] + 0.008 * d[j] * p);
+                let f: [f64; 3] = std::array::from_fn(|o| {
+                    let mut fo = offset[o] + m * 0.008 * d[o] * a + b * 0.008 * d[o] * v;
+                    for j in 0..3 {
+                        fo += k[o][j] * (x[j] - rest[j]);
+                    }
+                    fo
+                });
+                est.update(x, f);
+                n += 1;
             }
-            rls.update(x, f);
         }
-        let est = rls.stiffness();
+        // 30 ms of rest: the last perturbation is over
+        let offset = [0.0; 3];
+        for _ in 0..30 {
+            est.update(rest, offset);
+        }
+        assert!(n > 0);
+    }
+
+    /// Position, velocity and acceleration of rest / out / hold / back.
+    fn profile(s: f64) -> (f64, f64, f64) {
+        let mj = |u: f64| {
+            let u = u.clamp(0.0, 1.0);
+            (
+                10.0 * u.powi(3) - 15.0 * u.powi(4) + 6.0 * u.powi(5),
+                (30.0 * u.powi(2) - 60.0 * u.powi(3) + 30.0 * u.powi(4)) / 0.1,
+                (60.0 * u - 180.0 * u.powi(2) + 120.0 * u.powi(3)) / 0.01,
+            )
+        };
+        if s < 0.05 {
+            (0.0, 0.0, 0.0)
+        } else if s < 0.15 {
+            mj((s - 0.05) / 0.1)
+        } else if s < 0.65 {
+            (1.0, 0.0, 0.0)
+        } else {
+            let (p, v, a) = mj((s - 0.65) / 0.1);
+            (1.0 - p, -v, -a)
+        }
+    }
+
+    #[test]
+    fn recovers_stiffness_damping_and_inertia_despite_offsets_per_perturbation() {
+        let k = [
+            [900.0, -300.0, 50.0],
+            [-300.0, 1500.0, 100.0],
+            [50.0, 100.0, 700.0],
+        ];
+        let mut est = OnlineImpedance::new(OnlineSettings::new(1000.0)).unwrap();
+        run(k, 2, &mut est);
+        assert!(
+            matches!(est.state(), OnlineState::Waiting(w) if w.contains("2 of 3")),
+            "{:?}",
+            est.state()
+        );
+        run(k, 6, &mut est);
+        let e = est.estimate().expect("estimating after 8 perturbations");
+        assert_eq!(e.trials, 8);
         for o in 0..3 {
-            for i in 0..3 {
+            for j in 0..3 {
                 assert!(
-                    (est[o][i] - k[o][i]).abs() < 0.01 * 800.0,
-                    "K[{o}][{i}] = {}",
-                    est[o][i]
+                    (e.stiffness[o][j] - k[o][j]).abs() < 0.02 * 1500.0,
+                    "K{o}{j} = {} (true {})",
+                    e.stiffness[o][j],
+                    k[o][j]
                 );
             }
+            assert!(
+                (e.damping[o][o] - 15.0).abs() < 1.5,
+                "B{o}{o} = {}",
+                e.damping[o][o]
+            );
+            assert!(
+                (e.inertia[o][o] - 1.5).abs() < 0.15,
+                "M{o}{o} = {}",
+                e.inertia[o][o]
+            );
+            assert!(e.vaf[o].unwrap() > 99.0);
         }
-        assert!(rls.vaf().unwrap().iter().all(|v| *v > 99.0));
+        assert_eq!(est.perturbations, 8);
+    }
+
+    #[test]
+    fn one_direction_only_is_not_identifiable_and_says_so() {
+        let mut est = OnlineImpedance::new(OnlineSettings::new(1000.0)).unwrap();
+        for _ in 0..4 {
+            for i in 0..780 {
+                let (p, _, _) = profile(i as f64 / 1000.0);
+                est.update([0.3 + 0.008 * p, -0.2, 0.05], [800.0 * 0.008 * p, 0.0, 0.0]);
+            }
+        }
+        assert_eq!(est.perturbations, 4);
+        assert!(est.estimate().is_none());
+        assert!(
+            matches!(est.state(), OnlineState::Waiting(w) if w.contains("directions")),
+            "{:?}",
+            est.state()
+        );
+    }
+
+    #[test]
+    fn extreme_samples_do_not_poison_the_estimate() {
+        let k = [[900.0, 0.0, 0.0], [0.0, 600.0, 0.0], [0.0, 0.0, 400.0]];
+        let mut est = OnlineImpedance::new(OnlineSettings::new(1000.0)).unwrap();
+        run(k, 6, &mut est);
+        est.update([f64::NAN, 0.0, 0.0], [0.0; 3]);
+        est.update([0.3, -0.2, 0.05], [1e300, 0.0, 0.0]);
+        run(k, 12, &mut est);
+        assert_eq!(est.rejected, 2);
+        assert_eq!(est.dropped, 0, "at rest no segment was open");
+        let e = est.estimate().expect("estimating");
+        for o in 0..3 {
+            assert!(
+                (e.stiffness[o][o] - k[o][o]).abs() < 0.02 * k[o][o],
+                "K{o}{o} = {}",
+                e.stiffness[o][o]
+            );
+        }
+    }
+
+    #[test]
+    fn a_reset_forgets_the_old_level() {
+        let mut est = OnlineImpedance::new(OnlineSettings::new(1000.0)).unwrap();
+        run(
+            [[900.0, 0.0, 0.0], [0.0, 600.0, 0.0], [0.0, 0.0, 400.0]],
+            6,
+            &mut est,
+        );
+        est.reset();
+        assert!(est.estimate().is_none());
+        let k2 = [[1800.0, 0.0, 0.0], [0.0, 1200.0, 0.0], [0.0, 0.0, 800.0]];
+        run(k2, 4, &mut est);
+        let e = est.estimate().expect("estimating");
+        assert_eq!(e.trials, 4);
+        for o in 0..3 {
+            assert!(
+                (e.stiffness[o][o] - k2[o][o]).abs() < 0.02 * k2[o][o],
+                "K{o}{o} = {}",
+                e.stiffness[o][o]
+            );
+        }
     }
 }

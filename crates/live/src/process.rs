@@ -2,14 +2,32 @@
 //! with the causal envelope (rectify, 2nd-order Butterworth 8 Hz, one causal
 //! pass, divided by the MVC maximum; mean over muscles — the same chain as
 //! `limpid_analysis::emg` with `causal = true`, so live and offline agree to
-//! rounding), live MVC capture, and an online stiffness estimate by
-//! recursive least squares with forgetting on f = K (x - x_ref) + c.
+//! rounding), live MVC capture, and the online impedance
+//! (`limpid_ident::online`: M, B, K per completed perturbation), restarted
+//! when the co-contraction level changes.
 
 use limpid_analysis::emg::EmgParams;
 use limpid_core::{Error, Result};
 use limpid_dsp::{LowPass, StreamingFilter};
 
-pub use limpid_ident::online::Rls;
+pub use limpid_ident::online::{OnlineEstimate, OnlineImpedance, OnlineSettings, OnlineState};
+
+/// A level change: the index averaged over [`LEVEL_AVERAGE_S`] differs from
+/// the level's mean by more than this (fraction of MVC) for [`LEVEL_HOLD_S`].
+pub const LEVEL_STEP: f64 = 0.1;
+/// Averaging time of the index for level-change detection (s).
+pub const LEVEL_AVERAGE_S: f64 = 0.2;
+/// How long the change must last (s).
+pub const LEVEL_HOLD_S: f64 = 0.2;
+
+/// The online stiffness of one co-contraction level, kept when the level changes.
+#[derive(Debug, Clone)]
+pub struct LevelStiffness {
+    /// Mean co-contraction index over the level (fraction of MVC).
+    pub index: f64,
+    /// The last estimate of the level.
+    pub estimate: OnlineEstimate,
+}
 
 /// The live state machine: envelopes, index, MVC capture, RLS.
 #[derive(Debug, Clone)]
@@ -27,8 +45,19 @@ pub struct Processor {
     /// the bar shows, since the raw 8 Hz envelope flickers at display rate.
     pub index_display: f64,
     display_weight: f64,
-    /// The online stiffness estimate.
-    pub rls: Rls,
+    /// The online impedance of the current level.
+    pub online: OnlineImpedance,
+    /// Earlier levels' last estimates (most recent last, at most 32).
+    pub history: Vec<LevelStiffness>,
+    /// Level changes seen.
+    pub level_changes: u64,
+    level_sum: f64,
+    level_n: f64,
+    index_fast: f64,
+    fast_weight: f64,
+    away_samples: usize,
+    away_since: u64,
+    hold_samples: usize,
 }
 
 impl Processor {
@@ -56,7 +85,16 @@ impl Processor {
             index: f64::NAN,
             index_display: f64::NAN,
             display_weight: 1.0 / fs,
-            rls: Rls::new(0.9995),
+            online: OnlineImpedance::new(OnlineSettings::new(fs))?,
+            history: Vec::new(),
+            level_changes: 0,
+            level_sum: 0.0,
+            level_n: 0.0,
+            index_fast: f64::NAN,
+            fast_weight: 1.0 / (LEVEL_AVERAGE_S * fs).max(1.0),
+            away_samples: 0,
+            away_since: 0,
+            hold_samples: ((LEVEL_HOLD_S * fs).round() as usize).max(1),
         })
     }
 
@@ -89,9 +127,57 @@ impl Processor {
                 self.index
             };
         }
-        if let Some(k) = kinematics {
-            self.rls.update([k[0], k[1], k[2]], [k[3], k[4], k[5]]);
+        if self.index.is_finite() {
+            self.track_level();
         }
+        if let Some(k) = kinematics {
+            self.online.update([k[0], k[1], k[2]], [k[3], k[4], k[5]]);
+        }
+    }
+
+    /// The mean index of the current level (fraction of MVC), once known.
+    pub fn level_index(&self) -> Option<f64> {
+        (self.level_n > 0.0).then(|| self.level_sum / self.level_n)
+    }
+
+    /// Restart the online impedance when the index leaves its level.
+    fn track_level(&mut self) {
+        self.index_fast = if self.index_fast.is_finite() {
+            self.index_fast + self.fast_weight * (self.index - self.index_fast)
+        } else {
+            self.index
+        };
+        let mean = self.level_sum / self.level_n.max(1.0);
+        let settled = self.level_n as usize >= self.hold_samples;
+        if settled && (self.index_fast - mean).abs() > LEVEL_STEP {
+            if self.away_samples == 0 {
+                self.away_since = self.online.samples;
+            }
+            self.away_samples += 1;
+        } else {
+            self.away_samples = 0;
+        }
+        if self.away_samples >= self.hold_samples {
+            if let Some(e) = self.online.estimate() {
+                if self.history.len() == 32 {
+                    self.history.remove(0);
+                }
+                self.history.push(LevelStiffness {
+                    index: mean,
+                    estimate: e.clone(),
+                });
+            }
+            // the index crossed the step about one averaging time after the change
+            let lag = (LEVEL_AVERAGE_S * self.online.settings().fs) as u64;
+            self.online.reset_from(self.away_since.saturating_sub(lag));
+            self.level_changes += 1;
+            self.level_sum = 0.0;
+            self.level_n = 0.0;
+            self.away_samples = 0;
+            return;
+        }
+        self.level_sum += self.index;
+        self.level_n += 1.0;
     }
 
     /// Start capturing an MVC: the maxima of the envelopes from now on.

@@ -136,10 +136,92 @@ pub struct Snapshot {
     pub latency_p99_us: Option<f64>,
     /// Largest latency (µs).
     pub latency_max_us: Option<f64>,
-    /// Online stiffness (N/m) and its one-step VAF (%), once kinematics arrive.
+    /// The online impedance of the current co-contraction level.
+    pub online: OnlineView,
+}
+
+/// The online impedance as the page shows it: a number only with its
+/// standard error, and otherwise the reason there is none.
+#[derive(Debug, Clone, Serialize)]
+pub struct OnlineView {
+    /// "estimating", or why no number is shown ("no kinematics in the
+    /// stream", "waiting for perturbations: 1 of 3", ...).
+    pub status: String,
+    /// Stiffness (N/m), row = force axis; only while estimating.
     pub stiffness: Option<[[f64; 3]; 3]>,
-    /// One-step VAF of the online stiffness per axis (%).
-    pub stiffness_vaf: Option<[f64; 3]>,
+    /// Its standard errors (N/m).
+    pub stiffness_se: Option<[[f64; 3]; 3]>,
+    /// Damping (N s/m).
+    pub damping: Option<[[f64; 3]; 3]>,
+    /// Inertia (kg).
+    pub inertia: Option<[[f64; 3]; 3]>,
+    /// VAF per force axis (%); null where it is not in [0, 100].
+    pub vaf: Option<[Option<f64>; 3]>,
+    /// Perturbations in the estimate (the most recent of this level).
+    pub trials: usize,
+    /// Perturbations seen since the start.
+    pub perturbations: u64,
+    /// Mean co-contraction index of the current level (fraction of MVC).
+    pub level_index: Option<f64>,
+    /// Level changes detected (each restarts the estimate).
+    pub level_changes: u64,
+    /// Earlier levels: mean index and last stiffness with standard errors.
+    pub history: Vec<LevelView>,
+    /// Kinematic samples refused as implausible.
+    pub rejected: u64,
+}
+
+/// One earlier level of [`OnlineView::history`].
+#[derive(Debug, Clone, Serialize)]
+pub struct LevelView {
+    /// Mean co-contraction index (fraction of MVC).
+    pub index: f64,
+    /// Stiffness (N/m).
+    pub stiffness: [[f64; 3]; 3],
+    /// Its standard errors (N/m).
+    pub stiffness_se: [[f64; 3]; 3],
+    /// Perturbations in it.
+    pub trials: usize,
+}
+
+impl OnlineView {
+    /// The view of a processor's online state.
+    pub fn of(p: &Processor) -> Self {
+        use crate::process::OnlineState;
+        let o = &p.online;
+        let e = o.estimate();
+        let status = if o.samples == 0 {
+            "no kinematics in the stream".to_string()
+        } else {
+            match o.state() {
+                OnlineState::Estimating => "estimating".to_string(),
+                OnlineState::Waiting(why) => why.clone(),
+            }
+        };
+        OnlineView {
+            status,
+            stiffness: e.map(|e| e.stiffness),
+            stiffness_se: e.map(|e| e.stiffness_se),
+            damping: e.map(|e| e.damping),
+            inertia: e.map(|e| e.inertia),
+            vaf: e.map(|e| e.vaf),
+            trials: o.window_trials(),
+            perturbations: o.perturbations,
+            level_index: p.level_index(),
+            level_changes: p.level_changes,
+            history: p
+                .history
+                .iter()
+                .map(|h| LevelView {
+                    index: h.index,
+                    stiffness: h.estimate.stiffness,
+                    stiffness_se: h.estimate.stiffness_se,
+                    trials: h.estimate.trials,
+                })
+                .collect(),
+            rejected: o.rejected,
+        }
+    }
 }
 
 /// A running session.
@@ -258,8 +340,7 @@ impl Session {
             latency_p50_us: s.latency.quantile(0.5),
             latency_p99_us: s.latency.quantile(0.99),
             latency_max_us: (s.latency.count > 0).then_some(s.latency.max_us),
-            stiffness: (p.rls.updates > 0).then(|| p.rls.stiffness()),
-            stiffness_vaf: p.rls.vaf(),
+            online: OnlineView::of(p),
         }
     }
 
