@@ -1,5 +1,5 @@
-//! Per-sample cost of the live update: six EMG envelopes, the index and the
-//! RLS stiffness step (issue 9 target: under 1 µs per sample).
+//! Per-sample cost of the live update: six EMG envelopes, the index, level
+//! tracking and the online impedance step (target: under 1 µs per sample).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use limpid_live::process::Processor;
@@ -8,7 +8,7 @@ use std::hint::black_box;
 fn bench(c: &mut Criterion) {
     let mut p = Processor::new(6, 1000.0, Some(vec![1e-3; 6])).unwrap();
     let mut k = 0u64;
-    c.bench_function("live update: 6 EMG + index + RLS", |b| {
+    c.bench_function("live update: 6 EMG + index + online impedance", |b| {
         b.iter(|| {
             k += 1;
             let t = k as f64 * 1e-3;
