@@ -29,7 +29,7 @@ pub struct LevelStiffness {
     pub estimate: OnlineEstimate,
 }
 
-/// The live state machine: envelopes, index, MVC capture, RLS.
+/// The live state machine: envelopes, index, MVC capture, level tracking, online impedance.
 #[derive(Debug, Clone)]
 pub struct Processor {
     filters: Vec<StreamingFilter>,

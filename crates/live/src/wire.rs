@@ -14,7 +14,7 @@
 //!
 //! Anything else (other magic, version, length, channel count) is malformed:
 //! counted and dropped. So is a sample with a value no sensor gives (issue
-//! 13: one 1e308 would poison the envelope and the RLS for the rest of the
+//! 13: one 1e308 would poison the envelope and the online estimate for the rest of the
 //! session): beyond the recording limits of `limpid_core::recording::magnitude_limit`
 //! (t 1e10 s, EMG 1e6 V, positions 100 m, forces 1e6 N).
 
