@@ -69,7 +69,7 @@ pub fn run(args: DemoArgs) -> CliResult {
         .report
         .clone()
         .unwrap_or_else(|| args.out.join("report.html"));
-    crate::report::write(std::slice::from_ref(&doc.estimate), &report_path)?;
+    crate::report::write(std::slice::from_ref(&doc.estimate), None, &report_path)?;
 
     if args.json {
         println!("{}", doc.to_json_pretty());

@@ -295,7 +295,11 @@ pub fn run(method: Method) -> CliResult {
             }
             let doc = Document::new(Estimate::Linear(result));
             if let Some(path) = &args.report {
-                crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
+                crate::report::write(
+                    std::slice::from_ref(&doc.estimate),
+                    Some(&args.recording),
+                    path,
+                )?;
             }
             let Estimate::Linear(result) = &doc.estimate else {
                 unreachable!("made above")
@@ -351,7 +355,11 @@ pub fn run(method: Method) -> CliResult {
                 &rec, &mvc, &params, &emg,
             )?));
             if let Some(path) = &args.report {
-                crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
+                crate::report::write(
+                    std::slice::from_ref(&doc.estimate),
+                    Some(&args.recording),
+                    path,
+                )?;
             }
             let Estimate::Cocontraction(result) = &doc.estimate else {
                 unreachable!("made above")

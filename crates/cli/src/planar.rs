@@ -237,7 +237,11 @@ pub fn run_estimate(args: PlanarArgs) -> CliResult {
     let window = window_samples(&data, args.window_ms)?;
     let doc = Document::new(Estimate::Planar(estimate_planar(&data, window, xi)?));
     if let Some(path) = &args.report {
-        crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
+        crate::report::write(
+            std::slice::from_ref(&doc.estimate),
+            Some(&args.arm.recording),
+            path,
+        )?;
     }
     let Estimate::Planar(est) = &doc.estimate else {
         unreachable!("made above")
@@ -256,7 +260,11 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
         &data, args.from, args.to, args.step, xi,
     )?));
     if let Some(path) = &args.report {
-        crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
+        crate::report::write(
+            std::slice::from_ref(&doc.estimate),
+            Some(&args.arm.recording),
+            path,
+        )?;
     }
     if args.json {
         println!("{}", doc.to_json_pretty());

@@ -59,7 +59,11 @@ pub fn run(args: ReflexArgs) -> CliResult {
     let rec = crate::read_recording(&args.recording)?;
     let doc = Document::new(Estimate::Reflex(params.fit(&rec)?));
     if let Some(path) = &args.report {
-        crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
+        crate::report::write(
+            std::slice::from_ref(&doc.estimate),
+            Some(&args.recording),
+            path,
+        )?;
     }
     if args.json {
         println!("{}", doc.to_json());

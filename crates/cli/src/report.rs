@@ -28,23 +28,28 @@ fn write_named(inputs: &[(String, Estimate)], path: &Path) -> CliResult<limpid_r
     Ok(report)
 }
 
-/// A section's name: the recording's file name where the result names it.
-fn section_name(v: &Estimate, i: usize) -> String {
+/// A section's name: the recording's file name where the result names it,
+/// else the input the command read (`source`), else its place in the list.
+fn section_name(v: &Estimate, source: Option<&Path>, i: usize) -> String {
+    let file_name = |p: &Path| {
+        p.file_name().map_or_else(
+            || p.display().to_string(),
+            |f| f.to_string_lossy().into_owned(),
+        )
+    };
     v.recording()
-        .map(|r| {
-            Path::new(r)
-                .file_name()
-                .map_or_else(|| r.to_string(), |f| f.to_string_lossy().into_owned())
-        })
+        .map(|r| file_name(Path::new(r)))
+        .or_else(|| source.map(file_name))
         .unwrap_or_else(|| format!("result {}", i + 1))
 }
 
-/// `--report FILE` of the other commands: the results of this run.
-pub fn write(results: &[Estimate], path: &Path) -> CliResult {
+/// `--report FILE` of the other commands: the results of this run, made
+/// from `source` (the recording or manifest read; None for the demo).
+pub fn write(results: &[Estimate], source: Option<&Path>, path: &Path) -> CliResult {
     let named: Vec<(String, Estimate)> = results
         .iter()
         .enumerate()
-        .map(|(i, v)| (section_name(v, i), v.clone()))
+        .map(|(i, v)| (section_name(v, source, i), v.clone()))
         .collect();
     write_named(&named, path)?;
     eprintln!("report: {}", path.display());

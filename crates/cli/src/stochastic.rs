@@ -111,7 +111,11 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
     }
     let doc = Document::new(Estimate::Stochastic(est));
     if let Some(path) = &args.report {
-        crate::report::write(std::slice::from_ref(&doc.estimate), path)?;
+        crate::report::write(
+            std::slice::from_ref(&doc.estimate),
+            Some(&args.recording),
+            path,
+        )?;
     }
     if args.json {
         println!("{}", doc.to_json());

@@ -76,7 +76,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
             let files = write_tables(&result, &args.out)?;
             let result = limpid_analysis::result::Estimate::Study(result);
             if let Some(path) = &args.report {
-                crate::report::write(std::slice::from_ref(&result), path)?;
+                crate::report::write(std::slice::from_ref(&result), Some(&args.manifest), path)?;
             }
             let limpid_analysis::result::Estimate::Study(result) = result else {
                 unreachable!("made above")

@@ -164,7 +164,19 @@ fn report_command_writes_html_without_external_urls_and_svg_figures() {
     );
     assert!(text.contains("shortest trusted window"));
     let svgs: Vec<_> = std::fs::read_dir(&figs).unwrap().collect();
-    assert_eq!(svgs.len(), 3, "condition number, eigenvalues, symmetry");
+    assert_eq!(
+        svgs.len(),
+        5,
+        "K and D against T_obs, condition number, eigenvalues, symmetry"
+    );
+    // seed 003 Fig. 4-5: K against T_obs with the shortest trusted window drawn
+    let k = std::fs::read_to_string(figs.join("s1-sweep-k.svg")).unwrap();
+    for name in ["K11", "K22", "± 1 SE", "shortest trusted window ("] {
+        assert!(
+            k.contains(&format!("data-name=\"{name}")),
+            "{name} in the K figure"
+        );
+    }
     // something that is not a result: one line naming the file
     let bad = dir.path().join("bad.json");
     std::fs::write(&bad, "{\"hello\": 1}").unwrap();
@@ -490,4 +502,18 @@ fn reports_name_the_recording() {
         html.contains("500 Hz") && html.contains("trials"),
         "recording details"
     );
+    // results without a recording field are named after the file the command read
+    let out = limpid(&[
+        "window-sweep",
+        example("../../../shared/examples/planar/ex_joint_180.csv")
+            .to_str()
+            .unwrap(),
+        "--link-lengths",
+        "0.28,0.35",
+        "--report",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("Observation-window sweep: ex_joint_180.csv"));
 }

@@ -1190,7 +1190,67 @@ fn sweep_section(name: &str, v: &Sweep) -> Section {
         stroke: Stroke::Solid,
         color: PALETTE[k].into(),
     };
-    let figures = vec![
+    let mut figures = Vec::new();
+    // seed 003 Fig. 4-5: the joint K and D entries against T_obs, ± 1 SE
+    // dashed, the shortest trusted window as a vertical line
+    for (kind, unit, pick) in [
+        (
+            "K",
+            "N m/rad",
+            (|e: &PlanarEstimate| (&e.stiffness, &e.standard_errors.stiffness))
+                as fn(&PlanarEstimate) -> (&Matrix, &Matrix),
+        ),
+        ("D", "N m s/rad", |e: &PlanarEstimate| {
+            (&e.damping, &e.standard_errors.damping)
+        }),
+    ] {
+        let mut lines = Vec::new();
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (k, (i, j)) in [(0, 0), (0, 1), (1, 0), (1, 1)].into_iter().enumerate() {
+            let value: Vec<f64> = v.rows.iter().map(|r| pick(&r.estimate).0[(i, j)]).collect();
+            let se: Vec<f64> = v.rows.iter().map(|r| pick(&r.estimate).1[(i, j)]).collect();
+            let name = format!("{kind}{}{}", i + 1, j + 1);
+            for sign in [1.0, -1.0] {
+                let y: Vec<f64> = value.iter().zip(&se).map(|(v, e)| v + sign * e).collect();
+                lines.push(Series {
+                    name: "± 1 SE".into(),
+                    x: t.clone(),
+                    y,
+                    stroke: Stroke::Dashed,
+                    color: PALETTE[k].into(),
+                });
+            }
+            for y in value.iter().chain(&se) {
+                if y.is_finite() {
+                    lo = lo.min(*y);
+                    hi = hi.max(*y);
+                }
+            }
+            lines.push(series(&name, value, k));
+        }
+        if let (Some(ts), true) = (v.shortest_trusted_ms, lo < hi) {
+            lines.push(Series {
+                name: format!("shortest trusted window ({} ms)", fmt(ts)),
+                x: vec![ts, ts],
+                y: vec![lo, hi],
+                stroke: Stroke::Dotted,
+                color: "#000000".into(),
+            });
+        }
+        figures.push(Figure {
+            id: format!("sweep-{}", kind.to_lowercase()),
+            chart: Chart {
+                title: format!("Joint {kind} against the observation window (± 1 SE dashed)"),
+                x_label: "T_obs (ms)".into(),
+                y_label: format!("{kind} ({unit})"),
+                x_log: false,
+                y_log: false,
+                y_range: None,
+                series: lines,
+            },
+        });
+    }
+    figures.extend([
         Figure {
             id: "sweep-condition".into(),
             chart: Chart {
@@ -1240,7 +1300,7 @@ fn sweep_section(name: &str, v: &Sweep) -> Section {
                 ],
             },
         },
-    ];
+    ]);
     let never = |x: Option<f64>| x.map_or_else(|| "never".into(), fmt);
     let mut verdict = format!(
         "shortest trusted window: {} ms (precise, stable across neighbouring windows, before any change of the impedance within the trials); positive definite from {} ms, quasi-symmetric from {} ms, quasi-constant from {} ms",
@@ -1400,7 +1460,7 @@ pub fn to_html(report: &Report) -> String {
                     h,
                     "<figure id=\"{}\">{}</figure>",
                     escape(&f.id),
-                    f.chart.to_svg(420.0, 280.0)
+                    f.chart.to_svg(660.0, 300.0)
                 );
             }
             h.push_str("</div>");
@@ -1435,7 +1495,7 @@ pub fn figure_files(report: &Report) -> Vec<(String, String)> {
             s.figures.iter().map(move |f| {
                 (
                     format!("s{}-{}.svg", i + 1, f.id),
-                    f.chart.to_svg(560.0, 380.0),
+                    f.chart.to_svg(760.0, 380.0),
                 )
             })
         })

@@ -145,7 +145,8 @@ impl Chart {
 
     /// The chart as a standalone `<svg>` element of `width` x `height` px.
     pub fn to_svg(&self, width: f64, height: f64) -> String {
-        let (ml, mr, mt, mb) = (64.0, 12.0, 28.0, 44.0);
+        // the legend sits right of the plot, outside the data
+        let (ml, mr, mt, mb) = (64.0, 200.0, 28.0, 44.0);
         let (pw, ph) = (width - ml - mr, height - mt - mb);
         let (x0, x1) = self.range(|p| p.0, self.x_log);
         let (y0, y1) = self
@@ -210,6 +211,7 @@ impl Chart {
             mt + ph / 2.0,
             escape(&self.y_label)
         );
+        let mut legend_rows = 0;
         for (k, series) in self.series.iter().enumerate() {
             let mut d = String::new();
             let mut pen_down = false;
@@ -229,15 +231,19 @@ impl Chart {
                 escape(&series.name),
                 series.color
             );
-            // legend
-            let ly = mt + 12.0 + 13.0 * k as f64;
+            // legend: one entry per name (series drawn in pieces share one)
+            if self.series[..k].iter().any(|o| o.name == series.name) {
+                continue;
+            }
+            let ly = mt + 8.0 + 14.0 * legend_rows as f64;
+            legend_rows += 1;
+            let lx = ml + pw + 10.0;
             let _ = write!(
                 s,
-                r#"<line x1="{:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{}" stroke-width="1.6"{dash}/><text x="{:.1}" y="{:.1}">{}</text>"#,
-                ml + pw - 150.0,
-                ml + pw - 130.0,
+                r#"<line x1="{lx:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{}" stroke-width="1.6"{dash}/><text x="{:.1}" y="{:.1}">{}</text>"#,
+                lx + 20.0,
                 series.color,
-                ml + pw - 126.0,
+                lx + 24.0,
                 ly + 4.0,
                 escape(&series.name)
             );
