@@ -94,10 +94,26 @@ fn stochastic_report_figure_data_matches_its_snapshot() {
     for f in summary.as_array().unwrap().iter().take(18) {
         assert_eq!(
             f["traces"].as_array().unwrap().len(),
-            3,
-            "{}: estimate, fit, expected",
+            5,
+            "{}: estimate, its 95 % band (2 lines), fit, expected",
             f["id"]
         );
+    }
+    // the coherence band encloses the estimate
+    for f in report.sections.iter().flat_map(|s| &s.figures) {
+        if f.id.starts_with("bode-") {
+            let s = &f.chart.series;
+            assert_eq!(s[1].name, "95 % band (coherence)");
+            for k in 0..s[0].y.len() {
+                let (lo, v, hi) = (s[1].y[k], s[0].y[k], s[2].y[k]);
+                assert!(
+                    lo.is_nan() || (lo <= v && v <= hi),
+                    "{} at {} Hz: {lo} <= {v} <= {hi}",
+                    f.id,
+                    s[0].x[k]
+                );
+            }
+        }
     }
     // seed 004's Bode phase, unwrapped: no jump above 180 degrees between neighbouring points
     for f in report.sections.iter().flat_map(|s| &s.figures) {
@@ -272,8 +288,8 @@ fn demo_and_stochastic_reports_render_in_headless_chromium() {
         let panel = panel.split("</figure>").next().unwrap();
         assert_eq!(
             panel.matches("class=\"trace\"").count(),
-            3,
-            "estimate, fit, expected"
+            5,
+            "estimate, its band (2), fit, expected"
         );
     }
     screenshot_ok(&shot);

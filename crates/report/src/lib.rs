@@ -145,6 +145,18 @@ fn kind_unit(kind: MatrixKind, coords: &[String]) -> &'static str {
     }
 }
 
+/// Unit of the impedance element Z[i][j]: the force or torque on coordinate
+/// `row` per unit displacement of coordinate `column`.
+fn element_unit(row: &str, column: &str) -> &'static str {
+    let angular = |c: &str| c == "theta" || c.starts_with('q');
+    match (angular(row), angular(column)) {
+        (false, false) => "N/m",
+        (false, true) => "N/rad",
+        (true, false) => "N m/m",
+        (true, true) => "N m/rad",
+    }
+}
+
 fn optional(v: Option<f64>) -> String {
     v.map_or_else(|| "n/a".into(), fmt)
 }
@@ -580,14 +592,59 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
                     PALETTE[6],
                 ));
             }
+            // random error of Z[i][j] from the coherences (Bendat & Piersol's
+            // gain-factor error sqrt(1 - g^2) / (|g| sqrt(2 n_d)) of the force
+            // i and position j outputs, added in quadrature); band = +- 2 errors
+            let nd = v.criteria.segments.max(1) as f64;
+            let error = |o: usize, f: usize| {
+                let g2 = v.coherence.multiple.get(o).and_then(|m| m.get(f)).copied();
+                g2.filter(|g| *g > 0.0 && *g <= 1.0)
+                    .map_or(f64::INFINITY, |g| ((1.0 - g) / (2.0 * nd * g)).sqrt())
+            };
+            let eps: Vec<f64> = positive
+                .iter()
+                .map(|&f| error(n + i, f).hypot(error(j, f)))
+                .collect();
             let element = format!("Z[{},{}]", coords[i], coords[j]);
+            let with_band = |mut chart: Chart, phase: bool| {
+                let y = chart.series[0].y.clone();
+                for sign in [1.0, -1.0] {
+                    let band: Vec<f64> = y
+                        .iter()
+                        .zip(&eps)
+                        .map(|(v, e)| {
+                            if phase {
+                                v + sign * (2.0 * e).min(std::f64::consts::FRAC_PI_2).to_degrees()
+                            } else {
+                                let r = v * (1.0 + sign * 2.0 * e);
+                                if r > 0.0 {
+                                    r
+                                } else {
+                                    f64::NAN
+                                }
+                            }
+                        })
+                        .collect();
+                    chart.series.insert(
+                        1,
+                        Series {
+                            name: "95 % band (coherence)".into(),
+                            x: fx.clone(),
+                            y: band,
+                            stroke: Stroke::Dotted,
+                            color: PALETTE[0].into(),
+                        },
+                    );
+                }
+                chart
+            };
             let mk = |phase: bool| Chart {
                 title: format!("{element} {}", if phase { "phase" } else { "magnitude" }),
                 x_label: "frequency (Hz)".into(),
                 y_label: if phase {
                     "phase (deg)".into()
                 } else {
-                    format!("|Z| ({})", kind_unit(MatrixKind::Stiffness, coords))
+                    format!("|Z| ({})", element_unit(&coords[i], &coords[j]))
                 },
                 x_log: true,
                 y_log: !phase,
@@ -620,11 +677,11 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
             };
             figures.push(Figure {
                 id: format!("bode-mag-{}{}", coords[i], coords[j]),
-                chart: mk(false),
+                chart: with_band(mk(false), false),
             });
             figures.push(Figure {
                 id: format!("bode-phase-{}{}", coords[i], coords[j]),
-                chart: mk(true),
+                chart: with_band(mk(true), true),
             });
         }
     }
