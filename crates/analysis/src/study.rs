@@ -541,16 +541,56 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
             g(&x.principal_change_percent, 2)
         );
     }
-    let json = study_json(r).map_err(|e| Error::Format {
+    // study.json keeps every number but not the fit traces (150 kB per level
+    // and recording); each recording's full result is in recordings/
+    let mut slim = r.clone();
+    for p in &mut slim.recordings {
+        for l in &mut p.result.levels {
+            let t = &mut l.estimate.fit.traces;
+            t.time.clear();
+            t.measured.iter_mut().for_each(Vec::clear);
+            t.predicted.iter_mut().for_each(Vec::clear);
+        }
+    }
+    let json = study_json(&slim).map_err(|e| Error::Format {
         path: dir.join("study.json"),
         message: e.to_string(),
     })?;
-    Ok(vec![
+    let mut written = vec![
         write("tables.csv", csv)?,
         write("rotation.csv", rot)?,
         write("study.json", json)?,
         write("tables.md", markdown(r))?,
-    ])
+    ];
+    let per = dir.join("recordings");
+    std::fs::create_dir_all(&per).map_err(|source| Error::Io {
+        path: per.clone(),
+        source,
+    })?;
+    for p in &r.recordings {
+        let name = format!(
+            "recordings/s{}_c{}.json",
+            file_safe(&p.subject),
+            file_safe(&p.configuration)
+        );
+        let doc =
+            crate::result::Document::new(crate::result::Estimate::Cocontraction(p.result.clone()));
+        written.push(write(&name, doc.to_json())?);
+    }
+    Ok(written)
+}
+
+/// An id as part of a file name: letters, digits, '-' and '_' kept, others '_'.
+fn file_safe(id: &str) -> String {
+    id.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// The study's result document (`crate::result`, kind "study"), serialised

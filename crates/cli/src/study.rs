@@ -96,13 +96,18 @@ pub fn run(cmd: StudyCommand) -> CliResult {
             if args.print {
                 println!("\n{}", limpid_analysis::study::markdown(&result));
             }
+            let (per_recording, tables): (Vec<_>, Vec<_>) = files
+                .iter()
+                .partition(|p| p.parent().is_some_and(|d| d.ends_with("recordings")));
             println!(
-                "wrote {}",
-                files
+                "wrote {} and {} per-recording results in {}",
+                tables
                     .iter()
                     .map(|p| p.display().to_string())
                     .collect::<Vec<_>>()
-                    .join(", ")
+                    .join(", "),
+                per_recording.len(),
+                args.out.join("recordings").display()
             );
             Ok(())
         }

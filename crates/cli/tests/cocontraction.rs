@@ -125,6 +125,33 @@ fn virtual_study_tables_show_the_anisotropic_increase() {
     for f in ["tables.csv", "rotation.csv", "tables.md"] {
         assert!(tables.join(f).exists(), "{f}");
     }
+    // issue 20: study.json without the fit traces; each recording's full result beside it
+    for r in study["recordings"].as_array().unwrap() {
+        for l in r["result"]["levels"].as_array().unwrap() {
+            assert_eq!(
+                l["estimate"]["fit"]["traces"]["time"]
+                    .as_array()
+                    .unwrap()
+                    .len(),
+                0
+            );
+        }
+        let file = tables.join("recordings").join(format!(
+            "s{}_c{}.json",
+            r["subject"].as_str().unwrap(),
+            r["configuration"].as_str().unwrap()
+        ));
+        let full = read_json(&file);
+        assert_eq!(full["kind"], "cocontraction");
+        assert!(!full["levels"][0]["estimate"]["fit"]["traces"]["time"]
+            .as_array()
+            .unwrap()
+            .is_empty());
+        assert_eq!(
+            full["levels"][0]["stiffness"],
+            r["result"]["levels"][0]["stiffness"]
+        );
+    }
     // issue 20: each mean comes with its sd over subjects (seed 001's tables give mean ± sd)
     let recordings = study["recordings"].as_array().unwrap();
     for row in levels {
