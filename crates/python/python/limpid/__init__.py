@@ -400,7 +400,7 @@ def frequency_response(inputs: Sequence[Any], outputs: Sequence[Any], fs: float 
             f"frequency_response: the inputs' spectral matrix is singular at {singular} of {nf} "
             "frequencies (no input power there, or inputs fully coherent); H and the coherences are NaN there",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
     return f, h.reshape(nf, no, ni), m.reshape(nf, no), p.reshape(nf, no, ni)
 

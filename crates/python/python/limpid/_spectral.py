@@ -165,7 +165,7 @@ def spectra(x: Any, y: Any, kind: str, fs: Any, window: WindowLike, nperseg: Any
             raise ValueError(f"Parameter nperseg={nperseg} is not a positive integer!")
         if n < nperseg:
             warnings.warn(f"nperseg={nperseg} is greater than signal length max(len(x), len(y)) = {n}, "
-                          f"using nperseg = {n}", UserWarning, stacklevel=3)
+                          f"using nperseg = {n}", UserWarning, stacklevel=4)
             nperseg = n
         win = _window(window, nperseg)
     else:
