@@ -567,12 +567,20 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
         path: per.clone(),
         source,
     })?;
+    let mut used = std::collections::HashSet::new();
     for p in &r.recordings {
-        let name = format!(
-            "recordings/s{}_c{}.json",
+        // a subject may have several recordings of one configuration: number them
+        let stem = format!(
+            "recordings/s{}_c{}",
             file_safe(&p.subject),
             file_safe(&p.configuration)
         );
+        let mut name = format!("{stem}.json");
+        let mut k = 2;
+        while !used.insert(name.clone()) {
+            name = format!("{stem}_{k}.json");
+            k += 1;
+        }
         let doc =
             crate::result::Document::new(crate::result::Estimate::Cocontraction(p.result.clone()));
         written.push(write(&name, doc.to_json())?);

@@ -42,6 +42,9 @@ def test_study_run_gives_the_tables_and_lists_the_failure(manifest, tmp_path):
     assert row["subjects"] == 2 and abs(row["sd"]["kxx"]) < 1e-9 * abs(row["kxx"])
     for name in ("tables.csv", "rotation.csv", "study.json", "tables.md"):
         assert (tmp_path / "tables" / name).exists()
+    # one full result per recording, none overwritten
+    assert sorted(p.name for p in (tmp_path / "tables" / "recordings").iterdir()) == [
+        "s1_c4.json", "s1_c7.json", "s2_c4.json", "s2_c7.json"]
 
 
 def test_a_study_over_a_process_pool_equals_study_run(manifest):
@@ -77,3 +80,12 @@ def test_the_dask_example_on_a_local_cluster_of_processes(manifest, tmp_path):
     assert len(study.to_dict()["failures"]) == 1
     assert (tmp_path / "dask" / "tables.csv").read_text() == (
         limpid.study_run(manifest, out=tmp_path / "local") and (tmp_path / "local" / "tables.csv").read_text())
+
+
+def test_repeated_recordings_of_one_subject_and_configuration_keep_their_own_files(tmp_path):
+    case = SHARED / "ex_config4"
+    entry = f'[[recording]]\nsubject = "1"\nconfiguration = "4"\nfile = "{case}.csv"\nmvc = "{case}.mvc.csv"\n'
+    path = tmp_path / "study.toml"
+    path.write_text(entry + "\n" + entry)
+    limpid.study_run(path, out=tmp_path / "t")
+    assert sorted(p.name for p in (tmp_path / "t" / "recordings").iterdir()) == ["s1_c4.json", "s1_c4_2.json"]
