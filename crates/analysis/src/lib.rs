@@ -20,6 +20,7 @@ pub mod emg;
 pub mod linear;
 pub mod markers;
 pub mod protocol;
+pub mod reproduce;
 pub mod result;
 pub mod study;
 

@@ -11,6 +11,7 @@ mod planar;
 mod protocol;
 mod reflex;
 mod report;
+mod reproduce;
 mod stochastic;
 mod study;
 mod table;
@@ -60,6 +61,8 @@ enum Command {
     Spectra(stochastic::SpectraArgs),
     /// Check that standard errors cover the truth and verdicts hold, by Monte Carlo over virtual subjects of every method.
     Calibrate(calibrate::CalibrateArgs),
+    /// Run a seed's experiment on the virtual lab and print its tables beside the paper's (000, 001, 003, 004 or all).
+    Reproduce(reproduce::ReproduceArgs),
     /// Whole co-contraction studies: tables across subjects and configurations (seed 001).
     Study {
         #[command(subcommand)]
@@ -151,6 +154,7 @@ fn run(cli: Cli) -> CliResult {
         Command::Simulate(args) => protocol::run_simulate(args),
         Command::GravityCompensate(args) => gravity::run(args),
         Command::Report(args) => report::run(args),
+        Command::Reproduce(args) => reproduce::run(args),
         Command::Live(args) => live::run(args),
     }
 }

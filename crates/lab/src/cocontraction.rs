@@ -4,16 +4,20 @@
 //! each of 18 evenly spread targets in 100 ms (cubic), holds 500 ms, returns
 //! in 100 ms; each trial window starts with 50 ms of rest (the 1 s rests
 //! between trials are not recorded, as in `../shared/examples/cocontraction`).
-//! Stiffness depends on the level, K(c) = K0 + c dK; six EMG channels follow
-//! emg_m = a_m (0.02 + activation_m) N(0,1) + N(0, 5 µV), with activation the
-//! level times a muscle gain near 1. The MVC recording holds 5 s: rest,
-//! ramp, full activation for 3 s, ramp, rest.
+//! Stiffness depends on the level, piecewise linear between knots (the clean
+//! population: K(c) = K0 + c dK; the realistic subject of
+//! [`seed001_realistic_population`]: seed 001 Tables 1-4 at 0, 50, 75, 100 %);
+//! six EMG channels follow emg_m = a_m (0.02 + activation_m) N(0,1) + N(0,
+//! 5 µV), with activation the level times a muscle gain near 1 (times a slow
+//! wobble of the held level for the realistic subject). The MVC recording
+//! holds 5 s: rest, ramp, full activation for 3 s, ramp, rest.
 
 use nalgebra::{Matrix3, Vector3};
 use rand::{rngs::StdRng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
 use crate::profile::Profile;
+use crate::realistic::{seed001_stiffness, StretchReflex, SEED001_TABLES};
 use limpid_core::{Recording, Result};
 
 /// The six muscles of seed 001.
@@ -37,20 +41,38 @@ pub struct CocontractionSubject {
     pub inertia: Matrix3<f64>,
     /// B (N s/m).
     pub damping: Matrix3<f64>,
-    /// Stiffness at level 0 (N/m).
-    pub stiffness0: Matrix3<f64>,
-    /// Stiffness added per unit level (N/m).
-    pub stiffness_gain: Matrix3<f64>,
+    /// Stiffness (N/m) at levels in increasing order; linear between them,
+    /// constant beyond the ends.
+    pub stiffness_knots: Vec<(f64, Matrix3<f64>)>,
     /// EMG amplitude per muscle at full activation (V).
     pub emg_amplitude: [f64; 6],
     /// Activation per unit level, per muscle (about 1).
     pub activation_gain: [f64; 6],
+    /// Stretch reflex, if any.
+    pub reflex: Option<crate::realistic::StretchReflex>,
+    /// s.d. of the slow wobble of the held activation (fraction of the level;
+    /// 0: held exactly).
+    pub activation_wobble: f64,
 }
 
 impl CocontractionSubject {
     /// Stiffness at a level.
     pub fn stiffness(&self, level: f64) -> Matrix3<f64> {
-        self.stiffness0 + self.stiffness_gain * level
+        let knots = &self.stiffness_knots;
+        let Some(first) = knots.first() else {
+            return Matrix3::zeros();
+        };
+        if level <= first.0 {
+            return first.1;
+        }
+        for pair in knots.windows(2) {
+            let ((l0, k0), (l1, k1)) = (pair[0], pair[1]);
+            if level <= l1 {
+                let t = (level - l0) / (l1 - l0);
+                return k0 + (k1 - k0) * t;
+            }
+        }
+        knots[knots.len() - 1].1
     }
 }
 
@@ -106,6 +128,15 @@ pub fn simulate_cocontraction(
         .map(|_| Vec::with_capacity(total))
         .collect();
     let back_start = protocol.rest_s + protocol.move_s + protocol.hold_s;
+    let subject_noise = noise.disturbances(total, fs, &mut rng)?;
+    // the held level wobbles slowly (feedback keeps it near the target)
+    let wobble = crate::simulate::slow_noise(total, fs, 0.5, subject.activation_wobble, &mut rng)?;
+    // commanded displacement (fraction of the radius), rate, acceleration in a trial
+    let motion = |t: f64| {
+        let (s1, v1, a1) = Profile::Cubic.eval(t - protocol.rest_s, protocol.move_s);
+        let (s2, v2, a2) = Profile::Cubic.eval(t - back_start, protocol.move_s);
+        (s1 - s2, v1 - v2, a1 - a2)
+    };
     for (li, level) in protocol.levels.iter().enumerate() {
         let k = subject.stiffness(*level);
         for (di, dir) in protocol.directions.iter().enumerate() {
@@ -115,14 +146,20 @@ pub fn simulate_cocontraction(
             for i in 0..per {
                 let idx = trial * per + i;
                 let t = i as f64 / fs;
-                let (s1, v1, a1) = Profile::Cubic.eval(t - protocol.rest_s, protocol.move_s);
-                let (s2, v2, a2) = Profile::Cubic.eval(t - back_start, protocol.move_s);
-                let (s, sd, sdd) = (s1 - s2, v1 - v2, a1 - a2);
+                let (s, sd, sdd) = motion(t);
                 let disp = dir * (protocol.radius_m * s);
+                let vel = dir * (protocol.radius_m * sd);
+                let intrinsic = subject.damping * vel + k * disp;
+                // stretch reflex: opposes the velocity of `delay` earlier
+                let reflex = subject.reflex.map_or(Vector3::zeros(), |r| {
+                    let earlier = dir * (protocol.radius_m * motion(t - r.delay_s).1);
+                    subject.damping * earlier * r.gain(*level)
+                });
                 let f = subject.inertia * dir * (protocol.radius_m * sdd)
-                    + subject.damping * dir * (protocol.radius_m * sd)
-                    + k * disp
-                    + offset;
+                    + intrinsic
+                    + reflex
+                    + offset
+                    + subject_noise.force(idx, &intrinsic, &k);
                 cols[0].push(idx as f64 / fs);
                 for a in 0..3 {
                     cols[1 + a].push(
@@ -134,8 +171,9 @@ pub fn simulate_cocontraction(
                 }
                 cols[7].push((trial + 1) as f64);
                 cols[8].push(*level);
+                let held = level * (1.0 + wobble[0][idx]);
                 for (m, col) in cols[9..].iter_mut().enumerate() {
-                    let act = level * subject.activation_gain[m];
+                    let act = (held * subject.activation_gain[m]).max(0.0);
                     col.push(emg_sample(subject.emg_amplitude[m], act, &unit, &mut rng));
                 }
             }
@@ -178,18 +216,6 @@ fn emg_sample(amplitude: f64, activation: f64, unit: &Normal<f64>, rng: &mut Std
     amplitude * (0.02 + activation) * unit.sample(rng) + 5e-6 * unit.sample(rng)
 }
 
-/// Principal stiffnesses (K1, K2, K3) of seed 001 Table 1 (0 %) and Table 4
-/// (100 % co-contraction), configurations 1-7, N/m.
-pub const SEED001_PRINCIPAL: [([f64; 3], [f64; 3]); 7] = [
-    ([2202.1, 711.5, 188.7], [2406.5, 910.1, 414.2]),
-    ([2740.1, 661.3, 146.6], [2924.1, 1090.4, 355.2]),
-    ([2807.6, 476.6, 268.1], [2955.3, 579.3, 374.0]),
-    ([2046.6, 663.4, 471.1], [2182.5, 845.5, 608.0]),
-    ([2550.1, 484.3, 301.1], [2827.8, 642.2, 393.4]),
-    ([3264.9, 505.1, 247.7], [3471.0, 627.6, 417.7]),
-    ([2549.9, 845.9, 368.3], [2701.0, 1191.2, 667.5]),
-];
-
 /// A virtual study population: `subjects` x the 7 configurations of seed 001.
 ///
 /// Level 0 has seed 001 Table 1's principal stiffnesses (times a subject
@@ -203,7 +229,8 @@ pub fn seed001_population(subjects: usize, seed: u64) -> Vec<(usize, usize, Coco
     let mut out = Vec::new();
     for s in 0..subjects {
         let factor = 0.9 + 0.2 * (s as f64 + 0.5) / subjects as f64;
-        for (c, (k0, k1)) in SEED001_PRINCIPAL.iter().enumerate() {
+        for c in 0..7 {
+            let (k0, k1) = (&SEED001_TABLES[0][c][4..7], &SEED001_TABLES[3][c][4..7]);
             let axis = Vector3::from_fn(|_, _| unit.sample(&mut rng));
             let angle = unit.sample(&mut rng);
             let r0 =
@@ -225,13 +252,47 @@ pub fn seed001_population(subjects: usize, seed: u64) -> Vec<(usize, usize, Coco
                     start: Vector3::new(0.3, -0.2 + 0.02 * c as f64, 0.05),
                     inertia,
                     damping,
-                    stiffness0: r0 * d0 * r0.transpose(),
-                    stiffness_gain: r1 * Matrix3::from_diagonal(&gain) * r1.transpose(),
+                    stiffness_knots: vec![
+                        (0.0, r0 * d0 * r0.transpose()),
+                        (
+                            1.0,
+                            r0 * d0 * r0.transpose()
+                                + r1 * Matrix3::from_diagonal(&gain) * r1.transpose(),
+                        ),
+                    ],
                     emg_amplitude: [amp(0), amp(1), amp(2), amp(3), amp(4), amp(5)],
                     activation_gain: [1.0, 0.97, 1.03, 0.98, 1.02, 1.0],
+                    reflex: None,
+                    activation_wobble: 0.0,
                 },
             ));
         }
     }
     out
+}
+
+/// The realistic seed 001 population: `subjects` x 7 configurations with
+/// seed 001 Tables 1-5's stiffness per configuration and level
+/// ([`seed001_stiffness`]; subject factors 0.9-1.1 averaging 1), a stretch
+/// reflex ([`StretchReflex::typical`]), a 5 % wobble of the held level, and
+/// the inertia, damping and EMG of [`seed001_population`].
+pub fn seed001_realistic_population(
+    subjects: usize,
+    seed: u64,
+) -> Vec<(usize, usize, CocontractionSubject)> {
+    let tables: Vec<_> = (0..7).map(seed001_stiffness).collect();
+    seed001_population(subjects, seed)
+        .into_iter()
+        .map(|(s, c, mut subject)| {
+            let factor = 0.9 + 0.2 * (s as f64 - 0.5) / subjects as f64;
+            subject.stiffness_knots = tables[c - 1]
+                .knots
+                .iter()
+                .map(|(l, k)| (*l, k * factor))
+                .collect();
+            subject.reflex = Some(StretchReflex::typical());
+            subject.activation_wobble = 0.05;
+            (s, c, subject)
+        })
+        .collect()
 }

@@ -17,6 +17,7 @@ pub mod imbic;
 pub mod planar;
 pub mod profile;
 pub mod protocol;
+pub mod realistic;
 pub mod rig;
 pub mod robot;
 pub mod session;

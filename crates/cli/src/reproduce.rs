@@ -1,0 +1,58 @@
+//! `limpid reproduce`: each seed's experiment on the virtual lab, its numbers
+//! beside the paper's ([`limpid_analysis::reproduce`]).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use limpid_analysis::reproduce::{reproduce, text, Seed};
+
+use crate::CliResult;
+
+#[derive(Args)]
+pub struct ReproduceArgs {
+    /// Which seed: 000, 001, 003, 004 or all.
+    #[arg(value_name = "SEED")]
+    pub seed: String,
+    /// Print one JSON object {"rows": [...], "findings": [...]}.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write reproduce.json and reproduce.txt into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Random seed of the virtual subjects' noise.
+    #[arg(long, default_value_t = 1)]
+    pub random_seed: u64,
+}
+
+pub fn run(args: ReproduceArgs) -> CliResult {
+    let seeds: Vec<Seed> = if args.seed == "all" {
+        Seed::ALL.to_vec()
+    } else {
+        vec![Seed::parse(&args.seed).ok_or_else(|| {
+            limpid_core::Error::invalid(
+                "seed",
+                format!(
+                    "unknown seed {:?}; expected 000, 001, 003, 004 or all",
+                    args.seed
+                ),
+            )
+        })?]
+    };
+    let r = reproduce(&seeds, args.random_seed)?;
+    let json = serde_json::to_string_pretty(&r).expect("rows serialise");
+    let table = text(&r);
+    if let Some(dir) = &args.out {
+        std::fs::create_dir_all(dir).map_err(|e| limpid_core::Error::Io {
+            path: dir.clone(),
+            source: e,
+        })?;
+        limpid_core::files::write_file(&dir.join("reproduce.json"), json.as_bytes())?;
+        limpid_core::files::write_file(&dir.join("reproduce.txt"), table.as_bytes())?;
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        print!("{table}");
+    }
+    Ok(())
+}
