@@ -149,7 +149,12 @@ pub fn rotation_turning_axes(angles_deg: [f64; 3], signs: [f64; 2]) -> Option<(V
     let mut squares = [n2[0] / total, n2[1] / total, n2[2] / total];
     let mut phi = cos_phi.acos();
     let angles_of = |sq: &[f64; 3], phi: f64| -> [f64; 3] {
-        sq.map(|s| (phi.cos() + (1.0 - phi.cos()) * s).clamp(-1.0, 1.0).acos().to_degrees())
+        sq.map(|s| {
+            (phi.cos() + (1.0 - phi.cos()) * s)
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees()
+        })
     };
     let misfit = |sq: &[f64; 3], phi: f64| -> f64 {
         let got = angles_of(sq, phi);
@@ -203,7 +208,8 @@ fn rotation(w: &[f64]) -> Matrix3<f64> {
 }
 
 fn diagonal_misfit(r: &Matrix3<f64>, principal: &[f64], diag: &[f64]) -> f64 {
-    let k = r * Matrix3::from_diagonal(&Vector3::new(principal[0], principal[1], principal[2]))
+    let k = r
+        * Matrix3::from_diagonal(&Vector3::new(principal[0], principal[1], principal[2]))
         * r.transpose();
     (0..3).map(|i| (k[(i, i)] - diag[i]).powi(2)).sum()
 }
@@ -346,7 +352,10 @@ mod tests {
         let (oa, ob) = (order(&ea), order(&eb));
         (0..3)
             .map(|i| {
-                let c = ea.eigenvectors.column(oa[i]).dot(&eb.eigenvectors.column(ob[i]));
+                let c = ea
+                    .eigenvectors
+                    .column(oa[i])
+                    .dot(&eb.eigenvectors.column(ob[i]));
                 c.abs().min(1.0).acos().to_degrees()
             })
             .collect()
@@ -389,8 +398,15 @@ mod tests {
                 assert!((got[i] - want).abs() < 1.0, "c{c}: {got:?} vs {want}");
             }
             // the diagonal is matched as far as one orientation and Table 5 allow
-            eprintln!("c{c}: diagonal misfit {:.1} N/m, rotation {got:.1?}", s.diagonal_misfit);
-            assert!(s.diagonal_misfit < 150.0, "c{c}: misfit {}", s.diagonal_misfit);
+            eprintln!(
+                "c{c}: diagonal misfit {:.1} N/m, rotation {got:.1?}",
+                s.diagonal_misfit
+            );
+            assert!(
+                s.diagonal_misfit < 150.0,
+                "c{c}: misfit {}",
+                s.diagonal_misfit
+            );
         }
     }
 }

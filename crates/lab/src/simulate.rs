@@ -279,7 +279,13 @@ fn drift_signal(n: usize, fs: f64, noise: &NoiseModel, rng: &mut StdRng) -> Resu
 
 /// Three channels of white noise low-passed at `hz` (2nd-order Butterworth,
 /// zero-phase) and scaled to s.d. `std`.
-pub(crate) fn slow_noise(n: usize, fs: f64, hz: f64, std: f64, rng: &mut StdRng) -> Result<Vec<Vec<f64>>> {
+pub(crate) fn slow_noise(
+    n: usize,
+    fs: f64,
+    hz: f64,
+    std: f64,
+    rng: &mut StdRng,
+) -> Result<Vec<Vec<f64>>> {
     if std == 0.0 || n < 16 {
         return Ok(vec![vec![0.0; n]; 3]);
     }
