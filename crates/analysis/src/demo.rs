@@ -3,7 +3,10 @@
 //!
 //! Six start points, 16 centre-out perturbations each (3 cm, 3 s; 6 s for the
 //! sinusoid), a position-controlled robot, an F/T sensor with per-trial
-//! offset, drift and noise (`limpid_lab`); every start point is estimated
+//! offset, drift and noise (`limpid_lab`). The default subject is realistic
+//! ([`DemoSubject::Realistic`]: Table II's antisymmetric stiffness,
+//! signal-dependent force noise, posture drift); `Ideal` is the clean one.
+//! Every start point is estimated
 //! with the linear estimator (seed 000 eq. (3)-(8)) and compared with the
 //! subject's true matrices by the relative Frobenius error.
 
@@ -61,9 +64,25 @@ impl DemoPoint {
     }
 }
 
+/// Which virtual subject the demo perturbs.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum DemoSubject {
+    /// Seed 000 Table I plus Table II's antisymmetric stiffness, with
+    /// [`NoiseModel::realistic`] (signal-dependent force noise, posture drift).
+    #[default]
+    Realistic,
+    /// Table I exactly, sensor noise only ([`NoiseModel::default`]); documents
+    /// written before the subject was recorded are of this subject.
+    Ideal,
+}
+
 /// The whole virtual study.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct DemoResult {
+    /// The virtual subject (absent in older documents: ideal).
+    #[serde(default = "ideal")]
+    pub subject: DemoSubject,
     /// Perturbation profile of the centre-out phase.
     pub profile: String,
     /// Target directions per start point.
@@ -95,8 +114,17 @@ pub fn relative_error_percent(estimate: &Matrix, truth: &Matrix) -> f64 {
     100.0 * (&estimate.0 - &truth.0).norm() / truth.norm()
 }
 
-fn run_point(p: &Posture, protocol: &CentreOut, seed: u64) -> Result<DemoPoint> {
-    let rec = simulate_centre_out(p, protocol, &NoiseModel::default(), seed)?;
+fn ideal() -> DemoSubject {
+    DemoSubject::Ideal
+}
+
+fn run_point(
+    p: &Posture,
+    protocol: &CentreOut,
+    noise: &NoiseModel,
+    seed: u64,
+) -> Result<DemoPoint> {
+    let rec = simulate_centre_out(p, protocol, noise, seed)?;
     let prepared = prepare(&rec, &PrepareParams::default())?;
     let est = fit_linear(&prepared, &LinearParams::default())?;
     let result = linear_result(&est, &prepared);
@@ -120,19 +148,37 @@ fn run_point(p: &Posture, protocol: &CentreOut, seed: u64) -> Result<DemoPoint> 
 
 /// Simulate and estimate every start point (in parallel); `progress` is
 /// called once per start point.
-pub fn run_demo(profile: Profile, seed: u64, progress: &(dyn Fn() + Sync)) -> Result<DemoResult> {
+pub fn run_demo(
+    profile: Profile,
+    subject: DemoSubject,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> Result<DemoResult> {
     let protocol = CentreOut::seed000(profile);
-    let subject = seed000_subject1();
-    let points = subject
+    let mut postures = seed000_subject1();
+    let noise = match subject {
+        DemoSubject::Realistic => {
+            for (p, max_a) in postures
+                .iter_mut()
+                .zip(limpid_lab::realistic::SEED000_K_MAX_A)
+            {
+                p.stiffness += limpid_lab::realistic::antisymmetric_part(max_a);
+            }
+            NoiseModel::realistic()
+        }
+        DemoSubject::Ideal => NoiseModel::default(),
+    };
+    let points = postures
         .par_iter()
         .enumerate()
         .map(|(i, p)| {
-            let r = run_point(p, &protocol, seed.wrapping_mul(1000) + i as u64);
+            let r = run_point(p, &protocol, &noise, seed.wrapping_mul(1000) + i as u64);
             progress();
             r
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(DemoResult {
+        subject,
         profile: format!("{profile:?}").to_lowercase(),
         directions: protocol.directions.len(),
         radius_m: protocol.radius_m,

@@ -26,7 +26,13 @@ fn committed_schema_matches_the_types() {
 
 #[test]
 fn a_demo_document_round_trips_and_names_its_kind_and_schema() {
-    let demo = limpid_analysis::demo::run_demo(limpid_lab::Profile::Cubic, 3, &|| ()).unwrap();
+    let demo = limpid_analysis::demo::run_demo(
+        limpid_lab::Profile::Cubic,
+        limpid_analysis::demo::DemoSubject::Realistic,
+        3,
+        &|| (),
+    )
+    .unwrap();
     let doc = Document::new(Estimate::Demo(demo));
     let text = doc.to_json();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();

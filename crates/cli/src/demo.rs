@@ -5,9 +5,10 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use limpid_analysis::demo::{demo_csv, run_demo};
+use limpid_analysis::demo::{demo_csv, run_demo, DemoSubject};
 use limpid_analysis::linear::MatrixKind;
 use limpid_analysis::result::{Document, Estimate};
+use limpid_core::criteria::MatrixVerdict;
 use limpid_core::Matrix;
 use limpid_lab::Profile;
 
@@ -21,8 +22,20 @@ pub enum ProfileArg {
     Sinusoid,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+pub enum SubjectArg {
+    /// Table I and II's subject with force fluctuation and posture drift.
+    Realistic,
+    /// Table I exactly, sensor noise only.
+    Ideal,
+}
+
 #[derive(Args)]
 pub struct DemoArgs {
+    /// Virtual subject: realistic (seed 000 Tables I-II with signal-dependent
+    /// force noise and posture drift) or ideal (Table I, sensor noise only).
+    #[arg(long, value_enum, default_value_t = SubjectArg::Realistic)]
+    pub subject: SubjectArg,
     /// Perturbation profile of the centre-out phase.
     #[arg(long, value_enum, default_value_t = ProfileArg::Cubic)]
     pub profile: ProfileArg,
@@ -53,7 +66,11 @@ pub fn run(args: DemoArgs) -> CliResult {
             .progress_chars("=> "),
     );
     bar.set_message("simulating and estimating");
-    let result = run_demo(profile, args.seed, &|| bar.inc(1))?;
+    let subject = match args.subject {
+        SubjectArg::Realistic => DemoSubject::Realistic,
+        SubjectArg::Ideal => DemoSubject::Ideal,
+    };
+    let result = run_demo(profile, subject, args.seed, &|| bar.inc(1))?;
     bar.finish_and_clear();
     let doc = Document::new(Estimate::Demo(result));
     let Estimate::Demo(result) = &doc.estimate else {
@@ -83,9 +100,14 @@ pub fn run(args: DemoArgs) -> CliResult {
         result.motion_s,
         result.sample_rate_hz
     );
-    println!(
-        "sensor noise: per-trial force offset 3 N, drift 0.05 N, white 0.1 N, position 20 um\n"
-    );
+    match result.subject {
+        DemoSubject::Realistic => println!(
+            "subject: realistic (Table II's antisymmetric stiffness; force fluctuation 25 % of the subject's force below 2 Hz, posture drift 0.5 mm, force drift 0.3 N)\nsensor noise: per-trial force offset 3 N, white 0.1 N, position 20 um\n"
+        ),
+        DemoSubject::Ideal => println!(
+            "subject: ideal (Table I exactly)\nsensor noise: per-trial force offset 3 N, drift 0.05 N, white 0.1 N, position 20 um\n"
+        ),
+    }
     println!(
         "{:<6}{:<10}{:>30}{:>30}{:>10}{:>10}  inertia",
         "point", "", "Kxx Kyy Kzz (N/m)", "Bxx Byy Bzz (N s/m)", "K err %", "B err %"
@@ -112,20 +134,28 @@ pub fn run(args: DemoArgs) -> CliResult {
             diag(&d.true_stiffness),
             diag(&d.true_damping)
         );
+        // an error is shown only for a matrix the data identify
+        let error = |kind: MatrixKind, v: f64, decimals: usize| {
+            if e.criteria.verdicts.get(kind) == &MatrixVerdict::NotIdentifiable {
+                "n/i".to_string()
+            } else {
+                format!("{v:.decimals$}")
+            }
+        };
         println!(
-            "{:<6}{:<10}{:>30}{:>30}{:>10.2}{:>10.1}  {}",
+            "{:<6}{:<10}{:>30}{:>30}{:>10}{:>10}  {}",
             "",
             "estimated",
             diag(&e.stiffness),
             diag(&e.damping),
-            d.stiffness_error_percent,
-            d.damping_error_percent,
+            error(MatrixKind::Stiffness, d.stiffness_error_percent, 2),
+            error(MatrixKind::Damping, d.damping_error_percent, 1),
             inertia
         );
     }
     let worst_k = result.worst_error_percent(MatrixKind::Stiffness);
     let worst_b = result.worst_error_percent(MatrixKind::Damping);
-    println!("\nworst stiffness error {worst_k:.2} %, worst damping error {worst_b:.1} % (relative Frobenius norm)");
+    println!("\nworst stiffness error {worst_k:.2} %, worst damping error {worst_b:.1} % (relative Frobenius norm; n/i: not identifiable from this data, its error is not a measure of limpid)");
     println!(
         "results: {} and {}",
         json_path.display(),

@@ -145,7 +145,13 @@ fn parquet_gives_the_csv_result() {
 #[test]
 fn demo_recovers_all_six_start_points() {
     let dir = tempfile::tempdir().unwrap();
-    let out = limpid(&["demo", "--out", dir.path().to_str().unwrap()]);
+    let out = limpid(&[
+        "demo",
+        "--subject",
+        "ideal",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     for s in ["S1", "S2", "S3", "S4", "S5", "S6"] {
         assert!(out.stdout.contains(s), "{s} missing:\n{}", out.stdout);
@@ -165,6 +171,39 @@ fn demo_recovers_all_six_start_points() {
         assert!((100.0 * e - k).abs() < 1e-9);
     }
     assert!(dir.path().join("demo.csv").exists());
+    assert_eq!(demo["subject"], "ideal");
+}
+
+#[test]
+fn demo_on_the_realistic_subject_recovers_stiffness_within_its_standard_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = limpid(&["demo", "--out", dir.path().to_str().unwrap()]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("subject: realistic"), "{}", out.stdout);
+    let demo = read_json(&dir.path().join("demo.json"));
+    assert_eq!(demo["subject"], "realistic");
+    let mut within = 0;
+    let mut total = 0;
+    for p in demo["points"].as_array().unwrap() {
+        let k = p["stiffness_error_percent"].as_f64().unwrap();
+        assert!(k < 15.0, "{}: stiffness error {k} %", p["start_point"]);
+        // the truth includes Table II's antisymmetric part
+        let truth = mat(&p["true_stiffness"]);
+        assert!((truth[(0, 1)] - truth[(1, 0)]).abs() > 1.0, "{truth:?}");
+        let est = mat(&p["estimate"]["stiffness"]);
+        let se = mat(&p["estimate"]["standard_errors"]["stiffness"]);
+        for i in 0..3 {
+            total += 1;
+            if (est[(i, i)] - truth[(i, i)]).abs() <= 2.0 * se[(i, i)] {
+                within += 1;
+            }
+        }
+    }
+    // 2 SE cover the truth for most diagonal elements (binomial slack for 18)
+    assert!(
+        within >= 14,
+        "{within} of {total} diagonal elements within 2 SE"
+    );
 }
 
 #[test]
