@@ -6,7 +6,9 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use limpid_analysis::result::{Document, Estimate};
 use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch, Window};
-use limpid_ident::stochastic::{accuracy, default_welch, ExpectedModel, StochasticParams};
+use limpid_ident::stochastic::{
+    accuracy, default_welch, estimate_stochastic_pooled, ExpectedModel, StochasticParams,
+};
 use limpid_ident::Estimator;
 
 use crate::table::num;
@@ -51,8 +53,11 @@ impl WelchArgs {
 
 #[derive(Args)]
 pub struct StochasticArgs {
-    /// Recording with commanded inputs u* (one per coordinate), positions and forces.
-    pub recording: PathBuf,
+    /// Recording(s) with commanded inputs u* (one per coordinate), positions
+    /// and forces; several repeated trials are pooled (their Welch segments
+    /// averaged together, seed 004 §III-F).
+    #[arg(required = true, num_args = 1..)]
+    pub recordings: Vec<PathBuf>,
     #[command(flatten)]
     pub welch: WelchArgs,
     /// Band of the parametric fit and accuracy measures (Hz).
@@ -92,7 +97,12 @@ pub struct SpectraArgs {
 }
 
 pub fn run_estimate(args: StochasticArgs) -> CliResult {
-    let rec = crate::read_recording(&args.recording)?;
+    let recs = args
+        .recordings
+        .iter()
+        .map(crate::read_recording)
+        .collect::<limpid_core::Result<Vec<_>>>()?;
+    let rec = &recs[0];
     let band = match args.band.as_slice() {
         [lo, hi] => (*lo, *hi),
         _ => {
@@ -105,7 +115,8 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         welch: Some(args.welch.welch(rec.len(), rec.sample_rate())),
         band_hz: band,
     };
-    let mut est = params.fit(&rec)?;
+    params.check()?;
+    let mut est = estimate_stochastic_pooled(&recs, &params)?;
     if let Some(p) = &args.expected {
         est.accuracy = Some(accuracy(&est, &ExpectedModel::read(p)?, band)?);
     }
@@ -113,7 +124,7 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
     if let Some(path) = &args.report {
         crate::report::write(
             std::slice::from_ref(&doc.estimate),
-            Some(&args.recording),
+            Some(&args.recordings[0]),
             path,
         )?;
     }
@@ -126,7 +137,20 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
     };
     let c = &est.criteria;
     let coords = &est.coordinates;
-    println!("limpid estimate stochastic: {}", args.recording.display());
+    let names: Vec<String> = args
+        .recordings
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    println!(
+        "limpid estimate stochastic: {}{}",
+        names.join(", "),
+        if names.len() > 1 {
+            format!(" (pooled: {} recordings)", names.len())
+        } else {
+            String::new()
+        }
+    );
     println!(
         "coordinates {} driven by {} | Welch: {} segments of {} samples (resolution {:.3} Hz), Hann | fit band {}-{} Hz",
         coords.join(", "), est.inputs.join(", "), c.segments, c.nperseg, c.frequency_resolution_hz, num(band.0), num(band.1)

@@ -225,24 +225,59 @@ pub fn estimate_stochastic(
     rec: &Recording,
     params: &StochasticParams,
 ) -> Result<StochasticEstimate> {
+    estimate_stochastic_pooled(std::slice::from_ref(rec), params)
+}
+
+/// Estimate Z(f) from repeated trials (seed 004 §III-F: six trials per
+/// configuration): the Welch segments of every recording are averaged
+/// together, so the spectral densities — not the ratios Z — are averaged,
+/// which keeps Z = T R^-1 unbiased where averaging the trials' Z would
+/// average ratios of noisy spectra. The recordings must share coordinates,
+/// sample rate and Welch settings (default settings from the first).
+pub fn estimate_stochastic_pooled(
+    recs: &[Recording],
+    params: &StochasticParams,
+) -> Result<StochasticEstimate> {
+    let Some(rec) = recs.first() else {
+        return Err(Error::invalid("recordings", "no recording given"));
+    };
     let (coords, force_cols) = choose_coordinates(rec)?;
     let n = coords.len();
     let inputs: Vec<String> = coords.iter().map(|c| input_name(c)).collect();
-    let mut signals: Vec<&[f64]> = Vec::with_capacity(3 * n);
-    for u in &inputs {
-        signals.push(rec.require(
-            u,
-            "commanded perturbation (stochastic input) of each coordinate",
-        )?);
-    }
-    for c in coords.iter().chain(&force_cols) {
-        signals.push(rec.require(c, "output")?);
-    }
     let fs = rec.sample_rate();
     let welch = params
         .welch
         .clone()
         .unwrap_or_else(|| default_welch(rec.len(), fs));
+    let mut pooled: Option<SegmentSpectra> = None;
+    for r in recs {
+        if r.sample_rate() != fs {
+            return Err(Error::invalid(
+                "recordings",
+                format!(
+                    "{}: sample rate {} Hz, the first recording's is {fs} Hz",
+                    r.path().display(),
+                    r.sample_rate()
+                ),
+            ));
+        }
+        let mut signals: Vec<&[f64]> = Vec::with_capacity(3 * n);
+        for u in &inputs {
+            signals.push(r.require(
+                u,
+                "commanded perturbation (stochastic input) of each coordinate",
+            )?);
+        }
+        for c in coords.iter().chain(&force_cols) {
+            signals.push(r.require(c, "output")?);
+        }
+        let spectra = SegmentSpectra::new(&signals, &welch)?;
+        match pooled.as_mut() {
+            None => pooled = Some(spectra),
+            Some(p) => p.append(spectra)?,
+        }
+    }
+    let spectra = pooled.expect("at least one recording");
     let (lo, hi) = params.band_hz;
     if !(lo > 0.0 && hi > lo && hi < fs / 2.0) {
         let nyquist = limpid_core::display_round(fs / 2.0);
@@ -251,7 +286,6 @@ pub fn estimate_stochastic(
             format!("expected 0 < low < high < {nyquist} Hz, found {lo}-{hi} Hz"),
         ));
     }
-    let spectra = SegmentSpectra::new(&signals, &welch)?;
     let in_band_of = |freqs: &[f64]| -> Vec<usize> {
         (0..freqs.len())
             .filter(|&k| freqs[k] >= lo && freqs[k] <= hi)
@@ -262,6 +296,12 @@ pub fn estimate_stochastic(
             .map(|k| (0..2 * n).map(|o| multiple[o][k]).fold(1.0, f64::min))
             .collect()
     };
+    // nonparametric reads the bins up to the first above the band
+    let bins = spectra
+        .frequencies
+        .iter()
+        .position(|f| *f > hi)
+        .map_or(spectra.frequencies.len(), |k| k + 1);
     let NonParametric {
         frequencies,
         impedance,
@@ -269,7 +309,12 @@ pub fn estimate_stochastic(
         partial,
         max_input_coherence,
         singular_in_band,
-    } = nonparametric(spectra.matrix(), &spectra.frequencies, n, (lo, hi));
+    } = nonparametric(
+        spectra.matrix_below(bins, 0..0),
+        &spectra.frequencies,
+        n,
+        (lo, hi),
+    );
     let in_band = in_band_of(&frequencies);
     if in_band.len() < 4 {
         return Err(Error::TooFewSamples {
@@ -306,7 +351,7 @@ pub fn estimate_stochastic(
             .filter_map(|g| {
                 let skip = g * segments / groups..(g + 1) * segments / groups;
                 let np = nonparametric(
-                    spectra.matrix_without(skip),
+                    spectra.matrix_below(bins, skip),
                     &spectra.frequencies,
                     n,
                     (lo, hi),

@@ -74,11 +74,10 @@ impl RobotDynamics {
 
     /// Task pose [X, Z, θ_y] and the 3 x 3 task Jacobian.
     fn task(&self, q: &[f64], r0: &Matrix3<f64>) -> (Vector3<f64>, Matrix3<f64>) {
-        let t = self.robot.fk(q);
+        let (t, j6) = self.robot.pose_and_jacobian(q);
         let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into();
         let rel = r * r0.transpose();
         let theta = rel[(0, 2)].atan2(rel[(2, 2)]);
-        let j6 = self.robot.jacobian(q);
         let rows = [0, 2, 4];
         let j = Matrix3::from_fn(|i, c| j6[(rows[i], c)]);
         (Vector3::new(t[(0, 3)], t[(2, 3)], theta), j)

@@ -346,6 +346,11 @@ impl Robot {
 
     /// Geometric Jacobian (6 x n): linear velocity over angular velocity.
     pub fn jacobian(&self, q: &[f64]) -> DMatrix<f64> {
+        self.pose_and_jacobian(q).1
+    }
+
+    /// End-effector pose and geometric Jacobian from one pass over the joints.
+    pub fn pose_and_jacobian(&self, q: &[f64]) -> (Matrix4<f64>, DMatrix<f64>) {
         let (axes, end) = self.axes(q);
         let pe: Vector3<f64> = end.fixed_view::<3, 1>(0, 3).into();
         let mut jac = DMatrix::zeros(6, self.dof());
@@ -356,7 +361,7 @@ impl Robot {
                 jac[(3 + k, i)] = z[k];
             }
         }
-        jac
+        (end, jac)
     }
 
     /// Damped least-squares IK to a target pose (position and orientation;
