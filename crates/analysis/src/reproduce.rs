@@ -191,6 +191,31 @@ fn seed000(seed: u64) -> Result<Reproduction> {
         (MatrixKind::Damping, "B", "N s/m"),
         (MatrixKind::Inertia, "M", "kg"),
     ];
+    // Table I: the subject's diagonal (as read from the garbled table, see
+    // limpid_lab::seed000_subject1) against limpid's estimate
+    let table_i = seed000_subject1();
+    for (i, r) in results.iter().enumerate() {
+        for (kind, letter, unit) in kinds.iter().take(2) {
+            let truth = match kind {
+                MatrixKind::Stiffness => table_i[i].stiffness,
+                _ => table_i[i].damping,
+            };
+            for (a, axis) in ["xx", "yy", "zz"].iter().enumerate() {
+                let mut x = row(
+                    "000",
+                    format!("Table I, subject 1, S{}, {letter}_{axis}", i + 1),
+                    Some(truth[(a, a)]),
+                    Some(r.matrix(*kind)[(a, a)]),
+                    unit,
+                );
+                let verdict = r.criteria.verdicts.get(*kind);
+                if *verdict != MatrixVerdict::Trusted {
+                    x.note = format!("limpid's verdict on {letter}: {verdict:?}");
+                }
+                out.rows.push(x);
+            }
+        }
+    }
     let mut ratio_max = 0.0f64;
     for (i, r) in results.iter().enumerate() {
         for (k, (kind, letter, unit)) in kinds.iter().enumerate() {

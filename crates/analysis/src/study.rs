@@ -413,35 +413,53 @@ pub fn summarise(
 /// `.truth.json` with the stiffness per level, with the manifest
 /// `study.toml` that `run_study` reads. Returns the number of recordings and
 /// the manifest's path; `progress` is called once per recording.
+///
+/// `realistic`: the subjects of [`limpid_lab::cocontraction::seed001_realistic_population`]
+/// (seed 001 Tables 1-5, reflex, [`limpid_lab::NoiseModel::realistic`]) and,
+/// as seed 001 does, one MVC — configuration 5's — for all configurations;
+/// otherwise the clean population with an MVC per recording.
 pub fn simulate_study(
     dir: &Path,
     subjects: usize,
+    realistic: bool,
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Result<(usize, PathBuf)> {
     use limpid_lab::cocontraction::{
-        seed001_population, simulate_cocontraction, CocontractionProtocol,
+        seed001_population, seed001_realistic_population, simulate_cocontraction,
+        CocontractionProtocol,
     };
     std::fs::create_dir_all(dir).map_err(|e| Error::Io {
         path: dir.to_path_buf(),
         source: e,
     })?;
-    let population = seed001_population(subjects, seed);
+    let (population, noise) = if realistic {
+        (
+            seed001_realistic_population(subjects, seed),
+            limpid_lab::NoiseModel::realistic(),
+        )
+    } else {
+        (
+            seed001_population(subjects, seed),
+            limpid_lab::NoiseModel::default(),
+        )
+    };
     let protocol = CocontractionProtocol::seed001();
     let entries: Vec<String> = population
         .par_iter()
         .map(|(s, c, subject)| -> Result<String> {
             let seed = seed.wrapping_mul(10_000) + (*s as u64) * 100 + *c as u64;
-            let (rec, mvc) = simulate_cocontraction(
-                subject,
-                &protocol,
-                &limpid_lab::NoiseModel::default(),
-                seed,
-            )?;
+            let (rec, mvc) = simulate_cocontraction(subject, &protocol, &noise, seed)?;
             let file = format!("s{s}_c{c}.parquet");
-            let mvc_file = format!("s{s}_c{c}.mvc.parquet");
+            let mvc_file = if realistic {
+                format!("s{s}_c5.mvc.parquet")
+            } else {
+                format!("s{s}_c{c}.mvc.parquet")
+            };
             limpid_io::write_recording(&rec, dir.join(&file))?;
-            limpid_io::write_recording(&mvc, dir.join(&mvc_file))?;
+            if !realistic || *c == 5 {
+                limpid_io::write_recording(&mvc, dir.join(&mvc_file))?;
+            }
             let truth = serde_json::json!({
                 "levels": protocol.levels.iter().map(|l| {
                     serde_json::json!({"level": l, "stiffness": crate::Matrix::from(subject.stiffness(*l))})
@@ -456,7 +474,8 @@ pub fn simulate_study(
         })
         .collect::<Result<_>>()?;
     let manifest = format!(
-        "# virtual seed 001 study: {subjects} subjects x 7 configurations x 4 levels x 18 perturbations\n[study]\nname = \"virtual seed 001 study\"\n\n{}",
+        "# virtual seed 001 study: {subjects} {} subjects x 7 configurations x 4 levels x 18 perturbations\n[study]\nname = \"virtual seed 001 study\"\n\n{}",
+        if realistic { "realistic" } else { "ideal" },
         entries.join("\n")
     );
     let path = dir.join("study.toml");

@@ -24,9 +24,9 @@ pub enum ProfileArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum SubjectArg {
-    /// Table I and II's subject with force fluctuation and posture drift.
+    /// Built from the seed's tables, with force fluctuation, drift (and reflexes).
     Realistic,
-    /// Table I exactly, sensor noise only.
+    /// The clean subject: the typed-in matrices, sensor noise only.
     Ideal,
 }
 

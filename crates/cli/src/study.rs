@@ -43,6 +43,11 @@ pub struct SimulateArgs {
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Virtual subjects: realistic (seed 001 Tables 1-5 with reflex,
+    /// force fluctuation and one MVC from configuration 5) or ideal (clean,
+    /// linear in the level, an MVC per recording).
+    #[arg(long, value_enum, default_value_t = crate::demo::SubjectArg::Realistic)]
+    pub subject: crate::demo::SubjectArg,
 }
 
 fn bar(len: usize, msg: &'static str) -> CliResult<ProgressBar> {
@@ -120,8 +125,13 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 .into());
             }
             let progress = bar(7 * args.subjects, "simulating recordings")?;
-            let (recordings, path) =
-                simulate_study(&args.out, args.subjects, args.seed, &|| progress.inc(1))?;
+            let (recordings, path) = simulate_study(
+                &args.out,
+                args.subjects,
+                matches!(args.subject, crate::demo::SubjectArg::Realistic),
+                args.seed,
+                &|| progress.inc(1),
+            )?;
             progress.finish_and_clear();
             println!("wrote {} recordings and {}", recordings, path.display());
             Ok(())

@@ -66,7 +66,14 @@ fn examples_index_within_0_03_and_stiffness_within_5_percent_per_level() {
 #[test]
 fn virtual_study_tables_show_the_anisotropic_increase() {
     let dir = tempfile::tempdir().unwrap();
-    let out = limpid(&["study", "simulate", "--out", dir.path().to_str().unwrap()]);
+    let out = limpid(&[
+        "study",
+        "simulate",
+        "--subject",
+        "ideal",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let manifest = dir.path().join("study.toml");
     let tables = dir.path().join("tables");
@@ -247,4 +254,48 @@ fn bad_manifest_and_missing_mvc_channels() {
         out.stderr.trim_end(),
         format!("limpid: {}: missing required column emg_deltoid_anterior (the MVC recording must have every EMG channel of the trials); found columns: t,x", mvc.display())
     );
+}
+
+#[test]
+fn realistic_virtual_study_uses_one_mvc_and_recovers_seed001_table1_within_15_percent() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = limpid(&[
+        "study",
+        "simulate",
+        "--subjects",
+        "2",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let manifest = std::fs::read_to_string(dir.path().join("study.toml")).unwrap();
+    // seed 001: configuration 5's MVC for every configuration
+    assert!(manifest.contains("mvc = \"s1_c5.mvc.parquet\""));
+    assert!(!manifest.contains("s1_c3.mvc.parquet"));
+    assert!(!dir.path().join("s1_c3.mvc.parquet").exists());
+    let tables = dir.path().join("tables");
+    let run = limpid(&[
+        "study",
+        "run",
+        dir.path().join("study.toml").to_str().unwrap(),
+        "--out",
+        tables.to_str().unwrap(),
+    ]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let study = read_json(&tables.join("study.json"));
+    let k1_table1 = [2202.1, 2740.1, 2807.6, 2046.6, 2550.1, 3264.9, 2549.9];
+    for row in study["levels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|l| l["level"] == 0.0)
+    {
+        let c: usize = row["configuration"].as_str().unwrap().parse().unwrap();
+        let v = row["k1"].as_f64().unwrap();
+        // two subjects with factors 0.95 and 1.05: their mean is the table's
+        assert!(
+            (v / k1_table1[c - 1] - 1.0).abs() < 0.15,
+            "config {c} k1: {v}"
+        );
+    }
 }
