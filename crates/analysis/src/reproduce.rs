@@ -21,6 +21,9 @@
 //! tables). [`Finding`]s state the papers' qualitative findings and whether
 //! the virtual experiment shows them.
 
+// the paper's tables and limpid's are indexed in step ([configuration][level][value])
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{Matrix3, Matrix4, Vector4};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -132,6 +135,16 @@ pub fn reproduce(seeds: &[Seed], seed: u64) -> Result<Reproduction> {
     Ok(out)
 }
 
+fn verdict_words(v: MatrixVerdict) -> &'static str {
+    match v {
+        MatrixVerdict::Trusted => "trusted",
+        MatrixVerdict::PoorFit => "poor fit",
+        MatrixVerdict::NotIdentifiable => "not identifiable",
+        MatrixVerdict::NotPassive => "not passive",
+        MatrixVerdict::Imprecise => "imprecise (2 SE beyond the tolerance)",
+    }
+}
+
 fn row(seed: &str, item: String, paper: Option<f64>, limpid: Option<f64>, unit: &str) -> Row {
     Row {
         seed: seed.into(),
@@ -210,7 +223,7 @@ fn seed000(seed: u64) -> Result<Reproduction> {
                 );
                 let verdict = r.criteria.verdicts.get(*kind);
                 if *verdict != MatrixVerdict::Trusted {
-                    x.note = format!("limpid's verdict on {letter}: {verdict:?}");
+                    x.note = format!("limpid's verdict on {letter}: {}", verdict_words(*verdict));
                 }
                 out.rows.push(x);
             }
@@ -223,7 +236,7 @@ fn seed000(seed: u64) -> Result<Reproduction> {
             let verdict = r.criteria.verdicts.get(*kind);
             let note = match verdict {
                 MatrixVerdict::Trusted => String::new(),
-                v => format!("limpid's verdict on {letter}: {v:?}"),
+                v => format!("limpid's verdict on {letter}: {}", verdict_words(*v)),
             };
             let paper = &SEED000_TABLE_II[i];
             for (j, (name, value)) in [

@@ -19,6 +19,9 @@ pub struct ReproduceArgs {
     /// Also write reproduce.json and reproduce.txt into this directory.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Also write the tables and findings as one HTML page.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
     /// Random seed of the virtual subjects' noise.
     #[arg(long, default_value_t = 1)]
     pub random_seed: u64,
@@ -48,6 +51,14 @@ pub fn run(args: ReproduceArgs) -> CliResult {
         })?;
         limpid_core::files::write_file(&dir.join("reproduce.json"), json.as_bytes())?;
         limpid_core::files::write_file(&dir.join("reproduce.txt"), table.as_bytes())?;
+    }
+    if let Some(path) = &args.report {
+        let title = format!(
+            "limpid reproduce {}: the seeds' numbers beside limpid's",
+            args.seed
+        );
+        let page = limpid_report::reproduce::reproduction_page(&r, &title);
+        limpid_core::files::write_file(path, page.as_bytes())?;
     }
     if args.json {
         println!("{json}");

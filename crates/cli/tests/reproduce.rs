@@ -125,7 +125,15 @@ fn reproduce_prints_a_table_per_seed_and_refuses_unknown_seeds() {
 #[test]
 fn reproduce_out_writes_json_and_text() {
     let dir = tempfile::tempdir().unwrap();
-    let out = limpid(&["reproduce", "004", "--out", dir.path().to_str().unwrap()]);
+    let page = dir.path().join("page.html");
+    let out = limpid(&[
+        "reproduce",
+        "004",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--report",
+        page.to_str().unwrap(),
+    ]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let json: Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("reproduce.json")).unwrap())
@@ -134,4 +142,9 @@ fn reproduce_out_writes_json_and_text() {
     assert!(std::fs::read_to_string(dir.path().join("reproduce.txt"))
         .unwrap()
         .contains("seed 004"));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("<h2>Seed 004</h2>"));
+    assert!(html.contains("higher multiple coherence"));
+    assert!(!html.contains("http://") && !html.contains("https://"));
+    assert!(!html.contains("NaN"));
 }

@@ -229,8 +229,8 @@ pub fn seed001_population(subjects: usize, seed: u64) -> Vec<(usize, usize, Coco
     let mut out = Vec::new();
     for s in 0..subjects {
         let factor = 0.9 + 0.2 * (s as f64 + 0.5) / subjects as f64;
-        for c in 0..7 {
-            let (k0, k1) = (&SEED001_TABLES[0][c][4..7], &SEED001_TABLES[3][c][4..7]);
+        for (c, (first, last)) in SEED001_TABLES[0].iter().zip(&SEED001_TABLES[3]).enumerate() {
+            let (k0, k1) = (&first[4..7], &last[4..7]);
             let axis = Vector3::from_fn(|_, _| unit.sample(&mut rng));
             let angle = unit.sample(&mut rng);
             let r0 =

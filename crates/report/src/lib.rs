@@ -20,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+pub mod reproduce;
 pub mod svg;
 
 use std::fmt::Write as _;
@@ -1466,7 +1467,8 @@ h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;margin-top:2e
 .warnings{background:#fff6e5;border-left:4px solid #e90;padding:.5em 1em}\
 table{border-collapse:collapse;margin:.8em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}\
 caption{text-align:left;font-weight:bold;padding:2px}.figures{display:flex;flex-wrap:wrap;gap:8px}\
-#ellipsoid-kinds button{margin:2px;border:1px solid #888;background:#fff}#ellipsoid-kinds button.on{background:#cde}";
+#ellipsoid-kinds button{margin:2px;border:1px solid #888;background:#fff}#ellipsoid-kinds button.on{background:#cde}\
+td:first-child,td:nth-child(5),td:nth-child(6),th:first-child,th:nth-child(5),th:nth-child(6){text-align:left}.ok{color:#1a7f37;font-weight:bold}.bad{color:#b42318;font-weight:bold}";
 
 /// The report as one HTML document: no external URL anywhere.
 pub fn to_html(report: &Report) -> String {
