@@ -135,6 +135,14 @@ pub fn reproduce(seeds: &[Seed], seed: u64) -> Result<Reproduction> {
     Ok(out)
 }
 
+impl Row {
+    /// The row with a note.
+    fn with_note(mut self, note: impl Into<String>) -> Self {
+        self.note = note.into();
+        self
+    }
+}
+
 fn verdict_words(v: MatrixVerdict) -> &'static str {
     match v {
         MatrixVerdict::Trusted => "trusted",
@@ -247,15 +255,16 @@ fn seed000(seed: u64) -> Result<Reproduction> {
             .into_iter()
             .enumerate()
             {
-                let mut x = row(
-                    "000",
-                    format!("Table II, subject 1, S{}, {letter}_{name}", i + 1),
-                    Some(paper[3 * k + j]),
-                    Some(value),
-                    unit,
+                out.rows.push(
+                    row(
+                        "000",
+                        format!("Table II, subject 1, S{}, {letter}_{name}", i + 1),
+                        Some(paper[3 * k + j]),
+                        Some(value),
+                        unit,
+                    )
+                    .with_note(note.clone()),
                 );
-                x.note = note.clone();
-                out.rows.push(x);
             }
             if *letter == "K" {
                 ratio_max = ratio_max.max(t.max_antisymmetric / t.max_symmetric);
@@ -266,15 +275,13 @@ fn seed000(seed: u64) -> Result<Reproduction> {
         .map(|a| mean(results.iter().map(|r| r.fit.r[a])))
         .collect();
     for (a, axis) in ["x", "y", "z"].iter().enumerate() {
-        let mut x = row(
+        out.rows.push(row(
             "000",
             format!("fit correlation r, {axis} axis (mean of S1-S6)"),
             Some(SEED000_R[a]),
             Some(r_axis[a]),
             "",
-        );
-        x.note = "signal-dependent force noise (25 % of the subject's force, < 2 Hz) and posture drift of the realistic subject".into();
-        out.rows.push(x);
+        ).with_note("signal-dependent force noise (25 % of the subject's force, < 2 Hz) and posture drift of the realistic subject"));
     }
     out.findings.push(Finding {
         seed: "000".into(),
@@ -419,18 +426,19 @@ fn seed001(seed: u64) -> Result<Reproduction> {
         }
     }
     for (l, level) in SEED001_LEVELS.iter().enumerate() {
-        let mut x = row(
-            "001",
-            format!(
-                "co-contraction index C at the {} % level (mean of configurations)",
-                level * 100.0
-            ),
-            None,
-            Some(mean((0..7).map(|c| index[c][l]))),
-            "",
+        out.rows.push(
+            row(
+                "001",
+                format!(
+                    "co-contraction index C at the {} % level (mean of configurations)",
+                    level * 100.0
+                ),
+                None,
+                Some(mean((0..7).map(|c| index[c][l]))),
+                "",
+            )
+            .with_note("Fig. 4 only: the subjects held each level; MVC from configuration 5"),
         );
-        x.note = "Fig. 4 only: the subjects held each level; MVC from configuration 5".into();
-        out.rows.push(x);
     }
     // findings
     let ratio = |v: usize| {
@@ -480,15 +488,13 @@ fn seed001(seed: u64) -> Result<Reproduction> {
     };
     let paper_departure = departure(&|c, l, v| SEED001_TABLES[l][c][v]);
     let limpid_departure = departure(&|c, l, v| measured[c][l][v]);
-    let mut x = row(
+    out.rows.push(row(
         "001",
         "mean departure of K_1-K_3 at 50 % and 75 % from the line through 0 and 100 % (of K at 100 %)".into(),
         Some(paper_departure),
         Some(limpid_departure),
         "%",
-    );
-    x.note = "Tables 1-4; the subject carries each table's own values".into();
-    out.rows.push(x);
+    ).with_note("Tables 1-4; the subject carries each table's own values"));
     out.findings.push(Finding {
         seed: "001".into(),
         claim: "stiffness is not linear in the level (Tables 2-3)".into(),
@@ -601,25 +607,21 @@ fn seed003(seed: u64) -> Result<Reproduction> {
             known.shortest_trusted_ms,
         ),
     ] {
-        let mut x = row("003", item.into(), paper, value, ms);
-        x.note = match value {
+        out.rows.push(row("003", item.into(), paper, value, ms).with_note(match value {
             None => format!("no window up to {longest} ms meets it"),
             Some(_) if item.starts_with("shortest trusted") => {
                 "paper: the window 'required' for an accurate estimate (§V); limpid: 2 SE of K within 10 %, of D within 25 %".into()
             }
             Some(_) => String::new(),
-        };
-        out.rows.push(x);
+        }));
     }
-    let mut x = row(
+    out.rows.push(row(
         "003",
         "change of K or D within the trials (reflex) detected after onset".into(),
         None,
         full.impedance_change.as_ref().map(|c| c.onset_ms),
         ms,
-    );
-    x.note = "seed 003 §I: reflexes act after 25-110 ms, the paper's windows include them; the virtual subject's K and D rise by 30 % after 90 ms; limpid trusts no window that spans a detected change".into();
-    out.rows.push(x);
+    ).with_note("seed 003 §I: reflexes act after 25-110 ms, the paper's windows include them; the virtual subject's K and D rise by 30 % after 90 ms; limpid trusts no window that spans a detected change"));
     // Table I: quintic against the sixth-order polynomial
     let q = polynomial_ratios(&[(3, 10.0), (4, -15.0), (5, 6.0)], design.interpolation_s);
     let c6 = sextic_coefficients();
@@ -631,19 +633,20 @@ fn seed003(seed: u64) -> Result<Reproduction> {
     let mut closer = 0;
     for i in 0..3 {
         for (name, v) in [("fifth-order", q[i]), ("sixth-order", s[i])] {
-            let mut x = row(
-                "003",
-                format!(
-                    "Table I, {} of the {name} polynomial (T_k = {} ms)",
-                    labels[i],
-                    design.interpolation_s * 1e3
-                ),
-                None,
-                Some(v),
-                if i == 1 { "s^4" } else { "s^2" },
+            out.rows.push(
+                row(
+                    "003",
+                    format!(
+                        "Table I, {} of the {name} polynomial (T_k = {} ms)",
+                        labels[i],
+                        design.interpolation_s * 1e3
+                    ),
+                    None,
+                    Some(v),
+                    if i == 1 { "s^4" } else { "s^2" },
+                )
+                .with_note("Table I's cells are garbled in the text"),
             );
-            x.note = "Table I's cells are garbled in the text".into();
-            out.rows.push(x);
         }
         if q[i].ln().abs() < s[i].ln().abs() {
             closer += 1;
@@ -737,60 +740,62 @@ fn seed004(seed: u64) -> Result<Reproduction> {
         })
         .collect::<Result<Vec<_>>>()?;
     let mut out = Reproduction::default();
-    let mut x = row(
-        "004",
-        "Table III, minimum resolvable frequency f_r = fs / N_FFT".into(),
-        Some(0.041),
-        Some(1000.0 / welch.nperseg as f64),
-        "Hz",
+    out.rows.push(
+        row(
+            "004",
+            "Table III, minimum resolvable frequency f_r = fs / N_FFT".into(),
+            Some(0.041),
+            Some(1000.0 / welch.nperseg as f64),
+            "Hz",
+        )
+        .with_note("N_FFT = N_WND = 24576, N_OVL = 18432, Hann, 50 s at 1 kHz"),
     );
-    x.note = "N_FFT = N_WND = 24576, N_OVL = 18432, Hann, 50 s at 1 kHz".into();
-    out.rows.push(x);
     let coords = ["x", "z", "theta"];
     for (name, ctrl, rig, est, acc) in &results {
         if *ctrl == "IMBIC" {
             for (i, ci) in coords.iter().enumerate() {
-                let mut x = row(
-                    "004",
-                    format!("K_{name}, {ci}{ci} (spring array, Table II springs)"),
-                    None,
-                    Some(est.stiffness[(i, i)]),
-                    if i == 2 { "N m/rad" } else { "N/m" },
+                out.rows.push(
+                    row(
+                        "004",
+                        format!("K_{name}, {ci}{ci} (spring array, Table II springs)"),
+                        None,
+                        Some(est.stiffness[(i, i)]),
+                        if i == 2 { "N m/rad" } else { "N/m" },
+                    )
+                    .with_note(format!(
+                        "true {:.4}; the paper prints K_sa only through its springs",
+                        rig.stiffness[(i, i)]
+                    )),
                 );
-                x.note = format!(
-                    "true {:.4}; the paper prints K_sa only through its springs",
-                    rig.stiffness[(i, i)]
-                );
-                out.rows.push(x);
             }
         }
-        let mut x = row(
-            "004",
-            format!("phi_T, {name}, {ctrl}"),
-            None,
-            Some(acc.phi_t),
-            "SI",
+        out.rows.push(
+            row(
+                "004",
+                format!("phi_T, {name}, {ctrl}"),
+                None,
+                Some(acc.phi_t),
+                "SI",
+            )
+            .with_note("Fig. 11 only"),
         );
-        x.note = "Fig. 11 only".into();
-        out.rows.push(x);
-        let mut x = row(
-            "004",
-            format!("smallest multiple coherence 0.5-10 Hz, {name}, {ctrl}"),
-            if *ctrl == "IMBIC" { Some(0.95) } else { None },
-            Some(est.criteria.min_multiple_coherence),
-            "",
+        out.rows.push(
+            row(
+                "004",
+                format!("smallest multiple coherence 0.5-10 Hz, {name}, {ctrl}"),
+                if *ctrl == "IMBIC" { Some(0.95) } else { None },
+                Some(est.criteria.min_multiple_coherence),
+                "",
+            )
+            .with_note("paper: 'exceed 0.95 throughout the frequency range of interest' (IMBIC)"),
         );
-        x.note = "paper: 'exceed 0.95 throughout the frequency range of interest' (IMBIC)".into();
-        out.rows.push(x);
-        let mut x = row(
+        out.rows.push(row(
             "004",
             format!("input coherence (largest) 0.5-10 Hz, {name}, {ctrl}"),
             None,
             Some(est.criteria.max_input_coherence),
             "",
-        );
-        x.note = "seed 004 asks < 0.6; with Table III's long segments (30 in six trials) independent inputs show high coherence at some of the 400 frequencies".into();
-        out.rows.push(x);
+        ).with_note("seed 004 asks < 0.6; with Table III's long segments (30 in six trials) independent inputs show high coherence at some of the 400 frequencies"));
     }
     let get = |n: &str, c: &str| results.iter().find(|r| r.0 == n && r.1 == c);
     let k_error = |r: &(
@@ -809,15 +814,16 @@ fn seed004(seed: u64) -> Result<Reproduction> {
         ("sa2", "PD"),
     ] {
         if let Some(r) = get(name, ctrl) {
-            let mut x = row(
-                "004",
-                format!("K error vs the spring array (relative Frobenius), {name}, {ctrl}"),
-                None,
-                Some(k_error(r)),
-                "%",
+            out.rows.push(
+                row(
+                    "004",
+                    format!("K error vs the spring array (relative Frobenius), {name}, {ctrl}"),
+                    None,
+                    Some(k_error(r)),
+                    "%",
+                )
+                .with_note("not in the paper"),
             );
-            x.note = "not in the paper".into();
-            out.rows.push(x);
         }
     }
     let mut higher = Vec::new();
