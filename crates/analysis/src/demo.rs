@@ -100,12 +100,18 @@ pub struct DemoResult {
 }
 
 impl DemoResult {
-    /// The largest error of one kind over the start points (percent).
-    pub fn worst_error_percent(&self, kind: MatrixKind) -> f64 {
+    /// The largest error of one kind over the start points whose data
+    /// identify that matrix (percent); `None` when no point does. An
+    /// unidentifiable matrix's error measures the data, not limpid.
+    pub fn worst_error_percent(&self, kind: MatrixKind) -> Option<f64> {
         self.points
             .iter()
+            .filter(|p| {
+                p.estimate.criteria.verdicts.get(kind)
+                    != &crate::linear::MatrixVerdict::NotIdentifiable
+            })
             .map(|p| p.error_percent(kind))
-            .fold(0.0, f64::max)
+            .reduce(f64::max)
     }
 }
 

@@ -136,6 +136,15 @@ pub fn reproduce(seeds: &[Seed], seed: u64) -> Result<Reproduction> {
 }
 
 impl Row {
+    /// limpid's value relative to the paper's ("+6 %"); empty when either
+    /// is missing or the paper's is 0.
+    pub fn difference(&self) -> String {
+        match (self.paper, self.limpid) {
+            (Some(p), Some(l)) if p != 0.0 => format!("{:+.0} %", 100.0 * (l / p - 1.0)),
+            _ => String::new(),
+        }
+    }
+
     /// The row with a note.
     fn with_note(mut self, note: impl Into<String>) -> Self {
         self.note = note.into();
@@ -880,10 +889,7 @@ pub fn text(r: &Reproduction) -> String {
             );
         }
         let f = |v: Option<f64>| v.map_or("-".to_string(), crate::reproduce::sig);
-        let diff = match (x.paper, x.limpid) {
-            (Some(p), Some(l)) if p != 0.0 => format!("{:+.0} %", 100.0 * (l / p - 1.0)),
-            _ => String::new(),
-        };
+        let diff = x.difference();
         let _ = write!(
             s,
             "{:<78} {:>10} {:>10} {:>9}  {}",

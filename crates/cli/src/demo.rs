@@ -153,9 +153,16 @@ pub fn run(args: DemoArgs) -> CliResult {
             inertia
         );
     }
-    let worst_k = result.worst_error_percent(MatrixKind::Stiffness);
-    let worst_b = result.worst_error_percent(MatrixKind::Damping);
-    println!("\nworst stiffness error {worst_k:.2} %, worst damping error {worst_b:.1} % (relative Frobenius norm; n/i: not identifiable from this data, its error is not a measure of limpid)");
+    let worst =
+        |kind: MatrixKind, name: &str, decimals: usize| match result.worst_error_percent(kind) {
+            Some(v) => format!("worst {name} error {v:.decimals$} %"),
+            None => format!("{name} not identifiable at any start point"),
+        };
+    println!(
+        "\n{}, {} (relative Frobenius norm over the identifiable points; n/i: not identifiable from this data, its error is not a measure of limpid)",
+        worst(MatrixKind::Stiffness, "stiffness", 2),
+        worst(MatrixKind::Damping, "damping", 1)
+    );
     println!(
         "results: {} and {}",
         json_path.display(),

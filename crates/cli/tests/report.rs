@@ -533,3 +533,191 @@ fn reports_name_the_recording() {
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(html.contains("Observation-window sweep: ex_joint_180.csv"));
 }
+
+/// The VAF (%) of `predicted` as a model of `measured`.
+fn vaf(measured: &[f64], predicted: &[f64]) -> f64 {
+    let var = |v: &[f64]| {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        v.iter().map(|x| (x - m).powi(2)).sum::<f64>()
+    };
+    let e: Vec<f64> = measured.iter().zip(predicted).map(|(y, p)| y - p).collect();
+    100.0 * (1.0 - var(&e) / var(measured))
+}
+
+/// Issue 20: the planar, window-sweep, co-contraction, study and stochastic
+/// reports each open in Chromium without a script error, with the figures a
+/// reader of the seeds expects; screenshots are kept in the temp folder
+/// (`limpid-report-<kind>.png`) for a person to look at.
+#[test]
+fn every_kind_of_report_renders_with_its_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name);
+    let joint = example("../../../shared/examples/planar/ex_joint_180.csv");
+    let cc = "../../../shared/examples/cocontraction/ex_config4";
+    let study = d("study");
+    assert_eq!(
+        limpid(&[
+            "study",
+            "simulate",
+            "--subjects",
+            "2",
+            "--out",
+            study.to_str().unwrap()
+        ])
+        .code,
+        0
+    );
+    let runs: Vec<(&str, Vec<String>)> = vec![
+        (
+            "planar",
+            [
+                "estimate",
+                "planar",
+                joint.to_str().unwrap(),
+                "--link-lengths",
+                "0.28,0.35",
+                "--report",
+            ]
+            .map(String::from)
+            .to_vec(),
+        ),
+        (
+            "sweep",
+            [
+                "window-sweep",
+                joint.to_str().unwrap(),
+                "--link-lengths",
+                "0.28,0.35",
+                "--report",
+            ]
+            .map(String::from)
+            .to_vec(),
+        ),
+        (
+            "cocontraction",
+            vec![
+                "estimate".into(),
+                "cocontraction".into(),
+                example(&format!("{cc}.csv")).display().to_string(),
+                "--mvc".into(),
+                example(&format!("{cc}.mvc.csv")).display().to_string(),
+                "--report".into(),
+            ],
+        ),
+        (
+            "study",
+            vec![
+                "study".into(),
+                "run".into(),
+                study.join("study.toml").display().to_string(),
+                "--out".into(),
+                d("out").display().to_string(),
+                "--report".into(),
+            ],
+        ),
+        (
+            "stochastic",
+            vec![
+                "estimate".into(),
+                "stochastic".into(),
+                example(&format!("{SA3}.csv")).display().to_string(),
+                "--report".into(),
+            ],
+        ),
+    ];
+    for (kind, mut args) in runs {
+        let page = d(&format!("{kind}.html"));
+        args.push(page.display().to_string());
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = limpid(&args);
+        assert_eq!(out.code, 0, "{kind}: {}", out.stderr);
+        let shot = d(&format!("{kind}.png"));
+        let (dom, log) = open_in_chromium(&page, &shot);
+        no_console_errors(&log);
+        screenshot_ok(&shot);
+        std::fs::copy(
+            &shot,
+            std::env::temp_dir().join(format!("limpid-report-{kind}.png")),
+        )
+        .unwrap();
+        let figure = |id: &str| {
+            dom.split(&format!("<figure id=\"{id}\""))
+                .nth(1)
+                .unwrap_or_else(|| panic!("{kind}: no figure {id}"))
+                .split("</figure>")
+                .next()
+                .unwrap()
+                .to_string()
+        };
+        match kind {
+            "planar" => {
+                for j in 1..=2 {
+                    assert_eq!(
+                        figure(&format!("fit-dtau{j}"))
+                            .matches("class=\"trace\"")
+                            .count(),
+                        2
+                    );
+                }
+                assert_eq!(
+                    figure("endpoint-stiffness-ellipse")
+                        .matches("class=\"ellipsoid\"")
+                        .count(),
+                    1
+                );
+                assert!(dom.contains("Confidence criteria (seed 003 §III-C)"));
+                assert!(dom.contains("base inertial parameters (kg m²)"));
+            }
+            "sweep" => {
+                assert!(dom.matches("class=\"trace\"").count() >= 4, "{kind}");
+            }
+            "cocontraction" => {
+                let grid = figure("stiffness-ellipsoids");
+                assert_eq!(grid.matches("class=\"ellipsoid\"").count(), 4);
+                assert!(grid.contains("N/m</text>"), "a scale bar with its unit");
+                // every kind shown (?all): 12 names, more than 8, so shown on hover only
+                assert_eq!(dom.matches("class=\"label\" visibility=\"hidden\"").count(), 12);
+            }
+            "study" => {
+                let grid = figure("study-stiffness-ellipsoids");
+                assert_eq!(grid.matches("class=\"ellipsoid\"").count(), 28);
+                for c in 1..=7 {
+                    assert!(grid.contains(&format!(">configuration {c}</text>")));
+                }
+                // 28 viewer labels, hidden until hovered
+                assert_eq!(
+                    dom.matches("class=\"label\" visibility=\"hidden\"").count(),
+                    28
+                );
+                // mean ± sd per cell
+                assert!(dom.contains("Mean ± sd over subjects"));
+                assert!(dom.matches(" ± ").count() >= 28 * 8);
+            }
+            "stochastic" => {
+                assert!(dom.contains("Verdicts and the criteria behind them"));
+                assert!(dom.contains("lowest multiple coherence"));
+                // mixed x/z/theta coordinates: a unit in every cell, never "SI"
+                assert!(!dom.contains("SI"), "{kind}: SI in the page");
+                assert!(dom.contains(" N/rad</td>") && dom.contains(" N m/rad</td>"));
+            }
+            _ => unreachable!(),
+        }
+    }
+    // the planar traces are the fit's own
+    let est = json(&[
+        "estimate",
+        "planar",
+        joint.to_str().unwrap(),
+        "--link-lengths",
+        "0.28,0.35",
+        "--json",
+    ]);
+    let tr = &est["traces"];
+    for j in 0..2 {
+        let m: Vec<f64> = serde_json::from_value(tr["measured"][j].clone()).unwrap();
+        let p: Vec<f64> = serde_json::from_value(tr["predicted"][j].clone()).unwrap();
+        assert!(m.len() > 500 && m.len() <= 1500);
+        let reported = est["fit"]["vaf"][j].as_f64().unwrap();
+        assert!((vaf(&m, &p) - reported).abs() < 0.5, "joint {j}");
+    }
+}

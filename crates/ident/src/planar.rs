@@ -352,6 +352,12 @@ pub struct PlanarEstimate {
     /// ([`estimate_planar`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub leave_one_out_vaf: Option<[f64; 2]>,
+    /// Measured and predicted Δτ per joint (N m) along the concatenated
+    /// windows, every k-th sample (at most
+    /// [`TRACE_POINTS`](crate::linear::TRACE_POINTS) per joint); with known
+    /// inertial parameters both have the known inertial torque removed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub traces: Option<crate::linear::FitTraces>,
 }
 
 /// Standard errors of a planar estimate (delete-one-trial jackknife).
@@ -458,8 +464,18 @@ pub fn fit_planar(
         vaf: [0.0; 2],
         r: [0.0; 2],
     };
+    // every k-th sample of the concatenated windows goes to the traces
+    let stride = (rows / 2).div_ceil(crate::linear::TRACE_POINTS).max(1);
+    let mut traces = crate::linear::FitTraces {
+        time: (0..rows / 2)
+            .step_by(stride)
+            .map(|i| i as f64 / data.fs)
+            .collect(),
+        measured: vec![Vec::new(), Vec::new()],
+        predicted: vec![Vec::new(), Vec::new()],
+    };
     for r in 0..2 {
-        let (mut y, mut yh) = (Vec::new(), Vec::new());
+        let (mut y, mut yh) = (Vec::with_capacity(rows / 2), Vec::with_capacity(rows / 2));
         for b in &blocks {
             for i in (r..b.nrows()).step_by(2) {
                 let pred: f64 = (0..p).map(|j| b[(i, j)] * theta[j]).sum();
@@ -470,6 +486,8 @@ pub fn fit_planar(
         let (rr, vaf, _) = fit_stats(&y, &yh);
         fit.vaf[r] = vaf;
         fit.r[r] = rr;
+        traces.measured[r] = y.iter().step_by(stride).copied().collect();
+        traces.predicted[r] = yh.iter().step_by(stride).copied().collect();
     }
     let (stiffness_se, damping_se) = (m2(&se, off + 4), m2(&se, off));
     let fit_ok = fit.vaf.iter().all(|v| *v >= VAF_FLOOR_PERCENT);
@@ -529,6 +547,7 @@ pub fn fit_planar(
         trials: use_trials.len(),
         samples: rows / 2,
         leave_one_out_vaf: None,
+        traces: Some(traces),
     })
 }
 
@@ -696,7 +715,10 @@ pub fn interval_sweep(data: &PlanarData, xi: Option<[f64; 3]>, step: usize) -> V
             let n = (((tk_ms + OBSERVATION_AFTER_INTERPOLATION_MS) * data.fs / 1000.0).round()
                 as usize)
                 .min(shortest);
-            let estimate = fit_planar(data, n, xi, trials).ok()?;
+            let estimate = PlanarEstimate {
+                traces: None,
+                ..fit_planar(data, n, xi, trials).ok()?
+            };
             let window_ms = estimate.observation_window_ms;
             let mut reasons = estimate.criteria.reasons.clone();
             let change = impedance_change(data, trials, shortest, step, xi);
@@ -963,9 +985,13 @@ pub fn window_sweep(
         .par_iter()
         .filter_map(|ms| {
             let n = (ms * data.fs / 1000.0).round() as usize;
+            // the traces of 36 windows would only bloat the sweep's JSON
             fit_planar(data, n, xi, &all).ok().map(|estimate| SweepRow {
                 observation_window_ms: *ms,
-                estimate,
+                estimate: PlanarEstimate {
+                    traces: None,
+                    ..estimate
+                },
                 trusted: false,
                 reasons: Vec::new(),
             })

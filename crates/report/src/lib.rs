@@ -6,7 +6,7 @@
 //! - an interactive 3-D view of the stiffness, damping and inertia ellipsoids
 //!   at their start points (seed 000 Fig. 4, seed 001 Fig. 5): radii
 //!   proportional to the eigenvalues of the symmetric part (seed 001's
-//!   convention), one scale per kind, with a scale sphere; our own small
+//!   convention), one scale per kind, with scale bars; our own small
 //!   viewer (`viewer.js`, no library, no network);
 //! - tables in the layout of seed 000 Tables I-II (estimate ± standard error,
 //!   and the truth where known);
@@ -20,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+pub mod ellipse;
 pub mod reproduce;
 pub mod svg;
 
@@ -88,6 +89,17 @@ pub struct Section {
     pub figures: Vec<Figure>,
     /// Ellipsoids for the 3-D view.
     pub ellipsoids: Vec<EllipsoidView>,
+    /// Pre-drawn SVG figures (ellipsoid grids, ellipses), equal in x and y.
+    pub drawings: Vec<Drawing>,
+}
+
+/// A figure drawn directly as SVG (not a line chart).
+#[derive(Debug, Clone, Serialize)]
+pub struct Drawing {
+    /// HTML id and file name stem.
+    pub id: String,
+    /// The standalone `<svg>` element.
+    pub svg: String,
 }
 
 /// The whole report.
@@ -158,8 +170,102 @@ fn element_unit(row: &str, column: &str) -> &'static str {
     }
 }
 
-fn optional(v: Option<f64>) -> String {
-    v.map_or_else(|| "n/a".into(), fmt)
+/// Unit of element (row, column) of K, B or M when the coordinates mix
+/// positions and angles: the row's force (N) or torque (N m) per the
+/// column's displacement (m or rad), velocity or acceleration.
+fn matrix_element_unit(kind: MatrixKind, row: &str, column: &str) -> String {
+    let angular = |c: &str| c == "theta" || c.starts_with('q');
+    let force = if angular(row) { "N m" } else { "N" };
+    let per = if angular(column) { "rad" } else { "m" };
+    match (kind, angular(row), angular(column)) {
+        (MatrixKind::Stiffness, ..) => format!("{force}/{per}"),
+        (MatrixKind::Damping, ..) => format!("{force} s/{per}"),
+        (MatrixKind::Inertia, false, false) => "kg".into(),
+        (MatrixKind::Inertia, true, true) => "kg m²".into(),
+        (MatrixKind::Inertia, ..) => format!("{force} s²/{per}"),
+    }
+}
+
+/// The stochastic estimate's verdicts and the criteria behind them (seed 004
+/// §III: coherences, input coherence, fit of the parametric model).
+fn stochastic_criteria_table(v: &StochasticEstimate) -> Table {
+    let c = &v.criteria;
+    let words = |m: &MatrixVerdict| match m {
+        MatrixVerdict::Trusted => "trusted",
+        MatrixVerdict::PoorFit => "poor fit: do not use",
+        MatrixVerdict::NotIdentifiable => "not identifiable from this data",
+        MatrixVerdict::NotPassive => "not passive: symmetric part not positive definite",
+        MatrixVerdict::Imprecise => "imprecise: 2 SE exceed the tolerance",
+    };
+    let mut rows = vec![
+        vec![
+            "stiffness K".into(),
+            words(&c.verdicts.stiffness).into(),
+            String::new(),
+        ],
+        vec![
+            "damping B".into(),
+            words(&c.verdicts.damping).into(),
+            String::new(),
+        ],
+    ];
+    if let Some(m) = &c.verdicts.inertia {
+        rows.push(vec!["inertia M".into(), words(m).into(), String::new()]);
+    }
+    let band = format!("{}-{} Hz", fmt(c.band_hz[0]), fmt(c.band_hz[1]));
+    rows.extend([
+        vec![
+            "mean multiple coherence".into(),
+            fmt(c.mean_multiple_coherence),
+            format!(
+                "over {band}; at least {} for any matrix to be trusted",
+                fmt(limpid_ident::stochastic::MIN_MEAN_COHERENCE)
+            ),
+        ],
+        vec![
+            "lowest multiple coherence".into(),
+            fmt(c.min_multiple_coherence),
+            format!("over {band}"),
+        ],
+        vec![
+            "largest input coherence".into(),
+            fmt(c.max_input_coherence),
+            "between two perturbation inputs; seed 004 asks below 0.6".into(),
+        ],
+        vec![
+            "fit VAF".into(),
+            format!("{} %", fmt(c.fit_vaf)),
+            format!(
+                "of Z by the parametric model; at least {} % to trust it",
+                fmt(limpid_core::criteria::VAF_FLOOR_PERCENT)
+            ),
+        ],
+        vec![
+            "phi_T, Z against the fit".into(),
+            fmt(c.phi_t_vs_fit),
+            "seed 004 eq. (15)".into(),
+        ],
+        vec![
+            "Welch".into(),
+            format!("{} segments of {} samples", c.segments, c.nperseg),
+            format!("resolution {} Hz", fmt(c.frequency_resolution_hz)),
+        ],
+    ]);
+    Table {
+        caption: "Verdicts and the criteria behind them".into(),
+        header: vec!["item".into(), "value".into(), "meaning".into()],
+        rows,
+    }
+}
+
+/// "mean ± sd", rounded to the sd; the mean alone when there is no spread
+/// (one subject).
+fn mean_sd(mean: Option<f64>, sd: Option<f64>) -> String {
+    match (mean, sd) {
+        (Some(m), Some(s)) if s.is_finite() && s > 0.0 => limpid_core::with_standard_error(m, s),
+        (Some(m), _) => fmt(m),
+        (None, _) => "n/a".into(),
+    }
 }
 
 fn messages(w: &[Warning]) -> Vec<String> {
@@ -431,6 +537,7 @@ fn linear_section(name: &str, v: &LinearResult) -> Section {
         tables,
         figures: fit_figures("", v),
         ellipsoids: ellipsoids_of("estimate", centre, v),
+        drawings: vec![],
     }
 }
 
@@ -451,6 +558,7 @@ fn calibration_section(name: &str, v: &limpid_analysis::calibrate::Calibration) 
         }],
         figures: vec![],
         ellipsoids: vec![],
+        drawings: vec![],
     }
 }
 
@@ -462,6 +570,7 @@ fn demo_section(name: &str, v: &DemoResult) -> Section {
         tables: vec![],
         figures: vec![],
         ellipsoids: vec![],
+        drawings: vec![],
     };
     let mut errors = Table {
         caption: "Estimated vs. true (relative Frobenius error)".into(),
@@ -510,11 +619,17 @@ fn demo_section(name: &str, v: &DemoResult) -> Section {
     }
     section.warnings = group_warnings(&grouped);
     errors.caption.push_str("; n/i: the matrix is not identifiable from the data (its error against the truth is not meaningful)");
-    section.verdict = format!(
-        "{} start points; worst stiffness error {} % against the known truth",
-        v.points.len(),
-        fmt(v.worst_error_percent(MatrixKind::Stiffness))
-    );
+    section.verdict = match v.worst_error_percent(MatrixKind::Stiffness) {
+        Some(e) => format!(
+            "{} start points; worst stiffness error {} % against the known truth",
+            v.points.len(),
+            fmt(e)
+        ),
+        None => format!(
+            "{} start points; stiffness not identifiable at any of them",
+            v.points.len()
+        ),
+    };
     section.tables.insert(0, errors);
     section
 }
@@ -755,23 +870,23 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
         );
     }
     let se = &v.standard_errors;
-    let tables = [
+    let matrix_tables = [
         (
-            "stiffness",
+            MatrixKind::Stiffness,
             "K",
             &v.stiffness,
             &se.stiffness,
             expected.map(|e| &e.stiffness),
         ),
         (
-            "damping",
+            MatrixKind::Damping,
             "B",
             &v.damping,
             &se.damping,
             expected.map(|e| &e.damping),
         ),
         (
-            "inertia",
+            MatrixKind::Inertia,
             "M",
             &v.inertia,
             &se.inertia,
@@ -780,15 +895,38 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
     ]
     .into_iter()
     .map(|(kind, sym, m, se, truth)| {
-        matrix_table(
-            &format!("{sym} ({kind}, SI, parametric fit over the band) ± standard error"),
+        let mixed = kind_unit(kind, coords) == "SI";
+        let unit = if mixed {
+            "unit per element".to_string()
+        } else {
+            kind_unit(kind, coords).to_string()
+        };
+        let mut t = matrix_table(
+            &format!(
+                "{sym} ({}, {unit}, parametric fit over the band) ± standard error",
+                kind.name()
+            ),
             coords,
             m,
             Some(se),
             truth,
-        )
+        );
+        if mixed {
+            for (i, row) in t.rows.iter_mut().enumerate() {
+                for (j, cell) in row.iter_mut().skip(1).enumerate() {
+                    let _ = write!(
+                        cell,
+                        " {}",
+                        matrix_element_unit(kind, &coords[i], &coords[j])
+                    );
+                }
+            }
+        }
+        t
     })
-    .collect();
+    .collect::<Vec<_>>();
+    let mut tables = vec![stochastic_criteria_table(v)];
+    tables.extend(matrix_tables);
     Section {
         heading: format!("Stochastic estimate: {name}"),
         verdict,
@@ -796,6 +934,7 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
         tables,
         figures,
         ellipsoids: vec![],
+        drawings: vec![],
     }
 }
 
@@ -803,19 +942,19 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
 /// ellipsoid rotation from level 0 to 1, and the stiffness against the index.
 fn study_section(name: &str, v: &StudyResult) -> Section {
     let levels = Table {
-        caption: "Means over subjects per configuration and level (seed 001 Tables 1-5): index, diagonal stiffness, largest antisymmetric element, principal stiffnesses (N/m)".into(),
+        caption: "Mean ± sd over subjects per configuration and level (seed 001 Tables 1-5): co-contraction index (fraction of MVC), diagonal stiffness, largest antisymmetric element, principal stiffnesses (N/m)".into(),
         header: [
             "configuration",
             "level",
-            "subjects",
-            "cocontraction_index",
-            "kxx",
-            "kyy",
-            "kzz",
-            "k_max_a",
-            "k1",
-            "k2",
-            "k3",
+            "subjects (n)",
+            "index C",
+            "Kxx",
+            "Kyy",
+            "Kzz",
+            "K_maxA",
+            "K1",
+            "K2",
+            "K3",
         ]
         .map(String::from)
         .to_vec(),
@@ -823,18 +962,19 @@ fn study_section(name: &str, v: &StudyResult) -> Section {
             .levels
             .iter()
             .map(|r| {
+                let sd = &r.sd;
                 vec![
                     r.configuration.clone(),
                     fmt(r.level),
                     r.subjects.to_string(),
-                    optional(r.cocontraction_index),
-                    optional(r.kxx),
-                    optional(r.kyy),
-                    optional(r.kzz),
-                    optional(r.k_max_a),
-                    optional(r.k1),
-                    optional(r.k2),
-                    optional(r.k3),
+                    mean_sd(r.cocontraction_index, sd.cocontraction_index),
+                    mean_sd(r.kxx, sd.kxx),
+                    mean_sd(r.kyy, sd.kyy),
+                    mean_sd(r.kzz, sd.kzz),
+                    mean_sd(r.k_max_a, sd.k_max_a),
+                    mean_sd(r.k1, sd.k1),
+                    mean_sd(r.k2, sd.k2),
+                    mean_sd(r.k3, sd.k3),
                 ]
             })
             .collect(),
@@ -872,6 +1012,38 @@ fn study_section(name: &str, v: &StudyResult) -> Section {
             }
         }
     }
+    // small multiples: configurations down, levels across (seed 001 Fig. 5)
+    let mut level_values: Vec<f64> = v.levels.iter().map(|r| r.level).collect();
+    level_values.sort_by(f64::total_cmp);
+    level_values.dedup();
+    let cells: Vec<Vec<Option<EllipsoidView>>> = configs
+        .iter()
+        .map(|c| {
+            level_values
+                .iter()
+                .map(|level| {
+                    let r = v
+                        .levels
+                        .iter()
+                        .find(|r| &r.configuration == *c && r.level == *level)?;
+                    let point = format!("configuration {c}, level {}", fmt(*level));
+                    ellipsoid_view(&point, "stiffness", [0.0; 3], r.ellipsoid.as_ref()?)
+                })
+                .collect()
+        })
+        .collect();
+    let drawings =
+        vec![Drawing {
+        id: "study-stiffness-ellipsoids".into(),
+        svg: ellipse::grid(
+            "Mean stiffness ellipsoid per configuration and co-contraction level (seed 001 Fig. 5)",
+            &configs.iter().map(|c| format!("configuration {c}")).collect::<Vec<_>>(),
+            &level_values.iter().map(|l| format!("level {}", fmt(*l))).collect::<Vec<_>>(),
+            &cells,
+            "N/m",
+            ellipse::View::DEFAULT,
+        ),
+    }];
     let series: Vec<Series> = configs
         .iter()
         .enumerate()
@@ -923,6 +1095,7 @@ fn study_section(name: &str, v: &StudyResult) -> Section {
         tables: vec![levels, rotation],
         figures,
         ellipsoids,
+        drawings,
     }
 }
 
@@ -935,6 +1108,7 @@ fn cocontraction_section(name: &str, v: &CocontractionResult) -> Section {
         tables: vec![],
         figures: vec![],
         ellipsoids: vec![],
+        drawings: vec![],
     };
     let mut index_table = Table {
         caption: "Co-contraction index and stiffness per level (seed 001 Tables 1-5)".into(),
@@ -959,11 +1133,7 @@ fn cocontraction_section(name: &str, v: &CocontractionResult) -> Section {
             .unwrap_or_default();
         index_table.rows.push(vec![
             fmt(l.level),
-            format!(
-                "{} ± {}",
-                fmt(l.cocontraction_index),
-                fmt(l.cocontraction_sd)
-            ),
+            mean_sd(Some(l.cocontraction_index), Some(l.cocontraction_sd)),
             format!("{} %", fmt(100.0 * l.cocontraction_within_band)),
             ev.join(" / "),
             l.estimate.verdict(),
@@ -1005,6 +1175,31 @@ fn cocontraction_section(name: &str, v: &CocontractionResult) -> Section {
         ]);
     }
     section.verdict = format!("co-contraction index {}", summary.join(", "));
+    let columns: Vec<String> = v
+        .levels
+        .iter()
+        .map(|l| format!("level {}", fmt(l.level)))
+        .collect();
+    let cells = vec![v
+        .levels
+        .iter()
+        .map(|l| {
+            l.ellipsoid.as_ref().and_then(|e| {
+                ellipsoid_view(&format!("level {}", fmt(l.level)), "stiffness", [0.0; 3], e)
+            })
+        })
+        .collect()];
+    section.drawings.push(Drawing {
+        id: "stiffness-ellipsoids".into(),
+        svg: ellipse::grid(
+            "Stiffness ellipsoid per co-contraction level (seed 001 Fig. 5)",
+            &[name.to_string()],
+            &columns,
+            &cells,
+            "N/m",
+            ellipse::View::DEFAULT,
+        ),
+    });
     section.tables.insert(0, index_table);
     section.tables.insert(1, comparisons);
     section
@@ -1194,6 +1389,7 @@ fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimate) -> Secti
         tables: vec![parameters, vafs],
         figures,
         ellipsoids: vec![],
+        drawings: vec![],
     }
 }
 
@@ -1226,14 +1422,195 @@ fn planar_section(name: &str, v: &PlanarEstimate) -> Section {
         )
     })
     .collect();
+    let mut tables: Vec<Table> = tables;
+    tables.extend(planar_quality_tables(v));
+    let kx = &v.endpoint_stiffness;
+    tables.push(matrix_table(
+        "end-point stiffness J⁻ᵀ K J⁻¹ at the mean posture (N/m)",
+        &["x".to_string(), "y".to_string()],
+        kx,
+        None,
+        None,
+    ));
+    let figures = v.traces.as_ref().map_or_else(Vec::new, |tr| {
+        (0..tr.measured.len().min(2))
+            .map(|r| Figure {
+                id: format!("fit-dtau{}", r + 1),
+                chart: Chart {
+                    title: format!(
+                        "joint {}: measured vs predicted Δτ (r {}, VAF {} %)",
+                        r + 1,
+                        fmt(v.fit.r[r]),
+                        fmt(v.fit.vaf[r])
+                    ),
+                    x_label: "time along the observation windows (s)".into(),
+                    y_label: format!("Δτ{} (N m)", r + 1),
+                    x_log: false,
+                    y_log: false,
+                    y_range: None,
+                    series: vec![
+                        Series {
+                            name: "measured".into(),
+                            x: tr.time.clone(),
+                            y: tr.measured[r].clone(),
+                            stroke: Stroke::Solid,
+                            color: PALETTE[0].into(),
+                        },
+                        Series {
+                            name: "predicted".into(),
+                            x: tr.time.clone(),
+                            y: tr.predicted[r].clone(),
+                            stroke: Stroke::Dashed,
+                            color: PALETTE[1].into(),
+                        },
+                    ],
+                },
+            })
+            .collect()
+    });
+    let drawings = endpoint_ellipse(kx)
+        .map(|e| Drawing {
+            id: "endpoint-stiffness-ellipse".into(),
+            svg: ellipse::grid(
+                "End-point stiffness ellipse (symmetric part, seen from above)",
+                &[name.to_string()],
+                &[format!(
+                    "{} trials, T_obs {} ms",
+                    v.trials,
+                    fmt(v.observation_window_ms)
+                )],
+                &[vec![Some(e)]],
+                "N/m",
+                ellipse::View::Top,
+            ),
+        })
+        .into_iter()
+        .collect();
     Section {
         heading: format!("Planar-arm estimate: {name}"),
         verdict,
         warnings: vec![],
         tables,
-        figures: vec![],
+        figures,
         ellipsoids: vec![],
+        drawings,
     }
+}
+
+/// The symmetric part of a 2x2 matrix as a flat ellipsoid in the x-y plane
+/// (None when not finite).
+fn endpoint_ellipse(k: &Matrix) -> Option<EllipsoidView> {
+    if k.shape() != (2, 2) {
+        return None;
+    }
+    let (a, b, d) = (k[(0, 0)], 0.5 * (k[(0, 1)] + k[(1, 0)]), k[(1, 1)]);
+    let mean = 0.5 * (a + d);
+    let dev = (0.25 * (a - d) * (a - d) + b * b).sqrt();
+    let angle = 0.5 * (2.0 * b).atan2(a - d);
+    let (c, s) = (angle.cos(), angle.sin());
+    [a, b, d]
+        .iter()
+        .all(|v| v.is_finite())
+        .then(|| EllipsoidView {
+            point: "end point".into(),
+            kind: "stiffness".into(),
+            centre: [0.0; 3],
+            eigenvalues: [mean + dev, mean - dev, 0.0],
+            axes: [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
+        })
+}
+
+/// Seed 003's quality of a planar estimate: inertial parameters, fit and the
+/// confidence criteria (§III-C).
+fn planar_quality_tables(v: &PlanarEstimate) -> Vec<Table> {
+    let se = &v.standard_errors;
+    let xi = Table {
+        caption: if v.inertial_parameters_fixed {
+            "base inertial parameters (kg m²), given: reduced model (eq. 23-25)".into()
+        } else {
+            "base inertial parameters (kg m²) ± standard error".into()
+        },
+        header: vec!["ξ1".into(), "ξ2".into(), "ξ3".into()],
+        rows: vec![(0..3)
+            .map(|k| {
+                if v.inertial_parameters_fixed {
+                    fmt(v.inertial_parameters[k])
+                } else {
+                    limpid_core::with_standard_error(
+                        v.inertial_parameters[k],
+                        se.inertial_parameters[k],
+                    )
+                }
+            })
+            .collect()],
+    };
+    let c = &v.criteria;
+    let yes = |b: bool| if b { "yes" } else { "NO" };
+    let mut rows = vec![
+        vec![
+            "observation window".into(),
+            format!("{} ms", fmt(v.observation_window_ms)),
+            format!("{} trials, {} samples per joint", v.trials, v.samples),
+        ],
+        vec![
+            "fit VAF, joint 1 / 2".into(),
+            format!("{} % / {} %", fmt(v.fit.vaf[0]), fmt(v.fit.vaf[1])),
+            format!("r {} / {}", fmt(v.fit.r[0]), fmt(v.fit.r[1])),
+        ],
+    ];
+    if let Some(l) = v.leave_one_out_vaf {
+        rows.push(vec![
+            "leave-one-trial-out VAF".into(),
+            format!("{} % / {} %", fmt(l[0]), fmt(l[1])),
+            "each trial predicted by the others (seed 003 Fig. 6)".into(),
+        ]);
+    }
+    rows.extend([
+        vec![
+            "condition number of W".into(),
+            fmt(c.condition_number),
+            format!(
+                "scaled (columns of unit norm): {}",
+                fmt(c.condition_number_scaled)
+            ),
+        ],
+        vec![
+            "K positive definite".into(),
+            yes(c.stiffness_positive_definite).into(),
+            format!(
+                "eigenvalues {} / {} N m/rad",
+                fmt(c.stiffness_eigenvalues[0]),
+                fmt(c.stiffness_eigenvalues[1])
+            ),
+        ],
+        vec![
+            "D positive definite".into(),
+            yes(c.damping_positive_definite).into(),
+            format!(
+                "eigenvalues {} / {} N m s/rad",
+                fmt(c.damping_eigenvalues[0]),
+                fmt(c.damping_eigenvalues[1])
+            ),
+        ],
+        vec![
+            "symmetry of K, D".into(),
+            format!(
+                "{} / {}",
+                fmt(c.stiffness_symmetry_ratio),
+                fmt(c.damping_symmetry_ratio)
+            ),
+            "‖antisymmetric part‖ / ‖symmetric part‖; quasi-symmetric when small (seed 003 §III-C)"
+                .into(),
+        ],
+    ]);
+    vec![
+        xi,
+        Table {
+            caption: "Confidence criteria (seed 003 §III-C)".into(),
+            header: vec!["criterion".into(), "value".into(), "detail".into()],
+            rows,
+        },
+    ]
 }
 
 fn sweep_section(name: &str, v: &Sweep) -> Section {
@@ -1383,6 +1760,7 @@ fn sweep_section(name: &str, v: &Sweep) -> Section {
         tables: vec![],
         figures,
         ellipsoids: vec![],
+        drawings: vec![],
     }
 }
 
@@ -1439,13 +1817,8 @@ fn viewer_data(ellipsoids: &[EllipsoidView]) -> Value {
         if max > 0.0 {
             kinds.push(kind);
             scale.insert(kind.into(), (0.4 * spacing / max).into());
-            // a round number near half the largest eigenvalue
-            let mag = 10f64.powf((0.5 * max).log10().floor());
-            let round = [1.0, 2.0, 5.0]
-                .iter()
-                .map(|m| m * mag)
-                .filter(|v| *v <= 0.5 * max)
-                .fold(mag, f64::max);
+            // a round number not above the largest eigenvalue
+            let round = ellipse::round_down(max);
             scale_value.insert(kind.into(), round.into());
         }
     }
@@ -1456,6 +1829,8 @@ fn viewer_data(ellipsoids: &[EllipsoidView]) -> Value {
         "span": span,
         "scale": scale,
         "scale_value": scale_value,
+        // a round length for the position scale bar: about a fifth of the view
+        "length_value": ellipse::round_down(0.2 * span),
         "units": {"stiffness": "N/m", "damping": "N s/m", "inertia": "kg"},
         "colors": {"stiffness": PALETTE[0], "damping": PALETTE[1], "inertia": PALETTE[2]},
     })
@@ -1465,10 +1840,10 @@ const STYLE: &str = "body{font-family:sans-serif;max-width:1400px;margin:1em aut
 h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;margin-top:2em}\
 .verdict{background:#eef5ee;border-left:4px solid #2a7;padding:.5em 1em}\
 .warnings{background:#fff6e5;border-left:4px solid #e90;padding:.5em 1em}\
-table{border-collapse:collapse;margin:.8em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}\
-caption{text-align:left;font-weight:bold;padding:2px}.figures{display:flex;flex-wrap:wrap;gap:8px}\
+table{border-collapse:collapse;margin:.8em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:left}td.num{text-align:right;font-variant-numeric:tabular-nums}\
+caption{text-align:left;font-weight:bold;padding:2px;min-width:32em}.figures{display:flex;flex-wrap:wrap;gap:8px}figure{margin:0}\
 #ellipsoid-kinds button{margin:2px;border:1px solid #888;background:#fff}#ellipsoid-kinds button.on{background:#cde}\
-td:first-child,td:nth-child(5),td:nth-child(6),th:first-child,th:nth-child(5),th:nth-child(6){text-align:left}.ok{color:#1a7f37;font-weight:bold}.bad{color:#b42318;font-weight:bold}";
+.ok{color:#1a7f37;font-weight:bold}.bad{color:#b42318;font-weight:bold}";
 
 /// The report as one HTML document: no external URL anywhere.
 pub fn to_html(report: &Report) -> String {
@@ -1502,7 +1877,7 @@ pub fn to_html(report: &Report) -> String {
         .flat_map(|s| s.ellipsoids.clone())
         .collect();
     if !ellipsoids.is_empty() {
-        h.push_str("<h2>Ellipsoids</h2><p>Each at its start point; co-contraction levels side by side along x, study configurations down z. Radii proportional to the eigenvalues of the symmetric part (one scale per kind, shown by the dashed sphere); drag to rotate, click a kind to show or hide it.</p><div id=\"ellipsoid-kinds\"></div><div id=\"ellipsoid-view\"></div>");
+        h.push_str("<h2>Ellipsoids</h2><p>Each at its start point; co-contraction levels side by side along x, study configurations down z. Radii proportional to the eigenvalues of the symmetric part (one scale per kind, shown by the scale bars); drag to rotate, hover an ellipsoid for its name and principal values, click a kind to show or hide it.</p><div id=\"ellipsoid-kinds\"></div><div id=\"ellipsoid-view\"></div>");
         let data = viewer_data(&ellipsoids).to_string().replace("</", "<\\/");
         let _ = write!(
             h,
@@ -1512,6 +1887,14 @@ pub fn to_html(report: &Report) -> String {
     }
     for s in &report.sections {
         let _ = write!(h, "<h2>{}</h2>", escape(&s.heading));
+        for d in &s.drawings {
+            let _ = write!(
+                h,
+                "<figure id=\"{}\" class=\"drawing\">{}</figure>",
+                escape(&d.id),
+                d.svg
+            );
+        }
         if !s.figures.is_empty() {
             h.push_str("<div class=\"figures\">");
             for f in &s.figures {
@@ -1533,7 +1916,15 @@ pub fn to_html(report: &Report) -> String {
             for r in &t.rows {
                 h.push_str("<tr>");
                 for c in r {
-                    let _ = write!(h, "<td>{}</td>", escape(c));
+                    // numbers right-aligned, words left
+                    let numeric = c
+                        .trim_start_matches(['-', '+', '−'])
+                        .starts_with(|ch: char| ch.is_ascii_digit() || ch == '.');
+                    if numeric {
+                        let _ = write!(h, "<td class=\"num\">{}</td>", escape(c));
+                    } else {
+                        let _ = write!(h, "<td>{}</td>", escape(c));
+                    }
                 }
                 h.push_str("</tr>");
             }
@@ -1551,12 +1942,19 @@ pub fn figure_files(report: &Report) -> Vec<(String, String)> {
         .iter()
         .enumerate()
         .flat_map(|(i, s)| {
-            s.figures.iter().map(move |f| {
-                (
-                    format!("s{}-{}.svg", i + 1, f.id),
-                    f.chart.to_svg(760.0, 380.0),
+            s.figures
+                .iter()
+                .map(move |f| {
+                    (
+                        format!("s{}-{}.svg", i + 1, f.id),
+                        f.chart.to_svg(760.0, 380.0),
+                    )
+                })
+                .chain(
+                    s.drawings
+                        .iter()
+                        .map(move |d| (format!("s{}-{}.svg", i + 1, d.id), d.svg.clone())),
                 )
-            })
         })
         .collect()
 }

@@ -40,10 +40,7 @@ pub fn reproduction_page(r: &Reproduction, title: &str) -> String {
             ));
         }
         let cell = |v: Option<f64>| v.map_or("–".to_string(), sig);
-        let diff = match (x.paper, x.limpid) {
-            (Some(p), Some(l)) if p != 0.0 => format!("{:+.0} %", 100.0 * (l / p - 1.0)),
-            _ => String::new(),
-        };
+        let diff = x.difference();
         s.push_str(&format!(
             "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
             escape(&x.item),

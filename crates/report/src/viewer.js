@@ -7,9 +7,10 @@
   if (!holder) { return; }
   var data = JSON.parse(document.getElementById("ellipsoid-data").textContent);
   var NS = "http://www.w3.org/2000/svg";
-  var W = 640, H = 480;
+  // as wide as the page; the drawing scales with it (viewBox)
+  var W = Math.max(640, Math.min(1360, holder.clientWidth || 1200)), H = Math.round(0.6 * W);
   var svg = document.createElementNS(NS, "svg");
-  svg.setAttribute("width", W);
+  svg.setAttribute("width", "100%");
   svg.setAttribute("height", H);
   svg.setAttribute("viewBox", "0 0 " + W + " " + H);
   svg.setAttribute("class", "viewer");
@@ -58,9 +59,11 @@
       svg.appendChild(path("M" + a[0] + "," + a[1] + " L" + b[0] + "," + b[1], "axis", "#888", 1));
       var t = document.createElementNS(NS, "text");
       t.setAttribute("x", b[0] + 3); t.setAttribute("y", b[1] - 3);
-      t.textContent = name;
+      t.setAttribute("font-size", "13");
+      t.textContent = name + " (m)";
       svg.appendChild(t);
     });
+    var count = data.ellipsoids.filter(function (e) { return shown[e.kind]; }).length;
     data.ellipsoids.forEach(function (e) {
       if (!shown[e.kind]) { return; }
       var g = document.createElementNS(NS, "g");
@@ -77,32 +80,42 @@
       g.appendChild(path(ring(e.centre, ax[0], ax[1], 48), "section", color, 1.6));
       g.appendChild(path(ring(e.centre, ax[1], ax[2], 48), "section", color, 1.2));
       g.appendChild(path(ring(e.centre, ax[0], ax[2], 48), "section", color, 1.2));
+      // the name on hover (always when few are shown), and a tooltip with the principal values
       var label = document.createElementNS(NS, "text");
       var at = screen(e.centre);
-      label.setAttribute("x", at[0] + 4); label.setAttribute("y", at[1] + 12);
-      label.setAttribute("font-size", "11");
+      label.setAttribute("x", at[0] + 6); label.setAttribute("y", at[1] - 6);
+      label.setAttribute("font-size", "13");
+      label.setAttribute("class", "label");
       label.textContent = e.point;
+      if (count > 8) { label.setAttribute("visibility", "hidden"); }
       g.appendChild(label);
+      var tip = document.createElementNS(NS, "title");
+      tip.textContent = e.point + " (" + e.kind + "): principal values " +
+        e.eigenvalues.map(function (v) { return Number(v.toPrecision(4)); }).join(", ") + " " + data.units[e.kind];
+      g.appendChild(tip);
+      g.addEventListener("mouseenter", function () { label.setAttribute("visibility", "visible"); });
+      g.addEventListener("mouseleave", function () { if (count > 8) { label.setAttribute("visibility", "hidden"); } });
       svg.appendChild(g);
     });
-    // scale sphere: radius of `scale_value` in the shown kind
-    data.kinds.forEach(function (k, i) {
-      if (!shown[k]) { return; }
-      var r = data.scale_value[k] * data.scale[k];
-      var g = document.createElementNS(NS, "g");
-      g.setAttribute("class", "scale-sphere");
-      var sc = 0.8 * Math.min(W, H) / span;
-      var e = document.createElementNS(NS, "circle");
-      e.setAttribute("cx", 40); e.setAttribute("cy", H - 40 - 60 * i);
-      e.setAttribute("r", Math.max(2, r * sc));
-      e.setAttribute("fill", "none"); e.setAttribute("stroke", data.colors[k]); e.setAttribute("stroke-dasharray", "3 2");
-      g.appendChild(e);
+    // scale bars: a radius of `scale_value` in each shown kind, and a length in the lab
+    var sc = 0.8 * Math.min(W, H) / span, row = 0;
+    function bar(len, text, color, cls) {
+      var y = H - 24 - 26 * row, g = document.createElementNS(NS, "g");
+      g.setAttribute("class", cls);
+      g.appendChild(path("M24," + (y - 5) + " L24," + (y + 5) + " M24," + y + " L" + (24 + len).toFixed(1) + "," + y +
+        " M" + (24 + len).toFixed(1) + "," + (y - 5) + " L" + (24 + len).toFixed(1) + "," + (y + 5), "bar", color, 2));
       var t = document.createElementNS(NS, "text");
-      t.setAttribute("x", 40 + Math.max(2, r * sc) + 6); t.setAttribute("y", H - 36 - 60 * i);
-      t.textContent = "sphere: " + data.scale_value[k] + " " + data.units[k];
+      t.setAttribute("x", 32 + len); t.setAttribute("y", y + 5); t.setAttribute("font-size", "13");
+      t.textContent = text;
       g.appendChild(t);
       svg.appendChild(g);
+      row += 1;
+    }
+    data.kinds.forEach(function (k) {
+      if (!shown[k]) { return; }
+      bar(data.scale_value[k] * data.scale[k] * sc, k + ": " + data.scale_value[k] + " " + data.units[k] + " (radius)", data.colors[k], "scale-bar");
     });
+    bar(data.length_value * sc, "position: " + data.length_value + " m", "#666", "length-bar");
   }
   var dragging = null;
   svg.addEventListener("mousedown", function (ev) { dragging = [ev.clientX, ev.clientY]; });
