@@ -9,9 +9,10 @@ command -v cargo >/dev/null 2>&1 || missing="$missing cargo(rustup)"
 command -v cmake >/dev/null 2>&1 || missing="$missing cmake"
 command -v c++ >/dev/null 2>&1 || missing="$missing g++"
 command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || missing="$missing chromium"
+[ -e /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || [ -e /usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf ] || missing="$missing fonts-dejavu-core"
 python3 -c "import venv, ensurepip" >/dev/null 2>&1 || missing="$missing python3-venv"
 if [ -n "$missing" ]; then
-  echo "scripts/test.sh: missing:$missing; install them first (Debian: apt-get install cmake g++ chromium python3-venv; Rust from rustup), or run .ci/run, which installs the Debian ones" >&2
+  echo "scripts/test.sh: missing:$missing; install them first (Debian: apt-get install cmake g++ chromium fonts-dejavu-core python3-venv; Rust from rustup), or run .ci/run, which installs the Debian ones" >&2
   exit 2
 fi
 cargo test --workspace --release

@@ -16,7 +16,7 @@ pub struct ReportArgs {
     /// The HTML file to write.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Also write every figure as SVG into this folder (for papers).
+    /// Also write every figure into this folder as SVG and PNG, sized for a journal column (for papers).
     #[arg(long, value_name = "DIR")]
     pub figures: Option<PathBuf>,
 }
@@ -69,11 +69,26 @@ pub fn run(args: ReportArgs) -> CliResult {
     if let Some(dir) = &args.figures {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         let files = limpid_report::figure_files(&report);
-        for (name, svg) in &files {
-            let p = dir.join(name);
-            limpid_core::files::write_file(&p, svg.as_bytes())?;
+        for (stem, svg) in &files {
+            limpid_core::files::write_file(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
         }
-        println!("wrote {} figures to {}", files.len(), dir.display());
+        // the bitmaps in parallel: rasterising is the slow part
+        use rayon::prelude::*;
+        let pngs: Vec<(String, Vec<u8>)> = files
+            .par_iter()
+            .map(|(stem, svg)| {
+                limpid_report::png::svg_to_png(svg).map(|png| (format!("{stem}.png"), png))
+            })
+            .collect::<Result<_, String>>()?;
+        for (name, png) in &pngs {
+            limpid_core::files::write_file(&dir.join(name), png)?;
+        }
+        println!(
+            "wrote {} figures to {} (SVG, and PNG at {} x)",
+            files.len(),
+            dir.display(),
+            limpid_report::png::SCALE
+        );
     }
     Ok(())
 }

@@ -179,12 +179,29 @@ fn report_command_writes_html_without_external_urls_and_svg_figures() {
         "no src/href at all"
     );
     assert!(text.contains("shortest trusted window"));
-    let svgs: Vec<_> = std::fs::read_dir(&figs).unwrap().collect();
+    let mut names: Vec<String> = std::fs::read_dir(&figs)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let svgs: Vec<&String> = names.iter().filter(|n| n.ends_with(".svg")).collect();
     assert_eq!(
         svgs.len(),
         5,
         "K and D against T_obs, condition number, eigenvalues, symmetry"
     );
+    // each also as a PNG at 3 x the journal size (560 x 360 px)
+    for svg in svgs {
+        let png = std::fs::read(figs.join(svg.replace(".svg", ".png"))).unwrap();
+        assert!(png.starts_with(b"\x89PNG"), "{svg}");
+        let dim = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+        assert_eq!(
+            (dim(&png[16..20]), dim(&png[20..24])),
+            (1680, 1080),
+            "{svg}"
+        );
+    }
+    assert_eq!(names.len(), 10);
     // seed 003 Fig. 4-5: K against T_obs with the shortest trusted window drawn
     let k = std::fs::read_to_string(figs.join("s1-sweep-k.svg")).unwrap();
     for name in ["K11", "K22", "± 1 SE", "shortest trusted window ("] {
@@ -674,9 +691,15 @@ fn every_kind_of_report_renders_with_its_figures() {
             "cocontraction" => {
                 let grid = figure("stiffness-ellipsoids");
                 assert_eq!(grid.matches("class=\"ellipsoid\"").count(), 4);
-                assert!(grid.contains("N/m</text>"), "a scale bar with its unit");
+                assert!(
+                    grid.contains("N/m (semi-axis)</text>"),
+                    "a scale bar with its unit"
+                );
                 // every kind shown (?all): 12 names, more than 8, so shown on hover only
-                assert_eq!(dom.matches("class=\"label\" visibility=\"hidden\"").count(), 12);
+                assert_eq!(
+                    dom.matches("class=\"label\" visibility=\"hidden\"").count(),
+                    12
+                );
             }
             "study" => {
                 let grid = figure("study-stiffness-ellipsoids");

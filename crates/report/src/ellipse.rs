@@ -242,7 +242,7 @@ pub fn grid(
     let by = height - 22.0;
     let _ = write!(
         s,
-        r##"<g class="scale-bar"><line x1="{left}" y1="{by}" x2="{:.1}" y2="{by}" stroke="#222" stroke-width="2"/><line x1="{left}" y1="{:.1}" x2="{left}" y2="{:.1}" stroke="#222"/><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#222"/><text x="{:.1}" y="{:.1}">{} {}</text></g>"##,
+        r##"<g class="scale-bar"><line x1="{left}" y1="{by}" x2="{:.1}" y2="{by}" stroke="#222" stroke-width="2"/><line x1="{left}" y1="{:.1}" x2="{left}" y2="{:.1}" stroke="#222"/><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#222"/><text x="{:.1}" y="{:.1}">{} {} (semi-axis)</text></g>"##,
         left + bar,
         by - 4.0,
         by + 4.0,
@@ -357,7 +357,7 @@ mod tests {
         assert_eq!(svg.matches("class=\"ellipsoid\"").count(), 3);
         assert!(svg.contains("no estimate"));
         // scale bar: a round number not above the largest principal value
-        assert!(svg.contains(">500 N/m</text>"), "{svg}");
+        assert!(svg.contains(">500 N/m (semi-axis)</text>"), "{svg}");
         assert_eq!(round_down(449.0), 200.0);
         assert_eq!(round_down(450.0), 200.0);
         assert_eq!(round_down(500.0), 500.0);

@@ -143,10 +143,24 @@ impl Chart {
         (lo - pad, hi + pad)
     }
 
-    /// The chart as a standalone `<svg>` element of `width` x `height` px.
+    /// The chart as a standalone `<svg>` element of `width` x `height` px
+    /// (11 px text, for the page).
     pub fn to_svg(&self, width: f64, height: f64) -> String {
-        // the legend sits right of the plot, outside the data
-        let (ml, mr, mt, mb) = (64.0, 200.0, 28.0, 44.0);
+        self.to_svg_styled(width, height, 11.0)
+    }
+
+    /// The chart with `font` px text; margins and the legend grow with it.
+    pub fn to_svg_styled(&self, width: f64, height: f64, font: f64) -> String {
+        let k = font / 11.0;
+        // the legend sits right of the plot, outside the data, as wide as its longest name
+        let longest = self
+            .series
+            .iter()
+            .map(|s| s.name.chars().count())
+            .max()
+            .unwrap_or(0) as f64;
+        let mr = (34.0 * k + 0.6 * font * longest).max(40.0 * k);
+        let (ml, mt, mb) = (64.0 * k, 28.0 * k, 44.0 * k);
         let (pw, ph) = (width - ml - mr, height - mt - mb);
         let (x0, x1) = self.range(|p| p.0, self.x_log);
         let (y0, y1) = self
@@ -164,13 +178,15 @@ impl Chart {
         let mut s = String::new();
         let _ = write!(
             s,
-            r#"<svg xmlns="http://www.w3.org/2000/svg" class="chart" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="11">"#
+            r##"<svg xmlns="http://www.w3.org/2000/svg" class="chart" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="{font}"><rect width="{width}" height="{height}" fill="#fff"/>"##
         );
         let _ = write!(s, r#"<title>{}</title>"#, escape(&self.title));
         let _ = write!(
             s,
-            r##"<text x="{}" y="16" text-anchor="middle" font-size="12" font-weight="bold">{}</text>"##,
+            r##"<text x="{}" y="{:.1}" text-anchor="middle" font-size="{}" font-weight="bold">{}</text>"##,
             ml + pw / 2.0,
+            16.0 * k,
+            font + 1.0,
             escape(&self.title)
         );
         let _ = write!(
@@ -183,7 +199,7 @@ impl Chart {
                 s,
                 r##"<line x1="{x:.1}" y1="{mt}" x2="{x:.1}" y2="{:.1}" stroke="#ddd"/><text x="{x:.1}" y="{:.1}" text-anchor="middle">{}</text>"##,
                 mt + ph,
-                mt + ph + 14.0,
+                mt + ph + 14.0 * k,
                 tick_label(t)
             );
         }
@@ -193,8 +209,8 @@ impl Chart {
                 s,
                 r##"<line x1="{ml}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
                 ml + pw,
-                ml - 4.0,
-                y + 4.0,
+                ml - 4.0 * k,
+                y + 4.0 * k,
                 tick_label(t)
             );
         }
@@ -202,17 +218,18 @@ impl Chart {
             s,
             r##"<text x="{}" y="{}" text-anchor="middle">{}</text>"##,
             ml + pw / 2.0,
-            height - 8.0,
+            height - 8.0 * k,
             escape(&self.x_label)
         );
         let _ = write!(
             s,
-            r##"<text transform="translate(14 {}) rotate(-90)" text-anchor="middle">{}</text>"##,
+            r##"<text transform="translate({:.1} {}) rotate(-90)" text-anchor="middle">{}</text>"##,
+            14.0 * k,
             mt + ph / 2.0,
             escape(&self.y_label)
         );
         let mut legend_rows = 0;
-        for (k, series) in self.series.iter().enumerate() {
+        for (index, series) in self.series.iter().enumerate() {
             let mut d = String::new();
             let mut pen_down = false;
             for (x, y) in self.finite_points(series) {
@@ -227,24 +244,25 @@ impl Chart {
             };
             let _ = write!(
                 s,
-                r#"<path class="trace" data-name="{}" d="{d}" fill="none" stroke="{}" stroke-width="1.4"{dash}/>"#,
+                r#"<path class="trace" data-name="{}" d="{d}" fill="none" stroke="{}" stroke-width="{:.2}"{dash}/>"#,
                 escape(&series.name),
-                series.color
+                series.color,
+                1.4 * k
             );
             // legend: one entry per name (series drawn in pieces share one)
-            if self.series[..k].iter().any(|o| o.name == series.name) {
+            if self.series[..index].iter().any(|o| o.name == series.name) {
                 continue;
             }
-            let ly = mt + 8.0 + 14.0 * legend_rows as f64;
+            let ly = mt + 8.0 * k + 14.0 * k * legend_rows as f64;
             legend_rows += 1;
-            let lx = ml + pw + 10.0;
+            let lx = ml + pw + 10.0 * k;
             let _ = write!(
                 s,
                 r#"<line x1="{lx:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{}" stroke-width="1.6"{dash}/><text x="{:.1}" y="{:.1}">{}</text>"#,
-                lx + 20.0,
+                lx + 20.0 * k,
                 series.color,
-                lx + 24.0,
-                ly + 4.0,
+                lx + 24.0 * k,
+                ly + 4.0 * k,
                 escape(&series.name)
             );
         }
