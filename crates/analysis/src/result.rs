@@ -76,11 +76,65 @@ impl Estimate {
     }
 }
 
+/// How a result was made: limpid's version, the command, when, and the
+/// files it read (size and modification time, to tell one file from another).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema, PartialEq)]
+pub struct Run {
+    /// limpid's version.
+    pub limpid_version: String,
+    /// The command line, arguments separated by spaces.
+    pub command_line: String,
+    /// When the result was made (UTC, RFC 3339).
+    pub created_utc: String,
+    /// The files the command read.
+    pub inputs: Vec<InputFile>,
+}
+
+/// One file a result was made from.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema, PartialEq)]
+pub struct InputFile {
+    /// The path as given.
+    pub path: String,
+    /// Size in bytes (absent when the file could not be read).
+    pub bytes: Option<u64>,
+    /// Last modification (UTC, RFC 3339), where the file system keeps it.
+    pub modified_utc: Option<String>,
+}
+
+fn rfc3339(t: std::time::SystemTime) -> String {
+    chrono::DateTime::<chrono::Utc>::from(t).to_rfc3339_opts(chrono::SecondsFormat::Secs, true)
+}
+
+impl Run {
+    /// This process: its arguments, now, and the given input files.
+    pub fn of_this_process(inputs: &[&std::path::Path]) -> Run {
+        Run {
+            limpid_version: env!("CARGO_PKG_VERSION").into(),
+            command_line: std::env::args().collect::<Vec<_>>().join(" "),
+            created_utc: rfc3339(std::time::SystemTime::now()),
+            inputs: inputs
+                .iter()
+                .map(|p| {
+                    let meta = std::fs::metadata(p).ok();
+                    InputFile {
+                        path: p.display().to_string(),
+                        bytes: meta.as_ref().map(|m| m.len()),
+                        modified_utc: meta.and_then(|m| m.modified().ok()).map(rfc3339),
+                    }
+                })
+                .collect(),
+        }
+    }
+}
+
 /// A result with its schema version: the JSON document.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct Document {
     /// [`SCHEMA_VERSION`] of the writer.
     pub schema: u32,
+    /// How the result was made (absent in documents written by the library).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub run: Option<Run>,
     #[serde(flatten)]
     /// The result.
     pub estimate: Estimate,
@@ -91,8 +145,15 @@ impl Document {
     pub fn new(estimate: Estimate) -> Self {
         Document {
             schema: SCHEMA_VERSION,
+            run: None,
             estimate,
         }
+    }
+
+    /// The document with how it was made.
+    pub fn with_run(mut self, run: Run) -> Self {
+        self.run = Some(run);
+        self
     }
 
     /// The document as pretty JSON.

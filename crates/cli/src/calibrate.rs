@@ -44,7 +44,9 @@ pub fn run(args: CalibrateArgs) -> CliResult {
     if args.json {
         println!(
             "{}",
-            Document::new(Estimate::Calibration(result)).to_json_pretty()
+            Document::new(Estimate::Calibration(result))
+                .with_run(limpid_analysis::result::Run::of_this_process(&[]))
+                .to_json_pretty()
         );
         return Ok(());
     }

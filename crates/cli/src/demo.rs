@@ -72,7 +72,8 @@ pub fn run(args: DemoArgs) -> CliResult {
     };
     let result = run_demo(profile, subject, args.seed, &|| bar.inc(1))?;
     bar.finish_and_clear();
-    let doc = Document::new(Estimate::Demo(result));
+    let doc = Document::new(Estimate::Demo(result))
+        .with_run(limpid_analysis::result::Run::of_this_process(&[]));
     let Estimate::Demo(result) = &doc.estimate else {
         unreachable!("made above")
     };
@@ -86,7 +87,7 @@ pub fn run(args: DemoArgs) -> CliResult {
         .report
         .clone()
         .unwrap_or_else(|| args.out.join("report.html"));
-    crate::report::write(std::slice::from_ref(&doc.estimate), None, &report_path)?;
+    crate::report::write(&doc, &report_path)?;
 
     if args.json {
         println!("{}", doc.to_json_pretty());

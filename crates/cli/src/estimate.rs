@@ -293,13 +293,11 @@ pub fn run(method: Method) -> CliResult {
                 }
                 result.shoulder = Some(shoulder_impedance(&result, &posture)?);
             }
-            let doc = Document::new(Estimate::Linear(result));
+            let doc = Document::new(Estimate::Linear(result)).with_run(
+                limpid_analysis::result::Run::of_this_process(&[&args.recording]),
+            );
             if let Some(path) = &args.report {
-                crate::report::write(
-                    std::slice::from_ref(&doc.estimate),
-                    Some(&args.recording),
-                    path,
-                )?;
+                crate::report::write(&doc, path)?;
             }
             let Estimate::Linear(result) = &doc.estimate else {
                 unreachable!("made above")
@@ -353,13 +351,13 @@ pub fn run(method: Method) -> CliResult {
             };
             let doc = Document::new(Estimate::Cocontraction(estimate_cocontraction(
                 &rec, &mvc, &params, &emg,
-            )?));
+            )?))
+            .with_run(limpid_analysis::result::Run::of_this_process(&[
+                &args.recording,
+                &args.mvc,
+            ]));
             if let Some(path) = &args.report {
-                crate::report::write(
-                    std::slice::from_ref(&doc.estimate),
-                    Some(&args.recording),
-                    path,
-                )?;
+                crate::report::write(&doc, path)?;
             }
             let Estimate::Cocontraction(result) = &doc.estimate else {
                 unreachable!("made above")

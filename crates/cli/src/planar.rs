@@ -235,13 +235,11 @@ fn text(e: &PlanarEstimate, data: &PlanarData) -> String {
 pub fn run_estimate(args: PlanarArgs) -> CliResult {
     let (data, xi) = args.arm.load()?;
     let window = window_samples(&data, args.window_ms)?;
-    let doc = Document::new(Estimate::Planar(estimate_planar(&data, window, xi)?));
+    let doc = Document::new(Estimate::Planar(estimate_planar(&data, window, xi)?)).with_run(
+        limpid_analysis::result::Run::of_this_process(&[&args.arm.recording]),
+    );
     if let Some(path) = &args.report {
-        crate::report::write(
-            std::slice::from_ref(&doc.estimate),
-            Some(&args.arm.recording),
-            path,
-        )?;
+        crate::report::write(&doc, path)?;
     }
     let Estimate::Planar(est) = &doc.estimate else {
         unreachable!("made above")
@@ -258,13 +256,12 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
     let (data, xi) = args.arm.load()?;
     let doc = Document::new(Estimate::WindowSweep(window_sweep(
         &data, args.from, args.to, args.step, xi,
-    )?));
+    )?))
+    .with_run(limpid_analysis::result::Run::of_this_process(&[&args
+        .arm
+        .recording]));
     if let Some(path) = &args.report {
-        crate::report::write(
-            std::slice::from_ref(&doc.estimate),
-            Some(&args.arm.recording),
-            path,
-        )?;
+        crate::report::write(&doc, path)?;
     }
     if args.json {
         println!("{}", doc.to_json_pretty());

@@ -57,13 +57,11 @@ pub fn run(args: ReflexArgs) -> CliResult {
     };
     params.check()?;
     let rec = crate::read_recording(&args.recording)?;
-    let doc = Document::new(Estimate::Reflex(params.fit(&rec)?));
+    let doc = Document::new(Estimate::Reflex(params.fit(&rec)?)).with_run(
+        limpid_analysis::result::Run::of_this_process(&[&args.recording]),
+    );
     if let Some(path) = &args.report {
-        crate::report::write(
-            std::slice::from_ref(&doc.estimate),
-            Some(&args.recording),
-            path,
-        )?;
+        crate::report::write(&doc, path)?;
     }
     if args.json {
         println!("{}", doc.to_json());

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use limpid_analysis::result::{Document, Estimate};
+use limpid_analysis::result::{Document, Estimate, Run};
 
 use crate::CliResult;
 
@@ -21,50 +21,68 @@ pub struct ReportArgs {
     pub figures: Option<PathBuf>,
 }
 
-/// Write the report of named results; returns the report for `--figures`.
-fn write_named(inputs: &[(String, Estimate)], path: &Path) -> CliResult<limpid_report::Report> {
-    let report = limpid_report::build(inputs);
+/// Write the report of named results (with how each was made, where known);
+/// returns the report for `--figures`.
+fn write_named(
+    inputs: &[(String, Estimate)],
+    runs: &[Option<&Run>],
+    path: &Path,
+) -> CliResult<limpid_report::Report> {
+    let mut report = limpid_report::build(inputs);
+    for (section, run) in report.sections.iter_mut().zip(runs) {
+        if let Some(run) = run {
+            section.tables.insert(0, limpid_report::run_table(run));
+        }
+    }
     limpid_core::files::write_file(path, limpid_report::to_html(&report).as_bytes())?;
     Ok(report)
 }
 
 /// A section's name: the recording's file name where the result names it,
-/// else the input the command read (`source`), else its place in the list.
-fn section_name(v: &Estimate, source: Option<&Path>, i: usize) -> String {
+/// else the first input the command read, else its place in the list.
+fn section_name(doc: &Document, i: usize) -> String {
     let file_name = |p: &Path| {
         p.file_name().map_or_else(
             || p.display().to_string(),
             |f| f.to_string_lossy().into_owned(),
         )
     };
-    v.recording()
+    let source = doc
+        .run
+        .as_ref()
+        .and_then(|r| r.inputs.first())
+        .map(|f| PathBuf::from(&f.path));
+    doc.estimate
+        .recording()
         .map(|r| file_name(Path::new(r)))
-        .or_else(|| source.map(file_name))
+        .or_else(|| source.as_deref().map(file_name))
         .unwrap_or_else(|| format!("result {}", i + 1))
 }
 
-/// `--report FILE` of the other commands: the results of this run, made
-/// from `source` (the recording or manifest read; None for the demo).
-pub fn write(results: &[Estimate], source: Option<&Path>, path: &Path) -> CliResult {
-    let named: Vec<(String, Estimate)> = results
-        .iter()
-        .enumerate()
-        .map(|(i, v)| (section_name(v, source, i), v.clone()))
-        .collect();
-    write_named(&named, path)?;
+/// `--report FILE` of the other commands: the result of this run.
+pub fn write(doc: &Document, path: &Path) -> CliResult {
+    write_named(
+        &[(section_name(doc, 0), doc.estimate.clone())],
+        &[doc.run.as_ref()],
+        path,
+    )?;
     eprintln!("report: {}", path.display());
     Ok(())
 }
 
 pub fn run(args: ReportArgs) -> CliResult {
-    let mut inputs = Vec::new();
+    let mut docs = Vec::new();
     for p in &args.results {
         let text = limpid_core::files::read_text(p)?;
         let name = p.display().to_string();
-        let doc = Document::from_json(&name, &text)?;
-        inputs.push((name, doc.estimate));
+        docs.push((name.clone(), Document::from_json(&name, &text)?));
     }
-    let report = write_named(&inputs, &args.output)?;
+    let inputs: Vec<(String, Estimate)> = docs
+        .iter()
+        .map(|(name, d)| (name.clone(), d.estimate.clone()))
+        .collect();
+    let runs: Vec<Option<&Run>> = docs.iter().map(|(_, d)| d.run.as_ref()).collect();
+    let report = write_named(&inputs, &runs, &args.output)?;
     println!("wrote {}", args.output.display());
     if let Some(dir) = &args.figures {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -120,13 +120,11 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
     if let Some(p) = &args.expected {
         est.accuracy = Some(accuracy(&est, &ExpectedModel::read(p)?, band)?);
     }
-    let doc = Document::new(Estimate::Stochastic(est));
+    let inputs: Vec<&std::path::Path> = args.recordings.iter().map(|p| p.as_path()).collect();
+    let doc = Document::new(Estimate::Stochastic(est))
+        .with_run(limpid_analysis::result::Run::of_this_process(&inputs));
     if let Some(path) = &args.report {
-        crate::report::write(
-            std::slice::from_ref(&doc.estimate),
-            Some(&args.recordings[0]),
-            path,
-        )?;
+        crate::report::write(&doc, path)?;
     }
     if args.json {
         println!("{}", doc.to_json());

@@ -79,11 +79,16 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 );
             }
             let files = write_tables(&result, &args.out)?;
-            let result = limpid_analysis::result::Estimate::Study(result);
+            let doc = limpid_analysis::result::Document::new(
+                limpid_analysis::result::Estimate::Study(result),
+            )
+            .with_run(limpid_analysis::result::Run::of_this_process(&[
+                &args.manifest
+            ]));
             if let Some(path) = &args.report {
-                crate::report::write(std::slice::from_ref(&result), Some(&args.manifest), path)?;
+                crate::report::write(&doc, path)?;
             }
-            let limpid_analysis::result::Estimate::Study(result) = result else {
+            let limpid_analysis::result::Estimate::Study(result) = &doc.estimate else {
                 unreachable!("made above")
             };
             println!(

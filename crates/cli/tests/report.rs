@@ -535,6 +535,51 @@ fn reports_name_the_recording() {
         html.contains("500 Hz") && html.contains("trials"),
         "recording details"
     );
+    // how it was made: the file with its size and date, the command, the version
+    assert!(html.contains("How this result was made"));
+    let bytes = std::fs::metadata(example(
+        "../../../shared/examples/cartesian_slow/ex_cubic.csv",
+    ))
+    .unwrap()
+    .len();
+    let kib = if bytes >= 1 << 20 {
+        format!("{} MiB", limpid_core::significant(bytes as f64 / 1048576.0, 4))
+    } else {
+        format!("{} KiB", limpid_core::significant(bytes as f64 / 1024.0, 4))
+    };
+    assert!(html.contains(&kib), "size {kib}");
+    assert!(html.contains(", modified 20"), "modification date");
+    assert!(html.contains("estimate linear") && html.contains("--report"));
+    assert!(html.contains(&format!("by limpid {}", env!("CARGO_PKG_VERSION"))));
+    // and the JSON document carries it, so `limpid report` shows it too
+    let doc = json(&[
+        "estimate",
+        "linear",
+        example("../../../shared/examples/cartesian_slow/ex_cubic.csv")
+            .to_str()
+            .unwrap(),
+        "--json",
+    ]);
+    assert_eq!(doc["run"]["inputs"][0]["bytes"].as_u64(), Some(bytes));
+    assert!(doc["run"]["command_line"]
+        .as_str()
+        .unwrap()
+        .contains("--json"));
+    let saved = dir.path().join("r.json");
+    std::fs::write(&saved, doc.to_string()).unwrap();
+    let again = dir.path().join("again.html");
+    assert_eq!(
+        limpid(&[
+            "report",
+            saved.to_str().unwrap(),
+            "-o",
+            again.to_str().unwrap()
+        ])
+        .code,
+        0
+    );
+    let html = std::fs::read_to_string(&again).unwrap();
+    assert!(html.contains("How this result was made") && html.contains(&kib));
     // results without a recording field are named after the file the command read
     let out = limpid(&[
         "window-sweep",

@@ -259,6 +259,45 @@ fn stochastic_criteria_table(v: &StochasticEstimate) -> Table {
     }
 }
 
+/// How a result was made (limpid_analysis::result::Run) as the first table
+/// of its section: the files read (size, modification time), the command
+/// line, limpid's version and when.
+pub fn run_table(run: &limpid_analysis::result::Run) -> Table {
+    let mut rows: Vec<Vec<String>> = run
+        .inputs
+        .iter()
+        .map(|f| {
+            let size = f.bytes.map_or_else(
+                || "unreadable".to_string(),
+                |b| {
+                    if b >= 1 << 20 {
+                        format!("{} MiB", fmt(b as f64 / f64::from(1 << 20)))
+                    } else if b >= 1 << 10 {
+                        format!("{} KiB", fmt(b as f64 / 1024.0))
+                    } else {
+                        format!("{b} bytes")
+                    }
+                },
+            );
+            let modified = f
+                .modified_utc
+                .as_deref()
+                .map_or(String::new(), |m| format!(", modified {m}"));
+            vec!["input".into(), format!("{} ({size}{modified})", f.path)]
+        })
+        .collect();
+    rows.push(vec!["command".into(), run.command_line.clone()]);
+    rows.push(vec![
+        "made".into(),
+        format!("{} by limpid {}", run.created_utc, run.limpid_version),
+    ]);
+    Table {
+        caption: "How this result was made".into(),
+        header: vec!["item".into(), "value".into()],
+        rows,
+    }
+}
+
 /// "mean ± sd", rounded to the sd; the mean alone when there is no spread
 /// (one subject).
 fn mean_sd(mean: Option<f64>, sd: Option<f64>) -> String {
