@@ -104,7 +104,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 );
             }
             if args.print {
-                println!("\n{}", limpid_analysis::study::markdown(&result));
+                println!("\n{}", limpid_analysis::study::markdown(result));
             }
             let (per_recording, tables): (Vec<_>, Vec<_>) = files
                 .iter()
