@@ -1958,8 +1958,9 @@ pub fn to_html(report: &Report) -> String {
                 for c in r {
                     // numbers right-aligned, words left
                     let numeric = c
-                        .trim_start_matches(['-', '+', '−'])
-                        .starts_with(|ch: char| ch.is_ascii_digit() || ch == '.');
+                        .split_whitespace()
+                        .next()
+                        .is_some_and(|w| w.parse::<f64>().is_ok());
                     if numeric {
                         let _ = write!(h, "<td class=\"num\">{}</td>", escape(c));
                     } else {

@@ -8,7 +8,7 @@
   var data = JSON.parse(document.getElementById("ellipsoid-data").textContent);
   var NS = "http://www.w3.org/2000/svg";
   // as wide as the page; the drawing scales with it (viewBox)
-  var W = Math.max(640, Math.min(1360, holder.clientWidth || 1200)), H = Math.round(0.6 * W);
+  var W = Math.max(640, Math.min(1360, holder.clientWidth || 1200)), H = Math.round(0.5 * W);
   var svg = document.createElementNS(NS, "svg");
   svg.setAttribute("width", "100%");
   svg.setAttribute("height", H);
