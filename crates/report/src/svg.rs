@@ -146,20 +146,26 @@ impl Chart {
     /// The chart as a standalone `<svg>` element of `width` x `height` px
     /// (11 px text, for the page).
     pub fn to_svg(&self, width: f64, height: f64) -> String {
-        self.to_svg_styled(width, height, 11.0)
+        // one legend width for every chart of the page, so their plots align
+        self.render(width, height, 11.0, Some(200.0))
     }
 
-    /// The chart with `font` px text; margins and the legend grow with it.
+    /// The chart alone (for a file) with `font` px text; margins grow with
+    /// the text, the legend is as wide as its longest name.
     pub fn to_svg_styled(&self, width: f64, height: f64, font: f64) -> String {
+        self.render(width, height, font, None)
+    }
+
+    fn render(&self, width: f64, height: f64, font: f64, legend: Option<f64>) -> String {
         let k = font / 11.0;
-        // the legend sits right of the plot, outside the data, as wide as its longest name
+        // the legend sits right of the plot, outside the data
         let longest = self
             .series
             .iter()
             .map(|s| s.name.chars().count())
             .max()
             .unwrap_or(0) as f64;
-        let mr = (34.0 * k + 0.6 * font * longest).max(40.0 * k);
+        let mr = legend.unwrap_or((34.0 * k + 0.6 * font * longest).max(40.0 * k));
         let (ml, mt, mb) = (64.0 * k, 28.0 * k, 44.0 * k);
         let (pw, ph) = (width - ml - mr, height - mt - mb);
         let (x0, x1) = self.range(|p| p.0, self.x_log);
