@@ -543,7 +543,10 @@ fn reports_name_the_recording() {
     .unwrap()
     .len();
     let kib = if bytes >= 1 << 20 {
-        format!("{} MiB", limpid_core::significant(bytes as f64 / 1048576.0, 4))
+        format!(
+            "{} MiB",
+            limpid_core::significant(bytes as f64 / 1048576.0, 4)
+        )
     } else {
         format!("{} KiB", limpid_core::significant(bytes as f64 / 1024.0, 4))
     };

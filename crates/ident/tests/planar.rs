@@ -284,3 +284,68 @@ fn the_sweep_runs_over_the_interpolation_intervals_a_recording_holds() {
     // here, a false alarm that costs trust, not correctness)
     assert!(sweep.intervals.iter().filter(|r| r.trusted).count() >= 2);
 }
+
+/// A subject's slow torque fluctuation (0.15 N m below 3 Hz, as a subject
+/// holding 5 N would show) moves the torques out of their white-noise band
+/// during the rest: the onset must still come from the robot's motion, and
+/// the estimate stay close to the truth.
+#[test]
+fn slow_torque_fluctuation_during_rest_does_not_move_the_onset() {
+    use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject};
+    use rand::{Rng, SeedableRng};
+    let subject = PlanarSubject::seed003();
+    let mut rec = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.02, 1e-5, 5).unwrap();
+    let prep = PlanarPrepare {
+        arm: seed003_arm(),
+        cutoff_hz: None,
+        order: 4,
+        elbow_positive: true,
+    };
+    let clean = prepare_planar(&rec, &prep).unwrap();
+    let t = rec.t().to_vec();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(9);
+    for name in ["tau1", "tau2"] {
+        // a sum of sinusoids between 0.2 and 3 Hz with random phases, 0.15 N m rms
+        let parts: Vec<(f64, f64)> = (0..8)
+            .map(|_| {
+                (
+                    rng.random_range(0.2..3.0),
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                )
+            })
+            .collect();
+        let amp = 0.15 * (2.0f64 / parts.len() as f64).sqrt();
+        let tau: Vec<f64> = rec
+            .column(name)
+            .unwrap()
+            .iter()
+            .zip(&t)
+            .map(|(v, ti)| {
+                v + amp
+                    * parts
+                        .iter()
+                        .map(|(f, p)| (std::f64::consts::TAU * f * ti + p).sin())
+                        .sum::<f64>()
+            })
+            .collect();
+        rec.set_column(name, tau).unwrap();
+    }
+    let data = prepare_planar(&rec, &prep).expect("the motion marks the onset");
+    assert_eq!(data.trials.len(), clean.trials.len());
+    // onsets within 10 ms of those without the fluctuation
+    for (a, b) in data.trials.iter().zip(&clean.trials) {
+        let (na, nb) = (a.dq[0].len() as f64, b.dq[0].len() as f64);
+        assert!(
+            (na - nb).abs() <= 0.01 * data.fs,
+            "trial {}: {na} vs {nb} samples after onset",
+            a.id
+        );
+    }
+    let all: Vec<usize> = (0..data.trials.len()).collect();
+    let est = fit_planar(&data, usize::MAX, None, &all).unwrap();
+    let ek = limpid_testkit::rel_err(
+        &est.stiffness,
+        &limpid_core::Matrix::from(subject.stiffness),
+    );
+    assert!(ek < 0.1, "stiffness error {ek}");
+}
