@@ -572,13 +572,22 @@ fn seed003(seed: u64) -> Result<Reproduction> {
         damping_gain: 0.3,
     });
     // the subject holds 5 N distal (seed 003 §IV): force fluctuation of about
-    // 0.5 N at the hand, 0.15 N m at the joints
-    let rec = simulate_planar(
+    // 0.5 N at the hand, 0.15 N m at the joints, white (sensor and fast
+    // fluctuation) ...
+    let mut rec = simulate_planar(
         &arm,
         &design.simulation(),
         PLANAR_TORQUE_NOISE_NM,
         2e-5,
         seed,
+    )?;
+    // ... which is slow (below 3 Hz, the physiological tremor-free band of
+    // force fluctuation): within a window it acts as a drifting offset
+    limpid_lab::planar::add_torque_fluctuation(
+        &mut rec,
+        PLANAR_TORQUE_NOISE_NM,
+        3.0,
+        seed ^ 0x5eed,
     )?;
     let data = prepare_planar(
         &rec,

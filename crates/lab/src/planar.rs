@@ -176,3 +176,27 @@ pub fn simulate_planar_intervals(
         .to_vec();
     Recording::new("virtual:planar", names, cols, 2)
 }
+
+/// Add a subject's slow torque fluctuation to `tau1` and `tau2`: low-pass
+/// noise below `max_hz` with `rms_nm` standard deviation per joint, the
+/// signal-dependent force fluctuation of a subject holding a load (seed 003
+/// §IV: 5 N held at the hand). Changes nothing when `rms_nm` is 0.
+pub fn add_torque_fluctuation(
+    rec: &mut Recording,
+    rms_nm: f64,
+    max_hz: f64,
+    seed: u64,
+) -> Result<()> {
+    if rms_nm == 0.0 {
+        return Ok(());
+    }
+    let mut rng = StdRng::seed_from_u64(seed);
+    let noise =
+        crate::simulate::slow_noise(rec.len(), rec.sample_rate(), max_hz, rms_nm, &mut rng)?;
+    for (k, name) in ["tau1", "tau2"].into_iter().enumerate() {
+        let tau = rec.require(name, "joint torque")?;
+        let with: Vec<f64> = tau.iter().zip(&noise[k]).map(|(t, n)| t + n).collect();
+        rec.set_column(name, with)?;
+    }
+    Ok(())
+}
