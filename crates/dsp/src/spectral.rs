@@ -241,6 +241,86 @@ impl SegmentSpectra {
             .collect()
     }
 
+    /// Delete-a-group jackknife spectra: for each range of segments in
+    /// `groups`, the spectral matrix of the first `bins` frequencies averaged
+    /// over every segment outside it (as [`Self::matrix_below`] with that
+    /// `skip`). Each segment's products are summed once, into its group; a
+    /// replicate is then the total less one group, so the cost is one pass
+    /// over the segments, not one per replicate.
+    pub fn matrices_deleting(
+        &self,
+        bins: usize,
+        groups: &[Range<usize>],
+    ) -> Vec<Vec<DMatrix<Complex64>>> {
+        let m = self.spectra.len();
+        let bins = bins.min(self.scale.len());
+        let segments = self.segments();
+        let pairs: Vec<(usize, usize)> = (0..m).flat_map(|i| (i..m).map(move |j| (i, j))).collect();
+        let mut index = vec![vec![0; m]; m];
+        for (p, &(i, j)) in pairs.iter().enumerate() {
+            index[i][j] = p;
+        }
+        // sums[group][pair][bin] of conj(S_i) S_j over the group's segments
+        let sums: Vec<Vec<Vec<Complex64>>> = groups
+            .iter()
+            .map(|g| {
+                pairs
+                    .iter()
+                    .map(|&(a, b)| {
+                        let (sa, sb) = (&self.spectra[a], &self.spectra[b]);
+                        (0..bins)
+                            .map(|k| {
+                                g.clone()
+                                    .filter(|i| *i < segments)
+                                    .map(|i| sa[i][k].conj() * sb[i][k])
+                                    .sum()
+                            })
+                            .collect()
+                    })
+                    .collect()
+            })
+            .collect();
+        // segments outside every group count in each replicate too
+        let outside: Vec<usize> = (0..segments)
+            .filter(|i| !groups.iter().any(|g| g.contains(i)))
+            .collect();
+        let total: Vec<Vec<Complex64>> = (0..pairs.len())
+            .map(|p| {
+                let (a, b) = pairs[p];
+                (0..bins)
+                    .map(|k| {
+                        sums.iter().map(|g| g[p][k]).sum::<Complex64>()
+                            + outside
+                                .iter()
+                                .map(|&i| self.spectra[a][i][k].conj() * self.spectra[b][i][k])
+                                .sum::<Complex64>()
+                    })
+                    .collect()
+            })
+            .collect();
+        groups
+            .iter()
+            .zip(&sums)
+            .map(|(g, sum)| {
+                let deleted = g.clone().filter(|i| *i < segments).count();
+                let kept = segments.saturating_sub(deleted).max(1) as f64;
+                let at = |i: usize, j: usize, k: usize| {
+                    let (lo, hi, conj) = if i <= j { (i, j, false) } else { (j, i, true) };
+                    let p = index[lo][hi];
+                    let v = (total[p][k] - sum[p][k]) / kept * self.scale[k];
+                    if conj {
+                        v.conj()
+                    } else {
+                        v
+                    }
+                };
+                (0..bins)
+                    .map(|k| DMatrix::from_fn(m, m, |i, j| at(i, j, k)))
+                    .collect()
+            })
+            .collect()
+    }
+
     /// Add the segments of another recording made with the same Welch
     /// settings and signals (seed 004 averages repeated trials): the spectra
     /// then average over the segments of both.

@@ -346,16 +346,14 @@ pub fn estimate_stochastic_pooled(
     let segments = spectra.segments();
     let groups = JACKKNIFE_GROUPS.min(segments);
     let se = if groups >= MIN_JACKKNIFE_GROUPS {
-        let replicates: Vec<[Matrix; 3]> = (0..groups)
+        let ranges: Vec<std::ops::Range<usize>> = (0..groups)
+            .map(|g| g * segments / groups..(g + 1) * segments / groups)
+            .collect();
+        let replicates: Vec<[Matrix; 3]> = spectra
+            .matrices_deleting(bins, &ranges)
             .into_par_iter()
-            .filter_map(|g| {
-                let skip = g * segments / groups..(g + 1) * segments / groups;
-                let np = nonparametric(
-                    spectra.matrix_below(bins, skip),
-                    &spectra.frequencies,
-                    n,
-                    (lo, hi),
-                );
+            .filter_map(|matrix| {
+                let np = nonparametric(matrix, &spectra.frequencies, n, (lo, hi));
                 let band = in_band_of(&np.frequencies);
                 (band.len() >= 4).then(|| {
                     let w = weight_of(&np.multiple, np.frequencies.len());
