@@ -214,12 +214,12 @@ fn diagonal_misfit(r: &Matrix3<f64>, principal: &[f64], diag: &[f64]) -> f64 {
     (0..3).map(|i| (k[(i, i)] - diag[i]).powi(2)).sum()
 }
 
-struct OrientationProblem<'a> {
+struct OrientationProblem<'a, 'b> {
     /// (principal, diagonal, relative rotation after R) per level fitted jointly.
-    levels: Vec<(&'a [f64], &'a [f64], Matrix3<f64>)>,
+    levels: &'b [(&'a [f64], &'a [f64], Matrix3<f64>)],
 }
 
-impl CostFunction for OrientationProblem<'_> {
+impl CostFunction for OrientationProblem<'_, '_> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, w: &Vec<f64>) -> Result<f64, argmin::core::Error> {
@@ -236,7 +236,6 @@ impl CostFunction for OrientationProblem<'_> {
 /// difference between diag(R Q_l Λ_l Q_l^T R^T) and each level's diagonal:
 /// Nelder-Mead from 27 starting rotations. Returns R and the rms misfit (N/m).
 pub fn fit_orientation(levels: &[(&[f64], &[f64], Matrix3<f64>)]) -> (Matrix3<f64>, f64) {
-    let problem_levels = levels.to_vec();
     let mut best = (Matrix3::identity(), f64::INFINITY);
     let steps = [-2.0, 0.0, 2.0];
     for a in steps {
@@ -255,9 +254,7 @@ pub fn fit_orientation(levels: &[(&[f64], &[f64], Matrix3<f64>)]) -> (Matrix3<f6
                 let Ok(solver) = NelderMead::new(simplex).with_sd_tolerance(1e-9) else {
                     continue;
                 };
-                let problem = OrientationProblem {
-                    levels: problem_levels.clone(),
-                };
+                let problem = OrientationProblem { levels };
                 let Ok(res) = Executor::new(problem, solver)
                     .configure(|s| s.max_iters(800))
                     .run()

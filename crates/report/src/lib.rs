@@ -1609,10 +1609,7 @@ fn planar_quality_tables(v: &PlanarEstimate) -> Vec<Table> {
         vec![
             "condition number of W".into(),
             fmt(c.condition_number),
-            format!(
-                "scaled (columns of unit norm): {}",
-                fmt(c.condition_number_scaled)
-            ),
+            format!("with unit-RMS columns: {}", fmt(c.condition_number_scaled)),
         ],
         vec![
             "K positive definite".into(),
