@@ -110,14 +110,18 @@ impl Run {
     pub fn of_this_process(inputs: &[&std::path::Path]) -> Run {
         Run {
             limpid_version: env!("CARGO_PKG_VERSION").into(),
-            command_line: std::env::args().collect::<Vec<_>>().join(" "),
+            // args_os: a path need not be UTF-8 (std::env::args would panic)
+            command_line: std::env::args_os()
+                .map(|a| a.to_string_lossy().into_owned())
+                .collect::<Vec<_>>()
+                .join(" "),
             created_utc: rfc3339(std::time::SystemTime::now()),
             inputs: inputs
                 .iter()
                 .map(|p| {
                     let meta = std::fs::metadata(p).ok();
                     InputFile {
-                        path: p.display().to_string(),
+                        path: p.to_string_lossy().into_owned(),
                         bytes: meta.as_ref().map(|m| m.len()),
                         modified_utc: meta.and_then(|m| m.modified().ok()).map(rfc3339),
                     }

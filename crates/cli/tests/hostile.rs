@@ -429,3 +429,34 @@ fn methods_refuse_data_they_cannot_use_and_name_what_is_missing() {
     let line = one_line_error(&out);
     assert!(line.contains("missing required column ux"), "{line}");
 }
+
+/// A path that is not UTF-8 (legal on Linux) is read, and named in the
+/// result's `run` block lossily; it never panics.
+#[cfg(unix)]
+#[test]
+fn a_recording_path_that_is_not_utf8_is_read_and_named() {
+    use std::os::unix::ffi::OsStrExt;
+    let dir = tempfile::tempdir().unwrap();
+    let name = std::ffi::OsStr::from_bytes(b"bad\xff.csv");
+    let path = dir.path().join(name);
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../../shared/examples/cartesian_slow/ex_cubic.csv"),
+        &path,
+    )
+    .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_limpid"))
+        .args([
+            "estimate".as_ref(),
+            "linear".as_ref(),
+            path.as_os_str(),
+            "--json".as_ref(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let named = doc["run"]["inputs"][0]["path"].as_str().unwrap();
+    assert!(named.ends_with("bad\u{fffd}.csv"), "{named}");
+}
