@@ -515,8 +515,12 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut csv = String::from(
         "configuration,level,subjects,cocontraction_index,cocontraction_index_sd,kxx,kxx_sd,kyy,kyy_sd,kzz,kzz_sd,k_max_a,k_max_a_sd,k1,k1_sd,k2,k2_sd,k3,k3_sd\n",
     );
-    // a value no recording has is an empty cell, never "NaN"
-    let cell = |v: Option<f64>, decimals: usize| cell(v, decimals, "");
+    // every digit, shortest round-trip (exponents for the tiny and huge); a
+    // value no recording has is an empty cell, never "NaN"
+    let cell = |v: Option<f64>, _decimals: usize| {
+        v.filter(|v| v.is_finite())
+            .map_or(String::new(), |v| limpid_core::CsvNumber(v).to_string())
+    };
     for l in &r.levels {
         let _ = writeln!(
             csv,
@@ -544,7 +548,11 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
     }
     let mut rot = String::from("configuration,from_level,to_level,subjects,rotation_primary_deg,rotation_secondary_deg,rotation_tertiary_deg,change_primary_percent,change_secondary_percent,change_tertiary_percent\n");
     for x in &r.rotation {
-        let g = |v: &Vec<f64>, i: usize| v.get(i).map_or(String::new(), |x| format!("{x:.2}"));
+        let g = |v: &Vec<f64>, i: usize| {
+            v.get(i)
+                .filter(|x| x.is_finite())
+                .map_or(String::new(), |x| limpid_core::CsvNumber(*x).to_string())
+        };
         let _ = writeln!(
             rot,
             "{},{},{},{},{},{},{},{},{},{}",

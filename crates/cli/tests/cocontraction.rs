@@ -182,6 +182,33 @@ fn virtual_study_tables_show_the_anisotropic_increase() {
     }
     let csv = std::fs::read_to_string(tables.join("tables.csv")).unwrap();
     assert!(csv.lines().next().unwrap().contains(",k1,k1_sd,"), "{csv}");
+    // every number of the CSV reads back to study.json's, to the last bit
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let k1 = header.iter().position(|h| *h == "k1").unwrap();
+    let k1_sd = header.iter().position(|h| *h == "k1_sd").unwrap();
+    let index_sd = header
+        .iter()
+        .position(|h| *h == "cocontraction_index_sd")
+        .unwrap();
+    let levels = study["levels"].as_array().unwrap();
+    assert_eq!(csv.lines().count(), levels.len() + 1);
+    for (line, row) in csv.lines().skip(1).zip(levels) {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(
+            cells[k1].parse::<f64>().unwrap(),
+            row["k1"].as_f64().unwrap()
+        );
+        assert_eq!(
+            cells[k1_sd].parse::<f64>().unwrap(),
+            row["sd"]["k1"].as_f64().unwrap()
+        );
+        let sd = row["sd"]["cocontraction_index"].as_f64().unwrap();
+        assert_eq!(
+            cells[index_sd].parse::<f64>().unwrap(),
+            sd,
+            "a small sd is not rounded to 0"
+        );
+    }
     let md = std::fs::read_to_string(tables.join("tables.md")).unwrap();
     assert!(md.contains("mean ± sd across subjects") && md.contains(" ± "));
 }
