@@ -1540,24 +1540,22 @@ fn planar_section(name: &str, v: &PlanarEstimate) -> Section {
 /// The symmetric part of a 2x2 matrix as a flat ellipsoid in the x-y plane
 /// (None when not finite).
 fn endpoint_ellipse(k: &Matrix) -> Option<EllipsoidView> {
-    if k.shape() != (2, 2) {
+    let e = limpid_analysis::ellipsoid(k)?;
+    if e.eigenvalues.len() != 2 {
         return None;
     }
-    let (a, b, d) = (k[(0, 0)], 0.5 * (k[(0, 1)] + k[(1, 0)]), k[(1, 1)]);
-    let mean = 0.5 * (a + d);
-    let dev = (0.25 * (a - d) * (a - d) + b * b).sqrt();
-    let angle = 0.5 * (2.0 * b).atan2(a - d);
-    let (c, s) = (angle.cos(), angle.sin());
-    [a, b, d]
-        .iter()
-        .all(|v| v.is_finite())
-        .then(|| EllipsoidView {
-            point: "end point".into(),
-            kind: "stiffness".into(),
-            centre: [0.0; 3],
-            eigenvalues: [mean + dev, mean - dev, 0.0],
-            axes: [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
-        })
+    let a = &e.axes;
+    Some(EllipsoidView {
+        point: "end point".into(),
+        kind: "stiffness".into(),
+        centre: [0.0; 3],
+        eigenvalues: [e.eigenvalues[0], e.eigenvalues[1], 0.0],
+        axes: [
+            [a[(0, 0)], a[(0, 1)], 0.0],
+            [a[(1, 0)], a[(1, 1)], 0.0],
+            [0.0, 0.0, 1.0],
+        ],
+    })
 }
 
 /// Seed 003's quality of a planar estimate: inertial parameters, fit and the
