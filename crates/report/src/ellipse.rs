@@ -58,10 +58,17 @@ fn semi_axis(e: &EllipsoidView, k: usize) -> [f64; 3] {
 
 /// Outline of the projected ellipsoid as screen points (unscaled, centred).
 fn outline(e: &EllipsoidView, view: View, n: usize) -> Vec<[f64; 2]> {
-    // S = Σ_k (P A e_k)(P A e_k)ᵀ
+    // S = Σ_k (P A e_k)(P A e_k)ᵀ, formed in units of the largest radius so
+    // that squaring cannot overflow (radii up to 1e307)
+    let unit = e.eigenvalues.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let unit = if unit > 0.0 && unit.is_finite() {
+        unit
+    } else {
+        1.0
+    };
     let mut s = [[0.0; 2]; 2];
     for k in 0..3 {
-        let p = view.project(semi_axis(e, k));
+        let p = view.project(semi_axis(e, k)).map(|v| v / unit);
         for (i, row) in s.iter_mut().enumerate() {
             for (j, v) in row.iter_mut().enumerate() {
                 *v += p[i] * p[j];
@@ -79,7 +86,7 @@ fn outline(e: &EllipsoidView, view: View, n: usize) -> Vec<[f64; 2]> {
         .map(|i| {
             let t = std::f64::consts::TAU * i as f64 / n as f64;
             let (u, v) = (l1.sqrt() * t.cos(), l2.sqrt() * t.sin());
-            [c * u - sn * v, sn * u + c * v]
+            [unit * (c * u - sn * v), unit * (sn * u + c * v)]
         })
         .collect()
 }
@@ -298,6 +305,15 @@ mod tests {
         let max_x = pts.iter().map(|p| p[0].abs()).fold(0.0, f64::max);
         let max_y = pts.iter().map(|p| p[1].abs()).fold(0.0, f64::max);
         assert!((max_x - 3.0).abs() < 1e-9 && (max_y - 2.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn outline_of_a_huge_ellipsoid_stays_finite() {
+        let e = sphere_like([1e307, 415.0, 0.0]);
+        let pts = outline(&e, View::Top, 360);
+        assert!(pts.iter().all(|p| p[0].is_finite() && p[1].is_finite()));
+        let max_x = pts.iter().map(|p| p[0].abs()).fold(0.0, f64::max);
+        assert!((max_x / 1e307 - 1.0).abs() < 1e-12, "{max_x}");
     }
 
     #[test]
