@@ -9,7 +9,7 @@ use limpid_analysis::linear::{linear_result, shoulder_impedance, ShoulderPosture
 use limpid_analysis::result::{Document, Estimate};
 use limpid_core::FrameTransform;
 use limpid_ident::{
-    prepare, Derivative, Estimator, LinearParams, Offsets, PrepareParams, Windowing,
+    fit_linear_plan, plan, Derivative, LinearParams, Offsets, PrepareParams, Windowing,
 };
 
 use crate::{table, CliResult};
@@ -269,13 +269,16 @@ pub fn run(method: Method) -> CliResult {
                 ..args.prepare.params()?
             };
             let rec = args.prepare.read(&args.recording)?;
-            let prepared = prepare(&rec, &params)?;
-            let est = LinearParams {
-                equilibrium: !args.no_equilibrium,
-                ..LinearParams::default()
-            }
-            .fit(&prepared)?;
-            let mut result = linear_result(&est, &prepared);
+            // window by window: the prepared signals are never held whole (issue 16)
+            let plan = plan(&rec, &params)?;
+            let est = fit_linear_plan(
+                &plan,
+                &LinearParams {
+                    equilibrium: !args.no_equilibrium,
+                    ..LinearParams::default()
+                },
+            )?;
+            let mut result = linear_result(&est, &plan.meta);
             let up = match args.vertical {
                 AxisArg::X => nalgebra::Vector3::x(),
                 AxisArg::Y => nalgebra::Vector3::y(),

@@ -40,7 +40,9 @@ pub fn open_input(path: &Path) -> Result<File> {
 /// Read a whole input file of at most `max_bytes` bytes.
 pub fn read_bytes(path: &Path, max_bytes: u64) -> Result<Vec<u8>> {
     let file = open_input(path)?;
-    let mut bytes = Vec::new();
+    // sized once from the file's length (growing by doubling copied a large file twice)
+    let size = file.metadata().map_or(0, |m| m.len().min(max_bytes + 1));
+    let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
     file.take(max_bytes + 1)
         .read_to_end(&mut bytes)
         .map_err(|e| io_error(path, e))?;

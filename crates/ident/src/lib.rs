@@ -22,5 +22,5 @@ pub mod reflex;
 pub mod stochastic;
 
 pub use estimator::{Estimator, PlanarParams};
-pub use linear::{fit_linear, LinearEstimate, LinearParams};
-pub use prepare::{prepare, Derivative, Offsets, PrepareParams, Prepared, Windowing};
+pub use linear::{fit_linear, fit_linear_plan, LinearEstimate, LinearParams};
+pub use prepare::{plan, prepare, Derivative, Offsets, Plan, PrepareParams, Prepared, Windowing};

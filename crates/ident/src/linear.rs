@@ -28,8 +28,8 @@ use rayon::prelude::*;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::lsq::{merge, triangle};
-use crate::prepare::Prepared;
+use crate::lsq::{householder_in_place, merge};
+use crate::prepare::{Plan, Prepared};
 use limpid_core::{Error, Result, Warning, WarningCode};
 
 /// Settings of the linear estimator.
@@ -258,9 +258,206 @@ pub(crate) fn solve_triangle(
     })
 }
 
-/// The scaled regression problem of one fit: regressor and force columns,
-/// their RMS scales, and the noise model of the regressors.
-struct Regression<'a> {
+/// Where a fit reads its prepared rows: the concatenated columns of a
+/// [`Prepared`], or a [`Plan`]'s windows computed as the QR reaches them (the
+/// prepared signals of a long recording are then never held whole).
+#[derive(Clone, Copy)]
+enum Rows<'a> {
+    Columns(&'a Prepared),
+    Windows(&'a Plan<'a>),
+}
+
+impl<'a> Rows<'a> {
+    fn meta(&self) -> &'a Prepared {
+        match *self {
+            Rows::Columns(data) => data,
+            Rows::Windows(plan) => &plan.meta,
+        }
+    }
+
+    fn len(&self) -> usize {
+        match *self {
+            Rows::Columns(data) => data.len(),
+            Rows::Windows(plan) => plan.len(),
+        }
+    }
+
+    /// Indices of the windows lying inside the sample range.
+    fn windows_in(&self, range: &std::ops::Range<usize>) -> std::ops::Range<usize> {
+        let w = &self.meta().windows;
+        let first = w.partition_point(|w| w.samples.start < range.start);
+        let end = w.partition_point(|w| w.samples.end <= range.end);
+        first..end.max(first)
+    }
+
+    /// Row ranges of a block reduced one after the other: `CHUNK` rows, or
+    /// whole windows up to about `CHUNK` rows (at least one window).
+    fn chunks(&self, block: std::ops::Range<usize>) -> Vec<std::ops::Range<usize>> {
+        let mut out = Vec::new();
+        let mut lo = block.start;
+        match *self {
+            Rows::Columns(_) => {
+                while lo < block.end {
+                    let hi = (lo + CHUNK).min(block.end);
+                    out.push(lo..hi);
+                    lo = hi;
+                }
+            }
+            Rows::Windows(plan) => {
+                for w in &plan.meta.windows[self.windows_in(&block)] {
+                    if w.samples.end - lo > CHUNK && w.samples.start > lo {
+                        out.push(lo..w.samples.start);
+                        lo = w.samples.start;
+                    }
+                }
+                if lo < block.end {
+                    out.push(lo..block.end);
+                }
+            }
+        }
+        out
+    }
+
+    /// Rows `range` of the unscaled `[L | 1 | F]` (columns acc, vel, disp per
+    /// coordinate, the constant when `p > 3n`, forces) into the column-major
+    /// `a` of leading dimension `ld`, from row `r0`. For `Windows`, `range`
+    /// holds whole windows.
+    fn fill(
+        &self,
+        range: std::ops::Range<usize>,
+        a: &mut [f64],
+        (ld, r0): (usize, usize),
+        (n, p): (usize, usize),
+    ) -> Result<()> {
+        if p > 3 * n {
+            a[3 * n * ld + r0..3 * n * ld + r0 + range.len()].fill(1.0);
+        }
+        // the kind-major order of Prepared: disp, vel, acc, force
+        let order: Vec<usize> = (0..n)
+            .map(|k| 2 * n + k)
+            .chain((0..n).map(|k| n + k))
+            .chain(0..n)
+            .chain((0..n).map(|k| p + k))
+            .collect();
+        match *self {
+            Rows::Columns(data) => {
+                let sources = data.disp.iter().chain(&data.vel).chain(&data.acc);
+                for (dest, src) in column_slices(a, ld, r0, range.len(), &order)
+                    .into_iter()
+                    .zip(sources.chain(&data.force))
+                {
+                    dest.copy_from_slice(&src[range.clone()]);
+                }
+            }
+            Rows::Windows(plan) => {
+                for i in self.windows_in(&range) {
+                    let s = &plan.meta.windows[i].samples;
+                    let mut dest =
+                        column_slices(a, ld, r0 + s.start - range.start, s.len(), &order);
+                    plan.fill_window(i, &mut dest)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Rows `at..at + len` of the columns of the column-major `a` (leading
+/// dimension `ld`), in the order `order`.
+fn column_slices<'b>(
+    a: &'b mut [f64],
+    ld: usize,
+    at: usize,
+    len: usize,
+    order: &[usize],
+) -> Vec<&'b mut [f64]> {
+    let mut columns: Vec<Option<&mut [f64]>> = a
+        .chunks_mut(ld)
+        .map(|c| Some(&mut c[at..at + len]))
+        .collect();
+    order
+        .iter()
+        .map(|&j| columns[j].take().unwrap_or_default())
+        .collect()
+}
+
+/// One jackknife block reduced: its unscaled triangle, column sums, and
+/// each force's smallest and largest value.
+struct BlockSummary {
+    triangle: DMatrix<f64>,
+    sums: Vec<f64>,
+    force_range: Vec<(f64, f64)>,
+}
+
+/// Tall-skinny QR of the unscaled `[L | 1 | F]`: each block reduced to its
+/// q x q triangle chunk by chunk (the triangle so far stacked on the next
+/// chunk's rows), blocks in parallel, one buffer per block.
+fn reduce_blocks(
+    rows: Rows<'_>,
+    blocks: &[std::ops::Range<usize>],
+    (n, p, q): (usize, usize, usize),
+) -> Result<Vec<BlockSummary>> {
+    blocks
+        .par_iter()
+        .map(|block| {
+            let chunks = rows.chunks(block.clone());
+            let longest = chunks.iter().map(|c| c.len()).max().unwrap_or(0);
+            let mut buffer = vec![0.0; (longest + q) * q];
+            let mut triangle: Option<DMatrix<f64>> = None;
+            let mut sums = vec![0.0; q];
+            let mut force_range = vec![(f64::INFINITY, f64::NEG_INFINITY); n];
+            for chunk in chunks {
+                let r0 = triangle.as_ref().map_or(0, |_| q);
+                let ld = chunk.len() + r0;
+                let a = &mut buffer[..ld * q];
+                rows.fill(chunk, a, (ld, r0), (n, p))?;
+                for (j, column) in a.chunks(ld).enumerate() {
+                    sums[j] += column[r0..].iter().sum::<f64>();
+                    if j >= p {
+                        let range = &mut force_range[j - p];
+                        for v in &column[r0..] {
+                            range.0 = range.0.min(*v);
+                            range.1 = range.1.max(*v);
+                        }
+                    }
+                }
+                if let Some(t) = &triangle {
+                    for (j, column) in a.chunks_mut(ld).enumerate() {
+                        for i in 0..q {
+                            column[i] = t[(i, j)];
+                        }
+                    }
+                }
+                if ld < q {
+                    // fewer rows than columns: pad with zero rows
+                    let mut padded = DMatrix::<f64>::zeros(q, q);
+                    for (j, column) in a.chunks(ld).enumerate() {
+                        padded.view_mut((0, j), (ld, 1)).copy_from_slice(column);
+                    }
+                    triangle = Some(crate::lsq::triangle(padded, q));
+                    continue;
+                }
+                householder_in_place(a, ld, q);
+                triangle = Some(DMatrix::from_fn(q, q, |i, j| {
+                    if i <= j {
+                        a[j * ld + i]
+                    } else {
+                        0.0
+                    }
+                }));
+            }
+            Ok(BlockSummary {
+                triangle: triangle.unwrap_or_else(|| DMatrix::zeros(q, q)),
+                sums,
+                force_range,
+            })
+        })
+        .collect()
+}
+
+/// The scaled regression problem of one fit: the RMS scales of the columns
+/// of `[L | F]`, and the noise model of the regressors.
+struct Regression {
     /// Coordinates.
     n: usize,
     /// Samples.
@@ -269,40 +466,39 @@ struct Regression<'a> {
     p: usize,
     /// Columns of the augmented matrix `[L | F]`.
     q: usize,
-    with_const: bool,
-    /// acc, vel, disp per coordinate.
-    cols: Vec<&'a [f64]>,
-    forces: Vec<&'a [f64]>,
     /// RMS of each column of `[L | F]` (1 for the constant).
     scales: Vec<f64>,
     /// Per coordinate: signal share of its acceleration, velocity and displacement regressors.
     reliability: Vec<[f64; 3]>,
     /// Per-sample noise covariance of the scaled regressors (errors-in-variables).
     noise: DMatrix<f64>,
+    /// Triangle of all rows, unscaled (`R^T R = A^T A`).
+    total: DMatrix<f64>,
+    /// Column sums of the unscaled `[L | 1 | F]`.
+    sums: Vec<f64>,
+    /// Per force: every sample has the same value.
+    constant_force: Vec<bool>,
 }
 
-impl<'a> Regression<'a> {
+impl Regression {
+    /// From the reduced blocks: the scales are the column norms of the
+    /// merged triangle (a QR keeps column norms), so no pass over the data
+    /// is spent on them. Returns the blocks' triangles scaled to unit RMS columns.
     fn new(
-        data: &'a Prepared,
+        data: &Prepared,
+        m: usize,
         with_const: bool,
+        blocks: &[BlockSummary],
         numerical: impl Fn(String) -> Error,
-    ) -> Result<Self> {
+    ) -> Result<(Self, Vec<DMatrix<f64>>)> {
         let n = data.dims();
-        let m = data.len();
         let p = 3 * n + usize::from(with_const);
         let q = p + n;
-        let mut cols: Vec<&[f64]> = Vec::with_capacity(3 * n);
-        cols.extend(data.acc.iter().map(Vec::as_slice));
-        cols.extend(data.vel.iter().map(Vec::as_slice));
-        cols.extend(data.disp.iter().map(Vec::as_slice));
-        let forces: Vec<&[f64]> = data.force.iter().map(Vec::as_slice).collect();
-        let rms = |c: &[f64]| (c.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
+        let total = merge(blocks.iter().map(|b| &b.triangle), q);
         let scales: Vec<f64> = (0..q)
-            .into_par_iter()
             .map(|j| match j {
-                j if j < 3 * n => rms(cols[j]),
-                j if j < p => 1.0,
-                j => rms(forces[j - p]),
+                j if j < 3 * n || j >= p => total.column(j).norm() / (m as f64).sqrt(),
+                _ => 1.0,
             })
             .collect();
         let names = column_names(&data.coordinates, with_const);
@@ -312,6 +508,33 @@ impl<'a> Regression<'a> {
                 names[j]
             )));
         }
+        let unscale: Vec<f64> = scales
+            .iter()
+            .map(|s| if *s > 0.0 { 1.0 / s } else { 1.0 })
+            .collect();
+        let scaled = blocks
+            .iter()
+            .map(|b| {
+                let mut t = b.triangle.clone();
+                for (j, mut column) in t.column_iter_mut().enumerate() {
+                    column *= unscale[j];
+                }
+                t
+            })
+            .collect();
+        let sums = (0..q)
+            .map(|j| blocks.iter().map(|b| b.sums[j]).sum())
+            .collect();
+        let constant_force = (0..n)
+            .map(|a| {
+                let (lo, hi) = blocks
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |r, b| {
+                        (r.0.min(b.force_range[a].0), r.1.max(b.force_range[a].1))
+                    });
+                lo == hi
+            })
+            .collect();
         let reliability: Vec<[f64; 3]> = (0..n)
             .map(|k| {
                 let nv = data.regressor_noise_var.get(k).copied().unwrap_or([0.0; 4]);
@@ -341,73 +564,22 @@ impl<'a> Regression<'a> {
                 noise[(ix, ia)] = c;
             }
         }
-        Ok(Self {
+        let reg = Self {
             n,
             m,
             p,
             q,
-            with_const,
-            cols,
-            forces,
             scales,
             reliability,
             noise,
-        })
+            total,
+            sums,
+            constant_force,
+        };
+        Ok((reg, scaled))
     }
 
-    /// Rows `range` of the scaled `[L | F]` into `mat` from row `r0`, column by column.
-    fn fill_rows(&self, mat: &mut DMatrix<f64>, r0: usize, range: std::ops::Range<usize>) {
-        let (n, p) = (self.n, self.p);
-        let len = range.len();
-        for j in 0..self.q {
-            let s = if self.scales[j] > 0.0 {
-                self.scales[j]
-            } else {
-                1.0
-            };
-            let rows = mat.nrows();
-            let out = &mut mat.as_mut_slice()[j * rows + r0..j * rows + r0 + len];
-            if j < 3 * n {
-                for (o, v) in out.iter_mut().zip(&self.cols[j][range.clone()]) {
-                    *o = v / s;
-                }
-            } else if j < p {
-                out.fill(1.0 / s);
-            } else {
-                for (o, v) in out.iter_mut().zip(&self.forces[j - p][range.clone()]) {
-                    *o = v / s;
-                }
-            }
-        }
-    }
-
-    /// Tall-skinny QR: each block reduced to its q x q triangle, chunk by chunk, blocks in parallel.
-    fn block_triangles(&self, blocks: &[std::ops::Range<usize>]) -> Vec<DMatrix<f64>> {
-        let q = self.q;
-        blocks
-            .par_iter()
-            .map(|range| {
-                let mut acc: Option<DMatrix<f64>> = None;
-                let mut lo = range.start;
-                while lo < range.end {
-                    let hi = (lo + CHUNK).min(range.end);
-                    let rows = hi - lo + acc.as_ref().map_or(0, |_| q);
-                    let mut a = DMatrix::<f64>::zeros(rows, q);
-                    let mut r0 = 0;
-                    if let Some(prev) = &acc {
-                        a.rows_mut(0, q).copy_from(prev);
-                        r0 = q;
-                    }
-                    self.fill_rows(&mut a, r0, lo..hi);
-                    acc = Some(triangle(a, q));
-                    lo = hi;
-                }
-                acc.unwrap_or_else(|| DMatrix::zeros(q, q))
-            })
-            .collect()
-    }
-
-    /// Solve from merged triangles holding `rows` samples.
+    /// Solve from merged (scaled) triangles holding `rows` samples.
     fn solve<'t>(
         &self,
         triangles: impl Iterator<Item = &'t DMatrix<f64>>,
@@ -424,71 +596,105 @@ impl<'a> Regression<'a> {
         )
     }
 
-    /// Second pass over the data: r, VAF, RMSE and decimated traces per force
-    /// component, and (when `inflate`) the autocorrelation inflation of its residuals.
+    /// r, VAF and RMSE per force component from the unscaled triangle and
+    /// column sums (every sum of products of `f` and `f̂ = L θ` is a
+    /// quadratic form of `R^T R`; the residual norm is `|R w|`, exact without
+    /// cancellation), traces of the first windows, and (when `inflate`) the
+    /// autocorrelation inflation of the residuals, which reads every row again.
     fn fit_quality(
         &self,
-        data: &Prepared,
+        rows: Rows<'_>,
         theta: &DMatrix<f64>,
         inflate: bool,
-    ) -> (FitQuality, Vec<f64>) {
-        let (n, m, p) = (self.n, self.m, self.p);
-        let lags = data.correlation_lags().min(m / 4).max(1);
+    ) -> Result<(FitQuality, Vec<f64>)> {
+        let (n, m, p, q) = (self.n, self.m, self.p, self.q);
+        let data = rows.meta();
+        let mf = m as f64;
+        let mut fit = FitQuality {
+            r: Vec::with_capacity(n),
+            vaf: Vec::with_capacity(n),
+            rmse: Vec::with_capacity(n),
+            traces: FitTraces {
+                time: Vec::new(),
+                measured: Vec::with_capacity(n),
+                predicted: Vec::with_capacity(n),
+            },
+        };
+        for a in 0..n {
+            let mut w = DVector::<f64>::zeros(q);
+            for j in 0..p {
+                w[j] = theta[(j, a)];
+            }
+            let predicted = &self.total * &w;
+            let measured = self.total.column(p + a).into_owned();
+            let residual = &measured - &predicted;
+            let sum_f = self.sums[p + a];
+            let sum_h: f64 = (0..p).map(|j| self.sums[j] * w[j]).sum();
+            let (ff, hh) = (measured.norm_squared(), predicted.norm_squared());
+            // centred sums; a rounding residue of a constant signal counts as zero
+            let centred = |s: f64, sum: f64| {
+                let c = s - sum * sum / mf;
+                if c <= 1e-12 * s {
+                    0.0
+                } else {
+                    c
+                }
+            };
+            let sff = if self.constant_force[a] {
+                0.0
+            } else {
+                centred(ff, sum_f)
+            };
+            let shh = centred(hh, sum_h);
+            let sfh = measured.dot(&predicted) - sum_f * sum_h / mf;
+            let see = residual.norm_squared();
+            let var_e = (see / mf - ((sum_f - sum_h) / mf).powi(2)).max(0.0);
+            fit.r.push(if sff > 0.0 && shh > 0.0 {
+                (sfh / (sff * shh).sqrt()).clamp(-1.0, 1.0)
+            } else {
+                0.0
+            });
+            fit.vaf.push(if sff > 0.0 {
+                100.0 * (1.0 - var_e / (sff / mf))
+            } else {
+                0.0
+            });
+            fit.rmse.push((see / mf).sqrt());
+        }
         // the first (up to) three windows, decimated to TRACE_POINTS
         let trace_len = data
             .windows
             .get(data.windows.len().min(3).saturating_sub(1))
             .map_or(m, |w| w.samples.end)
             .min(m);
+        let read_len = if inflate { m } else { trace_len };
+        let mut a = vec![0.0; read_len * q];
+        rows.fill(0..read_len, &mut a, (read_len, 0), (n, p))?;
+        let predict = |i: usize, f: usize| -> f64 {
+            (0..p).map(|j| theta[(j, f)] * a[j * read_len + i]).sum()
+        };
         let trace_step = trace_len.div_ceil(TRACE_POINTS).max(1);
         let trace_idx: Vec<usize> = (0..trace_len).step_by(trace_step).collect();
-        let mut fit = FitQuality {
-            r: Vec::with_capacity(n),
-            vaf: Vec::with_capacity(n),
-            rmse: Vec::with_capacity(n),
-            traces: FitTraces {
-                time: trace_idx.iter().map(|&i| i as f64 / data.fs).collect(),
-                measured: Vec::with_capacity(n),
-                predicted: Vec::with_capacity(n),
-            },
-        };
-        let mut inflation = Vec::with_capacity(n);
-        let mut predicted = vec![0.0; m];
-        let mut resid = vec![0.0; m];
-        for a in 0..n {
-            let coef: Vec<f64> = (0..p).map(|j| theta[(j, a)]).collect();
-            const ROWS: usize = 1 << 13;
-            predicted
-                .par_chunks_mut(ROWS)
-                .enumerate()
-                .for_each(|(b, out)| {
-                    let rows = b * ROWS..b * ROWS + out.len();
-                    out.fill(if self.with_const { coef[3 * n] } else { 0.0 });
-                    for (c, col) in coef.iter().zip(&self.cols) {
-                        for (o, v) in out.iter_mut().zip(&col[rows.clone()]) {
-                            *o += c * v;
-                        }
-                    }
-                });
-            let f = self.forces[a];
-            let (r_coef, vaf, rmse) = fit_stats(f, &predicted);
-            fit.r.push(r_coef);
-            fit.vaf.push(vaf);
-            fit.rmse.push(rmse);
+        fit.traces.time = trace_idx.iter().map(|&i| i as f64 / data.fs).collect();
+        for f in 0..n {
+            let column = &a[(p + f) * read_len..(p + f + 1) * read_len];
             fit.traces
                 .measured
-                .push(trace_idx.iter().map(|&i| f[i]).collect());
+                .push(trace_idx.iter().map(|&i| column[i]).collect());
             fit.traces
                 .predicted
-                .push(trace_idx.iter().map(|&i| predicted[i]).collect());
-            if inflate {
-                for ((e, y), yh) in resid.iter_mut().zip(f).zip(&predicted) {
-                    *e = y - yh;
-                }
+                .push(trace_idx.iter().map(|&i| predict(i, f)).collect());
+        }
+        let mut inflation = Vec::new();
+        if inflate {
+            let lags = data.correlation_lags().min(m / 4).max(1);
+            for f in 0..n {
+                let column = &a[(p + f) * read_len..(p + f + 1) * read_len];
+                let resid: Vec<f64> = (0..m).map(|i| column[i] - predict(i, f)).collect();
                 inflation.push(autocorrelation_inflation(&resid, &data.windows, lags));
             }
         }
-        (fit, inflation)
+        Ok((fit, inflation))
     }
 
     /// Delete-one-block jackknife standard errors from the per-block triangles
@@ -634,9 +840,11 @@ fn inertia_confounding(sens: &DMatrix<f64>, coords: &[String]) -> DMatrix<f64> {
 
 /// Jackknife groups: the windows (contiguous runs of them when there are
 /// more than MAX_JACKKNIFE_GROUPS), else contiguous pieces of the data.
-fn jackknife_blocks(data: &Prepared, q: usize) -> Vec<std::ops::Range<usize>> {
-    let m = data.len();
-    let w = &data.windows;
+fn jackknife_blocks(
+    w: &[crate::prepare::PreparedWindow],
+    m: usize,
+    q: usize,
+) -> Vec<std::ops::Range<usize>> {
     if w.len() >= MIN_JACKKNIFE_BLOCKS {
         let g = w.len().min(MAX_JACKKNIFE_GROUPS);
         (0..g)
@@ -681,13 +889,33 @@ fn equilibrium_position(
 
 /// Fit the linear model to prepared data.
 pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstimate> {
+    fit_rows(Rows::Columns(data), params)
+}
+
+/// Fit the linear model window by window from a [`Plan`]: each window's
+/// signals are computed, reduced into its jackknife block's QR triangle and
+/// dropped, so a long recording's prepared signals are never held whole
+/// (issue 16). The same estimate as [`fit_linear`] of the materialised plan
+/// (to rounding). With fewer than [`MIN_JACKKNIFE_BLOCKS`] windows the
+/// blocks are contiguous pieces that cut through windows: the plan is then
+/// materialised first.
+pub fn fit_linear_plan(plan: &Plan<'_>, params: &LinearParams) -> Result<LinearEstimate> {
+    if plan.meta.windows.len() < MIN_JACKKNIFE_BLOCKS {
+        return fit_linear(&plan.materialise()?, params);
+    }
+    fit_rows(Rows::Windows(plan), params)
+}
+
+fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
+    let data = rows.meta();
     let n = data.dims();
-    let m = data.len();
+    let m = rows.len();
     // a constant term: the equilibrium (seed 000), or the unknown offset of continuous data;
     // demeaned windows already had their per-trial constants removed
     let with_const = !data.demeaned && (params.equilibrium || data.continuous);
     let absorbed = if data.demeaned { data.windows.len() } else { 0 };
     let p = 3 * n + usize::from(with_const);
+    let q = p + n;
     let numerical = |message: String| Error::Numerical {
         path: data.path.clone(),
         message,
@@ -700,15 +928,16 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
             found: m,
         });
     }
-    let reg = Regression::new(data, with_const, numerical)?;
-    let blocks = jackknife_blocks(data, reg.q);
-    let triangles = reg.block_triangles(&blocks);
+    let blocks = jackknife_blocks(&data.windows, m, q);
+    let summaries = reduce_blocks(rows, &blocks, (n, p, q))?;
+    let (reg, triangles) = Regression::new(data, m, with_const, &summaries, numerical)?;
+    drop(summaries);
     let solved = reg.solve(triangles.iter(), m).map_err(numerical)?;
     let theta = &solved.theta;
     let condition_number = solved.condition_number;
     let g = blocks.len();
     let use_jackknife = g >= MIN_JACKKNIFE_BLOCKS;
-    let (fit, inflation) = reg.fit_quality(data, theta, !use_jackknife);
+    let (fit, inflation) = reg.fit_quality(rows, theta, !use_jackknife)?;
     let (mut se, mut se_method) = if use_jackknife {
         let block_rows: Vec<usize> = blocks.iter().map(|b| b.len()).collect();
         let unit = if g == data.windows.len() {
@@ -836,16 +1065,11 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
         damping: judge(1, &damping, &se_out.damping, &mut warnings),
         stiffness: judge(2, &stiffness, &se_out.stiffness, &mut warnings),
     };
-    let constant_force: Vec<bool> = reg
-        .forces
-        .iter()
-        .map(|f| f.iter().all(|v| *v == f[0]))
-        .collect();
     quality_warnings(
         &identifiable,
         condition_number,
         &fit,
-        &constant_force,
+        &reg.constant_force,
         &data.coordinates,
         &mut warnings,
     );

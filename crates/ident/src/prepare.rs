@@ -18,6 +18,7 @@
 //! 6. drop `trim` samples at both ends of every window (filter/derivative
 //!    edge effects) and concatenate.
 
+use std::borrow::Cow;
 use std::ops::Range;
 use std::path::PathBuf;
 
@@ -287,38 +288,58 @@ pub fn choose_coordinates(rec: &Recording) -> Result<(Vec<String>, Vec<String>)>
     Ok((coords, forces))
 }
 
-/// Prepare a recording for estimation.
+/// Prepare a recording for estimation: every window's signals, concatenated.
 pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
+    plan(rec, params)?.materialise()
+}
+
+/// A preparation whose windows are found, but whose signals are computed
+/// only when asked, one window at a time ([`Plan::fill_window`]). An
+/// estimator that reduces each window as it goes (the linear fit's QR,
+/// issue 16) never holds the prepared signals of the whole recording.
+#[derive(Debug, Clone)]
+pub struct Plan<'r> {
+    /// Everything of the prepared data but its signals: `disp`, `vel`,
+    /// `acc` and `force` are empty, [`Plan::len`] gives the sample count.
+    pub meta: Prepared,
+    rec: Cow<'r, Recording>,
+    /// Source windows, in the order of `meta.windows`.
+    windows: Vec<Window>,
+    lowpass: LowPass,
+    derivative: Derivative,
+    sign: f64,
+    end_trim: usize,
+    sg_window: usize,
+    samples: usize,
+}
+
+/// Find the windows of a recording and everything about them that needs no
+/// filtering (rest offsets, references, lengths); see [`Plan`].
+pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> {
     let fs = rec.sample_rate();
     let cutoff = params.cutoff_hz.unwrap_or_else(|| default_cutoff(fs));
     let lowpass = LowPass::butterworth(params.filter_order, cutoff, fs)?;
     if params.min_rest_s.is_nan() || params.min_rest_s <= 0.0 {
         return Err(Error::invalid("minimum rest", "must be positive"));
     }
-    let mut rec_local;
-    let rec = if let Some(tf) = &params.transform {
-        rec_local = rec.clone();
-        tf.apply(&mut rec_local)?;
-        &rec_local
-    } else {
-        rec
+    let rec: Cow<'r, Recording> = match &params.transform {
+        Some(tf) => {
+            let mut local = rec.clone();
+            tf.apply(&mut local)?;
+            Cow::Owned(local)
+        }
+        None => Cow::Borrowed(rec),
     };
-    let (coords, force_cols) = choose_coordinates(rec)?;
-    let pos: Vec<&[f64]> = coords
-        .iter()
-        .map(|c| rec.column(c).unwrap_or(&[]))
-        .collect();
+    let (coords, force_cols) = choose_coordinates(&rec)?;
+    let pos = columns(&rec, &coords);
+    let frc = columns(&rec, &force_cols);
     let sign = if params.negate_force { -1.0 } else { 1.0 };
-    let frc: Vec<&[f64]> = force_cols
-        .iter()
-        .map(|c| rec.column(c).unwrap_or(&[]))
-        .collect();
     let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
 
     let position_noise: Vec<f64> = pos.par_iter().map(|c| noise_sigma(c)).collect();
-    let mut windows = make_windows(rec, params, &pos, &frc, &position_noise, min_rest)?;
+    let mut windows = make_windows(&rec, params, &pos, &frc, &position_noise, min_rest)?;
     if let Some(level) = params.level {
-        keep_level(rec, &mut windows, level)?;
+        keep_level(&rec, &mut windows, level)?;
     }
     let continuous = windows.iter().all(|w| w.onset.is_none());
 
@@ -336,196 +357,186 @@ pub fn prepare(rec: &Recording, params: &PrepareParams) -> Result<Prepared> {
     } else {
         ((END_TRIM_PERIODS * fs / cutoff).round() as usize).max(1)
     };
-    let mut out = Prepared {
-        path: rec.path().to_path_buf(),
-        coordinates: coords.clone(),
-        force_columns: force_cols.clone(),
-        fs,
-        disp: vec![Vec::new(); n],
-        vel: vec![Vec::new(); n],
-        acc: vec![Vec::new(); n],
-        force: vec![Vec::new(); n],
-        windows: Vec::new(),
-        continuous,
-        demeaned: !continuous && fits_offsets(params.offsets, &windows, fs),
-        cutoff_hz: cutoff,
-        filter_order: params.filter_order,
-        derivative: params.derivative,
-        trim,
-        reference: vec![0.0; n],
-        position_noise,
-        regressor_noise_var: Vec::new(),
-    };
-    let gains = noise_gains(params.derivative, &lowpass, sg_window, dt)?;
-    out.regressor_noise_var = out
-        .position_noise
-        .iter()
-        .map(|s| {
-            [
-                s * s * gains[0],
-                s * s * gains[1],
-                s * s * gains[2],
-                s * s * gains[3],
-            ]
-        })
-        .collect();
-    // every window writes its trimmed signals straight into its own part of
-    // the output columns, windows in parallel (no per-window copies, and the
-    // fresh pages are first touched by the threads that fill them)
-    let end_trim = trim + end_trim_extra;
-    let demean = out.demeaned;
-    let lens: Vec<usize> = windows
-        .iter()
-        .map(|w| w.range.len().saturating_sub(trim + end_trim))
-        .collect();
-    let total: usize = lens.iter().sum();
-    // kind-major: disp of each coordinate, then vel, acc, force
-    let mut columns: Vec<Vec<f64>> = (0..4 * n).map(|_| vec![0.0; total]).collect();
-    let mut destinations: Vec<Vec<&mut [f64]>> = (0..windows.len())
-        .map(|_| Vec::with_capacity(4 * n))
-        .collect();
-    for column in columns.iter_mut() {
-        let mut rest: &mut [f64] = column;
-        for (dest, len) in destinations.iter_mut().zip(&lens) {
-            let (head, tail) = std::mem::take(&mut rest).split_at_mut(*len);
-            dest.push(head);
-            rest = tail;
-        }
-    }
-    let done: Vec<Result<WindowSignals>> = windows
-        .par_iter()
-        .zip(destinations.into_par_iter())
-        .map(|(w, mut dest)| {
-            window_signals(
-                rec,
-                w,
-                &pos,
-                &frc,
-                sign,
-                params,
-                &lowpass,
-                (trim, end_trim),
-                sg_window,
-                dt,
-                demean,
-                &mut dest,
-            )
-        })
-        .collect();
-    let mut start = 0;
-    for ((w, signals), len) in windows.iter().zip(done).zip(&lens) {
-        let signals = signals?;
-        let r = &w.range;
-        out.windows.push(PreparedWindow {
-            id: w.id,
-            samples: start..start + len,
-            rows: r.start + trim..r.end - end_trim,
-            rest_samples: w.rest_len(),
-            force_offset: signals.offsets,
-            reference: signals.references,
-        });
-        start += len;
-    }
-    let mut columns = columns.into_iter();
-    for kind in [&mut out.disp, &mut out.vel, &mut out.acc, &mut out.force] {
-        *kind = columns.by_ref().take(n).collect();
-    }
-    for k in 0..n {
-        out.reference[k] =
-            out.windows.iter().map(|w| w.reference[k]).sum::<f64>() / out.windows.len() as f64;
-    }
-    Ok(out)
-}
-
-/// One window's force offsets and reference positions (its filtered signals
-/// are written into the output columns).
-struct WindowSignals {
-    offsets: Vec<f64>,
-    references: Vec<f64>,
-}
-
-#[allow(clippy::too_many_arguments)]
-fn window_signals(
-    rec: &Recording,
-    w: &Window,
-    pos: &[&[f64]],
-    frc: &[&[f64]],
-    sign: f64,
-    params: &PrepareParams,
-    lowpass: &LowPass,
-    (trim, end_trim): (usize, usize),
-    sg_window: usize,
-    dt: f64,
-    demean: bool,
-    dest: &mut [&mut [f64]],
-) -> Result<WindowSignals> {
-    let fs = 1.0 / dt;
-    let cutoff = lowpass.cutoff_hz();
-    let r = w.range.clone();
     // the end of a perturbation window is trimmed by one cut-off period more (see END_TRIM_PERIODS)
+    let end_trim = trim + end_trim_extra;
     let need = (trim + end_trim + 1)
         .max(lowpass.padlen() + 1)
         .max(sg_window);
-    if r.len() < need {
+    if let Some(w) = windows.iter().find(|w| w.range.len() < need) {
         return Err(Error::TooFewSamples {
             path: rec.path().to_path_buf(),
             what: format!(
                 "trial {} (rows {}-{}) with zero-phase filtering and differences",
                 w.id,
-                rec.row_of(r.start),
-                rec.row_of(r.end - 1)
+                rec.row_of(w.range.start),
+                rec.row_of(w.range.end - 1)
             ),
             needed: need,
-            found: r.len(),
+            found: w.range.len(),
         });
     }
-    let rest = match w.onset {
-        Some(onset) => r.start..onset,
-        None => r.clone(),
+    let gains = noise_gains(params.derivative, &lowpass, sg_window, dt)?;
+    let regressor_noise_var = position_noise
+        .iter()
+        .map(|s| std::array::from_fn(|i| s * s * gains[i]))
+        .collect();
+    let mut start = 0;
+    let prepared_windows: Vec<PreparedWindow> = windows
+        .iter()
+        .map(|w| {
+            let r = &w.range;
+            let rest = match w.onset {
+                Some(onset) => r.start..onset,
+                None => r.clone(),
+            };
+            let len = r.len() - trim - end_trim;
+            let out = PreparedWindow {
+                id: w.id,
+                samples: start..start + len,
+                rows: r.start + trim..r.end - end_trim,
+                rest_samples: w.rest_len(),
+                force_offset: frc
+                    .iter()
+                    .map(|f| match w.onset {
+                        Some(_) => sign * mean(&f[rest.clone()]),
+                        None => 0.0,
+                    })
+                    .collect(),
+                reference: pos.iter().map(|p| mean(&p[rest.clone()])).collect(),
+            };
+            start += len;
+            out
+        })
+        .collect();
+    let reference = (0..n)
+        .map(|k| {
+            prepared_windows.iter().map(|w| w.reference[k]).sum::<f64>()
+                / prepared_windows.len() as f64
+        })
+        .collect();
+    let meta = Prepared {
+        path: rec.path().to_path_buf(),
+        coordinates: coords,
+        force_columns: force_cols,
+        fs,
+        disp: vec![Vec::new(); n],
+        vel: vec![Vec::new(); n],
+        acc: vec![Vec::new(); n],
+        force: vec![Vec::new(); n],
+        demeaned: !continuous && fits_offsets(params.offsets, &windows, fs),
+        windows: prepared_windows,
+        continuous,
+        cutoff_hz: cutoff,
+        filter_order: params.filter_order,
+        derivative: params.derivative,
+        trim,
+        reference,
+        position_noise,
+        regressor_noise_var,
     };
-    // one extension per window end, shared by every signal so that the model holds across coordinates
-    let edge_samples = ((fs / cutoff).round() as usize).max(3);
-    let (left, right) = edge_kinds(pos, r.clone(), edge_samples, dt);
-    let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
-    let n = pos.len();
-    let mut out = WindowSignals {
-        offsets: Vec::with_capacity(n),
-        references: Vec::with_capacity(n),
-    };
-    let mut shifted: Vec<Vec<f64>> = Vec::with_capacity(2 * n);
-    for p in pos {
-        let reference = mean(&p[rest.clone()]);
-        out.references.push(reference);
-        shifted.push(p[r.clone()].iter().map(|v| v - reference).collect());
-    }
-    for f in frc {
-        let offset = if w.onset.is_some() {
-            sign * mean(&f[rest.clone()])
-        } else {
-            0.0
-        };
-        out.offsets.push(offset);
-        shifted.push(f[r.clone()].iter().map(|v| sign * v - offset).collect());
-    }
-    let signals = filter_and_differentiate(
-        &shifted,
-        params.derivative,
+    Ok(Plan {
+        meta,
+        rec,
+        windows,
         lowpass,
-        (left, right, extra),
+        derivative: params.derivative,
+        sign,
+        end_trim,
         sg_window,
-        dt,
-    )?;
-    let keep = trim..r.len() - end_trim;
-    for (k, per_coordinate) in signals.iter().enumerate() {
-        for (kind, src) in per_coordinate.iter().enumerate() {
-            let part = &src[keep.clone()];
-            let m = if demean { mean(part) } else { 0.0 };
-            for (o, v) in dest[kind * n + k].iter_mut().zip(part) {
-                *o = v - m;
+        samples: start,
+    })
+}
+
+fn columns<'a>(rec: &'a Recording, names: &[String]) -> Vec<&'a [f64]> {
+    names.iter().map(|c| rec.column(c).unwrap_or(&[])).collect()
+}
+
+impl Plan<'_> {
+    /// Samples the prepared signals will have (all windows).
+    pub fn len(&self) -> usize {
+        self.samples
+    }
+
+    /// True when no sample is used.
+    pub fn is_empty(&self) -> bool {
+        self.samples == 0
+    }
+
+    /// Window `i`'s trimmed signals into `dest`, kind-major: the n
+    /// displacements, then velocities, accelerations and forces, each as
+    /// long as the window's `samples` range.
+    pub fn fill_window(&self, i: usize, dest: &mut [&mut [f64]]) -> Result<()> {
+        let w = &self.windows[i];
+        let prepared = &self.meta.windows[i];
+        let pos = columns(&self.rec, &self.meta.coordinates);
+        let frc = columns(&self.rec, &self.meta.force_columns);
+        let (fs, dt) = (self.meta.fs, 1.0 / self.meta.fs);
+        let cutoff = self.lowpass.cutoff_hz();
+        let r = w.range.clone();
+        // one extension per window end, shared by every signal so that the model holds across coordinates
+        let edge_samples = ((fs / cutoff).round() as usize).max(3);
+        let (left, right) = edge_kinds(&pos, r.clone(), edge_samples, dt);
+        let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
+        let n = pos.len();
+        let mut shifted: Vec<Vec<f64>> = Vec::with_capacity(2 * n);
+        for (p, reference) in pos.iter().zip(&prepared.reference) {
+            shifted.push(p[r.clone()].iter().map(|v| v - reference).collect());
+        }
+        for (f, offset) in frc.iter().zip(&prepared.force_offset) {
+            let sign = self.sign;
+            shifted.push(f[r.clone()].iter().map(|v| sign * v - offset).collect());
+        }
+        let signals = filter_and_differentiate(
+            &shifted,
+            self.derivative,
+            &self.lowpass,
+            (left, right, extra),
+            self.sg_window,
+            dt,
+        )?;
+        let keep = self.meta.trim..r.len() - self.end_trim;
+        for (k, per_coordinate) in signals.iter().enumerate() {
+            for (kind, src) in per_coordinate.iter().enumerate() {
+                let part = &src[keep.clone()];
+                let m = if self.meta.demeaned { mean(part) } else { 0.0 };
+                for (o, v) in dest[kind * n + k].iter_mut().zip(part) {
+                    *o = v - m;
+                }
             }
         }
+        Ok(())
     }
-    Ok(out)
+
+    /// Every window's signals, concatenated: the [`Prepared`] data.
+    pub fn materialise(&self) -> Result<Prepared> {
+        let n = self.meta.dims();
+        let total = self.samples;
+        // every window writes its signals straight into its own part of the
+        // output columns, windows in parallel (no per-window copies, and the
+        // fresh pages are first touched by the threads that fill them)
+        let mut columns: Vec<Vec<f64>> = (0..4 * n).map(|_| vec![0.0; total]).collect();
+        let mut destinations: Vec<Vec<&mut [f64]>> = (0..self.windows.len())
+            .map(|_| Vec::with_capacity(4 * n))
+            .collect();
+        for column in columns.iter_mut() {
+            let mut rest: &mut [f64] = column;
+            for (dest, w) in destinations.iter_mut().zip(&self.meta.windows) {
+                let (head, tail) = std::mem::take(&mut rest).split_at_mut(w.samples.len());
+                dest.push(head);
+                rest = tail;
+            }
+        }
+        destinations
+            .into_par_iter()
+            .enumerate()
+            .try_for_each(|(i, mut dest)| self.fill_window(i, &mut dest))?;
+        let mut out = self.meta.clone();
+        let mut columns = columns.into_iter();
+        for kind in [&mut out.disp, &mut out.vel, &mut out.acc, &mut out.force] {
+            *kind = columns.by_ref().take(n).collect();
+        }
+        Ok(out)
+    }
 }
 
 /// Keep only the windows whose samples all carry `level` (seed 001's
@@ -722,9 +733,14 @@ fn make_windows(
                 .collect();
             let floors = change_floors(&signals);
             let mut windows = windows_from_trial_column(rec, &params.trial_column)?;
-            for w in &mut windows {
-                let onset = detect_onset(&signals, w.range.clone(), &sigmas, &floors)
-                    .unwrap_or(w.range.end);
+            // trials in parallel; the first trial without rest (in order) is the error
+            let onsets: Vec<usize> = windows
+                .par_iter()
+                .map(|w| {
+                    detect_onset(&signals, w.range.clone(), &sigmas, &floors).unwrap_or(w.range.end)
+                })
+                .collect();
+            for (w, onset) in windows.iter_mut().zip(onsets) {
                 let rest = onset - w.range.start;
                 if rest < min_rest {
                     return Err(Error::NoRestBeforeOnset {

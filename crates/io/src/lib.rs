@@ -273,8 +273,20 @@ pub const MAX_PARQUET_ROWS: i64 = 1 << 32;
 /// nested, repeated, decimal and date columns are refused. A panic inside the
 /// parquet crate (a corrupt file) becomes an error naming the file.
 pub fn read_parquet(path: &Path) -> Result<Recording> {
-    let bytes = limpid_core::files::read_bytes(path, MAX_PARQUET_BYTES)?;
-    read_recording_bytes(path, bytes)
+    #[cfg(unix)]
+    {
+        let file = StrictFile::open(path)?;
+        limpid_core::error::catch_panic(
+            path,
+            "Parquet decoder (corrupt or unsupported file)",
+            || read_parquet_source(path, file),
+        )
+    }
+    #[cfg(not(unix))]
+    {
+        let bytes = limpid_core::files::read_bytes(path, MAX_PARQUET_BYTES)?;
+        read_recording_bytes(path, bytes)
+    }
 }
 
 /// Largest Parquet file read (bytes; it is decoded from memory).
@@ -479,6 +491,131 @@ impl parquet::file::reader::ChunkReader for StrictBytes {
     }
     fn get_bytes(&self, start: u64, length: usize) -> parquet::errors::Result<bytes::Bytes> {
         self.0.get_bytes(start, length)
+    }
+}
+
+/// A Parquet file read where the decoder asks, column chunk by column chunk
+/// (the columns are decoded in parallel), instead of whole into memory
+/// first: the file's bytes no longer add to the decoded columns in the peak
+/// memory (issue 16). Reads past the end fail, as for [`StrictBytes`].
+#[cfg(unix)]
+struct StrictFile {
+    file: std::sync::Arc<std::fs::File>,
+    len: u64,
+}
+
+#[cfg(unix)]
+impl StrictFile {
+    fn open(path: &Path) -> Result<Self> {
+        let file = limpid_core::files::open_input(path)?;
+        let len = file
+            .metadata()
+            .map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?
+            .len();
+        if len == 0 {
+            return Err(Error::Empty {
+                path: path.to_path_buf(),
+            });
+        }
+        if len > MAX_PARQUET_BYTES {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "larger than the {MAX_PARQUET_BYTES} bytes limpid reads for this kind of file"
+                ),
+            });
+        }
+        Ok(StrictFile {
+            file: std::sync::Arc::new(file),
+            len,
+        })
+    }
+}
+
+/// A reader of [`StrictFile`] from an offset (positioned reads, so that
+/// threads share the file without sharing a cursor).
+#[cfg(unix)]
+struct StrictFileRead {
+    file: std::sync::Arc<std::fs::File>,
+    pos: u64,
+    len: u64,
+}
+
+#[cfg(unix)]
+impl std::io::Read for StrictFileRead {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        use std::os::unix::fs::FileExt;
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        let left = self.len.saturating_sub(self.pos);
+        if left == 0 {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::UnexpectedEof,
+                "read past the end of the Parquet file",
+            ));
+        }
+        let want = buf.len().min(usize::try_from(left).unwrap_or(usize::MAX));
+        let got = self.file.read_at(&mut buf[..want], self.pos)?;
+        if got == 0 {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::UnexpectedEof,
+                "the Parquet file ended early (truncated while read?)",
+            ));
+        }
+        self.pos += got as u64;
+        Ok(got)
+    }
+}
+
+#[cfg(unix)]
+impl parquet::file::reader::Length for StrictFile {
+    fn len(&self) -> u64 {
+        self.len
+    }
+}
+
+#[cfg(unix)]
+impl parquet::file::reader::ChunkReader for StrictFile {
+    // page headers are read a few bytes at a time: buffered
+    type T = std::io::BufReader<StrictFileRead>;
+    fn get_read(&self, start: u64) -> parquet::errors::Result<Self::T> {
+        if start > self.len {
+            return Err(parquet::errors::ParquetError::EOF(format!(
+                "offset {start} beyond the file's {} bytes",
+                self.len
+            )));
+        }
+        Ok(std::io::BufReader::with_capacity(
+            1024,
+            StrictFileRead {
+                file: self.file.clone(),
+                pos: start,
+                len: self.len,
+            },
+        ))
+    }
+    fn get_bytes(&self, start: u64, length: usize) -> parquet::errors::Result<bytes::Bytes> {
+        use std::io::Read;
+        let end = start.checked_add(length as u64).filter(|e| *e <= self.len);
+        if end.is_none() {
+            return Err(parquet::errors::ParquetError::EOF(format!(
+                "{length} bytes from offset {start} run beyond the file's {} bytes",
+                self.len
+            )));
+        }
+        let mut out = vec![0u8; length];
+        StrictFileRead {
+            file: self.file.clone(),
+            pos: start,
+            len: self.len,
+        }
+        .read_exact(&mut out)
+        .map_err(|e| parquet::errors::ParquetError::External(Box::new(e)))?;
+        Ok(bytes::Bytes::from(out))
     }
 }
 

@@ -450,16 +450,17 @@ fn estimate_linear(
     let o: serde_json::Value = serde_json::from_str(options).map_err(value_err)?;
     let equilibrium = o["equilibrium"].as_bool().unwrap_or(true);
     detached(py, move || {
-        let prepared = limpid_ident::prepare(&rec, &params)?;
-        let est = limpid_ident::fit_linear(
-            &prepared,
+        // window by window, as the CLI: the prepared signals are never held whole
+        let plan = limpid_ident::plan(&rec, &params)?;
+        let est = limpid_ident::fit_linear_plan(
+            &plan,
             &limpid_ident::LinearParams {
                 equilibrium,
                 ..Default::default()
             },
         )?;
         Ok(document(Estimate::Linear(
-            limpid_analysis::linear::linear_result(&est, &prepared),
+            limpid_analysis::linear::linear_result(&est, &plan.meta),
         )))
     })
     .map_err(err)
