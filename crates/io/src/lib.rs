@@ -354,7 +354,7 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         .map(|g| reader.get_row_group(g).map_err(pq_err))
         .collect::<Result<_>>()?;
     let decode_column = |k: usize| -> Result<Vec<f64>> {
-        let mut out: Vec<f64> = Vec::with_capacity(reserve);
+        let mut out = column_buffer(reserve);
         let mut origin: Option<i64> = None;
         for group in &groups {
             let mut defs: Vec<i16> = Vec::new();
@@ -442,6 +442,36 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         }
     }
     Ok(rec)
+}
+
+/// An empty column with room for `capacity` samples. On Linux the kernel is
+/// asked to back it with 2 MB pages (transparent huge pages, `madvise`
+/// mode): filling the 115 MB of a 60-minute recording's columns then takes
+/// about 60 page faults instead of 28 000, which cost a fifth of `estimate
+/// linear`'s time in the kernel (issue 16). Only advice: ignored where
+/// unsupported or disabled.
+fn column_buffer(capacity: usize) -> Vec<f64> {
+    let column: Vec<f64> = Vec::with_capacity(capacity);
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 2 << 20;
+        let start = column.as_ptr() as usize;
+        let end = start + capacity * std::mem::size_of::<f64>();
+        // the whole 2 MB pages inside the allocation
+        let (first, last) = (start.next_multiple_of(HUGE), end / HUGE * HUGE);
+        if last > first {
+            // SAFETY: advice on pages of an allocation this function owns; it
+            // neither reads nor changes their contents.
+            unsafe {
+                libc::madvise(
+                    first as *mut libc::c_void,
+                    last - first,
+                    libc::MADV_HUGEPAGE,
+                );
+            }
+        }
+    }
+    column
 }
 
 /// The file's bytes for the Parquet decoder, whose readers fail at the end of
