@@ -1,9 +1,13 @@
-//! Criterion benchmark of `estimate linear` (issue 2): load from Parquet,
-//! prepare, estimate — on simulated 500 Hz 3-D recordings of 1 and 60 minutes
-//! (seed 000 cubic trials back to back, fixed seed).
+//! Criterion benchmark of `estimate linear` (issues 2 and 16), stage by
+//! stage: load from Parquet, find the windows (`plan`: noise, onsets, rest
+//! offsets), filter + differentiate + QR + fit window by window (the CLI's
+//! path), and the whole command; `prepare` and `fit` time the materialised
+//! path that the Python `prepare` and the other estimators use. Simulated
+//! 500 Hz 3-D recordings of 1 and 60 minutes (seed 000 cubic trials back to
+//! back, fixed seed).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
+use limpid_ident::{fit_linear, fit_linear_plan, plan, prepare, LinearParams, PrepareParams};
 use limpid_lab::{seed000_subject1, simulate_centre_out, sphere, CentreOut, NoiseModel, Profile};
 
 /// A recording of `minutes` of 3.2 s cubic trials at 500 Hz.
@@ -35,6 +39,15 @@ fn bench(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("load_parquet", &id), &path, |b, p| {
             b.iter(|| limpid_io::read_recording(p).expect("read"))
         });
+        group.bench_with_input(BenchmarkId::new("plan", &id), &rec, |b, r| {
+            b.iter(|| plan(r, &PrepareParams::default()).expect("plan"))
+        });
+        let the_plan = plan(&rec, &PrepareParams::default()).expect("plan");
+        group.bench_with_input(
+            BenchmarkId::new("fit_window_by_window", &id),
+            &the_plan,
+            |b, p| b.iter(|| fit_linear_plan(p, &LinearParams::default()).expect("fit")),
+        );
         group.bench_with_input(BenchmarkId::new("prepare", &id), &rec, |b, r| {
             b.iter(|| prepare(r, &PrepareParams::default()).expect("prepare"))
         });
@@ -45,8 +58,8 @@ fn bench(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("whole_command", &id), &path, |b, p| {
             b.iter(|| {
                 let r = limpid_io::read_recording(p).expect("read");
-                let d = prepare(&r, &PrepareParams::default()).expect("prepare");
-                fit_linear(&d, &LinearParams::default()).expect("fit")
+                let d = plan(&r, &PrepareParams::default()).expect("plan");
+                fit_linear_plan(&d, &LinearParams::default()).expect("fit")
             })
         });
     }

@@ -256,7 +256,7 @@ impl LowPass {
     }
 
     /// [`LowPass::filtfilt_edges`] of several signals of one window at once
-    /// (same length, same edges): up to four signals are interleaved and
+    /// (same length, same edges): up to six signals are interleaved and
     /// filtered together, so the recursive sections run one lane per signal
     /// instead of waiting on one signal's dependency chain. Every lane does
     /// exactly the arithmetic of the one-signal call (equal results).
@@ -301,12 +301,16 @@ impl LowPass {
         let sections = self.sections();
         let zi = steady_state(&sections);
         let mut out = Vec::with_capacity(xs.len());
-        for group in xs.chunks(4) {
+        // up to six lanes: the three positions and three forces of a 3-D
+        // window in one pass (a 4 + 2 split waited twice on the same latency)
+        for group in xs.chunks(6) {
             match group.len() {
                 1 => lanes::<1>(group, &layout, &sections, &zi, &mut out),
                 2 => lanes::<2>(group, &layout, &sections, &zi, &mut out),
                 3 => lanes::<3>(group, &layout, &sections, &zi, &mut out),
-                _ => lanes::<4>(group, &layout, &sections, &zi, &mut out),
+                4 => lanes::<4>(group, &layout, &sections, &zi, &mut out),
+                5 => lanes::<5>(group, &layout, &sections, &zi, &mut out),
+                _ => lanes::<6>(group, &layout, &sections, &zi, &mut out),
             }
         }
         Ok(out)

@@ -629,13 +629,14 @@ pub(crate) fn edge_kinds(
 ) -> (Edge, Edge) {
     let span = span.min(window.len() / 4).max(2);
     let tm = (span as f64 - 1.0) / 2.0;
-    let den: f64 = (0..span).map(|k| (k as f64 - tm).powi(2)).sum();
+    let weights: Vec<f64> = (0..span).map(|k| k as f64 - tm).collect();
+    let den: f64 = weights.iter().map(|w| w.powi(2)).sum();
     // Σ (k - tm)(v - xm) = Σ (k - tm) v, the weights summing to zero
     let slope = |c: &[f64], s: usize| {
         let num: f64 = c[s..s + span]
             .iter()
-            .enumerate()
-            .map(|(k, v)| (k as f64 - tm) * v)
+            .zip(&weights)
+            .map(|(v, w)| w * v)
             .sum();
         num / den / dt
     };
