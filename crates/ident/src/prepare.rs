@@ -336,8 +336,26 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
     let sign = if params.negate_force { -1.0 } else { 1.0 };
     let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
 
-    let position_noise: Vec<f64> = pos.par_iter().map(|c| noise_sigma(c)).collect();
-    let mut windows = make_windows(&rec, params, &pos, &frc, &position_noise, min_rest)?;
+    // the noise of every signal onset detection needs, signals in parallel
+    let trials = match params.windowing {
+        Windowing::Trials => true,
+        Windowing::Auto => rec.has(&params.trial_column),
+        _ => false,
+    };
+    let noisy: Vec<&[f64]> = pos
+        .iter()
+        .chain(frc.iter().filter(|_| trials))
+        .copied()
+        .collect();
+    let mut position_noise: Vec<f64> = noisy.par_iter().map(|c| noise_sigma(c)).collect();
+    let force_noise = position_noise.split_off(pos.len());
+    let mut windows = make_windows(
+        &rec,
+        params,
+        (&pos, &frc),
+        (&position_noise, &force_noise),
+        min_rest,
+    )?;
     if let Some(level) = params.level {
         keep_level(&rec, &mut windows, level)?;
     }
@@ -700,12 +718,12 @@ fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }
 
+/// `force_noise` is needed (and given) only for trial windows.
 fn make_windows(
     rec: &Recording,
     params: &PrepareParams,
-    pos: &[&[f64]],
-    frc: &[&[f64]],
-    position_noise: &[f64],
+    (pos, frc): (&[&[f64]], &[&[f64]]),
+    (position_noise, force_noise): (&[f64], &[f64]),
     min_rest: usize,
 ) -> Result<Vec<Window>> {
     let continuous = || {
@@ -727,12 +745,8 @@ fn make_windows(
             // onset: the earlier of motion and force change (a step in acceleration
             // moves the force before the displacement rises above the noise)
             let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
-            let sigmas: Vec<f64> = position_noise
-                .iter()
-                .copied()
-                .chain(frc.par_iter().map(|c| noise_sigma(c)).collect::<Vec<_>>())
-                .collect();
-            let floors = change_floors(&signals);
+            let sigmas: Vec<f64> = position_noise.iter().chain(force_noise).copied().collect();
+            let floors: Vec<f64> = signals.par_iter().map(|c| change_floors(&[c])[0]).collect();
             let mut windows = windows_from_trial_column(rec, &params.trial_column)?;
             // trials in parallel; the first trial without rest (in order) is the error
             let onsets: Vec<usize> = windows

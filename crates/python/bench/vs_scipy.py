@@ -15,33 +15,9 @@ import sys
 import time
 
 import numpy as np
-import scipy.signal as ss
 
 import limpid
-
-
-def scipy_pipeline(rec):
-    t = rec["t"]
-    fs = 1.0 / np.median(np.diff(t))
-    sos = ss.butter(4, 30.0, fs=fs, output="sos")
-    trial = rec["trial"]
-    edges = np.flatnonzero(np.diff(trial)) + 1
-    starts = np.r_[0, edges]
-    ends = np.r_[edges, len(t)]
-    rows, rhs = [], []
-    for s, e in zip(starts, ends):
-        x = ss.sosfiltfilt(sos, np.vstack([rec["x"][s:e], rec["y"][s:e], rec["z"][s:e]]), axis=1)
-        f = ss.sosfiltfilt(sos, np.vstack([rec["fx"][s:e], rec["fy"][s:e], rec["fz"][s:e]]), axis=1)
-        v = np.gradient(x, 1 / fs, axis=1)
-        a = np.gradient(v, 1 / fs, axis=1)
-        rest = max(1, int(0.2 * fs))
-        f = f - f[:, :rest].mean(axis=1, keepdims=True)
-        rows.append(np.vstack([a, v, x, np.ones(e - s)]).T)
-        rhs.append(f.T)
-    Y = np.vstack(rows)
-    F = np.vstack(rhs)
-    P, *_ = np.linalg.lstsq(Y, F, rcond=None)
-    return P[6:9].T  # K
+from scipy_pipeline import scipy_pipeline
 
 
 def main(path):
