@@ -1,7 +1,7 @@
 //! limpid-ident: from a recording to impedance estimates with their quality.
 //!
-//! - [`prepare`]: windows, offsets, filtering, derivatives (seed 000 §II-C,
-//!   seed 001 "Data Processing").
+//! - [`prepare`](mod@prepare): windows, offsets, filtering, derivatives (seed 000 §II-C,
+//!   seed 001 "Data Processing"); [`Plan`] for estimators that go window by window.
 //! - [`linear`]: the linear model `M x'' + B x' + K (x - x_eq) = f` by least
 //!   squares (seed 000 eq. (3)-(8), seed 001 eq. (3)-(10)).
 //! - [`planar`]: the planar 2-link arm in joint space (seed 003).

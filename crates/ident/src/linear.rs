@@ -11,11 +11,12 @@
 //! column is added; its coefficient `c = -K (x_eq - x_ref)` gives
 //! `x_eq = x_ref - K^{-1} c`.
 //!
-//! Numerics: columns are scaled to unit RMS, the augmented matrix
-//! `[L | F]` is reduced by a tall-skinny Householder QR (chunks reduced in
-//! parallel, never normal equations), and the small triangular factor is
-//! solved by SVD, which also gives the condition number of the scaled
-//! regressor. Standard errors come from the residual variance of each force
+//! Numerics: the augmented matrix `[L | F]` is reduced by a tall-skinny
+//! Householder QR (blocks reduced in parallel, never normal equations; from
+//! a [`Plan`] window by window, without holding the prepared signals), its
+//! triangle's columns are scaled to unit RMS (a QR keeps column norms), and
+//! the small triangular factor is solved by SVD, which also gives the
+//! condition number of the scaled regressor. Standard errors come from the residual variance of each force
 //! component times `(L^T L)^{-1}`, inflated by the residuals' autocorrelation
 //! over the low-pass correlation length (Bartlett-weighted sum), because
 //! filtered residuals are not white. This inflation is exact when the
@@ -896,7 +897,7 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
 /// signals are computed, reduced into its jackknife block's QR triangle and
 /// dropped, so a long recording's prepared signals are never held whole
 /// (issue 16). The same estimate as [`fit_linear`] of the materialised plan
-/// (to rounding). With fewer than [`MIN_JACKKNIFE_BLOCKS`] windows the
+/// (to rounding). With fewer than 8 windows (the fewest jackknife blocks) the
 /// blocks are contiguous pieces that cut through windows: the plan is then
 /// materialised first.
 pub fn fit_linear_plan(plan: &Plan<'_>, params: &LinearParams) -> Result<LinearEstimate> {
