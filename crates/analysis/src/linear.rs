@@ -343,23 +343,32 @@ pub struct ShoulderPosture {
     pub angles_deg: [f64; 3],
 }
 
+impl ShoulderPosture {
+    /// The arm model and the posture's angles (rad).
+    pub fn shoulder(&self) -> (limpid_core::arm::Shoulder, [f64; 3]) {
+        (
+            limpid_core::arm::Shoulder {
+                upper_arm_m: self.upper_arm_m,
+                forearm_m: self.forearm_m,
+                elbow_rad: self.elbow_deg.to_radians(),
+            },
+            self.angles_deg.map(f64::to_radians),
+        )
+    }
+}
+
 /// Map a 3-D end-point estimate to the shoulder's joint space (seed 004).
 pub fn shoulder_impedance(est: &LinearResult, p: &ShoulderPosture) -> Result<ShoulderImpedance> {
     let (Some(k), Some(b)) = (est.stiffness.to_matrix3(), est.damping.to_matrix3()) else {
         return Err(Error::invalid("shoulder", "needs a 3-D estimate (x, y, z)"));
     };
-    let s = limpid_core::arm::Shoulder {
-        upper_arm_m: p.upper_arm_m,
-        forearm_m: p.forearm_m,
-        elbow_rad: p.elbow_deg.to_radians(),
-    };
-    let q = p.angles_deg.map(f64::to_radians);
+    let (s, q) = p.shoulder();
     Ok(ShoulderImpedance {
         angles_deg: p.angles_deg,
         jacobian: s.jacobian(q).into(),
         stiffness: s.joint_impedance(&k, q).into(),
         damping: s.joint_impedance(&b, q).into(),
-        note: "J_h^T Z J_h about the posture; the static-load term dJ^T/dq F is not included"
+        note: "J_h^T Z J_h about the posture; the static-load term dJ^T/dq F is not included. With the elbow fixed the hand moves on a sphere about the shoulder, so J_h has rank 2: the hand's position cannot sense rotation about the shoulder-hand line, and these matrices are singular along it. Seed 004 takes the rotation from the hand's orientation instead: estimate stochastic --shoulder with theta, tauy and utheta columns"
             .into(),
     })
 }

@@ -176,7 +176,9 @@ pub struct LinearArgs {
     pub vertical: AxisArg,
     /// Also give the shoulder's joint-space stiffness and damping J_h^T Z J_h (seed 004's
     /// 3-DoF shoulder): UPPER_ARM_M,FOREARM_M,ELBOW_DEG,FLEXION_DEG,ABDUCTION_DEG,ROTATION_DEG
-    /// (frame: x forward, y left, z up, origin at the shoulder; right arm).
+    /// (frame: x forward, y left, z up, origin at the shoulder; right arm). The hand's
+    /// position cannot sense rotation about the shoulder-hand line: these matrices are
+    /// singular along it (rank 2).
     #[arg(
         long,
         value_name = "L1,L2,E,F,A,R",
@@ -327,6 +329,7 @@ pub fn run(method: Method) -> CliResult {
                     for i in 0..3 {
                         println!("  [{}]", row(&s.damping, i));
                     }
+                    println!("note: {}", s.note);
                 }
             }
             Ok(())
@@ -376,7 +379,7 @@ pub fn run(method: Method) -> CliResult {
 }
 
 /// `--shoulder L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION`.
-fn shoulder_posture(v: &[f64]) -> CliResult<ShoulderPosture> {
+pub(crate) fn shoulder_posture(v: &[f64]) -> CliResult<ShoulderPosture> {
     let [l1, l2, elbow, flex, abd, rot] = v else {
         return Err(limpid_core::Error::invalid(
             "--shoulder",

@@ -71,6 +71,19 @@ pub struct StochasticArgs {
     /// Truth or expected model (JSON with inertia, damping, stiffness): prints phi_T and phi_ij (eq. 15-16).
     #[arg(long, value_name = "FILE")]
     pub expected: Option<PathBuf>,
+    /// Estimate the shoulder's joint impedance as seed 004 does: turn hand X, Z
+    /// (with F and u) into flexion and abduction (τ = J_h^T F, eq. (3)) and
+    /// take theta, tauy, utheta as internal rotation, before estimating:
+    /// UPPER_ARM_M,FOREARM_M,ELBOW_DEG,FLEXION_DEG,ABDUCTION_DEG,ROTATION_DEG of
+    /// the operating point (frame: x forward, y left, z up, origin at the
+    /// shoulder; right arm; the recording's mean X, Z is the hand there).
+    #[arg(
+        long,
+        value_name = "L1,L2,E,F,A,R",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub shoulder: Option<Vec<f64>>,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -102,6 +115,18 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         .iter()
         .map(crate::read_recording)
         .collect::<limpid_core::Result<Vec<_>>>()?;
+    let posture = args
+        .shoulder
+        .as_deref()
+        .map(crate::estimate::shoulder_posture)
+        .transpose()?;
+    let recs = match &posture {
+        Some(p) => recs
+            .iter()
+            .map(|r| limpid_analysis::shoulder::joint_space_recording(r, p))
+            .collect::<limpid_core::Result<Vec<_>>>()?,
+        None => recs,
+    };
     let rec = &recs[0];
     let band = match args.band.as_slice() {
         [lo, hi] => (*lo, *hi),
@@ -153,6 +178,13 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
         "coordinates {} driven by {} | Welch: {} segments of {} samples (resolution {:.3} Hz), Hann | fit band {}-{} Hz",
         coords.join(", "), est.inputs.join(", "), c.segments, c.nperseg, c.frequency_resolution_hz, num(band.0), num(band.1)
     );
+    if let Some(p) = &posture {
+        println!(
+            "shoulder joint space (seed 004 eq. (3)), before estimation: q1 flexion, q2 abduction from the hand's X, Z (tau = J_h^T F){} | posture: flexion {} deg, abduction {} deg, rotation {} deg, elbow {} deg | angles in rad, torques in N m",
+            if coords.len() > 2 { ", q3 internal rotation = the hand's theta" } else { "" },
+            num(p.angles_deg[0]), num(p.angles_deg[1]), num(p.angles_deg[2]), num(p.elbow_deg)
+        );
+    }
     let v = &c.verdicts;
     for (title, m, se, verdict) in [
         (

@@ -244,3 +244,41 @@ fn shoulder_posture_with_the_wrong_count_or_a_1_dof_estimate() {
         assert_eq!(out.stderr.trim_end(), format!("limpid: {expected}"));
     }
 }
+
+#[test]
+fn stochastic_shoulder_posture_that_is_singular_or_a_recording_without_z() {
+    let sa3 = shared().join("examples/stochastic/ex_sa3.csv");
+    let sa3 = sa3.to_str().unwrap();
+    for (extra, expected) in [
+        ("0.3,0.35,90,30", "invalid --shoulder: expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found 4"),
+        // abduction 0: the arm in the sagittal plane, X and Z both follow flexion only
+        ("0.3,0.35,90,30,0,0", "invalid --shoulder: at flexion 30 deg, abduction 0 deg the hand's X and Z do not determine the two angles (condition number of J_h"),
+    ] {
+        let out = limpid(&["estimate", "stochastic", sa3, "--shoulder", extra]);
+        assert_eq!(out.code, 2, "{}", out.stderr);
+        assert!(out.stderr.starts_with(&format!("limpid: {expected}")), "{}", out.stderr);
+        assert_eq!(out.stderr.lines().count(), 1, "{}", out.stderr);
+    }
+    // a 2-D x, y recording has no Z to turn into flexion and abduction
+    let d = tempfile::tempdir().unwrap();
+    let mut s = String::from("t,x,y,fx,fy,ux,uy\n");
+    for i in 0..5000 {
+        let t = i as f64 * 0.001;
+        let (a, b) = ((7.0 * t).sin(), (11.0 * t).cos());
+        s.push_str(&format!("{t},{},{},{a},{b},{a},{b}\n", 0.01 * a, 0.01 * b));
+    }
+    let p = write(&d, "xy.csv", &s);
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        p.to_str().unwrap(),
+        "--shoulder",
+        "0.3,0.35,90,30,45,0",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("xy.csv") && out.stderr.contains("column z"),
+        "{}",
+        out.stderr
+    );
+}

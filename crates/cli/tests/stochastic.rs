@@ -78,3 +78,50 @@ fn spectra_csv_and_bad_band() {
         out.stderr
     );
 }
+
+/// `--shoulder`: seed 004 turns hand X, Z into flexion and abduction before
+/// estimating (τ = J_h^T F, eq. (3)) and keeps θ_y as internal rotation; the
+/// joint stiffness must be the truth seen through J = diag(J_h, 1).
+#[test]
+fn shoulder_joint_space_before_estimation_matches_the_mapped_truth() {
+    let dir = shared().join("examples/stochastic");
+    let truth = read_json(&dir.join("ex_sa3.truth.json"));
+    let rec = dir.join("ex_sa3.csv");
+    let r = json(&[
+        "estimate",
+        "stochastic",
+        rec.to_str().unwrap(),
+        "--shoulder",
+        "0.3,0.35,90,30,45,0",
+        "--json",
+    ]);
+    assert_eq!(r["coordinates"], serde_json::json!(["q1", "q2", "q3"]));
+    assert_eq!(r["inputs"], serde_json::json!(["u1", "u2", "u3"]));
+    let s = limpid_core::arm::Shoulder {
+        upper_arm_m: 0.3,
+        forearm_m: 0.35,
+        elbow_rad: 90f64.to_radians(),
+    };
+    let jh = s.jacobian_xz([30f64.to_radians(), 45f64.to_radians(), 0.0]);
+    let j = nalgebra::Matrix3::new(
+        jh[(0, 0)],
+        jh[(0, 1)],
+        0.0,
+        jh[(1, 0)],
+        jh[(1, 1)],
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+    );
+    let k = mat(&truth["stiffness"]);
+    let k = nalgebra::Matrix3::from_fn(|a, b| k[(a, b)]);
+    let m = j.transpose() * k * j;
+    let expected = nalgebra::DMatrix::from_fn(3, 3, |a, b| m[(a, b)]);
+    let e = rel_err(&mat(&r["stiffness"]), &expected);
+    assert!(
+        e < 0.05,
+        "joint stiffness error {e}: {} vs {expected}",
+        r["stiffness"]
+    );
+}

@@ -286,6 +286,42 @@ impl Shoulder {
     pub fn torques(&self, force: &Vector3<f64>, angles: [f64; 3]) -> Vector3<f64> {
         self.jacobian(angles).transpose() * force
     }
+
+    /// The hand's X-Z Jacobian ∂(X, Z)/∂(flexion, abduction) (rows X and Z,
+    /// columns 1-2 of [`Shoulder::jacobian`]): seed 004's J_h of eq. (3).
+    pub fn jacobian_xz(&self, angles: [f64; 3]) -> nalgebra::Matrix2<f64> {
+        let j = self.jacobian(angles);
+        nalgebra::Matrix2::new(j[(0, 0)], j[(0, 1)], j[(2, 0)], j[(2, 1)])
+    }
+
+    /// Flexion and abduction that put the hand at `x`, `z` (m) with the
+    /// rotation held at `start[2]`, by Newton's method from `start` (a nearby
+    /// posture, e.g. the previous sample's): seed 004's "kinematic
+    /// relationship between the shoulder rotation and hand's position". With
+    /// the elbow fixed the hand stays on a sphere about the shoulder, so its
+    /// position gives two angles, not three. `None` when it does not
+    /// converge to 1e-12 m within 50 steps (out of reach, or a posture where
+    /// X and Z do not determine the two angles).
+    pub fn flexion_abduction_of(&self, x: f64, z: f64, start: [f64; 3]) -> Option<[f64; 3]> {
+        let mut q = start;
+        let miss = |q: [f64; 3]| {
+            let h = self.hand(q);
+            nalgebra::Vector2::new(x - h[0], z - h[2])
+        };
+        for _ in 0..50 {
+            let m = miss(q);
+            if !m.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            if m.norm() <= 1e-12 {
+                return Some(q);
+            }
+            let step = self.jacobian_xz(q).lu().solve(&m)?;
+            q[0] += step[0];
+            q[1] += step[1];
+        }
+        (miss(q).norm() <= 1e-12).then_some(q)
+    }
 }
 
 #[cfg(test)]
@@ -322,5 +358,28 @@ mod shoulder_tests {
         let j = s.jacobian(q);
         let dxl = j * dq;
         assert!((dq.dot(&(kq * dq)) - dxl.dot(&(k * dxl))).abs() < 1e-15);
+    }
+
+    #[test]
+    fn flexion_abduction_of_inverts_the_hand_x_z_and_refuses_out_of_reach() {
+        let s = Shoulder {
+            upper_arm_m: 0.3,
+            forearm_m: 0.35,
+            elbow_rad: FRAC_PI_2,
+        };
+        let q0 = [0.4, 0.3, -0.2];
+        // the hand stays on a sphere: its 3 x 3 Jacobian has rank 2
+        assert!(s.jacobian(q0).determinant().abs() < 1e-9);
+        let target = s.hand([0.45, 0.27, -0.2]);
+        let q = s.flexion_abduction_of(target[0], target[2], q0).unwrap();
+        assert!((q[0] - 0.45).abs() < 1e-9 && (q[1] - 0.27).abs() < 1e-9 && q[2] == -0.2);
+        // J_h^T F of the X-Z force does the same work as F on a small X-Z motion
+        let jxz = s.jacobian_xz(q0);
+        let dq = nalgebra::Vector2::new(1e-6, -2e-6);
+        let h1 = s.hand([q0[0] + dq[0], q0[1] + dq[1], q0[2]]) - s.hand(q0);
+        let f = nalgebra::Vector2::new(3.0, -2.0);
+        assert!(((jxz.transpose() * f).dot(&dq) - (f[0] * h1[0] + f[1] * h1[2])).abs() < 1e-11);
+        // farther than upper arm + forearm from the shoulder
+        assert!(s.flexion_abduction_of(0.0, 2.0, q0).is_none());
     }
 }
