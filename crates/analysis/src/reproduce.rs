@@ -819,6 +819,18 @@ fn seed004(seed: u64) -> Result<Reproduction> {
         )
         .with_note("N_FFT = N_WND = 24576, N_OVL = 18432, Hann, 50 s at 1 kHz"),
     );
+    for link in ["a_1", "a_2", "d_3"] {
+        out.rows.push(
+            row(
+                "004",
+                format!("Table I (D-H, Craig's notation), {link} of the PUMA-type robot"),
+                None,
+                None,
+                "m",
+            )
+            .with_note("the table names the length but gives no value, and its third row reads alpha_2 = 90 deg + theta_3 with theta_3 = 0: the geometry cannot be rebuilt; the virtual robot is a 3-joint vertical-plane chain (0.35, 0.35, 0.10 m) with the paper's M-bar_phi"),
+        );
+    }
     let coords = ["x", "z", "theta"];
     let mut profiles = Vec::new();
     for (name, ctrl, rig, est, acc) in &results {
