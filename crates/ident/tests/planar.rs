@@ -349,3 +349,79 @@ fn slow_torque_fluctuation_during_rest_does_not_move_the_onset() {
     );
     assert!(ek < 0.1, "stiffness error {ek}");
 }
+
+/// Seed 003 §IV-A's cuff: soft tissue in series between robot and arm. A
+/// very stiff cuff gives back the rigid arm; the seed's cuff delays the
+/// criteria to windows of a few hundred ms, as seed 003 Fig. 4 shows, where
+/// the rigid arm meets them within 100 ms.
+#[test]
+fn a_cuff_in_series_lengthens_the_window_the_criteria_need() {
+    use limpid_ident::planar::window_sweep;
+    use limpid_lab::planar::{simulate_planar, Cuff, PlanarProtocol, PlanarSubject};
+    let rigid = PlanarSubject::seed003();
+    let arm = seed003_arm();
+    let protocol = PlanarProtocol::seed003();
+    let run = |cuff: Option<Cuff>| {
+        let subject = PlanarSubject {
+            cuff,
+            ..rigid.clone()
+        };
+        simulate_planar(&subject, &protocol, 0.0, 0.0, 5).unwrap()
+    };
+    // 1e7 N/m: the arm follows the cuff to within micrometres
+    let stiff = run(Some(Cuff::at_hand(&arm, rigid.q0, 1e7, 2e3)));
+    let none = run(None);
+    let torque_scale = none
+        .column("tau1")
+        .unwrap()
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    for name in ["tau1", "tau2"] {
+        let worst = stiff
+            .column(name)
+            .unwrap()
+            .iter()
+            .zip(none.column(name).unwrap())
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst < 0.02 * torque_scale, "{name}: {worst} N m apart");
+    }
+    // the seed 003 cuff, noise as the examples
+    let with_noise = |cuff: Option<Cuff>| {
+        let subject = PlanarSubject {
+            cuff,
+            ..rigid.clone()
+        };
+        let rec = simulate_planar(&subject, &protocol, 0.02, 1e-5, 5).unwrap();
+        let data = prepare_planar(
+            &rec,
+            &PlanarPrepare {
+                arm: seed003_arm(),
+                cutoff_hz: None,
+                order: 4,
+                elbow_positive: true,
+            },
+        )
+        .unwrap();
+        window_sweep(&data, 50.0, 430.0, 10.0, None).unwrap()
+    };
+    let rigid_sweep = with_noise(None);
+    let cuff_sweep = with_noise(Some(Cuff::seed003(&arm, rigid.q0)));
+    let pd = |s: &limpid_ident::planar::Sweep| s.min_positive_definite_ms.unwrap_or(f64::INFINITY);
+    assert!(
+        pd(&rigid_sweep) <= 100.0,
+        "rigid arm: K PD from {:?}",
+        rigid_sweep.min_positive_definite_ms
+    );
+    assert!(
+        (150.0..=430.0).contains(&pd(&cuff_sweep)),
+        "with the cuff: K PD from {:?}",
+        cuff_sweep.min_positive_definite_ms
+    );
+    // long windows see the cuff and the arm in series: a softer K than the arm's
+    let last = cuff_sweep.rows.last().unwrap();
+    let k11 = last.estimate.stiffness[(0, 0)];
+    assert!(
+        k11 < rigid.stiffness[(0, 0)] && k11 > 0.3 * rigid.stiffness[(0, 0)],
+        "K11 {k11}"
+    );
+}

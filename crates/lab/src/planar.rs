@@ -6,6 +6,15 @@
 //! stiffness and damping are scaled (seed 003 §I-B: reflexes act after
 //! 25-110 ms). Each trial window holds `rest_s` before the onset and `after_s`
 //! after it.
+//!
+//! With a [`Cuff`] the robot no longer moves the arm itself: it moves a cuff
+//! (seed 003 §IV-A: "connected to the human arm via a plastic cuff") that
+//! holds the forearm through soft tissue, a spring and damper in series.
+//! The arm's motion then follows from its dynamics (eq. (9) with the cuff's
+//! torque as input, integrated at 20 kHz), and the recording holds what the
+//! robot measures: its own position and the force in the cuff. The rigid
+//! model of seed 003 does not describe that until the cuff's fast dynamics
+//! have passed, which is what makes the seed's observation windows long.
 
 use nalgebra::{Matrix2, Vector2};
 use rand::{rngs::StdRng, seq::SliceRandom, SeedableRng};
@@ -27,6 +36,46 @@ pub struct Reflex {
     pub damping_gain: f64,
 }
 
+/// [`Cuff::seed003`]'s stiffness (N/m) and damping (N s/m) at the hand.
+pub const SEED003_CUFF: (f64, f64) = (2000.0, 20.0);
+
+/// Soft tissue between the robot's cuff and the arm: a spring and damper in
+/// series, in joint space.
+#[derive(Debug, Clone, Copy)]
+pub struct Cuff {
+    /// Joint-space stiffness of the tissue (N m/rad).
+    pub stiffness: Matrix2<f64>,
+    /// Joint-space damping of the tissue (N m s/rad).
+    pub damping: Matrix2<f64>,
+}
+
+impl Cuff {
+    /// An isotropic tissue at the hand, `stiffness_n_per_m` and
+    /// `damping_ns_per_m`, seen in joint space through the arm's Jacobian at
+    /// `q0` (J^T k J; small motions).
+    pub fn at_hand(
+        arm: &limpid_core::arm::Arm,
+        q0: [f64; 2],
+        stiffness_n_per_m: f64,
+        damping_ns_per_m: f64,
+    ) -> Self {
+        let j = arm.jacobian(q0);
+        let jtj = j.transpose() * j;
+        Cuff {
+            stiffness: jtj * stiffness_n_per_m,
+            damping: jtj * damping_ns_per_m,
+        }
+    }
+
+    /// Seed 003's plastic cuff on the forearm: 2000 N/m and 20 N s/m at the
+    /// hand. The seeds give no value; this is an order of magnitude for soft
+    /// tissue pressed by a rigid cuff (hand-held interfaces are stiffer, a
+    /// loose strap softer); `limpid reproduce 003` states it.
+    pub fn seed003(arm: &limpid_core::arm::Arm, q0: [f64; 2]) -> Self {
+        Cuff::at_hand(arm, q0, SEED003_CUFF.0, SEED003_CUFF.1)
+    }
+}
+
 /// A planar subject in joint space.
 #[derive(Debug, Clone)]
 pub struct PlanarSubject {
@@ -42,6 +91,8 @@ pub struct PlanarSubject {
     pub tau0: [f64; 2],
     /// A stretch reflex, if any.
     pub reflex: Option<Reflex>,
+    /// Soft tissue between cuff and arm; `None`: the robot moves the arm rigidly.
+    pub cuff: Option<Cuff>,
 }
 
 impl PlanarSubject {
@@ -54,6 +105,7 @@ impl PlanarSubject {
             q0: [0.08, 1.0],
             tau0: [0.37, 0.41],
             reflex: None,
+            cuff: None,
         }
     }
 }
@@ -95,6 +147,9 @@ impl PlanarProtocol {
         }
     }
 }
+
+/// Integration steps per sample of the arm behind a [`Cuff`] (20 kHz at 1 kHz).
+const CUFF_SUBSTEPS: usize = 20;
 
 /// Simulate `t,q1,q2,tau1,tau2,trial` with white torque and angle noise.
 pub fn simulate_planar(
@@ -142,27 +197,63 @@ pub fn simulate_planar_intervals(
     let mut cols: Vec<Vec<f64>> = (0..6)
         .map(|_| Vec::with_capacity(per * order.len()))
         .collect();
+    let impedance_at = |t_on: f64| match subject.reflex {
+        Some(r) if t_on > r.latency_s => (
+            subject.stiffness * (1.0 + r.stiffness_gain),
+            subject.damping * (1.0 + r.damping_gain),
+        ),
+        _ => (subject.stiffness, subject.damping),
+    };
+    let q0 = Vector2::new(subject.q0[0], subject.q0[1]);
+    let tau0 = Vector2::new(subject.tau0[0], subject.tau0[1]);
     for (trial, &d) in order.iter().enumerate() {
-        let dir = protocol.directions[d];
+        let dir = Vector2::new(protocol.directions[d][0], protocol.directions[d][1]);
+        let tk = intervals_s[trial % intervals_s.len()];
+        // the robot's (or cuff's) joint-space trajectory: position, velocity, acceleration
+        let robot = |t_on: f64| {
+            let (s, sd, sdd) = Profile::Quintic.eval(t_on, tk);
+            (q0 + dir * s, dir * sd, dir * sdd)
+        };
+        // with a cuff: the arm's state, at rest where the cuff carries τ0
+        let mut arm = subject.cuff.map(|c| {
+            let rest = c.stiffness.try_inverse().map_or(q0, |inv| q0 - inv * tau0);
+            (c, rest, rest, Vector2::<f64>::zeros())
+        });
         for i in 0..per {
             let t_on = i as f64 / fs - protocol.rest_s;
-            let tk = intervals_s[trial % intervals_s.len()];
-            let (s, sd, sdd) = Profile::Quintic.eval(t_on, tk);
-            let q = [subject.q0[0] + dir[0] * s, subject.q0[1] + dir[1] * s];
-            let qd = [dir[0] * sd, dir[1] * sd];
-            let qdd = [dir[0] * sdd, dir[1] * sdd];
-            let (kk, dd) = match subject.reflex {
-                Some(r) if t_on > r.latency_s => (
-                    subject.stiffness * (1.0 + r.stiffness_gain),
-                    subject.damping * (1.0 + r.damping_gain),
-                ),
-                _ => (subject.stiffness, subject.damping),
+            let (q, qd, qdd) = robot(t_on);
+            let tau = match &mut arm {
+                None => {
+                    let (kk, dd) = impedance_at(t_on);
+                    mass_matrix(q[1], subject.xi) * qdd
+                        + coriolis(q[1], [qd[0], qd[1]], subject.xi)
+                        + dd * qd
+                        + kk * (q - q0)
+                        + tau0
+                }
+                Some((cuff, rest, qa, qad)) => {
+                    let measured = cuff.stiffness * (q - *qa) + cuff.damping * (qd - *qad);
+                    // eq. (9) of the arm, driven by the cuff, until the next sample
+                    for k in 0..CUFF_SUBSTEPS {
+                        let t = t_on + k as f64 / (fs * CUFF_SUBSTEPS as f64);
+                        let (qr, qrd, _) = robot(t);
+                        let (kk, dd) = impedance_at(t);
+                        let on_arm = cuff.stiffness * (qr - *qa) + cuff.damping * (qrd - *qad);
+                        let rhs = on_arm
+                            - tau0
+                            - coriolis(qa[1], [qad[0], qad[1]], subject.xi)
+                            - dd * *qad
+                            - kk * (*qa - *rest);
+                        let qadd = mass_matrix(qa[1], subject.xi)
+                            .try_inverse()
+                            .map_or(Vector2::zeros(), |m| m * rhs);
+                        let h = 1.0 / (fs * CUFF_SUBSTEPS as f64);
+                        *qad += qadd * h;
+                        *qa += *qad * h;
+                    }
+                    measured
+                }
             };
-            let tau = mass_matrix(q[1], subject.xi) * Vector2::new(qdd[0], qdd[1])
-                + coriolis(q[1], qd, subject.xi)
-                + dd * Vector2::new(qd[0], qd[1])
-                + kk * Vector2::new(q[0] - subject.q0[0], q[1] - subject.q0[1])
-                + Vector2::new(subject.tau0[0], subject.tau0[1]);
             cols[0].push((trial * per + i) as f64 / fs);
             cols[1].push(q[0] + angle_std * unit.sample(&mut rng));
             cols[2].push(q[1] + angle_std * unit.sample(&mut rng));
