@@ -530,17 +530,33 @@ fn window_sweep(
 
 /// Seed 004's stochastic MIMO estimator; JSON text.
 #[pyfunction]
-#[pyo3(signature = (recording, nperseg=None, noverlap=None, band_hz=(0.5, 10.0)))]
+#[pyo3(signature = (recording, nperseg=None, noverlap=None, band_hz=(0.5, 10.0), shoulder=None))]
 fn estimate_stochastic(
     py: Python<'_>,
     recording: &Bound<'_, PyAny>,
     nperseg: Option<usize>,
     noverlap: Option<usize>,
     band_hz: (f64, f64),
+    shoulder: Option<(f64, f64, f64, f64, f64, f64)>,
 ) -> PyResult<String> {
     use limpid_ident::stochastic::{default_welch, estimate_stochastic, StochasticParams};
     let rec = self::recording(recording)?;
     detached(py, move || -> limpid_core::Result<String> {
+        // seed 004 §II-B: the shoulder's joint space before estimation
+        let rec = match shoulder {
+            Some((l1, l2, elbow, flexion, abduction, rotation)) => {
+                limpid_analysis::shoulder::joint_space_recording(
+                    &rec,
+                    &limpid_analysis::linear::ShoulderPosture {
+                        upper_arm_m: l1,
+                        forearm_m: l2,
+                        elbow_deg: elbow,
+                        angles_deg: [flexion, abduction, rotation],
+                    },
+                )?
+            }
+            None => rec,
+        };
         let mut w = default_welch(rec.len(), rec.sample_rate());
         if let Some(n) = nperseg {
             w.nperseg = n;

@@ -327,3 +327,45 @@ def test_a_text_column_is_named_with_its_row():
     rec = FakeFrame({"t": np.arange(4) / 100, "x": [0.0, 0.1, "slip", 0.2], "fx": np.zeros(4)})
     with pytest.raises(ValueError, match=r"column x, row 3: expected a number, found 'slip'"):
         limpid.estimate_linear(rec)
+
+
+def _hand(angles_rad, upper=0.3, fore=0.35, elbow_rad=np.pi / 2):
+    """The arm model of limpid's shoulder (R = Ry(-flexion) Rx(-abduction) Rz(rotation)),
+    written again here from its documented definition."""
+    f, a, r = angles_rad
+
+    def rot(axis, t):
+        c, s = np.cos(t), np.sin(t)
+        return {"x": np.array([[1, 0, 0], [0, c, -s], [0, s, c]]),
+                "y": np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]]),
+                "z": np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])}[axis]
+
+    arm = np.array([0, 0, -upper]) + fore * np.array([np.sin(elbow_rad), 0, -np.cos(elbow_rad)])
+    return rot("y", -f) @ rot("x", -a) @ rot("z", r) @ arm
+
+
+def test_stochastic_in_the_shoulders_joint_space_matches_the_mapped_truth():
+    case = SHARED / "stochastic" / "ex_sa3"
+    truth = json.loads(case.with_suffix(".truth.json").read_text())
+    est = limpid.estimate_stochastic(case.with_suffix(".csv"), shoulder=(0.3, 0.35, 90, 30, 45, 0))
+    assert est.to_dict()["coordinates"] == ["q1", "q2", "q3"]
+    # J = diag(J_h, 1), J_h = d(X, Z)/d(flexion, abduction) by central differences
+    q0 = np.radians([30.0, 45.0, 0.0])
+    jh = np.zeros((2, 2))
+    for c in range(2):
+        dq = np.zeros(3)
+        dq[c] = 1e-6
+        d = (_hand(q0 + dq) - _hand(q0 - dq)) / 2e-6
+        jh[:, c] = d[[0, 2]]
+    j = np.eye(3)
+    j[:2, :2] = jh
+    expected = j.T @ np.array(truth["stiffness"]) @ j
+    assert rel(est.stiffness, expected) < 0.05
+
+
+def test_stochastic_shoulder_needs_six_numbers_and_a_usable_posture():
+    path = SHARED / "stochastic" / "ex_sa3.csv"
+    with pytest.raises(ValueError, match="expected 6 numbers"):
+        limpid.estimate_stochastic(path, shoulder=(0.3, 0.35, 90, 30, 45))
+    with pytest.raises(ValueError, match="do not determine the two angles"):
+        limpid.estimate_stochastic(path, shoulder=(0.3, 0.35, 90, 30, 0, 0))

@@ -515,13 +515,37 @@ def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], *,
 
 def estimate_stochastic(recording: RecordingLike, *, nperseg: Optional[int] = None,
                         noverlap: Optional[int] = None,
-                        band_hz: Tuple[float, float] = (0.5, 10.0)) -> Result:
-    """Seed 004's stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric fit."""
+                        band_hz: Tuple[float, float] = (0.5, 10.0),
+                        shoulder: Optional[Sequence[float]] = None) -> Result:
+    """Seed 004's stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric fit.
+
+    Parameters
+    ----------
+    shoulder : (upper_arm_m, forearm_m, elbow_deg, flexion_deg, abduction_deg, rotation_deg)
+        Estimate the shoulder's joint impedance as seed 004 does (``limpid estimate
+        stochastic --shoulder``): hand X, Z become flexion ``q1`` and abduction ``q2``,
+        forces torques ``J_h^T F`` (eq. (3)), and ``theta``/``tauy``/``utheta`` internal
+        rotation ``q3``, before the spectra. The posture is the operating point (the
+        recording's mean X, Z is the hand there); x forward, y left, z up, right arm.
+    """
     seg = None if nperseg is None else _integer("nperseg", nperseg, minimum=2)
     ov = None if noverlap is None else _integer("noverlap", noverlap, minimum=0)
     lo, hi = band_hz
     band = (_number("band_hz", lo), _number("band_hz", hi))
-    return Result(json.loads(_limpid.estimate_stochastic(_recording(recording), seg, ov, band)))
+    posture = None
+    if shoulder is not None:
+        try:
+            values = list(shoulder)
+        except TypeError:
+            raise ValueError(f"shoulder: expected 6 numbers (upper arm, forearm, elbow, flexion, "
+                             f"abduction, rotation), found {shoulder!r}") from None
+        if len(values) != 6:
+            raise ValueError(f"shoulder: expected 6 numbers (upper arm, forearm, elbow, flexion, "
+                             f"abduction, rotation), found {len(values)}")
+        l1, l2, e, f, a, r = (_number("shoulder", v) for v in values)
+        posture = (l1, l2, e, f, a, r)
+    return Result(json.loads(_limpid.estimate_stochastic(_recording(recording), seg, ov, band,
+                                                         posture)))
 
 
 def estimate_reflex(recording: RecordingLike, *, position: str = "q1", torque: str = "tau1",
