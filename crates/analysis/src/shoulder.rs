@@ -35,6 +35,17 @@ use crate::linear::ShoulderPosture;
 /// and abduction usefully (a millimetre of hand motion would be radians).
 const SINGULAR_CONDITION: f64 = 1e4;
 
+/// J = diag(J_h, 1) at the posture: the hand's (X, Z, θ_y) per (flexion,
+/// abduction, internal rotation). A hand impedance Z in those coordinates is
+/// J^T Z J in the shoulder's joint space for small motions.
+pub fn task_jacobian(posture: &ShoulderPosture) -> nalgebra::Matrix3<f64> {
+    let (shoulder, q0) = posture.shoulder();
+    let jh = shoulder.jacobian_xz(q0);
+    let mut j = nalgebra::Matrix3::identity();
+    j.fixed_view_mut::<2, 2>(0, 0).copy_from(&jh);
+    j
+}
+
 /// A recording with `x`, `z`, `fx`, `fz`, `ux`, `uz` (and optionally `theta`,
 /// `tauy`, `utheta`) turned into the shoulder's joint space: columns `t`,
 /// `q1`/`tau1`/`u1` (flexion), `q2`/`tau2`/`u2` (abduction) and, with a

@@ -97,23 +97,12 @@ fn shoulder_joint_space_before_estimation_matches_the_mapped_truth() {
     ]);
     assert_eq!(r["coordinates"], serde_json::json!(["q1", "q2", "q3"]));
     assert_eq!(r["inputs"], serde_json::json!(["u1", "u2", "u3"]));
-    let s = limpid_core::arm::Shoulder {
+    let j = limpid_analysis::shoulder::task_jacobian(&limpid_analysis::linear::ShoulderPosture {
         upper_arm_m: 0.3,
         forearm_m: 0.35,
-        elbow_rad: 90f64.to_radians(),
-    };
-    let jh = s.jacobian_xz([30f64.to_radians(), 45f64.to_radians(), 0.0]);
-    let j = nalgebra::Matrix3::new(
-        jh[(0, 0)],
-        jh[(0, 1)],
-        0.0,
-        jh[(1, 0)],
-        jh[(1, 1)],
-        0.0,
-        0.0,
-        0.0,
-        1.0,
-    );
+        elbow_deg: 90.0,
+        angles_deg: [30.0, 45.0, 0.0],
+    });
     let k = mat(&truth["stiffness"]);
     let k = nalgebra::Matrix3::from_fn(|a, b| k[(a, b)]);
     let m = j.transpose() * k * j;

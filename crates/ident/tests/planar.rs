@@ -86,22 +86,27 @@ fn seed003_arm() -> Arm {
     }
 }
 
+/// Seed 003's preparation: its arm, no extra low-pass, 4th-order filter.
+fn seed003_prepare() -> PlanarPrepare {
+    PlanarPrepare {
+        arm: seed003_arm(),
+        cutoff_hz: None,
+        order: 4,
+        elbow_positive: true,
+    }
+}
+
+fn prepare_seed003(rec: &limpid_core::Recording) -> limpid_ident::planar::PlanarData {
+    prepare_planar(rec, &seed003_prepare()).unwrap()
+}
+
 #[test]
 fn virtual_arm_without_reflex_is_recovered_and_constant_over_windows() {
     use limpid_ident::planar::window_sweep;
     use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject};
     let subject = PlanarSubject::seed003();
     let rec = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.02, 1e-5, 3).unwrap();
-    let data = prepare_planar(
-        &rec,
-        &PlanarPrepare {
-            arm: seed003_arm(),
-            cutoff_hz: None,
-            order: 4,
-            elbow_positive: true,
-        },
-    )
-    .unwrap();
+    let data = prepare_seed003(&rec);
     let sweep = window_sweep(&data, 100.0, 400.0, 50.0, None).unwrap();
     for row in &sweep.rows {
         let k = &row.estimate.stiffness;
@@ -126,16 +131,7 @@ fn reflex_after_60_ms_makes_the_stiffness_estimate_grow_with_the_window() {
         damping_gain: 0.0,
     });
     let rec = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.02, 1e-5, 4).unwrap();
-    let data = prepare_planar(
-        &rec,
-        &PlanarPrepare {
-            arm: seed003_arm(),
-            cutoff_hz: None,
-            order: 4,
-            elbow_positive: true,
-        },
-    )
-    .unwrap();
+    let data = prepare_seed003(&rec);
     let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
     let k11: Vec<f64> = sweep
         .rows
@@ -295,12 +291,7 @@ fn slow_torque_fluctuation_during_rest_does_not_move_the_onset() {
     use rand::{Rng, SeedableRng};
     let subject = PlanarSubject::seed003();
     let mut rec = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.02, 1e-5, 5).unwrap();
-    let prep = PlanarPrepare {
-        arm: seed003_arm(),
-        cutoff_hz: None,
-        order: 4,
-        elbow_positive: true,
-    };
+    let prep = seed003_prepare();
     let clean = prepare_planar(&rec, &prep).unwrap();
     let t = rec.t().to_vec();
     let mut rng = rand::rngs::StdRng::seed_from_u64(9);
@@ -392,16 +383,7 @@ fn a_cuff_in_series_lengthens_the_window_the_criteria_need() {
             ..rigid.clone()
         };
         let rec = simulate_planar(&subject, &protocol, 0.02, 1e-5, 5).unwrap();
-        let data = prepare_planar(
-            &rec,
-            &PlanarPrepare {
-                arm: seed003_arm(),
-                cutoff_hz: None,
-                order: 4,
-                elbow_positive: true,
-            },
-        )
-        .unwrap();
+        let data = prepare_seed003(&rec);
         window_sweep(&data, 50.0, 430.0, 10.0, None).unwrap()
     };
     let rigid_sweep = with_noise(None);
