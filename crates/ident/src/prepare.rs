@@ -336,12 +336,9 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
     let sign = if params.negate_force { -1.0 } else { 1.0 };
     let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
 
+    let mode = resolved_windowing(&rec, params);
     // the noise of every signal onset detection needs, signals in parallel
-    let trials = match params.windowing {
-        Windowing::Trials => true,
-        Windowing::Auto => rec.has(&params.trial_column),
-        _ => false,
-    };
+    let trials = matches!(mode, Windowing::Trials);
     let noisy: Vec<&[f64]> = pos
         .iter()
         .chain(frc.iter().filter(|_| trials))
@@ -351,7 +348,8 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
     let force_noise = position_noise.split_off(pos.len());
     let mut windows = make_windows(
         &rec,
-        params,
+        mode,
+        &params.trial_column,
         (&pos, &frc),
         (&position_noise, &force_noise),
         min_rest,
@@ -718,10 +716,22 @@ fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }
 
-/// `force_noise` is needed (and given) only for trial windows.
+/// `params.windowing` with `Auto` decided: trial windows when the recording
+/// has the trial column, else one continuous window.
+fn resolved_windowing(rec: &Recording, params: &PrepareParams) -> Windowing {
+    match params.windowing {
+        Windowing::Auto if rec.has(&params.trial_column) => Windowing::Trials,
+        Windowing::Auto => Windowing::Continuous,
+        other => other,
+    }
+}
+
+/// Windows of a [`resolved_windowing`] `mode`; `force_noise` is needed (and
+/// given) only for trial windows.
 fn make_windows(
     rec: &Recording,
-    params: &PrepareParams,
+    mode: Windowing,
+    trial_column: &str,
     (pos, frc): (&[&[f64]], &[&[f64]]),
     (position_noise, force_noise): (&[f64], &[f64]),
     min_rest: usize,
@@ -733,12 +743,6 @@ fn make_windows(
             onset: None,
         }]
     };
-    let has_trials = rec.has(&params.trial_column);
-    let mode = match params.windowing {
-        Windowing::Auto if has_trials => Windowing::Trials,
-        Windowing::Auto => Windowing::Continuous,
-        other => other,
-    };
     match mode {
         Windowing::Continuous => Ok(continuous()),
         Windowing::Trials => {
@@ -747,7 +751,7 @@ fn make_windows(
             let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
             let sigmas: Vec<f64> = position_noise.iter().chain(force_noise).copied().collect();
             let floors: Vec<f64> = signals.par_iter().map(|c| change_floors(&[c])[0]).collect();
-            let mut windows = windows_from_trial_column(rec, &params.trial_column)?;
+            let mut windows = windows_from_trial_column(rec, trial_column)?;
             // trials in parallel; the first trial without rest (in order) is the error
             let onsets: Vec<usize> = windows
                 .par_iter()
@@ -761,7 +765,7 @@ fn make_windows(
                     return Err(Error::NoRestBeforeOnset {
                         path: rec.path().to_path_buf(),
                         row: rec.row_of(w.range.start),
-                        column: params.trial_column.clone(),
+                        column: trial_column.to_string(),
                         trial: w.id,
                         rest_samples: rest,
                         needed: min_rest,
@@ -772,6 +776,7 @@ fn make_windows(
             }
             Ok(windows)
         }
+        // Auto is resolved before; it cannot reach here
         Windowing::Onsets | Windowing::Auto => {
             let found = detect_windows(pos, min_rest);
             if found.is_empty() {
