@@ -330,7 +330,8 @@ pub struct ShoulderImpedance {
     pub note: String,
 }
 
-/// The shoulder's posture and segments for [`shoulder_impedance`].
+/// The shoulder's posture and segments for [`shoulder_impedance`] and
+/// [`crate::shoulder::joint_space_recording`].
 #[derive(Debug, Clone, Copy)]
 pub struct ShoulderPosture {
     /// Upper-arm length (m).
