@@ -345,16 +345,41 @@ pub struct ShoulderPosture {
 }
 
 impl ShoulderPosture {
-    /// The arm model and the posture's angles (rad).
-    pub fn shoulder(&self) -> (limpid_core::arm::Shoulder, [f64; 3]) {
-        (
+    /// The arm model and the posture's angles (rad); lengths must be in
+    /// (0, 2] m and every angle finite.
+    pub fn shoulder(&self) -> Result<(limpid_core::arm::Shoulder, [f64; 3])> {
+        for (name, v) in [
+            ("upper arm length", self.upper_arm_m),
+            ("forearm length", self.forearm_m),
+        ] {
+            if !(v > 0.0 && v <= 2.0) {
+                return Err(Error::invalid(
+                    "--shoulder",
+                    if v.abs() < 1e6 {
+                        format!("{name} must be in (0, 2] m, found {v}")
+                    } else {
+                        format!("{name} must be in (0, 2] m, found {v:e}")
+                    },
+                ));
+            }
+        }
+        if !(self.elbow_deg.is_finite() && self.angles_deg.iter().all(|a| a.is_finite())) {
+            return Err(Error::invalid(
+                "--shoulder",
+                format!(
+                    "angles must be finite degrees, found elbow {}, flexion, abduction, rotation {:?}",
+                    self.elbow_deg, self.angles_deg
+                ),
+            ));
+        }
+        Ok((
             limpid_core::arm::Shoulder {
                 upper_arm_m: self.upper_arm_m,
                 forearm_m: self.forearm_m,
                 elbow_rad: self.elbow_deg.to_radians(),
             },
             self.angles_deg.map(f64::to_radians),
-        )
+        ))
     }
 }
 
@@ -363,7 +388,7 @@ pub fn shoulder_impedance(est: &LinearResult, p: &ShoulderPosture) -> Result<Sho
     let (Some(k), Some(b)) = (est.stiffness.to_matrix3(), est.damping.to_matrix3()) else {
         return Err(Error::invalid("shoulder", "needs a 3-D estimate (x, y, z)"));
     };
-    let (s, q) = p.shoulder();
+    let (s, q) = p.shoulder()?;
     Ok(ShoulderImpedance {
         angles_deg: p.angles_deg,
         jacobian: s.jacobian(q).into(),

@@ -38,12 +38,12 @@ const SINGULAR_CONDITION: f64 = 1e4;
 /// J = diag(J_h, 1) at the posture: the hand's (X, Z, θ_y) per (flexion,
 /// abduction, internal rotation). A hand impedance Z in those coordinates is
 /// J^T Z J in the shoulder's joint space for small motions.
-pub fn task_jacobian(posture: &ShoulderPosture) -> nalgebra::Matrix3<f64> {
-    let (shoulder, q0) = posture.shoulder();
+pub fn task_jacobian(posture: &ShoulderPosture) -> Result<nalgebra::Matrix3<f64>> {
+    let (shoulder, q0) = posture.shoulder()?;
     let jh = shoulder.jacobian_xz(q0);
     let mut j = nalgebra::Matrix3::identity();
     j.fixed_view_mut::<2, 2>(0, 0).copy_from(&jh);
-    j
+    Ok(j)
 }
 
 /// A recording with `x`, `z`, `fx`, `fz`, `ux`, `uz` (and optionally `theta`,
@@ -52,7 +52,7 @@ pub fn task_jacobian(posture: &ShoulderPosture) -> nalgebra::Matrix3<f64> {
 /// rotation axis, `q3`/`tau3`/`u3` (internal rotation = the hand's θ_y).
 /// Angles in rad, torques in N m. The path stays the recording's, for errors.
 pub fn joint_space_recording(rec: &Recording, posture: &ShoulderPosture) -> Result<Recording> {
-    let (shoulder, q0) = posture.shoulder();
+    let (shoulder, q0) = posture.shoulder()?;
     let j0 = shoulder.jacobian_xz(q0);
     let singular = j0.singular_values();
     let condition = singular.max() / singular.min();

@@ -16,7 +16,7 @@ const POSTURE: ShoulderPosture = ShoulderPosture {
 
 /// J = diag(J_h, 1), written out from J_h here (not through `task_jacobian`).
 fn task_jacobian_by_hand() -> Matrix3<f64> {
-    let (s, q) = POSTURE.shoulder();
+    let (s, q) = POSTURE.shoulder().unwrap();
     let jh = s.jacobian_xz(q);
     Matrix3::new(
         jh[(0, 0)],
@@ -44,7 +44,10 @@ fn shoulder_impedance_estimated_in_joint_space_matches_the_truth_and_the_hand_es
     let b_q = Matrix3::new(0.8, 0.1, 0.0, 0.1, 0.6, 0.0, 0.0, 0.0, 0.08);
     let m_q = Matrix3::from_diagonal(&nalgebra::Vector3::new(0.1, 0.08, 0.01));
     let j = task_jacobian_by_hand();
-    assert_eq!(j, limpid_analysis::shoulder::task_jacobian(&POSTURE));
+    assert_eq!(
+        j,
+        limpid_analysis::shoulder::task_jacobian(&POSTURE).unwrap()
+    );
     let j_inv = j.try_inverse().unwrap();
     let to_hand = |z: &Matrix3<f64>| j_inv.transpose() * z * j_inv;
     let mut rig = RigExperiment::spring_array(&SA1);

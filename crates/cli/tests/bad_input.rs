@@ -253,6 +253,9 @@ fn stochastic_shoulder_posture_that_is_singular_or_a_recording_without_z() {
         ("0.3,0.35,90,30", "invalid --shoulder: expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found 4"),
         // abduction 0: the arm in the sagittal plane, X and Z both follow flexion only
         ("0.3,0.35,90,30,0,0", "invalid --shoulder: at flexion 30 deg, abduction 0 deg the hand's X and Z do not determine the two angles (condition number of J_h"),
+        ("-0.3,0.35,90,30,45,0", "invalid --shoulder: upper arm length must be in (0, 2] m, found -0.3"),
+        ("0.3,1e307,90,30,45,0", "invalid --shoulder: forearm length must be in (0, 2] m, found 1e307"),
+        ("0.3,0.35,90,30,nan,0", "invalid --shoulder: angles must be finite degrees"),
     ] {
         let out = limpid(&["estimate", "stochastic", sa3, "--shoulder", extra]);
         assert_eq!(out.code, 2, "{}", out.stderr);

@@ -102,7 +102,8 @@ fn shoulder_joint_space_before_estimation_matches_the_mapped_truth() {
         forearm_m: 0.35,
         elbow_deg: 90.0,
         angles_deg: [30.0, 45.0, 0.0],
-    });
+    })
+    .unwrap();
     let k = mat(&truth["stiffness"]);
     let k = nalgebra::Matrix3::from_fn(|a, b| k[(a, b)]);
     let m = j.transpose() * k * j;
