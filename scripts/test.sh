@@ -1,30 +1,29 @@
 #!/usr/bin/env bash
 # The tests: the Rust workspace, then the Python package built as a wheel and
 # tested in a fresh virtual environment (maturin, numpy, scipy, pytest from PyPI).
+#
+# Set-up included: on Debian, the system packages the tests need are installed
+# when this runs as root or with password-less sudo; otherwise one line says
+# what to install. Real human recordings (another licence) are read from
+# $LIMPID_REAL_DATA; the outside-generator examples from $LIMPID_EXAMPLES. Both
+# are optional: the tests that need them say they were skipped when unset.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# prerequisites first: one line on what to install, not a build failure 20 minutes in
-missing=""
-command -v cargo >/dev/null 2>&1 || missing="$missing cargo(rustup)"
-command -v cmake >/dev/null 2>&1 || missing="$missing cmake"
-command -v c++ >/dev/null 2>&1 || missing="$missing g++"
-command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || missing="$missing chromium"
-[ -e /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || [ -e /usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf ] || missing="$missing fonts-dejavu-core"
-python3 -c "import venv, ensurepip" >/dev/null 2>&1 || missing="$missing python3-venv"
-if [ -n "$missing" ]; then
-  echo "scripts/test.sh: missing:$missing; install them first (Debian: apt-get install cmake g++ chromium fonts-dejavu-core python3-venv; Rust from rustup), or run .ci/run, which installs the Debian ones" >&2
-  exit 2
-fi
-cargo test --workspace --release
+bash scripts/prerequisites.sh
+# one profile for every build below (see [profile.ci] in Cargo.toml): the
+# workspace tests, the LSL test and the wheel share their compiled dependencies
+profile=ci
+cargo test --workspace --profile "$profile"
 # Lab Streaming Layer inlets (cargo feature lsl) on loopback: liblsl is built
 # from source with cmake; its vendored boost needs the define with glibc >= 2.34
 # (LSLAPICFG: resolve on this machine only, without multicast or IPv6)
 CXXFLAGS="-DPTHREAD_STACK_MIN=16384 ${CXXFLAGS:-}" LSLAPICFG="$PWD/crates/live/tests/lsl_api.cfg" \
-  cargo test --release -p limpid-live --features lsl --test lsl
-venv=target/venv-test
+  cargo test --profile "$profile" -p limpid-live --features lsl --test lsl
+target_dir="${CARGO_TARGET_DIR:-target}"
+venv="$target_dir/venv-test"
 python3 -m venv --clear "$venv"
 "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy scipy pytest mypy "dask[distributed]"
-rm -rf target/wheels
-"$venv/bin/maturin" build --release -q -m crates/python/Cargo.toml -o target/wheels
-"$venv/bin/pip" install -q --disable-pip-version-check --no-deps target/wheels/limpid-*.whl
-LIMPID_REQUIRE_DASK=1 "$venv/bin/python" -m pytest -q crates/python/tests
+rm -rf "$target_dir/wheels"
+"$venv/bin/maturin" build --profile "$profile" -q -m crates/python/Cargo.toml -o "$target_dir/wheels"
+"$venv/bin/pip" install -q --disable-pip-version-check --no-deps "$target_dir"/wheels/limpid-*.whl
+LIMPID_REQUIRE_DASK=1 "$venv/bin/python" -m pytest -q -rs crates/python/tests

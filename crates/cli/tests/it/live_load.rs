@@ -5,8 +5,7 @@
 //! timed assertion would fail on a busy CI host, not on a limpid fault.
 //! Alone in its file so that it runs by itself.
 
-mod live_common;
-use live_common::*;
+use crate::live_common::*;
 use std::net::UdpSocket;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 

@@ -2,8 +2,7 @@
 //! in one line on stderr and exit 2, or in an honest result; never a panic,
 //! a hang, a NaN, or a partial file.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 use std::path::{Path, PathBuf};
 

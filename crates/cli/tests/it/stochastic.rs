@@ -1,7 +1,6 @@
 //! `limpid estimate stochastic` and `limpid spectra` (issue 6).
 
-mod common;
-use common::*;
+use crate::common::*;
 
 #[test]
 fn stochastic_examples_through_the_cli() {

@@ -1,8 +1,7 @@
 //! `limpid reproduce`: each seed's experiment on the realistic virtual
 //! subjects, compared with the paper's numbers (issue 18).
 
-mod common;
-use common::*;
+use crate::common::*;
 use serde_json::Value;
 
 fn rows<'a>(r: &'a Value, seed: &str, item_start: &str) -> Vec<&'a Value> {

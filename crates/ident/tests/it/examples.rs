@@ -2,8 +2,7 @@
 
 use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
 
-mod common;
-use common::{mat, rel_err, truth};
+use crate::common::{mat, rel_err, truth};
 
 const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/examples");
 

@@ -1,7 +1,6 @@
 //! `limpid protocol` and `limpid simulate` (issue 3, first part).
 
-mod common;
-use common::*;
+use crate::common::*;
 
 #[test]
 fn preset_checks_simulates_and_estimates_back_to_its_truth() {

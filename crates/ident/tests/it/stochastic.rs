@@ -10,8 +10,7 @@ const EXAMPLES: &str = concat!(
     "/../../../shared/examples/stochastic"
 );
 
-mod common;
-use common::{mat, rel_err as rel};
+use crate::common::{mat, rel_err as rel};
 
 #[test]
 fn spring_array_examples() {

@@ -6,12 +6,11 @@ use limpid_dsp::spectral::{
 };
 use serde_json::Value;
 
-mod common;
-use common::{max_rel, vec_of};
+use crate::common::{max_rel, vec_of};
 
 #[test]
 fn welch_csd_coherence_match_scipy() {
-    let f: Value = serde_json::from_str(include_str!("fixtures/scipy_spectral.json")).unwrap();
+    let f: Value = serde_json::from_str(include_str!("../fixtures/scipy_spectral.json")).unwrap();
     let (x, y) = (vec_of(&f["x"]), vec_of(&f["y"]));
     for case in f["cases"].as_array().unwrap() {
         let p = &case["params"];

@@ -3,8 +3,7 @@
 //! 90-99 % of the stiffness and damping elements, and no element is further
 //! than 4 standard errors from it.
 
-mod common;
-use common::*;
+use crate::common::*;
 use serde_json::Value;
 
 /// (|z|, label) for every element of `key` in `est` against `truth`.

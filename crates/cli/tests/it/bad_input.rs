@@ -1,8 +1,7 @@
 //! Every class of bad input: a one-line error naming file, row and column,
 //! exit status 2, never a panic (issue 2). Messages are pinned exactly.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 use std::path::PathBuf;
 

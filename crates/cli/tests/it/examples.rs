@@ -1,8 +1,7 @@
 //! `limpid estimate linear` against ../shared/examples truths and the real
 //! ankle data (issue 2 acceptance), and `limpid demo` against its subject.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 #[test]
 fn cartesian_slow_within_3_percent_stiffness_15_percent_damping() {

@@ -1,7 +1,6 @@
 //! Co-contraction (issue 4): examples per level, the virtual study, failures.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 #[test]
 fn examples_index_within_0_03_and_stiffness_within_5_percent_per_level() {

@@ -1,8 +1,7 @@
 //! `limpid gravity-compensate` (seed 004 eq. 4-9) on a synthetic rig whose
 //! sensor tilts with theta: bias in the sensor frame, weight in the reference frame.
 
-mod common;
-use common::*;
+use crate::common::*;
 use nalgebra::{Matrix3, Vector3};
 
 fn ry(a: f64) -> Matrix3<f64> {

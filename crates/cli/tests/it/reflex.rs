@@ -1,8 +1,7 @@
 //! `limpid estimate reflex` (issue 17): the parallel cascade on the real
 //! ankle recordings, its report, and its refusals.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 /// A 1 kHz joint recording `t,q1,tau1` of `n` samples with the given cells.
 fn joint_csv(path: &std::path::Path, n: usize, row: impl Fn(f64) -> (String, String)) {

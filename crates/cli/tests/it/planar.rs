@@ -1,7 +1,6 @@
 //! `limpid estimate planar` and `limpid window-sweep` (issue 5).
 
-mod common;
-use common::*;
+use crate::common::*;
 
 fn m2(v: &serde_json::Value) -> limpid_core::Matrix {
     mat(v)

@@ -2,8 +2,7 @@
 //! external URL, and the pages of `limpid demo` and of a stochastic example
 //! opened in headless Chromium (Debian's `chromium`, installed by .ci/run).
 
-mod common;
-use common::*;
+use crate::common::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 

@@ -3,11 +3,10 @@
 use limpid_dsp::{savgol, LowPass};
 use serde_json::Value;
 
-mod common;
-use common::{max_rel, vec_of};
+use crate::common::{max_rel, vec_of};
 
 fn fixture() -> Value {
-    let text = include_str!("fixtures/scipy_dsp.json");
+    let text = include_str!("../fixtures/scipy_dsp.json");
     serde_json::from_str(text).expect("fixture is valid JSON")
 }
 

@@ -1,10 +1,8 @@
 //! `limpid live` end to end (issue 9): a replayed co-contraction recording,
 //! the page in headless Chromium at each phase, and garbage on the UDP port.
 
-mod common;
-mod live_common;
-use common::*;
-use live_common::*;
+use crate::common::*;
+use crate::live_common::*;
 use std::net::UdpSocket;
 use std::path::Path;
 use std::time::{Duration, Instant};

@@ -1,0 +1,19 @@
+//! The integration tests of this crate, gathered into one test binary
+//! (one link instead of one per file); each module is one former file.
+
+mod bad_input;
+mod cocontraction;
+mod common;
+mod coverage;
+mod examples;
+mod gravity;
+mod hostile;
+mod live;
+mod live_common;
+mod live_load;
+mod planar;
+mod protocol;
+mod reflex;
+mod report;
+mod reproduce;
+mod stochastic;

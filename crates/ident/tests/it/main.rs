@@ -1,0 +1,10 @@
+//! The integration tests of this crate, gathered into one test binary
+//! (one link instead of one per file); each module is one former file.
+
+mod common;
+mod examples;
+mod noiseless;
+mod planar;
+mod reflex;
+mod stochastic;
+mod unidentified_inertia;
