@@ -10,16 +10,29 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/prerequisites.sh
-# one profile for every build below (see [profile.ci] in Cargo.toml): the
-# workspace tests, the LSL test and the wheel share their compiled dependencies
+for v in LIMPID_EXAMPLES LIMPID_REAL_DATA; do
+  if [ -n "${!v:-}" ]; then echo "scripts/test.sh: $v=${!v}: its tests run"
+  else echo "scripts/test.sh: $v is not set: the tests that need it are skipped"; fi
+done
+# One profile for every build below (see [profile.ci] in Cargo.toml), and one
+# cargo invocation for the whole workspace with every feature the tests use, so
+# each dependency is compiled once (a `-p` selection would unify features
+# differently and compile parquet, tokio, ... again). The `lsl` feature builds
+# liblsl from source with cmake; its vendored boost needs the define with
+# glibc >= 2.34. LSLAPICFG: the LSL test resolves on this machine only,
+# without multicast or IPv6.
 profile=ci
-cargo test --workspace --profile "$profile"
-# Lab Streaming Layer inlets (cargo feature lsl) on loopback: liblsl is built
-# from source with cmake; its vendored boost needs the define with glibc >= 2.34
-# (LSLAPICFG: resolve on this machine only, without multicast or IPv6)
-CXXFLAGS="-DPTHREAD_STACK_MIN=16384 ${CXXFLAGS:-}" LSLAPICFG="$PWD/crates/live/tests/lsl_api.cfg" \
-  cargo test --profile "$profile" -p limpid-live --features lsl --test lsl
+case " ${CXXFLAGS:-} " in *" -DPTHREAD_STACK_MIN=16384 "*) ;; *) export CXXFLAGS="-DPTHREAD_STACK_MIN=16384 ${CXXFLAGS:-}" ;; esac
+LSLAPICFG="$PWD/crates/live/tests/lsl_api.cfg" \
+  cargo test --workspace --profile "$profile" --features limpid-live/lsl,limpid-cli/lsl
 target_dir="${CARGO_TARGET_DIR:-target}"
+case "$target_dir" in /*) ;; *) target_dir="$PWD/$target_dir" ;; esac
+# the Python tests read the same limpid-made examples as the Rust tests
+export LIMPID_TEST_EXAMPLES="$target_dir/test-examples"
+rm -rf "$LIMPID_TEST_EXAMPLES"
+# (built with the test run's selection and features: nothing is compiled again)
+cargo build -q --workspace --profile "$profile" --features limpid-live/lsl,limpid-cli/lsl --bins
+"$target_dir/$profile/limpid-test-examples" "$LIMPID_TEST_EXAMPLES"
 venv="$target_dir/venv-test"
 python3 -m venv --clear "$venv"
 "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy scipy pytest mypy "dask[distributed]"

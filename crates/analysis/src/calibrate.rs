@@ -517,23 +517,31 @@ pub fn calibrate(
     };
     let methods = vec![
         run(
-            "centre-out cubic (seed 000)",
+            "centre-out cubic (Artemiadis et al. 2010)",
             &|s| centre_out(Profile::Cubic, s),
             1,
         ),
         run(
-            "centre-out trapezoid (seed 000)",
+            "centre-out trapezoid (Artemiadis et al. 2010)",
             &|s| centre_out(Profile::Trapezoid, s),
             2,
         ),
         run(
-            "centre-out sinusoid (seed 000)",
+            "centre-out sinusoid (Artemiadis et al. 2010)",
             &|s| centre_out(Profile::Sinusoid, s),
             3,
         ),
-        run("co-contraction, 4 levels (seed 001)", &cocontraction, 4),
-        run("planar arm, whole window (seed 003)", &planar, 5),
-        run("stochastic spring array (seed 004)", &stochastic, 6),
+        run(
+            "co-contraction, 4 levels (Patel et al. 2013)",
+            &cocontraction,
+            4,
+        ),
+        run("planar arm, whole window (Lakatos et al. 2011)", &planar, 5),
+        run(
+            "stochastic spring array (Park & Chang 2011)",
+            &stochastic,
+            6,
+        ),
         run("ankle with reflex, parallel cascade", &reflex, 8),
     ];
     debug_assert_eq!(methods.len(), METHODS);

@@ -162,7 +162,10 @@ pub fn estimate_cocontraction(
     prepare_params: &PrepareParams,
     emg: &EmgParams,
 ) -> Result<CocontractionResult> {
-    let levels_col = rec.require("level", "the condition level of each sample (seed 001)")?;
+    let levels_col = rec.require(
+        "level",
+        "the condition level of each sample (Patel et al. 2013)",
+    )?;
     let muscles = emg_columns(rec);
     let maxima = mvc_maxima(mvc, &muscles, emg)?;
     let index = cocontraction_index(rec, &muscles, &maxima, emg)?;

@@ -394,7 +394,7 @@ pub fn shoulder_impedance(est: &LinearResult, p: &ShoulderPosture) -> Result<Sho
         jacobian: s.jacobian(q).into(),
         stiffness: s.joint_impedance(&k, q).into(),
         damping: s.joint_impedance(&b, q).into(),
-        note: "J_h^T Z J_h about the posture; the static-load term dJ^T/dq F is not included. With the elbow fixed the hand moves on a sphere about the shoulder, so J_h has rank 2: the hand's position cannot sense rotation about the shoulder-hand line, and these matrices are singular along it. Seed 004 takes the rotation from the hand's orientation instead: estimate stochastic --shoulder with theta, tauy and utheta columns"
+        note: "J_h^T Z J_h about the posture; the static-load term dJ^T/dq F is not included. With the elbow fixed the hand moves on a sphere about the shoulder, so J_h has rank 2: the hand's position cannot sense rotation about the shoulder-hand line, and these matrices are singular along it. Park & Chang (2011) takes the rotation from the hand's orientation instead: estimate stochastic --shoulder with theta, tauy and utheta columns"
             .into(),
     })
 }

@@ -107,15 +107,51 @@ impl Seed {
         }
     }
 
-    /// The seed named by `text` ("000", "0", "001", ...).
+    /// The id a reader understands: the first author and the year.
+    pub fn id(self) -> &'static str {
+        match self {
+            Seed::S000 => "artemiadis2010",
+            Seed::S001 => "patel2013",
+            Seed::S003 => "lakatos2011",
+            Seed::S004 => "park2011",
+        }
+    }
+
+    /// The paper as a reader cites it.
+    pub fn citation(self) -> &'static str {
+        citation(self.code())
+    }
+
+    /// The paper named by `text`: its id (`artemiadis2010`, `patel2013`,
+    /// `lakatos2011`, `park2011`, case-insensitive) or the short number
+    /// (`000`, `0`, `001`, ...) kept as an alias.
     pub fn parse(text: &str) -> Option<Seed> {
-        match text.trim_start_matches('0') {
+        let lower = text.trim().to_ascii_lowercase();
+        if let Some(s) = Seed::ALL.into_iter().find(|s| s.id() == lower) {
+            return Some(s);
+        }
+        if lower.is_empty() || !lower.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        match lower.trim_start_matches('0') {
             "" => Some(Seed::S000),
             "1" => Some(Seed::S001),
             "3" => Some(Seed::S003),
             "4" => Some(Seed::S004),
             _ => None,
         }
+    }
+}
+
+/// The citation of the paper whose short number is `code` ("000", ...);
+/// the code itself for an unknown one.
+pub fn citation(code: &str) -> &str {
+    match code {
+        "000" => "Artemiadis, Katsiaris, Liarokapis & Kyriakopoulos (2010)",
+        "001" => "Patel, O'Neill & Artemiadis (2013)",
+        "003" => "Lakatos, Petit & van der Smagt (2011)",
+        "004" => "Park & Chang (2011)",
+        other => other,
     }
 }
 
@@ -672,7 +708,7 @@ fn seed003(seed: u64) -> Result<Reproduction> {
         None,
         full.impedance_change.as_ref().map(|c| c.onset_ms),
         ms,
-    ).with_note("the cuff's fast dynamics in the first tens of ms and the virtual subject's reflex (K and D +30 % after 90 ms) are changes the rigid model does not hold through; seed 003 §I: reflexes act after 25-110 ms, the paper's windows include them"));
+    ).with_note("the cuff's fast dynamics in the first tens of ms and the virtual subject's reflex (K and D +30 % after 90 ms) are changes the rigid model does not hold through; Lakatos, Petit & van der Smagt (2011) §I: reflexes act after 25-110 ms, the paper's windows include them"));
     // Table I: quintic against the sixth-order polynomial
     let q = polynomial_ratios(&[(3, 10.0), (4, -15.0), (5, 6.0)], design.interpolation_s);
     let c6 = sextic_coefficients();
@@ -938,7 +974,7 @@ fn seed004(seed: u64) -> Result<Reproduction> {
             None,
             Some(est.criteria.max_input_coherence),
             "",
-        ).with_note("seed 004 asks < 0.6; with Table III's long segments (30 in six trials) independent inputs show high coherence at some of the 400 frequencies"));
+        ).with_note("Park & Chang (2011) asks < 0.6; with Table III's long segments (30 in six trials) independent inputs show high coherence at some of the 400 frequencies"));
     }
     let get = |n: &str, c: &str| results.iter().find(|r| r.0 == n && r.1 == c);
     let k_error = |r: &(
@@ -983,7 +1019,7 @@ fn seed004(seed: u64) -> Result<Reproduction> {
     }
     out.findings.push(Finding {
         seed: "004".into(),
-        claim: "IMBIC gives a higher multiple coherence than a PD-controlled robot (the reason seed 004 uses it)".into(),
+        claim: "IMBIC gives a higher multiple coherence than a PD-controlled robot (the reason Park & Chang (2011) uses it)".into(),
         holds: !higher.is_empty() && higher.iter().all(|(_, i, p)| i > p),
         evidence: higher
             .iter()
@@ -1029,8 +1065,12 @@ pub fn text(r: &Reproduction) -> String {
             current.clone_from(&x.seed);
             let _ = writeln!(
                 s,
-                "\nseed {current}\n{:<78} {:>10} {:>10} {:>9}  unit",
-                "item", "paper", "limpid", "diff"
+                "\n{}\n{:<78} {:>10} {:>10} {:>9}  unit",
+                citation(&current),
+                "item",
+                "paper",
+                "limpid",
+                "diff"
             );
         }
         let f = |v: Option<f64>| v.map_or("-".to_string(), crate::reproduce::sig);
@@ -1053,9 +1093,9 @@ pub fn text(r: &Reproduction) -> String {
     for f in &r.findings {
         let _ = writeln!(
             s,
-            "[{}] seed {}: {} — {}",
+            "[{}] {}: {} — {}",
             if f.holds { "holds" } else { "DIFFERS" },
-            f.seed,
+            citation(&f.seed),
             f.claim,
             f.evidence
         );

@@ -6,7 +6,7 @@
 //!
 //! ```toml
 //! [study]
-//! name = "virtual seed 001"   # optional
+//! name = "virtual Patel, O'Neill & Artemiadis (2013)"   # optional
 //! tolerance = 0.1             # optional, band around the target level
 //!
 //! [[recording]]
@@ -474,7 +474,7 @@ pub fn simulate_study(
         })
         .collect::<Result<_>>()?;
     let manifest = format!(
-        "# virtual seed 001 study: {subjects} {} subjects x 7 configurations x 4 levels x 18 perturbations\n[study]\nname = \"virtual seed 001 study\"\n\n{}",
+        "# virtual Patel, O'Neill & Artemiadis (2013) study: {subjects} {} subjects x 7 configurations x 4 levels x 18 perturbations\n[study]\nname = \"virtual Patel, O'Neill & Artemiadis (2013) study\"\n\n{}",
         if realistic { "realistic" } else { "ideal" },
         entries.join("\n")
     );

@@ -62,7 +62,7 @@ pub fn run(args: CalibrateArgs) -> CliResult {
     }
     let w = &result.window_sweep;
     println!(
-        "\nwindow sweep (seed 003, 50-400 ms): {} sweeps ({} with a stretch reflex); {} windows trusted, {} of them beyond K 10 % or D 25 % of the truth; {} windows were within both; sweeps trusting some window: {} of {} without reflex, {} of {} with",
+        "\nwindow sweep (Lakatos et al. 2011, 50-400 ms): {} sweeps ({} with a stretch reflex); {} windows trusted, {} of them beyond K 10 % or D 25 % of the truth; {} windows were within both; sweeps trusting some window: {} of {} without reflex, {} of {} with",
         w.sweeps,
         w.with_reflex,
         w.trusted_windows,

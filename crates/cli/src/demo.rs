@@ -32,7 +32,7 @@ pub enum SubjectArg {
 
 #[derive(Args)]
 pub struct DemoArgs {
-    /// Virtual subject: realistic (seed 000 Tables I-II with signal-dependent
+    /// Virtual subject: realistic (Artemiadis et al. 2010, Tables I-II with signal-dependent
     /// force noise and posture drift) or ideal (Table I, sensor noise only).
     #[arg(long, value_enum, default_value_t = SubjectArg::Realistic)]
     pub subject: SubjectArg,
@@ -94,7 +94,7 @@ pub fn run(args: DemoArgs) -> CliResult {
         return Ok(());
     }
     println!(
-        "limpid demo: seed 000 protocol on a virtual subject (Table I, subject 1): 6 start points x {} {} perturbations of {} cm, {} s, {} Hz",
+        "limpid demo: Artemiadis et al. (2010) protocol on a virtual subject (Table I, subject 1): 6 start points x {} {} perturbations of {} cm, {} s, {} Hz",
         result.directions,
         result.profile,
         result.radius_m * 100.0,

@@ -16,13 +16,13 @@ use crate::{table, CliResult};
 
 #[derive(Subcommand)]
 pub enum Method {
-    /// Linear model M x'' + B x' + K (x - x_eq) = f by least squares (seeds 000, 001).
+    /// Linear model M x'' + B x' + K (x - x_eq) = f by least squares (Artemiadis et al. 2010; Patel et al. 2013).
     Linear(LinearArgs),
-    /// Co-contraction index and impedance per level, compared with the lowest level (seed 001).
+    /// Co-contraction index and impedance per level, compared with the lowest level (Patel et al. 2013).
     Cocontraction(CocontractionArgs),
-    /// Planar two-link arm in joint space: inertial parameters, K, D, confidence criteria (seed 003).
+    /// Planar two-link arm in joint space: inertial parameters, K, D, confidence criteria (Lakatos et al. 2011).
     Planar(crate::planar::PlanarArgs),
-    /// Stochastic MIMO impedance Z = T R^-1 from Welch spectra, with a parametric fit (seed 004).
+    /// Stochastic MIMO impedance Z = T R^-1 from Welch spectra, with a parametric fit (Park & Chang 2011).
     Stochastic(crate::stochastic::StochasticArgs),
     /// Intrinsic and reflex joint stiffness by the parallel cascade (Kearney et al. 1997): IRFs, delay, gain, VAF split.
     Reflex(crate::reflex::ReflexArgs),
@@ -42,7 +42,7 @@ pub enum OffsetsArg {
     Auto,
     /// Fit one force offset per trial (robust to slow drift; no equilibrium).
     Fit,
-    /// Subtract the pre-onset rest mean (seeds 000, 001); equilibrium estimated.
+    /// Subtract the pre-onset rest mean (Artemiadis et al. 2010; Patel et al. 2013); equilibrium estimated.
     Rest,
 }
 
@@ -62,7 +62,7 @@ pub enum WindowArg {
 pub enum FrameArg {
     /// Keep the recording's frame.
     Identity,
-    /// Seed 000 eq. (1): robot axes [X_R Y_R Z_R] = [-Y_H Z_H -X_H] to the human frame.
+    /// Artemiadis et al. (2010) eq. (1): robot axes [X_R Y_R Z_R] = [-Y_H Z_H -X_H] to the human frame.
     Seed000,
 }
 
@@ -106,7 +106,7 @@ pub struct PrepareArgs {
 /// end-effector pose by forward kinematics.
 #[derive(Args)]
 pub struct RobotArgs {
-    /// Compute the end-effector pose from the robot_q1..n columns by this robot's forward kinematics (kuka-lwr4, puma3 or a .urdf file), as seed 000 does.
+    /// Compute the end-effector pose from the robot_q1..n columns by this robot's forward kinematics (kuka-lwr4, puma3 or a .urdf file), as Artemiadis et al. (2010) does.
     #[arg(long, value_name = "ROBOT")]
     pub robot: Option<String>,
     /// Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad), as a protocol's `robot_base`.
@@ -160,21 +160,21 @@ impl PrepareArgs {
 
 #[derive(Args)]
 pub struct LinearArgs {
-    /// Recording (CSV, Parquet or MATLAB .mat; FORMAT.md).
+    /// Recording (CSV, Parquet or MATLAB .mat; the recording format: docs/src/format.md).
     pub recording: PathBuf,
     #[command(flatten)]
     pub prepare: PrepareArgs,
-    /// Fit without the equilibrium constant (the 9-column form P = F Y^+ of seed 001).
+    /// Fit without the equilibrium constant (the 9-column form P = F Y^+ of Patel et al. 2013).
     #[arg(long)]
     pub no_equilibrium: bool,
     /// Use only trials of this condition level (the `level` column).
     #[arg(long)]
     pub level: Option<f64>,
     /// The upward vertical axis of the frame, for the arm configuration from
-    /// `elbow_*`/`wrist_*` markers (seed 001's frame has x vertical).
+    /// `elbow_*`/`wrist_*` markers (Patel et al. 2013's frame has x vertical).
     #[arg(long, value_enum, default_value_t = AxisArg::Z)]
     pub vertical: AxisArg,
-    /// Also give the shoulder's joint-space stiffness and damping J_h^T Z J_h (seed 004's
+    /// Also give the shoulder's joint-space stiffness and damping J_h^T Z J_h (Park & Chang 2011's
     /// 3-DoF shoulder): UPPER_ARM_M,FOREARM_M,ELBOW_DEG,FLEXION_DEG,ABDUCTION_DEG,ROTATION_DEG
     /// (frame: x forward, y left, z up, origin at the shoulder; right arm). The hand's
     /// position cannot sense rotation about the shoulder-hand line: these matrices are
@@ -203,7 +203,7 @@ pub enum AxisArg {
 
 #[derive(Args)]
 pub struct CocontractionArgs {
-    /// Recording with `level` and `emg_*` columns (seed 001).
+    /// Recording with `level` and `emg_*` columns (Patel et al. 2013).
     pub recording: PathBuf,
     /// Maximum voluntary co-contraction recording with the same EMG channels.
     #[arg(long)]

@@ -15,7 +15,7 @@ use crate::CliResult;
 pub struct GravityArgs {
     /// The test recording with `sensor_fx`, `sensor_fy`, `sensor_fz` (and `sensor_tx`, `sensor_ty`, `sensor_tz`).
     pub recording: PathBuf,
-    /// Seed 004's two steps. Step 1: readings in a pose where gravity does not
+    /// Park & Chang (2011)'s two steps. Step 1: readings in a pose where gravity does not
     /// load the sensor axes.
     #[arg(
         long,
@@ -28,7 +28,7 @@ pub struct GravityArgs {
     pub initial_s: f64,
     /// Instead of the two steps: still readings in several orientations (the
     /// same sensor and orientation columns), from which the weight, the load's
-    /// centre of mass and the biases are fitted (a limpid extension; see the README).
+    /// centre of mass and the biases are fitted (a limpid extension; see docs/src/reference/protocol.md).
     #[arg(long, value_name = "RECORDING")]
     pub calibration: Option<PathBuf>,
     /// Sensor orientation from the robot_q columns by forward kinematics.

@@ -16,7 +16,7 @@ pub struct LiveArgs {
     /// Address of the web page (port 0: any free port; the URL is printed).
     #[arg(long, default_value = "127.0.0.1:8080")]
     pub listen: SocketAddr,
-    /// UDP address the samples arrive at (wire format in the README).
+    /// UDP address the samples arrive at (wire format: docs/src/reference/live.md).
     #[arg(long, default_value = "127.0.0.1:9000")]
     pub udp: SocketAddr,
     /// MVC recording (`emg_*` columns): normalisation maxima; without it, capture one live from the page.

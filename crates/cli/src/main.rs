@@ -40,9 +40,9 @@ enum Command {
         #[command(subcommand)]
         method: estimate::Method,
     },
-    /// Run seed 000's 3-D study on a built-in virtual subject and compare with the truth.
+    /// Run Artemiadis et al. (2010)'s 3-D study on a built-in virtual subject and compare with the truth.
     Demo(demo::DemoArgs),
-    /// Planar-arm estimates over a range of observation windows, with the minimum trustworthy window (seed 003).
+    /// Planar-arm estimates over a range of observation windows, with the minimum trustworthy window (Lakatos et al. 2011).
     WindowSweep(planar::SweepArgs),
     /// Design and check perturbation protocols (TOML).
     Protocol {
@@ -51,11 +51,11 @@ enum Command {
     },
     /// Simulate a protocol on a virtual subject: a recording and its truth file.
     Simulate(protocol::SimulateArgs),
-    /// Live co-contraction feedback and online stiffness: a web page fed over UDP or by a replay (seed 001 Fig. 3).
+    /// Live co-contraction feedback and online stiffness: a web page fed over UDP or by a replay (Patel et al. 2013, Fig. 3).
     Live(live::LiveArgs),
     /// One self-contained HTML report (ellipsoids, tables, Bode and coherence plots) from JSON results.
     Report(report::ReportArgs),
-    /// Turn F/T sensor readings into the force (and torque) on the limb: bias and weight removed in two steps (seed 004 eq. 4-9) or by a calibration from still poses.
+    /// Turn F/T sensor readings into the force (and torque) on the limb: bias and weight removed in two steps (Park & Chang 2011, eq. 4-9) or by a calibration from still poses.
     GravityCompensate(gravity::GravityArgs),
     /// Welch PSD, coherence, multiple and partial coherence of outputs on inputs, as CSV.
     Spectra(stochastic::SpectraArgs),
@@ -63,7 +63,7 @@ enum Command {
     Calibrate(calibrate::CalibrateArgs),
     /// Run a seed's experiment on the virtual lab and print its tables beside the paper's (000, 001, 003, 004 or all).
     Reproduce(reproduce::ReproduceArgs),
-    /// Whole co-contraction studies: tables across subjects and configurations (seed 001).
+    /// Whole co-contraction studies: tables across subjects and configurations (Patel et al. 2013).
     Study {
         #[command(subcommand)]
         command: study::StudyCommand,

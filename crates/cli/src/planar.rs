@@ -357,7 +357,7 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
     );
     if !sweep.intervals.is_empty() {
         println!(
-            "\ninterpolation-interval study (seed 003 §IV: the trials of each T_k, observed over T_obs = T_k + 70 ms)"
+            "\ninterpolation-interval study (Lakatos et al. 2011, §IV: the trials of each T_k, observed over T_obs = T_k + 70 ms)"
         );
         println!(
             "{:>6} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8}  verdict",

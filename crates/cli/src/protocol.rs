@@ -46,10 +46,10 @@ pub struct SimulateArgs {
     /// Protocol (TOML).
     pub protocol: PathBuf,
     /// Subject (TOML). Centre-out: 3 x 3 `inertia`, `damping`, `stiffness` (SI) and
-    /// optionally a `[noise]` table; default seed 000 Table I subject 1, posture i at
+    /// optionally a `[noise]` table; default Artemiadis et al. (2010) Table I subject 1, posture i at
     /// start point i. Planar: `xi` (3), 2 x 2 `stiffness`, `damping`, `tau0` (2),
     /// optional `[reflex]` (latency_s, stiffness_gain, damping_gain); default the
-    /// seed 003 subject. Stochastic: a spring set `springs` (8 values, N/m, k1a..k4b);
+    /// Lakatos, Petit & van der Smagt (2011) subject. Stochastic: a spring set `springs` (8 values, N/m, k1a..k4b);
     /// default set SA3 of ../shared/examples.
     #[arg(long)]
     pub subject: Option<PathBuf>,
@@ -61,7 +61,7 @@ pub struct SimulateArgs {
     pub seed: u64,
     /// Stochastic protocols: who holds the spring array. `ideal`: a linear robot with
     /// the desired impedance; `imbic`: the PUMA-type robot with joint friction under
-    /// IMBIC (seed 004 eq. 11-14); `pd`: the same robot under a plain PD law.
+    /// IMBIC (Park & Chang 2011, eq. 11-14); `pd`: the same robot under a plain PD law.
     #[arg(long, value_enum, default_value_t = ControllerArg::Ideal)]
     pub controller: ControllerArg,
 }
@@ -176,7 +176,7 @@ fn print_report(d: &Design, report: &DesignReport) {
 
 fn print_ratios(c: &[f64; 3]) {
     println!(
-        "  conditioning ratios C12, C13, C23 (seed 003 eq. 17): {}, {}, {}",
+        "  conditioning ratios C12, C13, C23 (Lakatos et al. 2011, eq. 17): {}, {}, {}",
         num(c[0]),
         num(c[1]),
         num(c[2])
@@ -207,7 +207,7 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}{suffix}.{ext}"))
 }
 
-/// Write seed 003's planar schedule and say so.
+/// Write Lakatos, Petit & van der Smagt (2011)'s planar schedule and say so.
 fn export_planar(p: &PlanarDesign, output: &Path) -> CliResult {
     let rec = limpid_lab::export::planar_schedule(p, output)?;
     limpid_io::write_recording(&rec, output)?;
@@ -223,7 +223,7 @@ fn export_planar(p: &PlanarDesign, output: &Path) -> CliResult {
     Ok(())
 }
 
-/// Write seed 004's commanded inputs and say so.
+/// Write Park & Chang (2011)'s commanded inputs and say so.
 fn export_stochastic(p: &StochasticDesign, output: &Path) -> CliResult {
     let rec = limpid_lab::export::stochastic_schedule(p, output)?;
     limpid_io::write_recording(&rec, output)?;

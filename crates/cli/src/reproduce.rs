@@ -1,4 +1,4 @@
-//! `limpid reproduce`: each seed's experiment on the virtual lab, its numbers
+//! `limpid reproduce`: each paper's experiment on the virtual lab, its numbers
 //! beside the paper's ([`limpid_analysis::reproduce`]).
 
 use std::path::PathBuf;
@@ -10,8 +10,10 @@ use crate::CliResult;
 
 #[derive(Args)]
 pub struct ReproduceArgs {
-    /// Which seed: 000, 001, 003, 004 or all.
-    #[arg(value_name = "SEED")]
+    /// Which paper: artemiadis2010 (Artemiadis et al. 2010), patel2013
+    /// (Patel, O'Neill & Artemiadis), lakatos2011 (Lakatos, Petit & van der
+    /// Smagt), park2011 (Park & Chang) or all; 000, 001, 003, 004 are aliases.
+    #[arg(value_name = "PAPER")]
     pub seed: String,
     /// Print one JSON object {"rows": [...], "findings": [...]}.
     #[arg(long)]
@@ -33,9 +35,9 @@ pub fn run(args: ReproduceArgs) -> CliResult {
     } else {
         vec![Seed::parse(&args.seed).ok_or_else(|| {
             limpid_core::Error::invalid(
-                "seed",
+                "paper",
                 format!(
-                    "unknown seed {:?}; expected 000, 001, 003, 004 or all",
+                    "unknown paper {:?}; expected artemiadis2010, patel2013, lakatos2011, park2011 or all",
                     args.seed
                 ),
             )
@@ -54,7 +56,7 @@ pub fn run(args: ReproduceArgs) -> CliResult {
     }
     if let Some(path) = &args.report {
         let title = format!(
-            "limpid reproduce {}: the seeds' numbers beside limpid's",
+            "limpid reproduce {}: the papers' numbers beside limpid's",
             args.seed
         );
         let page = limpid_report::reproduce::reproduction_page(&r, &title);

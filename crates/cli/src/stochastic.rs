@@ -55,7 +55,7 @@ impl WelchArgs {
 pub struct StochasticArgs {
     /// Recording(s) with commanded inputs u* (one per coordinate), positions
     /// and forces; several repeated trials are pooled (their Welch segments
-    /// averaged together, seed 004 §III-F).
+    /// averaged together, Park & Chang (2011) §III-F).
     #[arg(required = true, num_args = 1..)]
     pub recordings: Vec<PathBuf>,
     #[command(flatten)]
@@ -71,7 +71,7 @@ pub struct StochasticArgs {
     /// Truth or expected model (JSON with inertia, damping, stiffness): prints phi_T and phi_ij (eq. 15-16).
     #[arg(long, value_name = "FILE")]
     pub expected: Option<PathBuf>,
-    /// Estimate the shoulder's joint impedance as seed 004 does: turn hand X, Z
+    /// Estimate the shoulder's joint impedance as Park & Chang (2011) does: turn hand X, Z
     /// (with F and u) into flexion and abduction (τ = J_h^T F, eq. (3)) and
     /// take theta, tauy, utheta as internal rotation, before estimating:
     /// UPPER_ARM_M,FOREARM_M,ELBOW_DEG,FLEXION_DEG,ABDUCTION_DEG,ROTATION_DEG of
@@ -180,7 +180,7 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
     );
     if let Some(p) = &posture {
         println!(
-            "shoulder joint space (seed 004 eq. (3)), before estimation: q1 flexion, q2 abduction from the hand's X, Z (tau = J_h^T F){} | posture: flexion {} deg, abduction {} deg, rotation {} deg, elbow {} deg | angles in rad, torques in N m",
+            "shoulder joint space (Park & Chang 2011, eq. (3)), before estimation: q1 flexion, q2 abduction from the hand's X, Z (tau = J_h^T F){} | posture: flexion {} deg, abduction {} deg, rotation {} deg, elbow {} deg | angles in rad, torques in N m",
             if coords.len() > 2 { ", q3 internal rotation = the hand's theta" } else { "" },
             num(p.angles_deg[0]), num(p.angles_deg[1]), num(p.angles_deg[2]), num(p.elbow_deg)
         );

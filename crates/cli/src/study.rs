@@ -13,7 +13,7 @@ use crate::CliResult;
 pub enum StudyCommand {
     /// Process every recording of a manifest and write the study tables.
     Run(RunArgs),
-    /// Write a virtual seed 001 study (recordings, MVC files, study.toml) with known truth.
+    /// Write a virtual Patel, O'Neill & Artemiadis (2013) study (recordings, MVC files, study.toml) with known truth.
     Simulate(SimulateArgs),
 }
 
@@ -37,13 +37,13 @@ pub struct SimulateArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
-    /// Number of subjects (each in seed 001's 7 configurations).
+    /// Number of subjects (each in Patel et al. 2013's 7 configurations).
     #[arg(long, default_value_t = 4)]
     pub subjects: usize,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Virtual subjects: realistic (seed 001 Tables 1-5 with reflex,
+    /// Virtual subjects: realistic (Patel et al. 2013, Tables 1-5 with reflex,
     /// force fluctuation and one MVC from configuration 5) or ideal (clean,
     /// linear in the level, an MVC per recording).
     #[arg(long, value_enum, default_value_t = crate::demo::SubjectArg::Realistic)]

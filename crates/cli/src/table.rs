@@ -99,7 +99,7 @@ pub fn linear_text(r: &LinearResult) -> String {
     if coords.len() >= 2 {
         let _ = writeln!(
             out,
-            "Symmetric parts (seed 000 Table I layout): K(s) | B(s) | M(s)"
+            "Symmetric parts (Artemiadis et al. 2010, Table I layout): K(s) | B(s) | M(s)"
         );
         for i in 0..coords.len() {
             let row = |m: &Matrix| {
@@ -203,7 +203,7 @@ fn yes(b: bool) -> &'static str {
     }
 }
 
-/// The readable report of `estimate cocontraction` (seed 001 Tables 1-5 for one recording).
+/// The readable report of `estimate cocontraction` (Patel et al. 2013, Tables 1-5 for one recording).
 pub fn cocontraction_text(r: &CocontractionResult) -> String {
     let mut out = String::new();
     let _ = writeln!(

@@ -90,7 +90,7 @@ pub enum Error {
         found: String,
     },
     /// A finite value too large for its unit (a corrupt sample, or the wrong unit).
-    #[error("{path}: row {row}, column {column}: implausible value {found:e}: limpid accepts magnitudes up to {limit} in this column (SI units, FORMAT.md)")]
+    #[error("{path}: row {row}, column {column}: implausible value {found:e}: limpid accepts magnitudes up to {limit} in this column (SI units, docs/src/format.md)")]
     Implausible {
         /// The file.
         path: PathBuf,

@@ -175,7 +175,7 @@ impl Recording {
                 && (KNOWN_NAMES.contains(&spelt.as_str()) || spelt.starts_with("emg_"))
             {
                 warnings.push(format!(
-                    "column {name:?} is not a FORMAT.md name but looks like {spelt:?} written with non-Latin letters; it is ignored"
+                    "column {name:?} is not a recording-format name but looks like {spelt:?} written with non-Latin letters; it is ignored"
                 ));
             }
         }
@@ -196,7 +196,7 @@ impl Recording {
         let sample_rate = check_time(&path, &columns[time_index], trial, first_row)?;
         if let Some(unit) = time_unit_hint(sample_rate) {
             warnings.push(format!(
-                "column t looks like it is in {unit} (sample rate {} Hz); FORMAT.md wants seconds",
+                "column t looks like it is in {unit} (sample rate {} Hz); the recording format (docs/src/format.md) wants seconds",
                 crate::display_round(sample_rate)
             ));
         }

@@ -390,17 +390,27 @@ fn run_sections<'a>(
             *v = y;
         }
     }
+    // Up to four sections (Butterworth order 8; every default is 1 or 2) the
+    // loop is unrolled; more take the same arithmetic with the state in a
+    // vector (unrolling all ten counts cost most of this crate's build time).
     match sections.len() {
         1 => fixed::<1>(samples, sections, zi, x0),
         2 => fixed::<2>(samples, sections, zi, x0),
         3 => fixed::<3>(samples, sections, zi, x0),
         4 => fixed::<4>(samples, sections, zi, x0),
-        5 => fixed::<5>(samples, sections, zi, x0),
-        6 => fixed::<6>(samples, sections, zi, x0),
-        7 => fixed::<7>(samples, sections, zi, x0),
-        8 => fixed::<8>(samples, sections, zi, x0),
-        9 => fixed::<9>(samples, sections, zi, x0),
-        _ => fixed::<10>(samples, sections, zi, x0),
+        _ => {
+            let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * x0, z[1] * x0]).collect();
+            for v in samples {
+                let mut y = *v;
+                for ((b, a), z) in sections.iter().zip(state.iter_mut()) {
+                    let out = b[0] * y + z[0];
+                    z[0] = b[1] * y - a[0] * out + z[1];
+                    z[1] = b[2] * y - a[1] * out;
+                    y = out;
+                }
+                *v = y;
+            }
+        }
     }
 }
 
@@ -512,17 +522,28 @@ fn run_lanes<'a, const L: usize>(
             *v = y;
         }
     }
+    // unrolled up to four sections, as in `run_sections`
     match sections.len() {
         1 => fixed::<1, L>(samples, sections, zi, x0),
         2 => fixed::<2, L>(samples, sections, zi, x0),
         3 => fixed::<3, L>(samples, sections, zi, x0),
         4 => fixed::<4, L>(samples, sections, zi, x0),
-        5 => fixed::<5, L>(samples, sections, zi, x0),
-        6 => fixed::<6, L>(samples, sections, zi, x0),
-        7 => fixed::<7, L>(samples, sections, zi, x0),
-        8 => fixed::<8, L>(samples, sections, zi, x0),
-        9 => fixed::<9, L>(samples, sections, zi, x0),
-        _ => fixed::<10, L>(samples, sections, zi, x0),
+        _ => {
+            let mut z0: Vec<[f64; L]> = zi.iter().map(|z| x0.map(|x| z[0] * x)).collect();
+            let mut z1: Vec<[f64; L]> = zi.iter().map(|z| x0.map(|x| z[1] * x)).collect();
+            for v in samples {
+                let mut y = *v;
+                for (i, (b, a)) in sections.iter().enumerate() {
+                    for l in 0..L {
+                        let out = b[0] * y[l] + z0[i][l];
+                        z0[i][l] = b[1] * y[l] - a[0] * out + z1[i][l];
+                        z1[i][l] = b[2] * y[l] - a[1] * out;
+                        y[l] = out;
+                    }
+                }
+                *v = y;
+            }
+        }
     }
 }
 
@@ -637,7 +658,8 @@ mod tests {
 
     #[test]
     fn signals_filtered_together_equal_one_at_a_time() {
-        for order in [2, 4, 7] {
+        // 1-4 sections unrolled, 5 and 6 through the loop over a state vector
+        for order in [2, 4, 7, 9, 12] {
             let lp = LowPass::butterworth(order, 30.0, 500.0).unwrap();
             let signals: Vec<Vec<f64>> = (0..6)
                 .map(|c| {
@@ -658,6 +680,46 @@ mod tests {
                     let alone = lp.filtfilt_edges(x, left, right, extra).unwrap();
                     assert_eq!(&alone, y, "order {order}");
                 }
+            }
+        }
+    }
+
+    /// The section cascade, written out plainly: every section count (the
+    /// unrolled 1-4 and the looped 5+) and every lane count give its bits.
+    #[test]
+    fn every_section_count_runs_the_plain_cascade() {
+        let x: Vec<f64> = (0..400).map(|i| (i as f64 * 0.11).sin() + 0.3).collect();
+        for count in 1..=7usize {
+            let sections: Vec<([f64; 3], [f64; 2])> = (0..count)
+                .map(|i| {
+                    let k = i as f64;
+                    (
+                        [0.05 + 0.01 * k, 0.1, 0.05],
+                        [-0.6 + 0.05 * k, 0.2 - 0.02 * k],
+                    )
+                })
+                .collect();
+            let zi: Vec<[f64; 2]> = (0..count).map(|i| [0.2 * i as f64, -0.1]).collect();
+            let mut plain = x.clone();
+            let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * x[0], z[1] * x[0]]).collect();
+            for v in plain.iter_mut() {
+                let mut y = *v;
+                for ((b, a), z) in sections.iter().zip(state.iter_mut()) {
+                    let out = b[0] * y + z[0];
+                    z[0] = b[1] * y - a[0] * out + z[1];
+                    z[1] = b[2] * y - a[1] * out;
+                    y = out;
+                }
+                *v = y;
+            }
+            let mut single = x.clone();
+            run_sections(single.iter_mut(), &sections, &zi, x[0]);
+            assert_eq!(single, plain, "{count} sections, one signal");
+            let mut lanes: Vec<[f64; 3]> = x.iter().map(|v| [*v; 3]).collect();
+            run_lanes::<3>(lanes.iter_mut(), &sections, &zi, [x[0]; 3]);
+            for l in 0..3 {
+                let lane: Vec<f64> = lanes.iter().map(|v| v[l]).collect();
+                assert_eq!(lane, plain, "{count} sections, lane {l}");
             }
         }
     }

@@ -974,7 +974,7 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
     let stiffness = block(theta, 2);
     let mut warnings = Vec::new();
     if data.demeaned && params.equilibrium {
-        warnings.push(Warning::new(WarningCode::EquilibriumAbsorbed, "equilibrium not estimated: each trial's force offset was fitted, which absorbs it; use rest offsets (seed 000) to estimate it"));
+        warnings.push(Warning::new(WarningCode::EquilibriumAbsorbed, "equilibrium not estimated: each trial's force offset was fitted, which absorbs it; use rest offsets (Artemiadis et al. 2010) to estimate it"));
     }
     let equilibrium = (with_const && params.equilibrium).then(|| {
         let constant = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);
@@ -1157,7 +1157,7 @@ fn quality_warnings(
     warnings: &mut Vec<Warning>,
 ) {
     if !identifiable.inertia {
-        warnings.push(Warning::new(WarningCode::InertiaBelowNoise, "inertial forces are below the noise: perturbations this slow cannot identify inertia (seed 000's 3 s motions are such a case)"));
+        warnings.push(Warning::new(WarningCode::InertiaBelowNoise, "inertial forces are below the noise: perturbations this slow cannot identify inertia (Artemiadis et al. 2010's 3 s motions are such a case)"));
     }
     if condition_number > 1e4 {
         warnings.push(Warning::new(WarningCode::IllConditioned, format!(

@@ -407,7 +407,7 @@ pub fn estimate_stochastic_pooled(
         warnings.push(Warning::new(WarningCode::SingularFrequencies, format!("{singular_in_band} frequencies in the band were left out: the input spectral matrix (or R) is singular there (an input without power, or inputs fully coherent)")));
     }
     if max_input_coherence >= 0.6 {
-        warnings.push(Warning::new(WarningCode::CorrelatedInputs, format!("inputs are correlated (ordinary coherence up to {max_input_coherence:.2}, seed 004 asks < 0.6): R and T are poorly separated")));
+        warnings.push(Warning::new(WarningCode::CorrelatedInputs, format!("inputs are correlated (ordinary coherence up to {max_input_coherence:.2}, Park & Chang 2011 asks < 0.6): R and T are poorly separated")));
     }
     let fit_ok = fit_vaf >= VAF_FLOOR_PERCENT && mean_coh >= MIN_MEAN_COHERENCE;
     let verdicts = Verdicts {

@@ -230,7 +230,7 @@ impl PlanarDesign {
     pub fn seed003() -> Self {
         let sim = PlanarProtocol::seed003();
         PlanarDesign {
-            name: "seed 003: 6 joint-space directions x 5, quintic over 200 ms, random waits 1-3 s"
+            name: "Lakatos, Petit & van der Smagt (2011): 6 joint-space directions x 5, quintic over 200 ms, random waits 1-3 s"
                 .into(),
             sample_rate_hz: sim.sample_rate,
             link_lengths_m: [0.30, 0.33],
@@ -355,7 +355,8 @@ impl StochasticDesign {
     /// the spring-array experiments in `../shared/examples/stochastic`.
     pub fn seed004() -> Self {
         StochasticDesign {
-            name: "seed 004: uniform noise, 8th-order Butterworth 15 Hz, 50 s at 1 kHz".into(),
+            name: "Park & Chang (2011): uniform noise, 8th-order Butterworth 15 Hz, 50 s at 1 kHz"
+                .into(),
             sample_rate_hz: 1000.0,
             duration_s: 50.0,
             channels: vec!["ux".into(), "uz".into(), "utheta".into()],

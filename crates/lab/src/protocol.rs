@@ -128,7 +128,7 @@ pub struct Limits {
 pub fn preset(name: &str) -> Result<Protocol> {
     let p = match name {
         "artemiadis-3d" => Protocol {
-            name: "seed 000: 6 start points on a 20 cm sphere, 16 targets at 3 cm, 3 s centre-out".into(),
+            name: "Artemiadis et al. (2010): 6 start points on a 20 cm sphere, 16 targets at 3 cm, 3 s centre-out".into(),
             sample_rate_hz: 500.0,
             start_points: StartPoints { points: vec![], centre_m: [0.40, 0.0, 0.0], radius_m: 0.20 },
             targets: Targets { count: 16, radius_m: 0.03 },
@@ -147,7 +147,7 @@ pub fn preset(name: &str) -> Result<Protocol> {
             robot_base: Some(Placement { xyz_m: [-0.05, 0.0, -0.6], rpy_rad: [0.0, 0.0, std::f64::consts::PI] }),
         },
         "patel-cocontraction" => Protocol {
-            name: "seed 001: 18 targets at 8 mm, 100 ms out, 500 ms hold, 100 ms back, 1 s rest".into(),
+            name: "Patel, O'Neill & Artemiadis (2013): 18 targets at 8 mm, 100 ms out, 500 ms hold, 100 ms back, 1 s rest".into(),
             sample_rate_hz: 1000.0,
             start_points: StartPoints { points: vec![[0.30, -0.20, 0.05]], centre_m: [0.0; 3], radius_m: 0.0 },
             targets: Targets { count: 18, radius_m: 0.008 },

@@ -197,7 +197,7 @@ fn planar(p: &PlanarDesign, subject: Option<&SubjectText>, seed: u64) -> Result<
         "interpolation_interval_ms": p.interpolation_s * 1e3,
         "reflex": arm.reflex,
         "noise": {"torque_white_std_Nm": torque_std, "baseline_torque_Nm": arm.tau0, "joint_angle_std_rad": angle_std},
-        "notes": ["tau = M(q) q'' + C(q,q') q' + D q' + K (q - q0) + tau0 + noise, seed 003 eq. (9)", "made by limpid simulate"],
+        "notes": ["tau = M(q) q'' + C(q,q') q' + D q' + K (q - q0) + tau0 + noise, Lakatos, Petit & van der Smagt (2011) eq. (9)", "made by limpid simulate"],
     });
     Ok(Simulated {
         label: None,
@@ -234,7 +234,7 @@ fn stochastic(
             json!({"model": "linear, desired impedance", "M_rd": rows(&e.robot_inertia), "B_rd": rows(&e.robot_damping), "K_rd": rows(&e.robot_stiffness)})
         }
         RigController::Imbic => {
-            json!({"model": "PUMA-type vertical-plane chain with joint friction under IMBIC (seed 004 eq. 11-14, the paper's gains)", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous})
+            json!({"model": "PUMA-type vertical-plane chain with joint friction under IMBIC (Park & Chang 2011, eq. 11-14, the paper's gains)", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous})
         }
         RigController::Pd => {
             json!({"model": "PUMA-type vertical-plane chain with joint friction under a plain PD law", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous})
@@ -251,7 +251,7 @@ fn stochastic(
         "springs_N_per_m": springs,
         "robot": robot,
         "noise": {"position_std_m": noise[0], "angle_std_rad": noise[1]},
-        "notes": ["spring array of seed 004 eq. (10) on the impedance-controlled robot; force on the rig", "made by limpid simulate"],
+        "notes": ["spring array of Park & Chang (2011) eq. (10) on the impedance-controlled robot; force on the rig", "made by limpid simulate"],
     });
     Ok(Simulated {
         label: None,

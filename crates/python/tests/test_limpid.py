@@ -1,5 +1,5 @@
 """limpid's Python package against scipy.signal, numpy.linalg.lstsq and the
-truth files of ../shared/examples (issue 8)."""
+truth files of the examples limpid's lab makes (issue 8)."""
 
 import json
 import os
@@ -11,7 +11,7 @@ import scipy.signal as ss
 
 import limpid
 
-SHARED = pathlib.Path(__file__).resolve().parents[4] / "shared" / "examples"
+from conftest import examples, real_data
 RNG = np.random.default_rng(20261123)
 
 
@@ -96,25 +96,25 @@ def test_linear_estimator_matches_lstsq_on_a_noiseless_system():
 
 
 def test_recovers_the_shared_example_truths():
-    case = SHARED / "cartesian_slow" / "ex_cubic"
+    case = examples("cartesian_slow") / "ex_cubic"
     truth = json.loads(case.with_suffix(".truth.json").read_text())
     est = limpid.estimate_linear(str(case.with_suffix(".csv")))
     assert rel(est.stiffness, truth["stiffness"]) < 0.03
 
-    case = SHARED / "planar" / "ex_joint_180"
+    case = examples("planar") / "ex_joint_180"
     truth = json.loads(case.with_suffix(".truth.json").read_text())
     est = limpid.estimate_planar(case.with_suffix(".csv"), truth["link_lengths"])
     assert rel(est.stiffness, truth["stiffness"]) < 0.03
     assert est.criteria.trusted
 
-    case = SHARED / "stochastic" / "ex_sa3"
+    case = examples("stochastic") / "ex_sa3"
     truth = json.loads(case.with_suffix(".truth.json").read_text())
     # from a dict of arrays this time
     est = limpid.estimate_stochastic(limpid.read_recording(case.with_suffix(".csv")))
     assert rel(est.stiffness, truth["stiffness"]) < 0.05
     assert est.impedance.shape[1:] == (3, 3, 2)
 
-    case = SHARED / "cocontraction" / "ex_config4"
+    case = examples("cocontraction") / "ex_config4"
     truth = json.loads(case.with_suffix(".truth.json").read_text())
     res = limpid.estimate_cocontraction(case.with_suffix(".csv"), str(case) + ".mvc.csv")
     assert len(res.to_dict()["levels"]) == 4
@@ -138,7 +138,7 @@ class FakeFrame:
 
 
 def test_dataframes_and_errors():
-    rec = limpid.read_recording(SHARED / "cartesian_slow" / "ex_cubic.csv")
+    rec = limpid.read_recording(examples("cartesian_slow") / "ex_cubic.csv")
     a = limpid.estimate_linear(FakeFrame(rec))
     b = limpid.estimate_linear(rec)
     np.testing.assert_array_equal(a.stiffness, b.stiffness)
@@ -157,7 +157,7 @@ def test_dataframes_and_errors():
 
 
 def test_hostile_values_are_refused_and_suspicious_ones_warned(tmp_path):
-    rec = limpid.read_recording(SHARED / "cartesian_slow" / "ex_cubic.csv")
+    rec = limpid.read_recording(examples("cartesian_slow") / "ex_cubic.csv")
     bad = dict(rec)
     bad["x"] = bad["x"].copy()
     bad["x"][100] = 1e307
@@ -264,7 +264,7 @@ def test_matlab_files_read_like_their_csv():
 
 
 def test_window_sweep_rows_match_single_estimates():
-    case = SHARED / "planar" / "ex_joint_180"
+    case = examples("planar") / "ex_joint_180"
     truth = json.loads(case.with_suffix(".truth.json").read_text())
     rec = case.with_suffix(".csv")
     sweep = limpid.window_sweep(rec, truth["link_lengths"], from_ms=50, to_ms=400, step_ms=50)
@@ -314,7 +314,7 @@ def test_gravity_compensation_from_still_poses():
 
 
 def test_reflex_on_the_real_ankle_recording():
-    real = SHARED.parent / "real" / "reklab_ankle" / "pf.csv"
+    real = real_data("reklab_ankle") / "pf.csv"
     est = limpid.estimate_reflex(real)
     d = est.to_dict()
     assert d["kind"] == "reflex"
@@ -345,7 +345,7 @@ def _hand(angles_rad, upper=0.3, fore=0.35, elbow_rad=np.pi / 2):
 
 
 def test_stochastic_in_the_shoulders_joint_space_matches_the_mapped_truth():
-    case = SHARED / "stochastic" / "ex_sa3"
+    case = examples("stochastic") / "ex_sa3"
     truth = json.loads(case.with_suffix(".truth.json").read_text())
     est = limpid.estimate_stochastic(case.with_suffix(".csv"), shoulder=(0.3, 0.35, 90, 30, 45, 0))
     assert est.to_dict()["coordinates"] == ["q1", "q2", "q3"]
@@ -364,7 +364,7 @@ def test_stochastic_in_the_shoulders_joint_space_matches_the_mapped_truth():
 
 
 def test_stochastic_shoulder_needs_six_numbers_and_a_usable_posture():
-    path = SHARED / "stochastic" / "ex_sa3.csv"
+    path = examples("stochastic") / "ex_sa3.csv"
     with pytest.raises(ValueError, match="expected 6 numbers"):
         limpid.estimate_stochastic(path, shoulder=(0.3, 0.35, 90, 30, 45))
     with pytest.raises(ValueError, match="do not determine the two angles"):

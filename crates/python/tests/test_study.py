@@ -11,7 +11,9 @@ import pytest
 
 import limpid
 
-SHARED = Path(__file__).resolve().parents[3] / ".." / "shared" / "examples" / "cocontraction"
+from conftest import examples
+
+SHARED = examples("cocontraction")
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 

@@ -11,8 +11,9 @@ import pytest
 
 import limpid
 
-SHARED = pathlib.Path(__file__).resolve().parents[4] / "shared" / "examples"
-LINEAR = SHARED / "cartesian_slow" / "ex_cubic.csv"
+from conftest import examples
+
+LINEAR = examples("cartesian_slow") / "ex_cubic.csv"
 
 
 def _stiffness_of(path):

@@ -231,7 +231,7 @@ fn stochastic_criteria_table(v: &StochasticEstimate) -> Table {
         vec![
             "largest input coherence".into(),
             fmt(c.max_input_coherence),
-            "between two perturbation inputs; seed 004 asks below 0.6".into(),
+            "between two perturbation inputs; Park & Chang (2011) asks below 0.6".into(),
         ],
         vec![
             "fit VAF".into(),
@@ -244,7 +244,7 @@ fn stochastic_criteria_table(v: &StochasticEstimate) -> Table {
         vec![
             "phi_T, Z against the fit".into(),
             fmt(c.phi_t_vs_fit),
-            "seed 004 eq. (15)".into(),
+            "Park & Chang (2011) eq. (15)".into(),
         ],
         vec![
             "Welch".into(),
@@ -489,7 +489,7 @@ fn linear_tables(v: &LinearResult, truth: Option<&DemoPoint>) -> Vec<Table> {
     })
     .collect();
     tables.push(Table {
-        caption: "Seed 000 Table II quantities".into(),
+        caption: "Artemiadis et al. (2010) Table II quantities".into(),
         header: vec!["matrix".into(), "quantities".into()],
         rows,
     });
@@ -604,7 +604,7 @@ fn calibration_section(name: &str, v: &limpid_analysis::calibrate::Calibration) 
 
 fn demo_section(name: &str, v: &DemoResult) -> Section {
     let mut section = Section {
-        heading: format!("Virtual seed 000 study: {name}"),
+        heading: format!("Virtual Artemiadis et al. (2010) study: {name}"),
         verdict: String::new(),
         warnings: vec![],
         tables: vec![],
@@ -982,7 +982,7 @@ fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
 /// ellipsoid rotation from level 0 to 1, and the stiffness against the index.
 fn study_section(name: &str, v: &StudyResult) -> Section {
     let levels = Table {
-        caption: "Mean ± sd over subjects per configuration and level (seed 001 Tables 1-5): co-contraction index (fraction of MVC), diagonal stiffness, largest antisymmetric element, principal stiffnesses (N/m)".into(),
+        caption: "Mean ± sd over subjects per configuration and level (Patel et al. 2013, Tables 1-5): co-contraction index (fraction of MVC), diagonal stiffness, largest antisymmetric element, principal stiffnesses (N/m)".into(),
         header: [
             "configuration",
             "level",
@@ -1076,7 +1076,7 @@ fn study_section(name: &str, v: &StudyResult) -> Section {
         vec![Drawing {
         id: "study-stiffness-ellipsoids".into(),
         svg: ellipse::grid(
-            "Mean stiffness ellipsoid per configuration and co-contraction level (seed 001 Fig. 5)",
+            "Mean stiffness ellipsoid per configuration and co-contraction level (Patel et al. 2013, Fig. 5)",
             &configs.iter().map(|c| format!("configuration {c}")).collect::<Vec<_>>(),
             &level_values.iter().map(|l| format!("level {}", fmt(*l))).collect::<Vec<_>>(),
             &cells,
@@ -1151,7 +1151,8 @@ fn cocontraction_section(name: &str, v: &CocontractionResult) -> Section {
         drawings: vec![],
     };
     let mut index_table = Table {
-        caption: "Co-contraction index and stiffness per level (seed 001 Tables 1-5)".into(),
+        caption: "Co-contraction index and stiffness per level (Patel et al. 2013, Tables 1-5)"
+            .into(),
         header: [
             "level",
             "index (mean ± sd)",
@@ -1232,7 +1233,7 @@ fn cocontraction_section(name: &str, v: &CocontractionResult) -> Section {
     section.drawings.push(Drawing {
         id: "stiffness-ellipsoids".into(),
         svg: ellipse::grid(
-            "Stiffness ellipsoid per co-contraction level (seed 001 Fig. 5)",
+            "Stiffness ellipsoid per co-contraction level (Patel et al. 2013, Fig. 5)",
             &[name.to_string()],
             &columns,
             &cells,
@@ -1600,7 +1601,7 @@ fn planar_quality_tables(v: &PlanarEstimate) -> Vec<Table> {
         rows.push(vec![
             "leave-one-trial-out VAF".into(),
             format!("{} % / {} %", fmt(l[0]), fmt(l[1])),
-            "each trial predicted by the others (seed 003 Fig. 6)".into(),
+            "each trial predicted by the others (Lakatos et al. 2011, Fig. 6)".into(),
         ]);
     }
     rows.extend([
@@ -1634,14 +1635,14 @@ fn planar_quality_tables(v: &PlanarEstimate) -> Vec<Table> {
                 fmt(c.stiffness_symmetry_ratio),
                 fmt(c.damping_symmetry_ratio)
             ),
-            "‖antisymmetric part‖ / ‖symmetric part‖; quasi-symmetric when small (seed 003 §III-C)"
+            "‖antisymmetric part‖ / ‖symmetric part‖; quasi-symmetric when small (Lakatos et al. 2011, §III-C)"
                 .into(),
         ],
     ]);
     vec![
         xi,
         Table {
-            caption: "Confidence criteria (seed 003 §III-C)".into(),
+            caption: "Confidence criteria (Lakatos et al. 2011, §III-C)".into(),
             header: vec!["criterion".into(), "value".into(), "detail".into()],
             rows,
         },

@@ -1,7 +1,7 @@
-//! The page of `limpid reproduce --report`: one table per seed (the paper's
+//! The page of `limpid reproduce --report`: one table per paper (the paper's
 //! number, limpid's, the difference, the note) and the findings.
 
-use limpid_analysis::reproduce::{sig, Reproduction};
+use limpid_analysis::reproduce::{citation, sig, Reproduction};
 
 use crate::svg::escape;
 use crate::STYLE;
@@ -20,8 +20,8 @@ pub fn reproduction_page(r: &Reproduction, title: &str) -> String {
             ("bad", "differs")
         };
         s.push_str(&format!(
-            "<li><span class=\"{class}\">{word}</span> seed {}: {} — {}</li>",
-            escape(&f.seed),
+            "<li><span class=\"{class}\">{word}</span> {}: {} — {}</li>",
+            escape(citation(&f.seed)),
             escape(&f.claim),
             escape(&f.evidence)
         ));
@@ -35,8 +35,8 @@ pub fn reproduction_page(r: &Reproduction, title: &str) -> String {
             }
             seed.clone_from(&x.seed);
             s.push_str(&format!(
-                "<h2>Seed {}</h2><table><thead><tr><th>item</th><th>paper</th><th>limpid</th><th>difference</th><th>unit</th><th>note</th></tr></thead><tbody>",
-                escape(&seed)
+                "<h2>{}</h2><table><thead><tr><th>item</th><th>paper</th><th>limpid</th><th>difference</th><th>unit</th><th>note</th></tr></thead><tbody>",
+                escape(citation(&seed))
             ));
         }
         let cell = |v: Option<f64>| v.map_or("–".to_string(), sig);

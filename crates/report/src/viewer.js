@@ -1,5 +1,5 @@
 // limpid ellipsoid viewer: orthographic 3-D view of impedance ellipsoids at
-// their start points (seed 000 Fig. 4, seed 001 Fig. 5). Written for limpid;
+// their start points (Artemiadis et al. 2010, Fig. 4, Patel et al. 2013, Fig. 5). Written for limpid;
 // no library. Drag to rotate; buttons pick the matrix kind.
 (function () {
   "use strict";

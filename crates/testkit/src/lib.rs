@@ -1,6 +1,8 @@
 //! limpid-testkit: the helpers every test crate of the workspace shares,
-//! written once: where the shared material is, JSON files and matrices,
-//! and the relative Frobenius error the tests compare against truth with.
+//! written once: the example recordings (made by limpid's lab, [`examples`]),
+//! the optional outside data (`LIMPID_EXAMPLES`, `LIMPID_REAL_DATA`), JSON
+//! files and matrices, and the relative Frobenius error the tests compare
+//! against truth with.
 
 use std::path::{Path, PathBuf};
 
@@ -8,14 +10,54 @@ use limpid_core::Matrix;
 use nalgebra::DMatrix;
 use serde_json::Value;
 
-/// `../shared` beside the checkout (CI clones the repository next to it).
-pub fn shared() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
+pub mod examples;
+
+pub use examples::limpid_examples;
+
+/// limpid-made examples of `family` (`cartesian_slow`, `cocontraction`,
+/// `planar`, `stochastic`) as a folder path.
+pub fn examples(family: &str) -> PathBuf {
+    limpid_examples(family)
 }
 
-/// `../shared/examples/<family>` as a string path.
-pub fn examples(family: &str) -> String {
-    shared().join("examples").join(family).display().to_string()
+/// Every example set a truth test should run on: limpid's own, then the
+/// outside generator's when `LIMPID_EXAMPLES` names it (said on stderr when not).
+pub fn example_sets(family: &str) -> Vec<(&'static str, PathBuf)> {
+    let mut sets = vec![("limpid", limpid_examples(family))];
+    if let Some(outside) = outside_examples(family) {
+        sets.push(("outside", outside));
+    }
+    sets
+}
+
+/// The outside generator's examples of `family` (`$LIMPID_EXAMPLES/<family>`),
+/// or `None`, saying on stderr that those checks were skipped.
+pub fn outside_examples(family: &str) -> Option<PathBuf> {
+    optional_folder("LIMPID_EXAMPLES", family)
+}
+
+/// Real recordings (`$LIMPID_REAL_DATA/<sub>`, e.g. `reklab_ankle`), or
+/// `None`, saying on stderr that the test was skipped.
+pub fn real_data(sub: &str) -> Option<PathBuf> {
+    optional_folder("LIMPID_REAL_DATA", sub)
+}
+
+fn optional_folder(variable: &str, sub: &str) -> Option<PathBuf> {
+    match std::env::var_os(variable) {
+        Some(root) if !root.is_empty() => {
+            let dir = PathBuf::from(root).join(sub);
+            assert!(
+                dir.is_dir(),
+                "{variable} is set but {} is not a folder",
+                dir.display()
+            );
+            Some(dir)
+        }
+        _ => {
+            eprintln!("skipped: {variable} is not set ({sub})");
+            None
+        }
+    }
 }
 
 /// A JSON file, parsed.

@@ -246,7 +246,7 @@ fn shoulder_posture_with_the_wrong_count_or_a_1_dof_estimate() {
 
 #[test]
 fn stochastic_shoulder_posture_that_is_singular_or_a_recording_without_z() {
-    let sa3 = shared().join("examples/stochastic/ex_sa3.csv");
+    let sa3 = examples("stochastic").join("ex_sa3.csv");
     let sa3 = sa3.to_str().unwrap();
     for (extra, expected) in [
         ("0.3,0.35,90,30", "invalid --shoulder: expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found 4"),

@@ -4,61 +4,74 @@ use crate::common::*;
 
 #[test]
 fn examples_index_within_0_03_and_stiffness_within_5_percent_per_level() {
-    for case in ["ex_config4", "ex_config7"] {
-        let dir = shared().join("examples/cocontraction");
-        let truth = read_json(&dir.join(format!("{case}.truth.json")));
-        let rec = dir.join(format!("{case}.csv"));
-        let mvc = dir.join(format!("{case}.mvc.csv"));
-        let r = json(&[
-            "estimate",
-            "cocontraction",
-            rec.to_str().unwrap(),
-            "--mvc",
-            mvc.to_str().unwrap(),
-            "--json",
-        ]);
-        let levels = r["levels"].as_array().unwrap();
-        let truth_levels = truth["levels"].as_array().unwrap();
-        assert_eq!(levels.len(), truth_levels.len());
-        for (l, t) in levels.iter().zip(truth_levels) {
-            assert_eq!(l["level"], t["level"]);
-            let c = l["cocontraction_index"].as_f64().unwrap();
-            let ct = t["cocontraction_index"].as_f64().unwrap();
-            assert!(
-                (c - ct).abs() < 0.03,
-                "{case} level {}: index {c} vs {ct}",
-                l["level"]
-            );
-            assert!(l["cocontraction_sd"].as_f64().unwrap() > 0.0);
-            let ek = rel_err(&mat(&l["stiffness"]), &mat(&t["stiffness"]));
-            assert!(
-                ek < 0.05,
-                "{case} level {}: stiffness error {ek}",
-                l["level"]
-            );
-            for key in ["damping", "inertia", "ellipsoid"] {
-                assert!(!l[key].is_null(), "{key}");
+    for (set, dir) in example_sets("cocontraction") {
+        for name in ["ex_config4", "ex_config7"] {
+            let case = &format!("{set}/{name}");
+            let truth = read_json(&dir.join(format!("{name}.truth.json")));
+            let rec = dir.join(format!("{name}.csv"));
+            let mvc = dir.join(format!("{name}.mvc.csv"));
+            let r = json(&[
+                "estimate",
+                "cocontraction",
+                rec.to_str().unwrap(),
+                "--mvc",
+                mvc.to_str().unwrap(),
+                "--json",
+            ]);
+            let levels = r["levels"].as_array().unwrap();
+            let truth_levels = truth["levels"].as_array().unwrap();
+            assert_eq!(levels.len(), truth_levels.len());
+            for (l, t) in levels.iter().zip(truth_levels) {
+                assert_eq!(l["level"], t["level"]);
+                let c = l["cocontraction_index"].as_f64().unwrap();
+                // the outside truth gives the index its reference processing
+                // computes; limpid's lab knows only the activation (the index is
+                // normalised by the MVC's maximum envelope, about 1.2x its mean):
+                // there the index must lie between 0.7x and 1x the activation
+                if let Some(ct) = t["cocontraction_index"].as_f64() {
+                    assert!(
+                        (c - ct).abs() < 0.03,
+                        "{case} level {}: index {c} vs {ct}",
+                        l["level"]
+                    );
+                } else {
+                    let level = t["level"].as_f64().unwrap();
+                    assert!(
+                        c <= level + 0.03 && c >= 0.7 * level,
+                        "{case} level {level}: index {c}"
+                    );
+                }
+                assert!(l["cocontraction_sd"].as_f64().unwrap() > 0.0);
+                let ek = rel_err(&mat(&l["stiffness"]), &mat(&t["stiffness"]));
+                assert!(
+                    ek < 0.05,
+                    "{case} level {}: stiffness error {ek}",
+                    l["level"]
+                );
+                for key in ["damping", "inertia", "ellipsoid"] {
+                    assert!(!l[key].is_null(), "{key}");
+                }
             }
+            // the truth's own description: at level 1 the tertiary stiffness grows most
+            let last = r["comparisons"].as_array().unwrap().last().unwrap().clone();
+            let change: Vec<f64> = last["principal_change_percent"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            assert!(
+                change[2] > 50.0 && change[0] < 10.0 && change[1] < 10.0,
+                "{case}: {change:?}"
+            );
+            let rot: Vec<f64> = last["rotation_deg"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            assert!(rot.iter().all(|a| (0.0..=90.0).contains(a)));
         }
-        // the truth's own description: at level 1 the tertiary stiffness grows most
-        let last = r["comparisons"].as_array().unwrap().last().unwrap().clone();
-        let change: Vec<f64> = last["principal_change_percent"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        assert!(
-            change[2] > 50.0 && change[0] < 10.0 && change[1] < 10.0,
-            "{case}: {change:?}"
-        );
-        let rot: Vec<f64> = last["rotation_deg"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        assert!(rot.iter().all(|a| (0.0..=90.0).contains(a)));
     }
 }
 
@@ -215,7 +228,7 @@ fn virtual_study_tables_show_the_anisotropic_increase() {
 #[test]
 fn a_failing_recording_is_reported_and_the_others_processed() {
     let dir = tempfile::tempdir().unwrap();
-    let ex = shared().join("examples/cocontraction");
+    let ex = examples("cocontraction");
     let manifest = format!(
         "[study]\nname = \"two\"\n\n[[recording]]\nsubject = \"1\"\nconfiguration = \"4\"\nfile = \"{}\"\nmvc = \"{}\"\n\n[[recording]]\nsubject = \"2\"\nconfiguration = \"4\"\nfile = \"missing.csv\"\nmvc = \"missing.mvc.csv\"\n",
         ex.join("ex_config4.csv").display(),
@@ -265,7 +278,7 @@ fn bad_manifest_and_missing_mvc_channels() {
     );
     assert_eq!(out.stderr.trim_end().lines().count(), 1, "{}", out.stderr);
     // an MVC file without the EMG channels
-    let ex = shared().join("examples/cocontraction/ex_config4.csv");
+    let ex = examples("cocontraction").join("ex_config4.csv");
     let mvc = dir.path().join("mvc.csv");
     std::fs::write(&mvc, "t,x\n0,0\n0.001,0\n0.002,0\n").unwrap();
     let out = limpid(&[

@@ -155,7 +155,7 @@ fn huge_counts_and_rates_are_refused_not_allocated() {
 
 #[test]
 fn json_to_a_full_stdout_is_one_line_and_exit_2() {
-    let rec = shared().join("examples/planar/ex_joint_180.csv");
+    let rec = examples("planar").join("ex_joint_180.csv");
     let full = std::fs::File::options().write(true).open("/dev/full");
     let Ok(full) = full else {
         return; // no /dev/full on this system
@@ -236,7 +236,7 @@ fn a_60_minute_recording_with_one_1e307_sample_is_answered_at_once() {
     assert_eq!(
         line,
         format!(
-            "limpid: {}: row 1000002, column x: implausible value 1e307: limpid accepts magnitudes up to 100 m in this column (SI units, FORMAT.md)",
+            "limpid: {}: row 1000002, column x: implausible value 1e307: limpid accepts magnitudes up to 100 m in this column (SI units, docs/src/format.md)",
             p.display()
         )
     );
@@ -249,7 +249,7 @@ fn a_60_minute_recording_with_one_1e307_sample_is_answered_at_once() {
 #[test]
 fn a_study_keeps_its_good_recordings_and_writes_no_nan_or_nothing_at_all() {
     let d = tempfile::tempdir().unwrap();
-    let ex = shared().join("examples/cocontraction");
+    let ex = examples("cocontraction");
     let bad = d.path().join("bad.csv");
     let text = std::fs::read_to_string(ex.join("ex_config7.csv")).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
@@ -361,8 +361,7 @@ fn corrupt_mat_files_print_one_line_and_nothing_on_stdout() {
 #[test]
 fn a_look_alike_header_is_said_not_ignored() {
     let d = tempfile::tempdir().unwrap();
-    let text =
-        std::fs::read_to_string(shared().join("examples/cartesian_slow/ex_cubic.csv")).unwrap();
+    let text = std::fs::read_to_string(examples("cartesian_slow").join("ex_cubic.csv")).unwrap();
     let p = d.path().join("cyrillic.csv");
     std::fs::write(&p, text.replacen("t,x,", "t,\u{445},", 1)).unwrap();
     let out = limpid(&["estimate", "linear", p.to_str().unwrap()]);
@@ -382,7 +381,7 @@ fn a_look_alike_header_is_said_not_ignored() {
 
 #[test]
 fn a_planar_estimate_of_3d_data_is_refused_not_silently_flattened() {
-    let rec = shared().join("examples/cartesian_slow/ex_cubic.csv");
+    let rec = examples("cartesian_slow").join("ex_cubic.csv");
     let out = limpid(&[
         "estimate",
         "planar",
@@ -401,15 +400,14 @@ fn a_planar_estimate_of_3d_data_is_refused_not_silently_flattened() {
 fn methods_refuse_data_they_cannot_use_and_name_what_is_missing() {
     let d = tempfile::tempdir().unwrap();
     // co-contraction without EMG: the index cannot be computed
-    let src =
-        std::fs::read_to_string(shared().join("examples/cocontraction/ex_config4.csv")).unwrap();
+    let src = std::fs::read_to_string(examples("cocontraction").join("ex_config4.csv")).unwrap();
     let no_emg: String = src
         .lines()
         .map(|l| l.split(',').take(9).collect::<Vec<_>>().join(",") + "\n")
         .collect();
     let rec = d.path().join("no_emg.csv");
     std::fs::write(&rec, no_emg).unwrap();
-    let mvc = shared().join("examples/cocontraction/ex_config4.mvc.csv");
+    let mvc = examples("cocontraction").join("ex_config4.mvc.csv");
     let out = limpid(&[
         "estimate",
         "cocontraction",
@@ -423,7 +421,7 @@ fn methods_refuse_data_they_cannot_use_and_name_what_is_missing() {
         "{line}"
     );
     // stochastic without the commanded inputs: the spectra Z = T R^-1 need them
-    let rec = shared().join("examples/cartesian_slow/ex_cubic.csv");
+    let rec = examples("cartesian_slow").join("ex_cubic.csv");
     let out = limpid(&["estimate", "stochastic", rec.to_str().unwrap()]);
     let line = one_line_error(&out);
     assert!(line.contains("missing required column ux"), "{line}");
@@ -438,12 +436,7 @@ fn a_recording_path_that_is_not_utf8_is_read_and_named() {
     let dir = tempfile::tempdir().unwrap();
     let name = std::ffi::OsStr::from_bytes(b"bad\xff.csv");
     let path = dir.path().join(name);
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../../shared/examples/cartesian_slow/ex_cubic.csv"),
-        &path,
-    )
-    .unwrap();
+    std::fs::copy(examples("cartesian_slow").join("ex_cubic.csv"), &path).unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_limpid"))
         .args([
             "estimate".as_ref(),

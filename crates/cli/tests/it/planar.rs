@@ -12,75 +12,78 @@ fn planar_examples_through_the_cli() {
         ("ex_joint_180", "0.28,0.35"),
         ("ex_endpoint_220", "0.32,0.31"),
     ] {
-        let dir = shared().join("examples/planar");
-        let t = read_json(&dir.join(format!("{case}.truth.json")));
-        let rec = dir.join(format!("{case}.csv"));
-        let r = json(&[
-            "estimate",
-            "planar",
-            rec.to_str().unwrap(),
-            "--link-lengths",
-            lengths,
-            "--json",
-        ]);
-        assert!(
-            rel_err(&m2(&r["stiffness"]), &mat(&t["stiffness"])) < 0.05,
-            "{case}"
-        );
-        assert!(
-            rel_err(&m2(&r["damping"]), &mat(&t["damping"])) < 0.15,
-            "{case}"
-        );
-        let xi: Vec<f64> = r["inertial_parameters"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        let xt: Vec<f64> = t["inertial_parameters"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        let row = |v: &[f64]| nalgebra::DMatrix::from_row_slice(1, v.len(), v);
-        assert!(rel_err(&row(&xi), &row(&xt)) < 0.10, "{case}");
-        assert_eq!(r["criteria"]["trusted"], true);
-        for key in [
-            "endpoint_stiffness",
-            "standard_errors",
-            "fit",
-            "leave_one_out_vaf",
-        ] {
-            assert!(!r[key].is_null(), "{key}");
+        for (set, dir) in example_sets("planar") {
+            let name = case;
+            let case = &format!("{set}/{name}");
+            let t = read_json(&dir.join(format!("{name}.truth.json")));
+            let rec = dir.join(format!("{name}.csv"));
+            let r = json(&[
+                "estimate",
+                "planar",
+                rec.to_str().unwrap(),
+                "--link-lengths",
+                lengths,
+                "--json",
+            ]);
+            assert!(
+                rel_err(&m2(&r["stiffness"]), &mat(&t["stiffness"])) < 0.05,
+                "{case}"
+            );
+            assert!(
+                rel_err(&m2(&r["damping"]), &mat(&t["damping"])) < 0.15,
+                "{case}"
+            );
+            let xi: Vec<f64> = r["inertial_parameters"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            let xt: Vec<f64> = t["inertial_parameters"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            let row = |v: &[f64]| nalgebra::DMatrix::from_row_slice(1, v.len(), v);
+            assert!(rel_err(&row(&xi), &row(&xt)) < 0.10, "{case}");
+            assert_eq!(r["criteria"]["trusted"], true);
+            for key in [
+                "endpoint_stiffness",
+                "standard_errors",
+                "fit",
+                "leave_one_out_vaf",
+            ] {
+                assert!(!r[key].is_null(), "{key}");
+            }
+            // the reduced model with the true inertial parameters gives the same K
+            let given = xt
+                .iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(",");
+            let red = json(&[
+                "estimate",
+                "planar",
+                rec.to_str().unwrap(),
+                "--link-lengths",
+                lengths,
+                "--inertial-parameters",
+                &given,
+                "--json",
+            ]);
+            assert_eq!(red["inertial_parameters_fixed"], true);
+            assert!(
+                rel_err(&m2(&red["stiffness"]), &mat(&t["stiffness"])) < 0.05,
+                "{case} reduced"
+            );
         }
-        // the reduced model with the true inertial parameters gives the same K
-        let given = xt
-            .iter()
-            .map(|v| v.to_string())
-            .collect::<Vec<_>>()
-            .join(",");
-        let red = json(&[
-            "estimate",
-            "planar",
-            rec.to_str().unwrap(),
-            "--link-lengths",
-            lengths,
-            "--inertial-parameters",
-            &given,
-            "--json",
-        ]);
-        assert_eq!(red["inertial_parameters_fixed"], true);
-        assert!(
-            rel_err(&m2(&red["stiffness"]), &mat(&t["stiffness"])) < 0.05,
-            "{case} reduced"
-        );
     }
 }
 
 #[test]
 fn window_sweep_reports_minimum_windows() {
-    let rec = shared().join("examples/planar/ex_joint_180.csv");
+    let rec = examples("planar").join("ex_joint_180.csv");
     let out = limpid(&[
         "window-sweep",
         rec.to_str().unwrap(),
@@ -106,13 +109,18 @@ fn window_sweep_reports_minimum_windows() {
     .stdout;
     let lines: Vec<&str> = csv.lines().collect();
     assert!(lines[0].starts_with("t_obs_ms,cond_w"));
-    // 50..240 ms in 10 ms steps (the trials hold 250 ms after the onset)
-    assert_eq!(lines.len() - 1, 20);
+    // 50 ms up to the last 10 ms step inside what the trials hold after the
+    // onset (250 ms: 50..240, 20 rows)
+    let truth = read_json(&examples("planar").join("ex_joint_180.truth.json"));
+    let held = truth["observation_window_ms"].as_f64().unwrap();
+    let rows = ((held - 10.0 - 50.0) / 10.0).floor() as usize + 1;
+    assert_eq!(held, 250.0);
+    assert_eq!(lines.len() - 1, rows);
 }
 
 #[test]
 fn planar_bad_inputs() {
-    let rec = shared().join("examples/planar/ex_endpoint_220.csv");
+    let rec = examples("planar").join("ex_endpoint_220.csv");
     let out = limpid(&[
         "estimate",
         "planar",

@@ -1,5 +1,6 @@
 //! `limpid estimate reflex` (issue 17): the parallel cascade on the real
-//! ankle recordings, its report, and its refusals.
+//! ankle recordings (with `LIMPID_REAL_DATA`), on limpid's virtual ankle,
+//! its report, and its refusals.
 
 use crate::common::*;
 
@@ -16,7 +17,9 @@ fn joint_csv(path: &std::path::Path, n: usize, row: impl Fn(f64) -> (String, Str
 
 #[test]
 fn reflex_on_the_real_ankle_recordings() {
-    let dir = shared().join("real/reklab_ankle");
+    let Some(dir) = real_data("reklab_ankle") else {
+        return;
+    };
     for name in ["pf", "df2"] {
         let rec = dir.join(format!("{name}.csv"));
         let r = json(&["estimate", "reflex", rec.to_str().unwrap(), "--json"]);
@@ -51,7 +54,7 @@ fn reflex_on_the_real_ankle_recordings() {
 
 #[test]
 fn reflex_text_and_report() {
-    let rec = shared().join("real/reklab_ankle/pf.csv");
+    let rec = examples("ankle").join("ex_ankle.csv");
     let dir = tempfile::tempdir().unwrap();
     let html = dir.path().join("pf.html");
     let out = limpid(&[
@@ -78,7 +81,7 @@ fn reflex_text_and_report() {
 #[test]
 fn reflex_refusals() {
     // no joint angle column: names the column
-    let planar = shared().join("examples/planar/ex_endpoint_220.csv");
+    let planar = examples("planar").join("ex_endpoint_220.csv");
     let out = limpid(&["estimate", "reflex", planar.to_str().unwrap()]);
     assert_eq!(out.code, 2);
     assert!(
@@ -103,7 +106,7 @@ fn reflex_refusals() {
         out.stderr
     );
     // settings that cannot work
-    let pf = shared().join("real/reklab_ankle/pf.csv");
+    let pf = examples("ankle").join("ex_ankle.csv");
     let out = limpid(&[
         "estimate",
         "reflex",

@@ -6,8 +6,6 @@ use crate::common::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-const SA3: &str = "../../../shared/examples/stochastic/ex_sa3";
-
 fn example(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
 }
@@ -81,9 +79,12 @@ fn stochastic_report_figure_data_matches_its_snapshot() {
     let est = json(&[
         "estimate",
         "stochastic",
-        example(&format!("{SA3}.csv")).to_str().unwrap(),
+        examples("stochastic").join("ex_sa3.csv").to_str().unwrap(),
         "--expected",
-        example(&format!("{SA3}.truth.json")).to_str().unwrap(),
+        examples("stochastic")
+            .join("ex_sa3.truth.json")
+            .to_str()
+            .unwrap(),
         "--json",
     ]);
     let report = limpid_report::build(&[("ex_sa3".into(), document(&est))]);
@@ -152,7 +153,8 @@ fn report_command_writes_html_without_external_urls_and_svg_figures() {
     let res = dir.path().join("sweep.json");
     let sweep = limpid(&[
         "window-sweep",
-        example("../../../shared/examples/planar/ex_joint_180.csv")
+        examples("planar")
+            .join("ex_joint_180.csv")
             .to_str()
             .unwrap(),
         "--link-lengths",
@@ -285,9 +287,12 @@ fn demo_and_stochastic_reports_render_in_headless_chromium() {
     let out = limpid(&[
         "estimate",
         "stochastic",
-        example(&format!("{SA3}.csv")).to_str().unwrap(),
+        examples("stochastic").join("ex_sa3.csv").to_str().unwrap(),
         "--expected",
-        example(&format!("{SA3}.truth.json")).to_str().unwrap(),
+        examples("stochastic")
+            .join("ex_sa3.truth.json")
+            .to_str()
+            .unwrap(),
         "--report",
         page.to_str().unwrap(),
     ]);
@@ -318,13 +323,13 @@ fn demo_and_stochastic_reports_render_in_headless_chromium() {
 
 #[test]
 fn cocontraction_report_has_per_level_ellipsoids_and_tables() {
-    let case = "../../../shared/examples/cocontraction/ex_config4";
+    let case = examples("cocontraction").join("ex_config4");
     let est = json(&[
         "estimate",
         "cocontraction",
-        example(&format!("{case}.csv")).to_str().unwrap(),
+        case.with_extension("csv").to_str().unwrap(),
         "--mvc",
-        example(&format!("{case}.mvc.csv")).to_str().unwrap(),
+        case.with_extension("mvc.csv").to_str().unwrap(),
         "--json",
     ]);
     let report = limpid_report::build(&[("ex_config4".into(), document(&est))]);
@@ -341,7 +346,10 @@ fn cocontraction_report_has_per_level_ellipsoids_and_tables() {
     assert_eq!(s.tables.len(), 2 + 4);
     assert_eq!(s.tables[0].rows.len(), 4);
     assert_eq!(s.tables[1].rows.len(), 3);
-    assert!(s.verdict.contains("0.4248 at level 0.5"), "{}", s.verdict);
+    // the verdict quotes each level's index as the estimate gives it
+    let index = est["levels"][1]["cocontraction_index"].as_f64().unwrap();
+    let quoted = format!("{index:.4} at level 0.5");
+    assert!(s.verdict.contains(&quoted), "{quoted} not in {}", s.verdict);
 }
 
 #[test]
@@ -349,7 +357,8 @@ fn linear_report_draws_measured_against_predicted_force() {
     let est = json(&[
         "estimate",
         "linear",
-        example("../../../shared/examples/cartesian_slow/ex_cubic.csv")
+        examples("cartesian_slow")
+            .join("ex_cubic.csv")
             .to_str()
             .unwrap(),
         "--json",
@@ -517,7 +526,8 @@ fn reports_name_the_recording() {
     let out = limpid(&[
         "estimate",
         "linear",
-        example("../../../shared/examples/cartesian_slow/ex_cubic.csv")
+        examples("cartesian_slow")
+            .join("ex_cubic.csv")
             .to_str()
             .unwrap(),
         "--report",
@@ -536,11 +546,9 @@ fn reports_name_the_recording() {
     );
     // how it was made: the file with its size and date, the command, the version
     assert!(html.contains("How this result was made"));
-    let bytes = std::fs::metadata(example(
-        "../../../shared/examples/cartesian_slow/ex_cubic.csv",
-    ))
-    .unwrap()
-    .len();
+    let bytes = std::fs::metadata(examples("cartesian_slow").join("ex_cubic.csv"))
+        .unwrap()
+        .len();
     let kib = if bytes >= 1 << 20 {
         format!(
             "{} MiB",
@@ -557,7 +565,8 @@ fn reports_name_the_recording() {
     let doc = json(&[
         "estimate",
         "linear",
-        example("../../../shared/examples/cartesian_slow/ex_cubic.csv")
+        examples("cartesian_slow")
+            .join("ex_cubic.csv")
             .to_str()
             .unwrap(),
         "--json",
@@ -585,7 +594,8 @@ fn reports_name_the_recording() {
     // results without a recording field are named after the file the command read
     let out = limpid(&[
         "window-sweep",
-        example("../../../shared/examples/planar/ex_joint_180.csv")
+        examples("planar")
+            .join("ex_joint_180.csv")
             .to_str()
             .unwrap(),
         "--link-lengths",
@@ -616,8 +626,8 @@ fn vaf(measured: &[f64], predicted: &[f64]) -> f64 {
 fn every_kind_of_report_renders_with_its_figures() {
     let dir = tempfile::tempdir().unwrap();
     let d = |name: &str| dir.path().join(name);
-    let joint = example("../../../shared/examples/planar/ex_joint_180.csv");
-    let cc = "../../../shared/examples/cocontraction/ex_config4";
+    let joint = examples("planar").join("ex_joint_180.csv");
+    let cc = examples("cocontraction").join("ex_config4");
     let study = d("study");
     assert_eq!(
         limpid(&[
@@ -662,9 +672,9 @@ fn every_kind_of_report_renders_with_its_figures() {
             vec![
                 "estimate".into(),
                 "cocontraction".into(),
-                example(&format!("{cc}.csv")).display().to_string(),
+                cc.with_extension("csv").display().to_string(),
                 "--mvc".into(),
-                example(&format!("{cc}.mvc.csv")).display().to_string(),
+                cc.with_extension("mvc.csv").display().to_string(),
                 "--report".into(),
             ],
         ),
@@ -684,7 +694,10 @@ fn every_kind_of_report_renders_with_its_figures() {
             vec![
                 "estimate".into(),
                 "stochastic".into(),
-                example(&format!("{SA3}.csv")).display().to_string(),
+                examples("stochastic")
+                    .join("ex_sa3.csv")
+                    .display()
+                    .to_string(),
                 "--report".into(),
             ],
         ),
@@ -729,7 +742,7 @@ fn every_kind_of_report_renders_with_its_figures() {
                         .count(),
                     1
                 );
-                assert!(dom.contains("Confidence criteria (seed 003 §III-C)"));
+                assert!(dom.contains("Confidence criteria (Lakatos et al. 2011, §III-C)"));
                 assert!(dom.contains("base inertial parameters (kg m²)"));
             }
             "sweep" => {

@@ -108,17 +108,25 @@ fn reproduce_all_prints_every_seeds_tables_and_the_findings_hold_where_the_subje
 }
 
 #[test]
-fn reproduce_prints_a_table_per_seed_and_refuses_unknown_seeds() {
+fn reproduce_prints_a_table_per_paper_and_refuses_unknown_papers() {
     let out = limpid(&["reproduce", "003"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
-    assert!(out.stdout.contains("seed 003"));
+    assert!(out.stdout.contains("Lakatos, Petit & van der Smagt (2011)"));
+    assert!(!out.stdout.contains("seed 003"), "{}", out.stdout);
+    // the id a reader understands gives the same tables as the numeric alias
+    let by_id = limpid(&["reproduce", "lakatos2011"]);
+    assert_eq!(by_id.code, 0, "{}", by_id.stderr);
+    assert_eq!(by_id.stdout, out.stdout);
     assert!(out.stdout.contains("paper"));
     assert!(out.stdout.contains("findings"));
     assert!(!out.stdout.contains("NaN"));
-    let bad = limpid(&["reproduce", "002"]);
-    assert_ne!(bad.code, 0);
-    assert!(bad.stderr.contains("unknown seed"), "{}", bad.stderr);
-    assert_eq!(bad.stderr.trim().lines().count(), 1, "{}", bad.stderr);
+    for name in ["002", "", "artemiadis"] {
+        let bad = limpid(&["reproduce", name]);
+        assert_ne!(bad.code, 0, "{name:?}");
+        assert!(bad.stderr.contains("unknown paper"), "{}", bad.stderr);
+        assert!(bad.stderr.contains("artemiadis2010"), "{}", bad.stderr);
+        assert_eq!(bad.stderr.trim().lines().count(), 1, "{}", bad.stderr);
+    }
 }
 
 #[test]
@@ -140,9 +148,9 @@ fn reproduce_out_writes_json_and_text() {
     assert!(!json["rows"].as_array().unwrap().is_empty());
     assert!(std::fs::read_to_string(dir.path().join("reproduce.txt"))
         .unwrap()
-        .contains("seed 004"));
+        .contains("Park & Chang (2011)"));
     let html = std::fs::read_to_string(&page).unwrap();
-    assert!(html.contains("<h2>Seed 004</h2>"));
+    assert!(html.contains("<h2>Park &amp; Chang (2011)</h2>"), "{html}");
     assert!(html.contains("higher multiple coherence"));
     assert!(!html.contains("http://") && !html.contains("https://"));
     assert!(!html.contains("NaN"));

@@ -4,37 +4,39 @@ use crate::common::*;
 
 #[test]
 fn stochastic_examples_through_the_cli() {
-    for case in ["ex_sa3", "ex_sa4"] {
-        let dir = shared().join("examples/stochastic");
-        let truth_path = dir.join(format!("{case}.truth.json"));
-        let truth = read_json(&truth_path);
-        let rec = dir.join(format!("{case}.csv"));
-        let r = json(&[
-            "estimate",
-            "stochastic",
-            rec.to_str().unwrap(),
-            "--expected",
-            truth_path.to_str().unwrap(),
-            "--json",
-        ]);
-        let rel = r["accuracy"]["mean_relative_error"].as_f64().unwrap();
-        assert!(rel < 0.10, "{case}: mean relative impedance error {rel}");
-        let ek = rel_err(&mat(&r["stiffness"]), &mat(&truth["stiffness"]));
-        assert!(ek < 0.05, "{case}: stiffness error {ek}");
-        let nf = r["frequencies"].as_array().unwrap().len();
-        assert_eq!(r["impedance"].as_array().unwrap().len(), nf);
-        assert_eq!(r["impedance"][0].as_array().unwrap().len(), 3);
-        assert_eq!(r["coherence"]["multiple"].as_array().unwrap().len(), 6);
-        assert_eq!(r["coherence"]["partial"][0].as_array().unwrap().len(), 3);
-        for key in ["inertia", "damping", "standard_errors", "criteria"] {
-            assert!(!r[key].is_null(), "{key}");
+    for (set, dir) in example_sets("stochastic") {
+        for name in ["ex_sa3", "ex_sa4"] {
+            let case = &format!("{set}/{name}");
+            let truth_path = dir.join(format!("{name}.truth.json"));
+            let truth = read_json(&truth_path);
+            let rec = dir.join(format!("{name}.csv"));
+            let r = json(&[
+                "estimate",
+                "stochastic",
+                rec.to_str().unwrap(),
+                "--expected",
+                truth_path.to_str().unwrap(),
+                "--json",
+            ]);
+            let rel = r["accuracy"]["mean_relative_error"].as_f64().unwrap();
+            assert!(rel < 0.10, "{case}: mean relative impedance error {rel}");
+            let ek = rel_err(&mat(&r["stiffness"]), &mat(&truth["stiffness"]));
+            assert!(ek < 0.05, "{case}: stiffness error {ek}");
+            let nf = r["frequencies"].as_array().unwrap().len();
+            assert_eq!(r["impedance"].as_array().unwrap().len(), nf);
+            assert_eq!(r["impedance"][0].as_array().unwrap().len(), 3);
+            assert_eq!(r["coherence"]["multiple"].as_array().unwrap().len(), 6);
+            assert_eq!(r["coherence"]["partial"][0].as_array().unwrap().len(), 3);
+            for key in ["inertia", "damping", "standard_errors", "criteria"] {
+                assert!(!r[key].is_null(), "{key}");
+            }
         }
     }
 }
 
 #[test]
 fn spectra_csv_and_bad_band() {
-    let rec = shared().join("examples/stochastic/ex_sa4.csv");
+    let rec = examples("stochastic").join("ex_sa4.csv");
     let out = limpid(&[
         "spectra",
         rec.to_str().unwrap(),
@@ -64,8 +66,8 @@ fn spectra_csv_and_bad_band() {
     let out = limpid(&[
         "estimate",
         "stochastic",
-        shared()
-            .join("examples/cartesian_slow/ex_cubic.csv")
+        examples("cartesian_slow")
+            .join("ex_cubic.csv")
             .to_str()
             .unwrap(),
     ]);
@@ -83,7 +85,7 @@ fn spectra_csv_and_bad_band() {
 /// joint stiffness must be the truth seen through J = diag(J_h, 1).
 #[test]
 fn shoulder_joint_space_before_estimation_matches_the_mapped_truth() {
-    let dir = shared().join("examples/stochastic");
+    let dir = examples("stochastic");
     let truth = read_json(&dir.join("ex_sa3.truth.json"));
     let rec = dir.join("ex_sa3.csv");
     let r = json(&[

@@ -1,36 +1,39 @@
-//! Recovery of ../shared/examples truths by the linear estimator (issue 2 acceptance).
+//! Recovery of the examples' truths by the linear estimator (issue 2
+//! acceptance): limpid-made examples always, the outside generator's with
+//! `LIMPID_EXAMPLES`.
 
 use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
 
-use crate::common::{mat, rel_err, truth};
-
-const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/examples");
+use crate::common::{example_sets, examples, mat, rel_err, truth};
 
 #[test]
 fn cartesian_slow_examples_recover_stiffness_and_damping() {
-    for case in ["ex_cubic", "ex_sinusoid"] {
-        let rec =
-            limpid_io::read_recording(format!("{EXAMPLES}/cartesian_slow/{case}.csv")).unwrap();
-        let t = truth(&format!("{EXAMPLES}/cartesian_slow/{case}.truth.json"));
-        for equilibrium in [true, false] {
-            let prepared = prepare(&rec, &PrepareParams::default()).unwrap();
-            let est = fit_linear(
-                &prepared,
-                &LinearParams {
-                    equilibrium,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-            let ek = rel_err(&est.stiffness, &mat(&t["stiffness"]));
-            let eb = rel_err(&est.damping, &mat(&t["damping"]));
-            eprintln!("{case} eq={equilibrium}: K err {:.4}, B err {:.4}, M {:?}, vaf {:?}, warnings {:?}", ek, eb, est.inertia, est.fit.vaf, est.warnings);
-            assert!(ek < 0.03, "{case}: stiffness error {ek}");
-            assert!(eb < 0.15, "{case}: damping error {eb}");
-            assert!(
-                !est.identifiable.inertia,
-                "{case}: slow perturbations must flag inertia"
-            );
+    for (set, dir) in example_sets("cartesian_slow") {
+        for case in ["ex_cubic", "ex_sinusoid"] {
+            let case = &format!("{set}/{case}");
+            let name = case.rsplit('/').next().unwrap();
+            let rec = limpid_io::read_recording(dir.join(format!("{name}.csv"))).unwrap();
+            let t = truth(&dir.join(format!("{name}.truth.json")));
+            for equilibrium in [true, false] {
+                let prepared = prepare(&rec, &PrepareParams::default()).unwrap();
+                let est = fit_linear(
+                    &prepared,
+                    &LinearParams {
+                        equilibrium,
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+                let ek = rel_err(&est.stiffness, &mat(&t["stiffness"]));
+                let eb = rel_err(&est.damping, &mat(&t["damping"]));
+                eprintln!("{case} eq={equilibrium}: K err {:.4}, B err {:.4}, M {:?}, vaf {:?}, warnings {:?}", ek, eb, est.inertia, est.fit.vaf, est.warnings);
+                assert!(ek < 0.03, "{case}: stiffness error {ek}");
+                assert!(eb < 0.15, "{case}: damping error {eb}");
+                assert!(
+                    !est.identifiable.inertia,
+                    "{case}: slow perturbations must flag inertia"
+                );
+            }
         }
     }
 }
@@ -48,13 +51,15 @@ fn fitting_window_by_window_equals_fitting_the_prepared_columns() {
             "{what}: {a} vs {b}"
         );
     };
-    for (file, offsets) in [
-        ("cocontraction/ex_config7.csv", Offsets::Rest),
-        ("cocontraction/ex_config4.csv", Offsets::Fit),
-        ("cartesian_slow/ex_cubic.csv", Offsets::Auto),
-        ("cartesian_slow/ex_sinusoid.csv", Offsets::Auto),
+    for (family, case, offsets) in [
+        ("cocontraction", "ex_config7.csv", Offsets::Rest),
+        ("cocontraction", "ex_config4.csv", Offsets::Fit),
+        ("cartesian_slow", "ex_cubic.csv", Offsets::Auto),
+        ("cartesian_slow", "ex_sinusoid.csv", Offsets::Auto),
     ] {
-        let rec = limpid_io::read_recording(format!("{EXAMPLES}/{file}")).unwrap();
+        let path = examples(family).join(case);
+        let file = &path.display().to_string();
+        let rec = limpid_io::read_recording(&path).unwrap();
         let params = PrepareParams {
             offsets,
             ..Default::default()

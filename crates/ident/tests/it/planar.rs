@@ -1,17 +1,14 @@
-//! Planar arm (seed 003) on ../shared/examples/planar: stiffness within 5 %,
-//! damping within 15 %, inertial parameters within 10 % (issue 5).
+//! Planar arm (seed 003) on the planar examples (limpid-made, and the outside
+//! generator's with `LIMPID_EXAMPLES`): stiffness within 5 %, damping within
+//! 15 %, inertial parameters within 10 % (issue 5).
 
 use limpid_ident::planar::{fit_planar, prepare_planar, Arm, PlanarPrepare};
 use serde_json::Value;
 
-const EXAMPLES: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/examples/planar"
-);
+use std::path::Path;
 
-fn truth(case: &str) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(format!("{EXAMPLES}/{case}.truth.json")).unwrap())
-        .unwrap()
+fn truth(dir: &Path, case: &str) -> Value {
+    limpid_testkit::read_json(&dir.join(format!("{case}.truth.json")))
 }
 
 fn rel(est: &limpid_core::Matrix, t: &Value) -> f64 {
@@ -20,61 +17,64 @@ fn rel(est: &limpid_core::Matrix, t: &Value) -> f64 {
 
 #[test]
 fn planar_examples_recover_truth() {
-    for case in ["ex_joint_180", "ex_endpoint_220"] {
-        let t = truth(case);
-        let l: Vec<f64> = t["link_lengths"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        let s: Vec<f64> = t["shoulder"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        let rec = limpid_io::read_recording(format!("{EXAMPLES}/{case}.csv")).unwrap();
-        let data = prepare_planar(
-            &rec,
-            &PlanarPrepare {
-                arm: Arm {
-                    l1: l[0],
-                    l2: l[1],
-                    shoulder: [s[0], s[1]],
+    for (set, dir) in limpid_testkit::example_sets("planar") {
+        for name in ["ex_joint_180", "ex_endpoint_220"] {
+            let case = &format!("{set}/{name}");
+            let t = truth(&dir, name);
+            let l: Vec<f64> = t["link_lengths"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            let s: Vec<f64> = t["shoulder"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            let rec = limpid_io::read_recording(dir.join(format!("{name}.csv"))).unwrap();
+            let data = prepare_planar(
+                &rec,
+                &PlanarPrepare {
+                    arm: Arm {
+                        l1: l[0],
+                        l2: l[1],
+                        shoulder: [s[0], s[1]],
+                    },
+                    cutoff_hz: None,
+                    order: 4,
+                    elbow_positive: true,
                 },
-                cutoff_hz: None,
-                order: 4,
-                elbow_positive: true,
-            },
-        )
-        .unwrap();
-        let all: Vec<usize> = (0..data.trials.len()).collect();
-        let est = fit_planar(&data, usize::MAX, None, &all).unwrap();
-        let ek = rel(&est.stiffness, &t["stiffness"]);
-        let ed = rel(&est.damping, &t["damping"]);
-        let xi: Vec<f64> = t["inertial_parameters"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        let exi = (0..3)
-            .map(|i| (est.inertial_parameters[i] - xi[i]).powi(2))
-            .sum::<f64>()
-            .sqrt()
-            / xi.iter().map(|v| v * v).sum::<f64>().sqrt();
-        eprintln!(
-            "{case}: K {ek:.4} D {ed:.4} xi {exi:.4} est {:?} {:?} {:?} window {} crit {:?}",
-            est.stiffness,
-            est.damping,
-            est.inertial_parameters,
-            est.observation_window_ms,
-            est.criteria.reasons
-        );
-        assert!(ek < 0.05, "{case}: stiffness error {ek}");
-        assert!(ed < 0.15, "{case}: damping error {ed}");
-        assert!(exi < 0.10, "{case}: inertial parameter error {exi}");
+            )
+            .unwrap();
+            let all: Vec<usize> = (0..data.trials.len()).collect();
+            let est = fit_planar(&data, usize::MAX, None, &all).unwrap();
+            let ek = rel(&est.stiffness, &t["stiffness"]);
+            let ed = rel(&est.damping, &t["damping"]);
+            let xi: Vec<f64> = t["inertial_parameters"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            let exi = (0..3)
+                .map(|i| (est.inertial_parameters[i] - xi[i]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+                / xi.iter().map(|v| v * v).sum::<f64>().sqrt();
+            eprintln!(
+                "{case}: K {ek:.4} D {ed:.4} xi {exi:.4} est {:?} {:?} {:?} window {} crit {:?}",
+                est.stiffness,
+                est.damping,
+                est.inertial_parameters,
+                est.observation_window_ms,
+                est.criteria.reasons
+            );
+            assert!(ek < 0.05, "{case}: stiffness error {ek}");
+            assert!(ed < 0.15, "{case}: damping error {ed}");
+            assert!(exi < 0.10, "{case}: inertial parameter error {exi}");
+        }
     }
 }
 
@@ -177,18 +177,26 @@ fn the_sweep_trusts_precise_stable_windows_and_none_past_a_reflex() {
     use limpid_ident::planar::window_sweep;
     use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject, Reflex};
     // the example: trusted from a window where K is precise, never the 50-80 ms ones (K11 +46 % at 50 ms)
-    let t = truth("ex_joint_180");
-    let rec = limpid_io::read_recording(format!("{EXAMPLES}/ex_joint_180.csv")).unwrap();
-    let data = prepare_planar(&rec, &PlanarPrepare::new(0.28, 0.35)).unwrap();
-    let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
-    let (k, d) = (
-        limpid_testkit::mat(&t["stiffness"]),
-        limpid_testkit::mat(&t["damping"]),
-    );
-    assert!(assert_trusted_windows_are_right(&sweep, &k, &d) >= 10);
-    let first = sweep.shortest_trusted_ms.unwrap();
-    assert!((80.0..=120.0).contains(&first), "trusted from {first} ms");
-    assert!(sweep.impedance_change.is_none());
+    for (set, dir) in limpid_testkit::example_sets("planar") {
+        let t = truth(&dir, "ex_joint_180");
+        let rec = limpid_io::read_recording(dir.join("ex_joint_180.csv")).unwrap();
+        let data = prepare_planar(&rec, &PlanarPrepare::new(0.28, 0.35)).unwrap();
+        let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
+        let (k, d) = (
+            limpid_testkit::mat(&t["stiffness"]),
+            limpid_testkit::mat(&t["damping"]),
+        );
+        assert!(
+            assert_trusted_windows_are_right(&sweep, &k, &d) >= 10,
+            "{set}"
+        );
+        let first = sweep.shortest_trusted_ms.unwrap();
+        assert!(
+            (80.0..=120.0).contains(&first),
+            "{set}: trusted from {first} ms"
+        );
+        assert!(sweep.impedance_change.is_none(), "{set}");
+    }
     // a reflex raising K and D by 50 % after 60 ms: detected, and no window trusted
     let mut subject = PlanarSubject::seed003();
     subject.reflex = Some(Reflex {

@@ -4,8 +4,6 @@
 use limpid_ident::reflex::{estimate_reflex, Polarity, ReflexParams};
 use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleSubject};
 
-const REAL: &str = "../../../shared/real/reklab_ankle";
-
 #[test]
 fn virtual_ankle_reflex_delay_and_gains_are_recovered() {
     for (seed, delay, gain, k, positive) in [
@@ -133,8 +131,11 @@ fn without_a_reflex_the_delay_is_not_identifiable_and_k_is_right() {
 
 #[test]
 fn real_ankle_recordings_match_the_method_s_known_behaviour() {
+    let Some(real) = crate::common::real_data("reklab_ankle") else {
+        return;
+    };
     for name in ["df", "df2", "df3", "pf", "pf2"] {
-        let rec = limpid_io::read_recording(format!("{REAL}/{name}.csv")).unwrap();
+        let rec = limpid_io::read_recording(real.join(format!("{name}.csv"))).unwrap();
         let e = estimate_reflex(&rec, &ReflexParams::default()).unwrap();
         // total VAF 86-96 %, well above the reflex-free fit's
         assert!(

@@ -30,9 +30,9 @@ struct Seen {
 }
 
 fn replay(case: &str) -> (Vec<Seen>, Vec<(f64, limpid_core::Matrix)>) {
-    let dir = "../../../shared/examples/cocontraction";
-    let rec = limpid_io::read_recording(format!("{dir}/{case}.csv")).unwrap();
-    let mvc = limpid_io::read_recording(format!("{dir}/{case}.mvc.csv")).unwrap();
+    let dir = limpid_testkit::examples("cocontraction");
+    let rec = limpid_io::read_recording(dir.join(format!("{case}.csv"))).unwrap();
+    let mvc = limpid_io::read_recording(dir.join(format!("{case}.mvc.csv"))).unwrap();
     let muscles = emg_columns(&rec);
     let maxima = mvc_maxima(&mvc, &muscles, &EmgParams::default()).unwrap();
     let offline =

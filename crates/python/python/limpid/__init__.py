@@ -2,7 +2,7 @@
 
 A thin layer over the Rust library (``limpid._limpid``):
 
-- recordings: a path (CSV/Parquet, FORMAT.md), a dict of 1-D arrays, or a
+- recordings: a path (CSV/Parquet, the recording format of docs/src/format.md), a dict of 1-D arrays, or a
   pandas DataFrame;
 - spectra with scipy.signal's argument names and defaults (``psd``, ``csd``,
   ``coherence``) returning ``(f, values)``;
@@ -229,7 +229,7 @@ def _recording(rec: RecordingLike) -> Any:
 
 
 def read_recording(path: Union[str, "os.PathLike[str]"]) -> Dict[str, np.ndarray]:
-    """Read a CSV, Parquet or MATLAB level-5 (.mat, -v6/-v7) recording (FORMAT.md) into a dict of arrays."""
+    """Read a CSV, Parquet or MATLAB level-5 (.mat, -v6/-v7) recording (docs/src/format.md) into a dict of arrays."""
     return _limpid.read_recording(path)
 
 
@@ -467,7 +467,7 @@ def estimate_linear(recording: RecordingLike, *, cutoff_hz: Optional[float] = No
                     order: Optional[int] = None, window: str = "auto", offsets: str = "auto",
                     derivative: str = "central", level: Optional[float] = None,
                     negate_force: bool = False, equilibrium: bool = True) -> Result:
-    """Seed 000's linear estimator (M, B, K with standard errors, fit, criteria,
+    """Artemiadis et al. (2010)'s linear estimator (M, B, K with standard errors, fit, criteria,
     ellipsoids); the options of ``limpid estimate linear``."""
     opts = {"cutoff_hz": None if cutoff_hz is None else _number("cutoff_hz", cutoff_hz),
             "order": None if order is None else _integer("order", order, minimum=1),
@@ -481,7 +481,7 @@ def estimate_linear(recording: RecordingLike, *, cutoff_hz: Optional[float] = No
 
 
 def _inertial(values: Optional[Sequence[float]]) -> Optional[Tuple[float, float, float]]:
-    """Seed 003's three inertial parameters (kg m^2), or None to estimate them."""
+    """Lakatos, Petit & van der Smagt (2011)'s three inertial parameters (kg m^2), or None to estimate them."""
     if values is None:
         return None
     v = [_number("inertial_parameters", x) for x in values]
@@ -493,7 +493,7 @@ def _inertial(values: Optional[Sequence[float]]) -> Optional[Tuple[float, float,
 def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], *,
                     window_ms: Optional[float] = None,
                     inertial_parameters: Optional[Sequence[float]] = None) -> Result:
-    """Seed 003's planar-arm estimator (joint K, D, inertial parameters, criteria)."""
+    """Lakatos, Petit & van der Smagt (2011)'s planar-arm estimator (joint K, D, inertial parameters, criteria)."""
     l1, l2 = link_lengths
     xi = _inertial(inertial_parameters)
     window = None if window_ms is None else _number("window_ms", window_ms)
@@ -503,7 +503,7 @@ def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], *,
 def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], *,
                  from_ms: float = 50.0, to_ms: float = 400.0, step_ms: float = 10.0,
                  inertial_parameters: Optional[Sequence[float]] = None) -> Result:
-    """Seed 003's observation-window sweep, as ``limpid window-sweep --json``:
+    """Lakatos, Petit & van der Smagt (2011)'s observation-window sweep, as ``limpid window-sweep --json``:
     ``rows`` (one estimate with its criteria per window) and the shortest
     trustworthy window."""
     l1, l2 = link_lengths
@@ -517,12 +517,12 @@ def estimate_stochastic(recording: RecordingLike, *, nperseg: Optional[int] = No
                         noverlap: Optional[int] = None,
                         band_hz: Tuple[float, float] = (0.5, 10.0),
                         shoulder: Optional[Sequence[float]] = None) -> Result:
-    """Seed 004's stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric fit.
+    """Park & Chang (2011)'s stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric fit.
 
     Parameters
     ----------
     shoulder : (upper_arm_m, forearm_m, elbow_deg, flexion_deg, abduction_deg, rotation_deg)
-        Estimate the shoulder's joint impedance as seed 004 does (``limpid estimate
+        Estimate the shoulder's joint impedance as Park & Chang (2011) does (``limpid estimate
         stochastic --shoulder``): hand X, Z become flexion ``q1`` and abduction ``q2``,
         forces torques ``J_h^T F`` (eq. (3)), and ``theta``/``tauy``/``utheta`` internal
         rotation ``q3``, before the spectra. The posture is the operating point (the
@@ -582,7 +582,7 @@ def estimate_reflex(recording: RecordingLike, *, position: str = "q1", torque: s
 
 def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, *, window: str = "auto",
                            offsets: str = "auto") -> Result:
-    """Seed 001's co-contraction analysis: index and stiffness per level."""
+    """Patel, O'Neill & Artemiadis (2013)'s co-contraction analysis: index and stiffness per level."""
     opts = {"window": _choice("window", window, ("auto", "trials", "onsets", "continuous")),
             "offsets": _choice("offsets", offsets, ("auto", "fit", "rest"))}
     return Result(json.loads(_limpid.estimate_cocontraction(_recording(recording), _recording(mvc), json.dumps(opts))))
@@ -646,7 +646,7 @@ def study_entries(manifest: Union[str, "os.PathLike[str]"]) -> List[Dict[str, An
 
 def study_process(entry: Mapping[str, Any]) -> StudyOutcome:
     """Process one study recording (one entry of :func:`study_entries`):
-    seed 001's co-contraction analysis, or the reason it failed. Never
+    Patel, O'Neill & Artemiadis (2013)'s co-contraction analysis, or the reason it failed. Never
     raises for a bad recording: the failure is kept for the study's table
     of failures, as ``limpid study run`` does."""
     e = {k: os.fspath(entry[k]) if k in ("file", "mvc") else str(entry[k])
@@ -657,7 +657,7 @@ def study_process(entry: Mapping[str, Any]) -> StudyOutcome:
 
 def study_combine(outcomes: Sequence[StudyOutcome], *, name: str = "study",
                   out: Optional[Union[str, "os.PathLike[str]"]] = None) -> Result:
-    """Seed 001's Tables 1-5 from the outcomes of :func:`study_process`
+    """Patel, O'Neill & Artemiadis (2013)'s Tables 1-5 from the outcomes of :func:`study_process`
     (gathered from any executor), as ``limpid study run``; the tables
     (tables.csv, rotation.csv, study.json, tables.md) are written to ``out``
     when given. ``ValueError`` when no recording could be processed."""
@@ -672,16 +672,16 @@ def study_combine(outcomes: Sequence[StudyOutcome], *, name: str = "study",
 def study_run(manifest: Union[str, "os.PathLike[str]"], *,
               out: Optional[Union[str, "os.PathLike[str]"]] = None) -> Result:
     """``limpid study run``: every recording of the manifest processed in
-    parallel on this machine, seed 001's Tables 1-5 returned (``levels``,
+    parallel on this machine, Patel, O'Neill & Artemiadis (2013)'s Tables 1-5 returned (``levels``,
     ``rotation``, ``failures``, ``recordings``) and written to ``out`` when
     given. For a study spread over processes or a cluster, use
     :func:`study_entries`, :func:`study_process` and :func:`study_combine`
-    (README, "Studies on a cluster")."""
+    (docs/src/python.md, "Python: studies, here or on a cluster")."""
     return Result(json.loads(_limpid.study_run(os.fspath(manifest), None if out is None else os.fspath(out))))
 
 
 def ellipsoid(matrix: Any) -> Result:
-    """Ellipsoid of the symmetric part of a 2 x 2 or 3 x 3 matrix (seed 000 eq. 13-17)."""
+    """Ellipsoid of the symmetric part of a 2 x 2 or 3 x 3 matrix (Artemiadis et al. 2010, eq. 13-17)."""
     m = np.asarray(matrix, dtype=float)
     return Result(json.loads(_limpid.ellipsoid(m.tolist())))
 
@@ -708,7 +708,7 @@ def simulate(
 
     ``subject`` is TOML text or a path to a TOML file (the CLI's ``--subject``
     format for the protocol's kind); without it the built-in subjects are used
-    (centre-out: seed 000's subject 1; planar: the seed 003 arm; stochastic:
+    (centre-out: Artemiadis et al. 2010's subject 1; planar: the Lakatos et al. 2011 arm; stochastic:
     spring set SA3). ``controller`` (stochastic protocols) is ``ideal``,
     ``imbic`` or ``pd``: who holds the spring array."""
     text = protocol if "\n" in protocol or "=" in protocol else protocol_preset(protocol)
@@ -733,7 +733,7 @@ def gravity_compensate(recording: RecordingLike, *, bias: Optional[RecordingLike
                        robot: Optional[str] = None,
                        robot_base: Optional[Sequence[float]] = None) -> Tuple[Dict[str, np.ndarray], List[str]]:
     """F/T sensor readings (``sensor_fx..z``, optionally ``sensor_tx..z``) to the force
-    (and torque) on the limb, as ``limpid gravity-compensate``: seed 004's two steps
+    (and torque) on the limb, as ``limpid gravity-compensate``: Park & Chang (2011)'s two steps
     (``bias``: readings in a gravity-free pose; ``initial_s``: the still start of the
     test) or a ``calibration`` from still poses (weight, centre of mass, biases).
     The orientation comes from ``robot`` (``kuka-lwr4``, ``puma3`` or a URDF path,

@@ -4,7 +4,7 @@
 The numbers come from the Rust kernel ``limpid._limpid.cross_spectra``
 (crate ``limpid-dsp``, module ``cross_spectra``); this module only turns
 N-D arguments into rows and index pairs, and the result back into scipy's
-shape. Choices where scipy is silent or differs are listed in the README
+shape. Choices where scipy is silent or differs are listed in docs/src/python.md
 ("Python: spectra as scipy").
 """
 

@@ -5,7 +5,9 @@ use std::process::Command;
 
 use serde_json::Value;
 
-pub use limpid_testkit::{mat, read_json, rel_err, shared};
+pub use limpid_testkit::{
+    example_sets, examples, mat, outside_examples, read_json, real_data, rel_err,
+};
 
 /// A result document (CLI `--json` output or a written JSON file) as the
 /// typed result the report renders.

@@ -1,4 +1,4 @@
 //! Helpers shared by limpid-ident's integration tests: the workspace's testkit.
 #![allow(unused_imports)]
 
-pub use limpid_testkit::{examples, mat, read_json as truth, rel_err};
+pub use limpid_testkit::{example_sets, examples, mat, read_json as truth, real_data, rel_err};
