@@ -30,8 +30,9 @@ case "$target_dir" in /*) ;; *) target_dir="$PWD/$target_dir" ;; esac
 # the Python tests read the same limpid-made examples as the Rust tests
 export LIMPID_TEST_EXAMPLES="$target_dir/test-examples"
 rm -rf "$LIMPID_TEST_EXAMPLES"
-# (built with the test run's selection and features: nothing is compiled again)
-cargo build -q --workspace --profile "$profile" --features limpid-live/lsl,limpid-cli/lsl --bins
+# (the writer was built by the test run, for limpid-testkit's own test: a
+# separate `cargo build` would resolve features without the dev-dependencies
+# and compile half the workspace again)
 "$target_dir/$profile/limpid-test-examples" "$LIMPID_TEST_EXAMPLES"
 venv="$target_dir/venv-test"
 python3 -m venv --clear "$venv"

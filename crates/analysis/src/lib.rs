@@ -22,6 +22,7 @@ pub mod markers;
 pub mod protocol;
 pub mod reproduce;
 pub mod result;
+pub mod shapes;
 pub mod shoulder;
 pub mod study;
 

@@ -187,7 +187,12 @@ impl Document {
                 ))
             }
         }
-        serde_json::from_value(v).map_err(|e| format!("{name}: not a limpid result: {e}"))
+        let doc: Document =
+            serde_json::from_value(v).map_err(|e| format!("{name}: not a limpid result: {e}"))?;
+        // fields that must agree with each other, before anything indexes them
+        crate::shapes::check(&doc.estimate)
+            .map_err(|e| format!("{name}: not a consistent limpid result: {e}"))?;
+        Ok(doc)
     }
 }
 

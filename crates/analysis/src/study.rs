@@ -429,10 +429,7 @@ pub fn simulate_study(
         seed001_population, seed001_realistic_population, simulate_cocontraction,
         CocontractionProtocol,
     };
-    std::fs::create_dir_all(dir).map_err(|e| Error::Io {
-        path: dir.to_path_buf(),
-        source: e,
-    })?;
+    limpid_core::files::create_dir(dir)?;
     let (population, noise) = if realistic {
         (
             seed001_realistic_population(subjects, seed),
@@ -503,10 +500,7 @@ fn cell(v: Option<f64>, decimals: usize, missing: &str) -> String {
 
 /// Write `tables.csv`, `rotation.csv`, `study.json`, `tables.md` into `dir`.
 pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    limpid_core::files::create_dir(dir)?;
     let write = |name: &str, text: String| -> Result<PathBuf> {
         let p = dir.join(name);
         limpid_core::files::write_file(&p, text.as_bytes())?;
@@ -590,10 +584,7 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
         write("tables.md", markdown(r))?,
     ];
     let per = dir.join("recordings");
-    std::fs::create_dir_all(&per).map_err(|source| Error::Io {
-        path: per.clone(),
-        source,
-    })?;
+    limpid_core::files::create_dir(&per)?;
     let mut used = std::collections::HashSet::new();
     for p in &r.recordings {
         // a subject may have several recordings of one configuration: number them

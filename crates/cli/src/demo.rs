@@ -78,7 +78,7 @@ pub fn run(args: DemoArgs) -> CliResult {
         unreachable!("made above")
     };
 
-    std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    limpid_core::files::create_dir(&args.out)?;
     let json_path = args.out.join("demo.json");
     limpid_core::files::write_file(&json_path, doc.to_json_pretty().as_bytes())?;
     let csv_path = args.out.join("demo.csv");

@@ -93,6 +93,14 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = Cli::parse();
+    // Rust's standard output treats a closed descriptor as a sink that accepts
+    // everything: a command would exit 0 having printed nothing. Say so instead.
+    #[cfg(unix)]
+    // SAFETY: F_GETFD only reads the descriptor's flags.
+    if unsafe { libc::fcntl(libc::STDOUT_FILENO, libc::F_GETFD) } == -1 {
+        eprintln!("limpid: standard output is closed: nothing could be printed");
+        return ExitCode::from(2);
+    }
     // a panic is a bug or an unwritable output: one line and exit 2, never a backtrace
     std::panic::set_hook(Box::new(|info| {
         let message = limpid_core::error::panic_message(info.payload());

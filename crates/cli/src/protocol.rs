@@ -250,7 +250,7 @@ fn write_truth(recording: &Path, samples: usize, truth: &serde_json::Value) -> C
 
 pub fn run_simulate(args: SimulateArgs) -> CliResult {
     if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        limpid_core::files::create_dir(dir)?;
     }
     let design = read_design(&args.protocol)?.0;
     let subject_file = match &args.subject {

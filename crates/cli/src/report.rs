@@ -85,7 +85,7 @@ pub fn run(args: ReportArgs) -> CliResult {
     let report = write_named(&inputs, &runs, &args.output)?;
     println!("wrote {}", args.output.display());
     if let Some(dir) = &args.figures {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        limpid_core::files::create_dir(dir)?;
         let files = limpid_report::figure_files(&report);
         for (stem, svg) in &files {
             limpid_core::files::write_file(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;

@@ -47,10 +47,7 @@ pub fn run(args: ReproduceArgs) -> CliResult {
     let json = serde_json::to_string_pretty(&r).expect("rows serialise");
     let table = text(&r);
     if let Some(dir) = &args.out {
-        std::fs::create_dir_all(dir).map_err(|e| limpid_core::Error::Io {
-            path: dir.clone(),
-            source: e,
-        })?;
+        limpid_core::files::create_dir(dir)?;
         limpid_core::files::write_file(&dir.join("reproduce.json"), json.as_bytes())?;
         limpid_core::files::write_file(&dir.join("reproduce.txt"), table.as_bytes())?;
     }

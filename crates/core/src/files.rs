@@ -71,10 +71,35 @@ pub fn read_text(path: &Path) -> Result<String> {
 
 /// Write `path` through `write`: into a temporary file beside it, renamed
 /// into place only when `write` succeeded and the data reached the disk.
+///
+/// Only a regular file (or a new one) is replaced so: a symbolic link is
+/// followed and its target written (atomically when that is a regular file),
+/// and a FIFO, device or socket (`-o /dev/stdout`) is written through, never
+/// replaced by a regular file (as root, a rename over `/dev/null` would
+/// replace the device node). A directory is refused.
 pub fn write_atomic<T>(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<T>,
 ) -> Result<T> {
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        let kind = meta.file_type();
+        if kind.is_symlink() {
+            return match std::fs::canonicalize(path) {
+                Ok(target) => write_atomic(&target, write),
+                // a dangling link: create its target through it
+                Err(_) => write_through(path, write),
+            };
+        }
+        if kind.is_dir() {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: "is a directory, not a file to write".into(),
+            });
+        }
+        if !kind.is_file() {
+            return write_through(path, write);
+        }
+    }
     let tmp = temporary_name(path);
     let file = File::create(&tmp).map_err(|e| io_error(path, e))?;
     let mut w = BufWriter::new(file);
@@ -97,6 +122,38 @@ pub fn write_atomic<T>(
             Err(e)
         }
     }
+}
+
+/// Write into `path` as it is (a FIFO, a device, a dangling link's target):
+/// opened for writing, created if missing, never renamed over.
+fn write_through<T>(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> Result<T>,
+) -> Result<T> {
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .open(path)
+        .map_err(|e| io_error(path, e))?;
+    let mut w = BufWriter::new(file);
+    let v = write(&mut w)?;
+    w.flush().map_err(|e| io_error(path, e))?;
+    Ok(v)
+}
+
+/// Make the output folder `dir` (and its parents). A path that exists but is
+/// not a folder is one clear error, not "File exists (os error 17)".
+pub fn create_dir(dir: &Path) -> Result<()> {
+    if let Ok(meta) = std::fs::metadata(dir) {
+        if !meta.is_dir() {
+            return Err(Error::Format {
+                path: dir.to_path_buf(),
+                message: "exists and is not a folder; name a folder for the outputs".into(),
+            });
+        }
+        return Ok(());
+    }
+    std::fs::create_dir_all(dir).map_err(|e| io_error(dir, e))
 }
 
 /// Write bytes to `path` atomically.
@@ -123,6 +180,62 @@ mod tests {
         assert!(e.contains("not a regular file"), "{e}");
         let e = read_text(Path::new("/")).unwrap_err().to_string();
         assert!(e.contains("a directory"), "{e}");
+    }
+
+    /// Outputs that are not regular files are written through, not replaced
+    /// (a rename over them would turn a link, FIFO or device into a file).
+    #[cfg(unix)]
+    #[test]
+    fn links_and_devices_are_written_through_not_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = std::env::temp_dir().join(format!("limpid-through-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // a link to a regular file: the target gets the bytes, the link stays a link
+        let target = dir.join("target.csv");
+        std::fs::write(&target, b"old").unwrap();
+        let link = dir.join("link.csv");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_file(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        // a dangling link: its target is created
+        let dangling = dir.join("dangling.csv");
+        std::os::unix::fs::symlink(dir.join("made.csv"), &dangling).unwrap();
+        write_file(&dangling, b"made").unwrap();
+        assert!(std::fs::symlink_metadata(&dangling)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read(dir.join("made.csv")).unwrap(), b"made");
+        // a device stays a device
+        write_file(Path::new("/dev/null"), b"discarded").unwrap();
+        assert!(std::fs::metadata("/dev/null")
+            .unwrap()
+            .file_type()
+            .is_char_device());
+        // a FIFO: written through to its reader
+        let fifo = dir.join("pipe");
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: mkfifo on a fresh path in our own temporary folder.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(&fifo).unwrap())
+        };
+        write_file(&fifo, b"through").unwrap();
+        assert_eq!(reader.join().unwrap(), b"through");
+        assert!(std::fs::symlink_metadata(&fifo)
+            .unwrap()
+            .file_type()
+            .is_fifo());
+        // a directory is refused in one line
+        let e = write_file(&dir, b"x").unwrap_err().to_string();
+        assert!(e.contains("is a directory"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

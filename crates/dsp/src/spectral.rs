@@ -148,6 +148,9 @@ impl Welch {
     }
 }
 
+/// Most bytes the kept segment spectra of one estimate may take (1 GiB).
+pub const MAX_SEGMENT_SPECTRA_BYTES: usize = 1 << 30;
+
 /// Segment spectra of several equally long signals, ready to be paired.
 pub struct SegmentSpectra {
     /// `spectra[signal][segment][bin]`.
@@ -170,12 +173,31 @@ impl SegmentSpectra {
         p.check(n)?;
         let step = p.nperseg - p.overlap();
         let segments = (n - p.nperseg) / step + 1;
+        let bins = p.nperseg / 2 + 1;
+        // every segment's spectrum is kept (the jackknife regroups them):
+        // bound what an overlap close to nperseg would ask for
+        let bytes = (signals.len() as f64)
+            * segments as f64
+            * bins as f64
+            * std::mem::size_of::<Complex64>() as f64;
+        if bytes > MAX_SEGMENT_SPECTRA_BYTES as f64 {
+            return Err(Error::invalid(
+                "overlap",
+                format!(
+                    "{segments} segments of {} samples (overlap {}) for {} signals would hold {:.1} GB of spectra; limpid keeps at most {:.1} GB: use a smaller overlap or segment",
+                    p.nperseg,
+                    p.overlap(),
+                    signals.len(),
+                    bytes / 1e9,
+                    MAX_SEGMENT_SPECTRA_BYTES as f64 / 1e9
+                ),
+            ));
+        }
         let w = p.window_values();
         let plan: Arc<dyn RealToComplex<f64>> =
             RealFftPlanner::<f64>::new().plan_fft_forward(p.nperseg);
         let mut input = plan.make_input_vec();
         let mut scratch = plan.make_scratch_vec();
-        let bins = p.nperseg / 2 + 1;
         let mut spectra = Vec::with_capacity(signals.len());
         for s in signals {
             let mut per = Vec::with_capacity(segments);

@@ -140,6 +140,19 @@ impl Estimator for ReflexParams {
         if self.max_iterations == 0 {
             return Err(Error::invalid("iterations", "expected at least 1"));
         }
+        // the intrinsic IRF needs lags on each side of zero: below two per
+        // side its ±half-width would silently become ±1 sample of a slower rate
+        if self.decimated_rate_hz * self.intrinsic_half_width_s < 2.0 {
+            return Err(Error::invalid(
+                "decimated rate",
+                format!(
+                    "at {} Hz the intrinsic IRF (±{} ms) holds fewer than 2 lags each side; use at least {} Hz",
+                    limpid_core::short_number(self.decimated_rate_hz),
+                    limpid_core::short_number(self.intrinsic_half_width_s * 1e3),
+                    limpid_core::short_number((2.0 / self.intrinsic_half_width_s).ceil())
+                ),
+            ));
+        }
         if self.max_delay_s >= self.reflex_irf_s {
             return Err(Error::invalid(
                 "largest reflex delay",

@@ -284,6 +284,17 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     )?;
     let tq = rec.require(&p.torque, "the torque of the parallel-cascade method")?;
     let fs = rec.sample_rate();
+    if p.decimated_rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE) {
+        return Err(Error::invalid(
+            "decimated rate",
+            format!(
+                "{} Hz is above the recording's {} Hz ({}); limpid decimates, it does not interpolate",
+                limpid_core::short_number(p.decimated_rate_hz),
+                limpid_core::short_number(fs),
+                rec.path().display()
+            ),
+        ));
+    }
     let [d, other_decimation] = decimate(q, tq, fs, p)?;
     let n = d.position.len();
     let lag = |s: f64| (s * d.fs).round() as usize;
@@ -1111,6 +1122,10 @@ fn reflex_parametric(
         .filter(|w| *w < 0.45 * nyquist)
         .flat_map(|w| [0.3, 0.5, 0.75, 1.1, 1.6].map(|z| (w, z)))
         .collect();
+    if combos.is_empty() {
+        // no low-pass of the grid lies below the decimated Nyquist frequency
+        return None;
+    }
     let mut fits = scan(&combos);
     let best = |fits: &[Vec<(f64, f64)>]| {
         let mut b = (f64::INFINITY, 0, 0);

@@ -108,6 +108,59 @@ fn rotation_about(axis: &Vector3<f64>, angle: f64) -> Matrix4<f64> {
     Rotation3::from_axis_angle(&Unit::new_unchecked(*axis), angle).to_homogeneous()
 }
 
+/// Deepest element nesting a URDF may have (a URDF needs 4).
+pub const MAX_URDF_DEPTH: usize = 64;
+
+/// Largest joint offset a URDF may have (m): the recordings' position limit.
+pub const MAX_URDF_OFFSET_M: f64 = 100.0;
+
+/// The line at which `xml`'s elements first nest deeper than `max`, if they
+/// do. Counts start tags against end tags; comments, declarations,
+/// processing instructions and CDATA do not count.
+fn xml_nesting_beyond(xml: &str, max: usize) -> Option<usize> {
+    let bytes = xml.as_bytes();
+    let (mut depth, mut line, mut i) = (0usize, 1usize, 0usize);
+    while i < bytes.len() {
+        match bytes[i] {
+            b'\n' => line += 1,
+            b'<' => {
+                let rest = &xml[i..];
+                let skip_to = |end: &str| rest.find(end).map(|k| k + end.len());
+                let skipped = if rest.starts_with("<!--") {
+                    skip_to("-->")
+                } else if rest.starts_with("<![CDATA[") {
+                    skip_to("]]>")
+                } else if rest.starts_with("<?") || rest.starts_with("<!") {
+                    skip_to(">")
+                } else {
+                    None
+                };
+                if let Some(k) = skipped {
+                    line += rest[..k].bytes().filter(|b| *b == b'\n').count();
+                    i += k;
+                    continue;
+                }
+                let close = rest.find('>').unwrap_or(rest.len());
+                let tag = &rest[..close];
+                line += tag.bytes().filter(|b| *b == b'\n').count();
+                if tag.starts_with("</") {
+                    depth = depth.saturating_sub(1);
+                } else if !tag.ends_with('/') {
+                    depth += 1;
+                    if depth > max {
+                        return Some(line);
+                    }
+                }
+                i += close.max(1);
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
 impl Robot {
     /// A robot from a DH table.
     pub fn from_dh(name: &str, convention: Convention, table: &[Joint]) -> Self {
@@ -153,6 +206,13 @@ impl Robot {
         };
         // through the capped reader: a FIFO or device is refused, not read for ever
         let text = limpid_core::files::read_text(path)?;
+        // the XML parser recurses per element: a deeply nested file would
+        // overflow the stack before it could say what is wrong
+        if let Some(line) = xml_nesting_beyond(&text, MAX_URDF_DEPTH) {
+            return Err(fail(format!(
+                "line {line}: elements nested more than {MAX_URDF_DEPTH} deep; a URDF needs 4"
+            )));
+        }
         let urdf = urdf_rs::read_from_string(&text).map_err(|e| {
             fail(
                 e.to_string()
@@ -202,7 +262,36 @@ impl Robot {
         let mut joints = Vec::new();
         let mut pending = Matrix4::identity();
         for j in chain {
-            let origin = pose(*j.origin.xyz, *j.origin.rpy);
+            // a limb-sized robot: every offset within the recordings' 100 m
+            // plausibility limit, every number finite (a 1e9 m link asked the
+            // exporter for terabytes)
+            let xyz = *j.origin.xyz;
+            let rpy = *j.origin.rpy;
+            if xyz.iter().chain(&rpy).any(|v| !v.is_finite())
+                || xyz.iter().any(|v| v.abs() > MAX_URDF_OFFSET_M)
+            {
+                return Err(fail(format!(
+                    "joint {:?}: origin xyz {xyz:?} m, rpy {rpy:?} rad; limpid accepts finite values and offsets up to {MAX_URDF_OFFSET_M} m",
+                    j.name
+                )));
+            }
+            if [
+                j.limit.lower,
+                j.limit.upper,
+                j.limit.velocity,
+                j.axis.xyz[0],
+                j.axis.xyz[1],
+                j.axis.xyz[2],
+            ]
+            .iter()
+            .any(|v| !v.is_finite())
+            {
+                return Err(fail(format!(
+                    "joint {:?}: a limit or axis is not a finite number",
+                    j.name
+                )));
+            }
+            let origin = pose(xyz, rpy);
             match j.joint_type {
                 urdf_rs::JointType::Fixed => pending *= origin,
                 urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
@@ -605,6 +694,22 @@ mod tests {
                    <axis xyz="1 0 0"/><limit lower="0" upper="1" effort="1" velocity="1"/></joint></robot>"#,
                 "joint \"slide\" is Prismatic",
             ),
+            (
+                "huge.urdf",
+                r#"<robot name="h"><link name="a"/><link name="b"/>
+                   <joint name="j1" type="revolute"><parent link="a"/><child link="b"/>
+                   <origin xyz="1e9 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/>
+                   <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#,
+                "joint \"j1\": origin xyz [1000000000.0, 0.0, 0.0] m",
+            ),
+            (
+                "nan.urdf",
+                r#"<robot name="n"><link name="a"/><link name="b"/>
+                   <joint name="j1" type="revolute"><parent link="a"/><child link="b"/>
+                   <origin xyz="0 0 0" rpy="NaN 0 0"/><axis xyz="0 0 1"/>
+                   <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#,
+                "limpid accepts finite values",
+            ),
         ];
         for (name, text, expect) in cases {
             let path = dir.join(name);
@@ -612,6 +717,27 @@ mod tests {
             let e = Robot::from_urdf(&path, None).unwrap_err().to_string();
             assert!(e.contains(expect) && e.contains(name), "{e}");
         }
+    }
+
+    /// 100,000 nested elements overflowed the XML parser's stack (a crash);
+    /// they are refused first, with the line where the nesting goes too deep.
+    #[test]
+    fn a_deeply_nested_urdf_is_refused_before_parsing() {
+        let dir = std::env::temp_dir().join(format!("limpid-deep-urdf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("deep.urdf");
+        let mut text = String::from("<robot name=\"d\">\n<!-- <a><a><a> -->\n");
+        text.push_str(&"<link>".repeat(100_000));
+        std::fs::write(&path, &text).unwrap();
+        let e = Robot::from_urdf(&path, None).unwrap_err().to_string();
+        assert!(
+            e.contains("deep.urdf") && e.contains("line 3: elements nested more than 64 deep"),
+            "{e}"
+        );
+        // the depth count: self-closing tags, comments and declarations do not nest
+        let ok = "<?xml version=\"1.0\"?>\n<!DOCTYPE robot>\n<robot><link name=\"a\"/><!-- <x> --><joint><parent link=\"a\"/></joint></robot>";
+        assert_eq!(xml_nesting_beyond(ok, 2), None);
+        assert_eq!(xml_nesting_beyond(ok, 1), Some(3));
     }
 
     #[test]

@@ -284,3 +284,70 @@ fn stochastic_shoulder_posture_that_is_singular_or_a_recording_without_z() {
         out.stderr
     );
 }
+
+/// Outputs (issue 36): a folder that is a file is one line, not "File exists
+/// (os error 17)"; a link, FIFO or device is written through, never replaced
+/// by a regular file; with standard output closed nothing is silently lost.
+#[test]
+fn output_paths_that_are_not_plain_files_or_folders() {
+    let d = tempfile::tempdir().unwrap();
+    let file = write(&d, "not-a-folder", "x");
+    let out = limpid(&["demo", "--out", file.to_str().unwrap()]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("not-a-folder") && out.stderr.contains("exists and is not a folder"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
+
+    // --report through a symbolic link: the target is written, the link stays
+    let rec = examples("cartesian_slow").join("ex_cubic.csv");
+    let target = d.path().join("real.html");
+    let link = d.path().join("link.html");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let out = limpid(&[
+        "estimate",
+        "linear",
+        rec.to_str().unwrap(),
+        "--report",
+        link.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert!(std::fs::read_to_string(&target).unwrap().contains("<html"));
+    // -o /dev/null: written through; the device stays a device
+    let out = limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        "artemiadis-3d",
+        "-o",
+        "/dev/null",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata("/dev/null")
+        .unwrap()
+        .file_type()
+        .is_char_device());
+
+    // standard output closed: an error, not exit 0 with nothing printed
+    use std::os::unix::process::CommandExt;
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_limpid"));
+    cmd.args(["estimate", "linear", rec.to_str().unwrap(), "--json"]);
+    // SAFETY: only close(2) between fork and exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::close(1);
+            Ok(())
+        });
+    }
+    let out = cmd.output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("standard output is closed"), "{stderr}");
+}

@@ -120,6 +120,20 @@ fn reflex_refusals() {
         "{}",
         out.stderr
     );
+    // decimated rates the method cannot use: too slow for the intrinsic IRF's
+    // lags (1-3 Hz crashed on an empty low-pass grid), or above the recording's
+    for (rate, says) in [
+        ("1", "fewer than 2 lags each side; use at least 50 Hz"),
+        ("3", "fewer than 2 lags each side"),
+        ("49", "fewer than 2 lags each side"),
+        ("1e9", "above the recording's 1000 Hz"),
+    ] {
+        let out = limpid(&["estimate", "reflex", pf.to_str().unwrap(), "--rate", rate]);
+        assert_eq!(out.code, 2, "--rate {rate}: {}", out.stderr);
+        assert!(out.stderr.contains("decimated rate"), "{}", out.stderr);
+        assert!(out.stderr.contains(says), "--rate {rate}: {}", out.stderr);
+        assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
+    }
     // constant torque
     let flat = dir.path().join("flat.csv");
     joint_csv(&flat, 20000, |t| {

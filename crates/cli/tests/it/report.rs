@@ -804,3 +804,117 @@ fn every_kind_of_report_renders_with_its_figures() {
         assert!((vaf(&m, &p) - reported).abs() < 0.5, "joint {j}");
     }
 }
+
+/// Result documents whose arrays disagree in length crashed the report in six
+/// places (issue 36); they are refused on read, naming the field.
+#[test]
+fn a_result_whose_arrays_disagree_is_refused_naming_the_field() {
+    let stochastic = json(&[
+        "estimate",
+        "stochastic",
+        examples("stochastic").join("ex_sa3.csv").to_str().unwrap(),
+        "--json",
+    ]);
+    let linear = json(&[
+        "estimate",
+        "linear",
+        examples("cartesian_slow")
+            .join("ex_cubic.csv")
+            .to_str()
+            .unwrap(),
+        "--json",
+    ]);
+    type Mutation = fn(&mut Value);
+    let cases: Vec<(&str, &Value, Mutation, &str)> = vec![
+        (
+            "empty partial",
+            &stochastic,
+            |v| v["coherence"]["partial"] = serde_json::json!([]),
+            "coherence.partial: 0 entries",
+        ),
+        (
+            "short impedance row",
+            &stochastic,
+            |v| {
+                v["impedance"][5][1].as_array_mut().unwrap().pop();
+            },
+            "impedance[5][1]: 2 entries",
+        ),
+        (
+            "missing multiple coherence",
+            &stochastic,
+            |v| {
+                v["coherence"]["multiple"].as_array_mut().unwrap().pop();
+            },
+            "coherence.multiple: 5 entries",
+        ),
+        (
+            "missing SE row",
+            &stochastic,
+            |v| {
+                v["standard_errors"]["stiffness"]
+                    .as_array_mut()
+                    .unwrap()
+                    .pop();
+            },
+            "standard_errors.stiffness: 2 x 3",
+        ),
+        (
+            "short VAF",
+            &linear,
+            |v| {
+                v["fit"]["vaf"].as_array_mut().unwrap().pop();
+            },
+            "fit.vaf: 2 entries, expected 3",
+        ),
+        (
+            "1000-row inertia",
+            &linear,
+            |v| {
+                let row = v["inertia"][0].clone();
+                v["inertia"] = Value::Array(vec![row; 1000]);
+            },
+            "inertia: 1000 x 3, expected 3 x 3",
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (what, base, mutate, says) in cases {
+        let mut doc = base.clone();
+        mutate(&mut doc);
+        let path = dir.path().join("bad.json");
+        std::fs::write(&path, doc.to_string()).unwrap();
+        let html = dir.path().join("bad.html");
+        let out = limpid(&[
+            "report",
+            path.to_str().unwrap(),
+            "-o",
+            html.to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 2, "{what}: {}", out.stderr);
+        assert!(
+            out.stderr.contains("bad.json") && out.stderr.contains(says),
+            "{what}: {}",
+            out.stderr
+        );
+        assert_eq!(
+            out.stderr.trim().lines().count(),
+            1,
+            "{what}: {}",
+            out.stderr
+        );
+        assert!(!html.exists(), "{what}: a report was written");
+    }
+    // the unmutated documents still read
+    for base in [&stochastic, &linear] {
+        let path = dir.path().join("good.json");
+        std::fs::write(&path, base.to_string()).unwrap();
+        let html = dir.path().join("good.html");
+        let out = limpid(&[
+            "report",
+            path.to_str().unwrap(),
+            "-o",
+            html.to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+    }
+}

@@ -116,3 +116,40 @@ fn shoulder_joint_space_before_estimation_matches_the_mapped_truth() {
         r["stiffness"]
     );
 }
+
+/// An overlap one sample short of the segment kept 46,000 segment spectra
+/// (past 4 GB); the size is bounded before anything is computed.
+#[test]
+fn an_overlap_that_would_need_gigabytes_is_refused_in_one_line() {
+    let rec = examples("stochastic").join("ex_sa3.csv");
+    let started = std::time::Instant::now();
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        rec.to_str().unwrap(),
+        "--nfft",
+        "4096",
+        "--overlap",
+        "4095",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("invalid overlap") && out.stderr.contains("GB of spectra"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
+    // a hang guard, not a timing assertion: refusing takes milliseconds
+    assert!(started.elapsed().as_secs() < 60);
+    // an ordinary overlap still works
+    let ok = limpid(&[
+        "estimate",
+        "stochastic",
+        rec.to_str().unwrap(),
+        "--nfft",
+        "4096",
+        "--overlap",
+        "3072",
+    ]);
+    assert_eq!(ok.code, 0, "{}", ok.stderr);
+}

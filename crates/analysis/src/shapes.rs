@@ -1,0 +1,194 @@
+//! The shapes a result document must have before anything indexes it.
+//!
+//! serde checks each field's type; it cannot check that fields agree with
+//! each other (an impedance row one entry short, a coherence list for fewer
+//! outputs than the result has, a 1000-row inertia beside 3 coordinates).
+//! The report indexed such documents and crashed (issue 36); a document read
+//! back is now checked here first, and a disagreement is one line naming the
+//! field. Every kind the report draws from arrays is checked; kinds without
+//! such arrays pass.
+
+use limpid_core::Matrix;
+
+use crate::linear::LinearResult;
+use crate::result::Estimate;
+
+/// `Err(field: what is wrong)` for the first disagreement in `e`.
+pub fn check(e: &Estimate) -> Result<(), String> {
+    match e {
+        Estimate::Linear(r) => linear("", r),
+        Estimate::Cocontraction(c) => {
+            for (i, l) in c.levels.iter().enumerate() {
+                let at = format!("levels[{i}].");
+                linear(&format!("{at}estimate."), &l.estimate)?;
+                let d = l.estimate.stiffness.0.nrows();
+                for (name, m) in [
+                    ("stiffness", &l.stiffness),
+                    ("damping", &l.damping),
+                    ("inertia", &l.inertia),
+                ] {
+                    square(&format!("{at}{name}"), m, d)?;
+                }
+            }
+            for (i, c) in c.comparisons.iter().enumerate() {
+                let n = c.change_percent.len();
+                for (name, len) in [
+                    ("rotation_deg", c.rotation_deg.len()),
+                    ("ambiguous", c.ambiguous.len()),
+                    ("partner", c.partner.len()),
+                ] {
+                    same(
+                        &format!("comparisons[{i}].{name}"),
+                        len,
+                        n,
+                        "change_percent",
+                    )?;
+                }
+            }
+            Ok(())
+        }
+        Estimate::Stochastic(s) => {
+            let (nf, no, ni) = (s.frequencies.len(), s.coordinates.len(), s.inputs.len());
+            same("impedance", s.impedance.len(), nf, "frequencies")?;
+            for (f, rows) in s.impedance.iter().enumerate() {
+                same(&format!("impedance[{f}]"), rows.len(), no, "coordinates")?;
+                for (o, row) in rows.iter().enumerate() {
+                    same(&format!("impedance[{f}][{o}]"), row.len(), ni, "inputs")?;
+                }
+            }
+            let c = &s.coherence;
+            same(
+                "coherence.multiple",
+                c.multiple.len(),
+                c.outputs.len(),
+                "coherence.outputs",
+            )?;
+            same(
+                "coherence.partial",
+                c.partial.len(),
+                c.outputs.len(),
+                "coherence.outputs",
+            )?;
+            for (o, m) in c.multiple.iter().enumerate() {
+                same(
+                    &format!("coherence.multiple[{o}]"),
+                    m.len(),
+                    nf,
+                    "frequencies",
+                )?;
+            }
+            for (o, p) in c.partial.iter().enumerate() {
+                same(&format!("coherence.partial[{o}]"), p.len(), ni, "inputs")?;
+                for (i, q) in p.iter().enumerate() {
+                    same(
+                        &format!("coherence.partial[{o}][{i}]"),
+                        q.len(),
+                        nf,
+                        "frequencies",
+                    )?;
+                }
+            }
+            for (name, m) in [
+                ("inertia", &s.inertia),
+                ("damping", &s.damping),
+                ("stiffness", &s.stiffness),
+                ("standard_errors.inertia", &s.standard_errors.inertia),
+                ("standard_errors.damping", &s.standard_errors.damping),
+                ("standard_errors.stiffness", &s.standard_errors.stiffness),
+            ] {
+                square(name, m, no)?;
+            }
+            Ok(())
+        }
+        Estimate::Planar(p) => {
+            for (name, m) in [
+                ("stiffness", &p.stiffness),
+                ("damping", &p.damping),
+                ("endpoint_stiffness", &p.endpoint_stiffness),
+                ("standard_errors.stiffness", &p.standard_errors.stiffness),
+                ("standard_errors.damping", &p.standard_errors.damping),
+            ] {
+                square(name, m, 2)?;
+            }
+            if let Some(t) = &p.traces {
+                traces("traces", t, 2)?;
+            }
+            Ok(())
+        }
+        Estimate::Reflex(r) => {
+            for (name, irf) in [
+                ("intrinsic.irf", &r.intrinsic.irf),
+                ("reflex.irf", &r.reflex.irf),
+            ] {
+                same(
+                    &format!("{name}.values"),
+                    irf.values.len(),
+                    irf.lags_s.len(),
+                    &format!("{name}.lags_s"),
+                )?;
+            }
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+fn linear(at: &str, r: &LinearResult) -> Result<(), String> {
+    let d = r.stiffness.0.nrows();
+    for (name, m) in [
+        ("stiffness", &r.stiffness),
+        ("damping", &r.damping),
+        ("inertia", &r.inertia),
+        ("standard_errors.stiffness", &r.standard_errors.stiffness),
+        ("standard_errors.damping", &r.standard_errors.damping),
+        ("standard_errors.inertia", &r.standard_errors.inertia),
+    ] {
+        square(&format!("{at}{name}"), m, d)?;
+    }
+    if let Some(eq) = &r.equilibrium {
+        same(&format!("{at}equilibrium"), eq.len(), d, "coordinates")?;
+    }
+    for (name, len) in [
+        ("fit.r", r.fit.r.len()),
+        ("fit.vaf", r.fit.vaf.len()),
+        ("fit.rmse", r.fit.rmse.len()),
+    ] {
+        same(&format!("{at}{name}"), len, d, "coordinates")?;
+    }
+    traces(&format!("{at}fit.traces"), &r.fit.traces, d)
+}
+
+fn traces(at: &str, t: &limpid_ident::linear::FitTraces, d: usize) -> Result<(), String> {
+    for (name, series) in [("measured", &t.measured), ("predicted", &t.predicted)] {
+        // absent traces (a study's compact results) are an empty list
+        if series.is_empty() {
+            continue;
+        }
+        same(&format!("{at}.{name}"), series.len(), d, "coordinates")?;
+        for (k, s) in series.iter().enumerate() {
+            same(&format!("{at}.{name}[{k}]"), s.len(), t.time.len(), "time")?;
+        }
+    }
+    Ok(())
+}
+
+fn square(name: &str, m: &Matrix, d: usize) -> Result<(), String> {
+    let (r, c) = m.0.shape();
+    if r == d && c == d {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name}: {r} x {c}, expected {d} x {d} (one row and column per coordinate)"
+        ))
+    }
+}
+
+fn same(name: &str, len: usize, want: usize, of: &str) -> Result<(), String> {
+    if len == want {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name}: {len} entries, expected {want} (one per entry of {of})"
+        ))
+    }
+}
