@@ -31,17 +31,16 @@ pub fn check(e: &Estimate) -> Result<(), String> {
                 }
             }
             for (i, c) in c.comparisons.iter().enumerate() {
-                let n = c.change_percent.len();
+                let n = c.principal_change_percent.len();
                 for (name, len) in [
                     ("rotation_deg", c.rotation_deg.len()),
                     ("ambiguous", c.ambiguous.len()),
-                    ("partner", c.partner.len()),
                 ] {
                     same(
                         &format!("comparisons[{i}].{name}"),
                         len,
                         n,
-                        "change_percent",
+                        "principal_change_percent",
                     )?;
                 }
             }

@@ -133,6 +133,7 @@ fn write_through<T>(
     let file = std::fs::OpenOptions::new()
         .write(true)
         .create(true)
+        .truncate(true)
         .open(path)
         .map_err(|e| io_error(path, e))?;
     let mut w = BufWriter::new(file);
