@@ -18,7 +18,7 @@
 //! around seed 003's subject, a third of them with a stretch reflex (latency
 //! 40-80 ms, K and D +30-60 %); spring arrays of 20-70 N/m springs (seed 004).
 //! Half the centre-out recordings use an ideal position servo (velocity steps
-//! at the onset, as in ../shared/examples), half a 30 Hz servo.
+//! at the onset, as in the outside examples), half a 30 Hz servo.
 
 use nalgebra::{Matrix2, Matrix3, Rotation3, Unit, Vector3};
 use rand::{rngs::StdRng, Rng, SeedableRng};
@@ -328,7 +328,7 @@ fn planar_subject(rng: &mut StdRng, reflex: bool) -> PlanarSubject {
     }
 }
 
-/// Seed 003's torque and angle noise (../shared/examples/planar).
+/// Seed 003's torque and angle noise (the outside examples (`planar`)).
 const PLANAR_NOISE: (f64, f64) = (0.02, 1e-5);
 
 /// A random planar subject, its seed 003 session, prepared.

@@ -1,5 +1,6 @@
 //! Criterion benchmark of the parallel-cascade reflex estimator (issue 17):
-//! one 60 s, 1 kHz real ankle recording (../shared/real/reklab_ankle/pf.csv),
+//! one 60 s, 1 kHz ankle recording: the real `pf.csv` of Kearney's laboratory
+//! under `$LIMPID_REAL_DATA/reklab_ankle` when set, else limpid's virtual ankle,
 //! from the loaded recording to the estimate (decimation, alternating IRFs,
 //! cross-validation, joint parametric delay scan, jackknife).
 
@@ -7,9 +8,10 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use limpid_ident::reflex::{estimate_reflex, ReflexParams};
 
 fn bench(c: &mut Criterion) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/real/reklab_ankle/pf.csv");
-    let rec = limpid_io::read_recording(&path).expect("real recording");
+    let path = limpid_testkit::real_data("reklab_ankle")
+        .map(|dir| dir.join("pf.csv"))
+        .unwrap_or_else(|| limpid_testkit::examples("ankle").join("ex_ankle.csv"));
+    let rec = limpid_io::read_recording(&path).expect("ankle recording");
     let mut group = c.benchmark_group("reflex");
     group.sample_size(20);
     group.bench_function("parallel_cascade_60s_1kHz", |b| {

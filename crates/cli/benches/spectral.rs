@@ -1,14 +1,13 @@
 //! Criterion benchmark of the stochastic method (issue 6): Welch spectral
 //! matrix of 9 channels x 50 s at 1 kHz and the impedance Z = T R^-1 with its
-//! parametric fit, on ../shared/examples/stochastic/ex_sa3.csv.
+//! parametric fit, on the ex_sa3 spring-array example limpid's lab makes.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use limpid_dsp::spectral::SegmentSpectra;
 use limpid_ident::stochastic::{default_welch, estimate_stochastic, StochasticParams};
 
 fn bench(c: &mut Criterion) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/examples/stochastic/ex_sa3.csv");
+    let path = limpid_testkit::examples("stochastic").join("ex_sa3.csv");
     let rec = limpid_io::read_recording(&path).expect("example recording");
     let names = ["ux", "uz", "utheta", "x", "z", "theta", "fx", "fz", "tauy"];
     let signals: Vec<&[f64]> = names

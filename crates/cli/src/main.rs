@@ -93,11 +93,11 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = Cli::parse();
-    // Rust's standard output treats a closed descriptor as a sink that accepts
-    // everything: a command would exit 0 having printed nothing. Say so instead.
+    // A command started with its standard output closed would exit 0 having
+    // printed nothing: Rust's runtime reopens a closed descriptor 1 on
+    // /dev/null (read-write, which a shell's `> /dev/null` never is). Say so.
     #[cfg(unix)]
-    // SAFETY: F_GETFD only reads the descriptor's flags.
-    if unsafe { libc::fcntl(libc::STDOUT_FILENO, libc::F_GETFD) } == -1 {
+    if stdout_was_closed() {
         eprintln!("limpid: standard output is closed: nothing could be printed");
         return ExitCode::from(2);
     }
@@ -147,6 +147,29 @@ fn main() -> ExitCode {
             eprintln!("limpid: {msg}");
             ExitCode::from(2)
         }
+    }
+}
+
+/// Descriptor 1 is /dev/null opened read-write: how Rust's start-up code
+/// fills a descriptor that was closed when the process started.
+#[cfg(unix)]
+fn stdout_was_closed() -> bool {
+    // SAFETY: fcntl and fstat only read the descriptor's state into local
+    // values; the path is a valid C string.
+    unsafe {
+        let flags = libc::fcntl(libc::STDOUT_FILENO, libc::F_GETFL);
+        if flags == -1 {
+            return true;
+        }
+        if flags & libc::O_ACCMODE != libc::O_RDWR {
+            return false;
+        }
+        let mut out: libc::stat = std::mem::zeroed();
+        let mut null: libc::stat = std::mem::zeroed();
+        libc::fstat(libc::STDOUT_FILENO, &mut out) == 0
+            && libc::stat(c"/dev/null".as_ptr(), &mut null) == 0
+            && (out.st_mode & libc::S_IFMT) == libc::S_IFCHR
+            && out.st_rdev == null.st_rdev
     }
 }
 

@@ -50,7 +50,7 @@ pub struct SimulateArgs {
     /// start point i. Planar: `xi` (3), 2 x 2 `stiffness`, `damping`, `tau0` (2),
     /// optional `[reflex]` (latency_s, stiffness_gain, damping_gain); default the
     /// Lakatos, Petit & van der Smagt (2011) subject. Stochastic: a spring set `springs` (8 values, N/m, k1a..k4b);
-    /// default set SA3 of ../shared/examples.
+    /// default the spring set SA3 (k1a = k1b = 50, k2a = k2b = 30, k3b = 66.37 N/m).
     #[arg(long)]
     pub subject: Option<PathBuf>,
     /// Output recording (.csv or .parquet); with several start points `_S<i>` is added before the extension.

@@ -246,9 +246,34 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
 
 pub fn run_spectra(args: SpectraArgs) -> CliResult {
     let rec = crate::read_recording(&args.recording)?;
+    // a column named twice makes the input spectral matrix singular (NaN
+    // coherences, exit 0 before); an input that never varies has no spectrum
+    let mut seen = std::collections::HashSet::new();
+    for name in args.inputs.iter().chain(&args.outputs) {
+        if !seen.insert(name) {
+            return Err(limpid_core::Error::invalid(
+                "--inputs/--outputs",
+                format!(
+                    "column {name} is named twice; each input and output must be its own column"
+                ),
+            )
+            .into());
+        }
+    }
     let mut signals: Vec<&[f64]> = Vec::new();
     for name in args.inputs.iter().chain(&args.outputs) {
         signals.push(rec.require(name, "named in --inputs/--outputs")?);
+    }
+    for (name, x) in args.inputs.iter().zip(&signals) {
+        if x.iter().all(|v| *v == x[0]) {
+            return Err(limpid_core::Error::Format {
+                path: rec.path().to_path_buf(),
+                message: format!(
+                    "column {name}: the input never varies, so it has no spectrum to divide by"
+                ),
+            }
+            .into());
+        }
     }
     let welch = args.welch.welch(rec.len(), rec.sample_rate());
     let s = SegmentSpectra::new(&signals, &welch)?;

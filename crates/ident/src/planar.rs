@@ -150,12 +150,30 @@ pub const ONSET_LEAD_S: f64 = 0.03;
 pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> {
     let fs = rec.sample_rate();
     let arm = p.arm;
-    if !(arm.l1 > 0.0 && arm.l2 > 0.0) {
+    // a human arm's segments: a 4.9e-324 m forearm made every end-point
+    // stiffness null (issue 36)
+    if ![arm.l1, arm.l2]
+        .iter()
+        .all(|l| (MIN_LINK_M..=MAX_LINK_M).contains(l))
+    {
         return Err(Error::invalid(
             "link lengths",
             format!(
-                "expected two positive lengths in m, found {}, {}",
+                "expected two lengths from {MIN_LINK_M} to {MAX_LINK_M} m, found {}, {}",
                 arm.l1, arm.l2
+            ),
+        ));
+    }
+    if !arm
+        .shoulder
+        .iter()
+        .all(|v| v.is_finite() && v.abs() <= 100.0)
+    {
+        return Err(Error::invalid(
+            "shoulder",
+            format!(
+                "expected a position within 100 m, found {}, {}",
+                arm.shoulder[0], arm.shoulder[1]
             ),
         ));
     }
@@ -429,6 +447,32 @@ fn trial_rows(t: &PlanarTrial, n: usize, xi: Option<[f64; 3]>) -> DMatrix<f64> {
     a
 }
 
+/// Shortest and longest arm segment limpid accepts (m).
+pub const MIN_LINK_M: f64 = 0.01;
+/// See [`MIN_LINK_M`].
+pub const MAX_LINK_M: f64 = 2.0;
+
+/// Largest base inertial parameter limpid accepts (kg m^2): a human arm's
+/// are below 1.
+pub const MAX_INERTIAL_PARAMETER: f64 = 100.0;
+
+/// Known base inertial parameters must be finite, positive (each is a mass
+/// times lengths or a moment of inertia) and of an arm's size: NaN, inf and
+/// 1e308 gave null estimates with exit 0 (issue 36).
+pub fn check_inertial_parameters(xi: &[f64; 3]) -> Result<()> {
+    if xi.iter().all(|v| *v > 0.0 && *v <= MAX_INERTIAL_PARAMETER) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            "inertial parameters",
+            format!(
+                "expected three positive values up to {MAX_INERTIAL_PARAMETER} kg m^2, found {}, {}, {}",
+                xi[0], xi[1], xi[2]
+            ),
+        ))
+    }
+}
+
 /// Estimate from the first `window` samples after onset of the given trials.
 pub fn fit_planar(
     data: &PlanarData,
@@ -436,6 +480,9 @@ pub fn fit_planar(
     xi: Option<[f64; 3]>,
     use_trials: &[usize],
 ) -> Result<PlanarEstimate> {
+    if let Some(xi) = &xi {
+        check_inertial_parameters(xi)?;
+    }
     let p = if xi.is_some() { 8 } else { 11 };
     let blocks: Vec<DMatrix<f64>> = use_trials
         .iter()
@@ -977,6 +1024,9 @@ pub fn window_sweep(
     step_ms: f64,
     xi: Option<[f64; 3]>,
 ) -> Result<Sweep> {
+    if let Some(xi) = &xi {
+        check_inertial_parameters(xi)?;
+    }
     if !(from_ms > 0.0 && step_ms > 0.0 && to_ms >= from_ms) {
         return Err(Error::invalid(
             "window range",

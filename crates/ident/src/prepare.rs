@@ -69,7 +69,7 @@ pub const AUTO_FIT_ABOVE_S: f64 = 2.0;
 pub enum Windowing {
     /// The `trial` column if present, else one continuous window. Onsets are
     /// not searched for automatically: a pseudo-random step perturbation
-    /// (e.g. ../shared/real/reklab_ankle) has rests and steps that look like trials.
+    /// (e.g. the real ankle recordings of Kearney's laboratory) has rests and steps that look like trials.
     Auto,
     /// Use the `trial` column (error if absent).
     Trials,

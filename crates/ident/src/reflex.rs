@@ -278,6 +278,13 @@ struct Decimated {
 
 /// The parallel-cascade estimate of `rec`.
 pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstimate> {
+    // one column as both would "explain" the torque perfectly (K = 1, VAF 100 %)
+    if p.position == p.torque {
+        return Err(Error::invalid(
+            "position and torque",
+            format!("column {} names both; they must be two columns", p.position),
+        ));
+    }
     let q = rec.require(
         &p.position,
         "the joint angle of the parallel-cascade method",

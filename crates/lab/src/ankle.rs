@@ -3,7 +3,7 @@
 //! 44(6)).
 //!
 //! A position servo imposes a pseudo-random binary sequence (PRBS) on the
-//! joint, as in the REKLAB ankle experiments (`../shared/real/reklab_ankle`):
+//! joint, as in the REKLAB ankle experiments (the real ankle recordings (`LIMPID_REAL_DATA`)):
 //! the command switches between +-`amplitude_rad` with probability 1/2 every
 //! `switch_s`, and the actuator follows it as a second-order system. The
 //! torque applied to the joint is

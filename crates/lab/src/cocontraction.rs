@@ -3,7 +3,7 @@
 //! Per level (0, 0.5, 0.75, 1 by default) the robot moves the hand 8 mm to
 //! each of 18 evenly spread targets in 100 ms (cubic), holds 500 ms, returns
 //! in 100 ms; each trial window starts with 50 ms of rest (the 1 s rests
-//! between trials are not recorded, as in `../shared/examples/cocontraction`).
+//! between trials are not recorded, as in the outside examples (`cocontraction`)).
 //! Stiffness depends on the level, piecewise linear between knots (the clean
 //! population: K(c) = K0 + c dK; the realistic subject of
 //! [`seed001_realistic_population`]: seed 001 Tables 1-4 at 0, 50, 75, 100 %);

@@ -352,7 +352,7 @@ pub struct StochasticLimits {
 
 impl StochasticDesign {
     /// Seed 004: x, z and θ inputs for 50 s at 1 kHz, 15 Hz cut-off; peaks of
-    /// the spring-array experiments in `../shared/examples/stochastic`.
+    /// the spring-array experiments in the outside examples (`stochastic`).
     pub fn seed004() -> Self {
         StochasticDesign {
             name: "Park & Chang (2011): uniform noise, 8th-order Butterworth 15 Hz, 50 s at 1 kHz"

@@ -98,7 +98,7 @@ pub struct PlanarSubject {
 }
 
 impl PlanarSubject {
-    /// The `ex_joint_180` truth of ../shared/examples/planar (seed 003's posture q0 = (0.08, 1.0)).
+    /// The `ex_joint_180` truth of the outside examples (`planar`) (seed 003's posture q0 = (0.08, 1.0)).
     pub fn seed003() -> Self {
         PlanarSubject {
             xi: [0.356, 0.143, 0.147],

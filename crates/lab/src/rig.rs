@@ -6,7 +6,7 @@
 //! paper does not list: `r_hv` and `r_d` (free length over l of the
 //! horizontal/vertical and diagonal springs), `c1 = L - l` and `c2 = (L - l) L`.
 //! [`Geometry::from_k_sa1`] holds the values that reproduce the paper's K_sa1,
-//! inferred from it (as in `../shared/examples/stochastic/*.truth.json`).
+//! inferred from it (as in the outside examples (`stochastic/*.truth.json`)).
 //!
 //! Stochastic input (§III-C): independent uniform white noise per channel
 //! through a causal 8th-order Butterworth low-pass at 15 Hz, scaled to a peak.
@@ -28,7 +28,7 @@ pub type Springs = [f64; 8];
 pub const SA1: Springs = [38.0615, 38.0615, 38.0615, 38.0615, 0.0, 0.0, 0.0, 66.3707];
 /// Seed 004 Table II, configuration sa2 (springs 4a and 4b exchanged).
 pub const SA2: Springs = [38.0615, 38.0615, 38.0615, 38.0615, 0.0, 0.0, 66.3707, 0.0];
-/// The spring set of `../shared/examples/stochastic/ex_sa3` (N/m, k1a..k4b).
+/// The spring set of the outside examples (`stochastic/ex_sa3`) (N/m, k1a..k4b).
 pub const SPRING_SET_SA3: Springs = [50.0, 50.0, 30.0, 30.0, 0.0, 66.3707, 0.0, 0.0];
 
 /// Geometry constants of eq. (10).
@@ -140,7 +140,7 @@ pub struct RigExperiment {
 
 impl RigExperiment {
     /// Spring array `springs` with the handle's mass 0.6028 kg and inertia
-    /// 3.4492 kg cm², damping ratio 0.01; the robot of `../shared/examples/stochastic`.
+    /// 3.4492 kg cm², damping ratio 0.01; the robot of the outside examples (`stochastic`).
     pub fn spring_array(springs: &Springs) -> Self {
         let k = spring_array_stiffness(springs, &Geometry::from_k_sa1());
         let m = Matrix3::from_diagonal(&nalgebra::Vector3::new(0.6028, 0.6028, 3.4492e-4));

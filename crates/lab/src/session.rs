@@ -1,6 +1,6 @@
 //! A protocol run on a virtual subject: the one path behind `limpid simulate`
 //! and Python's `limpid.simulate`. Each recording comes with its truth, in the
-//! layout of `../shared/examples/*/*.truth.json`.
+//! layout of the outside examples (`*/*.truth.json`).
 //!
 //! Subjects (TOML, all optional — the defaults are the built-in subjects):
 //! - centre-out (seed 000): 3 x 3 `inertia`, `damping`, `stiffness` (SI) and an

@@ -1,7 +1,7 @@
 //! A position-controlled robot imposes centre-out perturbations on a linear
 //! virtual subject (seed 000 §II-B): for each target direction, a rest at the
 //! start point, then the motion; the recording holds these windows back to
-//! back, one `trial` id each, like `../shared/examples/cartesian_slow`.
+//! back, one `trial` id each, like the outside examples (`cartesian_slow`).
 //!
 //! Force applied to the limb: f = M x'' + B x' + K (x - S) + offset_trial +
 //! drift + white noise, from exact kinematics of the profile; the recorded
@@ -17,7 +17,7 @@ use crate::subject::Posture;
 use limpid_core::{Recording, Result};
 use limpid_dsp::LowPass;
 
-/// Noise added by the virtual sensors (defaults: those of ../shared/examples).
+/// Noise added by the virtual sensors (defaults: those of the outside examples).
 ///
 /// | Name | Default | Purpose |
 /// |---|---|---|

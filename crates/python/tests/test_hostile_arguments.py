@@ -9,7 +9,7 @@ import pytest
 
 import limpid
 
-S = Path(__file__).resolve().parents[3] / ".." / "shared" / "examples"
+from conftest import EXAMPLES as S
 VALUES = [None, 0, -1, 2**70, 1e400, float("nan"), "x", True, 1.5, [], np.array([]), np.ones((2, 2)), {}, b"x"]
 CALLS = {
     "psd fs": lambda v: limpid.psd(np.ones(100), fs=v),

@@ -95,7 +95,7 @@ def test_linear_estimator_matches_lstsq_on_a_noiseless_system():
     assert min(est.fit.vaf) > 99.9
 
 
-def test_recovers_the_shared_example_truths():
+def test_recovers_the_example_truths():
     case = examples("cartesian_slow") / "ex_cubic"
     truth = json.loads(case.with_suffix(".truth.json").read_text())
     est = limpid.estimate_linear(str(case.with_suffix(".csv")))

@@ -147,4 +147,56 @@ fn planar_bad_inputs() {
         out.stderr.trim_end(),
         "limpid: invalid link lengths: expected two numbers separated by a comma, found 1"
     );
+    // numbers that gave null or NaN estimates with exit 0 (issue 36)
+    let joint = examples("planar").join("ex_joint_180.csv");
+    for (verb, flag, value, says) in [
+        (
+            "planar",
+            "--link-lengths",
+            "3,4.9e-324",
+            "invalid link lengths: expected two lengths from 0.01 to 2 m",
+        ),
+        (
+            "window-sweep",
+            "--link-lengths",
+            "3,4.9e-324",
+            "invalid link lengths",
+        ),
+        (
+            "planar",
+            "--inertial-parameters",
+            "nan,0.1,0.1",
+            "invalid inertial parameters: expected three positive values",
+        ),
+        (
+            "planar",
+            "--inertial-parameters",
+            "inf,0.1,0.1",
+            "invalid inertial parameters",
+        ),
+        (
+            "window-sweep",
+            "--inertial-parameters",
+            "1e308,0.1,0.1",
+            "invalid inertial parameters",
+        ),
+    ] {
+        let mut args = vec![verb];
+        if verb == "planar" {
+            args.insert(0, "estimate");
+        }
+        let lengths = if flag == "--link-lengths" {
+            value
+        } else {
+            "0.28,0.35"
+        };
+        args.extend([joint.to_str().unwrap(), "--link-lengths", lengths]);
+        if flag != "--link-lengths" {
+            args.extend([flag, value]);
+        }
+        let out = limpid(&args);
+        assert_eq!(out.code, 2, "{args:?}: {}", out.stderr);
+        assert!(out.stderr.contains(says), "{args:?}: {}", out.stderr);
+        assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
+    }
 }

@@ -120,6 +120,22 @@ fn reflex_refusals() {
         "{}",
         out.stderr
     );
+    // one column as position and torque "fitted" K = 1 with VAF 100 % (issue 36)
+    let out = limpid(&[
+        "estimate",
+        "reflex",
+        pf.to_str().unwrap(),
+        "--position",
+        "q1",
+        "--torque",
+        "q1",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("column q1 names both"),
+        "{}",
+        out.stderr
+    );
     // decimated rates the method cannot use: too slow for the intrinsic IRF's
     // lags (1-3 Hz crashed on an empty low-pass grid), or above the recording's
     for (rate, says) in [

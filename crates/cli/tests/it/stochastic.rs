@@ -153,3 +153,43 @@ fn an_overlap_that_would_need_gigabytes_is_refused_in_one_line() {
     ]);
     assert_eq!(ok.code, 0, "{}", ok.stderr);
 }
+
+/// `spectra` with a column named twice, or an input that never varies,
+/// printed NaN coherences with exit 0 (issue 36).
+#[test]
+fn spectra_refuses_repeated_columns_and_constant_inputs() {
+    let rec = examples("stochastic").join("ex_sa3.csv");
+    let rec = rec.to_str().unwrap();
+    for (inputs, outputs) in [("ux,ux", "x"), ("ux", "x,x"), ("ux,uz", "ux")] {
+        let out = limpid(&["spectra", rec, "--inputs", inputs, "--outputs", outputs]);
+        assert_eq!(out.code, 2, "{inputs} {outputs}: {}", out.stderr);
+        assert!(out.stderr.contains("is named twice"), "{}", out.stderr);
+        assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("flat.csv");
+    let mut text = String::from("t,ux,x\n");
+    for i in 0..5000 {
+        text.push_str(&format!(
+            "{},{},{}\n",
+            i as f64 * 0.001,
+            1.5,
+            (i as f64 * 0.37).sin()
+        ));
+    }
+    std::fs::write(&flat, text).unwrap();
+    let out = limpid(&[
+        "spectra",
+        flat.to_str().unwrap(),
+        "--inputs",
+        "ux",
+        "--outputs",
+        "x",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("flat.csv") && out.stderr.contains("column ux: the input never varies"),
+        "{}",
+        out.stderr
+    );
+}
