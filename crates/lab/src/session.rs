@@ -134,6 +134,12 @@ fn centre_out(p: &Protocol, subject: Option<&SubjectText>, seed: u64) -> Result<
         .as_ref()
         .and_then(|s| s.noise.clone())
         .unwrap_or_default();
+    if let Err(message) = noise.check() {
+        return Err(Error::Format {
+            path: subject.map_or_else(Default::default, |s| s.path.to_path_buf()),
+            message: format!("[noise] {message}"),
+        });
+    }
     let m3 = |a: &[[f64; 3]; 3]| Matrix3::from_fn(|r, c| a[r][c]);
     let mut out = Vec::with_capacity(starts.len());
     for (i, start) in starts.iter().enumerate() {

@@ -90,6 +90,38 @@ impl NoiseModel {
         }
     }
 
+    /// Deviations, resolutions, the noise fraction and the servo bandwidth
+    /// must be zero or positive, the bandwidths of the slow noises positive:
+    /// a negative deviation or servo bandwidth simulated (issue 36).
+    /// `Err` names the first field that is not.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        let non_negative = [
+            ("position_std_m", self.position_std_m),
+            ("offset_per_trial_std_n", self.offset_per_trial_std_n),
+            ("white_std_n", self.white_std_n),
+            ("drift_std_n", self.drift_std_n),
+            ("force_quantum_n", self.force_quantum_n),
+            ("servo_bandwidth_hz", self.servo_bandwidth_hz),
+            ("force_noise_fraction", self.force_noise_fraction),
+            ("posture_drift_std_m", self.posture_drift_std_m),
+        ];
+        for (name, v) in non_negative {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(format!("{name} = {v}: expected zero or a positive number"));
+            }
+        }
+        for (name, v) in [
+            ("drift_lowpass_hz", self.drift_lowpass_hz),
+            ("force_noise_hz", self.force_noise_hz),
+            ("posture_drift_hz", self.posture_drift_hz),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(format!("{name} = {v}: expected a positive bandwidth"));
+            }
+        }
+        Ok(())
+    }
+
     /// No noise at all (for exact-recovery tests).
     pub fn none() -> Self {
         NoiseModel {

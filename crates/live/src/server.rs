@@ -428,13 +428,25 @@ fn receive(socket: UdpSocket, channels: usize, shared: &Mutex<State>, stop: &Ato
     }
 }
 
+/// Largest gap in the sequence numbers counted as lost datagrams (about
+/// 17 minutes at 1 kHz). A larger jump is the sender restarting or
+/// renumbering, not loss: one datagram jumping by 2^32 made `lost` read
+/// 4,294,967,292 for the rest of the session (issue 36).
+pub const MAX_COUNTED_GAP: u64 = 1 << 20;
+
+/// Datagrams lost between sequence numbers `last` and `seq`.
+pub fn lost_between(last: u64, seq: u64) -> u64 {
+    match seq.checked_sub(last) {
+        Some(step) if step > 1 && step - 1 <= MAX_COUNTED_GAP => step - 1,
+        _ => 0,
+    }
+}
+
 /// One sample into the processor and the stream statistics.
 fn ingest(shared: &Mutex<State>, sample: &Sample, arrival: Instant, latency_us: Option<f64>) {
     let mut s = shared.lock().expect("state lock");
     if let Some(last) = s.last_seq {
-        if sample.seq > last + 1 {
-            s.lost += sample.seq - last - 1;
-        }
+        s.lost += lost_between(last, sample.seq);
     }
     s.last_seq = Some(sample.seq);
     s.processor.update(&sample.emg, sample.kinematics.as_ref());
@@ -599,3 +611,21 @@ fn replay(rec: &Recording, channels: &[String], speed: f64, udp: SocketAddr, sto
 
 /// The page: no external resource; reconnects by itself.
 pub const PAGE: &str = include_str!("page.html");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaps_count_as_lost_and_jumps_do_not() {
+        assert_eq!(lost_between(10, 11), 0);
+        assert_eq!(lost_between(10, 14), 3);
+        assert_eq!(lost_between(10, 10), 0, "a repeated datagram");
+        assert_eq!(lost_between(10, 3), 0, "numbering went back");
+        assert_eq!(lost_between(0, MAX_COUNTED_GAP + 1), MAX_COUNTED_GAP);
+        // one datagram whose number jumps by 2^32: a renumbering, not 4e9 losses
+        assert_eq!(lost_between(7, 7 + (1 << 32)), 0);
+        assert_eq!(lost_between(u64::MAX - 1, u64::MAX), 0);
+        assert_eq!(lost_between(0, u64::MAX), 0);
+    }
+}

@@ -493,3 +493,55 @@ fn subject_files_of_every_kind_are_simulated_and_estimated_back() {
     );
     assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
 }
+
+/// A subject file with a negative noise deviation or servo bandwidth was
+/// simulated (issue 36): refused in one line naming the file and the field.
+#[test]
+fn a_subject_whose_noise_cannot_exist_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let protocol = dir.path().join("p.toml");
+    let made = limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        "artemiadis-3d",
+        "-o",
+        protocol.to_str().unwrap(),
+    ]);
+    assert_eq!(made.code, 0, "{}", made.stderr);
+    let matrices = "inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n\
+                    damping = [[20.0, 0.0, 0.0], [0.0, 20.0, 0.0], [0.0, 0.0, 20.0]]\n\
+                    stiffness = [[500.0, 0.0, 0.0], [0.0, 500.0, 0.0], [0.0, 0.0, 500.0]]\n";
+    for (noise, says) in [
+        (
+            "white_std_n = -0.1",
+            "[noise] white_std_n = -0.1: expected zero or a positive number",
+        ),
+        (
+            "servo_bandwidth_hz = -30.0",
+            "[noise] servo_bandwidth_hz = -30",
+        ),
+        (
+            "drift_lowpass_hz = 0.0",
+            "[noise] drift_lowpass_hz = 0: expected a positive bandwidth",
+        ),
+    ] {
+        let subject = dir.path().join("bad.subject.toml");
+        std::fs::write(&subject, format!("{matrices}[noise]\n{noise}\n")).unwrap();
+        let out = limpid(&[
+            "simulate",
+            protocol.to_str().unwrap(),
+            "--subject",
+            subject.to_str().unwrap(),
+            "-o",
+            dir.path().join("r.csv").to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 2, "{noise}: {}", out.stderr);
+        assert!(
+            out.stderr.contains("bad.subject.toml") && out.stderr.contains(says),
+            "{noise}: {}",
+            out.stderr
+        );
+        assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
+    }
+}
