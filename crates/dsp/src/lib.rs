@@ -360,6 +360,17 @@ fn steady_state(sections: &[([f64; 3], [f64; 2])]) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// One second-order section in transposed direct form II (scipy's `sosfilt`
+/// arithmetic, in its order): the output for `y`, the state `z0, z1` advanced.
+/// Every cascade here (unrolled, looped, many lanes, streaming) takes it.
+#[inline(always)]
+fn section(b: &[f64; 3], a: &[f64; 2], z0: &mut f64, z1: &mut f64, y: f64) -> f64 {
+    let out = b[0] * y + *z0;
+    *z0 = b[1] * y - a[0] * out + *z1;
+    *z1 = b[2] * y - a[1] * out;
+    out
+}
+
 /// Filter the samples in place through every section (transposed direct
 /// form II), starting from the steady state `zi * x0`. Dispatched on the
 /// section count so the per-sample loop over sections is unrolled with its
@@ -381,11 +392,8 @@ fn run_sections<'a>(
         for v in samples {
             let mut y = *v;
             for i in 0..N {
-                let ((b, a), z) = (&sec[i], &mut state[i]);
-                let out = b[0] * y + z[0];
-                z[0] = b[1] * y - a[0] * out + z[1];
-                z[1] = b[2] * y - a[1] * out;
-                y = out;
+                let ((b, a), [z0, z1]) = (&sec[i], &mut state[i]);
+                y = section(b, a, z0, z1, y);
             }
             *v = y;
         }
@@ -399,16 +407,13 @@ fn run_sections<'a>(
         3 => fixed::<3>(samples, sections, zi, x0),
         4 => fixed::<4>(samples, sections, zi, x0),
         _ => {
-            let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * x0, z[1] * x0]).collect();
+            // the streaming filter's loop, started from the steady state
+            let mut cascade = StreamingFilter {
+                sections: sections.to_vec(),
+                state: zi.iter().map(|z| [z[0] * x0, z[1] * x0]).collect(),
+            };
             for v in samples {
-                let mut y = *v;
-                for ((b, a), z) in sections.iter().zip(state.iter_mut()) {
-                    let out = b[0] * y + z[0];
-                    z[0] = b[1] * y - a[0] * out + z[1];
-                    z[1] = b[2] * y - a[1] * out;
-                    y = out;
-                }
-                *v = y;
+                *v = cascade.step(*v);
             }
         }
     }
@@ -513,10 +518,7 @@ fn run_lanes<'a, const L: usize>(
             for i in 0..N {
                 let (b, a) = &sec[i];
                 for l in 0..L {
-                    let out = b[0] * y[l] + z0[i][l];
-                    z0[i][l] = b[1] * y[l] - a[0] * out + z1[i][l];
-                    z1[i][l] = b[2] * y[l] - a[1] * out;
-                    y[l] = out;
+                    y[l] = section(b, a, &mut z0[i][l], &mut z1[i][l], y[l]);
                 }
             }
             *v = y;
@@ -535,10 +537,7 @@ fn run_lanes<'a, const L: usize>(
                 let mut y = *v;
                 for (i, (b, a)) in sections.iter().enumerate() {
                     for l in 0..L {
-                        let out = b[0] * y[l] + z0[i][l];
-                        z0[i][l] = b[1] * y[l] - a[0] * out + z1[i][l];
-                        z1[i][l] = b[2] * y[l] - a[1] * out;
-                        y[l] = out;
+                        y[l] = section(b, a, &mut z0[i][l], &mut z1[i][l], y[l]);
                     }
                 }
                 *v = y;
@@ -560,11 +559,8 @@ impl StreamingFilter {
     #[inline]
     pub fn step(&mut self, x: f64) -> f64 {
         let mut y = x;
-        for ((b, a), z) in self.sections.iter().zip(self.state.iter_mut()) {
-            let out = b[0] * y + z[0];
-            z[0] = b[1] * y - a[0] * out + z[1];
-            z[1] = b[2] * y - a[1] * out;
-            y = out;
+        for ((b, a), [z0, z1]) in self.sections.iter().zip(self.state.iter_mut()) {
+            y = section(b, a, z0, z1, y);
         }
         y
     }
@@ -704,6 +700,7 @@ mod tests {
             let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * x[0], z[1] * x[0]]).collect();
             for v in plain.iter_mut() {
                 let mut y = *v;
+                // written out, not `section`: the reference the code is held to
                 for ((b, a), z) in sections.iter().zip(state.iter_mut()) {
                     let out = b[0] * y + z[0];
                     z[0] = b[1] * y - a[0] * out + z[1];

@@ -164,15 +164,17 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
             ),
         ));
     }
+    // the recordings' own position limit
+    let (limit, _) = limpid_core::recording::magnitude_limit("x");
     if !arm
         .shoulder
         .iter()
-        .all(|v| v.is_finite() && v.abs() <= 100.0)
+        .all(|v| v.is_finite() && v.abs() <= limit)
     {
         return Err(Error::invalid(
             "shoulder",
             format!(
-                "expected a position within 100 m, found {}, {}",
+                "expected a position within {limit} m, found {}, {}",
                 arm.shoulder[0], arm.shoulder[1]
             ),
         ));
