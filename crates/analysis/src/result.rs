@@ -88,6 +88,10 @@ pub struct Run {
     pub created_utc: String,
     /// The files the command read.
     pub inputs: Vec<InputFile>,
+    /// The estimator's request, as it ran (`limpid rerun` runs it again on
+    /// the same inputs); absent for workflows that are not one estimate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub request: Option<limpid_ident::request::Request>,
 }
 
 /// One file a result was made from.
@@ -127,6 +131,15 @@ impl Run {
                     }
                 })
                 .collect(),
+            request: None,
+        }
+    }
+
+    /// The same run, recording the request it ran.
+    pub fn with_request(self, request: &limpid_ident::request::Request) -> Run {
+        Run {
+            request: Some(request.clone()),
+            ..self
         }
     }
 }

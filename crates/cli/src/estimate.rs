@@ -3,15 +3,14 @@
 use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
-use limpid_analysis::cocontraction::estimate_cocontraction;
-use limpid_analysis::emg::EmgParams;
-use limpid_analysis::linear::{linear_result, shoulder_impedance, ShoulderPosture};
-use limpid_analysis::result::{Document, Estimate};
-use limpid_core::FrameTransform;
-use limpid_ident::{
-    fit_linear_plan, plan, Derivative, LinearParams, Offsets, PrepareParams, Windowing,
+use limpid_analysis::result::Estimate;
+use limpid_app::estimate::Estimated;
+use limpid_ident::request::{
+    Axis, CocontractionRequest, Frame, LinearRequest, PrepareRequest, Request,
 };
+use limpid_ident::{Derivative, Offsets, Windowing};
 
+use crate::emit::Output;
 use crate::{table, CliResult};
 
 #[derive(Subcommand)]
@@ -73,7 +72,7 @@ pub struct PrepareArgs {
     #[arg(long, value_name = "HZ")]
     pub cutoff: Option<f64>,
     /// Butterworth order per pass.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = PrepareRequest::default().order)]
     pub order: usize,
     /// How velocity and acceleration are computed.
     #[arg(long, value_enum, default_value_t = DerivativeArg::Central)]
@@ -126,35 +125,10 @@ impl RobotArgs {
         let Some(name) = &self.robot else {
             return Ok(None);
         };
-        let robot = limpid_lab::robot::Robot::by_name(name)?;
-        Ok(Some(match self.robot_base.as_deref() {
-            None => robot,
-            Some(base) => robot.placed_at(base)?,
-        }))
-    }
-
-    /// The placed robot's end-effector poses (4 x 4, lab frame) per sample, if `--robot` is given.
-    pub fn poses(
-        &self,
-        rec: &limpid_core::Recording,
-    ) -> CliResult<Option<Vec<nalgebra::Matrix4<f64>>>> {
-        match self.robot()? {
-            Some(robot) => Ok(Some(robot.poses(rec, "robot joint angles for --robot")?)),
-            None => Ok(None),
-        }
-    }
-}
-
-impl PrepareArgs {
-    /// Read the recording and apply `--robot`.
-    pub fn read(&self, path: &std::path::Path) -> CliResult<limpid_core::Recording> {
-        let mut rec = crate::read_recording(path)?;
-        if let Some(poses) = self.robot.poses(&rec)? {
-            for (a, name) in ["x", "y", "z"].iter().enumerate() {
-                rec.set_column(name, poses.iter().map(|t| t[(a, 3)]).collect())?;
-            }
-        }
-        Ok(rec)
+        Ok(Some(limpid_app::estimate::placed_robot(
+            name,
+            self.robot_base.as_deref(),
+        )?))
     }
 }
 
@@ -192,6 +166,9 @@ pub struct LinearArgs {
     /// Also write the HTML report (ellipsoids, tables) to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Print the request these flags make (JSON, as a result's run block and `limpid rerun` hold it) and stop.
+    #[arg(long)]
+    pub print_request: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -211,7 +188,7 @@ pub struct CocontractionArgs {
     #[command(flatten)]
     pub prepare: PrepareArgs,
     /// Half-width of the band around the target level counted as "on target".
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = limpid_ident::request::DEFAULT_TOLERANCE)]
     pub tolerance: f64,
     /// Print one JSON object instead of tables.
     #[arg(long)]
@@ -219,34 +196,17 @@ pub struct CocontractionArgs {
     /// Also write the HTML report (per-level tables, ellipsoids side by side) to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Print the request these flags make (JSON) and stop.
+    #[arg(long)]
+    pub print_request: bool,
 }
 
 impl PrepareArgs {
-    /// Validated preparation settings.
-    pub fn params(&self) -> CliResult<PrepareParams> {
-        let mut transform = match self.frame {
-            FrameArg::Identity => None,
-            FrameArg::Seed000 => Some(FrameTransform::seed000_robot_to_human()),
-        };
-        if let Some(values) = &self.transform {
-            let t = FrameTransform::from_values(values)?;
-            transform = Some(match transform {
-                Some(first) => FrameTransform {
-                    rotation: t.rotation * first.rotation,
-                    translation: t.rotation * first.translation + t.translation,
-                },
-                None => t,
-            });
-        }
-        Ok(PrepareParams {
-            windowing: match self.window {
-                WindowArg::Auto => Windowing::Auto,
-                WindowArg::Trials => Windowing::Trials,
-                WindowArg::Onsets => Windowing::Onsets,
-                WindowArg::Continuous => Windowing::Continuous,
-            },
+    /// The preparation part of a request.
+    pub fn request(&self, level: Option<f64>) -> PrepareRequest {
+        PrepareRequest {
             cutoff_hz: self.cutoff,
-            filter_order: self.order,
+            order: self.order,
             derivative: match self.derivative {
                 DerivativeArg::Central => Derivative::Central,
                 DerivativeArg::Savgol => Derivative::Savgol,
@@ -256,144 +216,127 @@ impl PrepareArgs {
                 OffsetsArg::Rest => Offsets::Rest,
                 OffsetsArg::Auto => Offsets::Auto,
             },
+            window: match self.window {
+                WindowArg::Auto => Windowing::Auto,
+                WindowArg::Trials => Windowing::Trials,
+                WindowArg::Onsets => Windowing::Onsets,
+                WindowArg::Continuous => Windowing::Continuous,
+            },
+            frame: match self.frame {
+                FrameArg::Identity => Frame::Identity,
+                FrameArg::Seed000 => Frame::Seed000,
+            },
+            transform: self.transform.clone(),
             negate_force: self.negate_force,
-            transform,
-            ..PrepareParams::default()
-        })
-    }
-}
-
-pub fn run(method: Method) -> CliResult {
-    match method {
-        Method::Linear(args) => {
-            let params = PrepareParams {
-                level: args.level,
-                ..args.prepare.params()?
-            };
-            let rec = args.prepare.read(&args.recording)?;
-            // window by window: the prepared signals are never held whole (issue 16)
-            let plan = plan(&rec, &params)?;
-            let est = fit_linear_plan(
-                &plan,
-                &LinearParams {
-                    equilibrium: !args.no_equilibrium,
-                    ..LinearParams::default()
-                },
-            )?;
-            let mut result = linear_result(&est, &plan.meta);
-            let up = match args.vertical {
-                AxisArg::X => nalgebra::Vector3::x(),
-                AxisArg::Y => nalgebra::Vector3::y(),
-                AxisArg::Z => nalgebra::Vector3::z(),
-            };
-            result.arm_configuration = limpid_analysis::markers::from_markers(&rec, up)?;
-            if let Some(v) = args.shoulder.as_deref() {
-                let posture = shoulder_posture(v)?;
-                if result.stiffness.shape() != (3, 3) {
-                    return Err(limpid_core::Error::invalid(
-                        "--shoulder",
-                        "needs a 3-D estimate (x, y, z)",
-                    )
-                    .into());
-                }
-                result.shoulder = Some(shoulder_impedance(&result, &posture)?);
-            }
-            let doc = Document::new(Estimate::Linear(result)).with_run(
-                limpid_analysis::result::Run::of_this_process(&[&args.recording]),
-            );
-            if let Some(path) = &args.report {
-                crate::report::write(&doc, path)?;
-            }
-            let Estimate::Linear(result) = &doc.estimate else {
-                unreachable!("made above")
-            };
-            if args.json {
-                println!("{}", doc.to_json_pretty());
-            } else {
-                print!("{}", table::linear_text(result));
-                if let Some(a) = &result.arm_configuration {
-                    print!("{}", table::arm_configuration_text(a));
-                }
-                if let Some(s) = &result.shoulder {
-                    let row = |m: &limpid_core::Matrix, i: usize| {
-                        (0..3)
-                            .map(|j| table::num(m[(i, j)]))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    };
-                    println!("shoulder joint stiffness J_h^T K J_h (N m/rad; flexion, abduction, rotation):");
-                    for i in 0..3 {
-                        println!("  [{}]", row(&s.stiffness, i));
-                    }
-                    println!("shoulder joint damping J_h^T B J_h (N m s/rad):");
-                    for i in 0..3 {
-                        println!("  [{}]", row(&s.damping, i));
-                    }
-                    println!("note: {}", s.note);
-                }
-            }
-            Ok(())
-        }
-        Method::Planar(args) => crate::planar::run_estimate(args),
-        Method::Stochastic(args) => crate::stochastic::run_estimate(args),
-        Method::Reflex(args) => crate::reflex::run(args),
-        Method::Cocontraction(args) => {
-            if args.tolerance.is_nan() || args.tolerance <= 0.0 {
-                return Err(limpid_core::Error::invalid(
-                    "tolerance",
-                    format!(
-                        "expected a positive band half-width, found {}",
-                        args.tolerance
-                    ),
-                )
-                .into());
-            }
-            let params = args.prepare.params()?;
-            let rec = args.prepare.read(&args.recording)?;
-            let mvc = crate::read_recording(&args.mvc)?;
-            let emg = EmgParams {
-                tolerance: args.tolerance,
-                ..EmgParams::default()
-            };
-            let doc = Document::new(Estimate::Cocontraction(estimate_cocontraction(
-                &rec, &mvc, &params, &emg,
-            )?))
-            .with_run(limpid_analysis::result::Run::of_this_process(&[
-                &args.recording,
-                &args.mvc,
-            ]));
-            if let Some(path) = &args.report {
-                crate::report::write(&doc, path)?;
-            }
-            let Estimate::Cocontraction(result) = &doc.estimate else {
-                unreachable!("made above")
-            };
-            if args.json {
-                println!("{}", doc.to_json_pretty());
-            } else {
-                print!("{}", table::cocontraction_text(result));
-            }
-            Ok(())
+            robot: self.robot.robot.clone(),
+            robot_base: self.robot.robot_base.clone(),
+            level,
         }
     }
 }
 
-/// `--shoulder L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION`.
-pub(crate) fn shoulder_posture(v: &[f64]) -> CliResult<ShoulderPosture> {
-    let [l1, l2, elbow, flex, abd, rot] = v else {
-        return Err(limpid_core::Error::invalid(
+/// Six numbers of `--shoulder`, or what is wrong with them.
+pub(crate) fn shoulder_numbers(v: Option<&[f64]>) -> CliResult<Option<[f64; 6]>> {
+    let Some(v) = v else { return Ok(None) };
+    <[f64; 6]>::try_from(v).map(Some).map_err(|_| {
+        limpid_core::Error::invalid(
             "--shoulder",
             format!(
                 "expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found {}",
                 v.len()
             ),
         )
-        .into());
-    };
-    Ok(ShoulderPosture {
-        upper_arm_m: *l1,
-        forearm_m: *l2,
-        elbow_deg: *elbow,
-        angles_deg: [*flex, *abd, *rot],
+        .into()
     })
+}
+
+impl LinearArgs {
+    /// The request these flags make.
+    pub fn request(&self) -> CliResult<Request> {
+        Ok(Request::Linear(LinearRequest {
+            prepare: self.prepare.request(self.level),
+            equilibrium: !self.no_equilibrium,
+            vertical: match self.vertical {
+                AxisArg::X => Axis::X,
+                AxisArg::Y => Axis::Y,
+                AxisArg::Z => Axis::Z,
+            },
+            shoulder: shoulder_numbers(self.shoulder.as_deref())?,
+        }))
+    }
+}
+
+impl CocontractionArgs {
+    /// The request these flags make.
+    pub fn request(&self) -> Request {
+        Request::Cocontraction(CocontractionRequest {
+            prepare: self.prepare.request(None),
+            tolerance: self.tolerance,
+        })
+    }
+}
+
+pub fn run(method: Method) -> CliResult {
+    match method {
+        Method::Linear(args) => crate::emit::estimate(
+            args.request()?,
+            std::slice::from_ref(&args.recording),
+            Output {
+                json: args.json,
+                report: args.report.as_deref(),
+                print_request: args.print_request,
+            },
+            linear_text,
+        ),
+        Method::Planar(args) => crate::planar::run_estimate(args),
+        Method::Stochastic(args) => crate::stochastic::run_estimate(args),
+        Method::Reflex(args) => crate::reflex::run(args),
+        Method::Cocontraction(args) => crate::emit::estimate(
+            args.request(),
+            &[args.recording.clone(), args.mvc.clone()],
+            Output {
+                json: args.json,
+                report: args.report.as_deref(),
+                print_request: args.print_request,
+            },
+            cocontraction_text,
+        ),
+    }
+}
+
+/// `limpid estimate cocontraction`'s text.
+pub fn cocontraction_text(e: &Estimated, _: &Request, _: &[PathBuf]) -> CliResult {
+    if let Estimate::Cocontraction(result) = &e.document.estimate {
+        print!("{}", table::cocontraction_text(result));
+    }
+    Ok(())
+}
+
+/// `limpid estimate linear`'s text: the matrices, the arm, the shoulder.
+pub fn linear_text(e: &Estimated, _: &Request, _: &[PathBuf]) -> CliResult {
+    let Estimate::Linear(result) = &e.document.estimate else {
+        return Ok(());
+    };
+    print!("{}", table::linear_text(result));
+    if let Some(a) = &result.arm_configuration {
+        print!("{}", table::arm_configuration_text(a));
+    }
+    if let Some(s) = &result.shoulder {
+        let row = |m: &limpid_core::Matrix, i: usize| {
+            (0..3)
+                .map(|j| table::num(m[(i, j)]))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        println!("shoulder joint stiffness J_h^T K J_h (N m/rad; flexion, abduction, rotation):");
+        for i in 0..3 {
+            println!("  [{}]", row(&s.stiffness, i));
+        }
+        println!("shoulder joint damping J_h^T B J_h (N m s/rad):");
+        for i in 0..3 {
+            println!("  [{}]", row(&s.damping, i));
+        }
+        println!("note: {}", s.note);
+    }
+    Ok(())
 }

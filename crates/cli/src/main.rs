@@ -4,6 +4,7 @@
 
 mod calibrate;
 mod demo;
+mod emit;
 mod estimate;
 mod gravity;
 mod live;
@@ -12,6 +13,7 @@ mod protocol;
 mod reflex;
 mod report;
 mod reproduce;
+mod rerun;
 mod stochastic;
 mod study;
 mod table;
@@ -63,6 +65,8 @@ enum Command {
     Calibrate(calibrate::CalibrateArgs),
     /// Run a seed's experiment on the virtual lab and print its tables beside the paper's (000, 001, 003, 004 or all).
     Reproduce(reproduce::ReproduceArgs),
+    /// Run the request recorded in a result's run block again, on the same input files.
+    Rerun(rerun::RerunArgs),
     /// Whole co-contraction studies: tables across subjects and configurations (Patel et al. 2013).
     Study {
         #[command(subcommand)]
@@ -187,6 +191,7 @@ fn run(cli: Cli) -> CliResult {
         Command::Report(args) => report::run(args),
         Command::Reproduce(args) => reproduce::run(args),
         Command::Live(args) => live::run(args),
+        Command::Rerun(args) => rerun::run(args),
     }
 }
 

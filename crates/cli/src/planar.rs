@@ -4,12 +4,13 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::Args;
-use limpid_analysis::result::{Document, Estimate};
+use limpid_analysis::result::Estimate;
+use limpid_app::estimate::Estimated;
 use limpid_core::Matrix;
-use limpid_ident::planar::{
-    estimate_planar, prepare_planar, window_sweep, Arm, PlanarData, PlanarEstimate, PlanarPrepare,
-};
+use limpid_ident::planar::PlanarEstimate;
+use limpid_ident::request::{ArmRequest, PlanarRequest, Request, SweepRequest, DEFAULT_SWEEP_MS};
 
+use crate::emit::Output;
 use crate::table::num;
 use crate::CliResult;
 
@@ -48,48 +49,36 @@ pub struct ArmArgs {
 }
 
 impl ArmArgs {
-    fn load(&self) -> CliResult<(PlanarData, Option<[f64; 3]>)> {
+    /// The arm part of a request.
+    fn request(&self) -> CliResult<ArmRequest> {
         let pair = |v: &[f64], name: &str| -> CliResult<[f64; 2]> {
-            match v {
-                [a, b] => Ok([*a, *b]),
-                _ => Err(limpid_core::Error::invalid(
+            <[f64; 2]>::try_from(v).map_err(|_| {
+                limpid_core::Error::invalid(
                     name,
                     format!(
                         "expected two numbers separated by a comma, found {}",
                         v.len()
                     ),
                 )
-                .into()),
-            }
+                .into()
+            })
         };
-        let l = pair(&self.link_lengths, "link lengths")?;
-        let shoulder = pair(&self.shoulder, "shoulder")?;
-        let xi = match &self.inertial_parameters {
-            Some(v) if v.len() == 3 => Some([v[0], v[1], v[2]]),
-            Some(v) => {
-                return Err(limpid_core::Error::invalid(
+        let inertial_parameters = match &self.inertial_parameters {
+            Some(v) => Some(<[f64; 3]>::try_from(v.as_slice()).map_err(|_| {
+                limpid_core::Error::invalid(
                     "inertial parameters",
                     format!("expected three numbers, found {}", v.len()),
                 )
-                .into())
-            }
+            })?),
             None => None,
         };
-        let rec = crate::read_recording(&self.recording)?;
-        let data = prepare_planar(
-            &rec,
-            &PlanarPrepare {
-                arm: Arm {
-                    l1: l[0],
-                    l2: l[1],
-                    shoulder,
-                },
-                cutoff_hz: self.cutoff,
-                elbow_positive: !self.elbow_negative,
-                ..PlanarPrepare::new(l[0], l[1])
-            },
-        )?;
-        Ok((data, xi))
+        Ok(ArmRequest {
+            link_lengths: pair(&self.link_lengths, "link lengths")?,
+            shoulder: pair(&self.shoulder, "shoulder")?,
+            elbow_negative: self.elbow_negative,
+            cutoff_hz: self.cutoff,
+            inertial_parameters,
+        })
     }
 }
 
@@ -106,6 +95,9 @@ pub struct PlanarArgs {
     /// Also write the HTML report to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Print the request these flags make (JSON) and stop.
+    #[arg(long)]
+    pub print_request: bool,
 }
 
 #[derive(Args)]
@@ -113,13 +105,13 @@ pub struct SweepArgs {
     #[command(flatten)]
     pub arm: ArmArgs,
     /// Shortest observation window (ms).
-    #[arg(long, default_value_t = 50.0)]
+    #[arg(long, default_value_t = DEFAULT_SWEEP_MS[0])]
     pub from: f64,
     /// Longest observation window (ms).
-    #[arg(long, default_value_t = 400.0)]
+    #[arg(long, default_value_t = DEFAULT_SWEEP_MS[1])]
     pub to: f64,
     /// Step (ms).
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = DEFAULT_SWEEP_MS[2])]
     pub step: f64,
     /// Print JSON.
     #[arg(long, conflicts_with = "csv")]
@@ -130,18 +122,9 @@ pub struct SweepArgs {
     /// Also write the HTML report (criteria against the window) to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
-}
-
-fn window_samples(data: &PlanarData, ms: Option<f64>) -> CliResult<usize> {
-    match ms {
-        None => Ok(usize::MAX),
-        Some(t) if t > 0.0 => Ok((t * data.fs / 1000.0).round() as usize),
-        Some(t) => Err(limpid_core::Error::invalid(
-            "observation window",
-            format!("expected a positive duration in ms, found {t}"),
-        )
-        .into()),
-    }
+    /// Print the request these flags make (JSON) and stop.
+    #[arg(long)]
+    pub print_request: bool,
 }
 
 fn m2(m: &Matrix, se: &Matrix) -> String {
@@ -157,17 +140,17 @@ fn m2(m: &Matrix, se: &Matrix) -> String {
     s
 }
 
-fn text(e: &PlanarEstimate, data: &PlanarData) -> String {
+fn text(e: &PlanarEstimate, path: &std::path::Path, from_endpoint: bool) -> String {
     let loo = e.leave_one_out_vaf.unwrap_or([f64::NAN; 2]);
     let mut s = String::new();
     let _ = writeln!(
         s,
         "limpid estimate planar: {} ({} trials, {} samples, T_obs {} ms, {} data)",
-        data.path.display(),
+        path.display(),
         e.trials,
         e.samples,
         num(e.observation_window_ms),
-        if data.from_endpoint {
+        if from_endpoint {
             "end-point"
         } else {
             "joint-space"
@@ -233,42 +216,57 @@ fn text(e: &PlanarEstimate, data: &PlanarData) -> String {
 }
 
 pub fn run_estimate(args: PlanarArgs) -> CliResult {
-    let (data, xi) = args.arm.load()?;
-    let window = window_samples(&data, args.window_ms)?;
-    let doc = Document::new(Estimate::Planar(estimate_planar(&data, window, xi)?)).with_run(
-        limpid_analysis::result::Run::of_this_process(&[&args.arm.recording]),
-    );
-    if let Some(path) = &args.report {
-        crate::report::write(&doc, path)?;
-    }
-    let Estimate::Planar(est) = &doc.estimate else {
-        unreachable!("made above")
-    };
-    if args.json {
-        println!("{}", doc.to_json_pretty());
-    } else {
-        print!("{}", text(est, &data));
+    let request = Request::Planar(PlanarRequest {
+        arm: args.arm.request()?,
+        window_ms: args.window_ms,
+    });
+    crate::emit::estimate(
+        request,
+        std::slice::from_ref(&args.arm.recording),
+        Output {
+            json: args.json,
+            report: args.report.as_deref(),
+            print_request: args.print_request,
+        },
+        planar_text,
+    )
+}
+
+/// `limpid estimate planar`'s text.
+pub fn planar_text(e: &Estimated, _: &Request, paths: &[PathBuf]) -> CliResult {
+    if let Estimate::Planar(est) = &e.document.estimate {
+        print!(
+            "{}",
+            text(est, &paths[0], e.from_endpoint.unwrap_or_default())
+        );
     }
     Ok(())
 }
 
 pub fn run_sweep(args: SweepArgs) -> CliResult {
-    let (data, xi) = args.arm.load()?;
-    let doc = Document::new(Estimate::WindowSweep(window_sweep(
-        &data, args.from, args.to, args.step, xi,
-    )?))
-    .with_run(limpid_analysis::result::Run::of_this_process(&[&args
-        .arm
-        .recording]));
-    if let Some(path) = &args.report {
-        crate::report::write(&doc, path)?;
-    }
-    if args.json {
-        println!("{}", doc.to_json_pretty());
+    let request = Request::WindowSweep(SweepRequest {
+        arm: args.arm.request()?,
+        from_ms: args.from,
+        to_ms: args.to,
+        step_ms: args.step,
+    });
+    let csv = args.csv;
+    crate::emit::estimate(
+        request,
+        std::slice::from_ref(&args.arm.recording),
+        Output {
+            json: args.json,
+            report: args.report.as_deref(),
+            print_request: args.print_request,
+        },
+        |e, r, paths| sweep_text(e, r, paths, csv),
+    )
+}
+
+/// `limpid window-sweep`'s table (CSV with `--csv`).
+pub fn sweep_text(e: &Estimated, _: &Request, paths: &[PathBuf], csv: bool) -> CliResult {
+    let Estimate::WindowSweep(sweep) = &e.document.estimate else {
         return Ok(());
-    }
-    let Estimate::WindowSweep(sweep) = &doc.estimate else {
-        unreachable!("made above")
     };
     let mut s = String::from("t_obs_ms,cond_w,cond_w_scaled,xi1,xi2,xi3,k11,k12,k21,k22,d11,d12,d21,d22,k_eig_min,d_eig_min,k_sym_ratio,d_sym_ratio,vaf1,vaf2,trusted\n");
     for r in &sweep.rows {
@@ -285,14 +283,14 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
             e.fit.vaf[0], e.fit.vaf[1], c.trusted
         );
     }
-    if args.csv {
+    if csv {
         print!("{s}");
         return Ok(());
     }
     println!(
         "limpid window-sweep: {} ({} trials)",
-        data.path.display(),
-        data.trials.len()
+        paths[0].display(),
+        e.trials.unwrap_or_default()
     );
     println!(
         "{:>8} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8}  verdict",

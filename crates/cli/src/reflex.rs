@@ -4,9 +4,11 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use limpid_analysis::result::{Document, Estimate};
-use limpid_ident::reflex::ReflexParams;
-use limpid_ident::Estimator;
+use limpid_analysis::result::Estimate;
+use limpid_app::estimate::Estimated;
+use limpid_ident::request::{ReflexRequest, Request};
+
+use crate::emit::Output;
 
 use crate::table::num;
 use crate::CliResult;
@@ -16,22 +18,22 @@ pub struct ReflexArgs {
     /// Recording under a stochastic position perturbation (joint angle and torque).
     pub recording: PathBuf,
     /// Position column (rad, or m for end-point data).
-    #[arg(long, default_value = "q1")]
+    #[arg(long, default_value_t = ReflexRequest::default().position)]
     pub position: String,
     /// Torque column applied to the limb (N m, or N).
-    #[arg(long, default_value = "tau1")]
+    #[arg(long, default_value_t = ReflexRequest::default().torque)]
     pub torque: String,
     /// Decimate to this rate (Hz) before identification.
-    #[arg(long, default_value_t = 100.0, value_name = "HZ")]
+    #[arg(long, default_value_t = ReflexRequest::default().rate_hz, value_name = "HZ")]
     pub rate: f64,
     /// Intrinsic IRF half-width (s).
-    #[arg(long, default_value_t = 0.04, value_name = "S")]
+    #[arg(long, default_value_t = ReflexRequest::default().intrinsic_lags_s, value_name = "S")]
     pub intrinsic_lags: f64,
     /// Reflex IRF length (s); also left out of every VAF.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    #[arg(long, default_value_t = ReflexRequest::default().reflex_lags_s, value_name = "S")]
     pub reflex_lags: f64,
     /// Largest reflex delay scanned (s).
-    #[arg(long, default_value_t = 0.15, value_name = "S")]
+    #[arg(long, default_value_t = ReflexRequest::default().max_delay_s, value_name = "S")]
     pub max_delay: f64,
     /// Rectify the velocity before anti-aliasing (the physical order) instead of after (Kearney et al.).
     #[arg(long)]
@@ -42,36 +44,46 @@ pub struct ReflexArgs {
     /// Also write the HTML report (IRFs, nonlinearity, torque, VAF split) to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Print the request these flags make (JSON) and stop.
+    #[arg(long)]
+    pub print_request: bool,
+}
+
+impl ReflexArgs {
+    /// The request these flags make.
+    pub fn request(&self) -> Request {
+        Request::Reflex(ReflexRequest {
+            position: self.position.clone(),
+            torque: self.torque.clone(),
+            rate_hz: self.rate,
+            intrinsic_lags_s: self.intrinsic_lags,
+            reflex_lags_s: self.reflex_lags,
+            max_delay_s: self.max_delay,
+            rectify_first: self.rectify_first,
+        })
+    }
 }
 
 pub fn run(args: ReflexArgs) -> CliResult {
-    let params = ReflexParams {
-        position: args.position.clone(),
-        torque: args.torque.clone(),
-        decimated_rate_hz: args.rate,
-        intrinsic_half_width_s: args.intrinsic_lags,
-        reflex_irf_s: args.reflex_lags,
-        max_delay_s: args.max_delay,
-        rectify_first: args.rectify_first,
-        ..ReflexParams::default()
-    };
-    params.check()?;
-    let rec = crate::read_recording(&args.recording)?;
-    let doc = Document::new(Estimate::Reflex(params.fit(&rec)?)).with_run(
-        limpid_analysis::result::Run::of_this_process(&[&args.recording]),
-    );
-    if let Some(path) = &args.report {
-        crate::report::write(&doc, path)?;
-    }
-    if args.json {
-        println!("{}", doc.to_json());
+    crate::emit::estimate(
+        args.request(),
+        std::slice::from_ref(&args.recording),
+        Output {
+            json: args.json,
+            report: args.report.as_deref(),
+            print_request: args.print_request,
+        },
+        reflex_text,
+    )
+}
+
+/// `limpid estimate reflex`'s text.
+pub fn reflex_text(estimated: &Estimated, _: &Request, paths: &[PathBuf]) -> CliResult {
+    let Estimate::Reflex(e) = &estimated.document.estimate else {
         return Ok(());
-    }
-    let Estimate::Reflex(e) = &doc.estimate else {
-        unreachable!("made above")
     };
     let (i, r) = (&e.intrinsic, &e.reflex);
-    println!("limpid estimate reflex: {}", args.recording.display());
+    println!("limpid estimate reflex: {}", paths[0].display());
     println!(
         "{} s at {} Hz, decimated to {} Hz | {} alternations",
         num(e.duration_s),

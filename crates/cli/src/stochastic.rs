@@ -4,13 +4,12 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use limpid_analysis::result::{Document, Estimate};
-use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch, Window};
-use limpid_ident::stochastic::{
-    accuracy, default_welch, estimate_stochastic_pooled, ExpectedModel, StochasticParams,
-};
-use limpid_ident::Estimator;
+use limpid_analysis::result::Estimate;
+use limpid_app::estimate::Estimated;
+use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch};
+use limpid_ident::request::{Request, SegmentWindow, StochasticRequest, DEFAULT_BAND_HZ};
 
+use crate::emit::Output;
 use crate::table::num;
 use crate::CliResult;
 
@@ -36,18 +35,26 @@ pub struct WelchArgs {
 }
 
 impl WelchArgs {
-    fn welch(&self, n: usize, fs: f64) -> Welch {
-        let mut w = default_welch(n, fs);
-        if let Some(nfft) = self.nfft {
-            w.nperseg = nfft;
+    fn window(&self) -> SegmentWindow {
+        match self.window {
+            WindowArg::Hann => SegmentWindow::Hann,
+            WindowArg::Hamming => SegmentWindow::Hamming,
+            WindowArg::Boxcar => SegmentWindow::Boxcar,
         }
-        w.noverlap = self.overlap;
-        w.window = match self.window {
-            WindowArg::Hann => Window::Hann,
-            WindowArg::Hamming => Window::Hamming,
-            WindowArg::Boxcar => Window::Boxcar,
+    }
+
+    /// Welch settings for `n` samples at `fs` Hz (the stochastic request's own rule).
+    fn welch(&self, n: usize, fs: f64) -> Welch {
+        let request = StochasticRequest {
+            nperseg: self.nfft,
+            noverlap: self.overlap,
+            window: self.window(),
+            ..StochasticRequest::default()
         };
-        w
+        request
+            .params(n, fs)
+            .welch
+            .expect("a request's settings always name their Welch segments")
     }
 }
 
@@ -61,12 +68,7 @@ pub struct StochasticArgs {
     #[command(flatten)]
     pub welch: WelchArgs,
     /// Band of the parametric fit and accuracy measures (Hz).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        value_name = "LO,HI",
-        default_value = "0.5,10"
-    )]
+    #[arg(long, value_delimiter = ',', value_name = "LO,HI", default_values_t = DEFAULT_BAND_HZ)]
     pub band: Vec<f64>,
     /// Truth or expected model (JSON with inertia, damping, stiffness): prints phi_T and phi_ij (eq. 15-16).
     #[arg(long, value_name = "FILE")]
@@ -90,6 +92,9 @@ pub struct StochasticArgs {
     /// Also write the HTML report (Bode plots, coherences) to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Print the request these flags make (JSON) and stop.
+    #[arg(long)]
+    pub print_request: bool,
 }
 
 #[derive(Args)]
@@ -109,62 +114,50 @@ pub struct SpectraArgs {
     pub json: bool,
 }
 
+impl StochasticArgs {
+    /// The request these flags make.
+    pub fn request(&self) -> CliResult<Request> {
+        let band_hz = <[f64; 2]>::try_from(self.band.as_slice()).map_err(|_| {
+            limpid_core::Error::invalid("band", "expected two frequencies LO,HI in Hz")
+        })?;
+        Ok(Request::Stochastic(StochasticRequest {
+            nperseg: self.welch.nfft,
+            noverlap: self.welch.overlap,
+            window: self.welch.window(),
+            band_hz,
+            shoulder: crate::estimate::shoulder_numbers(self.shoulder.as_deref())?,
+            expected: self
+                .expected
+                .as_ref()
+                .map(|p| p.to_string_lossy().into_owned()),
+        }))
+    }
+}
+
 pub fn run_estimate(args: StochasticArgs) -> CliResult {
-    let recs = args
-        .recordings
-        .iter()
-        .map(crate::read_recording)
-        .collect::<limpid_core::Result<Vec<_>>>()?;
-    let posture = args
-        .shoulder
-        .as_deref()
-        .map(crate::estimate::shoulder_posture)
-        .transpose()?;
-    let recs = match &posture {
-        Some(p) => recs
-            .iter()
-            .map(|r| limpid_analysis::shoulder::joint_space_recording(r, p))
-            .collect::<limpid_core::Result<Vec<_>>>()?,
-        None => recs,
-    };
-    let rec = &recs[0];
-    let band = match args.band.as_slice() {
-        [lo, hi] => (*lo, *hi),
-        _ => {
-            return Err(
-                limpid_core::Error::invalid("band", "expected two frequencies LO,HI in Hz").into(),
-            )
-        }
-    };
-    let params = StochasticParams {
-        welch: Some(args.welch.welch(rec.len(), rec.sample_rate())),
-        band_hz: band,
-    };
-    params.check()?;
-    let mut est = estimate_stochastic_pooled(&recs, &params)?;
-    if let Some(p) = &args.expected {
-        est.accuracy = Some(accuracy(&est, &ExpectedModel::read(p)?, band)?);
-    }
-    let inputs: Vec<&std::path::Path> = args.recordings.iter().map(|p| p.as_path()).collect();
-    let doc = Document::new(Estimate::Stochastic(est))
-        .with_run(limpid_analysis::result::Run::of_this_process(&inputs));
-    if let Some(path) = &args.report {
-        crate::report::write(&doc, path)?;
-    }
-    if args.json {
-        println!("{}", doc.to_json());
+    crate::emit::estimate(
+        args.request()?,
+        &args.recordings,
+        Output {
+            json: args.json,
+            report: args.report.as_deref(),
+            print_request: args.print_request,
+        },
+        stochastic_text,
+    )
+}
+
+/// `limpid estimate stochastic`'s text.
+pub fn stochastic_text(e: &Estimated, request: &Request, paths: &[PathBuf]) -> CliResult {
+    let (Estimate::Stochastic(est), Request::Stochastic(r)) = (&e.document.estimate, request)
+    else {
         return Ok(());
-    }
-    let Estimate::Stochastic(est) = &doc.estimate else {
-        unreachable!("made above")
     };
+    let band = (r.band_hz[0], r.band_hz[1]);
+    let posture = &e.posture;
     let c = &est.criteria;
     let coords = &est.coordinates;
-    let names: Vec<String> = args
-        .recordings
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect();
+    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     println!(
         "limpid estimate stochastic: {}{}",
         names.join(", "),

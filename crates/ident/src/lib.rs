@@ -8,6 +8,7 @@
 //! - [`stochastic`]: Z(f) = T R^-1 from Welch spectra (seed 004).
 //! - [`reflex`]: intrinsic and reflex stiffness, parallel cascade (Kearney et al. 1997).
 //! - [`online`]: per-perturbation impedance for the live display.
+//! - [`request`]: one typed request per method, shared by every front-end.
 //! - [`estimator`]: the one shape they share (settings -> check -> fit -> result).
 
 #![warn(missing_docs)]
@@ -19,6 +20,7 @@ pub mod online;
 pub mod planar;
 pub mod prepare;
 pub mod reflex;
+pub mod request;
 pub mod stochastic;
 
 pub use estimator::{Estimator, PlanarParams};

@@ -28,10 +28,10 @@ use limpid_core::trial::{
 use limpid_core::{Error, FrameTransform, Recording, Result, Window};
 use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// How velocity and acceleration are obtained.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Derivative {
     /// Butterworth zero-phase low-pass, then central differences.
@@ -41,7 +41,7 @@ pub enum Derivative {
 }
 
 /// How per-trial force offsets (sensor bias, arm weight, slow drift) are handled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Offsets {
     /// Subtract the mean force of the pre-onset rest (seed 000 §II-C, seed 001).
@@ -64,7 +64,7 @@ pub enum Offsets {
 pub const AUTO_FIT_ABOVE_S: f64 = 2.0;
 
 /// How the recording is cut into estimation windows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Windowing {
     /// The `trial` column if present, else one continuous window. Onsets are

@@ -1,0 +1,223 @@
+//! One request, run: recordings in, a result [`Document`] out.
+
+use limpid_analysis::linear::{linear_result, shoulder_impedance, ShoulderPosture};
+use limpid_analysis::result::{Document, Estimate};
+use limpid_core::{Error, Recording, Result};
+use limpid_ident::request::{
+    Axis, Checked, CocontractionRequest, LinearRequest, PlanarRequest, PrepareRequest, Request,
+    StochasticRequest, SweepRequest,
+};
+use limpid_ident::Estimator;
+
+/// A result and what its text rendering needs beyond it.
+#[derive(Debug)]
+pub struct Estimated {
+    /// The result (no run block: the front-end adds how it was made).
+    pub document: Document,
+    /// Planar methods: the trials came from end-point data (inverse kinematics).
+    pub from_endpoint: Option<bool>,
+    /// Planar methods: the number of trials.
+    pub trials: Option<usize>,
+    /// The shoulder posture the estimate was turned into joint space at.
+    pub posture: Option<ShoulderPosture>,
+}
+
+impl Estimated {
+    fn of(estimate: Estimate) -> Self {
+        Estimated {
+            document: Document::new(estimate),
+            from_endpoint: None,
+            trials: None,
+            posture: None,
+        }
+    }
+}
+
+/// How many recordings a method reads: (fewest, most).
+pub fn inputs_expected(request: &Request) -> (usize, usize) {
+    match request {
+        Request::Cocontraction(_) => (2, 2),
+        Request::Stochastic(_) => (1, usize::MAX),
+        _ => (1, 1),
+    }
+}
+
+/// Run a checked request on its recordings: the recording (co-contraction:
+/// then the MVC recording; stochastic: one or more, pooled).
+pub fn run(checked: &Checked, mut recordings: Vec<Recording>) -> Result<Estimated> {
+    let request = checked.request();
+    let (least, most) = inputs_expected(request);
+    if recordings.len() < least || recordings.len() > most {
+        return Err(Error::invalid(
+            "recordings",
+            format!(
+                "{} reads {}, found {}",
+                request.command(),
+                if least == most {
+                    format!("{least}")
+                } else {
+                    format!("at least {least}")
+                },
+                recordings.len()
+            ),
+        ));
+    }
+    match request {
+        Request::Linear(r) => {
+            let rec = with_robot(recordings.swap_remove(0), &r.prepare)?;
+            linear(r, &rec)
+        }
+        Request::Cocontraction(r) => {
+            let mvc = recordings.pop().expect("two recordings counted above");
+            let rec = with_robot(recordings.pop().expect("counted"), &r.prepare)?;
+            cocontraction(r, &rec, &mvc)
+        }
+        Request::Planar(r) => planar(r, &recordings[0]),
+        Request::WindowSweep(r) => sweep(r, &recordings[0]),
+        Request::Stochastic(r) => stochastic(r, recordings),
+        Request::Reflex(r) => Ok(Estimated::of(Estimate::Reflex(
+            r.params().fit(&recordings[0])?,
+        ))),
+    }
+}
+
+/// The end-effector pose from the robot's joint angles, when the request names a robot.
+pub fn with_robot(mut rec: Recording, prepare: &PrepareRequest) -> Result<Recording> {
+    let Some(name) = &prepare.robot else {
+        return Ok(rec);
+    };
+    let robot = placed_robot(name, prepare.robot_base.as_deref())?;
+    let poses = robot.poses(&rec, "robot joint angles for the robot's kinematics")?;
+    for (a, column) in ["x", "y", "z"].iter().enumerate() {
+        rec.set_column(column, poses.iter().map(|t| t[(a, 3)]).collect())?;
+    }
+    Ok(rec)
+}
+
+/// A robot by name (`kuka-lwr4`, `puma3` or a `.urdf` file), its base
+/// placed at X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad) when given.
+pub fn placed_robot(name: &str, base: Option<&[f64]>) -> Result<limpid_lab::robot::Robot> {
+    let robot = limpid_lab::robot::Robot::by_name(name)?;
+    match base {
+        None => Ok(robot),
+        Some(base) => robot.placed_at(base),
+    }
+}
+
+/// The shoulder posture of a request's six numbers.
+pub fn shoulder_posture(v: &[f64; 6]) -> ShoulderPosture {
+    let [upper_arm_m, forearm_m, elbow_deg, flexion, abduction, rotation] = *v;
+    ShoulderPosture {
+        upper_arm_m,
+        forearm_m,
+        elbow_deg,
+        angles_deg: [flexion, abduction, rotation],
+    }
+}
+
+fn linear(r: &LinearRequest, rec: &Recording) -> Result<Estimated> {
+    let params = r.prepare.params()?;
+    // window by window: the prepared signals are never held whole (issue 16)
+    let plan = limpid_ident::plan(rec, &params)?;
+    let est = limpid_ident::fit_linear_plan(
+        &plan,
+        &limpid_ident::LinearParams {
+            equilibrium: r.equilibrium,
+            ..limpid_ident::LinearParams::default()
+        },
+    )?;
+    let mut result = linear_result(&est, &plan.meta);
+    let up = match r.vertical {
+        Axis::X => nalgebra::Vector3::x(),
+        Axis::Y => nalgebra::Vector3::y(),
+        Axis::Z => nalgebra::Vector3::z(),
+    };
+    result.arm_configuration = limpid_analysis::markers::from_markers(rec, up)?;
+    if let Some(v) = &r.shoulder {
+        if result.stiffness.shape() != (3, 3) {
+            return Err(Error::invalid("shoulder", "needs a 3-D estimate (x, y, z)"));
+        }
+        result.shoulder = Some(shoulder_impedance(&result, &shoulder_posture(v))?);
+    }
+    Ok(Estimated::of(Estimate::Linear(result)))
+}
+
+fn cocontraction(r: &CocontractionRequest, rec: &Recording, mvc: &Recording) -> Result<Estimated> {
+    let emg = limpid_analysis::emg::EmgParams {
+        tolerance: r.tolerance,
+        ..limpid_analysis::emg::EmgParams::default()
+    };
+    Ok(Estimated::of(Estimate::Cocontraction(
+        limpid_analysis::cocontraction::estimate_cocontraction(
+            rec,
+            mvc,
+            &r.prepare.params()?,
+            &emg,
+        )?,
+    )))
+}
+
+fn planar_data(
+    arm: &limpid_ident::request::ArmRequest,
+    rec: &Recording,
+) -> Result<limpid_ident::planar::PlanarData> {
+    limpid_ident::planar::prepare_planar(rec, &arm.prepare())
+}
+
+fn planar(r: &PlanarRequest, rec: &Recording) -> Result<Estimated> {
+    let data = planar_data(&r.arm, rec)?;
+    let window = match r.window_ms {
+        None => usize::MAX,
+        Some(ms) => (ms * data.fs / 1000.0).round() as usize,
+    };
+    let est = limpid_ident::planar::estimate_planar(&data, window, r.arm.inertial_parameters)?;
+    Ok(Estimated {
+        from_endpoint: Some(data.from_endpoint),
+        trials: Some(data.trials.len()),
+        ..Estimated::of(Estimate::Planar(est))
+    })
+}
+
+fn sweep(r: &SweepRequest, rec: &Recording) -> Result<Estimated> {
+    let data = planar_data(&r.arm, rec)?;
+    let sweep = limpid_ident::planar::window_sweep(
+        &data,
+        r.from_ms,
+        r.to_ms,
+        r.step_ms,
+        r.arm.inertial_parameters,
+    )?;
+    Ok(Estimated {
+        from_endpoint: Some(data.from_endpoint),
+        trials: Some(data.trials.len()),
+        ..Estimated::of(Estimate::WindowSweep(sweep))
+    })
+}
+
+fn stochastic(r: &StochasticRequest, recordings: Vec<Recording>) -> Result<Estimated> {
+    let posture = r.shoulder.as_ref().map(shoulder_posture);
+    let recordings = match &posture {
+        // Park & Chang (2011) §II-B: the shoulder's joint space before estimation
+        Some(p) => recordings
+            .iter()
+            .map(|rec| limpid_analysis::shoulder::joint_space_recording(rec, p))
+            .collect::<Result<Vec<_>>>()?,
+        None => recordings,
+    };
+    let first = &recordings[0];
+    let params = r.params(first.len(), first.sample_rate());
+    params.check()?;
+    let mut est = limpid_ident::stochastic::estimate_stochastic_pooled(&recordings, &params)?;
+    if let Some(path) = &r.expected {
+        let expected = limpid_ident::stochastic::ExpectedModel::read(std::path::Path::new(path))?;
+        est.accuracy = Some(limpid_ident::stochastic::accuracy(
+            &est,
+            &expected,
+            params.band_hz,
+        )?);
+    }
+    Ok(Estimated {
+        posture,
+        ..Estimated::of(Estimate::Stochastic(est))
+    })
+}

@@ -1,0 +1,101 @@
+//! One way every estimate leaves the CLI: the request checked, the
+//! recordings read, the request run (`limpid-app`), the run block attached
+//! (with the request), then the report, the JSON or the text.
+
+use std::path::{Path, PathBuf};
+
+use limpid_analysis::result::{Document, Run};
+use limpid_app::estimate::Estimated;
+use limpid_core::Error;
+use limpid_ident::request::Request;
+
+use crate::CliResult;
+
+/// Where an estimate goes.
+pub struct Output<'a> {
+    /// One JSON object on stdout instead of text.
+    pub json: bool,
+    /// The HTML report, when asked for.
+    pub report: Option<&'a Path>,
+    /// Print the request instead of running it.
+    pub print_request: bool,
+}
+
+/// The flag a request field is set by (errors name what the user typed).
+fn flag(field: &str) -> Option<&'static str> {
+    Some(match field {
+        "cutoff_hz" => "--cutoff",
+        "order" => "--order",
+        "robot_base" => "--robot-base",
+        "level" => "--level",
+        "shoulder" => "--shoulder",
+        "tolerance" => "--tolerance",
+        "link_lengths" => "--link-lengths",
+        "inertial_parameters" => "--inertial-parameters",
+        "window_ms" => "--window-ms",
+        "from_ms" => "--from",
+        "to_ms" => "--to",
+        "step_ms" => "--step",
+        "nperseg" => "--nfft",
+        "noverlap" => "--overlap",
+        "band_hz" => "--band",
+        "rate_hz" => "--rate",
+        "intrinsic_lags_s" => "--intrinsic-lags",
+        "reflex_lags_s" => "--reflex-lags",
+        "max_delay_s" => "--max-delay",
+        _ => return None,
+    })
+}
+
+/// A library error, its request field renamed to the CLI's flag.
+pub fn with_flag_names(e: Error) -> Error {
+    match e {
+        Error::InvalidParameter { name, message } => Error::InvalidParameter {
+            name: flag(&name).map_or(name, str::to_string),
+            message,
+        },
+        other => other,
+    }
+}
+
+/// Run `request` on the recordings at `paths` and emit the result; `text`
+/// prints it for people.
+pub fn estimate(
+    request: Request,
+    paths: &[PathBuf],
+    out: Output<'_>,
+    text: impl FnOnce(&Estimated, &Request, &[PathBuf]) -> CliResult,
+) -> CliResult {
+    if out.print_request {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&request).expect("requests serialise")
+        );
+        return Ok(());
+    }
+    let checked = request.check().map_err(with_flag_names)?;
+    let recordings = paths
+        .iter()
+        .map(crate::read_recording)
+        .collect::<limpid_core::Result<Vec<_>>>()?;
+    let mut estimated = limpid_app::estimate::run(&checked, recordings).map_err(with_flag_names)?;
+    let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
+    estimated.document.run = Some(Run::of_this_process(&inputs).with_request(checked.request()));
+    if let Some(path) = out.report {
+        crate::report::write(&estimated.document, path)?;
+    }
+    if out.json {
+        println!("{}", json(&estimated.document, checked.request()));
+        return Ok(());
+    }
+    text(&estimated, checked.request(), paths)
+}
+
+/// The JSON text of a result: indented for the matrix methods, one line for
+/// the long frequency and IRF arrays.
+fn json(doc: &Document, request: &Request) -> String {
+    match request {
+        Request::Stochastic(_) | Request::Reflex(_) => doc.to_json(),
+        _ => doc.to_json_pretty(),
+    }
+}

@@ -1,0 +1,94 @@
+//! `limpid rerun RESULT.json`: the request a result's run block holds, run
+//! again on the files it names (a check that a result can be made again, or
+//! the same analysis with a newer limpid).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use limpid_analysis::result::Document;
+use limpid_ident::request::Request;
+
+use crate::emit::Output;
+use crate::CliResult;
+
+#[derive(Args)]
+pub struct RerunArgs {
+    /// A JSON result written by `limpid estimate ... --json` or `limpid window-sweep --json`.
+    pub result: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the HTML report to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+}
+
+pub fn run(args: RerunArgs) -> CliResult {
+    let name = args.result.display().to_string();
+    let text = limpid_core::files::read_text(&args.result)?;
+    let doc = Document::from_json(&name, &text)?;
+    let Some(run) = doc.run else {
+        return Err(format!(
+            "{name}: has no run block (written by the library or Python); nothing says how it was made"
+        )
+        .into());
+    };
+    let Some(request) = run.request else {
+        return Err(format!(
+            "{name}: its run block holds no request (a workflow, or limpid before 0.1's requests); its command line was: {}",
+            run.command_line
+        )
+        .into());
+    };
+    // a relative path is taken from here, else from the result's folder
+    let folder = args.result.parent().unwrap_or(std::path::Path::new(""));
+    let paths: Vec<PathBuf> = run
+        .inputs
+        .iter()
+        .map(|f| {
+            let p = PathBuf::from(&f.path);
+            if p.is_relative() && !p.exists() && folder.join(&p).exists() {
+                folder.join(p)
+            } else {
+                p
+            }
+        })
+        .collect();
+    for (file, path) in run.inputs.iter().zip(&paths) {
+        let meta = std::fs::metadata(path).ok();
+        let bytes = meta.as_ref().map(|m| m.len());
+        if file.bytes.is_some() && bytes.is_some() && file.bytes != bytes {
+            eprintln!(
+                "limpid: warning: {}: {} bytes now, {} when the result was made",
+                path.display(),
+                bytes.unwrap_or_default(),
+                file.bytes.unwrap_or_default()
+            );
+        }
+    }
+    let out = Output {
+        json: args.json,
+        report: args.report.as_deref(),
+        print_request: false,
+    };
+    match request {
+        Request::Linear(_) => {
+            crate::emit::estimate(request, &paths, out, crate::estimate::linear_text)
+        }
+        Request::Cocontraction(_) => {
+            crate::emit::estimate(request, &paths, out, crate::estimate::cocontraction_text)
+        }
+        Request::Planar(_) => {
+            crate::emit::estimate(request, &paths, out, crate::planar::planar_text)
+        }
+        Request::WindowSweep(_) => crate::emit::estimate(request, &paths, out, |e, r, p| {
+            crate::planar::sweep_text(e, r, p, false)
+        }),
+        Request::Stochastic(_) => {
+            crate::emit::estimate(request, &paths, out, crate::stochastic::stochastic_text)
+        }
+        Request::Reflex(_) => {
+            crate::emit::estimate(request, &paths, out, crate::reflex::reflex_text)
+        }
+    }
+}

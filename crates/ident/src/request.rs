@@ -1,0 +1,682 @@
+//! What a user asks of each estimator: one typed request per method, shared
+//! by every front-end (the CLI builds it from flags, Python from keyword
+//! arguments, a study from its manifest, `limpid rerun` from a result's run
+//! block). Defaults are defined here once; [`Request::check`] turns a request
+//! into the validated settings the estimators run on ([`Checked`]), the only
+//! way `limpid-app` runs one.
+//!
+//! Requests are plain data: file paths are named, not read (reading,
+//! robot kinematics and the shoulder's joint space happen in `limpid-app`).
+//! Field names carry their units (`_hz`, `_ms`, `_s`, `_m`, `_deg`).
+
+use limpid_core::{Error, FrameTransform, Result};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::planar::{Arm, PlanarPrepare};
+use crate::prepare::{Derivative, Offsets, PrepareParams, Windowing};
+use crate::reflex::ReflexParams;
+use crate::stochastic::StochasticParams;
+
+/// Band of the stochastic parametric fit and accuracy measures (Hz).
+pub const DEFAULT_BAND_HZ: [f64; 2] = [0.5, 10.0];
+/// The window sweep's shortest, longest observation window and step (ms).
+pub const DEFAULT_SWEEP_MS: [f64; 3] = [50.0, 400.0, 10.0];
+/// Half-width of the band around a co-contraction target counted as "on target".
+pub const DEFAULT_TOLERANCE: f64 = 0.1;
+
+/// Frame change applied to `x,y,z` and `fx,fy,fz` before anything else.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Frame {
+    /// Keep the recording's frame.
+    #[default]
+    Identity,
+    /// Artemiadis et al. (2010) eq. (1): robot axes [X_R Y_R Z_R] = [-Y_H Z_H -X_H] to the human frame.
+    #[serde(alias = "artemiadis2010")]
+    Seed000,
+}
+
+/// The upward vertical axis of the recording's frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Axis {
+    /// x up (Patel et al. 2013's frame).
+    X,
+    /// y up.
+    Y,
+    /// z up.
+    #[default]
+    Z,
+}
+
+/// Window applied to each Welch segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum SegmentWindow {
+    /// Periodic Hann.
+    #[default]
+    Hann,
+    /// Periodic Hamming.
+    Hamming,
+    /// Rectangular.
+    Boxcar,
+}
+
+/// How a recording is read and prepared for the linear estimators
+/// (Artemiadis et al. 2010 §II-C; Patel et al. 2013 "Data Processing").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct PrepareRequest {
+    /// Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
+    pub cutoff_hz: Option<f64>,
+    /// Butterworth order per pass.
+    pub order: usize,
+    /// How velocity and acceleration are computed.
+    pub derivative: Derivative,
+    /// How per-trial force offsets are handled.
+    pub offsets: Offsets,
+    /// How the recording is cut into windows.
+    pub window: Windowing,
+    /// Frame change applied to positions and forces.
+    pub frame: Frame,
+    /// General transform r11..r33, tx, ty, tz (m), applied after `frame`.
+    pub transform: Option<Vec<f64>>,
+    /// The force columns hold the hand's force on the sensor: negate them.
+    pub negate_force: bool,
+    /// The end-effector pose from the `robot_q1..n` columns by this robot's
+    /// forward kinematics (`kuka-lwr4`, `puma3` or a `.urdf` file).
+    pub robot: Option<String>,
+    /// Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad).
+    pub robot_base: Option<Vec<f64>>,
+    /// Use only windows of this condition level (the `level` column).
+    pub level: Option<f64>,
+}
+
+impl Default for PrepareRequest {
+    fn default() -> Self {
+        let p = PrepareParams::default();
+        PrepareRequest {
+            cutoff_hz: p.cutoff_hz,
+            order: p.filter_order,
+            derivative: p.derivative,
+            offsets: p.offsets,
+            window: p.windowing,
+            frame: Frame::Identity,
+            transform: None,
+            negate_force: p.negate_force,
+            robot: None,
+            robot_base: None,
+            level: p.level,
+        }
+    }
+}
+
+impl PrepareRequest {
+    /// The preparation settings (the robot is applied by whoever reads the recording).
+    pub fn params(&self) -> Result<PrepareParams> {
+        if self.robot.is_none() && self.robot_base.is_some() {
+            return Err(Error::invalid("robot_base", "needs a robot"));
+        }
+        let mut transform = match self.frame {
+            Frame::Identity => None,
+            Frame::Seed000 => Some(FrameTransform::seed000_robot_to_human()),
+        };
+        if let Some(values) = &self.transform {
+            let t = FrameTransform::from_values(values)?;
+            transform = Some(match transform {
+                Some(first) => FrameTransform {
+                    rotation: t.rotation * first.rotation,
+                    translation: t.rotation * first.translation + t.translation,
+                },
+                None => t,
+            });
+        }
+        Ok(PrepareParams {
+            windowing: self.window,
+            cutoff_hz: self.cutoff_hz,
+            filter_order: self.order,
+            derivative: self.derivative,
+            offsets: self.offsets,
+            negate_force: self.negate_force,
+            transform,
+            level: self.level,
+            ..PrepareParams::default()
+        })
+    }
+}
+
+/// Artemiadis et al. (2010)'s linear model `M x'' + B x' + K (x - x_eq) = f`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct LinearRequest {
+    /// Reading and preparation.
+    pub prepare: PrepareRequest,
+    /// Fit the equilibrium constant (false: the 9-column form P = F Y^+ of Patel et al. 2013).
+    pub equilibrium: bool,
+    /// The upward axis, for the arm configuration from `elbow_*`/`wrist_*` markers.
+    pub vertical: Axis,
+    /// Also the shoulder's joint-space stiffness and damping J_h^T Z J_h (Park & Chang 2011):
+    /// upper arm (m), forearm (m), elbow, flexion, abduction, rotation (deg).
+    pub shoulder: Option<[f64; 6]>,
+}
+
+impl Default for LinearRequest {
+    fn default() -> Self {
+        LinearRequest {
+            prepare: PrepareRequest::default(),
+            equilibrium: true,
+            vertical: Axis::Z,
+            shoulder: None,
+        }
+    }
+}
+
+/// Patel, O'Neill & Artemiadis (2013)'s co-contraction analysis (the MVC
+/// recording is the second input).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct CocontractionRequest {
+    /// Reading and preparation.
+    pub prepare: PrepareRequest,
+    /// Half-width of the band around the target level counted as "on target".
+    pub tolerance: f64,
+}
+
+impl Default for CocontractionRequest {
+    fn default() -> Self {
+        CocontractionRequest {
+            prepare: PrepareRequest::default(),
+            tolerance: DEFAULT_TOLERANCE,
+        }
+    }
+}
+
+/// The planar two-link arm (Lakatos et al. 2011).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ArmRequest {
+    /// Upper-arm and forearm lengths (m).
+    pub link_lengths: [f64; 2],
+    /// Shoulder position in the recording's frame (m).
+    #[serde(default)]
+    pub shoulder: [f64; 2],
+    /// Inverse-kinematics branch for end-point data: the elbow angle q2 negative.
+    #[serde(default)]
+    pub elbow_negative: bool,
+    /// Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
+    #[serde(default)]
+    pub cutoff_hz: Option<f64>,
+    /// Known base inertial parameters xi1..xi3 (kg m^2): the reduced model (eq. 23-25).
+    #[serde(default)]
+    pub inertial_parameters: Option<[f64; 3]>,
+}
+
+impl ArmRequest {
+    /// An arm of these link lengths (m), every other field at its default.
+    pub fn new(link_lengths: [f64; 2]) -> Self {
+        ArmRequest {
+            link_lengths,
+            shoulder: [0.0; 2],
+            elbow_negative: false,
+            cutoff_hz: None,
+            inertial_parameters: None,
+        }
+    }
+
+    /// The preparation of the planar trials.
+    pub fn prepare(&self) -> PlanarPrepare {
+        let [l1, l2] = self.link_lengths;
+        PlanarPrepare {
+            arm: Arm {
+                l1,
+                l2,
+                shoulder: self.shoulder,
+            },
+            cutoff_hz: self.cutoff_hz,
+            elbow_positive: !self.elbow_negative,
+            ..PlanarPrepare::new(l1, l2)
+        }
+    }
+}
+
+/// One planar estimate (Lakatos et al. 2011).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PlanarRequest {
+    /// The arm.
+    pub arm: ArmRequest,
+    /// Observation window after the perturbation onset (ms); none: every sample of every trial.
+    #[serde(default)]
+    pub window_ms: Option<f64>,
+}
+
+/// Planar estimates over a range of observation windows (Lakatos et al. 2011).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SweepRequest {
+    /// The arm.
+    pub arm: ArmRequest,
+    /// Shortest observation window (ms).
+    #[serde(default = "sweep_from")]
+    pub from_ms: f64,
+    /// Longest observation window (ms).
+    #[serde(default = "sweep_to")]
+    pub to_ms: f64,
+    /// Step (ms).
+    #[serde(default = "sweep_step")]
+    pub step_ms: f64,
+}
+
+fn sweep_from() -> f64 {
+    DEFAULT_SWEEP_MS[0]
+}
+fn sweep_to() -> f64 {
+    DEFAULT_SWEEP_MS[1]
+}
+fn sweep_step() -> f64 {
+    DEFAULT_SWEEP_MS[2]
+}
+
+impl SweepRequest {
+    /// A sweep of this arm over the default windows.
+    pub fn new(arm: ArmRequest) -> Self {
+        SweepRequest {
+            arm,
+            from_ms: sweep_from(),
+            to_ms: sweep_to(),
+            step_ms: sweep_step(),
+        }
+    }
+}
+
+/// Park & Chang (2011)'s stochastic MIMO estimate (several inputs are pooled).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct StochasticRequest {
+    /// Samples per segment (= FFT length); none: about 4 s, a power of two.
+    pub nperseg: Option<usize>,
+    /// Overlapping samples; none: half a segment.
+    pub noverlap: Option<usize>,
+    /// Segment window.
+    pub window: SegmentWindow,
+    /// Band of the parametric fit and accuracy measures (Hz).
+    pub band_hz: [f64; 2],
+    /// The shoulder's joint space before estimation (Park & Chang 2011 eq. (3)):
+    /// upper arm (m), forearm (m), elbow, flexion, abduction, rotation (deg).
+    pub shoulder: Option<[f64; 6]>,
+    /// A truth or expected model (JSON with inertia, damping, stiffness): accuracy phi_T, phi_ij (eq. 15-16).
+    pub expected: Option<String>,
+}
+
+impl Default for StochasticRequest {
+    fn default() -> Self {
+        StochasticRequest {
+            nperseg: None,
+            noverlap: None,
+            window: SegmentWindow::Hann,
+            band_hz: DEFAULT_BAND_HZ,
+            shoulder: None,
+            expected: None,
+        }
+    }
+}
+
+impl StochasticRequest {
+    /// The estimator's settings for a recording of `n` samples at `fs` Hz.
+    pub fn params(&self, n: usize, fs: f64) -> StochasticParams {
+        let mut w = crate::stochastic::default_welch(n, fs);
+        if let Some(nperseg) = self.nperseg {
+            w.nperseg = nperseg;
+        }
+        w.noverlap = self.noverlap;
+        w.window = match self.window {
+            SegmentWindow::Hann => limpid_dsp::spectral::Window::Hann,
+            SegmentWindow::Hamming => limpid_dsp::spectral::Window::Hamming,
+            SegmentWindow::Boxcar => limpid_dsp::spectral::Window::Boxcar,
+        };
+        StochasticParams {
+            welch: Some(w),
+            band_hz: (self.band_hz[0], self.band_hz[1]),
+        }
+    }
+}
+
+/// Intrinsic and reflex stiffness by the parallel cascade (Kearney et al. 1997).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct ReflexRequest {
+    /// Position column (rad, or m for end-point data).
+    pub position: String,
+    /// Torque column applied to the limb (N m, or N).
+    pub torque: String,
+    /// Decimate to this rate (Hz) before identification.
+    pub rate_hz: f64,
+    /// Intrinsic IRF half-width (s).
+    pub intrinsic_lags_s: f64,
+    /// Reflex IRF length (s); also left out of every VAF.
+    pub reflex_lags_s: f64,
+    /// Largest reflex delay scanned (s).
+    pub max_delay_s: f64,
+    /// Rectify the velocity before anti-aliasing (the physical order) instead of after (Kearney et al.).
+    pub rectify_first: bool,
+}
+
+impl Default for ReflexRequest {
+    fn default() -> Self {
+        let p = ReflexParams::default();
+        ReflexRequest {
+            position: p.position,
+            torque: p.torque,
+            rate_hz: p.decimated_rate_hz,
+            intrinsic_lags_s: p.intrinsic_half_width_s,
+            reflex_lags_s: p.reflex_irf_s,
+            max_delay_s: p.max_delay_s,
+            rectify_first: p.rectify_first,
+        }
+    }
+}
+
+impl ReflexRequest {
+    /// The estimator's settings.
+    pub fn params(&self) -> ReflexParams {
+        ReflexParams {
+            position: self.position.clone(),
+            torque: self.torque.clone(),
+            decimated_rate_hz: self.rate_hz,
+            intrinsic_half_width_s: self.intrinsic_lags_s,
+            reflex_irf_s: self.reflex_lags_s,
+            max_delay_s: self.max_delay_s,
+            rectify_first: self.rectify_first,
+            ..ReflexParams::default()
+        }
+    }
+}
+
+/// One estimate, as any front-end asks for it; `method` names the estimator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "method", rename_all = "snake_case")]
+pub enum Request {
+    /// `limpid estimate linear`.
+    Linear(LinearRequest),
+    /// `limpid estimate cocontraction` (inputs: the recording, then the MVC recording).
+    Cocontraction(CocontractionRequest),
+    /// `limpid estimate planar`.
+    Planar(PlanarRequest),
+    /// `limpid window-sweep`.
+    WindowSweep(SweepRequest),
+    /// `limpid estimate stochastic` (inputs: one or more recordings, pooled).
+    Stochastic(StochasticRequest),
+    /// `limpid estimate reflex`.
+    Reflex(ReflexRequest),
+}
+
+/// A request whose settings were checked; only [`Request::check`] makes one.
+#[derive(Debug, Clone)]
+pub struct Checked(Request);
+
+impl Checked {
+    /// The request as it was checked.
+    pub fn request(&self) -> &Request {
+        &self.0
+    }
+}
+
+fn finite(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            name,
+            format!("expected a finite number, found {v}"),
+        ))
+    }
+}
+
+fn positive(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            name,
+            format!("expected a positive number, found {v}"),
+        ))
+    }
+}
+
+fn check_prepare(p: &PrepareRequest) -> Result<()> {
+    if let Some(c) = p.cutoff_hz {
+        positive("cutoff_hz", c)?;
+    }
+    if let Some(l) = p.level {
+        finite("level", l)?;
+    }
+    p.params().map(|_| ())
+}
+
+fn check_arm(a: &ArmRequest) -> Result<()> {
+    for v in a.link_lengths {
+        positive("link_lengths", v)?;
+    }
+    for v in a.shoulder {
+        finite("shoulder", v)?;
+    }
+    if let Some(c) = a.cutoff_hz {
+        positive("cutoff_hz", c)?;
+    }
+    if let Some(xi) = a.inertial_parameters {
+        crate::planar::check_inertial_parameters(&xi)?;
+    }
+    Ok(())
+}
+
+impl Request {
+    /// The command a user types for this method.
+    pub fn command(&self) -> &'static str {
+        match self {
+            Request::Linear(_) => "estimate linear",
+            Request::Cocontraction(_) => "estimate cocontraction",
+            Request::Planar(_) => "estimate planar",
+            Request::WindowSweep(_) => "window-sweep",
+            Request::Stochastic(_) => "estimate stochastic",
+            Request::Reflex(_) => "estimate reflex",
+        }
+    }
+
+    /// Refuse settings that cannot give an honest result, before any data is read.
+    pub fn check(self) -> Result<Checked> {
+        match &self {
+            Request::Linear(r) => {
+                // the posture itself is checked where it is used, with reasons
+                check_prepare(&r.prepare)?;
+            }
+            Request::Cocontraction(r) => {
+                check_prepare(&r.prepare)?;
+                if r.tolerance.is_nan() || r.tolerance <= 0.0 {
+                    return Err(Error::invalid(
+                        "tolerance",
+                        format!("expected a positive band half-width, found {}", r.tolerance),
+                    ));
+                }
+            }
+            Request::Planar(r) => {
+                check_arm(&r.arm)?;
+                if let Some(ms) = r.window_ms {
+                    if ms.is_nan() || ms <= 0.0 {
+                        return Err(Error::invalid(
+                            "observation window",
+                            format!("expected a positive duration in ms, found {ms}"),
+                        ));
+                    }
+                }
+            }
+            Request::WindowSweep(r) => check_arm(&r.arm)?,
+            Request::Stochastic(r) => {
+                crate::Estimator::check(&StochasticParams {
+                    welch: None,
+                    band_hz: (r.band_hz[0], r.band_hz[1]),
+                })?;
+            }
+            Request::Reflex(r) => crate::Estimator::check(&r.params())?,
+        }
+        Ok(Checked(self))
+    }
+}
+
+/// The names of a request type's fields (its JSON Schema's properties).
+pub fn field_names<T: JsonSchema>() -> Vec<String> {
+    let schema = schemars::schema_for!(T);
+    schema
+        .get("properties")
+        .and_then(|p| p.as_object())
+        .map(|p| p.keys().cloned().collect())
+        .unwrap_or_default()
+}
+
+/// A request from flat options (a front-end's keyword arguments): the fields
+/// of the nested `prepare` and `arm` parts may be given at the top level.
+/// Errors name the offending option.
+pub fn from_options(
+    method: &str,
+    options: serde_json::Map<String, serde_json::Value>,
+) -> Result<Request> {
+    let nested: Option<(&str, Vec<String>)> = match method {
+        "linear" | "cocontraction" => Some(("prepare", field_names::<PrepareRequest>())),
+        "planar" | "window_sweep" => Some(("arm", field_names::<ArmRequest>())),
+        "stochastic" | "reflex" => None,
+        other => {
+            return Err(Error::invalid(
+                "method",
+                format!(
+                    "{other:?} is not a method: linear, cocontraction, planar, window_sweep, stochastic or reflex"
+                ),
+            ))
+        }
+    };
+    let mut top = serde_json::Map::new();
+    let mut inner = serde_json::Map::new();
+    for (key, value) in options {
+        if value.is_null() {
+            continue; // an option left at None: its default
+        }
+        match &nested {
+            Some((_, names)) if names.contains(&key) => {
+                inner.insert(key, value);
+            }
+            _ => {
+                top.insert(key, value);
+            }
+        }
+    }
+    if let Some((name, _)) = nested {
+        top.insert(name.into(), inner.into());
+    }
+    let value = serde_json::Value::Object(top);
+    // each method's own type (not the tagged enum, which would buffer the
+    // value and lose the path of an error)
+    Ok(match method {
+        "linear" => Request::Linear(typed(value)?),
+        "cocontraction" => Request::Cocontraction(typed(value)?),
+        "planar" => Request::Planar(typed(value)?),
+        "window_sweep" => Request::WindowSweep(typed(value)?),
+        "stochastic" => Request::Stochastic(typed(value)?),
+        _ => Request::Reflex(typed(value)?),
+    })
+}
+
+/// A request part from options; an error names the option (`band_hz`, `order`, ...).
+fn typed<T: serde::de::DeserializeOwned>(value: serde_json::Value) -> Result<T> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        let message = e.into_inner().to_string();
+        let path = path
+            .trim_start_matches("prepare.")
+            .trim_start_matches("arm.");
+        let name = match path {
+            "." | "prepare" | "arm" => "options",
+            p => p,
+        };
+        Error::invalid(name, message)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_estimators_defaults() {
+        assert_eq!(ReflexRequest::default().params().decimated_rate_hz, 100.0);
+        let p = PrepareRequest::default().params().unwrap();
+        assert_eq!(p.filter_order, PrepareParams::default().filter_order);
+        assert_eq!(
+            StochasticRequest::default().params(10_000, 1000.0).band_hz,
+            StochasticParams::default().band_hz
+        );
+    }
+
+    #[test]
+    fn flat_options_become_the_nested_request() {
+        let mut o = serde_json::Map::new();
+        o.insert("cutoff_hz".into(), 20.0.into());
+        o.insert("equilibrium".into(), false.into());
+        o.insert("level".into(), serde_json::Value::Null);
+        let r = from_options("linear", o).unwrap();
+        let Request::Linear(l) = r else { panic!() };
+        assert_eq!(l.prepare.cutoff_hz, Some(20.0));
+        assert!(!l.equilibrium);
+        let mut o = serde_json::Map::new();
+        o.insert("link_lengths".into(), serde_json::json!([0.3, 0.35]));
+        o.insert("from_ms".into(), 60.0.into());
+        let Request::WindowSweep(s) = from_options("window_sweep", o).unwrap() else {
+            panic!()
+        };
+        assert_eq!(s.arm.link_lengths, [0.3, 0.35]);
+        assert_eq!((s.from_ms, s.to_ms), (60.0, DEFAULT_SWEEP_MS[1]));
+    }
+
+    #[test]
+    fn unknown_or_mistyped_options_are_named() {
+        let mut o = serde_json::Map::new();
+        o.insert("cutof_hz".into(), 20.0.into());
+        let e = from_options("linear", o).unwrap_err().to_string();
+        assert!(e.contains("cutof_hz"), "{e}");
+        let mut o = serde_json::Map::new();
+        o.insert("band_hz".into(), serde_json::json!([1.0]));
+        let e = from_options("stochastic", o).unwrap_err().to_string();
+        assert!(e.contains("band_hz"), "{e}");
+        let e = from_options("fourier", serde_json::Map::new())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a method"), "{e}");
+    }
+
+    #[test]
+    fn checks_refuse_before_any_data() {
+        let mut r = LinearRequest::default();
+        r.prepare.cutoff_hz = Some(f64::NAN);
+        assert!(Request::Linear(r).check().is_err());
+        let r = CocontractionRequest {
+            tolerance: 0.0,
+            ..Default::default()
+        };
+        assert!(Request::Cocontraction(r).check().is_err());
+        let r = PlanarRequest {
+            arm: ArmRequest::new([0.3, 0.0]),
+            window_ms: None,
+        };
+        assert!(Request::Planar(r).check().is_err());
+    }
+
+    #[test]
+    fn a_request_round_trips_through_json() {
+        let r = Request::Stochastic(StochasticRequest {
+            nperseg: Some(1024),
+            ..Default::default()
+        });
+        let text = serde_json::to_string(&r).unwrap();
+        assert!(text.contains("\"method\":\"stochastic\""), "{text}");
+        let back: Request = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, r);
+    }
+}
