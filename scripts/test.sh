@@ -40,4 +40,6 @@ python3 -m venv --clear "$venv"
 rm -rf "$target_dir/wheels"
 "$venv/bin/maturin" build --profile "$profile" -q -m crates/python/Cargo.toml -o "$target_dir/wheels"
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps "$target_dir"/wheels/limpid-*.whl
+# the CLI the workspace tests built: the Python tests compare the requests both make
+export LIMPID_CLI="$target_dir/$profile/limpid"
 LIMPID_REQUIRE_DASK=1 "$venv/bin/python" -m pytest -q -rs crates/python/tests

@@ -18,6 +18,29 @@ use crate::prepare::{Derivative, Offsets, PrepareParams, Windowing};
 use crate::reflex::ReflexParams;
 use crate::stochastic::StochasticParams;
 
+/// Fixed-length lists of numbers read with a message people understand
+/// ("expected 6 numbers, found 5") from any front-end.
+mod numbers {
+    use serde::{Deserialize, Deserializer};
+
+    fn sized<E: serde::de::Error, const N: usize>(v: Vec<f64>) -> Result<[f64; N], E> {
+        <[f64; N]>::try_from(v.as_slice())
+            .map_err(|_| E::custom(format!("expected {N} numbers, found {}", v.len())))
+    }
+
+    pub fn exact<'de, D: Deserializer<'de>, const N: usize>(d: D) -> Result<[f64; N], D::Error> {
+        sized(Vec::<f64>::deserialize(d)?)
+    }
+
+    pub fn optional<'de, D: Deserializer<'de>, const N: usize>(
+        d: D,
+    ) -> Result<Option<[f64; N]>, D::Error> {
+        Option::<Vec<f64>>::deserialize(d)?
+            .map(sized::<D::Error, N>)
+            .transpose()
+    }
+}
+
 /// Band of the stochastic parametric fit and accuracy measures (Hz).
 pub const DEFAULT_BAND_HZ: [f64; 2] = [0.5, 10.0];
 /// The window sweep's shortest, longest observation window and step (ms).
@@ -158,6 +181,7 @@ pub struct LinearRequest {
     pub vertical: Axis,
     /// Also the shoulder's joint-space stiffness and damping J_h^T Z J_h (Park & Chang 2011):
     /// upper arm (m), forearm (m), elbow, flexion, abduction, rotation (deg).
+    #[serde(deserialize_with = "numbers::optional")]
     pub shoulder: Option<[f64; 6]>,
 }
 
@@ -197,9 +221,10 @@ impl Default for CocontractionRequest {
 #[serde(deny_unknown_fields)]
 pub struct ArmRequest {
     /// Upper-arm and forearm lengths (m).
+    #[serde(deserialize_with = "numbers::exact")]
     pub link_lengths: [f64; 2],
     /// Shoulder position in the recording's frame (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "numbers::exact")]
     pub shoulder: [f64; 2],
     /// Inverse-kinematics branch for end-point data: the elbow angle q2 negative.
     #[serde(default)]
@@ -208,7 +233,7 @@ pub struct ArmRequest {
     #[serde(default)]
     pub cutoff_hz: Option<f64>,
     /// Known base inertial parameters xi1..xi3 (kg m^2): the reduced model (eq. 23-25).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "numbers::optional")]
     pub inertial_parameters: Option<[f64; 3]>,
 }
 
@@ -301,9 +326,11 @@ pub struct StochasticRequest {
     /// Segment window.
     pub window: SegmentWindow,
     /// Band of the parametric fit and accuracy measures (Hz).
+    #[serde(deserialize_with = "numbers::exact")]
     pub band_hz: [f64; 2],
     /// The shoulder's joint space before estimation (Park & Chang 2011 eq. (3)):
     /// upper arm (m), forearm (m), elbow, flexion, abduction, rotation (deg).
+    #[serde(deserialize_with = "numbers::optional")]
     pub shoulder: Option<[f64; 6]>,
     /// A truth or expected model (JSON with inertia, damping, stiffness): accuracy phi_T, phi_ij (eq. 15-16).
     pub expected: Option<String>,
@@ -445,6 +472,15 @@ fn positive(name: &str, v: f64) -> Result<()> {
 }
 
 fn check_prepare(p: &PrepareRequest) -> Result<()> {
+    if !(1..=20).contains(&p.order) {
+        return Err(Error::invalid(
+            "order",
+            format!(
+                "expected a Butterworth order from 1 to 20, found {}",
+                p.order
+            ),
+        ));
+    }
     if let Some(c) = p.cutoff_hz {
         positive("cutoff_hz", c)?;
     }
@@ -533,14 +569,42 @@ pub fn field_names<T: JsonSchema>() -> Vec<String> {
         .unwrap_or_default()
 }
 
-/// A request from flat options (a front-end's keyword arguments): the fields
-/// of the nested `prepare` and `arm` parts may be given at the top level.
-/// Errors name the offending option.
-pub fn from_options(
-    method: &str,
-    options: serde_json::Map<String, serde_json::Value>,
-) -> Result<Request> {
-    let nested: Option<(&str, Vec<String>)> = match method {
+fn boolean_names<T: JsonSchema>() -> Vec<String> {
+    let schema = schemars::schema_for!(T);
+    schema
+        .get("properties")
+        .and_then(|p| p.as_object())
+        .map(|p| {
+            p.iter()
+                .filter(|(_, v)| v.get("type").and_then(|t| t.as_str()) == Some("boolean"))
+                .map(|(k, _)| k.clone())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The yes/no options of a method (top level and nested), so a front-end
+/// whose numbers and truth values mix (Python: `True == 1`) can keep them apart.
+pub fn boolean_options(method: &str) -> Result<Vec<String>> {
+    nesting(method)?;
+    Ok(match method {
+        "linear" => [
+            boolean_names::<LinearRequest>(),
+            boolean_names::<PrepareRequest>(),
+        ]
+        .concat(),
+        "cocontraction" => boolean_names::<PrepareRequest>(),
+        "planar" | "window_sweep" => boolean_names::<ArmRequest>(),
+        "stochastic" => boolean_names::<StochasticRequest>(),
+        _ => boolean_names::<ReflexRequest>(),
+    })
+}
+
+/// Where a method's flat options nest: `prepare` (linear, co-contraction)
+/// or `arm` (planar, window sweep) and that part's field names; `None` for
+/// methods whose options are all at the top level.
+pub fn nesting(method: &str) -> Result<Option<(&'static str, Vec<String>)>> {
+    Ok(match method {
         "linear" | "cocontraction" => Some(("prepare", field_names::<PrepareRequest>())),
         "planar" | "window_sweep" => Some(("arm", field_names::<ArmRequest>())),
         "stochastic" | "reflex" => None,
@@ -552,12 +616,54 @@ pub fn from_options(
                 ),
             ))
         }
-    };
+    })
+}
+
+/// A method's request from any serde deserializer of its (nested) options:
+/// each method's own type (not the tagged enum, which would buffer the value
+/// and lose the path of an error); an error names the option (`band_hz`, `order`, ...).
+pub fn deserialize_request<'de, D: serde::Deserializer<'de>>(
+    method: &str,
+    options: D,
+) -> Result<Request> {
+    fn typed<'de, T: Deserialize<'de>, D: serde::Deserializer<'de>>(d: D) -> Result<T> {
+        serde_path_to_error::deserialize(d).map_err(|e| {
+            let path = e.path().to_string();
+            let message = e.into_inner().to_string();
+            let path = path
+                .trim_start_matches("prepare.")
+                .trim_start_matches("arm.");
+            let name = match path {
+                "." | "prepare" | "arm" => "options",
+                p => p,
+            };
+            Error::invalid(name, message)
+        })
+    }
+    nesting(method)?;
+    Ok(match method {
+        "linear" => Request::Linear(typed(options)?),
+        "cocontraction" => Request::Cocontraction(typed(options)?),
+        "planar" => Request::Planar(typed(options)?),
+        "window_sweep" => Request::WindowSweep(typed(options)?),
+        "stochastic" => Request::Stochastic(typed(options)?),
+        _ => Request::Reflex(typed(options)?),
+    })
+}
+
+/// A request from flat options (a front-end's keyword arguments, as JSON
+/// values): the fields of the nested `prepare` and `arm` parts may be given
+/// at the top level; a null option keeps its default. Errors name the option.
+pub fn from_options(
+    method: &str,
+    options: serde_json::Map<String, serde_json::Value>,
+) -> Result<Request> {
+    let nested = nesting(method)?;
     let mut top = serde_json::Map::new();
     let mut inner = serde_json::Map::new();
     for (key, value) in options {
         if value.is_null() {
-            continue; // an option left at None: its default
+            continue;
         }
         match &nested {
             Some((_, names)) if names.contains(&key) => {
@@ -571,33 +677,7 @@ pub fn from_options(
     if let Some((name, _)) = nested {
         top.insert(name.into(), inner.into());
     }
-    let value = serde_json::Value::Object(top);
-    // each method's own type (not the tagged enum, which would buffer the
-    // value and lose the path of an error)
-    Ok(match method {
-        "linear" => Request::Linear(typed(value)?),
-        "cocontraction" => Request::Cocontraction(typed(value)?),
-        "planar" => Request::Planar(typed(value)?),
-        "window_sweep" => Request::WindowSweep(typed(value)?),
-        "stochastic" => Request::Stochastic(typed(value)?),
-        _ => Request::Reflex(typed(value)?),
-    })
-}
-
-/// A request part from options; an error names the option (`band_hz`, `order`, ...).
-fn typed<T: serde::de::DeserializeOwned>(value: serde_json::Value) -> Result<T> {
-    serde_path_to_error::deserialize(value).map_err(|e| {
-        let path = e.path().to_string();
-        let message = e.into_inner().to_string();
-        let path = path
-            .trim_start_matches("prepare.")
-            .trim_start_matches("arm.");
-        let name = match path {
-            "." | "prepare" | "arm" => "options",
-            p => p,
-        };
-        Error::invalid(name, message)
-    })
+    deserialize_request(method, serde_json::Value::Object(top))
 }
 
 #[cfg(test)]
@@ -632,6 +712,10 @@ mod tests {
             panic!()
         };
         assert_eq!(s.arm.link_lengths, [0.3, 0.35]);
+        assert_eq!(
+            boolean_options("linear").unwrap(),
+            ["equilibrium", "negate_force"]
+        );
         assert_eq!((s.from_ms, s.to_ms), (60.0, DEFAULT_SWEEP_MS[1]));
     }
 

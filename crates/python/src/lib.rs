@@ -388,243 +388,90 @@ fn read_recording<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bo
     columns_dict(py, &rec)
 }
 
-fn prepare_params(options: &str) -> PyResult<limpid_ident::PrepareParams> {
-    use limpid_ident::{Derivative, Offsets, PrepareParams, Windowing};
-    let o: serde_json::Value = serde_json::from_str(options).map_err(value_err)?;
-    let mut p = PrepareParams::default();
-    if let Some(c) = o["cutoff_hz"].as_f64() {
-        p.cutoff_hz = Some(c);
-    }
-    if let Some(n) = o["order"].as_u64() {
-        p.filter_order = n as usize;
-    }
-    if let Some(w) = o["window"].as_str() {
-        p.windowing = match w {
-            "auto" => Windowing::Auto,
-            "trials" => Windowing::Trials,
-            "onsets" => Windowing::Onsets,
-            "continuous" => Windowing::Continuous,
-            other => {
-                return Err(value_err(format!(
-                    "window {other:?}: auto, trials, onsets or continuous"
-                )))
-            }
-        };
-    }
-    if let Some(w) = o["offsets"].as_str() {
-        p.offsets = match w {
-            "auto" => Offsets::Auto,
-            "fit" => Offsets::Fit,
-            "rest" => Offsets::Rest,
-            other => return Err(value_err(format!("offsets {other:?}: auto, fit or rest"))),
-        };
-    }
-    if let Some(w) = o["derivative"].as_str() {
-        p.derivative = match w {
-            "central" => Derivative::Central,
-            "savgol" => Derivative::Savgol,
-            other => {
-                return Err(value_err(format!(
-                    "derivative {other:?}: central or savgol"
-                )))
-            }
-        };
-    }
-    if let Some(l) = o["level"].as_f64() {
-        p.level = Some(l);
-    }
-    p.negate_force = o["negate_force"].as_bool().unwrap_or(false);
-    Ok(p)
-}
-
-/// Seed 000's linear estimator; JSON text with the CLI's keys.
-#[pyfunction]
-#[pyo3(signature = (recording, options))]
-fn estimate_linear(
-    py: Python<'_>,
-    recording: &Bound<'_, PyAny>,
-    options: &str,
-) -> PyResult<String> {
-    let rec = self::recording(recording)?;
-    let params = prepare_params(options)?;
-    let o: serde_json::Value = serde_json::from_str(options).map_err(value_err)?;
-    let equilibrium = o["equilibrium"].as_bool().unwrap_or(true);
-    detached(py, move || {
-        // window by window, as the CLI: the prepared signals are never held whole
-        let plan = limpid_ident::plan(&rec, &params)?;
-        let est = limpid_ident::fit_linear_plan(
-            &plan,
-            &limpid_ident::LinearParams {
-                equilibrium,
-                ..Default::default()
-            },
-        )?;
-        Ok(document(Estimate::Linear(
-            limpid_analysis::linear::linear_result(&est, &plan.meta),
-        )))
-    })
-    .map_err(err)
-}
-
-/// The planar arm's trials prepared from a recording (seed 003).
-fn planar_data(
-    rec: &Recording,
-    link_lengths: (f64, f64),
-) -> limpid_core::Result<limpid_ident::planar::PlanarData> {
-    use limpid_ident::planar::{prepare_planar, PlanarPrepare};
-    prepare_planar(rec, &PlanarPrepare::new(link_lengths.0, link_lengths.1))
-}
-
-/// Seed 003's planar-arm estimator; JSON text.
-#[pyfunction]
-#[pyo3(signature = (recording, link_lengths, window_ms=None, inertial_parameters=None))]
-fn estimate_planar(
-    py: Python<'_>,
-    recording: &Bound<'_, PyAny>,
-    link_lengths: (f64, f64),
-    window_ms: Option<f64>,
-    inertial_parameters: Option<(f64, f64, f64)>,
-) -> PyResult<String> {
-    let rec = self::recording(recording)?;
-    detached(py, move || -> limpid_core::Result<String> {
-        let data = planar_data(&rec, link_lengths)?;
-        let window = match window_ms {
-            None => usize::MAX,
-            Some(ms) if ms > 0.0 => (ms * 1e-3 * data.fs).round() as usize,
-            Some(ms) => {
-                return Err(Error::invalid(
-                    "observation window",
-                    format!("expected a positive duration in ms, found {ms}"),
-                ))
-            }
-        };
-        let xi = inertial_parameters.map(|(a, b, c)| [a, b, c]);
-        Ok(document(Estimate::Planar(
-            limpid_ident::planar::estimate_planar(&data, window, xi)?,
-        )))
-    })
-    .map_err(err)
-}
-
-/// Seed 003's observation-window sweep (`limpid window-sweep --json`); JSON text.
-#[pyfunction]
-#[pyo3(signature = (recording, link_lengths, from_ms=50.0, to_ms=400.0, step_ms=10.0, inertial_parameters=None))]
-fn window_sweep(
-    py: Python<'_>,
-    recording: &Bound<'_, PyAny>,
-    link_lengths: (f64, f64),
-    from_ms: f64,
-    to_ms: f64,
-    step_ms: f64,
-    inertial_parameters: Option<(f64, f64, f64)>,
-) -> PyResult<String> {
-    let rec = self::recording(recording)?;
-    detached(py, move || -> limpid_core::Result<String> {
-        let data = planar_data(&rec, link_lengths)?;
-        let xi = inertial_parameters.map(|(a, b, c)| [a, b, c]);
-        let sweep = limpid_ident::planar::window_sweep(&data, from_ms, to_ms, step_ms, xi)?;
-        Ok(document(Estimate::WindowSweep(sweep)))
-    })
-    .map_err(err)
-}
-
-/// Seed 004's stochastic MIMO estimator; JSON text.
-#[pyfunction]
-#[pyo3(signature = (recording, nperseg=None, noverlap=None, band_hz=(0.5, 10.0), shoulder=None))]
-fn estimate_stochastic(
-    py: Python<'_>,
-    recording: &Bound<'_, PyAny>,
-    nperseg: Option<usize>,
-    noverlap: Option<usize>,
-    band_hz: (f64, f64),
-    shoulder: Option<(f64, f64, f64, f64, f64, f64)>,
-) -> PyResult<String> {
-    use limpid_ident::stochastic::{default_welch, estimate_stochastic, StochasticParams};
-    let rec = self::recording(recording)?;
-    detached(py, move || -> limpid_core::Result<String> {
-        // seed 004 §II-B: the shoulder's joint space before estimation
-        let rec = match shoulder {
-            Some((l1, l2, elbow, flexion, abduction, rotation)) => {
-                limpid_analysis::shoulder::joint_space_recording(
-                    &rec,
-                    &limpid_analysis::linear::ShoulderPosture {
-                        upper_arm_m: l1,
-                        forearm_m: l2,
-                        elbow_deg: elbow,
-                        angles_deg: [flexion, abduction, rotation],
-                    },
-                )?
-            }
-            None => rec,
-        };
-        let mut w = default_welch(rec.len(), rec.sample_rate());
-        if let Some(n) = nperseg {
-            w.nperseg = n;
+/// A method's request from flat keyword options (`limpid_ident::request`):
+/// the fields of its `prepare` or `arm` part are nested, `None` keeps a
+/// default, and the request is made by serde from the Python objects.
+fn build_request(
+    method: &str,
+    options: &Bound<'_, PyDict>,
+) -> PyResult<limpid_ident::request::Request> {
+    use limpid_ident::request::{deserialize_request, nesting};
+    let py = options.py();
+    let nested = nesting(method).map_err(err)?;
+    let booleans = limpid_ident::request::boolean_options(method).map_err(err)?;
+    let top = PyDict::new(py);
+    let inner = PyDict::new(py);
+    for (key, value) in options.iter() {
+        if value.is_none() {
+            continue;
         }
-        w.noverlap = noverlap.or(w.noverlap);
-        let est = estimate_stochastic(
-            &rec,
-            &StochasticParams {
-                welch: Some(w),
-                band_hz,
-            },
-        )?;
-        Ok(document(Estimate::Stochastic(est)))
+        let name: String = key
+            .extract()
+            .map_err(|_| value_err("option names must be strings"))?;
+        // Python's True is also 1: keep numbers and truth values apart
+        let is_bool = value.is_instance_of::<pyo3::types::PyBool>();
+        if is_bool != booleans.contains(&name) {
+            return Err(value_err(format!(
+                "invalid {name}: expected {}, found {value}",
+                if is_bool {
+                    "a value other than True/False"
+                } else {
+                    "True or False"
+                }
+            )));
+        }
+        match &nested {
+            Some((_, names)) if names.contains(&name) => inner.set_item(name, value)?,
+            _ => top.set_item(name, value)?,
+        }
+    }
+    if let Some((name, _)) = nested {
+        top.set_item(name, inner)?;
+    }
+    let mut de = pythonize::Depythonizer::from_object(top.as_any());
+    deserialize_request(method, &mut de).map_err(|e| {
+        let text = e.to_string();
+        if text.contains("unknown field") {
+            // as Python says of a keyword a function does not take
+            pyo3::exceptions::PyTypeError::new_err(text)
+        } else {
+            err(e)
+        }
     })
-    .map_err(err)
 }
 
-/// Intrinsic and reflex stiffness by the parallel cascade (Kearney et al. 1997); JSON text.
+/// The request flat keyword options make, as a dict (what a result's run
+/// block records; `request(method, {})` shows every default).
 #[pyfunction]
-#[pyo3(signature = (recording, position="q1", torque="tau1", rate_hz=100.0, max_delay_s=0.15, rectify_first=false))]
-fn estimate_reflex(
-    py: Python<'_>,
-    recording: &Bound<'_, PyAny>,
-    position: &str,
-    torque: &str,
-    rate_hz: f64,
-    max_delay_s: f64,
-    rectify_first: bool,
-) -> PyResult<String> {
-    use limpid_ident::reflex::ReflexParams;
-    use limpid_ident::Estimator;
-    let rec = self::recording(recording)?;
-    let params = ReflexParams {
-        position: position.into(),
-        torque: torque.into(),
-        decimated_rate_hz: rate_hz,
-        max_delay_s,
-        rectify_first,
-        ..ReflexParams::default()
-    };
-    detached(py, move || -> limpid_core::Result<String> {
-        Ok(document(Estimate::Reflex(params.fit(&rec)?)))
-    })
-    .map_err(err)
+fn request<'py>(
+    py: Python<'py>,
+    method: &str,
+    options: &Bound<'py, PyDict>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let r = build_request(method, options)?;
+    // through JSON's data model: lists, not tuples, as a result's run block reads back
+    let value = serde_json::to_value(&r).map_err(value_err)?;
+    pythonize::pythonize(py, &value).map_err(value_err)
 }
 
-/// Seed 001's co-contraction analysis; JSON text.
+/// Any estimator (`method`: linear, cocontraction, planar, window_sweep,
+/// stochastic, reflex) on its recordings, with keyword options as
+/// `limpid estimate METHOD`'s flags; JSON text of the result.
 #[pyfunction]
-#[pyo3(signature = (recording, mvc, options))]
-fn estimate_cocontraction(
+fn estimate(
     py: Python<'_>,
-    recording: &Bound<'_, PyAny>,
-    mvc: &Bound<'_, PyAny>,
-    options: &str,
+    method: &str,
+    recordings: Vec<Bound<'_, PyAny>>,
+    options: &Bound<'_, PyDict>,
 ) -> PyResult<String> {
-    let rec = self::recording(recording)?;
-    let mvc = self::recording(mvc)?;
-    let params = prepare_params(options)?;
-    detached(py, move || {
-        let r = limpid_analysis::cocontraction::estimate_cocontraction(
-            &rec,
-            &mvc,
-            &params,
-            &limpid_analysis::emg::EmgParams::default(),
-        )?;
-        Ok(document(Estimate::Cocontraction(r)))
-    })
-    .map_err(err)
+    let checked = build_request(method, options)?.check().map_err(err)?;
+    let recordings = recordings
+        .iter()
+        .map(recording)
+        .collect::<PyResult<Vec<_>>>()?;
+    detached(py, move || limpid_app::estimate::run(&checked, recordings))
+        .map(|e| e.document.to_json())
+        .map_err(err)
 }
 
 /// A study manifest with its paths resolved: JSON text of
@@ -787,16 +634,10 @@ fn gravity_compensate<'py>(
 ) -> PyResult<(Bound<'py, PyDict>, Vec<String>)> {
     use limpid_lab::gravity::{compensate, LoadSource};
     let mut rec = self::recording(recording)?;
-    let robot = match robot {
-        None => None,
-        Some(name) => {
-            let r = limpid_lab::robot::Robot::by_name(name).map_err(err)?;
-            Some(match robot_base.as_deref() {
-                None => r,
-                Some(base) => r.placed_at(base).map_err(err)?,
-            })
-        }
-    };
+    let robot = robot
+        .map(|name| limpid_app::estimate::placed_robot(name, robot_base.as_deref()))
+        .transpose()
+        .map_err(err)?;
     let bias = bias.map(self::recording).transpose()?;
     let calibration = calibration.map(self::recording).transpose()?;
     let source = match (&bias, &calibration) {
@@ -847,13 +688,9 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(lowpass_filtfilt, m)?)?;
     m.add_function(wrap_pyfunction!(frequency_response, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
-    m.add_function(wrap_pyfunction!(estimate_linear, m)?)?;
-    m.add_function(wrap_pyfunction!(estimate_planar, m)?)?;
-    m.add_function(wrap_pyfunction!(window_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(request, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate, m)?)?;
     m.add_function(wrap_pyfunction!(gravity_compensate, m)?)?;
-    m.add_function(wrap_pyfunction!(estimate_stochastic, m)?)?;
-    m.add_function(wrap_pyfunction!(estimate_reflex, m)?)?;
-    m.add_function(wrap_pyfunction!(estimate_cocontraction, m)?)?;
     m.add_function(wrap_pyfunction!(ellipsoid, m)?)?;
     m.add_function(wrap_pyfunction!(study_entries, m)?)?;
     m.add_function(wrap_pyfunction!(study_process, m)?)?;

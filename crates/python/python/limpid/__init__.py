@@ -37,6 +37,7 @@ __all__ = [
     "coherence",
     "lowpass_filtfilt",
     "frequency_response",
+    "request",
     "estimate_linear",
     "estimate_planar",
     "window_sweep",
@@ -187,13 +188,6 @@ def _number(name: str, value: Any) -> float:
     if not np.isfinite(v):
         raise ValueError(f"{name}: expected a finite number, found {v}")
     return v
-
-
-def _flag(name: str, value: Any) -> bool:
-    """A boolean option: True/False (numpy booleans too); anything else is a ValueError."""
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    raise ValueError(f"{name}: expected True or False, found {value!r}")
 
 
 def _choice(name: str, value: Any, choices: Sequence[str]) -> str:
@@ -463,129 +457,109 @@ def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4, axis: 
     return np.moveaxis(y, -1, ax)
 
 
-def estimate_linear(recording: RecordingLike, *, cutoff_hz: Optional[float] = None,
-                    order: Optional[int] = None, window: str = "auto", offsets: str = "auto",
-                    derivative: str = "central", level: Optional[float] = None,
-                    negate_force: bool = False, equilibrium: bool = True) -> Result:
+def _plain(v: Any) -> Any:
+    """numpy arrays and scalars as Python lists and numbers, the values a request is made of."""
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, np.generic):
+        return _plain(v.item())
+    if isinstance(v, float) and v.is_integer() and abs(v) < 2**63:
+        return int(v)  # 4.0 is a fine sample count; a float field reads an int as well
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    return v
+
+
+def request(method: str, **options: Any) -> Dict[str, Any]:
+    """The request an estimator runs with these options, as a dict (what a result's run
+    block records and ``limpid rerun`` runs): ``request("reflex")`` shows every default.
+
+    ``method`` is one of linear, cocontraction, planar, window_sweep, stochastic, reflex;
+    options are the keyword arguments of the ``estimate_*`` functions. The same request
+    is what ``limpid estimate METHOD ... --print-request`` prints for the same settings."""
+    r: Dict[str, Any] = _limpid.request(str(method), {k: _plain(v) for k, v in options.items()})
+    return r
+
+
+def _estimate(method: str, recordings: Sequence[RecordingLike], options: Mapping[str, Any]) -> Result:
+    opts = {k: _plain(v) for k, v in options.items()}
+    return Result(json.loads(_limpid.estimate(method, [_recording(r) for r in recordings], opts)))
+
+
+def estimate_linear(recording: RecordingLike, **options: Any) -> Result:
     """Artemiadis et al. (2010)'s linear estimator (M, B, K with standard errors, fit, criteria,
-    ellipsoids); the options of ``limpid estimate linear``."""
-    opts = {"cutoff_hz": None if cutoff_hz is None else _number("cutoff_hz", cutoff_hz),
-            "order": None if order is None else _integer("order", order, minimum=1),
-            "window": _choice("window", window, ("auto", "trials", "onsets", "continuous")),
-            "offsets": _choice("offsets", offsets, ("auto", "fit", "rest")),
-            "derivative": _choice("derivative", derivative, ("central", "savgol")),
-            "level": None if level is None else _number("level", level),
-            "negate_force": _flag("negate_force", negate_force),
-            "equilibrium": _flag("equilibrium", equilibrium)}
-    return Result(json.loads(_limpid.estimate_linear(_recording(recording), json.dumps(opts))))
+    ellipsoids), as ``limpid estimate linear``.
+
+    Options (defaults: ``limpid.request("linear")``): ``cutoff_hz``, ``order``,
+    ``derivative`` ("central", "savgol"), ``offsets`` ("auto", "fit", "rest"), ``window``
+    ("auto", "trials", "onsets", "continuous"), ``frame`` ("identity", "seed000"),
+    ``transform`` (12 numbers), ``negate_force``, ``robot`` and ``robot_base``, ``level``,
+    ``equilibrium``, ``vertical`` ("x", "y", "z"), ``shoulder`` (upper arm m, forearm m,
+    elbow, flexion, abduction, rotation deg)."""
+    return _estimate("linear", [recording], options)
 
 
-def _inertial(values: Optional[Sequence[float]]) -> Optional[Tuple[float, float, float]]:
-    """Lakatos, Petit & van der Smagt (2011)'s three inertial parameters (kg m^2), or None to estimate them."""
-    if values is None:
-        return None
-    v = [_number("inertial_parameters", x) for x in values]
-    if len(v) != 3:
-        raise ValueError(f"inertial_parameters: expected 3 numbers (kg m^2), found {len(v)}")
-    return (v[0], v[1], v[2])
+def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], **options: Any) -> Result:
+    """Lakatos, Petit & van der Smagt (2011)'s planar-arm estimator (joint K, D, inertial
+    parameters, criteria), as ``limpid estimate planar``.
+
+    Options (defaults: ``limpid.request("planar", link_lengths=...)``): ``window_ms``,
+    ``inertial_parameters`` (kg m^2, three), ``shoulder`` (X, Y in m), ``elbow_negative``,
+    ``cutoff_hz``."""
+    return _estimate("planar", [recording], {"link_lengths": link_lengths, **options})
 
 
-def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], *,
-                    window_ms: Optional[float] = None,
-                    inertial_parameters: Optional[Sequence[float]] = None) -> Result:
-    """Lakatos, Petit & van der Smagt (2011)'s planar-arm estimator (joint K, D, inertial parameters, criteria)."""
-    l1, l2 = link_lengths
-    xi = _inertial(inertial_parameters)
-    window = None if window_ms is None else _number("window_ms", window_ms)
-    return Result(json.loads(_limpid.estimate_planar(_recording(recording), (_number("link_lengths", l1), _number("link_lengths", l2)), window, xi)))
+def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], **options: Any) -> Result:
+    """Lakatos, Petit & van der Smagt (2011)'s observation-window sweep, as ``limpid window-sweep
+    --json``: ``rows`` (one estimate with its criteria per window) and the shortest
+    trustworthy window.
+
+    Options (defaults: ``limpid.request("window_sweep", link_lengths=...)``): ``from_ms``,
+    ``to_ms``, ``step_ms``, ``inertial_parameters``, ``shoulder``, ``elbow_negative``,
+    ``cutoff_hz``."""
+    return _estimate("window_sweep", [recording], {"link_lengths": link_lengths, **options})
 
 
-def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], *,
-                 from_ms: float = 50.0, to_ms: float = 400.0, step_ms: float = 10.0,
-                 inertial_parameters: Optional[Sequence[float]] = None) -> Result:
-    """Lakatos, Petit & van der Smagt (2011)'s observation-window sweep, as ``limpid window-sweep --json``:
-    ``rows`` (one estimate with its criteria per window) and the shortest
-    trustworthy window."""
-    l1, l2 = link_lengths
-    xi = _inertial(inertial_parameters)
-    return Result(json.loads(_limpid.window_sweep(_recording(recording), (_number("link_lengths", l1), _number("link_lengths", l2)),
-                                                  _number("from_ms", from_ms), _number("to_ms", to_ms),
-                                                  _number("step_ms", step_ms), xi)))
+def estimate_stochastic(recording: Union[RecordingLike, Sequence[RecordingLike]], **options: Any) -> Result:
+    """Park & Chang (2011)'s stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric
+    fit, as ``limpid estimate stochastic``; a list of recordings is pooled.
+
+    Options (defaults: ``limpid.request("stochastic")``): ``nperseg``, ``noverlap``,
+    ``window`` ("hann", "hamming", "boxcar"), ``band_hz`` (lo, hi), ``expected`` (a truth
+    JSON file: accuracy phi_T, phi_ij), ``shoulder``: (upper_arm_m, forearm_m, elbow_deg,
+    flexion_deg, abduction_deg, rotation_deg) estimates the shoulder's joint impedance as
+    Park & Chang (2011) does: hand X, Z become flexion ``q1`` and abduction ``q2``, forces
+    torques ``J_h^T F`` (eq. (3)), and ``theta``/``tauy``/``utheta`` internal rotation
+    ``q3``, before the spectra. The posture is the operating point (the recording's mean
+    X, Z is the hand there); x forward, y left, z up, right arm."""
+    if isinstance(recording, (list, tuple)):
+        return _estimate("stochastic", list(recording), options)
+    return _estimate("stochastic", [recording], options)
 
 
-def estimate_stochastic(recording: RecordingLike, *, nperseg: Optional[int] = None,
-                        noverlap: Optional[int] = None,
-                        band_hz: Tuple[float, float] = (0.5, 10.0),
-                        shoulder: Optional[Sequence[float]] = None) -> Result:
-    """Park & Chang (2011)'s stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric fit.
-
-    Parameters
-    ----------
-    shoulder : (upper_arm_m, forearm_m, elbow_deg, flexion_deg, abduction_deg, rotation_deg)
-        Estimate the shoulder's joint impedance as Park & Chang (2011) does (``limpid estimate
-        stochastic --shoulder``): hand X, Z become flexion ``q1`` and abduction ``q2``,
-        forces torques ``J_h^T F`` (eq. (3)), and ``theta``/``tauy``/``utheta`` internal
-        rotation ``q3``, before the spectra. The posture is the operating point (the
-        recording's mean X, Z is the hand there); x forward, y left, z up, right arm.
-    """
-    seg = None if nperseg is None else _integer("nperseg", nperseg, minimum=2)
-    ov = None if noverlap is None else _integer("noverlap", noverlap, minimum=0)
-    lo, hi = band_hz
-    band = (_number("band_hz", lo), _number("band_hz", hi))
-    posture = None
-    if shoulder is not None:
-        try:
-            values = list(shoulder)
-        except TypeError:
-            raise ValueError(f"shoulder: expected 6 numbers (upper arm, forearm, elbow, flexion, "
-                             f"abduction, rotation), found {shoulder!r}") from None
-        if len(values) != 6:
-            raise ValueError(f"shoulder: expected 6 numbers (upper arm, forearm, elbow, flexion, "
-                             f"abduction, rotation), found {len(values)}")
-        l1, l2, e, f, a, r = (_number("shoulder", v) for v in values)
-        posture = (l1, l2, e, f, a, r)
-    return Result(json.loads(_limpid.estimate_stochastic(_recording(recording), seg, ov, band,
-                                                         posture)))
-
-
-def estimate_reflex(recording: RecordingLike, *, position: str = "q1", torque: str = "tau1",
-                    rate_hz: float = 100.0, max_delay_s: float = 0.15,
-                    rectify_first: bool = False) -> Result:
+def estimate_reflex(recording: RecordingLike, **options: Any) -> Result:
     """Intrinsic and reflex joint stiffness by the parallel cascade (Kearney et al. 1997),
     as ``limpid estimate reflex --json``.
 
-    Parameters
-    ----------
-    recording : path, dict of arrays or DataFrame
-        Joint angle ``position`` (rad) and torque ``torque`` applied to the joint (N m)
-        under a stochastic perturbation, with time ``t`` (s).
-    rate_hz : float
-        Rate the data are decimated to before identification (default 100 Hz).
-    max_delay_s : float
-        Largest reflex delay scanned (default 0.15 s).
-    rectify_first : bool
-        Rectify the velocity before anti-aliasing (physical order) instead of after
-        (Kearney et al.'s method, default).
+    The recording holds joint angle ``position`` (rad) and torque ``torque`` applied to the
+    joint (N m) under a stochastic perturbation, with time ``t`` (s). Options (defaults:
+    ``limpid.request("reflex")``): ``position``, ``torque``, ``rate_hz`` (decimation before
+    identification), ``intrinsic_lags_s``, ``reflex_lags_s``, ``max_delay_s`` (largest
+    reflex delay scanned), ``rectify_first`` (rectify the velocity before anti-aliasing,
+    the physical order, instead of after, Kearney et al.'s method).
 
-    Returns
-    -------
-    Result
-        ``intrinsic`` (inertia, damping, stiffness with standard errors, IRF),
-        ``reflex`` (polarity, gain N m s/rad, delay_s, delay_interval_s, IRF),
-        ``fit`` (VAF in percent), ``cross_validated_vaf``, ``warnings``.
-    """
-    return Result(json.loads(_limpid.estimate_reflex(_recording(recording), position, torque,
-                                                     _number("rate_hz", rate_hz),
-                                                     _number("max_delay_s", max_delay_s),
-                                                     _flag("rectify_first", rectify_first))))
+    Returns ``intrinsic`` (inertia, damping, stiffness with standard errors, IRF),
+    ``reflex`` (polarity, gain N m s/rad, delay_s, delay_interval_s, IRF), ``fit`` (VAF in
+    percent), ``cross_validated_vaf``, ``warnings``."""
+    return _estimate("reflex", [recording], options)
 
 
-def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, *, window: str = "auto",
-                           offsets: str = "auto") -> Result:
-    """Patel, O'Neill & Artemiadis (2013)'s co-contraction analysis: index and stiffness per level."""
-    opts = {"window": _choice("window", window, ("auto", "trials", "onsets", "continuous")),
-            "offsets": _choice("offsets", offsets, ("auto", "fit", "rest"))}
-    return Result(json.loads(_limpid.estimate_cocontraction(_recording(recording), _recording(mvc), json.dumps(opts))))
+def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, **options: Any) -> Result:
+    """Patel, O'Neill & Artemiadis (2013)'s co-contraction analysis: index and stiffness per
+    level, as ``limpid estimate cocontraction``. Options (defaults:
+    ``limpid.request("cocontraction")``): ``tolerance`` and the preparation options of
+    :func:`estimate_linear`."""
+    return _estimate("cocontraction", [recording, mvc], options)
 
 
 class StudyOutcome:
@@ -769,6 +743,9 @@ def _value_errors(f: Any) -> Any:
         try:
             return f(*args, **kwargs)
         except (TypeError, OverflowError, IndexError) as e:
+            if isinstance(e, TypeError) and "unknown field" in str(e):
+                # an option the estimator does not have: a wrong call, as Python says
+                raise TypeError(f"{f.__name__}() got an unexpected keyword argument: {e}") from None
             raise ValueError(f"{f.__name__}: {e}") from e
 
     return checked
