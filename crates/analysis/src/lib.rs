@@ -19,7 +19,6 @@ pub mod demo;
 pub mod emg;
 pub mod linear;
 pub mod markers;
-pub mod protocol;
 pub mod reproduce;
 pub mod result;
 pub mod shapes;

@@ -354,7 +354,7 @@ impl ShoulderPosture {
         ] {
             if !(v > 0.0 && v <= 2.0) {
                 return Err(Error::invalid(
-                    "--shoulder",
+                    "shoulder",
                     if v.abs() < 1e6 {
                         format!("{name} must be in (0, 2] m, found {v}")
                     } else {
@@ -365,7 +365,7 @@ impl ShoulderPosture {
         }
         if !(self.elbow_deg.is_finite() && self.angles_deg.iter().all(|a| a.is_finite())) {
             return Err(Error::invalid(
-                "--shoulder",
+                "shoulder",
                 format!(
                     "angles must be finite degrees, found elbow {}, flexion, abduction, rotation {:?}",
                     self.elbow_deg, self.angles_deg

@@ -59,7 +59,7 @@ pub fn joint_space_recording(rec: &Recording, posture: &ShoulderPosture) -> Resu
     // NaN (a zero singular value over zero) counts as singular too
     if condition.is_nan() || condition >= SINGULAR_CONDITION {
         return Err(Error::invalid(
-            "--shoulder",
+            "shoulder",
             format!(
                 "at flexion {} deg, abduction {} deg the hand's X and Z do not determine the two angles (condition number of J_h {condition:.3e}); choose a posture away from it",
                 posture.angles_deg[0], posture.angles_deg[1]
@@ -102,7 +102,7 @@ pub fn joint_space_recording(rec: &Recording, posture: &ShoulderPosture) -> Resu
             .flexion_abduction_of(x[i] + dx, z[i] + dz, q)
             .ok_or_else(|| {
                 Error::invalid(
-                    "--shoulder",
+                    "shoulder",
                     format!(
                         "{}: row {}, columns x,z: the hand at ({}, {}) m about the posture cannot be reached by flexion and abduction of the arm given",
                         rec.path().display(),

@@ -1,6 +1,6 @@
 //! Whole studies (seed 001 Tables 1-5): subjects x configurations x
-//! recordings listed in a TOML manifest, processed in parallel, averaged
-//! across subjects per configuration and level.
+//! recordings listed in a TOML manifest, processed in parallel (in
+//! `limpid-app`), averaged across subjects per configuration and level (here).
 //!
 //! Manifest (paths relative to the manifest's folder):
 //!
@@ -25,16 +25,13 @@
 //! is listed with its error and left out of the means.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use rayon::prelude::*;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::cocontraction::{compare, estimate_cocontraction, CocontractionResult};
+use crate::cocontraction::{compare, CocontractionResult};
 use crate::emg::EmgParams;
-use limpid_core::{Error, Result};
-use limpid_ident::PrepareParams;
 
 /// The manifest file.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -70,25 +67,6 @@ pub struct Entry {
     pub file: PathBuf,
     /// Its MVC recording.
     pub mvc: PathBuf,
-}
-
-/// Read and check a manifest; relative paths are resolved against its folder.
-pub fn load_manifest(path: &Path) -> Result<Manifest> {
-    let text = limpid_core::files::read_text(path)?;
-    let mut m: Manifest =
-        toml::from_str(&text).map_err(|e| Error::settings(path, &text, e.span(), e.message()))?;
-    if m.recording.is_empty() {
-        return Err(Error::Format {
-            path: path.to_path_buf(),
-            message: "no [[recording]] entry: nothing to process".into(),
-        });
-    }
-    let base = path.parent().unwrap_or(Path::new("."));
-    for e in &mut m.recording {
-        e.file = base.join(&e.file);
-        e.mvc = base.join(&e.mvc);
-    }
-    Ok(m)
 }
 
 /// Tables 1-4 row: one configuration at one level.
@@ -218,62 +196,6 @@ pub fn study_emg(m: &Manifest) -> EmgParams {
         tolerance: m.study.tolerance.unwrap_or(0.1),
         ..EmgParams::default()
     }
-}
-
-/// One recording of a study: its co-contraction analysis, or why it failed
-/// (in one line; a panic in one recording, a bug, is caught as a failure too,
-/// so it cannot abort the study). Runs anywhere: a study may be spread over
-/// processes or machines and its outcomes joined by [`summarise`].
-pub fn process_entry(
-    e: &Entry,
-    params: &PrepareParams,
-    emg: &EmgParams,
-) -> std::result::Result<Processed, Failure> {
-    let run = || -> Result<CocontractionResult> {
-        let rec = limpid_io_read(&e.file)?;
-        let mvc = limpid_io_read(&e.mvc)?;
-        if !["x", "y", "z"].iter().all(|c| rec.has(c)) {
-            return Err(Error::Format {
-                path: e.file.clone(),
-                message: "study tables need 3-D recordings (x, y, z)".into(),
-            });
-        }
-        estimate_cocontraction(&rec, &mvc, params, emg)
-    };
-    limpid_core::error::catch_panic(&e.file, "estimation", run)
-        .map(|result| Processed {
-            subject: e.subject.clone(),
-            configuration: e.configuration.clone(),
-            result,
-        })
-        .map_err(|err| Failure {
-            subject: e.subject.clone(),
-            configuration: e.configuration.clone(),
-            file: e.file.display().to_string(),
-            error: err.to_string(),
-        })
-}
-
-/// Process every recording (in parallel); `progress` is called once per recording.
-pub fn run_study(
-    m: &Manifest,
-    params: &PrepareParams,
-    progress: &(dyn Fn() + Sync),
-) -> StudyResult {
-    let emg = study_emg(m);
-    let outcomes: Vec<std::result::Result<Processed, Failure>> = m
-        .recording
-        .par_iter()
-        .map(|e| {
-            let out = process_entry(e, params, &emg);
-            progress();
-            out
-        })
-        .collect();
-    summarise(
-        m.study.name.clone().unwrap_or_else(|| "study".into()),
-        outcomes,
-    )
 }
 
 /// Tables 1-5 from the outcomes of a study's recordings (in the manifest's
@@ -407,83 +329,6 @@ pub fn summarise(
     }
 }
 
-/// A virtual seed 001 study: `subjects` drawn from the seed 001 population,
-/// each in the 7 arm configurations, simulated (`limpid_lab`) and written to
-/// `dir` as `s<subject>_c<config>.parquet`, its MVC recording and a
-/// `.truth.json` with the stiffness per level, with the manifest
-/// `study.toml` that `run_study` reads. Returns the number of recordings and
-/// the manifest's path; `progress` is called once per recording.
-///
-/// `realistic`: the subjects of [`limpid_lab::cocontraction::seed001_realistic_population`]
-/// (seed 001 Tables 1-5, reflex, [`limpid_lab::NoiseModel::realistic`]) and,
-/// as seed 001 does, one MVC — configuration 5's — for all configurations;
-/// otherwise the clean population with an MVC per recording.
-pub fn simulate_study(
-    dir: &Path,
-    subjects: usize,
-    realistic: bool,
-    seed: u64,
-    progress: &(dyn Fn() + Sync),
-) -> Result<(usize, PathBuf)> {
-    use limpid_lab::cocontraction::{
-        seed001_population, seed001_realistic_population, simulate_cocontraction,
-        CocontractionProtocol,
-    };
-    limpid_core::files::create_dir(dir)?;
-    let (population, noise) = if realistic {
-        (
-            seed001_realistic_population(subjects, seed),
-            limpid_lab::NoiseModel::realistic(),
-        )
-    } else {
-        (
-            seed001_population(subjects, seed),
-            limpid_lab::NoiseModel::default(),
-        )
-    };
-    let protocol = CocontractionProtocol::seed001();
-    let entries: Vec<String> = population
-        .par_iter()
-        .map(|(s, c, subject)| -> Result<String> {
-            let seed = seed.wrapping_mul(10_000) + (*s as u64) * 100 + *c as u64;
-            let (rec, mvc) = simulate_cocontraction(subject, &protocol, &noise, seed)?;
-            let file = format!("s{s}_c{c}.parquet");
-            let mvc_file = if realistic {
-                format!("s{s}_c5.mvc.parquet")
-            } else {
-                format!("s{s}_c{c}.mvc.parquet")
-            };
-            limpid_io::write_recording(&rec, dir.join(&file))?;
-            if !realistic || *c == 5 {
-                limpid_io::write_recording(&mvc, dir.join(&mvc_file))?;
-            }
-            let truth = serde_json::json!({
-                "levels": protocol.levels.iter().map(|l| {
-                    serde_json::json!({"level": l, "stiffness": crate::Matrix::from(subject.stiffness(*l))})
-                }).collect::<Vec<_>>(),
-            });
-            let text = serde_json::to_string_pretty(&truth).expect("truth serialises");
-            limpid_core::files::write_file(&dir.join(format!("s{s}_c{c}.truth.json")), text.as_bytes())?;
-            progress();
-            Ok(format!(
-                "[[recording]]\nsubject = \"{s}\"\nconfiguration = \"{c}\"\nfile = \"{file}\"\nmvc = \"{mvc_file}\"\n"
-            ))
-        })
-        .collect::<Result<_>>()?;
-    let manifest = format!(
-        "# virtual Patel, O'Neill & Artemiadis (2013) study: {subjects} {} subjects x 7 configurations x 4 levels x 18 perturbations\n[study]\nname = \"virtual Patel, O'Neill & Artemiadis (2013) study\"\n\n{}",
-        if realistic { "realistic" } else { "ideal" },
-        entries.join("\n")
-    );
-    let path = dir.join("study.toml");
-    limpid_core::files::write_file(&path, manifest.as_bytes())?;
-    Ok((population.len(), path))
-}
-
-fn limpid_io_read(path: &Path) -> Result<limpid_core::Recording> {
-    limpid_io::read_recording(path)
-}
-
 /// Numbers in numeric order, then text.
 fn natural(a: &str, b: &str) -> std::cmp::Ordering {
     match (a.parse::<f64>(), b.parse::<f64>()) {
@@ -493,147 +338,9 @@ fn natural(a: &str, b: &str) -> std::cmp::Ordering {
 }
 
 /// A table cell: the value with `decimals`, or `missing` when no recording had it.
-fn cell(v: Option<f64>, decimals: usize, missing: &str) -> String {
+pub fn cell(v: Option<f64>, decimals: usize, missing: &str) -> String {
     v.filter(|v| v.is_finite())
         .map_or(missing.to_string(), |v| format!("{v:.decimals$}"))
-}
-
-/// Write `tables.csv`, `rotation.csv`, `study.json`, `tables.md` into `dir`.
-pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
-    limpid_core::files::create_dir(dir)?;
-    let write = |name: &str, text: String| -> Result<PathBuf> {
-        let p = dir.join(name);
-        limpid_core::files::write_file(&p, text.as_bytes())?;
-        Ok(p)
-    };
-    let mut csv = String::from(
-        "configuration,level,subjects,cocontraction_index,cocontraction_index_sd,kxx,kxx_sd,kyy,kyy_sd,kzz,kzz_sd,k_max_a,k_max_a_sd,k1,k1_sd,k2,k2_sd,k3,k3_sd\n",
-    );
-    // every digit, shortest round-trip (exponents for the tiny and huge); a
-    // value no recording has is an empty cell, never "NaN"
-    let cell = |v: Option<f64>, _decimals: usize| {
-        v.filter(|v| v.is_finite())
-            .map_or(String::new(), |v| limpid_core::CsvNumber(v).to_string())
-    };
-    for l in &r.levels {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            l.configuration,
-            l.level,
-            l.subjects,
-            cell(l.cocontraction_index, 4),
-            cell(l.sd.cocontraction_index, 4),
-            cell(l.kxx, 2),
-            cell(l.sd.kxx, 2),
-            cell(l.kyy, 2),
-            cell(l.sd.kyy, 2),
-            cell(l.kzz, 2),
-            cell(l.sd.kzz, 2),
-            cell(l.k_max_a, 2),
-            cell(l.sd.k_max_a, 2),
-            cell(l.k1, 2),
-            cell(l.sd.k1, 2),
-            cell(l.k2, 2),
-            cell(l.sd.k2, 2),
-            cell(l.k3, 2),
-            cell(l.sd.k3, 2)
-        );
-    }
-    let mut rot = String::from("configuration,from_level,to_level,subjects,rotation_primary_deg,rotation_secondary_deg,rotation_tertiary_deg,change_primary_percent,change_secondary_percent,change_tertiary_percent\n");
-    for x in &r.rotation {
-        let g = |v: &Vec<f64>, i: usize| {
-            v.get(i)
-                .filter(|x| x.is_finite())
-                .map_or(String::new(), |x| limpid_core::CsvNumber(*x).to_string())
-        };
-        let _ = writeln!(
-            rot,
-            "{},{},{},{},{},{},{},{},{},{}",
-            x.configuration,
-            x.from_level,
-            x.to_level,
-            x.subjects,
-            g(&x.rotation_deg, 0),
-            g(&x.rotation_deg, 1),
-            g(&x.rotation_deg, 2),
-            g(&x.principal_change_percent, 0),
-            g(&x.principal_change_percent, 1),
-            g(&x.principal_change_percent, 2)
-        );
-    }
-    // study.json keeps every number but not the fit traces (150 kB per level
-    // and recording); each recording's full result is in recordings/
-    let mut slim = r.clone();
-    for p in &mut slim.recordings {
-        for l in &mut p.result.levels {
-            let t = &mut l.estimate.fit.traces;
-            t.time.clear();
-            t.measured.iter_mut().for_each(Vec::clear);
-            t.predicted.iter_mut().for_each(Vec::clear);
-        }
-    }
-    let json = study_json(&slim).map_err(|e| Error::Format {
-        path: dir.join("study.json"),
-        message: e.to_string(),
-    })?;
-    let mut written = vec![
-        write("tables.csv", csv)?,
-        write("rotation.csv", rot)?,
-        write("study.json", json)?,
-        write("tables.md", markdown(r))?,
-    ];
-    let per = dir.join("recordings");
-    limpid_core::files::create_dir(&per)?;
-    let mut used = std::collections::HashSet::new();
-    for p in &r.recordings {
-        // a subject may have several recordings of one configuration: number them
-        let stem = format!(
-            "recordings/s{}_c{}",
-            file_safe(&p.subject),
-            file_safe(&p.configuration)
-        );
-        let mut name = format!("{stem}.json");
-        let mut k = 2;
-        while !used.insert(name.clone()) {
-            name = format!("{stem}_{k}.json");
-            k += 1;
-        }
-        let doc =
-            crate::result::Document::new(crate::result::Estimate::Cocontraction(p.result.clone()));
-        written.push(write(&name, doc.to_json())?);
-    }
-    Ok(written)
-}
-
-/// An id as part of a file name: letters, digits, '-' and '_' kept, others '_'.
-fn file_safe(id: &str) -> String {
-    id.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
-}
-
-/// The study's result document (`crate::result`, kind "study"), serialised
-/// without copying the study.
-fn study_json(r: &StudyResult) -> serde_json::Result<String> {
-    #[derive(Serialize)]
-    struct StudyDocument<'a> {
-        schema: u32,
-        kind: &'static str,
-        #[serde(flatten)]
-        study: &'a StudyResult,
-    }
-    serde_json::to_string_pretty(&StudyDocument {
-        schema: crate::result::SCHEMA_VERSION,
-        kind: "study",
-        study: r,
-    })
 }
 
 /// Seed 001's tables as Markdown.
@@ -703,30 +410,4 @@ pub fn markdown(r: &StudyResult) -> String {
         }
     }
     md
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::result::{Document, Estimate};
-
-    #[test]
-    fn the_borrowed_study_document_is_the_result_contract() {
-        let study = StudyResult {
-            name: "t".into(),
-            levels: vec![],
-            rotation: vec![],
-            failures: vec![Failure {
-                subject: "s1".into(),
-                configuration: "c1".into(),
-                file: "a.csv".into(),
-                error: "bad".into(),
-            }],
-            recordings: vec![],
-        };
-        let borrowed = study_json(&study).unwrap();
-        let owned = serde_json::to_string_pretty(&Document::new(Estimate::Study(study))).unwrap();
-        assert_eq!(borrowed, owned);
-        assert!(Document::from_json("study.json", &borrowed).is_ok());
-    }
 }

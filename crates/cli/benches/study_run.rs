@@ -3,7 +3,7 @@
 //! perturbations (28 Parquet recordings + MVC files), run in parallel.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use limpid_analysis::study::{load_manifest, run_study};
+use limpid_app::study::{load_manifest, run_study};
 use limpid_ident::PrepareParams;
 use limpid_lab::cocontraction::{
     seed001_population, simulate_cocontraction, CocontractionProtocol,

@@ -1,10 +1,10 @@
 //! `limpid calibrate`: the coverage and verdict study of
-//! [`limpid_analysis::calibrate`], printed as a table (or JSON).
+//! [`limpid_app::calibrate`], printed as a table (or JSON).
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use limpid_analysis::calibrate::{calibrate, sweeps_for, METHODS};
 use limpid_analysis::result::{Document, Estimate};
+use limpid_app::calibrate::{calibrate, sweeps_for, METHODS};
 
 use crate::CliResult;
 

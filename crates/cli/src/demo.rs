@@ -1,13 +1,13 @@
 //! `limpid demo`: seed 000's 3-D study on a built-in virtual subject
-//! ([`limpid_analysis::demo`] runs it; this prints and writes it).
+//! ([`limpid_app::demo`] runs it; this prints and writes it).
 
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use limpid_analysis::demo::{demo_csv, run_demo, DemoSubject};
 use limpid_analysis::linear::MatrixKind;
 use limpid_analysis::result::{Document, Estimate};
+use limpid_app::demo::{demo_csv, run_demo, DemoSubject};
 use limpid_core::criteria::MatrixVerdict;
 use limpid_core::Matrix;
 use limpid_lab::Profile;

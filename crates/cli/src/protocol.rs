@@ -111,7 +111,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
         },
         ProtocolCommand::Check { protocol, json } => {
             let (d, report) = read_design(&protocol)?;
-            let predicted = limpid_analysis::protocol::predicted_condition(&d)?;
+            let predicted = limpid_app::protocol::predicted_condition(&d)?;
             if json {
                 let mut v = serde_json::to_value(&report)?;
                 v["predicted_condition_number"] = serde_json::json!(predicted);

@@ -1,10 +1,10 @@
 //! `limpid reproduce`: each paper's experiment on the virtual lab, its numbers
-//! beside the paper's ([`limpid_analysis::reproduce`]).
+//! beside the paper's ([`limpid_app::reproduce`]).
 
 use std::path::PathBuf;
 
 use clap::Args;
-use limpid_analysis::reproduce::{reproduce, text, Seed};
+use limpid_app::reproduce::{reproduce, text, Seed};
 
 use crate::CliResult;
 

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use limpid_analysis::study::{load_manifest, run_study, simulate_study, write_tables};
+use limpid_app::study::{load_manifest, run_study, simulate_study, write_tables};
 use limpid_ident::PrepareParams;
 
 use crate::CliResult;
@@ -104,7 +104,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 );
             }
             if args.print {
-                println!("\n{}", limpid_analysis::study::markdown(result));
+                println!("\n{}", limpid_app::study::markdown(result));
             }
             let (per_recording, tables): (Vec<_>, Vec<_>) = files
                 .iter()

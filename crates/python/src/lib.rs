@@ -478,7 +478,7 @@ fn estimate(
 /// `{"study": {"name", "tolerance"}, "recording": [{subject, configuration, file, mvc}]}`.
 #[pyfunction]
 fn study_entries(manifest: std::path::PathBuf) -> PyResult<String> {
-    let m = limpid_analysis::study::load_manifest(&manifest).map_err(err)?;
+    let m = limpid_app::study::load_manifest(&manifest).map_err(err)?;
     serde_json::to_string(&m).map_err(value_err)
 }
 
@@ -486,7 +486,7 @@ fn study_entries(manifest: std::path::PathBuf) -> PyResult<String> {
 /// study's tolerance: JSON text of `{"Ok": processed}` or `{"Err": failure}`.
 #[pyfunction]
 fn study_process(py: Python<'_>, entry: &str, tolerance: f64) -> PyResult<String> {
-    use limpid_analysis::study::{process_entry, Entry};
+    use limpid_app::study::{process_entry, Entry};
     let e: Entry = serde_json::from_str(entry).map_err(value_err)?;
     let emg = limpid_analysis::emg::EmgParams {
         tolerance,
@@ -508,7 +508,7 @@ fn study_combine(
     outcomes: Vec<String>,
     out: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
-    use limpid_analysis::study::{Failure, Processed};
+    use limpid_app::study::{Failure, Processed};
     let parsed = outcomes
         .iter()
         .enumerate()
@@ -521,7 +521,7 @@ fn study_combine(
             })
         })
         .collect::<PyResult<Vec<_>>>()?;
-    let result = detached(py, || limpid_analysis::study::summarise(name, parsed));
+    let result = detached(py, || limpid_app::study::summarise(name, parsed));
     finish_study(result, out)
 }
 
@@ -534,15 +534,15 @@ fn study_run(
     manifest: std::path::PathBuf,
     out: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
-    let m = limpid_analysis::study::load_manifest(&manifest).map_err(err)?;
+    let m = limpid_app::study::load_manifest(&manifest).map_err(err)?;
     let result = detached(py, || {
-        limpid_analysis::study::run_study(&m, &limpid_ident::PrepareParams::default(), &|| {})
+        limpid_app::study::run_study(&m, &limpid_ident::PrepareParams::default(), &|| {})
     });
     finish_study(result, out)
 }
 
 fn finish_study(
-    result: limpid_analysis::study::StudyResult,
+    result: limpid_app::study::StudyResult,
     out: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
     if result.recordings.is_empty() {
@@ -555,7 +555,7 @@ fn finish_study(
         )));
     }
     if let Some(dir) = out {
-        limpid_analysis::study::write_tables(&result, &dir).map_err(err)?;
+        limpid_app::study::write_tables(&result, &dir).map_err(err)?;
     }
     Ok(document(Estimate::Study(result)))
 }

@@ -1,0 +1,88 @@
+//! The virtual experiment behind `limpid demo`: seed 000's 3-D study on a
+//! subject whose matrices are known (seed 000 Table I, subject 1).
+//!
+//! Six start points, 16 centre-out perturbations each (3 cm, 3 s; 6 s for the
+//! sinusoid), a position-controlled robot, an F/T sensor with per-trial
+//! offset, drift and noise (`limpid_lab`). Every start point is estimated
+//! with the linear estimator (seed 000 eq. (3)-(8)) and compared with the
+//! subject's true matrices by the relative Frobenius error
+//! ([`limpid_analysis::demo`] holds the result types).
+
+use limpid_core::{Matrix, Result};
+use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
+use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
+use rayon::prelude::*;
+
+pub use limpid_analysis::demo::*;
+use limpid_analysis::linear::linear_result;
+
+fn run_point(
+    p: &Posture,
+    protocol: &CentreOut,
+    noise: &NoiseModel,
+    seed: u64,
+) -> Result<DemoPoint> {
+    let rec = simulate_centre_out(p, protocol, noise, seed)?;
+    let prepared = prepare(&rec, &PrepareParams::default())?;
+    let est = fit_linear(&prepared, &LinearParams::default())?;
+    let result = linear_result(&est, &prepared);
+    let (k, b, m) = (
+        Matrix::from(p.stiffness),
+        Matrix::from(p.damping),
+        Matrix::from(p.inertia),
+    );
+    Ok(DemoPoint {
+        start_point: p.name.clone(),
+        position: [p.start.x, p.start.y, p.start.z],
+        stiffness_error_percent: relative_error_percent(&result.stiffness, &k),
+        damping_error_percent: relative_error_percent(&result.damping, &b),
+        inertia_error_percent: relative_error_percent(&result.inertia, &m),
+        true_stiffness: k,
+        true_damping: b,
+        true_inertia: m,
+        estimate: result,
+    })
+}
+
+/// Simulate and estimate every start point (in parallel); `progress` is
+/// called once per start point.
+pub fn run_demo(
+    profile: Profile,
+    subject: DemoSubject,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> Result<DemoResult> {
+    let protocol = CentreOut::seed000(profile);
+    let mut postures = seed000_subject1();
+    let noise = match subject {
+        DemoSubject::Realistic => {
+            for (p, max_a) in postures
+                .iter_mut()
+                .zip(limpid_lab::realistic::SEED000_K_MAX_A)
+            {
+                p.stiffness += limpid_lab::realistic::antisymmetric_part(max_a);
+            }
+            NoiseModel::realistic()
+        }
+        DemoSubject::Ideal => NoiseModel::default(),
+    };
+    let points = postures
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let r = run_point(p, &protocol, &noise, seed.wrapping_mul(1000) + i as u64);
+            progress();
+            r
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(DemoResult {
+        subject,
+        profile: format!("{profile:?}").to_lowercase(),
+        directions: protocol.directions.len(),
+        radius_m: protocol.radius_m,
+        motion_s: protocol.motion_s,
+        sample_rate_hz: protocol.sample_rate,
+        seed,
+        points,
+    })
+}

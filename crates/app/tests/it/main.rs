@@ -1,0 +1,4 @@
+//! limpid-app's integration tests: one binary (see docs/src/contributing.md).
+
+mod demo;
+mod requests;
