@@ -209,7 +209,11 @@ fn stochastic(r: &StochasticRequest, recordings: Vec<Recording>) -> Result<Estim
     params.check()?;
     let mut est = limpid_ident::stochastic::estimate_stochastic_pooled(&recordings, &params)?;
     if let Some(path) = &r.expected {
-        let expected = limpid_ident::stochastic::ExpectedModel::read(std::path::Path::new(path))?;
+        let path = std::path::Path::new(path);
+        let expected = limpid_ident::stochastic::ExpectedModel::from_json(
+            path,
+            &limpid_core::files::read_text(path)?,
+        )?;
         est.accuracy = Some(limpid_ident::stochastic::accuracy(
             &est,
             &expected,

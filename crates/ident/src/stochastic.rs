@@ -124,11 +124,11 @@ pub struct ExpectedModel {
 }
 
 impl ExpectedModel {
-    /// Read `inertia`, `damping`, `stiffness` from a JSON file such as a
-    /// recording's `*.truth.json` (other keys are ignored).
-    pub fn read(path: &std::path::Path) -> Result<Self> {
-        let text = limpid_core::files::read_text(path)?;
-        let model: ExpectedModel = serde_json::from_str(&text).map_err(|e| Error::Format {
+    /// `inertia`, `damping`, `stiffness` from the JSON text of a file such as
+    /// a recording's `*.truth.json` (other keys are ignored); `path` names the
+    /// file in errors (`limpid-app` reads it).
+    pub fn from_json(path: &std::path::Path, text: &str) -> Result<Self> {
+        let model: ExpectedModel = serde_json::from_str(text).map_err(|e| Error::Format {
             path: path.to_path_buf(),
             message: format!(
                 "line {}, column {}: expected square matrices of numbers under inertia, damping and stiffness ({e})",
