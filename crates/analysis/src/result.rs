@@ -112,13 +112,20 @@ fn rfc3339(t: std::time::SystemTime) -> String {
 impl Run {
     /// This process: its arguments, now, and the given input files.
     pub fn of_this_process(inputs: &[&std::path::Path]) -> Run {
+        // args_os: a path need not be UTF-8 (std::env::args would panic)
+        let command_line = std::env::args_os()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect::<Vec<_>>()
+            .join(" ");
+        Run::of_call(command_line, inputs)
+    }
+
+    /// A call described by `command_line` (e.g. a Python function), now, and
+    /// the given input files (size and date where each is a file).
+    pub fn of_call(command_line: String, inputs: &[&std::path::Path]) -> Run {
         Run {
             limpid_version: env!("CARGO_PKG_VERSION").into(),
-            // args_os: a path need not be UTF-8 (std::env::args would panic)
-            command_line: std::env::args_os()
-                .map(|a| a.to_string_lossy().into_owned())
-                .collect::<Vec<_>>()
-                .join(" "),
+            command_line,
             created_utc: rfc3339(std::time::SystemTime::now()),
             inputs: inputs
                 .iter()

@@ -35,7 +35,7 @@ pub fn run(args: RerunArgs) -> CliResult {
     };
     let Some(request) = run.request else {
         return Err(format!(
-            "{name}: its run block holds no request (a workflow, or limpid before 0.1's requests); its command line was: {}",
+            "{name}: its run block holds no request (made by a workflow, or before results recorded their request); its command line was: {}",
             run.command_line
         )
         .into());

@@ -440,6 +440,14 @@ fn build_request(
     })
 }
 
+/// The package function of a method.
+fn python_name(method: &str) -> String {
+    match method {
+        "window_sweep" => "window_sweep".into(),
+        other => format!("estimate_{other}"),
+    }
+}
+
 /// The request flat keyword options make, as a dict (what a result's run
 /// block records; `request(method, {})` shows every default).
 #[pyfunction]
@@ -465,13 +473,30 @@ fn estimate(
     options: &Bound<'_, PyDict>,
 ) -> PyResult<String> {
     let checked = build_request(method, options)?.check().map_err(err)?;
+    // files by their path, arrays as "<arrays>": the run block says which
+    let names: Vec<std::path::PathBuf> = recordings
+        .iter()
+        .map(|r| {
+            r.extract::<std::path::PathBuf>()
+                .unwrap_or_else(|_| "<arrays>".into())
+        })
+        .collect();
     let recordings = recordings
         .iter()
         .map(recording)
         .collect::<PyResult<Vec<_>>>()?;
-    detached(py, move || limpid_app::estimate::run(&checked, recordings))
-        .map(|e| e.document.to_json())
-        .map_err(err)
+    let mut document = detached(py, || limpid_app::estimate::run(&checked, recordings))
+        .map_err(err)?
+        .document;
+    let inputs: Vec<&Path> = names.iter().map(|p| p.as_path()).collect();
+    document.run = Some(
+        limpid_analysis::result::Run::of_call(
+            format!("Python: limpid.{}", python_name(method)),
+            &inputs,
+        )
+        .with_request(checked.request()),
+    );
+    Ok(document.to_json())
 }
 
 /// A study manifest with its paths resolved: JSON text of

@@ -95,3 +95,22 @@ def test_bad_options_are_named():
     # NaN is kept as NaN and refused by the check, not turned into a default
     with pytest.raises(ValueError, match="cutoff"):
         limpid.estimate_linear("r.csv", cutoff_hz=float("nan"))
+
+
+def test_a_python_result_records_its_request_and_the_cli_reruns_it(tmp_path):
+    from conftest import examples
+    path = examples("ankle") / "ex_ankle.csv"
+    result = limpid.estimate_reflex(path, rate_hz=200)
+    d = result.to_dict()
+    assert d["run"]["request"] == limpid.request("reflex", rate_hz=200)
+    assert d["run"]["inputs"][0]["path"] == str(path)
+    assert d["run"]["command_line"] == "Python: limpid.estimate_reflex"
+    if not CLI:
+        pytest.skip("LIMPID_CLI is not set (scripts/test.sh sets it)")
+    saved = tmp_path / "reflex.json"
+    saved.write_text(json.dumps(d))
+    out = subprocess.run([CLI, "rerun", str(saved), "--json"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    again = json.loads(out.stdout)
+    assert again["intrinsic"]["stiffness"] == d["intrinsic"]["stiffness"]
+    assert again["run"]["request"] == d["run"]["request"]

@@ -16,4 +16,5 @@ mod protocol;
 mod reflex;
 mod report;
 mod reproduce;
+mod rerun;
 mod stochastic;
