@@ -9,6 +9,9 @@
 //! name = "virtual Patel, O'Neill & Artemiadis (2013)"   # optional
 //! tolerance = 0.1             # optional, band around the target level
 //!
+//! [study.request.prepare]     # optional: `limpid estimate cocontraction`'s request
+//! cutoff_hz = 20
+//!
 //! [[recording]]
 //! subject = "1"
 //! configuration = "4"
@@ -31,7 +34,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::cocontraction::{compare, CocontractionResult};
-use crate::emg::EmgParams;
+use limpid_ident::request::CocontractionRequest;
 
 /// The manifest file.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -51,8 +54,31 @@ pub struct Manifest {
 pub struct StudyMeta {
     /// Study name for the tables.
     pub name: Option<String>,
-    /// Half-width of the band around each target level (default 0.1).
+    /// Half-width of the band around each target level (the request's
+    /// default when absent); the same as `request.tolerance`, give one.
     pub tolerance: Option<f64>,
+    /// How every recording is analysed: `limpid estimate cocontraction`'s
+    /// request (`[study.request]` with `tolerance`, `[study.request.prepare]`
+    /// with the preparation options); absent: the defaults.
+    pub request: Option<CocontractionRequest>,
+}
+
+impl StudyMeta {
+    /// The request every recording of the study is run with.
+    pub fn request(&self) -> limpid_core::Result<CocontractionRequest> {
+        match (&self.request, self.tolerance) {
+            (Some(_), Some(_)) => Err(limpid_core::Error::invalid(
+                "study.tolerance",
+                "give the tolerance once: as study.tolerance or as study.request.tolerance",
+            )),
+            (Some(r), None) => Ok(r.clone()),
+            (None, Some(tolerance)) => Ok(CocontractionRequest {
+                tolerance,
+                ..CocontractionRequest::default()
+            }),
+            (None, None) => Ok(CocontractionRequest::default()),
+        }
+    }
 }
 
 /// One recording of one subject in one configuration.
@@ -188,14 +214,6 @@ pub struct StudyResult {
     pub failures: Vec<Failure>,
     /// Every processed recording.
     pub recordings: Vec<Processed>,
-}
-
-/// The EMG settings of a study (its tolerance band around each level).
-pub fn study_emg(m: &Manifest) -> EmgParams {
-    EmgParams {
-        tolerance: m.study.tolerance.unwrap_or(0.1),
-        ..EmgParams::default()
-    }
 }
 
 /// Tables 1-5 from the outcomes of a study's recordings (in the manifest's

@@ -9,11 +9,11 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use limpid_analysis::cocontraction::{estimate_cocontraction, CocontractionResult};
-use limpid_analysis::emg::EmgParams;
+use limpid_analysis::cocontraction::CocontractionResult;
+use limpid_analysis::result::Estimate;
 pub use limpid_analysis::study::*;
 use limpid_core::{Error, Result};
-use limpid_ident::PrepareParams;
+use limpid_ident::request::{CocontractionRequest, Request};
 
 /// Read and check a manifest; relative paths are resolved against its folder.
 pub fn load_manifest(path: &Path) -> Result<Manifest> {
@@ -26,6 +26,13 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
             message: "no [[recording]] entry: nothing to process".into(),
         });
     }
+    // the request is checked here, at the boundary, not once per recording
+    Request::Cocontraction(m.study.request()?)
+        .check()
+        .map_err(|e| Error::Format {
+            path: path.to_path_buf(),
+            message: format!("[study.request]: {e}"),
+        })?;
     let base = path.parent().unwrap_or(Path::new("."));
     for e in &mut m.recording {
         e.file = base.join(&e.file);
@@ -40,10 +47,10 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
 /// processes or machines and its outcomes joined by [`summarise`].
 pub fn process_entry(
     e: &Entry,
-    params: &PrepareParams,
-    emg: &EmgParams,
+    request: &CocontractionRequest,
 ) -> std::result::Result<Processed, Failure> {
     let run = || -> Result<CocontractionResult> {
+        let checked = Request::Cocontraction(request.clone()).check()?;
         let rec = limpid_io_read(&e.file)?;
         let mvc = limpid_io_read(&e.mvc)?;
         if !["x", "y", "z"].iter().all(|c| rec.has(c)) {
@@ -52,7 +59,13 @@ pub fn process_entry(
                 message: "study tables need 3-D recordings (x, y, z)".into(),
             });
         }
-        estimate_cocontraction(&rec, &mvc, params, emg)
+        match crate::estimate::run(&checked, vec![rec, mvc])?
+            .document
+            .estimate
+        {
+            Estimate::Cocontraction(result) => Ok(result),
+            _ => unreachable!("a co-contraction request gives a co-contraction result"),
+        }
     };
     limpid_core::error::catch_panic(&e.file, "estimation", run)
         .map(|result| Processed {
@@ -68,26 +81,23 @@ pub fn process_entry(
         })
 }
 
-/// Process every recording (in parallel); `progress` is called once per recording.
-pub fn run_study(
-    m: &Manifest,
-    params: &PrepareParams,
-    progress: &(dyn Fn() + Sync),
-) -> StudyResult {
-    let emg = study_emg(m);
+/// Process every recording (in parallel) with the manifest's request;
+/// `progress` is called once per recording.
+pub fn run_study(m: &Manifest, progress: &(dyn Fn() + Sync)) -> Result<StudyResult> {
+    let request = m.study.request()?;
     let outcomes: Vec<std::result::Result<Processed, Failure>> = m
         .recording
         .par_iter()
         .map(|e| {
-            let out = process_entry(e, params, &emg);
+            let out = process_entry(e, &request);
             progress();
             out
         })
         .collect();
-    summarise(
+    Ok(summarise(
         m.study.name.clone().unwrap_or_else(|| "study".into()),
         outcomes,
-    )
+    ))
 }
 
 /// A virtual seed 001 study: `subjects` drawn from the seed 001 population,

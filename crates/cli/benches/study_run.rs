@@ -4,7 +4,6 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use limpid_app::study::{load_manifest, run_study};
-use limpid_ident::PrepareParams;
 use limpid_lab::cocontraction::{
     seed001_population, simulate_cocontraction, CocontractionProtocol,
 };
@@ -41,7 +40,7 @@ fn bench(c: &mut Criterion) {
     group.bench_with_input(
         BenchmarkId::new("virtual_seed001", "4x7x4x18"),
         &manifest,
-        |b, m| b.iter(|| run_study(m, &PrepareParams::default(), &|| {})),
+        |b, m| b.iter(|| run_study(m, &|| {})),
     );
     group.finish();
 }

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use limpid_app::study::{load_manifest, run_study, simulate_study, write_tables};
-use limpid_ident::PrepareParams;
 
 use crate::CliResult;
 
@@ -66,7 +65,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
         StudyCommand::Run(args) => {
             let manifest = load_manifest(&args.manifest)?;
             let progress = bar(manifest.recording.len(), "processing recordings")?;
-            let result = run_study(&manifest, &PrepareParams::default(), &|| progress.inc(1));
+            let result = run_study(&manifest, &|| progress.inc(1))?;
             progress.finish_and_clear();
             let ok = result.recordings.len();
             if ok == 0 {

@@ -37,7 +37,8 @@ pub trait Estimator {
     }
 }
 
-fn positive(name: &str, v: f64) -> Result<()> {
+/// `v` finite and above zero, or an error naming `name`.
+pub(crate) fn positive(name: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {

@@ -13,6 +13,7 @@ use limpid_core::{Error, FrameTransform, Result};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use crate::estimator::positive;
 use crate::planar::{Arm, PlanarPrepare};
 use crate::prepare::{Derivative, Offsets, PrepareParams, Windowing};
 use crate::reflex::ReflexParams;
@@ -456,17 +457,6 @@ fn finite(name: &str, v: f64) -> Result<()> {
         Err(Error::invalid(
             name,
             format!("expected a finite number, found {v}"),
-        ))
-    }
-}
-
-fn positive(name: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            name,
-            format!("expected a positive number, found {v}"),
         ))
     }
 }

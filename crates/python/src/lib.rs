@@ -422,6 +422,15 @@ fn build_request(
         }
         match &nested {
             Some((_, names)) if names.contains(&name) => inner.set_item(name, value)?,
+            // the nested part itself, as a request's dict holds it
+            Some((part, _)) if name == *part => {
+                let given = value
+                    .cast::<PyDict>()
+                    .map_err(|_| value_err(format!("invalid {part}: expected a dict")))?;
+                for (k, v) in given.iter() {
+                    inner.set_item(k, v)?;
+                }
+            }
             _ => top.set_item(name, value)?,
         }
     }
@@ -508,18 +517,17 @@ fn study_entries(manifest: std::path::PathBuf) -> PyResult<String> {
 }
 
 /// One study recording (JSON text of a manifest entry) processed with the
-/// study's tolerance: JSON text of `{"Ok": processed}` or `{"Err": failure}`.
+/// study's request (co-contraction options, as `estimate_cocontraction`'s):
+/// JSON text of `{"Ok": processed}` or `{"Err": failure}`.
 #[pyfunction]
-fn study_process(py: Python<'_>, entry: &str, tolerance: f64) -> PyResult<String> {
+fn study_process(py: Python<'_>, entry: &str, request: &Bound<'_, PyDict>) -> PyResult<String> {
     use limpid_app::study::{process_entry, Entry};
+    use limpid_ident::request::Request;
     let e: Entry = serde_json::from_str(entry).map_err(value_err)?;
-    let emg = limpid_analysis::emg::EmgParams {
-        tolerance,
-        ..limpid_analysis::emg::EmgParams::default()
+    let Request::Cocontraction(request) = build_request("cocontraction", request)? else {
+        unreachable!("a co-contraction request")
     };
-    let out = detached(py, || {
-        process_entry(&e, &limpid_ident::PrepareParams::default(), &emg)
-    });
+    let out = detached(py, || process_entry(&e, &request));
     serde_json::to_string(&out).map_err(value_err)
 }
 
@@ -560,9 +568,7 @@ fn study_run(
     out: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
     let m = limpid_app::study::load_manifest(&manifest).map_err(err)?;
-    let result = detached(py, || {
-        limpid_app::study::run_study(&m, &limpid_ident::PrepareParams::default(), &|| {})
-    });
+    let result = detached(py, || limpid_app::study::run_study(&m, &|| {})).map_err(err)?;
     finish_study(result, out)
 }
 

@@ -338,3 +338,77 @@ fn realistic_virtual_study_uses_one_mvc_and_recovers_seed001_table1_within_15_pe
         );
     }
 }
+
+#[test]
+fn a_study_runs_every_recording_with_its_manifests_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let ex = examples("cocontraction");
+    let (file, mvc) = (ex.join("ex_config4.csv"), ex.join("ex_config4.mvc.csv"));
+    let entry = format!(
+        "[[recording]]\nsubject = \"1\"\nconfiguration = \"4\"\nfile = \"{}\"\nmvc = \"{}\"\n",
+        file.display(),
+        mvc.display()
+    );
+    let study = |name: &str, head: &str| -> serde_json::Value {
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&path, format!("{head}\n{entry}")).unwrap();
+        let out_dir = dir.path().join(name);
+        let out = limpid(&[
+            "study",
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("study.json")).unwrap()).unwrap()
+    };
+    let request = "[study.request]\ntolerance = 0.15\n[study.request.prepare]\ncutoff_hz = 12\n";
+    let with_request = study("request", request);
+    let stiffness =
+        |v: &serde_json::Value| v["recordings"][0]["result"]["levels"][0]["stiffness"].clone();
+    // the study's recording is the estimate of the same request made by hand
+    let single = json(&[
+        "estimate",
+        "cocontraction",
+        file.to_str().unwrap(),
+        "--mvc",
+        mvc.to_str().unwrap(),
+        "--tolerance",
+        "0.15",
+        "--cutoff",
+        "12",
+        "--json",
+    ]);
+    assert_eq!(stiffness(&with_request), single["levels"][0]["stiffness"]);
+    let default = study("default", "");
+    assert_ne!(stiffness(&default), stiffness(&with_request));
+    // the tolerance twice, or a request that cannot run, is refused before any recording
+    for (head, expected) in [
+        (
+            "[study]\ntolerance = 0.1\n[study.request]\ntolerance = 0.2\n",
+            "give the tolerance once",
+        ),
+        (
+            "[study.request.prepare]\norder = 0\n",
+            "[study.request]: invalid order",
+        ),
+        (
+            "[study.request.prepare]\ncutof_hz = 3\n",
+            "unknown field `cutof_hz`",
+        ),
+    ] {
+        let path = dir.path().join("bad.toml");
+        std::fs::write(&path, format!("{head}\n{entry}")).unwrap();
+        let out = limpid(&[
+            "study",
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            dir.path().join("bad").to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 2, "{}", out.stderr);
+        assert!(out.stderr.contains(expected), "{}", out.stderr);
+        assert_eq!(out.stderr.trim_end().lines().count(), 1, "{}", out.stderr);
+    }
+}

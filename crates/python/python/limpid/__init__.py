@@ -609,13 +609,20 @@ def study_entries(manifest: Union[str, "os.PathLike[str]"]) -> List[Dict[str, An
     Returns
     -------
     list of dict
-        ``{"subject", "configuration", "file", "mvc", "tolerance", "study"}`` per recording.
+        ``{"subject", "configuration", "file", "mvc", "request", "tolerance", "study"}`` per
+        recording (``tolerance`` repeats the request's, and wins when edited);
+        ``request`` is the study's co-contraction request (``[study.request]``, with
+        ``study.tolerance`` folded in), as :func:`request` returns it.
     """
     m = json.loads(_limpid.study_entries(os.fspath(manifest)))
-    meta = m.get("study", {})
-    tolerance = meta.get("tolerance")
+    meta = m.get("study") or {}
+    options: Dict[str, Any] = dict(meta.get("request") or {})
+    if meta.get("tolerance") is not None:
+        options["tolerance"] = meta["tolerance"]
+    study_request = request("cocontraction", **options)
     name = meta.get("name") or "study"
-    return [dict(e, tolerance=0.1 if tolerance is None else tolerance, study=name) for e in m["recording"]]
+    return [dict(e, request=study_request, tolerance=study_request["tolerance"], study=name)
+            for e in m["recording"]]
 
 
 def study_process(entry: Mapping[str, Any]) -> StudyOutcome:
@@ -625,8 +632,11 @@ def study_process(entry: Mapping[str, Any]) -> StudyOutcome:
     of failures, as ``limpid study run`` does."""
     e = {k: os.fspath(entry[k]) if k in ("file", "mvc") else str(entry[k])
          for k in ("subject", "configuration", "file", "mvc")}
-    tol = _number("tolerance", entry.get("tolerance", 0.1))
-    return StudyOutcome(_limpid.study_process(json.dumps(e), tol))
+    options = dict(entry.get("request") or {})
+    if entry.get("tolerance") is not None:  # entries made before requests
+        options["tolerance"] = entry["tolerance"]
+    options.pop("method", None)
+    return StudyOutcome(_limpid.study_process(json.dumps(e), {k: _plain(v) for k, v in options.items()}))
 
 
 def study_combine(outcomes: Sequence[StudyOutcome], *, name: str = "study",
