@@ -31,6 +31,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::lsq::{householder_in_place, merge};
 use crate::prepare::{Plan, Prepared};
+use limpid_core::criteria::MatrixKind;
 use limpid_core::{Error, Result, Warning, WarningCode};
 
 /// Settings of the linear estimator.
@@ -984,7 +985,7 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
     // inertia first: when it is not identified, B and K carry its uncertainty too
     let inertia_se = block(&se, 0);
     let inertia_identified = identified(
-        0,
+        MatrixKind::Inertia,
         &inertia,
         &inertia_se,
         &data.coordinates,
@@ -1050,7 +1051,7 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
             "the estimate or its standard errors are not finite numbers: the data overflow double precision or do not determine the model".into(),
         ));
     }
-    let judge = |kind: usize, value: &Matrix, se: &Matrix, warnings: &mut Vec<Warning>| {
+    let judge = |kind: MatrixKind, value: &Matrix, se: &Matrix, warnings: &mut Vec<Warning>| {
         identified(
             kind,
             value,
@@ -1063,8 +1064,18 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
     };
     let identifiable = Identifiable {
         inertia: inertia_identified,
-        damping: judge(1, &damping, &se_out.damping, &mut warnings),
-        stiffness: judge(2, &stiffness, &se_out.stiffness, &mut warnings),
+        damping: judge(
+            MatrixKind::Damping,
+            &damping,
+            &se_out.damping,
+            &mut warnings,
+        ),
+        stiffness: judge(
+            MatrixKind::Stiffness,
+            &stiffness,
+            &se_out.stiffness,
+            &mut warnings,
+        ),
     };
     quality_warnings(
         &identifiable,
@@ -1093,13 +1104,22 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
     })
 }
 
-/// Whether one matrix (`kind` 0 inertia, 1 damping, 2 stiffness) is
-/// identified: every diagonal element at least `ratio` standard errors from
+/// The column of a matrix kind's regressors in the per-coordinate
+/// reliabilities `[acceleration, velocity, displacement]`.
+fn regressor_column(kind: MatrixKind) -> usize {
+    match kind {
+        MatrixKind::Inertia => 0,
+        MatrixKind::Damping => 1,
+        MatrixKind::Stiffness => 2,
+    }
+}
+
+/// Whether one matrix is identified: every diagonal element at least `ratio` standard errors from
 /// zero (NaN-safe; an exact zero, no force at all, identifies nothing) and
 /// its regressors carrying signal, not propagated position noise. Says why
 /// not in `warnings`.
 fn identified(
-    kind: usize,
+    matrix: MatrixKind,
     value: &Matrix,
     se: &Matrix,
     coords: &[String],
@@ -1108,6 +1128,7 @@ fn identified(
     warnings: &mut Vec<Warning>,
 ) -> bool {
     let n = coords.len();
+    let kind = regressor_column(matrix);
     let (label, name) = [("M", "inertia"), ("B", "damping"), ("K", "stiffness")][kind];
     let (mu, bu, ku) = units(coords);
     let unit = [mu, bu, ku][kind];
