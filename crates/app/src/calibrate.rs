@@ -303,7 +303,8 @@ type SweepOutcome = (usize, usize, usize, bool);
 
 fn sweep(seed: u64, reflex: bool) -> Option<SweepOutcome> {
     let (subject, data) = planar_session(seed, reflex).ok()?;
-    let s = window_sweep(&data, 50.0, 400.0, 10.0, None).ok()?;
+    let [from, to, step] = limpid_ident::request::DEFAULT_SWEEP_MS;
+    let s = window_sweep(&data, from, to, step, None).ok()?;
     let (k, d) = (
         Matrix::from(subject.stiffness),
         Matrix::from(subject.damping),

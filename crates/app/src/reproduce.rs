@@ -707,7 +707,10 @@ fn seed004(seed: u64) -> Result<Reproduction> {
         window: Window::Hann,
         ..Welch::new(1000.0)
     };
-    let band = (0.5, 10.0);
+    let band = (
+        limpid_ident::request::DEFAULT_BAND_HZ[0],
+        limpid_ident::request::DEFAULT_BAND_HZ[1],
+    );
     let cases: Vec<(&str, &Springs, &str, Controller)> = vec![
         ("sa1", &sa1, "IMBIC", Controller::imbic_seed004()),
         ("sa1", &sa1, "PD", Controller::pd_seed004()),

@@ -150,10 +150,7 @@ fn recording(name: &str, bytes: &[u8]) -> Outcome {
     // stochastic (seed 004)
     if rec.has("ux") || rec.has("uz") {
         use limpid_ident::stochastic::{estimate_stochastic, StochasticParams};
-        let p = StochasticParams {
-            welch: None,
-            band_hz: (0.5, 10.0),
-        };
+        let p = StochasticParams::default();
         if let Ok(est) = estimate_stochastic(&rec, &p) {
             any = true;
             findings.extend(check("stochastic", &est));

@@ -53,7 +53,10 @@ impl Default for StochasticParams {
     fn default() -> Self {
         StochasticParams {
             welch: None,
-            band_hz: (0.5, 10.0),
+            band_hz: (
+                crate::request::DEFAULT_BAND_HZ[0],
+                crate::request::DEFAULT_BAND_HZ[1],
+            ),
         }
     }
 }
