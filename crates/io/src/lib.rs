@@ -311,12 +311,44 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
     let mut names = Vec::with_capacity(schema.num_columns());
     // stored ticks per second, for timestamp columns
     let mut unit_s: Vec<Option<f64>> = Vec::with_capacity(schema.num_columns());
-    for c in schema.columns() {
+    // the schema's index of each column read: columns that cannot be a
+    // recording's (nested, text, dates...) are left out, as unknown columns are
+    let mut kept: Vec<usize> = Vec::with_capacity(schema.num_columns());
+    let mut skipped: Vec<String> = Vec::new();
+    for (index, c) in schema.columns().iter().enumerate() {
         let name = c.path().string();
-        if c.path().parts().len() > 1 || c.max_rep_level() > 0 {
-            return Err(fail(format!(
-                "column {name}: a nested or repeated (struct/list) column; a recording has flat numeric columns"
-            )));
+        let not_numbers = match c.logical_type_ref() {
+            Some(LogicalType::Decimal { .. })
+            | Some(LogicalType::Date)
+            | Some(LogicalType::Time(_))
+            | Some(LogicalType::String)
+            | Some(LogicalType::Uuid) => Some(format!(
+                "a {} column; a recording's columns are plain numbers in SI units",
+                c.logical_type_ref()
+                    .map(|l| format!("{l:?}"))
+                    .unwrap_or_default()
+            )),
+            _ => match c.physical_type() {
+                PhysicalType::DOUBLE
+                | PhysicalType::FLOAT
+                | PhysicalType::INT32
+                | PhysicalType::INT64 => None,
+                other => Some(format!(
+                    "a {other} column; a recording's columns are plain numbers"
+                )),
+            },
+        };
+        let reason = if c.path().parts().len() > 1 || c.max_rep_level() > 0 {
+            Some(
+                "a nested or repeated (struct/list) column; a recording has flat numeric columns"
+                    .to_string(),
+            )
+        } else {
+            not_numbers
+        };
+        if let Some(reason) = reason {
+            skipped.push(format!("column {name}: {reason}"));
+            continue;
         }
         let scale = match c.logical_type_ref() {
             Some(LogicalType::Timestamp(ts)) => Some(match ts.unit {
@@ -324,22 +356,16 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
                 TimeUnit::MICROS => 1e6,
                 TimeUnit::NANOS => 1e9,
             }),
-            Some(LogicalType::Decimal { .. })
-            | Some(LogicalType::Date)
-            | Some(LogicalType::Time(_))
-            | Some(LogicalType::String)
-            | Some(LogicalType::Uuid) => {
-                return Err(fail(format!(
-                    "column {name}: a {:?} column; expected plain numbers in SI units",
-                    c.logical_type_ref()
-                        .map(|l| format!("{l:?}"))
-                        .unwrap_or_default()
-                )));
-            }
             _ => None,
         };
         names.push(name);
         unit_s.push(scale);
+        kept.push(index);
+    }
+    if names.is_empty() {
+        if let Some(first) = skipped.first() {
+            return Err(fail(format!("{first}, and no other column to read")));
+        }
     }
     let total = meta.file_metadata().num_rows();
     if !(0..=MAX_PARQUET_ROWS).contains(&total) {
@@ -354,19 +380,20 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         .map(|g| reader.get_row_group(g).map_err(pq_err))
         .collect::<Result<_>>()?;
     let decode_column = |k: usize| -> Result<Vec<f64>> {
+        let index = kept[k];
         let mut out = column_buffer(reserve);
         let mut origin: Option<i64> = None;
         for group in &groups {
             let mut defs: Vec<i16> = Vec::new();
             // pages pass a size check before the decoder sees them: a corrupt
             // dictionary page claiming 2^31 values made it reserve 6 GB (fuzzer)
-            let descr = schema.column(k);
+            let descr = schema.column(index);
             let width = match descr.physical_type() {
                 PhysicalType::INT64 | PhysicalType::DOUBLE => 8,
                 _ => 4,
             };
             let pages = CheckedPages {
-                inner: group.get_column_page_reader(k).map_err(pq_err)?,
+                inner: group.get_column_page_reader(index).map_err(pq_err)?,
                 max_values: group.metadata().num_rows().max(0) as u64,
                 width,
             };
@@ -434,6 +461,9 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         .map(decode_column)
         .collect::<Result<_>>()?;
     let mut rec = Recording::new(path, names.clone(), columns, 1)?;
+    for reason in skipped {
+        rec.warn(format!("{reason}: not read"));
+    }
     for (name, per_s) in names.iter().zip(&unit_s) {
         if per_s.is_some() {
             rec.warn(format!(

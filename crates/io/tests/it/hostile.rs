@@ -182,6 +182,82 @@ fn parquet_timestamps_become_seconds_and_nested_columns_are_refused() {
 }
 
 #[test]
+fn unused_nested_and_text_parquet_columns_are_left_out_with_a_warning() {
+    use parquet::data_type::{ByteArray, ByteArrayType};
+    let d = tmp();
+    let p = d.path().join("extra.parquet");
+    let double = |name: &str| {
+        Arc::new(
+            Type::primitive_type_builder(name, Physical::DOUBLE)
+                .with_repetition(Repetition::REQUIRED)
+                .build()
+                .unwrap(),
+        )
+    };
+    let note = Arc::new(
+        Type::primitive_type_builder("note", Physical::BYTE_ARRAY)
+            .with_repetition(Repetition::REQUIRED)
+            .with_logical_type(Some(LogicalType::String))
+            .build()
+            .unwrap(),
+    );
+    let pose = Arc::new(
+        Type::group_type_builder("pose")
+            .with_repetition(Repetition::REQUIRED)
+            .with_fields(vec![double("a")])
+            .build()
+            .unwrap(),
+    );
+    let schema = Arc::new(
+        Type::group_type_builder("r")
+            .with_fields(vec![double("t"), pose, note, double("x")])
+            .build()
+            .unwrap(),
+    );
+    let mut w = SerializedFileWriter::new(
+        std::fs::File::create(&p).unwrap(),
+        schema,
+        Arc::new(WriterProperties::builder().build()),
+    )
+    .unwrap();
+    let n = 50;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    let x: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
+    let mut g = w.next_row_group().unwrap();
+    let mut c = g.next_column().unwrap().unwrap();
+    c.typed::<DoubleType>().write_batch(&t, None, None).unwrap();
+    c.close().unwrap();
+    let mut c = g.next_column().unwrap().unwrap();
+    c.typed::<DoubleType>()
+        .write_batch(&vec![7.0; n], None, None)
+        .unwrap();
+    c.close().unwrap();
+    let mut c = g.next_column().unwrap().unwrap();
+    let words: Vec<ByteArray> = (0..n).map(|_| ByteArray::from("ok")).collect();
+    c.typed::<ByteArrayType>()
+        .write_batch(&words, None, None)
+        .unwrap();
+    c.close().unwrap();
+    let mut c = g.next_column().unwrap().unwrap();
+    c.typed::<DoubleType>().write_batch(&x, None, None).unwrap();
+    c.close().unwrap();
+    g.close().unwrap();
+    w.close().unwrap();
+    let rec = limpid_io::read_recording(&p).unwrap();
+    assert_eq!(rec.names(), ["t", "x"]);
+    assert_eq!(rec.column("x").unwrap(), &x[..]);
+    let warnings = rec.warnings().join("\n");
+    assert!(
+        warnings.contains("column pose.a: a nested or repeated"),
+        "{warnings}"
+    );
+    assert!(
+        warnings.contains("column note: a String column"),
+        "{warnings}"
+    );
+}
+
+#[test]
 fn corrupt_parquet_is_an_error_not_a_panic() {
     let d = tmp();
     let good = d.path().join("good.parquet");
