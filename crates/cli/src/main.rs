@@ -85,6 +85,61 @@ pub fn read_recording(
     Ok(rec)
 }
 
+/// Every command, with negative numbers taken as values (`--cutoff -5` is
+/// a bad cut-off, not an unknown flag `-5`).
+fn command_accepting_negative_numbers(cmd: clap::Command) -> clap::Command {
+    cmd.allow_negative_numbers(true)
+        .mut_subcommands(command_accepting_negative_numbers)
+}
+
+/// The parsed command line; a usage error is one line on stderr and exit 2
+/// (clap's own text is several lines with the usage), help and version as clap prints them.
+fn parse_arguments() -> Result<Cli, ExitCode> {
+    use clap::{CommandFactory, FromArgMatches};
+    let cmd = command_accepting_negative_numbers(Cli::command());
+    let parsed = cmd
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m));
+    parsed.map_err(|e| {
+        use clap::error::ErrorKind;
+        if matches!(
+            e.kind(),
+            ErrorKind::DisplayHelp
+                | ErrorKind::DisplayVersion
+                | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+        ) {
+            e.exit()
+        }
+        eprintln!("limpid: {}", usage_error_line(&e.to_string()));
+        ExitCode::from(2)
+    })
+}
+
+/// clap's error text as one line: the error itself, its tip if any, and where
+/// help is.
+fn usage_error_line(text: &str) -> String {
+    // the first paragraph is the error (a list of missing arguments follows its colon)
+    let first: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .take_while(|l| !l.is_empty())
+        .collect();
+    let error = first.join(" ");
+    let error = error.trim_start_matches("error: ");
+    let tip = text
+        .lines()
+        .map(str::trim)
+        .find(|l| l.starts_with("tip: "))
+        .map(|t| format!(" ({})", t.trim_start_matches("tip: ")))
+        .unwrap_or_default();
+    let error = if error.is_empty() {
+        "invalid arguments"
+    } else {
+        error
+    };
+    format!("{error}{tip}; see --help")
+}
+
 /// Where and why the last panic happened (set by the quiet panic hook).
 static PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
 
@@ -96,7 +151,10 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    let cli = Cli::parse();
+    let cli = match parse_arguments() {
+        Ok(cli) => cli,
+        Err(code) => return code,
+    };
     // A command started with its standard output closed would exit 0 having
     // printed nothing: Rust's runtime reopens a closed descriptor 1 on
     // /dev/null (read-write, which a shell's `> /dev/null` never is). Say so.

@@ -51,6 +51,19 @@ impl FrameTransform {
                 ),
             ));
         }
+        // NaN would pass the orthonormality test below (NaN > tol is false)
+        if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(Error::invalid(
+                "transform",
+                format!("expected finite numbers, found {x} as number {}", i + 1),
+            ));
+        }
+        if let Some(t) = v[9..].iter().find(|t| t.abs() > 1e3) {
+            return Err(Error::invalid(
+                "transform",
+                format!("a translation of {t} m is not a lab's frame (at most 1000 m)"),
+            ));
+        }
         let rotation = Matrix3::from_row_slice(&v[..9]);
         let err = (rotation * rotation.transpose() - Matrix3::identity()).norm();
         if err > 1e-6 || (rotation.determinant() - 1.0).abs() > 1e-6 {

@@ -351,3 +351,44 @@ fn output_paths_that_are_not_plain_files_or_folders() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("standard output is closed"), "{stderr}");
 }
+
+#[test]
+fn usage_errors_are_one_line_and_negative_numbers_are_values() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(&d, "r.csv", &rows(2000));
+    let p = p.to_str().unwrap();
+    for (args, expected) in [
+        (
+            vec!["estimate", "linear", p, "--cutoff", "-5"],
+            "invalid --cutoff: expected a positive number, found -5",
+        ),
+        (
+            vec!["estimate", "linear", p, "--cutoff", "abc"],
+            "invalid value 'abc' for '--cutoff <HZ>'",
+        ),
+        (
+            vec!["estimate", "linear", p, "--bogus"],
+            "unexpected argument '--bogus'",
+        ),
+        (vec!["estimate", "planar", p], "--link-lengths"),
+        (
+            vec!["estimate", "reflex", p, "--rate", "-100"],
+            "decimated rate",
+        ),
+    ] {
+        let out = limpid(&args);
+        assert_eq!(out.code, 2, "{args:?}: {}", out.stderr);
+        assert_eq!(
+            out.stderr.trim_end().lines().count(),
+            1,
+            "{args:?}: {}",
+            out.stderr
+        );
+        assert!(out.stderr.starts_with("limpid: "), "{}", out.stderr);
+        assert!(out.stderr.contains(expected), "{args:?}: {}", out.stderr);
+    }
+    // help is still clap's, on stdout, exit 0
+    let out = limpid(&["estimate", "linear", "--help"]);
+    assert_eq!(out.code, 0);
+    assert!(out.stdout.contains("Usage:"), "{}", out.stdout);
+}
