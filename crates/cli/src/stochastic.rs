@@ -67,9 +67,8 @@ pub struct StochasticArgs {
     pub recordings: Vec<PathBuf>,
     #[command(flatten)]
     pub welch: WelchArgs,
-    /// Band of the parametric fit and accuracy measures (Hz).
-    #[arg(long, value_delimiter = ',', value_name = "LO,HI", default_values_t = DEFAULT_BAND_HZ)]
-    pub band: Vec<f64>,
+    #[arg(long, value_delimiter = ',', value_name = "LO,HI", help = band_help())]
+    pub band: Option<Vec<f64>>,
     /// Truth or expected model (JSON with inertia, damping, stiffness): prints phi_T and phi_ij (eq. 15-16).
     #[arg(long, value_name = "FILE")]
     pub expected: Option<PathBuf>,
@@ -114,10 +113,17 @@ pub struct SpectraArgs {
     pub json: bool,
 }
 
+/// `--band`'s help, its default written as the flag takes it.
+fn band_help() -> String {
+    let [lo, hi] = DEFAULT_BAND_HZ;
+    format!("Band of the parametric fit and accuracy measures (Hz) [default: {lo},{hi}]")
+}
+
 impl StochasticArgs {
     /// The request these flags make.
     pub fn request(&self) -> CliResult<Request> {
-        let band_hz = <[f64; 2]>::try_from(self.band.as_slice()).map_err(|_| {
+        let band = self.band.as_deref().unwrap_or(&DEFAULT_BAND_HZ);
+        let band_hz = <[f64; 2]>::try_from(band).map_err(|_| {
             limpid_core::Error::invalid("band", "expected two frequencies LO,HI in Hz")
         })?;
         Ok(Request::Stochastic(StochasticRequest {
