@@ -25,6 +25,7 @@ pub mod simulate;
 pub mod sphere;
 pub mod subject;
 pub mod validate;
+pub mod varying;
 
 pub use profile::Profile;
 pub use simulate::{simulate_centre_out, CentreOut, NoiseModel};
