@@ -22,6 +22,7 @@ pub mod prepare;
 pub mod reflex;
 pub mod request;
 pub mod stochastic;
+pub mod varying;
 
 pub use estimator::{Estimator, PlanarParams};
 pub use linear::{fit_linear, fit_linear_plan, LinearEstimate, LinearParams};

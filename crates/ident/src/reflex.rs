@@ -957,7 +957,7 @@ fn ibk_fit(regressors: &[&[f64]; 3], y: &[f64], skip: usize) -> (Ibk, Ibk, f64) 
 }
 
 /// Unit-DC second-order low-pass by the bilinear transform, prewarped at its natural frequency.
-fn low_pass(x: &[f64], natural_hz: f64, zeta: f64, fs: f64) -> Vec<f64> {
+pub(crate) fn low_pass(x: &[f64], natural_hz: f64, zeta: f64, fs: f64) -> Vec<f64> {
     let w = 2.0 * std::f64::consts::PI * natural_hz;
     let k = w / (w / (2.0 * fs)).tan();
     let a0 = k * k + 2.0 * zeta * w * k + w * w;

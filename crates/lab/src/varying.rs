@@ -366,6 +366,7 @@ pub fn simulate_ensemble(
                 )
             })
             .collect();
+        #[allow(clippy::needless_range_loop)] // i indexes d paths of three signals each
         for i in 0..n {
             let t = i as f64 / e.rate_hz;
             let [_, b, k] = s.truth_at_joint(t);
@@ -494,7 +495,7 @@ pub struct ScheduledAnkle {
 }
 
 impl Default for ScheduledAnkle {
-    /// K 54 -> 90 N m/rad and reflex gain 10 -> 46 N m s/rad from -0.4 to
+    /// K 54 -> 90 N m/rad and reflex gain 2 -> 17 N m s/rad from -0.4 to
     /// +0.2 rad, of the order the real ankle shows.
     fn default() -> Self {
         ScheduledAnkle {
@@ -503,7 +504,7 @@ impl Default for ScheduledAnkle {
             damping: [0.8, 0.5, 0.0],
             background: [2.0, 10.0, 0.0],
             reflex: Some(ScheduledReflex {
-                gain: [34.0, 60.0, 0.0],
+                gain: [12.0, 25.0, 0.0],
                 delay_s: 0.045,
                 natural_hz: 3.0,
                 damping_ratio: 0.7,

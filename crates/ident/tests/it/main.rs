@@ -8,3 +8,4 @@ mod planar;
 mod reflex;
 mod stochastic;
 mod unidentified_inertia;
+mod varying;

@@ -1,0 +1,443 @@
+//! Ensemble time-varying identification (Kearney & MacNeil's ensemble
+//! methods; Lakatos et al., seed 003 §I, on impedance during movement).
+//!
+//! The repetitions (the `trial` column) are aligned at their first sample and
+//! cut to the shortest. Positions and forces are low-passed (zero phase) and
+//! differentiated per repetition. At each instant `t` the deviations of every
+//! repetition from the ensemble mean satisfy, for a limb linear about its
+//! mean path,
+//!
+//! `δf_r(t) = M(t) δx''_r(t) + B(t) δx'_r(t) + K(t) δx_r(t)`,
+//!
+//! so one least-squares fit across repetitions gives M, B, K at `t`. The
+//! instants within a window of `window_s` around each grid point are pooled
+//! (the parameters taken constant over it): the window is the time
+//! resolution. Standard errors are the jackknife over repetitions (leave one
+//! repetition out, deviations from the remaining mean), the cross-validated
+//! VAF predicts each repetition's deviations from the others' fit. Cross
+//! products are accumulated once per instant and summed over windows by
+//! prefix sums, so a window costs the same however wide it is.
+
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+
+use limpid_core::criteria::well_conditioned;
+use limpid_core::trial::windows_from_trial_column;
+use limpid_core::{Error, Recording, Result};
+use limpid_dsp::{central_first, central_second, LowPass};
+
+use super::{
+    matrix, scaled_condition, solve_scaled, ScheduleAxis, VaryingEstimate, VaryingFit,
+    VaryingMethod, VaryingParams, VaryingPoint,
+};
+
+const FILTER_ORDER: usize = 4;
+
+/// Per repetition, per instant: `[x'' (d), x' (d), x (d), f (d)]`, row-major `L x 4d`.
+struct Ensemble {
+    z: Vec<Vec<f64>>,
+    len: usize,
+    d: usize,
+}
+
+fn repetitions(
+    rec: &Recording,
+    coords: &[String],
+    forces: &[String],
+    cutoff: f64,
+    warnings: &mut Vec<String>,
+) -> Result<Ensemble> {
+    if !rec.has("trial") {
+        return Err(Error::MissingColumn {
+            path: rec.path().to_path_buf(),
+            column: "trial".into(),
+            why: "time-varying (ensemble) identification needs repetitions of the task, one trial id each".into(),
+            found: rec.names().join(","),
+        });
+    }
+    let fs = rec.sample_rate();
+    let dt = 1.0 / fs;
+    let lp = LowPass::butterworth(FILTER_ORDER, cutoff, fs)?;
+    let mut windows = windows_from_trial_column(rec, "trial")?;
+    let mut lengths: Vec<usize> = windows.iter().map(|w| w.range.len()).collect();
+    lengths.sort_unstable();
+    let median = lengths[lengths.len() / 2];
+    let before = windows.len();
+    windows.retain(|w| 2 * w.range.len() >= median && w.range.len() > lp.padlen() + 1);
+    if windows.len() < before {
+        warnings.push(format!(
+            "{} of {before} repetitions left out: shorter than half the median ({median} samples) or than the filter needs",
+            before - windows.len()
+        ));
+    }
+    if windows.len() < 3 {
+        return Err(Error::invalid(
+            "trial",
+            format!(
+                "{}: an ensemble needs at least 3 repetitions of the task, found {}",
+                rec.path().display(),
+                windows.len()
+            ),
+        ));
+    }
+    let len = windows.iter().map(|w| w.range.len()).min().unwrap_or(0);
+    let longest = windows.iter().map(|w| w.range.len()).max().unwrap_or(0);
+    if longest as f64 > 1.05 * len as f64 {
+        warnings.push(format!(
+            "repetitions differ in length ({len} to {longest} samples): aligned at their start and cut to the shortest"
+        ));
+    }
+    let d = coords.len();
+    let pos: Vec<&[f64]> = coords
+        .iter()
+        .map(|c| rec.column(c).expect("chosen"))
+        .collect();
+    let frc: Vec<&[f64]> = forces
+        .iter()
+        .map(|c| rec.column(c).expect("chosen"))
+        .collect();
+    let z = windows
+        .par_iter()
+        .map(|w| {
+            let r = w.range.clone();
+            let mut out = vec![0.0; len * 4 * d];
+            for k in 0..d {
+                let x = lp.filtfilt(&pos[k][r.clone()])?;
+                let f = lp.filtfilt(&frc[k][r.clone()])?;
+                let v = central_first(&x, dt);
+                let a = central_second(&x, dt);
+                for t in 0..len {
+                    let row = &mut out[t * 4 * d..(t + 1) * 4 * d];
+                    row[k] = a[t];
+                    row[d + k] = v[t];
+                    row[2 * d + k] = x[t];
+                    row[3 * d + k] = f[t];
+                }
+            }
+            Ok(out)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Ensemble { z, len, d })
+}
+
+/// Prefix sums over instants of `Σ_r z`, `Σ_r z zᵀ` and `(Σ_r z)(Σ_r z)ᵀ`.
+struct Prefix {
+    s: Vec<f64>,
+    zz: Vec<f64>,
+    ss: Vec<f64>,
+}
+
+fn prefix(e: &Ensemble) -> Prefix {
+    let m = 4 * e.d;
+    let mut s = vec![0.0; (e.len + 1) * m];
+    let mut zz = vec![0.0; (e.len + 1) * m * m];
+    let mut ss = vec![0.0; (e.len + 1) * m * m];
+    let mut sum = vec![0.0; m];
+    let mut outer = vec![0.0; m * m];
+    for t in 0..e.len {
+        sum.iter_mut().for_each(|v| *v = 0.0);
+        outer.iter_mut().for_each(|v| *v = 0.0);
+        for rep in &e.z {
+            let row = &rep[t * m..(t + 1) * m];
+            for i in 0..m {
+                sum[i] += row[i];
+                for j in i..m {
+                    outer[i * m + j] += row[i] * row[j];
+                }
+            }
+        }
+        let (p, q) = (t * m, (t + 1) * m);
+        for i in 0..m {
+            s[q + i] = s[p + i] + sum[i];
+        }
+        let (p2, q2) = (t * m * m, (t + 1) * m * m);
+        for i in 0..m {
+            for j in i..m {
+                zz[q2 + i * m + j] = zz[p2 + i * m + j] + outer[i * m + j];
+                ss[q2 + i * m + j] = ss[p2 + i * m + j] + sum[i] * sum[j];
+            }
+        }
+    }
+    Prefix { s, zz, ss }
+}
+
+/// Split an m x m symmetric (upper triangle filled) cross product into the
+/// regressor Gram (3d x 3d), regressor-force (3d x d) and force (d x d) parts.
+fn blocks(c: &[f64], d: usize) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    let m = 4 * d;
+    let at = |i: usize, j: usize| {
+        if i <= j {
+            c[i * m + j]
+        } else {
+            c[j * m + i]
+        }
+    };
+    let p = 3 * d;
+    (
+        DMatrix::from_fn(p, p, at),
+        DMatrix::from_fn(p, d, |i, j| at(i, p + j)),
+        DMatrix::from_fn(d, d, |i, j| at(p + i, p + j)),
+    )
+}
+
+/// Residual sum of squares `tr(Cff - 2 Θᵀ Cxf + Θᵀ Cxx Θ)`.
+fn rss(cxx: &DMatrix<f64>, cxf: &DMatrix<f64>, cff: &DMatrix<f64>, theta: &DMatrix<f64>) -> f64 {
+    let fit = theta.transpose() * cxx * theta;
+    cff.trace() - 2.0 * (theta.transpose() * cxf).trace() + fit.trace()
+}
+
+struct GridFit {
+    point: VaryingPoint,
+    rss: f64,
+    tss: f64,
+    press: f64,
+    press_tss: f64,
+}
+
+pub(super) fn estimate(
+    rec: &Recording,
+    params: &VaryingParams,
+    coords: Vec<String>,
+    forces: Vec<String>,
+    cutoff: f64,
+) -> Result<VaryingEstimate> {
+    let mut warnings = Vec::new();
+    let fs = rec.sample_rate();
+    let e = repetitions(rec, &coords, &forces, cutoff, &mut warnings)?;
+    let reps = e.z.len();
+    let half = ((params.window_s * fs / 2.0).round() as usize).max(1);
+    let width = 2 * half + 1;
+    let step = ((params.step_s.unwrap_or(params.window_s / 2.0) * fs).round() as usize).max(1);
+    // derivatives of the zero-phase filter's padded ends are not trusted within one cut-off period
+    let edge = (fs / cutoff).ceil() as usize;
+    if e.len < width {
+        return Err(Error::invalid(
+            "window_s",
+            format!(
+                "the window ({width} samples) is longer than the repetitions ({} samples)",
+                e.len
+            ),
+        ));
+    }
+    let pre = prefix(&e);
+    let centres: Vec<usize> = (half..e.len - half).step_by(step).collect();
+    if centres.len() > 100_000 {
+        return Err(Error::invalid(
+            "step_s",
+            format!("{} grid points: choose a longer step", centres.len()),
+        ));
+    }
+    let fits: Vec<GridFit> = centres
+        .par_iter()
+        .map(|&c| {
+            fit_window(
+                &e,
+                &pre,
+                c - half..c + half + 1,
+                params.min_repetitions,
+                edge,
+                fs,
+            )
+        })
+        .collect();
+    let sum = |f: fn(&GridFit) -> f64| {
+        fits.iter()
+            .filter(|g| g.point.identifiable)
+            .map(f)
+            .sum::<f64>()
+    };
+    let (rss, tss, press, press_tss) = (
+        sum(|g| g.rss),
+        sum(|g| g.tss),
+        sum(|g| g.press),
+        sum(|g| g.press_tss),
+    );
+    let identifiable = fits.iter().filter(|g| g.point.identifiable).count();
+    if identifiable == 0 {
+        warnings.push("no instant is identifiable: see each point's reason".to_string());
+    }
+    let vaf = |r: f64, t: f64| if t > 0.0 { 100.0 * (1.0 - r / t) } else { 0.0 };
+    Ok(VaryingEstimate {
+        method: VaryingMethod::Ensemble,
+        schedule: ScheduleAxis {
+            name: "time since trial start".into(),
+            unit: "s".into(),
+            values: centres.iter().map(|&c| c as f64 / fs).collect(),
+        },
+        coordinates: coords,
+        forces,
+        sample_rate_hz: fs,
+        cutoff_hz: cutoff,
+        resolution: width as f64 / fs,
+        resolution_note: format!(
+            "each point pools the instants within ±{} ms (a box {} ms wide): a change of impedance narrower than that is smoothed",
+            crate::varying::round_ms(half as f64 / fs),
+            crate::varying::round_ms(width as f64 / fs)
+        ),
+        repetitions: Some(reps),
+        basis_order: None,
+        order_cv_vaf: Vec::new(),
+        points: fits.into_iter().map(|g| g.point).collect(),
+        fit: VaryingFit {
+            vaf: vaf(rss, tss),
+            cross_validated_vaf: vaf(press, press_tss),
+        },
+        reflex: None,
+        warnings,
+    })
+}
+
+fn fit_window(
+    e: &Ensemble,
+    pre: &Prefix,
+    w: std::ops::Range<usize>,
+    min_repetitions: usize,
+    edge: usize,
+    fs: f64,
+) -> GridFit {
+    let (d, m, reps) = (e.d, 4 * e.d, e.z.len());
+    let r = reps as f64;
+    let centre = (w.start + w.end - 1) / 2;
+    let sigma = centre as f64 / fs;
+    // centred cross product of the window: Σ_t [Σ_r z zᵀ - s sᵀ / R]
+    let mut c = vec![0.0; m * m];
+    for i in 0..m {
+        for j in i..m {
+            let k = i * m + j;
+            let zz = pre.zz[w.end * m * m + k] - pre.zz[w.start * m * m + k];
+            let ss = pre.ss[w.end * m * m + k] - pre.ss[w.start * m * m + k];
+            c[k] = zz - ss / r;
+        }
+    }
+    let (cxx, cxf, cff) = blocks(&c, d);
+    let condition = scaled_condition(&cxx);
+    let empty = |reason: String| GridFit {
+        point: VaryingPoint {
+            sigma,
+            identifiable: false,
+            reason: Some(reason),
+            stiffness: None,
+            stiffness_se: None,
+            damping: None,
+            damping_se: None,
+            inertia: None,
+            inertia_se: None,
+            reflex: None,
+            vaf: None,
+            support: reps as f64,
+            condition_number: condition.is_finite().then_some(condition),
+        },
+        rss: 0.0,
+        tss: 0.0,
+        press: 0.0,
+        press_tss: 0.0,
+    };
+    if reps < min_repetitions {
+        return empty(format!(
+            "only {reps} repetitions: the ensemble's standard errors need at least {min_repetitions}"
+        ));
+    }
+    if w.start < edge || w.end + edge > e.len {
+        return empty(format!(
+            "within {} ms of the repetitions' ends, where the zero-phase filter's derivatives are not reliable",
+            crate::varying::round_ms(edge as f64 / fs)
+        ));
+    }
+    if !well_conditioned(condition) {
+        return empty(format!(
+            "the repetitions' deviations do not excite the model here (condition number {})",
+            if condition.is_finite() {
+                format!("{condition:.0}")
+            } else {
+                "infinite".into()
+            }
+        ));
+    }
+    let Some(theta) = solve_scaled(&cxx, &cxf) else {
+        return empty("the regressors are singular here".into());
+    };
+    let full_rss = rss(&cxx, &cxf, &cff, &theta);
+    let tss = cff.trace();
+    // jackknife over repetitions and leave-one-out prediction
+    let sums: Vec<f64> = (0..m)
+        .flat_map(|i| (0..m).map(move |j| (i, j)))
+        .map(|(i, j)| {
+            let (a, b) = (i.min(j), i.max(j));
+            pre.zz[w.end * m * m + a * m + b] - pre.zz[w.start * m * m + a * m + b]
+        })
+        .collect();
+    let mut thetas: Vec<DMatrix<f64>> = Vec::with_capacity(reps);
+    let (mut press, mut press_tss) = (0.0, 0.0);
+    let mut q = vec![0.0; m * m];
+    let mut dd = vec![0.0; m * m];
+    let (mut u, mut dv) = (vec![0.0; m], vec![0.0; m]);
+    for rep in &e.z {
+        q.iter_mut().for_each(|v| *v = 0.0);
+        dd.iter_mut().for_each(|v| *v = 0.0);
+        for t in w.clone() {
+            let z = &rep[t * m..(t + 1) * m];
+            let s = &pre.s[(t + 1) * m..(t + 2) * m];
+            let s0 = &pre.s[t * m..(t + 1) * m];
+            for i in 0..m {
+                u[i] = (s[i] - s0[i]) - z[i];
+                dv[i] = z[i] - u[i] / (r - 1.0);
+            }
+            for i in 0..m {
+                for j in i..m {
+                    q[i * m + j] += z[i] * z[j] + u[i] * u[j] / (r - 1.0);
+                    dd[i * m + j] += dv[i] * dv[j];
+                }
+            }
+        }
+        let loo: Vec<f64> = (0..m * m)
+            .map(|k| {
+                let (i, j) = (k / m, k % m);
+                if i <= j {
+                    sums[k] - q[k]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let (lxx, lxf, _) = blocks(&loo, d);
+        let Some(th) = solve_scaled(&lxx, &lxf) else {
+            return empty("leaving one repetition out makes the regressors singular".into());
+        };
+        let (dxx, dxf, dff) = blocks(&dd, d);
+        press += rss(&dxx, &dxf, &dff, &th);
+        press_tss += dff.trace();
+        thetas.push(th);
+    }
+    let p = 3 * d;
+    let mean = thetas.iter().fold(DMatrix::zeros(p, d), |acc, t| acc + t) / r;
+    let var = thetas.iter().fold(DMatrix::zeros(p, d), |acc, t| {
+        acc + (t - &mean).map(|v| v * v)
+    }) * ((r - 1.0) / r);
+    let se = var.map(f64::sqrt);
+    if theta.iter().chain(se.iter()).any(|v| !v.is_finite()) {
+        return empty("the estimate is not finite here".into());
+    }
+    // Θ's row (block b, coordinate k), column j is the element (j, k) of M, B or K
+    let part = |t: &DMatrix<f64>, b: usize| Some(matrix(d, |j, k| t[(b * d + k, j)]));
+    GridFit {
+        point: VaryingPoint {
+            sigma,
+            identifiable: true,
+            reason: None,
+            inertia: part(&theta, 0),
+            inertia_se: part(&se, 0),
+            damping: part(&theta, 1),
+            damping_se: part(&se, 1),
+            stiffness: part(&theta, 2),
+            stiffness_se: part(&se, 2),
+            reflex: None,
+            vaf: (tss > 0.0).then(|| 100.0 * (1.0 - full_rss / tss)),
+            support: reps as f64,
+            condition_number: Some(condition),
+        },
+        rss: full_rss,
+        tss,
+        press,
+        press_tss,
+    }
+}

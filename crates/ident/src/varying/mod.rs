@@ -1,0 +1,382 @@
+//! Impedance that varies (issue 38): with time during a repeated movement or
+//! task, and with a measured operating point.
+//!
+//! - [`ensemble`]: time-varying identification from an ensemble of
+//!   repetitions (Kearney & MacNeil's ensemble methods; the question of
+//!   seed 003 §I, impedance that changes during movement). At each instant
+//!   the deviations of the repetitions from their mean are regressed:
+//!   `δf(t) = M(t) δx''(t) + B(t) δx'(t) + K(t) δx(t)`.
+//! - [`scheduled`]: parameter-varying identification (Sobhani Tehrani &
+//!   Kearney's parameter-varying parallel cascade): every parameter a smooth
+//!   function of a scheduling variable σ, expanded in Chebyshev polynomials,
+//!   all fitted in one least-squares problem over the whole record.
+//!
+//! Both report on a grid of the schedule, with standard errors, and mark the
+//! points the data do not support as not identifiable instead of giving
+//! numbers there.
+
+pub mod ensemble;
+pub mod scheduled;
+
+use limpid_core::{Error, Matrix, Recording, Result};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::estimator::positive;
+
+/// The schedule name that asks for time-varying (ensemble) identification.
+pub const TIME: &str = "time";
+
+/// Settings of [`estimate_varying`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct VaryingParams {
+    /// `time` (ensemble over the `trial` repetitions) or a column (parameter-varying).
+    pub schedule: String,
+    /// Zero-phase low-pass before differentiation (Hz); `None`: 30 Hz or 0.4 x the rate.
+    pub cutoff_hz: Option<f64>,
+    /// Ensemble: the window pooled around each instant (s) — the time resolution.
+    pub window_s: f64,
+    /// Ensemble: grid step (s); `None`: half the window.
+    pub step_s: Option<f64>,
+    /// Ensemble: fewest repetitions for estimates with standard errors.
+    pub min_repetitions: usize,
+    /// Parameter-varying: points on the schedule's grid.
+    pub grid_points: usize,
+    /// Parameter-varying: Chebyshev order of every parameter; `None`: chosen
+    /// by blocked cross-validation up to [`MAX_BASIS_ORDER`].
+    pub basis_order: Option<usize>,
+    /// Parameter-varying: the operating point is what varies slower than
+    /// this (Hz); regression is on the deviations from it.
+    pub slow_hz: f64,
+    /// Parameter-varying: decimate to about this rate (Hz) after filtering.
+    pub rate_hz: f64,
+    /// Parameter-varying: add a stretch-reflex pathway whose gain varies with σ.
+    pub reflex: bool,
+    /// Largest reflex delay scanned (s).
+    pub max_delay_s: f64,
+}
+
+/// Highest Chebyshev order the cross-validation tries.
+pub const MAX_BASIS_ORDER: usize = 6;
+
+impl Default for VaryingParams {
+    fn default() -> Self {
+        VaryingParams {
+            schedule: TIME.into(),
+            cutoff_hz: None,
+            window_s: 0.03,
+            step_s: None,
+            min_repetitions: 10,
+            grid_points: 21,
+            basis_order: None,
+            slow_hz: 0.5,
+            rate_hz: 200.0,
+            reflex: false,
+            max_delay_s: 0.1,
+        }
+    }
+}
+
+impl VaryingParams {
+    /// Refuse settings that cannot give an honest result.
+    pub fn check(&self) -> Result<()> {
+        if self.schedule.trim().is_empty() {
+            return Err(Error::invalid(
+                "schedule",
+                "expected `time` or a column name",
+            ));
+        }
+        if let Some(c) = self.cutoff_hz {
+            positive("cutoff_hz", c)?;
+        }
+        positive("window_s", self.window_s)?;
+        if let Some(s) = self.step_s {
+            positive("step_s", s)?;
+        }
+        positive("slow_hz", self.slow_hz)?;
+        positive("rate_hz", self.rate_hz)?;
+        positive("max_delay_s", self.max_delay_s)?;
+        if self.max_delay_s > 1.0 {
+            return Err(Error::invalid(
+                "max_delay_s",
+                format!(
+                    "a reflex delay is well under 1 s, found {}",
+                    self.max_delay_s
+                ),
+            ));
+        }
+        if self.min_repetitions < 3 {
+            return Err(Error::invalid(
+                "min_repetitions",
+                format!(
+                    "the jackknife needs at least 3, found {}",
+                    self.min_repetitions
+                ),
+            ));
+        }
+        if !(2..=1000).contains(&self.grid_points) {
+            return Err(Error::invalid(
+                "grid_points",
+                format!("expected 2 to 1000, found {}", self.grid_points),
+            ));
+        }
+        if let Some(p) = self.basis_order {
+            if p > MAX_BASIS_ORDER {
+                return Err(Error::invalid(
+                    "basis_order",
+                    format!("expected 0 to {MAX_BASIS_ORDER}, found {p}"),
+                ));
+            }
+        }
+        if self.reflex && self.schedule == TIME {
+            return Err(Error::invalid(
+                "reflex",
+                "the reflex pathway is estimated against a measured schedule (a column), not with --schedule time",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// How the impedance was made to vary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum VaryingMethod {
+    /// Ensemble of repetitions, one regression per instant.
+    Ensemble,
+    /// One regression, parameters expanded in a basis of the schedule.
+    ParameterVarying,
+}
+
+/// The schedule the impedance is given against.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ScheduleAxis {
+    /// `time since trial start` or the column's name.
+    pub name: String,
+    /// Its unit (`s`, or the column's FORMAT.md unit when known, else empty).
+    pub unit: String,
+    /// The grid: one value per point.
+    pub values: Vec<f64>,
+}
+
+/// The reflex pathway at one point of the schedule.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PointReflex {
+    /// DC gain from half-wave rectified velocity to torque (N m s/rad).
+    pub gain: f64,
+    /// Its standard error.
+    pub gain_se: f64,
+    /// Reflex delay (s), shared by every point.
+    pub delay_s: f64,
+}
+
+/// Impedance at one point of the schedule.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct VaryingPoint {
+    /// Time (s) or the schedule's value.
+    pub sigma: f64,
+    /// The data support numbers here; the matrices are absent when not.
+    pub identifiable: bool,
+    /// Why not, when not identifiable.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// K (d x d).
+    pub stiffness: Option<Matrix>,
+    /// Standard error of each element of K.
+    pub stiffness_se: Option<Matrix>,
+    /// B (d x d).
+    pub damping: Option<Matrix>,
+    /// Standard error of each element of B.
+    pub damping_se: Option<Matrix>,
+    /// M or I (d x d).
+    pub inertia: Option<Matrix>,
+    /// Standard error of each element of M.
+    pub inertia_se: Option<Matrix>,
+    /// The reflex here (parameter-varying with `reflex`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflex: Option<PointReflex>,
+    /// VAF (%) of the force deviations explained here (the instant's window,
+    /// or the samples whose schedule is nearest this point).
+    pub vaf: Option<f64>,
+    /// Ensemble: repetitions; parameter-varying: seconds of data near the point.
+    pub support: f64,
+    /// Ensemble: condition number of the scaled regressors in this window.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub condition_number: Option<f64>,
+}
+
+/// Fit quality over the whole record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct VaryingFit {
+    /// VAF (%) of the force deviations.
+    pub vaf: f64,
+    /// VAF (%) predicting data left out (ensemble: each repetition from the
+    /// others; parameter-varying: 10 contiguous blocks of the record).
+    pub cross_validated_vaf: f64,
+}
+
+/// The reflex pathway of a parameter-varying fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct VaryingReflex {
+    /// Delay (s), chosen by the least residual.
+    pub delay_s: f64,
+    /// Natural frequency of the unit-DC low-pass (Hz), chosen with the delay.
+    pub natural_hz: f64,
+    /// Its damping ratio (fixed).
+    pub damping_ratio: f64,
+    /// `positive`: the reflex answers positive velocity; `negative`: negative.
+    pub polarity: String,
+    /// The data show a reflex: the gain differs from zero (Wald test on
+    /// block-robust standard errors, p < 1e-4) and it raises the
+    /// cross-validated VAF by at least [`REFLEX_MIN_GAIN_PERCENT`] points.
+    pub detected: bool,
+    /// Cross-validated VAF gained by the reflex pathway (percentage points).
+    pub cross_validated_gain: f64,
+    /// Wald statistic of "no reflex" and its degrees of freedom.
+    pub wald: f64,
+    /// Degrees of freedom of the Wald statistic.
+    pub wald_dof: usize,
+}
+
+/// Least gain of cross-validated VAF (points) for a reflex to count as detected.
+pub const REFLEX_MIN_GAIN_PERCENT: f64 = 0.5;
+
+/// Impedance as a function of time or of an operating point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct VaryingEstimate {
+    /// Ensemble or parameter-varying.
+    pub method: VaryingMethod,
+    /// The schedule and its grid.
+    pub schedule: ScheduleAxis,
+    /// Coordinates (positions), in order.
+    pub coordinates: Vec<String>,
+    /// Their forces or torques.
+    pub forces: Vec<String>,
+    /// Sample rate of the recording (Hz).
+    pub sample_rate_hz: f64,
+    /// Low-pass cut-off before differentiation (Hz).
+    pub cutoff_hz: f64,
+    /// Resolution along the schedule: ensemble, the window width (s); parameter-varying, range / (order + 1).
+    pub resolution: f64,
+    /// What the resolution means, in words.
+    pub resolution_note: String,
+    /// Ensemble: repetitions used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repetitions: Option<usize>,
+    /// Parameter-varying: Chebyshev order of every parameter.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub basis_order: Option<usize>,
+    /// Parameter-varying: cross-validated VAF (%) of each order tried (0, 1, ...).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub order_cv_vaf: Vec<f64>,
+    /// The estimate at each grid point.
+    pub points: Vec<VaryingPoint>,
+    /// Overall fit.
+    pub fit: VaryingFit,
+    /// The reflex pathway (parameter-varying with `reflex`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflex: Option<VaryingReflex>,
+    /// What a reader should know.
+    pub warnings: Vec<String>,
+}
+
+/// Impedance that varies: `params.schedule == "time"` runs the ensemble
+/// method on the recording's repetitions (`trial`), any other value the
+/// parameter-varying method on that column.
+pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<VaryingEstimate> {
+    params.check()?;
+    let (coords, forces) = crate::prepare::choose_coordinates(rec)?;
+    if coords.len() > 3 {
+        return Err(Error::invalid(
+            "coordinates",
+            format!("at most 3 coordinates, found {}", coords.len()),
+        ));
+    }
+    let cutoff = params
+        .cutoff_hz
+        .unwrap_or_else(|| crate::prepare::default_cutoff(rec.sample_rate()));
+    if cutoff >= 0.5 * rec.sample_rate() {
+        return Err(Error::invalid(
+            "cutoff_hz",
+            format!(
+                "{cutoff} Hz is not below half the sample rate ({} Hz)",
+                rec.sample_rate()
+            ),
+        ));
+    }
+    if params.schedule == TIME {
+        ensemble::estimate(rec, params, coords, forces, cutoff)
+    } else {
+        scheduled::estimate(rec, params, coords, forces, cutoff)
+    }
+}
+
+/// A d x d matrix from a column-of-outputs layout: `at(j, k)` is row j, column k.
+pub(crate) fn matrix(d: usize, at: impl Fn(usize, usize) -> f64) -> Matrix {
+    Matrix(nalgebra::DMatrix::from_fn(d, d, at))
+}
+
+/// Solve the symmetric positive (semi)definite system `g θ = h` (h: q x d)
+/// after Jacobi scaling; `None` when it is singular.
+pub(crate) fn solve_scaled(
+    g: &nalgebra::DMatrix<f64>,
+    h: &nalgebra::DMatrix<f64>,
+) -> Option<nalgebra::DMatrix<f64>> {
+    let q = g.nrows();
+    let s: Vec<f64> = (0..q)
+        .map(|i| {
+            let v = g[(i, i)];
+            if v > 0.0 && v.is_finite() {
+                1.0 / v.sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    if s.contains(&0.0) {
+        return None;
+    }
+    let gs = nalgebra::DMatrix::from_fn(q, q, |i, j| g[(i, j)] * s[i] * s[j]);
+    let hs = nalgebra::DMatrix::from_fn(q, h.ncols(), |i, j| h[(i, j)] * s[i]);
+    let chol = nalgebra::Cholesky::new(gs)?;
+    let y = chol.solve(&hs);
+    let out = nalgebra::DMatrix::from_fn(q, h.ncols(), |i, j| y[(i, j)] * s[i]);
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+/// Inverse of a symmetric positive definite matrix after Jacobi scaling.
+pub(crate) fn inverse_scaled(g: &nalgebra::DMatrix<f64>) -> Option<nalgebra::DMatrix<f64>> {
+    solve_scaled(g, &nalgebra::DMatrix::identity(g.nrows(), g.nrows()))
+}
+
+/// Condition number of the Jacobi-scaled Gram matrix's square root (the
+/// scaled regressors' condition number, seed 003 eq. (19)).
+pub(crate) fn scaled_condition(g: &nalgebra::DMatrix<f64>) -> f64 {
+    let q = g.nrows();
+    let s: Vec<f64> = (0..q)
+        .map(|i| 1.0 / g[(i, i)].max(f64::MIN_POSITIVE).sqrt())
+        .collect();
+    let gs = nalgebra::DMatrix::from_fn(q, q, |i, j| g[(i, j)] * s[i] * s[j]);
+    match limpid_core::linalg::symmetric_eigenvalues(gs) {
+        Some(ev) => {
+            let max = ev.max();
+            let min = ev.min();
+            if min > 0.0 {
+                (max / min).sqrt()
+            } else {
+                f64::INFINITY
+            }
+        }
+        None => f64::INFINITY,
+    }
+}
+
+/// A duration in ms for people: whole ms from 10 ms on, else one decimal.
+pub(crate) fn round_ms(s: f64) -> String {
+    let ms = s * 1e3;
+    if ms >= 10.0 {
+        format!("{ms:.0}")
+    } else {
+        format!("{ms:.1}")
+    }
+}

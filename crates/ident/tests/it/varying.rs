@@ -1,0 +1,226 @@
+//! Varying impedance (issue 38) against the virtual lab's truth.
+
+use limpid_ident::varying::{estimate_varying, VaryingEstimate, VaryingParams};
+use limpid_lab::varying::{
+    simulate_ensemble, simulate_scheduled_ankle, EnsembleExperiment, EnsembleSubject, RampAndHold,
+    ScheduledAnkle,
+};
+
+/// Fraction of identifiable points whose element (j, k) of `pick` is within `tol` (relative) of `truth`.
+fn within(
+    e: &VaryingEstimate,
+    pick: impl Fn(&limpid_ident::varying::VaryingPoint) -> Option<(f64, f64)>,
+    truth: impl Fn(f64) -> f64,
+    tol: f64,
+) -> (f64, f64, usize) {
+    let mut n = 0;
+    let (mut ok, mut covered) = (0, 0);
+    for p in e.points.iter().filter(|p| p.identifiable) {
+        let (v, se) = pick(p).expect("identifiable points carry numbers");
+        let t = truth(p.sigma);
+        n += 1;
+        ok += usize::from((v - t).abs() <= tol * t.abs());
+        covered += usize::from((v - t).abs() <= 2.0 * se);
+    }
+    assert!(n > 0, "no identifiable point");
+    (ok as f64 / n as f64, covered as f64 / n as f64, n)
+}
+
+fn el(
+    m: &Option<limpid_core::Matrix>,
+    s: &Option<limpid_core::Matrix>,
+    j: usize,
+    k: usize,
+) -> Option<(f64, f64)> {
+    Some((m.as_ref()?[(j, k)], s.as_ref()?[(j, k)]))
+}
+
+#[test]
+fn ensemble_follows_a_150_ms_stiffness_change_of_one_joint() {
+    let s = EnsembleSubject::joint();
+    let e = EnsembleExperiment::default();
+    let rec = simulate_ensemble(&s, &e, 11).unwrap();
+    let est = estimate_varying(&rec, &VaryingParams::default()).unwrap();
+    assert_eq!(est.repetitions, Some(100));
+    let k = |t: f64| s.truth_at(t)[2][0][0];
+    let b = |t: f64| s.truth_at(t)[1][0][0];
+    let (kok, kcov, n) = within(&est, |p| el(&p.stiffness, &p.stiffness_se, 0, 0), k, 0.15);
+    let (bok, bcov, _) = within(&est, |p| el(&p.damping, &p.damping_se, 0, 0), b, 0.30);
+    assert!(n >= 60, "identifiable points: {n}");
+    assert!(
+        kok >= 0.9 && bok >= 0.8,
+        "K within 15 %: {kok}, B within 30 %: {bok}"
+    );
+    assert!(
+        kcov >= 0.8 && bcov >= 0.8,
+        "±2 SE coverage K {kcov}, B {bcov}"
+    );
+    // the peak is resolved: the estimate at the centre is near double the baseline
+    let peak = est
+        .points
+        .iter()
+        .filter(|p| p.identifiable)
+        .min_by(|a, b| (a.sigma - 0.6).abs().total_cmp(&(b.sigma - 0.6).abs()))
+        .unwrap();
+    let kp = peak.stiffness.as_ref().unwrap()[(0, 0)];
+    assert!(
+        (kp - k(peak.sigma)).abs() < 0.1 * k(peak.sigma),
+        "K at the peak {kp} vs {}",
+        k(peak.sigma)
+    );
+    assert!(est.fit.cross_validated_vaf > 80.0, "{:?}", est.fit);
+}
+
+#[test]
+fn ensemble_of_few_repetitions_is_not_identifiable() {
+    let s = EnsembleSubject::joint();
+    let e = EnsembleExperiment {
+        repetitions: 6,
+        ..EnsembleExperiment::default()
+    };
+    let rec = simulate_ensemble(&s, &e, 2).unwrap();
+    let est = estimate_varying(&rec, &VaryingParams::default()).unwrap();
+    assert!(est
+        .points
+        .iter()
+        .all(|p| !p.identifiable && p.stiffness.is_none()));
+    assert!(est.points[0]
+        .reason
+        .as_deref()
+        .unwrap()
+        .contains("6 repetitions"));
+}
+
+#[test]
+fn ensemble_of_a_planar_arm_in_joint_and_endpoint_coordinates() {
+    for endpoint in [false, true] {
+        let s = EnsembleSubject::planar(endpoint);
+        let e = EnsembleExperiment {
+            repetitions: 60,
+            amplitude_rad: 0.03,
+            switch_s: 0.15,
+            actuator_hz: 6.0,
+            torque_noise_nm: 0.02,
+            ..EnsembleExperiment::default()
+        };
+        let rec = simulate_ensemble(&s, &e, 5).unwrap();
+        let est = estimate_varying(&rec, &VaryingParams::default()).unwrap();
+        // K as a matrix (relative Frobenius error), each element's ±2 SE
+        let (mut ok, mut n) = (0, 0);
+        for p in est.points.iter().filter(|p| p.identifiable) {
+            let k = p.stiffness.as_ref().unwrap();
+            let t = s.truth_at(p.sigma)[2].clone();
+            let (mut err, mut norm) = (0.0, 0.0);
+            for j in 0..2 {
+                for c in 0..2 {
+                    err += (k[(j, c)] - t[j][c]).powi(2);
+                    norm += t[j][c].powi(2);
+                }
+            }
+            n += 1;
+            ok += usize::from(err.sqrt() <= 0.15 * norm.sqrt());
+        }
+        assert!(
+            n >= 60 && ok as f64 >= 0.9 * n as f64,
+            "endpoint {endpoint}: K within 15 % at {ok} of {n}"
+        );
+        for (j, k) in [(0, 0), (1, 1), (0, 1), (1, 0)] {
+            let kt = |t: f64| s.truth_at(t)[2][j][k];
+            let (_, kcov, _) = within(&est, |p| el(&p.stiffness, &p.stiffness_se, j, k), kt, 0.15);
+            assert!(kcov >= 0.8, "endpoint {endpoint}: K{j}{k} coverage {kcov}");
+        }
+        for (j, k) in [(0, 0), (1, 1)] {
+            let bt = |t: f64| s.truth_at(t)[1][j][k];
+            let (bok, _, _) = within(&est, |p| el(&p.damping, &p.damping_se, j, k), bt, 0.30);
+            assert!(
+                bok >= 0.8,
+                "endpoint {endpoint}: B{j}{k} within 30 % at {bok}"
+            );
+        }
+    }
+}
+
+#[test]
+fn scheduled_ankle_recovers_stiffness_and_reflex_gain_against_the_operating_angle() {
+    let s = ScheduledAnkle::default();
+    let p = RampAndHold::default();
+    let rec = simulate_scheduled_ankle(&s, &p, 3).unwrap();
+    let params = VaryingParams {
+        schedule: "sv".into(),
+        reflex: true,
+        ..VaryingParams::default()
+    };
+    let est = estimate_varying(&rec, &params).unwrap();
+    let (kok, kcov, n) = within(
+        &est,
+        |p| el(&p.stiffness, &p.stiffness_se, 0, 0),
+        |x| s.at(x)[0],
+        0.15,
+    );
+    let (bok, _, _) = within(
+        &est,
+        |p| el(&p.damping, &p.damping_se, 0, 0),
+        |x| s.at(x)[1],
+        0.30,
+    );
+    assert!(n >= 15, "identifiable {n}");
+    assert!(
+        kok >= 0.9 && bok >= 0.8,
+        "K {kok}, B {bok}; {:?}",
+        est.points
+            .iter()
+            .map(|p| (p.sigma, p.stiffness.as_ref().map(|m| m[(0, 0)])))
+            .collect::<Vec<_>>()
+    );
+    // the reflex pathway's small mismatch (1 ms delay steps) biases K by
+    // about 2 %, more than its standard error: coverage is not claimed here
+    let _ = kcov;
+    let r = est.reflex.as_ref().unwrap();
+    assert!(r.detected, "{r:?}");
+    assert!((r.delay_s - 0.045).abs() <= 0.010, "delay {}", r.delay_s);
+    // the gain's trend: rising with the angle, within 25 % at the ends
+    let pts: Vec<_> = est.points.iter().filter(|p| p.identifiable).collect();
+    let g = |p: &&limpid_ident::varying::VaryingPoint| p.reflex.as_ref().unwrap().gain;
+    let (first, last) = (pts.first().unwrap(), pts.last().unwrap());
+    assert!(g(last) > g(first) * 2.0, "gain {} -> {}", g(first), g(last));
+    assert!(
+        (g(last) - s.at(last.sigma)[2]).abs() < 0.25 * s.at(last.sigma)[2],
+        "gain at the top {} vs {}",
+        g(last),
+        s.at(last.sigma)[2]
+    );
+}
+
+#[test]
+fn scheduled_ankle_without_reflex_claims_none() {
+    let s = ScheduledAnkle {
+        reflex: None,
+        ..ScheduledAnkle::default()
+    };
+    let p = RampAndHold {
+        keep_ramps: false,
+        ..RampAndHold::default()
+    };
+    let rec = simulate_scheduled_ankle(&s, &p, 4).unwrap();
+    let params = VaryingParams {
+        schedule: "sv".into(),
+        reflex: true,
+        ..VaryingParams::default()
+    };
+    let est = estimate_varying(&rec, &params).unwrap();
+    assert!(!est.reflex.as_ref().unwrap().detected, "{:?}", est.reflex);
+    let (kok, kcov, _) = within(
+        &est,
+        |p| el(&p.stiffness, &p.stiffness_se, 0, 0),
+        |x| s.at(x)[0],
+        0.15,
+    );
+    let (bok, bcov, _) = within(
+        &est,
+        |p| el(&p.damping, &p.damping_se, 0, 0),
+        |x| s.at(x)[1],
+        0.30,
+    );
+    assert!(kok >= 0.9 && bok >= 0.8, "K {kok} B {bok}");
+    assert!(kcov >= 0.8 && bcov >= 0.8, "coverage K {kcov} B {bcov}");
+}
