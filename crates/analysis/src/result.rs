@@ -21,6 +21,7 @@ use crate::study::StudyResult;
 use limpid_ident::planar::{PlanarEstimate, Sweep};
 use limpid_ident::reflex::ReflexEstimate;
 use limpid_ident::stochastic::StochasticEstimate;
+use limpid_ident::varying::VaryingEstimate;
 
 /// Version of the result schema; raised when a field changes meaning or is removed.
 pub const SCHEMA_VERSION: u32 = 1;
@@ -40,6 +41,8 @@ pub enum Estimate {
     Stochastic(StochasticEstimate),
     /// Intrinsic and reflex joint stiffness, parallel cascade (Kearney et al. 1997).
     Reflex(ReflexEstimate),
+    /// Impedance against time (ensemble) or an operating point (parameter-varying).
+    Varying(VaryingEstimate),
     /// Impedance per co-contraction level (seed 001).
     Cocontraction(CocontractionResult),
     /// A whole co-contraction study (seed 001 Tables 1-5).
@@ -59,6 +62,7 @@ impl Estimate {
             Estimate::WindowSweep(_) => "window_sweep",
             Estimate::Stochastic(_) => "stochastic",
             Estimate::Reflex(_) => "reflex",
+            Estimate::Varying(_) => "varying",
             Estimate::Cocontraction(_) => "cocontraction",
             Estimate::Study(_) => "study",
             Estimate::Demo(_) => "demo",

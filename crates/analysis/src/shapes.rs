@@ -128,6 +128,30 @@ pub fn check(e: &Estimate) -> Result<(), String> {
             }
             Ok(())
         }
+        Estimate::Varying(v) => {
+            same(
+                "schedule.values",
+                v.schedule.values.len(),
+                v.points.len(),
+                "points",
+            )?;
+            let d = v.coordinates.len();
+            for (i, p) in v.points.iter().enumerate() {
+                for (name, m) in [
+                    ("stiffness", &p.stiffness),
+                    ("stiffness_se", &p.stiffness_se),
+                    ("damping", &p.damping),
+                    ("damping_se", &p.damping_se),
+                    ("inertia", &p.inertia),
+                    ("inertia_se", &p.inertia_se),
+                ] {
+                    if let Some(m) = m {
+                        square(&format!("points[{i}].{name}"), m, d)?;
+                    }
+                }
+            }
+            Ok(())
+        }
         _ => Ok(()),
     }
 }

@@ -78,6 +78,9 @@ pub fn run(checked: &Checked, mut recordings: Vec<Recording>) -> Result<Estimate
         Request::Reflex(r) => Ok(Estimated::of(Estimate::Reflex(
             r.params().fit(&recordings[0])?,
         ))),
+        Request::Varying(r) => Ok(Estimated::of(Estimate::Varying(
+            limpid_ident::varying::estimate_varying(&recordings[0], &r.params())?,
+        ))),
     }
 }
 

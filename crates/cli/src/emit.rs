@@ -43,6 +43,12 @@ fn flag(field: &str) -> Option<&'static str> {
         "intrinsic_lags_s" => "--intrinsic-lags",
         "reflex_lags_s" => "--reflex-lags",
         "max_delay_s" => "--max-delay",
+        "schedule" => "--schedule",
+        "min_repetitions" => "--min-repetitions",
+        "grid_points" => "--grid",
+        "basis_order" => "--order",
+        "slow_hz" => "--slow",
+        "reflex" => "--reflex",
         _ => return None,
     })
 }
@@ -95,7 +101,7 @@ pub fn estimate(
 /// the long frequency and IRF arrays.
 fn json(doc: &Document, request: &Request) -> String {
     match request {
-        Request::Stochastic(_) | Request::Reflex(_) => doc.to_json(),
+        Request::Stochastic(_) | Request::Reflex(_) | Request::Varying(_) => doc.to_json(),
         _ => doc.to_json_pretty(),
     }
 }

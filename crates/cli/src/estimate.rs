@@ -25,6 +25,8 @@ pub enum Method {
     Stochastic(crate::stochastic::StochasticArgs),
     /// Intrinsic and reflex joint stiffness by the parallel cascade (Kearney et al. 1997): IRFs, delay, gain, VAF split.
     Reflex(crate::reflex::ReflexArgs),
+    /// Impedance that varies: against time within repeated trials (ensemble) or a measured schedule column (parameter-varying, optional reflex gain).
+    Varying(crate::varying::VaryingArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -291,6 +293,7 @@ pub fn run(method: Method) -> CliResult {
         Method::Planar(args) => crate::planar::run_estimate(args),
         Method::Stochastic(args) => crate::stochastic::run_estimate(args),
         Method::Reflex(args) => crate::reflex::run(args),
+        Method::Varying(args) => crate::varying::run(args),
         Method::Cocontraction(args) => crate::emit::estimate(
             args.request(),
             &[args.recording.clone(), args.mvc.clone()],

@@ -17,6 +17,7 @@ mod rerun;
 mod stochastic;
 mod study;
 mod table;
+mod varying;
 
 use std::process::ExitCode;
 

@@ -13,7 +13,7 @@ use crate::CliResult;
 
 #[derive(Subcommand)]
 pub enum ProtocolCommand {
-    /// Print a preset protocol as TOML: artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic).
+    /// Print a preset protocol as TOML: artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold).
     New {
         #[arg(long)]
         preset: String,
@@ -108,6 +108,9 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             }
             (Design::Planar(p), _) => export_planar(&p, &output),
             (Design::Stochastic(p), _) => export_stochastic(&p, &output),
+            (Design::Ensemble(_) | Design::RampAndHold(_), _) => Err(
+                "ensemble and ramp-and-hold protocols are for `limpid simulate`; exporting them to a robot is not supported yet".into(),
+            ),
         },
         ProtocolCommand::Check { protocol, json } => {
             let (d, report) = read_design(&protocol)?;
@@ -169,6 +172,9 @@ fn print_report(d: &Design, report: &DesignReport) {
                 r.max_coherence_hz,
                 p.max_input_coherence
             );
+        }
+        (_, DesignReport::Varying(r)) => {
+            println!("  {} samples, {:.1} s recorded", r.samples, r.duration_s);
         }
         _ => {}
     }

@@ -90,5 +90,8 @@ pub fn run(args: RerunArgs) -> CliResult {
         Request::Reflex(_) => {
             crate::emit::estimate(request, &paths, out, crate::reflex::reflex_text)
         }
+        Request::Varying(_) => {
+            crate::emit::estimate(request, &paths, out, crate::varying::varying_text)
+        }
     }
 }

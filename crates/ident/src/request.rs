@@ -18,6 +18,7 @@ use crate::planar::{Arm, PlanarPrepare};
 use crate::prepare::{Derivative, Offsets, PrepareParams, Windowing};
 use crate::reflex::ReflexParams;
 use crate::stochastic::StochasticParams;
+use crate::varying::VaryingParams;
 
 /// Fixed-length lists of numbers read with a message people understand
 /// ("expected 6 numbers, found 5") from any front-end.
@@ -421,6 +422,73 @@ impl ReflexRequest {
     }
 }
 
+/// Impedance that varies with time (`schedule = "time"`, an ensemble of
+/// repetitions) or with a measured operating point (a column: parameter-varying).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct VaryingRequest {
+    /// `time` (ensemble over the `trial` repetitions) or the column the impedance varies with.
+    pub schedule: String,
+    /// Zero-phase low-pass before differentiation (Hz); absent: 30 Hz or 0.4 x the rate.
+    pub cutoff_hz: Option<f64>,
+    /// Ensemble: the window pooled around each instant (ms), the time resolution.
+    pub window_ms: f64,
+    /// Ensemble: the grid step (ms); absent: half the window.
+    pub step_ms: Option<f64>,
+    /// Ensemble: fewest repetitions for an identifiable instant.
+    pub min_repetitions: usize,
+    /// Parameter-varying: points on the schedule's grid.
+    pub grid_points: usize,
+    /// Parameter-varying: Chebyshev order of every parameter; absent: chosen by cross-validation.
+    pub basis_order: Option<usize>,
+    /// Parameter-varying: the operating point is what varies slower than this (Hz).
+    pub slow_hz: f64,
+    /// Parameter-varying: decimate to about this rate (Hz) after filtering.
+    pub rate_hz: f64,
+    /// Parameter-varying: add a stretch-reflex pathway whose gain varies with the schedule.
+    pub reflex: bool,
+    /// Largest reflex delay scanned (s).
+    pub max_delay_s: f64,
+}
+
+impl Default for VaryingRequest {
+    fn default() -> Self {
+        let p = VaryingParams::default();
+        VaryingRequest {
+            schedule: p.schedule,
+            cutoff_hz: p.cutoff_hz,
+            window_ms: p.window_s * 1e3,
+            step_ms: p.step_s.map(|s| s * 1e3),
+            min_repetitions: p.min_repetitions,
+            grid_points: p.grid_points,
+            basis_order: p.basis_order,
+            slow_hz: p.slow_hz,
+            rate_hz: p.rate_hz,
+            reflex: p.reflex,
+            max_delay_s: p.max_delay_s,
+        }
+    }
+}
+
+impl VaryingRequest {
+    /// The estimator's settings.
+    pub fn params(&self) -> VaryingParams {
+        VaryingParams {
+            schedule: self.schedule.clone(),
+            cutoff_hz: self.cutoff_hz,
+            window_s: self.window_ms / 1e3,
+            step_s: self.step_ms.map(|ms| ms / 1e3),
+            min_repetitions: self.min_repetitions,
+            grid_points: self.grid_points,
+            basis_order: self.basis_order,
+            slow_hz: self.slow_hz,
+            rate_hz: self.rate_hz,
+            reflex: self.reflex,
+            max_delay_s: self.max_delay_s,
+        }
+    }
+}
+
 /// One estimate, as any front-end asks for it; `method` names the estimator.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "method", rename_all = "snake_case")]
@@ -437,6 +505,8 @@ pub enum Request {
     Stochastic(StochasticRequest),
     /// `limpid estimate reflex`.
     Reflex(ReflexRequest),
+    /// `limpid estimate varying`.
+    Varying(VaryingRequest),
 }
 
 /// A request whose settings were checked; only [`Request::check`] makes one.
@@ -506,6 +576,7 @@ impl Request {
             Request::WindowSweep(_) => "window-sweep",
             Request::Stochastic(_) => "estimate stochastic",
             Request::Reflex(_) => "estimate reflex",
+            Request::Varying(_) => "estimate varying",
         }
     }
 
@@ -544,6 +615,13 @@ impl Request {
                 })?;
             }
             Request::Reflex(r) => crate::Estimator::check(&r.params())?,
+            Request::Varying(r) => {
+                positive("window_ms", r.window_ms)?;
+                if let Some(ms) = r.step_ms {
+                    positive("step_ms", ms)?;
+                }
+                r.params().check()?
+            }
         }
         Ok(Checked(self))
     }
@@ -586,6 +664,7 @@ pub fn boolean_options(method: &str) -> Result<Vec<String>> {
         "cocontraction" => boolean_names::<PrepareRequest>(),
         "planar" | "window_sweep" => boolean_names::<ArmRequest>(),
         "stochastic" => boolean_names::<StochasticRequest>(),
+        "varying" => boolean_names::<VaryingRequest>(),
         _ => boolean_names::<ReflexRequest>(),
     })
 }
@@ -597,12 +676,12 @@ pub fn nesting(method: &str) -> Result<Option<(&'static str, Vec<String>)>> {
     Ok(match method {
         "linear" | "cocontraction" => Some(("prepare", field_names::<PrepareRequest>())),
         "planar" | "window_sweep" => Some(("arm", field_names::<ArmRequest>())),
-        "stochastic" | "reflex" => None,
+        "stochastic" | "reflex" | "varying" => None,
         other => {
             return Err(Error::invalid(
                 "method",
                 format!(
-                    "{other:?} is not a method: linear, cocontraction, planar, window_sweep, stochastic or reflex"
+                    "{other:?} is not a method: linear, cocontraction, planar, window_sweep, stochastic, reflex or varying"
                 ),
             ))
         }
@@ -637,6 +716,7 @@ pub fn deserialize_request<'de, D: serde::Deserializer<'de>>(
         "planar" => Request::Planar(typed(options)?),
         "window_sweep" => Request::WindowSweep(typed(options)?),
         "stochastic" => Request::Stochastic(typed(options)?),
+        "varying" => Request::Varying(typed(options)?),
         _ => Request::Reflex(typed(options)?),
     })
 }

@@ -31,10 +31,14 @@ pub enum Design {
     Planar(PlanarDesign),
     /// Stochastic inputs (seed 004).
     Stochastic(StochasticDesign),
+    /// Repetitions of a task with random perturbations (time-varying impedance).
+    Ensemble(crate::varying::EnsembleExperiment),
+    /// Operating angles on a ramp-and-hold schedule under a continuous perturbation (parameter-varying impedance).
+    RampAndHold(crate::varying::RampAndHold),
 }
 
 /// The preset names, by kind.
-pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic)";
+pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold)";
 
 impl Design {
     /// A preset: seed 000 (`artemiadis-3d`), seed 001 (`patel-cocontraction`),
@@ -46,6 +50,8 @@ impl Design {
             }
             "lakatos-planar" => Ok(Design::Planar(PlanarDesign::seed003())),
             "park-stochastic" => Ok(Design::Stochastic(StochasticDesign::seed004())),
+            "ensemble" => Ok(Design::Ensemble(Default::default())),
+            "ankle-ramp-and-hold" => Ok(Design::RampAndHold(Default::default())),
             other => Err(Error::invalid(
                 "preset",
                 format!("unknown preset {other:?}; presets: {PRESETS}"),
@@ -76,7 +82,7 @@ impl Design {
                         path,
                         text,
                         Some(span),
-                        "kind must be a string: centre-out, planar or stochastic",
+                        "kind must be a string: centre-out, planar, stochastic, ensemble or ramp-and-hold",
                     ));
                 };
                 // blank the `kind = ...` line so that every other byte keeps its place
@@ -106,9 +112,21 @@ impl Design {
                 d.validate().map_err(fail)?;
                 Design::Stochastic(d)
             }
+            "ensemble" => {
+                let d: crate::varying::EnsembleExperiment =
+                    toml::from_str(&body).map_err(|e| located(&body, e))?;
+                d.validate().map_err(|e| fail(e.to_string()))?;
+                Design::Ensemble(d)
+            }
+            "ramp-and-hold" => {
+                let d: crate::varying::RampAndHold =
+                    toml::from_str(&body).map_err(|e| located(&body, e))?;
+                d.validate().map_err(|e| fail(e.to_string()))?;
+                Design::RampAndHold(d)
+            }
             other => {
                 return Err(fail(format!(
-                    "unknown kind {other:?}; kinds: centre-out, planar, stochastic"
+                    "unknown kind {other:?}; kinds: centre-out, planar, stochastic, ensemble, ramp-and-hold"
                 )))
             }
         };
@@ -163,6 +181,8 @@ impl Design {
                 p.duration_s * p.sample_rate_hz * p.channels.len().max(1) as f64,
                 "duration x rate x channels",
             ),
+            Design::Ensemble(p) => p.validate(),
+            Design::RampAndHold(p) => p.validate(),
         }
     }
 
@@ -172,6 +192,8 @@ impl Design {
             Design::CentreOut(p) => ("centre-out", p.to_toml()),
             Design::Planar(p) => ("planar", toml::to_string(p).unwrap_or_default()),
             Design::Stochastic(p) => ("stochastic", toml::to_string(p).unwrap_or_default()),
+            Design::Ensemble(p) => ("ensemble", toml::to_string(p).unwrap_or_default()),
+            Design::RampAndHold(p) => ("ramp-and-hold", toml::to_string(p).unwrap_or_default()),
         };
         format!("kind = \"{kind}\"\n{body}")
     }
@@ -445,6 +467,17 @@ pub enum DesignReport {
     Planar(PlanarReport),
     /// Stochastic report.
     Stochastic(StochasticReport),
+    /// Ensemble or ramp-and-hold report.
+    Varying(VaryingReport),
+}
+
+/// What `check` found in an ensemble or ramp-and-hold protocol.
+#[derive(Debug, Clone, Serialize)]
+pub struct VaryingReport {
+    /// Samples recorded.
+    pub samples: usize,
+    /// Duration recorded (s).
+    pub duration_s: f64,
 }
 
 /// What `check` found in a planar protocol.
@@ -489,6 +522,22 @@ pub fn check(d: &Design) -> Result<DesignReport> {
         Design::CentreOut(p) => Ok(DesignReport::CentreOut(protocol::check(p)?)),
         Design::Planar(p) => check_planar(p).map(DesignReport::Planar),
         Design::Stochastic(p) => check_stochastic(p).map(DesignReport::Stochastic),
+        Design::Ensemble(p) => {
+            p.validate()?;
+            let duration_s = p.repetitions as f64 * p.duration_s;
+            Ok(DesignReport::Varying(VaryingReport {
+                samples: (duration_s * p.rate_hz).round() as usize,
+                duration_s,
+            }))
+        }
+        Design::RampAndHold(p) => {
+            p.validate()?;
+            let duration_s = p.duration_s();
+            Ok(DesignReport::Varying(VaryingReport {
+                samples: (duration_s * p.rate_hz).round() as usize,
+                duration_s,
+            }))
+        }
     }
 }
 

@@ -122,6 +122,32 @@ pub fn simulate_design(
         Design::CentreOut(p) => centre_out(p, subject, seed),
         Design::Planar(p) => planar(p, subject, seed).map(|s| vec![s]),
         Design::Stochastic(p) => stochastic(p, subject, controller, seed).map(|s| vec![s]),
+        Design::Ensemble(p) => {
+            let s: crate::varying::EnsembleSubject = match subject {
+                Some(text) => parse(text)?,
+                None => crate::varying::EnsembleSubject::joint(),
+            };
+            let recording = crate::varying::simulate_ensemble(&s, p, seed)?;
+            let truth = crate::varying::ensemble_truth(&s, p, 0.01);
+            Ok(vec![Simulated {
+                label: None,
+                recording,
+                truth: serde_json::to_value(truth).expect("truths serialise"),
+            }])
+        }
+        Design::RampAndHold(p) => {
+            let s: crate::varying::ScheduledAnkle = match subject {
+                Some(text) => parse(text)?,
+                None => crate::varying::ScheduledAnkle::default(),
+            };
+            let recording = crate::varying::simulate_scheduled_ankle(&s, p, seed)?;
+            let truth = crate::varying::scheduled_truth(&s, p, 25);
+            Ok(vec![Simulated {
+                label: None,
+                recording,
+                truth: serde_json::to_value(truth).expect("truths serialise"),
+            }])
+        }
     }
 }
 

@@ -307,6 +307,13 @@ fn movement(a: f64, total: f64, t: f64) -> [f64; 3] {
     [a * p, a * v, a * acc]
 }
 
+impl EnsembleExperiment {
+    /// Refuse settings that cannot be simulated.
+    pub fn validate(&self) -> Result<()> {
+        check_experiment(self)
+    }
+}
+
 fn check_experiment(e: &EnsembleExperiment) -> Result<()> {
     let ok = |v: f64| v.is_finite() && v > 0.0;
     let noise_ok = |v: f64| v.is_finite() && v >= 0.0;
@@ -567,6 +574,37 @@ impl Default for RampAndHold {
     }
 }
 
+impl RampAndHold {
+    /// Refuse settings that cannot be simulated.
+    pub fn validate(&self) -> Result<()> {
+        let p = self;
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        if p.angles_rad.is_empty()
+            || p.angles_rad.iter().any(|a| !a.is_finite() || a.abs() > 3.2)
+            || !(ok(p.hold_s)
+                && p.ramp_s.is_finite()
+                && p.ramp_s >= 0.0
+                && ok(p.amplitude_rad)
+                && ok(p.switch_s)
+                && ok(p.actuator_hz)
+                && ok(p.rate_hz)
+                && p.torque_noise_nm.is_finite()
+                && p.torque_noise_nm >= 0.0)
+        {
+            return Err(Error::invalid(
+                "ramp-and-hold schedule",
+                "angles within ±3.2 rad; hold, amplitude, switching, actuator and rate positive; ramp and noise not negative",
+            ));
+        }
+        crate::validate::check_size(self.duration_s() * p.rate_hz, "scheduled ankle recording")
+    }
+
+    /// Length of the schedule (s).
+    pub fn duration_s(&self) -> f64 {
+        self.angles_rad.len() as f64 * (self.hold_s + self.ramp_s) - self.ramp_s
+    }
+}
+
 /// The operating angle at `t` s: holds joined by cosine ramps, and the index of the hold (None on a ramp).
 fn operating_angle(p: &RampAndHold, t: f64) -> (f64, Option<usize>) {
     let period = p.hold_s + p.ramp_s;
@@ -588,26 +626,8 @@ pub fn simulate_scheduled_ankle(
     p: &RampAndHold,
     seed: u64,
 ) -> Result<Recording> {
-    let ok = |v: f64| v.is_finite() && v > 0.0;
-    if p.angles_rad.is_empty()
-        || p.angles_rad.iter().any(|a| !a.is_finite() || a.abs() > 3.2)
-        || !(ok(p.hold_s)
-            && p.ramp_s.is_finite()
-            && p.ramp_s >= 0.0
-            && ok(p.amplitude_rad)
-            && ok(p.switch_s)
-            && ok(p.actuator_hz)
-            && ok(p.rate_hz)
-            && p.torque_noise_nm.is_finite()
-            && p.torque_noise_nm >= 0.0)
-    {
-        return Err(Error::invalid(
-            "ramp-and-hold schedule",
-            "angles within ±3.2 rad; hold, amplitude, switching, actuator and rate positive; ramp and noise not negative",
-        ));
-    }
-    let duration = p.angles_rad.len() as f64 * (p.hold_s + p.ramp_s) - p.ramp_s;
-    crate::validate::check_size(duration * p.rate_hz, "scheduled ankle recording")?;
+    p.validate()?;
+    let duration = p.duration_s();
     let n = (duration * p.rate_hz).round() as usize;
     let h = 1.0 / (p.rate_hz * SUBSTEPS as f64);
     let mut rng = StdRng::seed_from_u64(seed);

@@ -24,6 +24,7 @@ pub mod ellipse;
 pub mod png;
 pub mod reproduce;
 pub mod svg;
+mod varying;
 
 use std::fmt::Write as _;
 
@@ -127,6 +128,7 @@ pub fn build(inputs: &[(String, Estimate)]) -> Report {
             Estimate::Study(r) => study_section(name, r),
             Estimate::Cocontraction(r) => cocontraction_section(name, r),
             Estimate::Calibration(r) => calibration_section(name, r),
+            Estimate::Varying(r) => varying::section(name, r),
         })
         .collect();
     Report {

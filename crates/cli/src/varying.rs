@@ -1,0 +1,192 @@
+//! `limpid estimate varying`: impedance against time within repeated trials
+//! (ensemble) or against a measured schedule column (parameter-varying).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use limpid_analysis::result::Estimate;
+use limpid_app::estimate::Estimated;
+use limpid_core::{significant, with_standard_error};
+use limpid_ident::request::{Request, VaryingRequest};
+use limpid_ident::varying::VaryingMethod;
+
+use crate::emit::Output;
+use crate::CliResult;
+
+#[derive(Args)]
+pub struct VaryingArgs {
+    /// Recording: repetitions of a task with a `trial` column (--schedule time), or a record with the schedule column.
+    pub recording: PathBuf,
+    /// `time` (ensemble over the trials) or the column the impedance varies with (e.g. sv, level, q1).
+    #[arg(long, default_value_t = VaryingRequest::default().schedule, value_name = "time|COLUMN")]
+    pub schedule: String,
+    /// Zero-phase low-pass before differentiation (Hz) [default: 30, or 0.4 x the rate].
+    #[arg(long, value_name = "HZ")]
+    pub cutoff: Option<f64>,
+    /// Ensemble: the window pooled around each instant (ms), the time resolution.
+    #[arg(long, default_value_t = VaryingRequest::default().window_ms, value_name = "MS")]
+    pub window_ms: f64,
+    /// Ensemble: grid step (ms) [default: half the window].
+    #[arg(long = "step", value_name = "MS")]
+    pub step_ms: Option<f64>,
+    /// Ensemble: fewest repetitions for an identifiable instant.
+    #[arg(long, default_value_t = VaryingRequest::default().min_repetitions, value_name = "N")]
+    pub min_repetitions: usize,
+    /// Parameter-varying: points on the schedule's grid.
+    #[arg(long, default_value_t = VaryingRequest::default().grid_points, value_name = "N")]
+    pub grid: usize,
+    /// Parameter-varying: Chebyshev order of every parameter [default: chosen by 10-fold blocked cross-validation, 0-6].
+    #[arg(long, value_name = "P")]
+    pub order: Option<usize>,
+    /// Parameter-varying: the operating point is what varies slower than this (Hz).
+    #[arg(long, default_value_t = VaryingRequest::default().slow_hz, value_name = "HZ")]
+    pub slow: f64,
+    /// Parameter-varying: decimate to about this rate (Hz) after filtering.
+    #[arg(long, default_value_t = VaryingRequest::default().rate_hz, value_name = "HZ")]
+    pub rate: f64,
+    /// Parameter-varying: add a stretch-reflex pathway (rectified velocity, delay, low-pass) whose gain varies with the schedule.
+    #[arg(long)]
+    pub reflex: bool,
+    /// Largest reflex delay scanned (s).
+    #[arg(long, default_value_t = VaryingRequest::default().max_delay_s, value_name = "S")]
+    pub max_delay: f64,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the HTML report (K, B, M and the reflex gain against the schedule) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Print the request these flags make (JSON) and stop.
+    #[arg(long)]
+    pub print_request: bool,
+}
+
+impl VaryingArgs {
+    /// The request these flags make.
+    pub fn request(&self) -> Request {
+        Request::Varying(VaryingRequest {
+            schedule: self.schedule.clone(),
+            cutoff_hz: self.cutoff,
+            window_ms: self.window_ms,
+            step_ms: self.step_ms,
+            min_repetitions: self.min_repetitions,
+            grid_points: self.grid,
+            basis_order: self.order,
+            slow_hz: self.slow,
+            rate_hz: self.rate,
+            reflex: self.reflex,
+            max_delay_s: self.max_delay,
+        })
+    }
+}
+
+pub fn run(args: VaryingArgs) -> CliResult {
+    crate::emit::estimate(
+        args.request(),
+        std::slice::from_ref(&args.recording),
+        Output {
+            json: args.json,
+            report: args.report.as_deref(),
+            print_request: args.print_request,
+        },
+        varying_text,
+    )
+}
+
+/// `limpid estimate varying`'s text: one line per grid point, diagonal elements.
+pub fn varying_text(estimated: &Estimated, _: &Request, paths: &[PathBuf]) -> CliResult {
+    let Estimate::Varying(e) = &estimated.document.estimate else {
+        return Ok(());
+    };
+    println!("limpid estimate varying: {}", paths[0].display());
+    match e.method {
+        VaryingMethod::Ensemble => println!(
+            "ensemble of {} repetitions at {} Hz, low-pass {} Hz",
+            e.repetitions.unwrap_or_default(),
+            significant(e.sample_rate_hz, 4),
+            significant(e.cutoff_hz, 3)
+        ),
+        VaryingMethod::ParameterVarying => println!(
+            "parameter-varying on {}: Chebyshev order {}, low-pass {} Hz",
+            e.schedule.name,
+            e.basis_order.unwrap_or_default(),
+            significant(e.cutoff_hz, 3)
+        ),
+    }
+    println!("resolution: {}", e.resolution_note);
+    let d = e.coordinates.len();
+    let joint = e
+        .coordinates
+        .iter()
+        .all(|c| c.starts_with('q') || c == "theta");
+    let (ku, bu, mu) = if joint {
+        ("N m/rad", "N m s/rad", "kg m^2")
+    } else {
+        ("N/m", "N s/m", "kg")
+    };
+    let sched = if e.schedule.unit.is_empty() {
+        e.schedule.name.clone()
+    } else {
+        format!("{} ({})", e.schedule.name, e.schedule.unit)
+    };
+    println!(
+        "{sched}: K [{ku}], B [{bu}], M [{mu}] (diagonal, ± standard error){}",
+        if e.reflex.is_some() {
+            ", G [N m s/rad]"
+        } else {
+            ""
+        }
+    );
+    for p in &e.points {
+        let mut line = format!("  {:>9}", significant(p.sigma, 4));
+        match (
+            &p.stiffness,
+            &p.stiffness_se,
+            &p.damping,
+            &p.damping_se,
+            &p.inertia,
+            &p.inertia_se,
+        ) {
+            (Some(k), Some(ks), Some(b), Some(bs), Some(m), Some(ms)) => {
+                for i in 0..d {
+                    line.push_str(&format!(
+                        "  K{0}{0} {1}  B{0}{0} {2}  M{0}{0} {3}",
+                        i + 1,
+                        with_standard_error(k[(i, i)], ks[(i, i)]),
+                        with_standard_error(b[(i, i)], bs[(i, i)]),
+                        with_standard_error(m[(i, i)], ms[(i, i)])
+                    ));
+                }
+                if let Some(r) = &p.reflex {
+                    line.push_str(&format!("  G {}", with_standard_error(r.gain, r.gain_se)));
+                }
+            }
+            _ => line.push_str(&format!(
+                "  not identifiable: {}",
+                p.reason.as_deref().unwrap_or("no estimate")
+            )),
+        }
+        println!("{line}");
+    }
+    println!(
+        "VAF {} % (cross-validated {} %)",
+        significant(e.fit.vaf, 3),
+        significant(e.fit.cross_validated_vaf, 3)
+    );
+    if let Some(r) = &e.reflex {
+        println!(
+            "reflex: {} (delay {} ms, low-pass {} Hz, {} velocity; cross-validated VAF {:+.1} points, Wald {:.1} on {} df)",
+            if r.detected { "detected" } else { "not detected" },
+            significant(r.delay_s * 1e3, 3),
+            significant(r.natural_hz, 2),
+            r.polarity,
+            r.cross_validated_gain,
+            r.wald,
+            r.wald_dof
+        );
+    }
+    for w in &e.warnings {
+        println!("warning: {w}");
+    }
+    Ok(())
+}

@@ -1,0 +1,244 @@
+//! The report section of impedance that varies (issue 38): K, B (and the
+//! reflex gain) against time or the schedule, ±2 SE bands, a table per grid
+//! point, the points the data do not support left blank with their reason.
+
+use limpid_core::{significant, with_standard_error, Matrix};
+use limpid_ident::varying::{VaryingEstimate, VaryingMethod, VaryingPoint};
+
+use crate::svg::{Chart, Series, Stroke, PALETTE};
+use crate::{Figure, Section, Table};
+
+fn units(coords: &[String]) -> [&'static str; 3] {
+    let joint = coords.iter().all(|c| c.starts_with('q') || c == "theta");
+    if joint {
+        ["N m/rad", "N m s/rad", "kg m²"]
+    } else {
+        ["N/m", "N s/m", "kg"]
+    }
+}
+
+fn schedule_label(v: &VaryingEstimate) -> String {
+    if v.schedule.unit.is_empty() {
+        v.schedule.name.clone()
+    } else {
+        format!("{} ({})", v.schedule.name, v.schedule.unit)
+    }
+}
+
+type Pick = fn(&VaryingPoint) -> (Option<&Matrix>, Option<&Matrix>);
+
+/// One figure per quantity: each element (diagonal first) with its ±2 SE band dashed.
+fn element_figure(v: &VaryingEstimate, id: &str, title: &str, unit: &str, pick: Pick) -> Figure {
+    let d = v.coordinates.len();
+    let x: Vec<f64> = v.points.iter().map(|p| p.sigma).collect();
+    let mut series = Vec::new();
+    let mut elements: Vec<(usize, usize)> = (0..d).map(|i| (i, i)).collect();
+    for i in 0..d {
+        for j in 0..d {
+            if i != j {
+                elements.push((i, j));
+            }
+        }
+    }
+    for (k, (i, j)) in elements.into_iter().enumerate() {
+        let color = PALETTE[k % PALETTE.len()].to_string();
+        let at = |m: Option<&Matrix>| m.map_or(f64::NAN, |m| m[(i, j)]);
+        let value: Vec<f64> = v.points.iter().map(|p| at(pick(p).0)).collect();
+        let se: Vec<f64> = v.points.iter().map(|p| at(pick(p).1)).collect();
+        let name = if d == 1 {
+            title.split_whitespace().next().unwrap_or("").to_string()
+        } else {
+            format!("{}{}{}", &title[..1], i + 1, j + 1)
+        };
+        for sign in [2.0, -2.0] {
+            series.push(Series {
+                name: "± 2 SE".into(),
+                x: x.clone(),
+                y: value.iter().zip(&se).map(|(v, e)| v + sign * e).collect(),
+                stroke: Stroke::Dashed,
+                color: color.clone(),
+            });
+        }
+        series.push(Series {
+            name,
+            x: x.clone(),
+            y: value,
+            stroke: Stroke::Solid,
+            color,
+        });
+    }
+    Figure {
+        id: id.into(),
+        chart: Chart {
+            title: format!("{title} against {} (± 2 SE dashed)", v.schedule.name),
+            x_label: schedule_label(v),
+            y_label: format!("{} ({unit})", title.split_whitespace().next().unwrap_or("")),
+            x_log: false,
+            y_log: false,
+            y_range: None,
+            series,
+        },
+    }
+}
+
+fn cell(m: Option<&Matrix>, se: Option<&Matrix>, i: usize, j: usize) -> String {
+    match (m, se) {
+        (Some(m), Some(se)) => with_standard_error(m[(i, j)], se[(i, j)]),
+        _ => "—".into(),
+    }
+}
+
+/// The varying section: verdict, figures, per-point table.
+pub(crate) fn section(name: &str, v: &VaryingEstimate) -> Section {
+    let [ku, bu, mu] = units(&v.coordinates);
+    let d = v.coordinates.len();
+    let identifiable = v.points.iter().filter(|p| p.identifiable).count();
+    let method = match v.method {
+        VaryingMethod::Ensemble => format!(
+            "ensemble of {} repetitions",
+            v.repetitions.unwrap_or_default()
+        ),
+        VaryingMethod::ParameterVarying => format!(
+            "parameter-varying on {}, Chebyshev order {}",
+            v.schedule.name,
+            v.basis_order.unwrap_or_default()
+        ),
+    };
+    let mut verdict = format!(
+        "{method}: {identifiable} of {} points identifiable; VAF {} % (cross-validated {} %); {}",
+        v.points.len(),
+        significant(v.fit.vaf, 3),
+        significant(v.fit.cross_validated_vaf, 3),
+        v.resolution_note
+    );
+    if let Some(r) = &v.reflex {
+        verdict.push_str(&if r.detected {
+            format!(
+                "; reflex detected: delay {} ms, low-pass {} Hz, {} velocity, cross-validated VAF +{} points",
+                significant(r.delay_s * 1e3, 3),
+                significant(r.natural_hz, 2),
+                r.polarity,
+                significant(r.cross_validated_gain, 2)
+            )
+        } else {
+            "; no reflex detected".to_string()
+        });
+    }
+    let mut figures = vec![
+        element_figure(v, "varying-stiffness", "K stiffness", ku, |p| {
+            (p.stiffness.as_ref(), p.stiffness_se.as_ref())
+        }),
+        element_figure(v, "varying-damping", "B damping", bu, |p| {
+            (p.damping.as_ref(), p.damping_se.as_ref())
+        }),
+        element_figure(v, "varying-inertia", "M inertia", mu, |p| {
+            (p.inertia.as_ref(), p.inertia_se.as_ref())
+        }),
+    ];
+    if v.reflex.is_some() {
+        let x: Vec<f64> = v.points.iter().map(|p| p.sigma).collect();
+        let g: Vec<(f64, f64)> = v
+            .points
+            .iter()
+            .map(|p| {
+                p.reflex
+                    .as_ref()
+                    .map_or((f64::NAN, f64::NAN), |r| (r.gain, r.gain_se))
+            })
+            .collect();
+        let line = |name: &str, y: Vec<f64>, stroke| Series {
+            name: name.into(),
+            x: x.clone(),
+            y,
+            stroke,
+            color: PALETTE[0].into(),
+        };
+        figures.push(Figure {
+            id: "varying-reflex".into(),
+            chart: Chart {
+                title: format!("Reflex gain against {} (± 2 SE dashed)", v.schedule.name),
+                x_label: schedule_label(v),
+                y_label: "G (N m s/rad)".into(),
+                x_log: false,
+                y_log: false,
+                y_range: None,
+                series: vec![
+                    line(
+                        "± 2 SE",
+                        g.iter().map(|(a, s)| a + 2.0 * s).collect(),
+                        Stroke::Dashed,
+                    ),
+                    line(
+                        "± 2 SE",
+                        g.iter().map(|(a, s)| a - 2.0 * s).collect(),
+                        Stroke::Dashed,
+                    ),
+                    line("G", g.iter().map(|(a, _)| *a).collect(), Stroke::Solid),
+                ],
+            },
+        });
+    }
+    let mut header = vec![schedule_label(v)];
+    let diag: Vec<(usize, usize)> = (0..d).map(|i| (i, i)).collect();
+    for (q, unit) in [("K", ku), ("B", bu), ("M", mu)] {
+        for &(i, _) in &diag {
+            let el = if d == 1 {
+                q.to_string()
+            } else {
+                format!("{q}{}{}", i + 1, i + 1)
+            };
+            header.push(format!("{el} ({unit})"));
+        }
+    }
+    if v.reflex.is_some() {
+        header.push("G (N m s/rad)".into());
+    }
+    header.push("VAF (%)".into());
+    header.push("note".into());
+    let rows = v
+        .points
+        .iter()
+        .map(|p| {
+            let mut row = vec![significant(p.sigma, 4)];
+            for (m, se) in [
+                (p.stiffness.as_ref(), p.stiffness_se.as_ref()),
+                (p.damping.as_ref(), p.damping_se.as_ref()),
+                (p.inertia.as_ref(), p.inertia_se.as_ref()),
+            ] {
+                for &(i, j) in &diag {
+                    row.push(cell(m, se, i, j));
+                }
+            }
+            if v.reflex.is_some() {
+                row.push(
+                    p.reflex
+                        .as_ref()
+                        .map_or("—".into(), |r| with_standard_error(r.gain, r.gain_se)),
+                );
+            }
+            row.push(p.vaf.map_or("—".into(), |x| significant(x, 3)));
+            row.push(p.reason.clone().unwrap_or_default());
+            row
+        })
+        .collect();
+    Section {
+        heading: format!("Varying impedance: {name}"),
+        verdict,
+        warnings: v.warnings.clone(),
+        tables: vec![Table {
+            caption: format!(
+                "Impedance at each point (value ± standard error{}; — : not identifiable)",
+                if d > 1 {
+                    ", diagonal elements; the JSON has every element"
+                } else {
+                    ""
+                }
+            ),
+            header,
+            rows,
+        }],
+        figures,
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}
