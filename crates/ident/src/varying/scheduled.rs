@@ -43,6 +43,8 @@ const SLOW_ORDER: usize = 2;
 const REFLEX_DAMPING: f64 = 0.7;
 const REFLEX_NATURAL_HZ: [f64; 7] = [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
 const FOLDS: usize = 10;
+/// Low-pass of the position the reflex drive's velocity is taken from (Hz).
+const REFLEX_VELOCITY_HZ: f64 = 100.0;
 /// Least data near a grid point (s) for it to be identifiable.
 const MIN_SUPPORT_S: f64 = 1.0;
 /// Standard normal quantile of 1 - 1e-4 (the reflex test's level).
@@ -52,6 +54,10 @@ const Z_1E4: f64 = 3.719;
 struct Segment {
     /// `[x'' (d), x' (d), x (d)]` then forces (d), low-passed, not detrended.
     signals: Vec<Vec<f64>>,
+    /// Velocity of the first coordinate for the reflex drive, from the position
+    /// low-passed only against noise (rectification turns what a low-pass
+    /// removes into low-frequency torque, so the drive keeps it).
+    reflex_velocity: Vec<f64>,
     /// The schedule.
     sigma: Vec<f64>,
     /// Indices kept (trimmed, decimated).
@@ -125,6 +131,10 @@ fn rows(
     let fs = rec.sample_rate();
     let dt = 1.0 / fs;
     let lp = LowPass::butterworth(FILTER_ORDER, cutoff, fs)?;
+    // the reflex drive's velocity: low-passed at 0.45 x the rate only when that is above the estimation cut-off
+    let wide = (params.reflex && REFLEX_VELOCITY_HZ < 0.45 * fs)
+        .then(|| LowPass::butterworth(FILTER_ORDER, REFLEX_VELOCITY_HZ, fs))
+        .transpose()?;
     let schedule = rec.require(&params.schedule, "the schedule (--schedule)")?;
     let schedule_is_coordinate = coords.contains(&params.schedule);
     let ranges: Vec<std::ops::Range<usize>> = if rec.has("trial") {
@@ -171,6 +181,10 @@ fn rows(
             signals[2 * d + k] = x;
             signals[3 * d + k] = lp.filtfilt(&frc[k][seg.clone()])?;
         }
+        let reflex_velocity = match &wide {
+            Some(w) => central_first(&w.filtfilt(&pos[0][seg.clone()])?, dt),
+            None => central_first(&pos[0][seg.clone()], dt),
+        };
         let sigma = if schedule_is_coordinate {
             slow.filtfilt(&schedule[seg.clone()])?
         } else {
@@ -179,6 +193,7 @@ fn rows(
         let kept = (trim..seg.len() - trim).step_by(dec).collect();
         segments.push(Segment {
             signals,
+            reflex_velocity,
             sigma,
             kept,
         });
@@ -294,7 +309,7 @@ fn rows(
 fn reflex_columns(
     rows: &Rows,
     drive: &[Vec<f64>],
-    delay: usize,
+    delay_quarters: usize,
     slow: &LowPass,
 ) -> Result<Vec<f64>> {
     let p1 = rows.top + 1;
@@ -307,7 +322,7 @@ fn reflex_columns(
             let product: Vec<f64> = (0..len)
                 .map(|t| {
                     rows.basis(seg.sigma[t], rows.top, &mut phi);
-                    phi[i] * r[t.saturating_sub(delay)]
+                    phi[i] * delayed(r, t, delay_quarters)
                 })
                 .collect();
             let col = detrend(slow, &product)?;
@@ -322,11 +337,11 @@ fn reflex_columns(
 
 /// The reflex drive of one low-pass and polarity, per segment: `± LP2(rect(±x'))`.
 fn reflex_drive(rows: &Rows, natural_hz: f64, positive: bool, fs: f64) -> Vec<Vec<f64>> {
-    let d = rows.d;
     rows.segments
         .iter()
         .map(|seg| {
-            let rect: Vec<f64> = seg.signals[d]
+            let rect: Vec<f64> = seg
+                .reflex_velocity
                 .iter()
                 .map(|&x| if positive { x.max(0.0) } else { (-x).max(0.0) })
                 .collect();
@@ -497,9 +512,20 @@ fn robust_covariances(design: &Design<'_>, f: &Fitted) -> Option<Vec<DMatrix<f64
     Some(meat.iter().map(|m| &ginv * m * &ginv * c).collect())
 }
 
+/// `x(t - q/4)`, linearly interpolated (the drive is low-passed far below
+/// the sample rate); the start of the segment repeats before it.
+fn delayed(x: &[f64], t: usize, quarters: usize) -> f64 {
+    let whole = quarters / 4;
+    let frac = (quarters % 4) as f64 / 4.0;
+    let a = x[t.saturating_sub(whole)];
+    let b = x[t.saturating_sub(whole + 1)];
+    a + frac * (b - a)
+}
+
 struct ReflexChoice {
     natural_hz: f64,
     positive: bool,
+    /// Delay in quarter samples.
     delay: usize,
     columns: Vec<f64>,
 }
@@ -515,8 +541,9 @@ fn scan_reflex(
     fs: f64,
     trim: usize,
 ) -> Result<Option<ReflexChoice>> {
-    let max_delay = ((params.max_delay_s * fs).round() as usize).min(trim);
-    let step = ((0.005 * fs).round() as usize).max(1);
+    // in quarter samples: coarse 5 ms steps, then 1 sample, then a quarter
+    let max_delay = 4 * ((params.max_delay_s * fs).round() as usize).min(trim - 1);
+    let step = 4 * ((0.005 * fs).round() as usize).max(1);
     let coarse: Vec<usize> = (0..=max_delay).step_by(step).collect();
     let p1 = rows.top + 1;
     let mut best: Option<(f64, f64, bool, usize)> = None;
@@ -552,7 +579,7 @@ fn scan_reflex(
                 for (seg, prod) in rows.segments.iter().zip(&products) {
                     for (k, &t) in seg.kept.iter().enumerate() {
                         for (i, p) in prod.iter().enumerate() {
-                            cols[(row0 + k) * p1 + i] = p[t - delay];
+                            cols[(row0 + k) * p1 + i] = delayed(p, t, delay);
                         }
                     }
                     row0 += seg.kept.len();
@@ -573,12 +600,23 @@ fn scan_reflex(
             let Some(&(coarse_best, _)) = scores.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
                 continue;
             };
-            let fine: Vec<usize> =
-                (coarse_best.saturating_sub(step)..=(coarse_best + step).min(max_delay)).collect();
-            let fine: Vec<(usize, f64)> = fine
-                .par_iter()
-                .filter_map(|&dl| rss_at(dl).map(|r| (dl, r)))
-                .collect();
+            let scan = |around: usize, reach: usize, by: usize| -> Vec<(usize, f64)> {
+                let candidates: Vec<usize> = (around.saturating_sub(reach)
+                    ..=(around + reach).min(max_delay))
+                    .step_by(by)
+                    .collect();
+                candidates
+                    .par_iter()
+                    .filter_map(|&dl| rss_at(dl).map(|r| (dl, r)))
+                    .collect()
+            };
+            let best_of = |v: &[(usize, f64)], or: usize| {
+                v.iter()
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map_or(or, |b| b.0)
+            };
+            let sample = best_of(&scan(coarse_best, step, 4), coarse_best);
+            let fine = scan(sample, 3, 1);
             if let Some(&(delay, rss)) = fine.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
                 if best.is_none_or(|(b, ..)| rss < b) {
                     best = Some((rss, natural_hz, positive, delay));
@@ -725,7 +763,7 @@ pub(super) fn estimate(
                 ));
             }
             Some(VaryingReflex {
-                delay_s: c.delay as f64 / fs,
+                delay_s: c.delay as f64 / (4.0 * fs),
                 natural_hz: c.natural_hz,
                 damping_ratio: REFLEX_DAMPING,
                 polarity: if c.positive { "positive" } else { "negative" }.into(),
