@@ -218,7 +218,7 @@ impl EnsembleSubject {
 
 /// The perturbation and recording of an ensemble experiment.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct EnsembleExperiment {
     /// Repetitions of the task.
     pub repetitions: usize,
@@ -534,7 +534,7 @@ impl ScheduledAnkle {
 /// A ramp-and-hold schedule of operating angles with a continuous random
 /// perturbation on top.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct RampAndHold {
     /// Operating angles held, in order (rad).
     pub angles_rad: Vec<f64>,

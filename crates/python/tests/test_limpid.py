@@ -369,3 +369,27 @@ def test_stochastic_shoulder_needs_six_numbers_and_a_usable_posture():
         limpid.estimate_stochastic(path, shoulder=(0.3, 0.35, 90, 30, 45))
     with pytest.raises(ValueError, match="do not determine the two angles"):
         limpid.estimate_stochastic(path, shoulder=(0.3, 0.35, 90, 30, 0, 0))
+
+
+def test_varying_impedance_from_a_simulated_ramp_and_hold_ankle():
+    (cols, truth), = limpid.simulate("ankle-ramp-and-hold", seed=3)
+    assert truth["method"] == "varying" and truth["schedule"] == "sv"
+    est = limpid.estimate_varying(cols, schedule="sv", reflex=True, grid_points=7).to_dict()
+    assert est["kind"] == "varying" and est["schedule"]["name"] == "sv"
+    assert len(est["schedule"]["values"]) == len(est["points"]) == 7
+    # the truth's quadratic K(sv), evaluated at the result's grid
+    sv = np.array([p["sigma"] for p in truth["points"]])
+    k_true = np.array([p["stiffness"][0][0] for p in truth["points"]])
+    for p in est["points"]:
+        assert p["identifiable"]
+        k = p["stiffness"][0][0]
+        assert abs(k - np.interp(p["sigma"], sv, k_true)) < 0.05 * k
+    assert est["reflex"]["detected"] and abs(est["reflex"]["delay_s"] - truth["reflex_delay_s"]) < 0.005
+
+
+def test_varying_ensemble_marks_instants_without_support():
+    (cols, _), = limpid.simulate("kind = 'ensemble'\nrepetitions = 5\n", seed=2)
+    est = limpid.estimate_varying(cols).to_dict()
+    assert all(not p["identifiable"] and p["stiffness"] is None for p in est["points"])
+    with pytest.raises(ValueError, match="trial"):
+        limpid.estimate_varying({"t": np.arange(2000) / 1000, "q1": np.zeros(2000), "tau1": np.zeros(2000)})

@@ -56,6 +56,13 @@ CASES = [
       "--intrinsic-lags", "0.05", "--reflex-lags", "0.8", "--max-delay", "0.1", "--rectify-first"],
      dict(position="x", torque="fx", rate_hz=200, intrinsic_lags_s=0.05, reflex_lags_s=0.8,
           max_delay_s=0.1, rectify_first=True)),
+    ("varying", ["estimate", "varying", "r.csv"], {}),
+    ("varying",
+     ["estimate", "varying", "r.csv", "--schedule", "sv", "--cutoff", "20", "--window-ms", "40",
+      "--step", "10", "--min-repetitions", "12", "--grid", "11", "--order", "2", "--slow", "0.3",
+      "--rate", "250", "--reflex", "--max-delay", "0.08"],
+     dict(schedule="sv", cutoff_hz=20, window_ms=40, step_ms=10, min_repetitions=12, grid_points=11,
+          basis_order=2, slow_hz=0.3, rate_hz=250, reflex=True, max_delay_s=0.08)),
 ]
 
 
@@ -79,7 +86,7 @@ def test_every_option_of_every_method_is_exercised():
         flat_changed = {**changed, **changed.get("prepare", {}), **changed.get("arm", {})}
         same = [k for k in flat_default if k not in ("prepare", "arm", "method", "link_lengths")
                 and flat_default[k] == flat_changed[k]]
-        if method in ("linear", "planar", "stochastic", "reflex"):
+        if method in ("linear", "planar", "stochastic", "reflex", "varying"):
             assert same == [], f"{method}: options left at their default: {same}"
 
 

@@ -28,7 +28,13 @@ fn schedule_label(v: &VaryingEstimate) -> String {
 type Pick = fn(&VaryingPoint) -> (Option<&Matrix>, Option<&Matrix>);
 
 /// One figure per quantity: each element (diagonal first) with its ±2 SE band dashed.
-fn element_figure(v: &VaryingEstimate, id: &str, title: &str, unit: &str, pick: Pick) -> Figure {
+fn element_figure(
+    v: &VaryingEstimate,
+    id: &str,
+    (symbol, word): (&str, &str),
+    unit: &str,
+    pick: Pick,
+) -> Figure {
     let d = v.coordinates.len();
     let x: Vec<f64> = v.points.iter().map(|p| p.sigma).collect();
     let mut series = Vec::new();
@@ -46,9 +52,9 @@ fn element_figure(v: &VaryingEstimate, id: &str, title: &str, unit: &str, pick: 
         let value: Vec<f64> = v.points.iter().map(|p| at(pick(p).0)).collect();
         let se: Vec<f64> = v.points.iter().map(|p| at(pick(p).1)).collect();
         let name = if d == 1 {
-            title.split_whitespace().next().unwrap_or("").to_string()
+            symbol.to_string()
         } else {
-            format!("{}{}{}", &title[..1], i + 1, j + 1)
+            format!("{symbol}{}{}", i + 1, j + 1)
         };
         for sign in [2.0, -2.0] {
             series.push(Series {
@@ -70,9 +76,12 @@ fn element_figure(v: &VaryingEstimate, id: &str, title: &str, unit: &str, pick: 
     Figure {
         id: id.into(),
         chart: Chart {
-            title: format!("{title} against {} (± 2 SE dashed)", v.schedule.name),
+            title: format!(
+                "{word} {symbol} against {} (± 2 SE dashed)",
+                v.schedule.name
+            ),
             x_label: schedule_label(v),
-            y_label: format!("{} ({unit})", title.split_whitespace().next().unwrap_or("")),
+            y_label: format!("{symbol} ({unit})"),
             x_log: false,
             y_log: false,
             y_range: None,
@@ -125,13 +134,13 @@ pub(crate) fn section(name: &str, v: &VaryingEstimate) -> Section {
         });
     }
     let mut figures = vec![
-        element_figure(v, "varying-stiffness", "K stiffness", ku, |p| {
+        element_figure(v, "varying-stiffness", ("K", "Stiffness"), ku, |p| {
             (p.stiffness.as_ref(), p.stiffness_se.as_ref())
         }),
-        element_figure(v, "varying-damping", "B damping", bu, |p| {
+        element_figure(v, "varying-damping", ("B", "Damping"), bu, |p| {
             (p.damping.as_ref(), p.damping_se.as_ref())
         }),
-        element_figure(v, "varying-inertia", "M inertia", mu, |p| {
+        element_figure(v, "varying-inertia", ("M", "Inertia"), mu, |p| {
             (p.inertia.as_ref(), p.inertia_se.as_ref())
         }),
     ];

@@ -18,3 +18,4 @@ mod report;
 mod reproduce;
 mod rerun;
 mod stochastic;
+mod varying;

@@ -533,6 +533,10 @@ struct ReflexChoice {
 /// Delay, low-pass and polarity of the reflex with the least residual at
 /// `order`. The scan shifts the detrended product of the undelayed drive
 /// (σ barely moves within a delay); the chosen one is then built exactly.
+/// The intrinsic part's cross products are formed once; each candidate adds
+/// only its own columns' (a bordered Gram matrix). Every low-pass and
+/// polarity is scanned in 5 ms steps; the best of them is refined to a
+/// sample, then to a quarter sample.
 fn scan_reflex(
     rows: &Rows,
     order: usize,
@@ -541,93 +545,129 @@ fn scan_reflex(
     fs: f64,
     trim: usize,
 ) -> Result<Option<ReflexChoice>> {
-    // in quarter samples: coarse 5 ms steps, then 1 sample, then a quarter
+    // in quarter samples
     let max_delay = 4 * ((params.max_delay_s * fs).round() as usize).min(trim - 1);
     let step = 4 * ((0.005 * fs).round() as usize).max(1);
     let coarse: Vec<usize> = (0..=max_delay).step_by(step).collect();
-    let p1 = rows.top + 1;
-    let mut best: Option<(f64, f64, bool, usize)> = None;
-    for &natural_hz in &REFLEX_NATURAL_HZ {
-        if natural_hz >= 0.45 * fs {
-            continue;
-        }
-        for positive in [true, false] {
-            let drive = reflex_drive(rows, natural_hz, positive, fs);
-            // detrended products of the undelayed drive, full rate, per segment and degree
-            let mut phi = vec![0.0; p1];
-            let products: Vec<Vec<Vec<f64>>> = rows
-                .segments
-                .iter()
-                .zip(&drive)
-                .map(|(seg, r)| {
-                    (0..=order)
-                        .map(|i| {
-                            let prod: Vec<f64> = (0..seg.sigma.len())
-                                .map(|t| {
-                                    rows.basis(seg.sigma[t], rows.top, &mut phi);
-                                    phi[i] * r[t]
-                                })
-                                .collect();
-                            detrend(slow, &prod)
-                        })
-                        .collect::<Result<Vec<_>>>()
-                })
-                .collect::<Result<Vec<_>>>()?;
-            let rss_at = |delay: usize| {
-                let mut cols = vec![0.0; rows.len() * p1];
-                let mut row0 = 0;
-                for (seg, prod) in rows.segments.iter().zip(&products) {
-                    for (k, &t) in seg.kept.iter().enumerate() {
-                        for (i, p) in prod.iter().enumerate() {
-                            cols[(row0 + k) * p1 + i] = delayed(p, t, delay);
-                        }
-                    }
-                    row0 += seg.kept.len();
-                }
-                let design = Design {
-                    rows,
-                    order,
-                    reflex: Some(&cols),
-                };
-                let parts = design.folds(1);
-                let (g, h, yy) = &parts[0];
-                solve_scaled(g, h).map(|t| yy.iter().sum::<f64>() - (t.transpose() * h).trace())
-            };
-            let scores: Vec<(usize, f64)> = coarse
-                .par_iter()
-                .filter_map(|&dl| rss_at(dl).map(|r| (dl, r)))
-                .collect();
-            let Some(&(coarse_best, _)) = scores.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
-                continue;
-            };
-            let scan = |around: usize, reach: usize, by: usize| -> Vec<(usize, f64)> {
-                let candidates: Vec<usize> = (around.saturating_sub(reach)
-                    ..=(around + reach).min(max_delay))
-                    .step_by(by)
+    let base = Design {
+        rows,
+        order,
+        reflex: None,
+    };
+    let qa = base.columns();
+    let n = rows.len();
+    let mut a = vec![0.0; n * qa];
+    for (r, row) in a.chunks_mut(qa).enumerate() {
+        base.row(r, row);
+    }
+    let (gaa, ha, yy) = base.folds(1).swap_remove(0);
+    let yy = yy[0];
+    let p1 = order + 1;
+    // detrended products T_i(σ) r(t) of a drive, full rate, per segment and degree
+    let products = |drive: &[Vec<f64>]| -> Result<Vec<Vec<Vec<f64>>>> {
+        let mut phi = vec![0.0; rows.top + 1];
+        rows.segments
+            .iter()
+            .zip(drive)
+            .map(|(seg, r)| {
+                let basis: Vec<Vec<f64>> = (0..p1)
+                    .map(|i| {
+                        seg.sigma
+                            .iter()
+                            .map(|&sg| {
+                                rows.basis(sg, rows.top, &mut phi);
+                                phi[i]
+                            })
+                            .collect()
+                    })
                     .collect();
-                candidates
-                    .par_iter()
-                    .filter_map(|&dl| rss_at(dl).map(|r| (dl, r)))
-                    .collect()
-            };
-            let best_of = |v: &[(usize, f64)], or: usize| {
-                v.iter()
-                    .min_by(|a, b| a.1.total_cmp(&b.1))
-                    .map_or(or, |b| b.0)
-            };
-            let sample = best_of(&scan(coarse_best, step, 4), coarse_best);
-            let fine = scan(sample, 3, 1);
-            if let Some(&(delay, rss)) = fine.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
-                if best.is_none_or(|(b, ..)| rss < b) {
-                    best = Some((rss, natural_hz, positive, delay));
+                basis
+                    .iter()
+                    .map(|b| {
+                        let prod: Vec<f64> = b.iter().zip(r).map(|(x, y)| x * y).collect();
+                        detrend(slow, &prod)
+                    })
+                    .collect::<Result<Vec<_>>>()
+            })
+            .collect()
+    };
+    let rss_at = |prod: &[Vec<Vec<f64>>], delay: usize| -> Option<f64> {
+        let mut c = DMatrix::<f64>::zeros(qa, p1);
+        let mut dd = DMatrix::<f64>::zeros(p1, p1);
+        let mut e = DMatrix::<f64>::zeros(p1, 1);
+        let mut rv = vec![0.0; p1];
+        let mut row0 = 0;
+        for (seg, pr) in rows.segments.iter().zip(prod) {
+            for (k, &t) in seg.kept.iter().enumerate() {
+                let r = row0 + k;
+                for (i, p) in pr.iter().enumerate() {
+                    rv[i] = delayed(p, t, delay);
                 }
+                let ar = &a[r * qa..(r + 1) * qa];
+                let y = rows.f[r];
+                for i in 0..p1 {
+                    let v = rv[i];
+                    e[(i, 0)] += v * y;
+                    for j in i..p1 {
+                        dd[(i, j)] += v * rv[j];
+                    }
+                    for (m, &x) in ar.iter().enumerate() {
+                        c[(m, i)] += x * v;
+                    }
+                }
+            }
+            row0 += seg.kept.len();
+        }
+        let q = qa + p1;
+        let g = DMatrix::from_fn(q, q, |i, j| match (i < qa, j < qa) {
+            (true, true) => gaa[(i, j)],
+            (true, false) => c[(i, j - qa)],
+            (false, true) => c[(j, i - qa)],
+            (false, false) => dd[((i - qa).min(j - qa), (i - qa).max(j - qa))],
+        });
+        let h = DMatrix::from_fn(
+            q,
+            1,
+            |i, _| if i < qa { ha[(i, 0)] } else { e[(i - qa, 0)] },
+        );
+        solve_scaled(&g, &h).map(|t| yy - (t.transpose() * &h)[(0, 0)])
+    };
+    let candidates: Vec<(f64, bool)> = REFLEX_NATURAL_HZ
+        .iter()
+        .filter(|&&hz| hz < 0.45 * fs)
+        .flat_map(|&hz| [(hz, true), (hz, false)])
+        .collect();
+    let mut best: Option<(f64, f64, bool, usize)> = None;
+    for &(natural_hz, positive) in &candidates {
+        let prod = products(&reflex_drive(rows, natural_hz, positive, fs))?;
+        let scores: Vec<(usize, f64)> = coarse
+            .par_iter()
+            .filter_map(|&dl| rss_at(&prod, dl).map(|r| (dl, r)))
+            .collect();
+        if let Some(&(delay, rss)) = scores.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+            if best.is_none_or(|(b, ..)| rss < b) {
+                best = Some((rss, natural_hz, positive, delay));
             }
         }
     }
-    let Some((_, natural_hz, positive, delay)) = best else {
+    let Some((_, natural_hz, positive, coarse_best)) = best else {
         return Ok(None);
     };
     let drive = reflex_drive(rows, natural_hz, positive, fs);
+    let prod = products(&drive)?;
+    let scan = |around: usize, reach: usize, by: usize| -> usize {
+        let delays: Vec<usize> = (around.saturating_sub(reach)..=(around + reach).min(max_delay))
+            .step_by(by)
+            .collect();
+        delays
+            .par_iter()
+            .filter_map(|&dl| rss_at(&prod, dl).map(|r| (dl, r)))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(around, |b| b.0)
+    };
+    let delay = scan(scan(coarse_best, step, 4), 3, 1);
     Ok(Some(ReflexChoice {
         natural_hz,
         positive,

@@ -224,3 +224,57 @@ fn scheduled_ankle_without_reflex_claims_none() {
     assert!(kok >= 0.9 && bok >= 0.8, "K {kok} B {bok}");
     assert!(kcov >= 0.8 && bcov >= 0.8, "coverage K {kcov} B {bcov}");
 }
+
+/// Two real ankle recordings at different operating angles joined as two
+/// trials: the fit across both, linear in the angle, gives at each file's
+/// angle what the constant fit of that file alone gives.
+#[test]
+fn varying_on_real_ankle_recordings_agrees_with_per_file_fits() {
+    let Some(dir) = limpid_testkit::real_data("reklab_ankle") else {
+        return;
+    };
+    let read = |name: &str| limpid_io::read_recording(dir.join(format!("{name}.csv"))).unwrap();
+    let (a, b) = (read("df3"), read("df2"));
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); 4];
+    let mut t0 = 0.0;
+    for (k, rec) in [&a, &b].into_iter().enumerate() {
+        for i in 0..rec.len() {
+            cols[0].push(t0 + rec.t()[i]);
+            cols[1].push(rec.column("q1").unwrap()[i]);
+            cols[2].push(rec.column("tau1").unwrap()[i]);
+            cols[3].push((k + 1) as f64);
+        }
+        t0 = cols[0].last().unwrap() + 1.0;
+    }
+    let names = ["t", "q1", "tau1", "trial"].map(String::from).to_vec();
+    let joined = limpid_core::Recording::new("df3+df2", names, cols, 2).unwrap();
+    let params = |order| VaryingParams {
+        schedule: "q1".into(),
+        basis_order: Some(order),
+        grid_points: 41,
+        ..VaryingParams::default()
+    };
+    let both = estimate_varying(&joined, &params(1)).unwrap();
+    for rec in [&a, &b] {
+        let alone = estimate_varying(rec, &params(0)).unwrap();
+        let q = rec.column("q1").unwrap();
+        let mean = q.iter().sum::<f64>() / q.len() as f64;
+        let p = alone.points.iter().find(|p| p.identifiable).unwrap();
+        let at = both
+            .points
+            .iter()
+            .filter(|p| p.identifiable)
+            .min_by(|x, y| (x.sigma - mean).abs().total_cmp(&(y.sigma - mean).abs()))
+            .unwrap();
+        for (name, x, y) in [
+            ("K", &p.stiffness, &at.stiffness),
+            ("B", &p.damping, &at.damping),
+        ] {
+            let (x, y) = (x.as_ref().unwrap()[(0, 0)], y.as_ref().unwrap()[(0, 0)]);
+            assert!(
+                (x - y).abs() < 0.15 * x.abs(),
+                "{name} at {mean:.3} rad: alone {x}, joined {y}"
+            );
+        }
+    }
+}

@@ -44,6 +44,7 @@ __all__ = [
     "estimate_stochastic",
     "estimate_reflex",
     "estimate_cocontraction",
+    "estimate_varying",
     "ellipsoid",
     "StudyOutcome",
     "study_entries",
@@ -552,6 +553,27 @@ def estimate_reflex(recording: RecordingLike, **options: Any) -> Result:
     ``reflex`` (polarity, gain N m s/rad, delay_s, delay_interval_s, IRF), ``fit`` (VAF in
     percent), ``cross_validated_vaf``, ``warnings``."""
     return _estimate("reflex", [recording], options)
+
+
+def estimate_varying(recording: RecordingLike, schedule: str = "time", **options: Any) -> Result:
+    """Impedance that varies, as ``limpid estimate varying --json``.
+
+    ``schedule="time"``: the recording's ``trial`` repetitions of one task form an
+    ensemble; at each instant the deviations from the ensemble mean are regressed
+    (M, B, K against time since the trial's start). ``schedule="<column>"`` (e.g. an
+    operating angle ``sv``, a ``level``): every parameter is a Chebyshev polynomial of
+    that column, fitted in one least-squares problem (parameter-varying).
+
+    Options (defaults: ``limpid.request("varying")``): ``cutoff_hz``, ``window_ms`` and
+    ``step_ms`` (ensemble time resolution and grid), ``min_repetitions``, ``grid_points``,
+    ``basis_order`` (``None``: chosen by cross-validation), ``slow_hz`` (the operating
+    point varies slower), ``rate_hz``, ``reflex`` (a reflex gain that varies with the
+    schedule), ``max_delay_s``.
+
+    Returns ``schedule`` (name, unit, values), ``points`` (per grid value: ``sigma``,
+    ``identifiable``, ``stiffness``/``damping``/``inertia`` with ``*_se``, ``reflex``,
+    ``vaf``, ``reason`` when not identifiable), ``fit``, ``reflex``, ``warnings``."""
+    return _estimate("varying", [recording], dict(options, schedule=schedule))
 
 
 def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, **options: Any) -> Result:

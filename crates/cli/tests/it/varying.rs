@@ -1,0 +1,204 @@
+//! `limpid estimate varying` (issue 38): simulated ensemble and ramp-and-hold
+//! recordings against their truth files, the report, and the refusals.
+
+use crate::common::*;
+
+fn simulate(dir: &std::path::Path, preset: &str, extra: &str) -> std::path::PathBuf {
+    let protocol = dir.join(format!("{preset}.toml"));
+    let out = limpid(&["protocol", "new", "--preset", preset]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let mut text = out.stdout.clone();
+    for line in extra.lines() {
+        let key = line.split('=').next().unwrap().trim();
+        text = text
+            .lines()
+            .filter(|l| l.split('=').next().unwrap().trim() != key)
+            .map(|l| format!("{l}\n"))
+            .collect();
+        text.push_str(&format!("{line}\n"));
+    }
+    std::fs::write(&protocol, text).unwrap();
+    let rec = dir.join(format!("{preset}.csv"));
+    let out = limpid(&[
+        "simulate",
+        protocol.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+        "--seed",
+        "7",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    rec
+}
+
+#[test]
+fn ensemble_json_follows_the_truth_file_and_the_report_draws_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = simulate(dir.path(), "ensemble", "");
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(rec.with_extension("truth.json")).unwrap())
+            .unwrap();
+    let html = dir.path().join("v.html");
+    let v = json(&[
+        "estimate",
+        "varying",
+        rec.to_str().unwrap(),
+        "--json",
+        "--report",
+        html.to_str().unwrap(),
+    ]);
+    validate(&v);
+    assert_eq!(v["kind"], "varying");
+    assert_eq!(v["schedule"]["name"], "time since trial start");
+    let truth_k = |t: f64| {
+        let pts = truth["points"].as_array().unwrap();
+        let i = ((t / 0.01).round() as usize).min(pts.len() - 1);
+        pts[i]["stiffness"][0][0].as_f64().unwrap()
+    };
+    let points = v["points"].as_array().unwrap();
+    let mut good = 0;
+    let mut n = 0;
+    for p in points.iter().filter(|p| p["identifiable"] == true) {
+        let t = p["sigma"].as_f64().unwrap();
+        let k = p["stiffness"][0][0].as_f64().unwrap();
+        n += 1;
+        good += usize::from((k - truth_k(t)).abs() < 0.15 * truth_k(t));
+    }
+    assert!(n > 50 && good as f64 >= 0.9 * n as f64, "{good} of {n}");
+    // the instants near the ends are named, not given numbers
+    assert_eq!(points[0]["identifiable"], false);
+    assert!(points[0]["stiffness"].is_null());
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("Varying impedance") && page.contains("± 2 SE"));
+    assert!(!page.contains("NaN"));
+    // text
+    let out = limpid(&["estimate", "varying", rec.to_str().unwrap()]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("not identifiable: within") && out.stdout.contains("K11"));
+    assert!(!out.stdout.contains("NaN"));
+}
+
+#[test]
+fn ramp_and_hold_holds_only_with_gaps_recovers_k_and_the_reflex() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = simulate(dir.path(), "ankle-ramp-and-hold", "keep_ramps = false\n");
+    let v = json(&[
+        "estimate",
+        "varying",
+        rec.to_str().unwrap(),
+        "--schedule",
+        "sv",
+        "--reflex",
+        "--grid",
+        "13",
+        "--json",
+    ]);
+    validate(&v);
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(rec.with_extension("truth.json")).unwrap())
+            .unwrap();
+    assert!(v["reflex"]["detected"].as_bool().unwrap());
+    let delay = v["reflex"]["delay_s"].as_f64().unwrap();
+    assert!(
+        (delay - truth["reflex_delay_s"].as_f64().unwrap()).abs() < 0.01,
+        "{delay}"
+    );
+    let tp = truth["points"].as_array().unwrap();
+    let at = |s: f64, key: &str| {
+        // the truth grid and the result's span the same schedule range
+        let i = tp
+            .iter()
+            .enumerate()
+            .min_by(|a, b| {
+                (a.1["sigma"].as_f64().unwrap() - s)
+                    .abs()
+                    .total_cmp(&(b.1["sigma"].as_f64().unwrap() - s).abs())
+            })
+            .unwrap()
+            .0;
+        (tp[i]["sigma"].as_f64().unwrap(), tp[i][key].clone())
+    };
+    for p in v["points"].as_array().unwrap() {
+        let s = p["sigma"].as_f64().unwrap();
+        if p["identifiable"] != true {
+            continue;
+        }
+        let (ts, k) = at(s, "stiffness");
+        if (ts - s).abs() > 0.01 {
+            continue;
+        }
+        let (k, kt) = (
+            p["stiffness"][0][0].as_f64().unwrap(),
+            k[0][0].as_f64().unwrap(),
+        );
+        assert!((k - kt).abs() < 0.1 * kt, "K({s}) = {k}, truth {kt}");
+        let g = p["reflex"]["gain"].as_f64().unwrap();
+        let gt = at(s, "reflex_gain").1.as_f64().unwrap();
+        assert!(
+            (g - gt).abs() < 0.25 * gt.max(4.0),
+            "G({s}) = {g}, truth {gt}"
+        );
+    }
+}
+
+#[test]
+fn varying_refusals_name_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("flat.csv");
+    let mut text = String::from("t,q1,tau1,sv\n");
+    for i in 0..20_000 {
+        let t = i as f64 / 1000.0;
+        text.push_str(&format!(
+            "{t},{},{},0.1\n",
+            (t * 9.0).sin() * 0.01,
+            (t * 9.0).sin()
+        ));
+    }
+    std::fs::write(&rec, text).unwrap();
+    let r = rec.to_str().unwrap();
+    for (args, want) in [
+        (vec!["estimate", "varying", r], "trial"),
+        (
+            vec!["estimate", "varying", r, "--schedule", "sv"],
+            "does not vary",
+        ),
+        (vec!["estimate", "varying", r, "--schedule", "nope"], "nope"),
+        (
+            vec!["estimate", "varying", r, "--window-ms", "0"],
+            "--window-ms",
+        ),
+        (
+            vec!["estimate", "varying", r, "--order", "9", "--schedule", "sv"],
+            "--order",
+        ),
+        (vec!["estimate", "varying", r, "--reflex"], "--reflex"),
+        (
+            vec!["estimate", "varying", r, "--schedule", "sv", "--slow", "-1"],
+            "--slow",
+        ),
+        (
+            vec![
+                "estimate",
+                "varying",
+                r,
+                "--schedule",
+                "sv",
+                "--cutoff",
+                "900",
+            ],
+            "half the sample rate",
+        ),
+        (
+            vec!["estimate", "varying", r, "--grid", "1", "--schedule", "sv"],
+            "--grid",
+        ),
+    ] {
+        let out = limpid(&args);
+        assert_eq!(out.code, 2, "{args:?}: {}", out.stderr);
+        assert!(
+            out.stderr.contains(want) && out.stderr.lines().count() == 1,
+            "{args:?}: {}",
+            out.stderr
+        );
+    }
+}
