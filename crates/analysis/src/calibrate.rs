@@ -99,6 +99,22 @@ pub struct Calibration {
     pub methods: Vec<MethodCalibration>,
     /// The window sweep.
     pub window_sweep: SweepCalibration,
+    /// Reflex claims of the parameter-varying ankle.
+    #[serde(default)]
+    pub varying_reflex: ReflexClaims,
+}
+
+/// How often the parameter-varying fit claims a reflex, with and without one.
+#[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
+pub struct ReflexClaims {
+    /// Subjects without a reflex.
+    pub without_reflex: usize,
+    /// Of those, fits that claimed one.
+    pub claimed_without: usize,
+    /// Subjects with a reflex.
+    pub with_reflex: usize,
+    /// Of those, fits that detected it.
+    pub detected: usize,
 }
 
 fn percent(v: Option<f64>) -> String {

@@ -407,8 +407,157 @@ fn reflex(seed: u64) -> std::result::Result<Outcome, String> {
     Ok(o)
 }
 
+/// The identifiable points of a varying estimate against the truth at their
+/// schedule value: K and B with their per-point verdicts.
+fn add_varying(
+    o: &mut Outcome,
+    est: &limpid_ident::varying::VaryingEstimate,
+    truth: impl Fn(f64) -> (Matrix, Matrix),
+) {
+    for p in est.points.iter().filter(|p| p.identifiable) {
+        let (Some(k), Some(ks), Some(b), Some(bs), Some(v)) = (
+            &p.stiffness,
+            &p.stiffness_se,
+            &p.damping,
+            &p.damping_se,
+            &p.verdicts,
+        ) else {
+            continue;
+        };
+        let (tk, tb) = truth(p.sigma);
+        o.add(0, k, ks, &tk, v.stiffness.trusted());
+        o.add(1, b, bs, &tb, v.damping.trusted());
+    }
+}
+
+/// An ensemble subject drawn at random: one joint (half), or a planar arm in
+/// joint (a quarter) or end-point coordinates (a quarter); 15-120
+/// repetitions, torque and position noise.
+fn ensemble(seed: u64) -> std::result::Result<Outcome, String> {
+    use limpid_ident::varying::{estimate_varying, VaryingParams};
+    use limpid_lab::varying::{
+        simulate_ensemble, EnsembleBody, EnsembleExperiment, EnsembleSubject, TimeChange,
+    };
+    let mut rng = StdRng::seed_from_u64(seed);
+    let change = TimeChange {
+        centre_s: uniform(&mut rng, 0.45, 0.75),
+        width_s: uniform(&mut rng, 0.12, 0.3),
+        stiffness_gain: uniform(&mut rng, 0.0, 1.2),
+        damping_gain: uniform(&mut rng, 0.0, 0.6),
+    };
+    let kind = rng.random_range(0..4);
+    let (subject, experiment) = if kind < 2 {
+        (
+            EnsembleSubject {
+                body: EnsembleBody::Joint {
+                    inertia: uniform(&mut rng, 0.008, 0.03),
+                    movement_rad: uniform(&mut rng, 0.0, 0.5),
+                },
+                stiffness: vec![vec![uniform(&mut rng, 20.0, 150.0)]],
+                damping: vec![vec![uniform(&mut rng, 0.3, 2.0)]],
+                change,
+            },
+            EnsembleExperiment {
+                repetitions: rng.random_range(15..=120),
+                torque_noise_nm: uniform(&mut rng, 0.02, 0.3),
+                position_noise: uniform(&mut rng, 0.0, 2e-5),
+                ..EnsembleExperiment::default()
+            },
+        )
+    } else {
+        let mut s = EnsembleSubject::planar(kind == 3);
+        let k = random_matrix2(&mut rng, 8.0, 40.0);
+        let b = random_matrix2(&mut rng, 0.4, 2.0);
+        s.stiffness = vec![vec![k[(0, 0)], k[(0, 1)]], vec![k[(1, 0)], k[(1, 1)]]];
+        s.damping = vec![vec![b[(0, 0)], b[(0, 1)]], vec![b[(1, 0)], b[(1, 1)]]];
+        s.change = change;
+        (
+            s,
+            EnsembleExperiment {
+                repetitions: rng.random_range(20..=120),
+                amplitude_rad: uniform(&mut rng, 0.02, 0.04),
+                switch_s: uniform(&mut rng, 0.1, 0.2),
+                actuator_hz: uniform(&mut rng, 4.0, 8.0),
+                torque_noise_nm: uniform(&mut rng, 0.01, 0.05),
+                position_noise: uniform(&mut rng, 0.0, 1e-5),
+                ..EnsembleExperiment::default()
+            },
+        )
+    };
+    let rec = simulate_ensemble(&subject, &experiment, seed).map_err(|e| e.to_string())?;
+    let est = estimate_varying(&rec, &VaryingParams::default()).map_err(|e| e.to_string())?;
+    let mut o = Outcome::default();
+    let to = |m: &Vec<Vec<f64>>| Matrix::from_rows(m).expect("square truth");
+    add_varying(&mut o, &est, |t| {
+        let [_, b, k] = subject.truth_at(t);
+        (to(&k), to(&b))
+    });
+    Ok(o)
+}
+
+/// A scheduled ankle drawn at random (K, B quadratic in the operating angle;
+/// a reflex whose gain rises with it in half of them), on a ramp-and-hold
+/// schedule with or without the ramps recorded. Returns the outcome and,
+/// for the reflex claims, (had a reflex, a reflex was detected).
+fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool), String> {
+    use limpid_ident::varying::{estimate_varying, VaryingParams};
+    use limpid_lab::varying::{
+        simulate_scheduled_ankle, RampAndHold, ScheduledAnkle, ScheduledReflex,
+    };
+    let mut rng = StdRng::seed_from_u64(seed);
+    let with_reflex = rng.random::<bool>();
+    let subject = ScheduledAnkle {
+        inertia: uniform(&mut rng, 0.01, 0.025),
+        stiffness: [
+            uniform(&mut rng, 40.0, 120.0),
+            uniform(&mut rng, 0.0, 120.0),
+            uniform(&mut rng, 0.0, 150.0),
+        ],
+        damping: [
+            uniform(&mut rng, 0.5, 1.5),
+            uniform(&mut rng, -0.5, 1.0),
+            0.0,
+        ],
+        background: [
+            uniform(&mut rng, -2.0, 2.0),
+            uniform(&mut rng, 0.0, 20.0),
+            0.0,
+        ],
+        reflex: with_reflex.then(|| {
+            let low = uniform(&mut rng, 2.0, 10.0);
+            let slope = uniform(&mut rng, 0.0, 40.0);
+            ScheduledReflex {
+                gain: [low + 0.4 * slope, slope, 0.0],
+                delay_s: uniform(&mut rng, 0.03, 0.07),
+                natural_hz: uniform(&mut rng, 1.5, 4.0),
+                damping_ratio: uniform(&mut rng, 0.6, 0.9),
+            }
+        }),
+    };
+    let protocol = RampAndHold {
+        torque_noise_nm: uniform(&mut rng, 0.05, 0.3),
+        keep_ramps: rng.random::<bool>(),
+        ..RampAndHold::default()
+    };
+    let rec = simulate_scheduled_ankle(&subject, &protocol, seed).map_err(|e| e.to_string())?;
+    let params = VaryingParams {
+        schedule: "sv".into(),
+        reflex: true,
+        ..VaryingParams::default()
+    };
+    let est = estimate_varying(&rec, &params).map_err(|e| e.to_string())?;
+    let mut o = Outcome::default();
+    let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
+    add_varying(&mut o, &est, |s| {
+        let [k, b, _] = subject.at(s);
+        (one(k), one(b))
+    });
+    let detected = est.reflex.as_ref().is_some_and(|r| r.detected);
+    Ok((o, with_reflex, detected))
+}
+
 /// Methods of the study (each `recordings` virtual recordings).
-pub const METHODS: usize = 7;
+pub const METHODS: usize = 9;
 
 /// Window sweeps run beside `recordings` per method: half as many (each fits
 /// some 70 windows and split models), at least 10.
@@ -467,7 +616,44 @@ pub fn calibrate(
             6,
         ),
         run("ankle with reflex, parallel cascade", &reflex, 8),
+        run(
+            "time-varying ensemble, joint and planar (per instant)",
+            &ensemble,
+            9,
+        ),
     ];
+    let mut methods = methods;
+    // the parameter-varying ankle also counts reflex claims
+    let started = std::time::Instant::now();
+    let scheduled_runs: Vec<_> = (0..recordings as u64)
+        .into_par_iter()
+        .map(|i| {
+            let o = scheduled(seed.wrapping_mul(1_000_003).wrapping_add(1_000_000 + i));
+            progress();
+            o
+        })
+        .collect();
+    let mut varying_reflex = ReflexClaims::default();
+    let outcomes = scheduled_runs
+        .into_iter()
+        .map(|r| {
+            r.map(|(o, had, detected)| {
+                if had {
+                    varying_reflex.with_reflex += 1;
+                    varying_reflex.detected += usize::from(detected);
+                } else {
+                    varying_reflex.without_reflex += 1;
+                    varying_reflex.claimed_without += usize::from(detected);
+                }
+                o
+            })
+        })
+        .collect();
+    methods.push(summarise(
+        "parameter-varying ankle with --reflex (per operating angle)",
+        outcomes,
+        started.elapsed().as_secs_f64(),
+    ));
     debug_assert_eq!(methods.len(), METHODS);
     let started = std::time::Instant::now();
     // half as many sweeps: each fits some 70 windows and split models
@@ -507,5 +693,6 @@ pub fn calibrate(
         recordings_per_method: recordings,
         methods,
         window_sweep,
+        varying_reflex,
     })
 }

@@ -73,5 +73,10 @@ pub fn run(args: CalibrateArgs) -> CliResult {
         w.sweeps_with_a_trusted_window[1],
         w.with_reflex
     );
+    let r = &result.varying_reflex;
+    println!(
+        "parameter-varying ankle: a reflex claimed in {} of {} subjects without one, detected in {} of {} with one",
+        r.claimed_without, r.without_reflex, r.detected, r.with_reflex
+    );
     Ok(())
 }

@@ -24,11 +24,11 @@ use rayon::prelude::*;
 use limpid_core::criteria::well_conditioned;
 use limpid_core::trial::windows_from_trial_column;
 use limpid_core::{Error, Recording, Result};
-use limpid_dsp::{central_first, central_second, LowPass};
+use limpid_dsp::LowPass;
 
 use super::{
-    matrix, scaled_condition, solve_scaled, ScheduleAxis, VaryingEstimate, VaryingFit,
-    VaryingMethod, VaryingParams, VaryingPoint,
+    matrix, scaled_condition, solve_scaled, PointVerdicts, ScheduleAxis, VaryingEstimate,
+    VaryingFit, VaryingMethod, VaryingParams, VaryingPoint,
 };
 
 const FILTER_ORDER: usize = 4;
@@ -104,8 +104,7 @@ fn repetitions(
             for k in 0..d {
                 let x = lp.filtfilt(&pos[k][r.clone()])?;
                 let f = lp.filtfilt(&frc[k][r.clone()])?;
-                let v = central_first(&x, dt);
-                let a = central_second(&x, dt);
+                let (v, a) = super::derivatives(&x, dt);
                 for t in 0..len {
                     let row = &mut out[t * 4 * d..(t + 1) * 4 * d];
                     row[k] = a[t];
@@ -227,7 +226,7 @@ pub(super) fn estimate(
             format!("{} grid points: choose a longer step", centres.len()),
         ));
     }
-    let fits: Vec<GridFit> = centres
+    let mut fits: Vec<GridFit> = centres
         .par_iter()
         .map(|&c| {
             fit_window(
@@ -240,6 +239,7 @@ pub(super) fn estimate(
             )
         })
         .collect();
+    judge_with_smoothing_bias(&mut fits, width, step as f64 / fs, fs);
     let sum = |f: fn(&GridFit) -> f64| {
         fits.iter()
             .filter(|g| g.point.identifiable)
@@ -287,6 +287,62 @@ pub(super) fn estimate(
     })
 }
 
+/// The box average over `width` samples differs from the value at the
+/// centre by about `K'' (width² - 1) / 24` samples² where the impedance
+/// curves; its standard error does not say so. Each point's verdicts are
+/// taken again with `sqrt(SE² + bias²)`, the curvature from the second
+/// difference of the neighbouring points (`step_s` apart), so a point on a
+/// sharp change is not trusted beyond its tolerance.
+fn judge_with_smoothing_bias(fits: &mut [GridFit], width: usize, step_s: f64, fs: f64) {
+    let factor = (width as f64 * width as f64 - 1.0) / 24.0 / (fs * fs) / (step_s * step_s);
+    let widened: Vec<Option<PointVerdicts>> = (0..fits.len())
+        .map(|g| {
+            if g == 0 || g + 1 >= fits.len() {
+                return None;
+            }
+            let [a, b, c] = [&fits[g - 1].point, &fits[g].point, &fits[g + 1].point];
+            if !(a.identifiable && b.identifiable && c.identifiable) {
+                return None;
+            }
+            let widen = |pick: fn(
+                &VaryingPoint,
+            ) -> (
+                &Option<limpid_core::Matrix>,
+                &Option<limpid_core::Matrix>,
+            )| {
+                let (m0, _) = pick(a);
+                let (m1, se) = pick(b);
+                let (m2, _) = pick(c);
+                let (m0, m1, m2, se) = (m0.as_ref()?, m1.as_ref()?, m2.as_ref()?, se.as_ref()?);
+                let d = m1.nrows();
+                Some(matrix(d, |i, j| {
+                    let bias = factor * (m0[(i, j)] - 2.0 * m1[(i, j)] + m2[(i, j)]);
+                    se[(i, j)].hypot(bias)
+                }))
+            };
+            let ks = widen(|p| (&p.stiffness, &p.stiffness_se))?;
+            let bs = widen(|p| (&p.damping, &p.damping_se))?;
+            let ms = widen(|p| (&p.inertia, &p.inertia_se))?;
+            Some(PointVerdicts::of(
+                [
+                    b.stiffness.as_ref()?,
+                    &ks,
+                    b.damping.as_ref()?,
+                    &bs,
+                    b.inertia.as_ref()?,
+                    &ms,
+                ],
+                b.vaf,
+            ))
+        })
+        .collect();
+    for (f, v) in fits.iter_mut().zip(widened) {
+        if v.is_some() {
+            f.point.verdicts = v;
+        }
+    }
+}
+
 fn fit_window(
     e: &Ensemble,
     pre: &Prefix,
@@ -326,6 +382,7 @@ fn fit_window(
             vaf: None,
             support: reps as f64,
             condition_number: condition.is_finite().then_some(condition),
+            verdicts: None,
         },
         rss: 0.0,
         tss: 0.0,
@@ -418,22 +475,33 @@ fn fit_window(
         return empty("the estimate is not finite here".into());
     }
     // Θ's row (block b, coordinate k), column j is the element (j, k) of M, B or K
-    let part = |t: &DMatrix<f64>, b: usize| Some(matrix(d, |j, k| t[(b * d + k, j)]));
+    let part = |t: &DMatrix<f64>, b: usize| matrix(d, |j, k| t[(b * d + k, j)]);
+    let [m, ms, b, bs, k, ks] = [
+        part(&theta, 0),
+        part(&se, 0),
+        part(&theta, 1),
+        part(&se, 1),
+        part(&theta, 2),
+        part(&se, 2),
+    ];
+    let vaf = (tss > 0.0).then(|| 100.0 * (1.0 - full_rss / tss));
+    let verdicts = PointVerdicts::of([&k, &ks, &b, &bs, &m, &ms], vaf);
     GridFit {
         point: VaryingPoint {
             sigma,
             identifiable: true,
             reason: None,
-            inertia: part(&theta, 0),
-            inertia_se: part(&se, 0),
-            damping: part(&theta, 1),
-            damping_se: part(&se, 1),
-            stiffness: part(&theta, 2),
-            stiffness_se: part(&se, 2),
+            inertia: Some(m),
+            inertia_se: Some(ms),
+            damping: Some(b),
+            damping_se: Some(bs),
+            stiffness: Some(k),
+            stiffness_se: Some(ks),
             reflex: None,
-            vaf: (tss > 0.0).then(|| 100.0 * (1.0 - full_rss / tss)),
+            vaf,
             support: reps as f64,
             condition_number: Some(condition),
+            verdicts: Some(verdicts),
         },
         rss: full_rss,
         tss,

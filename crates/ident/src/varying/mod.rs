@@ -18,6 +18,9 @@
 pub mod ensemble;
 pub mod scheduled;
 
+use limpid_core::criteria::{
+    matrix_criteria, matrix_verdict, MatrixKind, MatrixVerdict, VAF_FLOOR_PERCENT,
+};
 use limpid_core::{Error, Matrix, Recording, Result};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -203,6 +206,39 @@ pub struct VaryingPoint {
     /// Ensemble: condition number of the scaled regressors in this window.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub condition_number: Option<f64>,
+    /// Verdicts of K, B and M here, by the rules of every limpid matrix
+    /// (the point's VAF, identified, passive, 2 SE within the tolerance).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verdicts: Option<PointVerdicts>,
+}
+
+/// The verdicts of one point's matrices.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PointVerdicts {
+    /// Of K.
+    pub stiffness: MatrixVerdict,
+    /// Of B.
+    pub damping: MatrixVerdict,
+    /// Of M.
+    pub inertia: MatrixVerdict,
+}
+
+impl PointVerdicts {
+    /// The verdicts of a point's matrices and their standard errors.
+    pub(crate) fn of([k, ks, b, bs, m, ms]: [&Matrix; 6], vaf: Option<f64>) -> Self {
+        let one = |kind, v: &Matrix, se: &Matrix| {
+            let d = v.nrows();
+            let identified = (0..d).all(|i| v[(i, i)].abs() >= 2.0 * se[(i, i)]);
+            let passive = matrix_criteria(v).positive_definite;
+            let fit_ok = vaf.is_some_and(|x| x >= VAF_FLOOR_PERCENT);
+            matrix_verdict(kind, v, se, fit_ok, identified, passive)
+        };
+        PointVerdicts {
+            stiffness: one(MatrixKind::Stiffness, k, ks),
+            damping: one(MatrixKind::Damping, b, bs),
+            inertia: one(MatrixKind::Inertia, m, ms),
+        }
+    }
 }
 
 /// Fit quality over the whole record.
@@ -222,7 +258,7 @@ pub struct VaryingReflex {
     pub delay_s: f64,
     /// Natural frequency of the unit-DC low-pass (Hz), chosen with the delay.
     pub natural_hz: f64,
-    /// Its damping ratio (fixed).
+    /// Its damping ratio (0.5 to 1, chosen with the natural frequency).
     pub damping_ratio: f64,
     /// `positive`: the reflex answers positive velocity; `negative`: negative.
     pub polarity: String,
@@ -379,4 +415,21 @@ pub(crate) fn round_ms(s: f64) -> String {
     } else {
         format!("{ms:.1}")
     }
+}
+
+/// Velocity and acceleration by five-point central differences (error
+/// O(dt⁴)): over records this long the standard errors are small enough
+/// that the three-point stencils' O(dt²) loss at the perturbation's upper
+/// frequencies shows as a bias of the damping. The two samples at each end
+/// fall back to three-point differences.
+pub(crate) fn derivatives(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = x.len();
+    let mut v = limpid_dsp::central_first(x, dt);
+    let mut a = limpid_dsp::central_second(x, dt);
+    for t in 2..n.saturating_sub(2) {
+        let (m2, m1, c, p1, p2) = (x[t - 2], x[t - 1], x[t], x[t + 1], x[t + 2]);
+        v[t] = (m2 - 8.0 * m1 + 8.0 * p1 - p2) / (12.0 * dt);
+        a[t] = (-m2 + 16.0 * m1 - 30.0 * c + 16.0 * p1 - p2) / (12.0 * dt * dt);
+    }
+    (v, a)
 }

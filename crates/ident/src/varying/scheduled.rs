@@ -17,30 +17,32 @@
 //! - the order `p` (the same for every parameter) is the one with the least
 //!   residual predicting each of 10 contiguous blocks of the record from the
 //!   other nine, unless given;
-//! - with `reflex`, `r(t) = ± LP2(rect(±x'(t - d)))` (unit-DC second-order
-//!   low-pass, damping ratio 0.7, on the velocity before the slow part is
-//!   removed); delay, natural frequency and polarity are chosen by the least
+//! - with `reflex`, the drive of gain coefficient i is
+//!   `± LP2(T_i(σ) rect(±x'(t - d)))` (the gain acts before the unit-DC
+//!   second-order low-pass, damping ratio 0.5-1; velocity before the slow part
+//!   is removed); delay, natural frequency and polarity are chosen by the least
 //!   residual; the reflex counts as detected only if its gains differ from
 //!   zero (Wald, p < 1e-4) and it raises the cross-validated VAF;
-//! - standard errors are block-robust (sandwich over 1 s blocks), since the
-//!   residual of a real limb is coloured.
+//! - standard errors are the delete-a-block jackknife over 1 s blocks, since
+//!   the residual of a real limb is coloured.
 
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use limpid_core::trial::windows_from_trial_column;
 use limpid_core::{Error, Recording, Result};
-use limpid_dsp::{central_first, central_second, LowPass};
+use limpid_dsp::LowPass;
 
 use super::{
-    inverse_scaled, matrix, solve_scaled, PointReflex, ScheduleAxis, VaryingEstimate, VaryingFit,
-    VaryingMethod, VaryingParams, VaryingPoint, VaryingReflex, MAX_BASIS_ORDER,
-    REFLEX_MIN_GAIN_PERCENT,
+    inverse_scaled, matrix, solve_scaled, PointReflex, PointVerdicts, ScheduleAxis,
+    VaryingEstimate, VaryingFit, VaryingMethod, VaryingParams, VaryingPoint, VaryingReflex,
+    MAX_BASIS_ORDER, REFLEX_MIN_GAIN_PERCENT,
 };
 
 const FILTER_ORDER: usize = 4;
 const SLOW_ORDER: usize = 2;
 const REFLEX_DAMPING: f64 = 0.7;
+const REFLEX_DAMPING_RATIOS: [f64; 6] = [0.5, 0.6, 0.7, 0.8, 0.9, 1.0];
 const REFLEX_NATURAL_HZ: [f64; 7] = [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
 const FOLDS: usize = 10;
 /// Low-pass of the position the reflex drive's velocity is taken from (Hz).
@@ -176,14 +178,15 @@ fn rows(
         let mut signals = vec![Vec::new(); 4 * d];
         for k in 0..d {
             let x = lp.filtfilt(&pos[k][seg.clone()])?;
-            signals[k] = central_second(&x, dt);
-            signals[d + k] = central_first(&x, dt);
+            let (v, a) = super::derivatives(&x, dt);
+            signals[k] = a;
+            signals[d + k] = v;
             signals[2 * d + k] = x;
             signals[3 * d + k] = lp.filtfilt(&frc[k][seg.clone()])?;
         }
         let reflex_velocity = match &wide {
-            Some(w) => central_first(&w.filtfilt(&pos[0][seg.clone()])?, dt),
-            None => central_first(&pos[0][seg.clone()], dt),
+            Some(w) => super::derivatives(&w.filtfilt(&pos[0][seg.clone()])?, dt).0,
+            None => super::derivatives(&pos[0][seg.clone()], dt).0,
         };
         let sigma = if schedule_is_coordinate {
             slow.filtfilt(&schedule[seg.clone()])?
@@ -304,28 +307,15 @@ fn rows(
     Ok((out, dec, trim))
 }
 
-/// Reflex product columns `T_i(σ(t)) r(t - δ)`, detrended, at the kept rows
-/// (`top + 1` per row), for a base reflex drive `r` per segment.
-fn reflex_columns(
-    rows: &Rows,
-    drive: &[Vec<f64>],
-    delay_quarters: usize,
-    slow: &LowPass,
-) -> Result<Vec<f64>> {
+/// Reflex columns at the kept rows (`top + 1` per row): each degree's
+/// drive (see [`reflex_drives`]) detrended.
+fn reflex_columns(rows: &Rows, drives: &[Vec<Vec<f64>>], slow: &LowPass) -> Result<Vec<f64>> {
     let p1 = rows.top + 1;
     let mut out = vec![0.0; rows.len() * p1];
     let mut row0 = 0;
-    let mut phi = vec![0.0; p1];
-    for (seg, r) in rows.segments.iter().zip(drive) {
-        let len = seg.sigma.len();
-        for i in 0..p1 {
-            let product: Vec<f64> = (0..len)
-                .map(|t| {
-                    rows.basis(seg.sigma[t], rows.top, &mut phi);
-                    phi[i] * delayed(r, t, delay_quarters)
-                })
-                .collect();
-            let col = detrend(slow, &product)?;
+    for (seg, degrees) in rows.segments.iter().zip(drives) {
+        for (i, drive) in degrees.iter().enumerate().take(p1) {
+            let col = detrend(slow, drive)?;
             for (k, &t) in seg.kept.iter().enumerate() {
                 out[(row0 + k) * p1 + i] = col[t];
             }
@@ -335,20 +325,53 @@ fn reflex_columns(
     Ok(out)
 }
 
-/// The reflex drive of one low-pass and polarity, per segment: `± LP2(rect(±x'))`.
-fn reflex_drive(rows: &Rows, natural_hz: f64, positive: bool, fs: f64) -> Vec<Vec<f64>> {
+/// The reflex drives of one low-pass and polarity, per segment and degree
+/// `i <= order`: `± LP2(T_i(σ(t)) rect(±x'(t - d)))`. The gain multiplies the
+/// rectified velocity before the low-pass (the motoneurons' gain, ahead of
+/// the muscle's activation dynamics), so a gain that changes during a ramp
+/// of the schedule is modelled as it acts.
+fn reflex_drives(
+    rows: &Rows,
+    (natural_hz, zeta, positive): (f64, f64, bool),
+    order: usize,
+    delay_quarters: usize,
+    fs: f64,
+) -> Vec<Vec<Vec<f64>>> {
+    let sign = if positive { 1.0 } else { -1.0 };
+    let mut phi = vec![0.0; rows.top + 1];
     rows.segments
         .iter()
         .map(|seg| {
-            let rect: Vec<f64> = seg
-                .reflex_velocity
-                .iter()
-                .map(|&x| if positive { x.max(0.0) } else { (-x).max(0.0) })
+            let v = &seg.reflex_velocity;
+            let rect: Vec<f64> = (0..v.len())
+                .map(|t| {
+                    let x = delayed(v, t, delay_quarters);
+                    if positive {
+                        x.max(0.0)
+                    } else {
+                        (-x).max(0.0)
+                    }
+                })
                 .collect();
-            let sign = if positive { 1.0 } else { -1.0 };
-            crate::reflex::low_pass(&rect, natural_hz, REFLEX_DAMPING, fs)
-                .into_iter()
-                .map(|v| sign * v)
+            let basis: Vec<Vec<f64>> = {
+                let mut b = vec![Vec::with_capacity(rect.len()); order + 1];
+                for &sg in &seg.sigma {
+                    rows.basis(sg, rows.top, &mut phi);
+                    for (column, &v) in b.iter_mut().zip(&phi) {
+                        column.push(v);
+                    }
+                }
+                b
+            };
+            basis
+                .iter()
+                .map(|b| {
+                    let product: Vec<f64> = b.iter().zip(&rect).map(|(x, r)| x * r).collect();
+                    crate::reflex::low_pass(&product, natural_hz, zeta, fs)
+                        .into_iter()
+                        .map(|v| sign * v)
+                        .collect()
+                })
                 .collect()
         })
         .collect()
@@ -470,46 +493,66 @@ fn total_ss(rows: &Rows) -> f64 {
         .sum()
 }
 
-/// Block-robust covariance of each output's coefficients: `G⁻¹ (Σ_b s_b s_bᵀ) G⁻¹ × B/(B-1)`.
+/// Covariance of each output's coefficients by the delete-a-block jackknife
+/// over 1 s blocks: robust to a coloured residual, and, unlike the plain
+/// sandwich, not too small when the coefficients are many for the blocks.
 fn robust_covariances(design: &Design<'_>, f: &Fitted) -> Option<Vec<DMatrix<f64>>> {
     let (q, d, n) = (design.columns(), design.rows.d, design.rows.len());
-    let ginv = inverse_scaled(&f.gram)?;
-    let mut meat = vec![DMatrix::<f64>::zeros(q, q); d];
-    let mut score = vec![vec![0.0; q]; d];
+    let mut parts: Vec<(DMatrix<f64>, DMatrix<f64>)> = Vec::new();
     let mut x = vec![0.0; q];
-    let mut blocks = 0usize;
-    let flush = |score: &mut Vec<Vec<f64>>, meat: &mut Vec<DMatrix<f64>>| {
-        for j in 0..d {
-            let s = &score[j];
-            for a in 0..q {
-                for b in 0..q {
-                    meat[j][(a, b)] += s[a] * s[b];
+    let mut r = 0;
+    while r < n {
+        let block = design.rows.block[r];
+        let mut g = vec![0.0; q * q];
+        let mut h = DMatrix::zeros(q, d);
+        while r < n && design.rows.block[r] == block {
+            design.row(r, &mut x);
+            for i in 0..q {
+                for j in i..q {
+                    g[i * q + j] += x[i] * x[j];
                 }
             }
-            score[j].iter_mut().for_each(|v| *v = 0.0);
-        }
-    };
-    for r in 0..n {
-        if r > 0 && design.rows.block[r] != design.rows.block[r - 1] {
-            flush(&mut score, &mut meat);
-            blocks += 1;
-        }
-        design.row(r, &mut x);
-        for (j, sc) in score.iter_mut().enumerate() {
-            let pred: f64 = (0..q).map(|i| x[i] * f.theta[(i, j)]).sum();
-            let e = design.rows.f[r * d + j] - pred;
-            for (s, xi) in sc.iter_mut().zip(&x) {
-                *s += xi * e;
+            for j in 0..d {
+                let y = design.rows.f[r * d + j];
+                for i in 0..q {
+                    h[(i, j)] += x[i] * y;
+                }
             }
+            r += 1;
         }
+        parts.push((DMatrix::from_fn(q, q, |i, j| g[i.min(j) * q + i.max(j)]), h));
     }
-    flush(&mut score, &mut meat);
-    blocks += 1;
+    let blocks = parts.len();
     if blocks < 2 {
         return None;
     }
-    let c = blocks as f64 / (blocks as f64 - 1.0);
-    Some(meat.iter().map(|m| &ginv * m * &ginv * c).collect())
+    let h_all = parts
+        .iter()
+        .fold(DMatrix::zeros(q, d), |acc, (_, h)| acc + h);
+    let thetas: Vec<DMatrix<f64>> = parts
+        .par_iter()
+        .map(|(g, h)| solve_scaled(&(&f.gram - g), &(&h_all - h)))
+        .collect::<Option<Vec<_>>>()?;
+    let b = blocks as f64;
+    Some(
+        (0..d)
+            .map(|j| {
+                let mean: Vec<f64> = (0..q)
+                    .map(|i| thetas.iter().map(|t| t[(i, j)]).sum::<f64>() / b)
+                    .collect();
+                let mut c = DMatrix::zeros(q, q);
+                for t in &thetas {
+                    for a in 0..q {
+                        let da = t[(a, j)] - mean[a];
+                        for e in 0..q {
+                            c[(a, e)] += da * (t[(e, j)] - mean[e]);
+                        }
+                    }
+                }
+                c * ((b - 1.0) / b)
+            })
+            .collect(),
+    )
 }
 
 /// `x(t - q/4)`, linearly interpolated (the drive is low-passed far below
@@ -524,6 +567,7 @@ fn delayed(x: &[f64], t: usize, quarters: usize) -> f64 {
 
 struct ReflexChoice {
     natural_hz: f64,
+    damping_ratio: f64,
     positive: bool,
     /// Delay in quarter samples.
     delay: usize,
@@ -563,32 +607,11 @@ fn scan_reflex(
     let (gaa, ha, yy) = base.folds(1).swap_remove(0);
     let yy = yy[0];
     let p1 = order + 1;
-    // detrended products T_i(σ) r(t) of a drive, full rate, per segment and degree
-    let products = |drive: &[Vec<f64>]| -> Result<Vec<Vec<Vec<f64>>>> {
-        let mut phi = vec![0.0; rows.top + 1];
-        rows.segments
+    // each degree's drive, detrended, full rate, per segment
+    let products = |drives: Vec<Vec<Vec<f64>>>| -> Result<Vec<Vec<Vec<f64>>>> {
+        drives
             .iter()
-            .zip(drive)
-            .map(|(seg, r)| {
-                let basis: Vec<Vec<f64>> = (0..p1)
-                    .map(|i| {
-                        seg.sigma
-                            .iter()
-                            .map(|&sg| {
-                                rows.basis(sg, rows.top, &mut phi);
-                                phi[i]
-                            })
-                            .collect()
-                    })
-                    .collect();
-                basis
-                    .iter()
-                    .map(|b| {
-                        let prod: Vec<f64> = b.iter().zip(r).map(|(x, y)| x * y).collect();
-                        detrend(slow, &prod)
-                    })
-                    .collect::<Result<Vec<_>>>()
-            })
+            .map(|degrees| degrees.iter().map(|d| detrend(slow, d)).collect())
             .collect()
     };
     let rss_at = |prod: &[Vec<Vec<f64>>], delay: usize| -> Option<f64> {
@@ -639,7 +662,13 @@ fn scan_reflex(
         .collect();
     let mut best: Option<(f64, f64, bool, usize)> = None;
     for &(natural_hz, positive) in &candidates {
-        let prod = products(&reflex_drive(rows, natural_hz, positive, fs))?;
+        let prod = products(reflex_drives(
+            rows,
+            (natural_hz, REFLEX_DAMPING, positive),
+            order,
+            0,
+            fs,
+        ))?;
         let scores: Vec<(usize, f64)> = coarse
             .par_iter()
             .filter_map(|&dl| rss_at(&prod, dl).map(|r| (dl, r)))
@@ -650,11 +679,52 @@ fn scan_reflex(
             }
         }
     }
-    let Some((_, natural_hz, positive, coarse_best)) = best else {
+    let Some((_, coarse_hz, positive, coarse_best)) = best else {
         return Ok(None);
     };
-    let drive = reflex_drive(rows, natural_hz, positive, fs);
-    let prod = products(&drive)?;
+    // refine one at a time at the coarse delay: the damping ratio, then the
+    // natural frequency between its neighbours, then the delay
+    let at = |hz: f64, zeta: f64, delay: usize| -> Result<Option<f64>> {
+        let prod = products(reflex_drives(rows, (hz, zeta, positive), order, 0, fs))?;
+        Ok(rss_at(&prod, delay))
+    };
+    let pick = |tries: Vec<(f64, Option<f64>)>, or: f64| {
+        tries
+            .into_iter()
+            .filter_map(|(v, r)| r.map(|r| (v, r)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(or, |b| b.0)
+    };
+    let zeta = pick(
+        REFLEX_DAMPING_RATIOS
+            .iter()
+            .map(|&z| Ok((z, at(coarse_hz, z, coarse_best)?)))
+            .collect::<Result<Vec<_>>>()?,
+        REFLEX_DAMPING,
+    );
+    let natural_hz = pick(
+        (-3..=3)
+            .map(|k| {
+                let hz = coarse_hz * 2f64.powf(k as f64 / 8.0);
+                Ok((
+                    hz,
+                    if hz < 0.45 * fs {
+                        at(hz, zeta, coarse_best)?
+                    } else {
+                        None
+                    },
+                ))
+            })
+            .collect::<Result<Vec<_>>>()?,
+        coarse_hz,
+    );
+    let prod = products(reflex_drives(
+        rows,
+        (natural_hz, zeta, positive),
+        order,
+        0,
+        fs,
+    ))?;
     let scan = |around: usize, reach: usize, by: usize| -> usize {
         let delays: Vec<usize> = (around.saturating_sub(reach)..=(around + reach).min(max_delay))
             .step_by(by)
@@ -670,9 +740,14 @@ fn scan_reflex(
     let delay = scan(scan(coarse_best, step, 4), 3, 1);
     Ok(Some(ReflexChoice {
         natural_hz,
+        damping_ratio: zeta,
         positive,
         delay,
-        columns: reflex_columns(rows, &drive, delay, slow)?,
+        columns: reflex_columns(
+            rows,
+            &reflex_drives(rows, (natural_hz, zeta, positive), rows.top, delay, fs),
+            slow,
+        )?,
     }))
 }
 
@@ -805,7 +880,7 @@ pub(super) fn estimate(
             Some(VaryingReflex {
                 delay_s: c.delay as f64 / (4.0 * fs),
                 natural_hz: c.natural_hz,
-                damping_ratio: REFLEX_DAMPING,
+                damping_ratio: c.damping_ratio,
                 polarity: if c.positive { "positive" } else { "negative" }.into(),
                 detected,
                 cross_validated_gain: gain,
@@ -883,6 +958,15 @@ pub(super) fn estimate(
                 }
             });
             let (rss_g, tss_g) = residual_ss[g];
+            let vaf = (identifiable && tss_g > 0.0).then(|| 100.0 * (1.0 - rss_g / tss_g));
+            let verdicts = identifiable.then(|| {
+                PointVerdicts::of(
+                    [
+                        &mats[2].0, &mats[2].1, &mats[1].0, &mats[1].1, &mats[0].0, &mats[0].1,
+                    ],
+                    vaf,
+                )
+            });
             let keep = |m: &limpid_core::Matrix| identifiable.then(|| m.clone());
             VaryingPoint {
                 sigma,
@@ -895,9 +979,10 @@ pub(super) fn estimate(
                 stiffness: keep(&mats[2].0),
                 stiffness_se: keep(&mats[2].1),
                 reflex: point_reflex.filter(|_| identifiable),
-                vaf: (identifiable && tss_g > 0.0).then(|| 100.0 * (1.0 - rss_g / tss_g)),
+                vaf,
                 support,
                 condition_number: None,
+                verdicts,
             }
         })
         .collect::<Vec<_>>();
