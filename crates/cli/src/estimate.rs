@@ -57,6 +57,8 @@ pub enum WindowArg {
     Onsets,
     /// One continuous window with a constant term.
     Continuous,
+    /// The trial column, each trial a continuous window with its own offset (holds of a continuous perturbation; no rest needed).
+    ContinuousTrials,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -223,6 +225,7 @@ impl PrepareArgs {
                 WindowArg::Trials => Windowing::Trials,
                 WindowArg::Onsets => Windowing::Onsets,
                 WindowArg::Continuous => Windowing::Continuous,
+                WindowArg::ContinuousTrials => Windowing::ContinuousTrials,
             },
             frame: match self.frame {
                 FrameArg::Identity => Frame::Identity,

@@ -77,6 +77,10 @@ pub enum Windowing {
     Onsets,
     /// One continuous window with a constant term.
     Continuous,
+    /// The `trial` column, each trial a continuous window with its own force
+    /// offset (fitted): holds of a continuous perturbation, no rest needed.
+    #[serde(rename = "continuous-trials")]
+    ContinuousTrials,
 }
 
 /// Preparation settings.
@@ -439,7 +443,12 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
         vel: vec![Vec::new(); n],
         acc: vec![Vec::new(); n],
         force: vec![Vec::new(); n],
-        demeaned: !continuous && fits_offsets(params.offsets, &windows, fs),
+        // several continuous windows (the holds of a continuous perturbation) each get their own offset
+        demeaned: if continuous {
+            windows.len() > 1
+        } else {
+            fits_offsets(params.offsets, &windows, fs)
+        },
         windows: prepared_windows,
         continuous,
         cutoff_hz: cutoff,
@@ -745,6 +754,7 @@ fn make_windows(
     };
     match mode {
         Windowing::Continuous => Ok(continuous()),
+        Windowing::ContinuousTrials => windows_from_trial_column(rec, trial_column),
         Windowing::Trials => {
             // onset: the earlier of motion and force change (a step in acceleration
             // moves the force before the displacement rises above the noise)

@@ -202,3 +202,53 @@ fn varying_refusals_name_what_is_wrong() {
         );
     }
 }
+
+#[test]
+fn linear_takes_holds_of_a_continuous_perturbation_as_trials() {
+    let dir = tempfile::tempdir().unwrap();
+    let subject = dir.path().join("ankle.toml");
+    std::fs::write(
+        &subject,
+        "inertia = 0.015\nstiffness = [70.0, 0.0, 0.0]\ndamping = [0.8, 0.0, 0.0]\nbackground = [2.0, 10.0, 0.0]\n",
+    )
+    .unwrap();
+    let protocol = dir.path().join("p.toml");
+    let out = limpid(&["protocol", "new", "--preset", "ankle-ramp-and-hold"]);
+    std::fs::write(
+        &protocol,
+        out.stdout
+            .replace("keep_ramps = true", "keep_ramps = false"),
+    )
+    .unwrap();
+    let rec = dir.path().join("holds.csv");
+    let out = limpid(&[
+        "simulate",
+        protocol.to_str().unwrap(),
+        "--subject",
+        subject.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    // with rests expected, every hold is refused
+    let out = limpid(&[
+        "estimate",
+        "linear",
+        rec.to_str().unwrap(),
+        "--window",
+        "trials",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stdout);
+    let v = json(&[
+        "estimate",
+        "linear",
+        rec.to_str().unwrap(),
+        "--window",
+        "continuous-trials",
+        "--json",
+    ]);
+    let k = v["stiffness"][0][0].as_f64().unwrap();
+    let b = v["damping"][0][0].as_f64().unwrap();
+    assert!((k - 70.0).abs() < 0.03 * 70.0, "K {k}");
+    assert!((b - 0.8).abs() < 0.1 * 0.8, "B {b}");
+}

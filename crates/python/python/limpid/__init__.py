@@ -493,7 +493,7 @@ def estimate_linear(recording: RecordingLike, **options: Any) -> Result:
 
     Options (defaults: ``limpid.request("linear")``): ``cutoff_hz``, ``order``,
     ``derivative`` ("central", "savgol"), ``offsets`` ("auto", "fit", "rest"), ``window``
-    ("auto", "trials", "onsets", "continuous"), ``frame`` ("identity", "seed000"),
+    ("auto", "trials", "onsets", "continuous", "continuous-trials"), ``frame`` ("identity", "seed000"),
     ``transform`` (12 numbers), ``negate_force``, ``robot`` and ``robot_base``, ``level``,
     ``equilibrium``, ``vertical`` ("x", "y", "z"), ``shoulder`` (upper arm m, forearm m,
     elbow, flexion, abduction, rotation deg)."""
