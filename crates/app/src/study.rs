@@ -38,7 +38,32 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
         e.file = base.join(&e.file);
         e.mvc = base.join(&e.mvc);
     }
+    refuse_repeats(path, &m.recording)?;
     Ok(m)
+}
+
+/// A study counts each recording once: a file listed twice (under any
+/// subject) would be averaged as independent data (issue 36). Repeated
+/// recordings of one subject and configuration are separate files.
+fn refuse_repeats(path: &Path, entries: &[Entry]) -> Result<()> {
+    let mut files = std::collections::HashMap::new();
+    for (i, e) in entries.iter().enumerate() {
+        let key = std::fs::canonicalize(&e.file).unwrap_or_else(|_| e.file.clone());
+        if let Some(j) = files.insert(key, i) {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "[[recording]] entries {} and {} name the same file {} (subjects {:?} and {:?}): a study counts each recording once",
+                    j + 1,
+                    i + 1,
+                    e.file.display(),
+                    entries[j].subject,
+                    e.subject
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// One recording of a study: its co-contraction analysis, or why it failed

@@ -1150,11 +1150,11 @@ fn identified(
             value[(i, i)] == 0.0 || !identified
         })
         .map(|i| {
+            // rounded to the error, as the report rounds (issue 37)
             format!(
-                "{label}{} = {:.3} ± {:.3} {unit}",
+                "{label}{} = {} {unit}",
                 sub(coords, i, i),
-                value[(i, i)],
-                se[(i, i)]
+                limpid_core::with_standard_error(value[(i, i)], se[(i, i)])
             )
         })
         .collect();

@@ -472,7 +472,8 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
     })
 }
 
-fn columns<'a>(rec: &'a Recording, names: &[String]) -> Vec<&'a [f64]> {
+/// The named columns of `rec` (chosen before: an absent one reads as empty).
+pub(crate) fn columns<'a>(rec: &'a Recording, names: &[String]) -> Vec<&'a [f64]> {
     names.iter().map(|c| rec.column(c).unwrap_or(&[])).collect()
 }
 

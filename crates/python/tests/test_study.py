@@ -5,6 +5,7 @@ import concurrent.futures as cf
 import importlib.util
 import os
 import pickle
+import shutil
 from pathlib import Path
 
 import pytest
@@ -22,7 +23,10 @@ def manifest(tmp_path):
     rows = []
     for subject in ("1", "2"):
         for config in ("4", "7"):
-            case = SHARED / f"ex_config{config}"
+            # each subject its own copy: a study refuses one file listed twice
+            case = tmp_path / f"s{subject}_config{config}"
+            shutil.copy(SHARED / f"ex_config{config}.csv", f"{case}.csv")
+            shutil.copy(SHARED / f"ex_config{config}.mvc.csv", f"{case}.mvc.csv")
             rows.append(f'[[recording]]\nsubject = "{subject}"\nconfiguration = "{config}"\n'
                         f'file = "{case}.csv"\nmvc = "{case}.mvc.csv"\n')
     # a recording that is missing: listed as a failure, not an abort
@@ -86,8 +90,15 @@ def test_the_dask_example_on_a_local_cluster_of_processes(manifest, tmp_path):
 
 def test_repeated_recordings_of_one_subject_and_configuration_keep_their_own_files(tmp_path):
     case = SHARED / "ex_config4"
-    entry = f'[[recording]]\nsubject = "1"\nconfiguration = "4"\nfile = "{case}.csv"\nmvc = "{case}.mvc.csv"\n'
+    again = tmp_path / "again.csv"
+    shutil.copy(f"{case}.csv", again)
+    entry = '[[recording]]\nsubject = "1"\nconfiguration = "4"\nfile = "{}"\nmvc = "' + f"{case}.mvc.csv" + '"\n'
     path = tmp_path / "study.toml"
-    path.write_text(entry + "\n" + entry)
+    path.write_text(entry.format(f"{case}.csv") + "\n" + entry.format(again))
+    # the same file twice is refused: it would count as two recordings
+    twice = tmp_path / "twice.toml"
+    twice.write_text(entry.format(f"{case}.csv") + "\n" + entry.format(f"{case}.csv"))
+    with pytest.raises(ValueError, match="name the same file"):
+        limpid.study_run(twice)
     limpid.study_run(path, out=tmp_path / "t")
     assert sorted(p.name for p in (tmp_path / "t" / "recordings").iterdir()) == ["s1_c4.json", "s1_c4_2.json"]

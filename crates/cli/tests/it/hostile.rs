@@ -452,3 +452,40 @@ fn a_recording_path_that_is_not_utf8_is_read_and_named() {
     let named = doc["run"]["inputs"][0]["path"].as_str().unwrap();
     assert!(named.ends_with("bad\u{fffd}.csv"), "{named}");
 }
+
+#[test]
+fn a_study_refuses_one_recording_listed_twice() {
+    // listed again under two more subjects it was counted as four subjects with sd 0 (issue 36)
+    let d = tempfile::tempdir().unwrap();
+    let ex = examples("cocontraction");
+    let (file, mvc) = (ex.join("ex_config7.csv"), ex.join("ex_config7.mvc.csv"));
+    let manifest = d.path().join("study.toml");
+    let entries: String = ["1", "1", "2", "3"]
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            format!(
+                "[[recording]]\nsubject = \"{s}\"\nconfiguration = \"{}\"\nfile = \"{}\"\nmvc = \"{}\"\n\n",
+                7 + i,
+                file.display(),
+                mvc.display()
+            )
+        })
+        .collect();
+    std::fs::write(&manifest, entries).unwrap();
+    let tables = d.path().join("tables");
+    let out = limpid(&[
+        "study",
+        "run",
+        manifest.to_str().unwrap(),
+        "--out",
+        tables.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stdout);
+    assert!(
+        out.stderr.contains("entries 1 and 2 name the same file")
+            && out.stderr.lines().count() == 1,
+        "{}",
+        out.stderr
+    );
+}

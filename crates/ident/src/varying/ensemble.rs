@@ -88,14 +88,10 @@ fn repetitions(
         ));
     }
     let d = coords.len();
-    let pos: Vec<&[f64]> = coords
-        .iter()
-        .map(|c| rec.column(c).expect("chosen"))
-        .collect();
-    let frc: Vec<&[f64]> = forces
-        .iter()
-        .map(|c| rec.column(c).expect("chosen"))
-        .collect();
+    let (pos, frc) = (
+        crate::prepare::columns(rec, coords),
+        crate::prepare::columns(rec, forces),
+    );
     let z = windows
         .par_iter()
         .map(|w| {

@@ -212,6 +212,10 @@ pub struct VaryingPoint {
     pub verdicts: Option<PointVerdicts>,
 }
 
+/// How much wider than a single estimate's a point's standard error is taken
+/// for its verdict (see [`PointVerdicts`]): 2 x 1.5 = 3 SE within the tolerance.
+pub const POINT_SE_FACTOR: f64 = 1.5;
+
 /// The verdicts of one point's matrices.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PointVerdicts {
@@ -224,9 +228,14 @@ pub struct PointVerdicts {
 }
 
 impl PointVerdicts {
-    /// The verdicts of a point's matrices and their standard errors.
+    /// The verdicts of a point's matrices and their standard errors. A grid
+    /// judges a hundred points where a single estimate judges one: at 2 SE
+    /// about one trusted point in a few hundred came out beyond its tolerance
+    /// by chance (`limpid calibrate`), so a point is judged at
+    /// [`POINT_SE_FACTOR`] x 2 SE.
     pub(crate) fn of([k, ks, b, bs, m, ms]: [&Matrix; 6], vaf: Option<f64>) -> Self {
         let one = |kind, v: &Matrix, se: &Matrix| {
+            let se = &Matrix(se.0.map(|x| x * POINT_SE_FACTOR));
             let d = v.nrows();
             let identified = (0..d).all(|i| v[(i, i)].abs() >= 2.0 * se[(i, i)]);
             let passive = matrix_criteria(v).positive_definite;

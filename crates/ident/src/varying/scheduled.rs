@@ -47,6 +47,13 @@ const REFLEX_NATURAL_HZ: [f64; 7] = [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
 const FOLDS: usize = 10;
 /// Low-pass of the position the reflex drive's velocity is taken from (Hz).
 const REFLEX_VELOCITY_HZ: f64 = 100.0;
+/// Share of each value added in quadrature to its standard error when a
+/// reflex pathway is fitted: the fitted pathway (rectifier, delay, a
+/// second-order low-pass of scanned frequency and damping) never matches a
+/// limb's exactly, and over a long record the mismatch exceeds the
+/// jackknife's error (`limpid calibrate`: ±2 SE covered K at 84 % and B at
+/// 89 % without it). The same reasoning as `reflex::MODEL_ERROR_FLOOR`.
+pub const REFLEX_MODEL_FLOOR: f64 = 0.01;
 /// Least data near a grid point (s) for it to be identifiable.
 const MIN_SUPPORT_S: f64 = 1.0;
 /// Standard normal quantile of 1 - 1e-4 (the reflex test's level).
@@ -160,14 +167,10 @@ fn rows(
     }
     let min_len = 2 * trim + slow.padlen().max(lp.padlen()) + 2;
     let d = coords.len();
-    let pos: Vec<&[f64]> = coords
-        .iter()
-        .map(|c| rec.column(c).expect("chosen"))
-        .collect();
-    let frc: Vec<&[f64]> = forces
-        .iter()
-        .map(|c| rec.column(c).expect("chosen"))
-        .collect();
+    let (pos, frc) = (
+        crate::prepare::columns(rec, coords),
+        crate::prepare::columns(rec, forces),
+    );
     let mut segments = Vec::new();
     let mut skipped = 0usize;
     for seg in ranges {
@@ -384,9 +387,12 @@ struct Design<'a> {
 }
 
 impl Design<'_> {
+    /// Columns: M, B, K of each coordinate (degrees 0..=order), the offset
+    /// c(σ) (degrees 1..=order + 1: it holds `K(σ) σ_eq(σ)`, one order above
+    /// K; its constant detrends to zero), the reflex gain (0..=order).
     fn columns(&self) -> usize {
         let p1 = self.order + 1;
-        3 * self.rows.d * p1 + self.order + usize::from(self.reflex.is_some()) * p1
+        3 * self.rows.d * p1 + p1 + usize::from(self.reflex.is_some()) * p1
     }
 
     fn row(&self, n: usize, out: &mut [f64]) {
@@ -397,8 +403,8 @@ impl Design<'_> {
             out[c..c + p1].copy_from_slice(&x[g * top1..g * top1 + p1]);
             c += p1;
         }
-        out[c..c + self.order].copy_from_slice(&x[3 * d * top1 + 1..3 * d * top1 + p1]);
-        c += self.order;
+        out[c..c + p1].copy_from_slice(&x[3 * d * top1 + 1..3 * d * top1 + p1 + 1]);
+        c += p1;
         if let Some(r) = self.reflex {
             out[c..c + p1].copy_from_slice(&r[n * top1..n * top1 + p1]);
         }
@@ -406,7 +412,7 @@ impl Design<'_> {
 
     /// The first column of the reflex gains.
     fn reflex_start(&self) -> usize {
-        3 * self.rows.d * (self.order + 1) + self.order
+        3 * self.rows.d * (self.order + 1) + self.order + 1
     }
 
     /// Per fold: Gram, regressor-force products, Σ f² per output.
@@ -784,7 +790,8 @@ pub(super) fn estimate(
         ));
     }
     let slow = LowPass::butterworth(SLOW_ORDER, params.slow_hz, fs)?;
-    let top = params.basis_order.unwrap_or(MAX_BASIS_ORDER);
+    // one degree more than any order tried, for the offset c(σ)
+    let top = params.basis_order.unwrap_or(MAX_BASIS_ORDER) + 1;
     let (rows, dec, trim) = rows(
         rec,
         params,
@@ -916,7 +923,15 @@ pub(super) fn estimate(
                     .flat_map(|a| (0..p1).map(move |b| (a, b)))
                     .map(|(a, b)| phi[a] * phi[b] * cov[j][(cols[a], cols[b])])
                     .sum();
-                (v, var.max(0.0).sqrt())
+                let se = var.max(0.0).sqrt();
+                // the reflex pathway's model error, which no block of the
+                // jackknife sees (see REFLEX_MODEL_FLOOR)
+                let floor = if reflex_summary.is_some() {
+                    REFLEX_MODEL_FLOOR * v.abs()
+                } else {
+                    0.0
+                };
+                (v, se.hypot(floor))
             };
             let support = rows
                 .sigma
