@@ -625,6 +625,10 @@ pub fn fit_planar(
     })
 }
 
+/// Fewest samples of each trial in an observation window: the derivatives
+/// and the 11 parameters need the motion, not a few points of it.
+pub const MIN_WINDOW_SAMPLES: usize = 10;
+
 /// Seed 003's estimate from every trial's first `window` samples, with its
 /// leave-one-trial-out validation.
 pub fn estimate_planar(
@@ -632,6 +636,17 @@ pub fn estimate_planar(
     window: usize,
     xi: Option<[f64; 3]>,
 ) -> Result<PlanarEstimate> {
+    if window < MIN_WINDOW_SAMPLES {
+        // 1 ms gave 30 samples for 11 parameters and K at 120x the truth (issue 36)
+        return Err(Error::invalid(
+            "window_ms",
+            format!(
+                "the observation window holds {window} sample(s) of each trial at {} Hz; at least {MIN_WINDOW_SAMPLES} ({} ms) are needed",
+                data.fs,
+                MIN_WINDOW_SAMPLES as f64 * 1e3 / data.fs
+            ),
+        ));
+    }
     let all: Vec<usize> = (0..data.trials.len()).collect();
     let mut est = fit_planar(data, window, xi, &all)?;
     est.leave_one_out_vaf = Some(leave_one_out_vaf(data, window, xi)?);
