@@ -163,7 +163,13 @@ fn two_steps(
     Ok((force_out, torque_out, summary))
 }
 
-/// Weight, centre of mass and biases fitted from still poses ([`PayloadCalibration`]).
+/// Residual (N rms) a calibration may leave whatever its weight: a sensor's
+/// noise without any payload.
+const CALIBRATION_NOISE_N: f64 = 0.5;
+
+/// Weight, centre of mass and biases fitted from still poses
+/// ([`PayloadCalibration`]); refused when the weight explains less than it
+/// leaves (residual above the weight and above [`CALIBRATION_NOISE_N`]).
 fn calibrated(
     cal: &Recording,
     robot: Option<&Robot>,
@@ -185,6 +191,17 @@ fn calibrated(
         path: cal.path().to_path_buf(),
         message: e.to_string(),
     })?;
+    let weight = Vector3::from(c.weight_ref).norm();
+    if c.force_rms_residual > weight.max(CALIBRATION_NOISE_N) {
+        // pure noise fitted a 2.7 N weight beside a 50 N residual and was used (issue 36)
+        return Err(Error::Format {
+            path: cal.path().to_path_buf(),
+            message: format!(
+                "the still poses do not show a weight: the fitted weight ({weight:.3} N) is smaller than what it leaves unexplained ({:.3} N rms); check that the readings are still and from the same sensor",
+                c.force_rms_residual
+            ),
+        });
+    }
     let force_out = forces
         .iter()
         .zip(rot)

@@ -387,6 +387,40 @@ fn a_calibration_from_still_poses_removes_the_off_axis_moment() {
         worst[0] < 1e-9 && worst[1] < 1e-9,
         "force, torque errors {worst:?}"
     );
+    // still readings of pure noise (50 N) fitted a small weight and were used (issue 36)
+    let mut state = 7u64;
+    let mut noise = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        100.0 * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+    };
+    let noisy: Vec<[f64; 8]> = still
+        .iter()
+        .map(|r| {
+            let mut r = *r;
+            for v in &mut r[2..] {
+                *v = noise();
+            }
+            r
+        })
+        .collect();
+    let cal_noise = dir.path().join("cal_noise.csv");
+    write(&cal_noise, &names, columns(&noisy));
+    let out = limpid(&[
+        "gravity-compensate",
+        rec.to_str().unwrap(),
+        "--calibration",
+        cal_noise.to_str().unwrap(),
+        "-o",
+        out_path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stdout);
+    assert!(
+        out.stderr.contains("cal_noise.csv") && out.stderr.contains("do not show a weight"),
+        "{}",
+        out.stderr
+    );
     // neither --bias nor --calibration: a usage error naming both
     let out = limpid(&[
         "gravity-compensate",
