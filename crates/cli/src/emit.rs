@@ -21,6 +21,31 @@ pub struct Output<'a> {
     pub print_request: bool,
 }
 
+/// The flags every estimating command shares: where its result goes.
+#[derive(clap::Args)]
+pub struct OutputArgs {
+    /// Print one JSON object (the result document) instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the HTML report (this method's tables and figures) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Print the request these flags make (JSON, as a result's run block and `limpid rerun` hold it) and stop.
+    #[arg(long)]
+    pub print_request: bool,
+}
+
+impl OutputArgs {
+    /// Where the estimate goes.
+    pub fn output(&self) -> Output<'_> {
+        Output {
+            json: self.json,
+            report: self.report.as_deref(),
+            print_request: self.print_request,
+        }
+    }
+}
+
 /// The flag a request field is set by (errors name what the user typed).
 fn flag(field: &str) -> Option<&'static str> {
     Some(match field {

@@ -10,7 +10,6 @@ use limpid_ident::request::{
 };
 use limpid_ident::{Derivative, Offsets, Windowing};
 
-use crate::emit::Output;
 use crate::{table, CliResult};
 
 #[derive(Subcommand)]
@@ -164,15 +163,8 @@ pub struct LinearArgs {
         allow_hyphen_values = true
     )]
     pub shoulder: Option<Vec<f64>>,
-    /// Print one JSON object instead of tables.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write the HTML report (ellipsoids, tables) to this file.
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
-    /// Print the request these flags make (JSON, as a result's run block and `limpid rerun` hold it) and stop.
-    #[arg(long)]
-    pub print_request: bool,
+    #[command(flatten)]
+    pub output: crate::emit::OutputArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -194,15 +186,8 @@ pub struct CocontractionArgs {
     /// Half-width of the band around the target level counted as "on target".
     #[arg(long, default_value_t = limpid_ident::request::DEFAULT_TOLERANCE)]
     pub tolerance: f64,
-    /// Print one JSON object instead of tables.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write the HTML report (per-level tables, ellipsoids side by side) to this file.
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
-    /// Print the request these flags make (JSON) and stop.
-    #[arg(long)]
-    pub print_request: bool,
+    #[command(flatten)]
+    pub output: crate::emit::OutputArgs,
 }
 
 impl PrepareArgs {
@@ -286,11 +271,7 @@ pub fn run(method: Method) -> CliResult {
         Method::Linear(args) => crate::emit::estimate(
             args.request()?,
             std::slice::from_ref(&args.recording),
-            Output {
-                json: args.json,
-                report: args.report.as_deref(),
-                print_request: args.print_request,
-            },
+            args.output.output(),
             linear_text,
         ),
         Method::Planar(args) => crate::planar::run_estimate(args),
@@ -300,11 +281,7 @@ pub fn run(method: Method) -> CliResult {
         Method::Cocontraction(args) => crate::emit::estimate(
             args.request(),
             &[args.recording.clone(), args.mvc.clone()],
-            Output {
-                json: args.json,
-                report: args.report.as_deref(),
-                print_request: args.print_request,
-            },
+            args.output.output(),
             cocontraction_text,
         ),
     }

@@ -10,7 +10,6 @@ use limpid_core::Matrix;
 use limpid_ident::planar::PlanarEstimate;
 use limpid_ident::request::{ArmRequest, PlanarRequest, Request, SweepRequest, DEFAULT_SWEEP_MS};
 
-use crate::emit::Output;
 use crate::table::num;
 use crate::CliResult;
 
@@ -89,15 +88,8 @@ pub struct PlanarArgs {
     /// Observation window after the perturbation onset (ms); default: all samples of every trial.
     #[arg(long, value_name = "T")]
     pub window_ms: Option<f64>,
-    /// Print one JSON object.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write the HTML report to this file.
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
-    /// Print the request these flags make (JSON) and stop.
-    #[arg(long)]
-    pub print_request: bool,
+    #[command(flatten)]
+    pub output: crate::emit::OutputArgs,
 }
 
 #[derive(Args)]
@@ -113,18 +105,11 @@ pub struct SweepArgs {
     /// Step (ms).
     #[arg(long, default_value_t = DEFAULT_SWEEP_MS[2])]
     pub step: f64,
-    /// Print JSON.
-    #[arg(long, conflicts_with = "csv")]
-    pub json: bool,
     /// Print the table as CSV.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "json")]
     pub csv: bool,
-    /// Also write the HTML report (criteria against the window) to this file.
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
-    /// Print the request these flags make (JSON) and stop.
-    #[arg(long)]
-    pub print_request: bool,
+    #[command(flatten)]
+    pub output: crate::emit::OutputArgs,
 }
 
 fn m2(m: &Matrix, se: &Matrix) -> String {
@@ -223,11 +208,7 @@ pub fn run_estimate(args: PlanarArgs) -> CliResult {
     crate::emit::estimate(
         request,
         std::slice::from_ref(&args.arm.recording),
-        Output {
-            json: args.json,
-            report: args.report.as_deref(),
-            print_request: args.print_request,
-        },
+        args.output.output(),
         planar_text,
     )
 }
@@ -254,11 +235,7 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
     crate::emit::estimate(
         request,
         std::slice::from_ref(&args.arm.recording),
-        Output {
-            json: args.json,
-            report: args.report.as_deref(),
-            print_request: args.print_request,
-        },
+        args.output.output(),
         |e, r, paths| sweep_text(e, r, paths, csv),
     )
 }

@@ -8,8 +8,6 @@ use limpid_analysis::result::Estimate;
 use limpid_app::estimate::Estimated;
 use limpid_ident::request::{ReflexRequest, Request};
 
-use crate::emit::Output;
-
 use crate::table::num;
 use crate::CliResult;
 
@@ -38,15 +36,8 @@ pub struct ReflexArgs {
     /// Rectify the velocity before anti-aliasing (the physical order) instead of after (Kearney et al.).
     #[arg(long)]
     pub rectify_first: bool,
-    /// Print one JSON object.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write the HTML report (IRFs, nonlinearity, torque, VAF split) to this file.
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
-    /// Print the request these flags make (JSON) and stop.
-    #[arg(long)]
-    pub print_request: bool,
+    #[command(flatten)]
+    pub output: crate::emit::OutputArgs,
 }
 
 impl ReflexArgs {
@@ -68,11 +59,7 @@ pub fn run(args: ReflexArgs) -> CliResult {
     crate::emit::estimate(
         args.request(),
         std::slice::from_ref(&args.recording),
-        Output {
-            json: args.json,
-            report: args.report.as_deref(),
-            print_request: args.print_request,
-        },
+        args.output.output(),
         reflex_text,
     )
 }

@@ -9,7 +9,6 @@ use limpid_app::estimate::Estimated;
 use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch};
 use limpid_ident::request::{Request, SegmentWindow, StochasticRequest, DEFAULT_BAND_HZ};
 
-use crate::emit::Output;
 use crate::table::num;
 use crate::CliResult;
 
@@ -85,15 +84,8 @@ pub struct StochasticArgs {
         allow_hyphen_values = true
     )]
     pub shoulder: Option<Vec<f64>>,
-    /// Print one JSON object.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write the HTML report (Bode plots, coherences) to this file.
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
-    /// Print the request these flags make (JSON) and stop.
-    #[arg(long)]
-    pub print_request: bool,
+    #[command(flatten)]
+    pub output: crate::emit::OutputArgs,
 }
 
 #[derive(Args)]
@@ -144,11 +136,7 @@ pub fn run_estimate(args: StochasticArgs) -> CliResult {
     crate::emit::estimate(
         args.request()?,
         &args.recordings,
-        Output {
-            json: args.json,
-            report: args.report.as_deref(),
-            print_request: args.print_request,
-        },
+        args.output.output(),
         stochastic_text,
     )
 }

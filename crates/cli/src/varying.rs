@@ -10,7 +10,6 @@ use limpid_core::{significant, with_standard_error};
 use limpid_ident::request::{Request, VaryingRequest};
 use limpid_ident::varying::VaryingMethod;
 
-use crate::emit::Output;
 use crate::CliResult;
 
 #[derive(Args)]
@@ -50,15 +49,8 @@ pub struct VaryingArgs {
     /// Largest reflex delay scanned (s).
     #[arg(long, default_value_t = VaryingRequest::default().max_delay_s, value_name = "S")]
     pub max_delay: f64,
-    /// Print one JSON object.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write the HTML report (K, B, M and the reflex gain against the schedule) to this file.
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
-    /// Print the request these flags make (JSON) and stop.
-    #[arg(long)]
-    pub print_request: bool,
+    #[command(flatten)]
+    pub output: crate::emit::OutputArgs,
 }
 
 impl VaryingArgs {
@@ -84,11 +76,7 @@ pub fn run(args: VaryingArgs) -> CliResult {
     crate::emit::estimate(
         args.request(),
         std::slice::from_ref(&args.recording),
-        Output {
-            json: args.json,
-            report: args.report.as_deref(),
-            print_request: args.print_request,
-        },
+        args.output.output(),
         varying_text,
     )
 }
