@@ -325,10 +325,18 @@ pub fn with_standard_error(v: f64, se: f64) -> String {
     if !(se.is_finite() && se > 0.0) {
         return format!("{} ± n/a", significant(v, 4));
     }
+    // an error below the value's precision (1e308 ± 1, a subnormal SE) cannot
+    // set its decimal place: both as significant digits (issue 36)
+    if !(v.abs() / se < 1e15) {
+        return format!("{} ± {}", significant(v, 4), significant(se, 2));
+    }
     // decimal place of the error's second significant digit
     let place = se.log10().floor() as i32 - 1;
     let unit = 10f64.powi(place);
     let (vr, sr) = ((v / unit).round() * unit, (se / unit).round() * unit);
+    if !(vr.is_finite() && sr.is_finite() && unit > 0.0) {
+        return format!("{} ± {}", significant(v, 4), significant(se, 2));
+    }
     let magnitude = vr.abs().max(sr);
     if !(1e-3..1e6).contains(&magnitude) {
         let e = magnitude.log10().floor() as i32;
@@ -370,6 +378,11 @@ mod tests {
         assert_eq!(with_standard_error(3.0e7, 1.2e5), "(3.000 ± 0.012)e7");
         assert_eq!(with_standard_error(7.0, f64::NAN), "7 ± n/a");
         assert_eq!(with_standard_error(f64::NAN, 1.0), "n/a");
+        // extremes printed as (NaN ± 0)e2147483647 and (NaN ± NaN)e0 (issue 36)
+        assert_eq!(with_standard_error(1e308, 1.0), "1.000e308 ± 1");
+        assert_eq!(with_standard_error(1.0, 5e-324), "1 ± 4.9e-324");
+        assert_eq!(with_standard_error(1.7e308, 1.5e308), "(1.7 ± 1.5)e308");
+        assert_eq!(with_standard_error(5e-320, 3e-320), "5.000e-320 ± 3.0e-320");
         assert_eq!(significant(99.9847, 4), "99.98");
         assert_eq!(significant(0.5, 4), "0.5");
         assert_eq!(significant(1001.3895, 4), "1001");
