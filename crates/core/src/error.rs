@@ -327,7 +327,8 @@ pub fn with_standard_error(v: f64, se: f64) -> String {
     }
     // an error below the value's precision (1e308 ± 1, a subnormal SE) cannot
     // set its decimal place: both as significant digits (issue 36)
-    if !(v.abs() / se < 1e15) {
+    let ratio = v.abs() / se;
+    if ratio.is_nan() || ratio >= 1e15 {
         return format!("{} ± {}", significant(v, 4), significant(se, 2));
     }
     // decimal place of the error's second significant digit
