@@ -103,15 +103,7 @@ pub fn varying_text(estimated: &Estimated, _: &Request, paths: &[PathBuf]) -> Cl
     }
     println!("resolution: {}", e.resolution_note);
     let d = e.coordinates.len();
-    let joint = e
-        .coordinates
-        .iter()
-        .all(|c| c.starts_with('q') || c == "theta");
-    let (ku, bu, mu) = if joint {
-        ("N m/rad", "N m s/rad", "kg m^2")
-    } else {
-        ("N/m", "N s/m", "kg")
-    };
+    let (mu, bu, ku) = limpid_ident::linear::units(&e.coordinates);
     let sched = if e.schedule.unit.is_empty() {
         e.schedule.name.clone()
     } else {

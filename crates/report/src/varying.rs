@@ -8,15 +8,6 @@ use limpid_ident::varying::{VaryingEstimate, VaryingMethod, VaryingPoint};
 use crate::svg::{Chart, Series, Stroke, PALETTE};
 use crate::{Figure, Section, Table};
 
-fn units(coords: &[String]) -> [&'static str; 3] {
-    let joint = coords.iter().all(|c| c.starts_with('q') || c == "theta");
-    if joint {
-        ["N m/rad", "N m s/rad", "kg m²"]
-    } else {
-        ["N/m", "N s/m", "kg"]
-    }
-}
-
 fn schedule_label(v: &VaryingEstimate) -> String {
     if v.schedule.unit.is_empty() {
         v.schedule.name.clone()
@@ -99,7 +90,7 @@ fn cell(m: Option<&Matrix>, se: Option<&Matrix>, i: usize, j: usize) -> String {
 
 /// The varying section: verdict, figures, per-point table.
 pub(crate) fn section(name: &str, v: &VaryingEstimate) -> Section {
-    let [ku, bu, mu] = units(&v.coordinates);
+    let (mu, bu, ku) = limpid_ident::linear::units(&v.coordinates);
     let d = v.coordinates.len();
     let identifiable = v.points.iter().filter(|p| p.identifiable).count();
     let method = match v.method {

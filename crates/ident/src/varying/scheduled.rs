@@ -71,6 +71,8 @@ struct Segment {
     sigma: Vec<f64>,
     /// Indices kept (trimmed, decimated).
     kept: Vec<usize>,
+    /// `T_i(σ)` at every sample, degrees `0..=top` (filled once the range is known).
+    basis: Vec<Vec<f64>>,
 }
 
 /// The design at the highest order: per kept sample, every product column
@@ -97,16 +99,6 @@ impl Rows {
     fn basis(&self, sigma: f64, p: usize, out: &mut [f64]) {
         let u = (2.0 * (sigma - self.lo) / self.span - 1.0).clamp(-1.0, 1.0);
         chebyshev(u, p, out);
-    }
-}
-
-fn unit_of(column: &str) -> &'static str {
-    match column {
-        "x" | "y" | "z" => "m",
-        "t" => "s",
-        c if c.starts_with('q') || c == "theta" => "rad",
-        c if c.starts_with("emg_") => "V",
-        _ => "",
     }
 }
 
@@ -202,6 +194,7 @@ fn rows(
             reflex_velocity,
             sigma,
             kept,
+            basis: Vec::new(),
         });
     }
     if skipped > 0 {
@@ -255,18 +248,19 @@ fn rows(
     let block_len = (fs.round() as usize).max(1);
     let (mut row0, mut block) = (0usize, 0usize);
     let mut phi = vec![0.0; p1];
+    for seg in &mut segments {
+        let mut b = vec![vec![0.0; seg.sigma.len()]; p1];
+        for (t, &sg) in seg.sigma.iter().enumerate() {
+            out.basis(sg, top, &mut phi);
+            for (column, &v) in b.iter_mut().zip(&phi) {
+                column[t] = v;
+            }
+        }
+        seg.basis = b;
+    }
     for seg in &segments {
         let len = seg.sigma.len();
-        let basis: Vec<Vec<f64>> = {
-            let mut b = vec![vec![0.0; len]; p1];
-            for (t, &sg) in seg.sigma.iter().enumerate() {
-                out.basis(sg, top, &mut phi);
-                for (column, &v) in b.iter_mut().zip(&phi) {
-                    column[t] = v;
-                }
-            }
-            b
-        };
+        let basis = &seg.basis;
         let columns: Vec<(usize, Vec<f64>)> = (0..width)
             .into_par_iter()
             .filter_map(|c| {
@@ -341,7 +335,6 @@ fn reflex_drives(
     fs: f64,
 ) -> Vec<Vec<Vec<f64>>> {
     let sign = if positive { 1.0 } else { -1.0 };
-    let mut phi = vec![0.0; rows.top + 1];
     rows.segments
         .iter()
         .map(|seg| {
@@ -356,18 +349,9 @@ fn reflex_drives(
                     }
                 })
                 .collect();
-            let basis: Vec<Vec<f64>> = {
-                let mut b = vec![Vec::with_capacity(rect.len()); order + 1];
-                for &sg in &seg.sigma {
-                    rows.basis(sg, rows.top, &mut phi);
-                    for (column, &v) in b.iter_mut().zip(&phi) {
-                        column.push(v);
-                    }
-                }
-                b
-            };
-            basis
+            seg.basis
                 .iter()
+                .take(order + 1)
                 .map(|b| {
                     let product: Vec<f64> = b.iter().zip(&rect).map(|(x, r)| x * r).collect();
                     crate::reflex::low_pass(&product, natural_hz, zeta, fs)
@@ -415,36 +399,42 @@ impl Design<'_> {
         3 * self.rows.d * (self.order + 1) + self.order + 1
     }
 
-    /// Per fold: Gram, regressor-force products, Σ f² per output.
+    /// Over the rows `range`: Gram matrix, regressor-force products, Σ f² per output.
+    fn cross_products(
+        &self,
+        range: std::ops::Range<usize>,
+    ) -> (DMatrix<f64>, DMatrix<f64>, Vec<f64>) {
+        let (q, d) = (self.columns(), self.rows.d);
+        let mut g = vec![0.0; q * q];
+        let mut h = DMatrix::zeros(q, d);
+        let mut yy = vec![0.0; d];
+        let mut x = vec![0.0; q];
+        for r in range {
+            self.row(r, &mut x);
+            for i in 0..q {
+                let xi = x[i];
+                for j in i..q {
+                    g[i * q + j] += xi * x[j];
+                }
+            }
+            for j in 0..d {
+                let f = self.rows.f[r * d + j];
+                yy[j] += f * f;
+                for i in 0..q {
+                    h[(i, j)] += x[i] * f;
+                }
+            }
+        }
+        let g = DMatrix::from_fn(q, q, |i, j| g[i.min(j) * q + i.max(j)]);
+        (g, h, yy)
+    }
+
+    /// [`Design::cross_products`] of `folds` contiguous parts of the record.
     fn folds(&self, folds: usize) -> Vec<(DMatrix<f64>, DMatrix<f64>, Vec<f64>)> {
-        let (q, d, n) = (self.columns(), self.rows.d, self.rows.len());
+        let n = self.rows.len();
         (0..folds)
             .into_par_iter()
-            .map(|fold| {
-                let (from, to) = (fold * n / folds, (fold + 1) * n / folds);
-                let mut g = vec![0.0; q * q];
-                let mut h = DMatrix::zeros(q, d);
-                let mut yy = vec![0.0; d];
-                let mut x = vec![0.0; q];
-                for r in from..to {
-                    self.row(r, &mut x);
-                    for i in 0..q {
-                        let xi = x[i];
-                        for j in i..q {
-                            g[i * q + j] += xi * x[j];
-                        }
-                    }
-                    for j in 0..d {
-                        let f = self.rows.f[r * d + j];
-                        yy[j] += f * f;
-                        for i in 0..q {
-                            h[(i, j)] += x[i] * f;
-                        }
-                    }
-                }
-                let g = DMatrix::from_fn(q, q, |i, j| g[i.min(j) * q + i.max(j)]);
-                (g, h, yy)
-            })
+            .map(|fold| self.cross_products(fold * n / folds..(fold + 1) * n / folds))
             .collect()
     }
 }
@@ -504,30 +494,22 @@ fn total_ss(rows: &Rows) -> f64 {
 /// sandwich, not too small when the coefficients are many for the blocks.
 fn robust_covariances(design: &Design<'_>, f: &Fitted) -> Option<Vec<DMatrix<f64>>> {
     let (q, d, n) = (design.columns(), design.rows.d, design.rows.len());
-    let mut parts: Vec<(DMatrix<f64>, DMatrix<f64>)> = Vec::new();
-    let mut x = vec![0.0; q];
-    let mut r = 0;
-    while r < n {
-        let block = design.rows.block[r];
-        let mut g = vec![0.0; q * q];
-        let mut h = DMatrix::zeros(q, d);
-        while r < n && design.rows.block[r] == block {
-            design.row(r, &mut x);
-            for i in 0..q {
-                for j in i..q {
-                    g[i * q + j] += x[i] * x[j];
-                }
-            }
-            for j in 0..d {
-                let y = design.rows.f[r * d + j];
-                for i in 0..q {
-                    h[(i, j)] += x[i] * y;
-                }
-            }
-            r += 1;
+    // the rows of one block are contiguous
+    let mut ranges = Vec::new();
+    let mut start = 0;
+    for r in 1..=n {
+        if r == n || design.rows.block[r] != design.rows.block[start] {
+            ranges.push(start..r);
+            start = r;
         }
-        parts.push((DMatrix::from_fn(q, q, |i, j| g[i.min(j) * q + i.max(j)]), h));
     }
+    let parts: Vec<(DMatrix<f64>, DMatrix<f64>)> = ranges
+        .into_par_iter()
+        .map(|range| {
+            let (g, h, _) = design.cross_products(range);
+            (g, h)
+        })
+        .collect();
     let blocks = parts.len();
     if blocks < 2 {
         return None;
@@ -1012,7 +994,7 @@ pub(super) fn estimate(
         method: VaryingMethod::ParameterVarying,
         schedule: ScheduleAxis {
             name: params.schedule.clone(),
-            unit: unit_of(&params.schedule).into(),
+            unit: limpid_core::recording::magnitude_limit(&params.schedule).1.into(),
             values: grid,
         },
         coordinates: coords,
