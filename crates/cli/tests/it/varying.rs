@@ -252,3 +252,46 @@ fn linear_takes_holds_of_a_continuous_perturbation_as_trials() {
     assert!((k - 70.0).abs() < 0.03 * 70.0, "K {k}");
     assert!((b - 0.8).abs() < 0.1 * 0.8, "B {b}");
 }
+
+#[test]
+fn extreme_windows_and_rates_are_refused_or_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let ens = simulate(dir.path(), "ensemble", "repetitions = 12\n");
+    let e = ens.to_str().unwrap();
+    // 1e307 ms saturated a sample count into the message; a step longer than a repetition left one edge point
+    for (flag, value) in [("--window-ms", "1e307"), ("--step", "1e307")] {
+        let out = limpid(&["estimate", "varying", e, flag, value]);
+        assert_eq!(out.code, 2, "{flag}: {}", out.stdout);
+        assert!(
+            out.stderr.contains(flag)
+                && out
+                    .stderr
+                    .contains("not shorter than the repetitions (1200 ms)")
+                && out.stderr.lines().count() == 1,
+            "{}",
+            out.stderr
+        );
+    }
+    // --rate 1e-300 looped over 2^64 decimation factors; it decimates as far as the low-pass allows
+    let flat = dir.path().join("slow.csv");
+    let mut text = String::from("t,q1,tau1,sv\n");
+    for i in 0..20_000 {
+        let t = i as f64 / 1000.0;
+        let q = (t * 9.0).sin() * 0.01 + (t * 37.0).sin() * 0.004;
+        text.push_str(&format!("{t},{q},{},{}\n", 50.0 * q, 0.1 * t));
+    }
+    std::fs::write(&flat, text).unwrap();
+    let v = json(&[
+        "estimate",
+        "varying",
+        flat.to_str().unwrap(),
+        "--schedule",
+        "sv",
+        "--rate",
+        "1e-300",
+        "--order",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(v["kind"], "varying");
+}

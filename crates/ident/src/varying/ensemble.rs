@@ -200,14 +200,29 @@ pub(super) fn estimate(
     let fs = rec.sample_rate();
     let e = repetitions(rec, &coords, &forces, cutoff, &mut warnings)?;
     let reps = e.z.len();
+    // compared before any cast: 1e307 ms would saturate a sample count
+    let repetition_ms = e.len as f64 / fs * 1e3;
+    let step_s = params.step_s.unwrap_or(params.window_s / 2.0);
+    for (name, seconds) in [("window_ms", params.window_s), ("step_ms", step_s)] {
+        if seconds * 1e3 >= repetition_ms {
+            return Err(Error::invalid(
+                name,
+                format!(
+                    "{} ms is not shorter than the repetitions ({} ms)",
+                    limpid_core::significant(seconds * 1e3, 4),
+                    limpid_core::significant(repetition_ms, 4)
+                ),
+            ));
+        }
+    }
     let half = ((params.window_s * fs / 2.0).round() as usize).max(1);
     let width = 2 * half + 1;
-    let step = ((params.step_s.unwrap_or(params.window_s / 2.0) * fs).round() as usize).max(1);
+    let step = ((step_s * fs).round() as usize).max(1);
     // derivatives of the zero-phase filter's padded ends are not trusted within one cut-off period
     let edge = (fs / cutoff).ceil() as usize;
     if e.len < width {
         return Err(Error::invalid(
-            "window_s",
+            "window_ms",
             format!(
                 "the window ({width} samples) is longer than the repetitions ({} samples)",
                 e.len

@@ -103,8 +103,8 @@ impl VaryingParams {
             return Err(Error::invalid(
                 "max_delay_s",
                 format!(
-                    "a reflex delay is well under 1 s, found {}",
-                    self.max_delay_s
+                    "a reflex delay is well under 1 s, found {} s",
+                    limpid_core::significant(self.max_delay_s, 4)
                 ),
             ));
         }

@@ -153,10 +153,11 @@ fn rows(
     ]
     .into_iter()
     .fold(0.0f64, f64::max) as usize;
-    let mut dec = ((fs / params.rate_hz).floor() as usize).max(1);
-    while dec > 1 && cutoff > 0.5 * fs / dec as f64 {
-        dec -= 1;
-    }
+    // as close to rate_hz as the low-pass allows (cutoff at most half the decimated rate)
+    let dec = (fs / params.rate_hz)
+        .min(0.5 * fs / cutoff)
+        .floor()
+        .max(1.0) as usize;
     let min_len = 2 * trim + slow.padlen().max(lp.padlen()) + 2;
     let d = coords.len();
     let (pos, frc) = (
