@@ -6,6 +6,7 @@ mod calibrate;
 mod demo;
 mod emit;
 mod estimate;
+mod files;
 mod gravity;
 mod live;
 mod planar;
@@ -34,6 +35,9 @@ use clap::{Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Channel map (TOML) that turns the lab files read by this command into recordings: channels, streams, units, signs, markers.
+    #[arg(long, global = true, value_name = "MAP.toml")]
+    map: Option<std::path::PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -68,6 +72,10 @@ enum Command {
     Reproduce(reproduce::ReproduceArgs),
     /// Run the request recorded in a result's run block again, on the same input files.
     Rerun(rerun::RerunArgs),
+    /// Show the streams, channels, rates, units, gaps and markers of a lab file (XDF, CSV, Parquet, MAT), with a proposed channel map.
+    Inspect(files::InspectArgs),
+    /// Convert a lab file to a recording (CSV or Parquet) through a channel map (--map).
+    Convert(files::ConvertArgs),
     /// Whole co-contraction studies: tables across subjects and configurations (Patel et al. 2013).
     Study {
         #[command(subcommand)]
@@ -79,11 +87,18 @@ enum Command {
 pub fn read_recording(
     path: impl AsRef<std::path::Path>,
 ) -> limpid_core::Result<limpid_core::Recording> {
-    let rec = limpid_io::read_recording(path)?;
+    let rec = limpid_io::read_recording_mapped(path, channel_map())?;
     for w in rec.warnings() {
         eprintln!("limpid: warning: {}: {w}", rec.path().display());
     }
     Ok(rec)
+}
+
+static CHANNEL_MAP: std::sync::OnceLock<limpid_io::map::ChannelMap> = std::sync::OnceLock::new();
+
+/// The channel map given with `--map`, if any.
+pub fn channel_map() -> Option<&'static limpid_io::map::ChannelMap> {
+    CHANNEL_MAP.get()
 }
 
 /// Every command, with negative numbers taken as values (`--cutoff -5` is
@@ -237,7 +252,13 @@ fn stdout_was_closed() -> bool {
 }
 
 fn run(cli: Cli) -> CliResult {
+    if let Some(path) = &cli.map {
+        let map = limpid_io::map::ChannelMap::read(path)?;
+        let _ = CHANNEL_MAP.set(map);
+    }
     match cli.command {
+        Command::Inspect(args) => files::run_inspect(args),
+        Command::Convert(args) => files::run_convert(args),
         Command::Estimate { method } => estimate::run(method),
         Command::Demo(args) => demo::run(args),
         Command::Calibrate(args) => calibrate::run(args),

@@ -21,7 +21,10 @@ use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
 
+pub mod inspect;
+pub mod map;
 mod mat;
+pub mod sources;
 
 use limpid_core::{Error, Recording, Result};
 use parquet::basic::{Repetition, Type as PhysicalType};
@@ -54,12 +57,39 @@ pub fn is_mat(path: &Path) -> bool {
 /// Read a recording, choosing the format by extension.
 pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     let path = path.as_ref();
-    if is_parquet(path) {
+    if sources::is_lab_file(path) {
+        convert(path, None).map(|c| c.recording)
+    } else if is_parquet(path) {
         read_parquet(path)
     } else if is_mat(path) {
         read_mat(path)
     } else {
         read_csv(path)
+    }
+}
+
+/// Read a recording through a channel map, or as [`read_recording`] does
+/// without one. Lab files (XDF) without a map get [`map::ChannelMap::implicit`].
+pub fn read_recording_mapped(
+    path: impl AsRef<Path>,
+    map: Option<&map::ChannelMap>,
+) -> Result<Recording> {
+    Ok(convert(path, map)?.recording)
+}
+
+/// A recording through a channel map, with what the conversion did.
+pub fn convert(path: impl AsRef<Path>, map: Option<&map::ChannelMap>) -> Result<map::Converted> {
+    let path = path.as_ref();
+    match map {
+        Some(map) => map::apply(&sources::read_source(path)?, map),
+        None if sources::is_lab_file(path) => {
+            let source = sources::read_source(path)?;
+            map::apply(&source, &map::ChannelMap::implicit(&source)?)
+        }
+        None => Ok(map::Converted {
+            recording: read_recording(path)?,
+            notes: Vec::new(),
+        }),
     }
 }
 
@@ -72,7 +102,10 @@ pub fn read_recording_bytes(path: impl AsRef<Path>, bytes: Vec<u8>) -> Result<Re
             path: path.to_path_buf(),
         });
     }
-    if is_parquet(path) {
+    if sources::is_lab_file(path) {
+        let source = sources::xdf::read_bytes(path, &bytes)?;
+        map::apply(&source, &map::ChannelMap::implicit(&source)?).map(|c| c.recording)
+    } else if is_parquet(path) {
         let data = StrictBytes(bytes::Bytes::from(bytes));
         limpid_core::error::catch_panic(
             path,
@@ -83,6 +116,68 @@ pub fn read_recording_bytes(path: impl AsRef<Path>, bytes: Vec<u8>) -> Result<Re
         read_mat_bytes(path, &bytes)
     } else {
         read_csv_from(path, bytes.as_slice())
+    }
+}
+
+/// A table as read, before the checks of [`Recording::new`]: named numeric
+/// columns of one length, and what the reader noticed.
+#[derive(Debug, Clone)]
+pub struct Table {
+    /// Column names, in file order.
+    pub names: Vec<String>,
+    /// Column values, as stored.
+    pub columns: Vec<Vec<f64>>,
+    /// Row number of the first sample in the file (2 for CSV, whose header is row 1).
+    pub first_row: usize,
+    /// What was accepted but skipped or converted.
+    pub warnings: Vec<String>,
+}
+
+impl Table {
+    /// Check the table as a FORMAT.md recording.
+    pub fn into_recording(self, path: &Path) -> Result<Recording> {
+        let mut rec = Recording::new(path, self.names, self.columns, self.first_row)?;
+        for w in self.warnings {
+            rec.warn(w);
+        }
+        Ok(rec)
+    }
+}
+
+/// Read a CSV, Parquet or MAT file as a table (by extension), without the
+/// FORMAT.md checks: what a channel map reads.
+pub fn read_table(path: &Path) -> Result<Table> {
+    if is_parquet(path) {
+        #[cfg(unix)]
+        {
+            let file = StrictFile::open(path)?;
+            limpid_core::error::catch_panic(
+                path,
+                "Parquet decoder (corrupt or unsupported file)",
+                || read_parquet_table(path, file),
+            )
+        }
+        #[cfg(not(unix))]
+        {
+            let bytes = limpid_core::files::read_bytes(path, MAX_PARQUET_BYTES)?;
+            read_parquet_table(path, StrictBytes(bytes::Bytes::from(bytes)))
+        }
+    } else if is_mat(path) {
+        let bytes = limpid_core::files::read_bytes(path, MAX_MAT_BYTES)?;
+        if bytes.is_empty() {
+            return Err(Error::Empty {
+                path: path.to_path_buf(),
+            });
+        }
+        read_mat_table(path, &bytes)
+    } else {
+        let file = limpid_core::files::open_input(path)?;
+        if file.metadata().map_err(io_err(path))?.len() == 0 {
+            return Err(Error::Empty {
+                path: path.to_path_buf(),
+            });
+        }
+        read_csv_table(path, file)
     }
 }
 
@@ -116,6 +211,11 @@ pub fn read_mat(path: &Path) -> Result<Recording> {
 
 /// [`read_mat`] on the file's bytes.
 fn read_mat_bytes(path: &Path, bytes: &[u8]) -> Result<Recording> {
+    read_mat_table(path, bytes)?.into_recording(path)
+}
+
+/// The numeric vectors of a MAT-file as a table.
+fn read_mat_table(path: &Path, bytes: &[u8]) -> Result<Table> {
     if bytes.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),
@@ -173,15 +273,20 @@ fn read_mat_bytes(path: &Path, bytes: &[u8]) -> Result<Recording> {
             }
         )));
     }
-    let mut rec = Recording::new(path, names, columns, 1)?;
+    let mut warnings = Vec::new();
     if !skipped.is_empty() {
-        rec.warn(format!(
+        warnings.push(format!(
             "{}: skipped MAT variables that are not numeric vectors: {}",
             path.display(),
             skipped.join("; ")
         ));
     }
-    Ok(rec)
+    Ok(Table {
+        names,
+        columns,
+        first_row: 1,
+        warnings,
+    })
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -204,6 +309,11 @@ pub fn read_csv(path: &Path) -> Result<Recording> {
 
 /// Read CSV text from `file`; `path` names it in errors.
 fn read_csv_from(path: &Path, file: impl std::io::Read) -> Result<Recording> {
+    read_csv_table(path, file)?.into_recording(path)
+}
+
+/// The cells of a CSV table, every one parsed as a number.
+fn read_csv_table(path: &Path, file: impl std::io::Read) -> Result<Table> {
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(true)
@@ -261,7 +371,12 @@ fn read_csv_from(path: &Path, file: impl std::io::Read) -> Result<Recording> {
             }
         }
     }
-    Recording::new(path, names, columns, 2)
+    Ok(Table {
+        names,
+        columns,
+        first_row: 2,
+        warnings: Vec::new(),
+    })
 }
 
 /// Most rows read from one Parquet file (the footer could claim any number).
@@ -296,6 +411,14 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
     path: &Path,
     file: R,
 ) -> Result<Recording> {
+    read_parquet_table(path, file)?.into_recording(path)
+}
+
+/// The flat numeric columns of a Parquet file as a table.
+fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static>(
+    path: &Path,
+    file: R,
+) -> Result<Table> {
     use parquet::basic::{LogicalType, TimeUnit};
     let pq_err = |e: parquet::errors::ParquetError| Error::Format {
         path: path.to_path_buf(),
@@ -460,18 +583,20 @@ fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'static>(
         .into_par_iter()
         .map(decode_column)
         .collect::<Result<_>>()?;
-    let mut rec = Recording::new(path, names.clone(), columns, 1)?;
-    for reason in skipped {
-        rec.warn(format!("{reason}: not read"));
-    }
+    let mut warnings: Vec<String> = skipped.iter().map(|r| format!("{r}: not read")).collect();
     for (name, per_s) in names.iter().zip(&unit_s) {
         if per_s.is_some() {
-            rec.warn(format!(
+            warnings.push(format!(
                 "column {name}: a Parquet timestamp, converted to seconds since the first sample"
             ));
         }
     }
-    Ok(rec)
+    Ok(Table {
+        names,
+        columns,
+        first_row: 1,
+        warnings,
+    })
 }
 
 /// An empty column with room for `capacity` samples. On Linux the kernel is

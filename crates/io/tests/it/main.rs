@@ -2,5 +2,6 @@
 //! (one link instead of one per file); each module is one former file.
 
 mod csv_numbers;
+mod formats;
 mod hostile;
 mod mat;

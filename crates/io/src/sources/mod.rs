@@ -1,0 +1,191 @@
+//! Lab files as they come off a rig: one or more *streams*, each a set of
+//! named channels on its own clock, plus text markers (issue 40).
+//!
+//! A [`Source`] is what a reader found in a file, before any renaming, unit
+//! conversion or alignment; [`crate::map::ChannelMap`] turns it into a
+//! FORMAT.md [`limpid_core::Recording`]. Tables (CSV, Parquet, MAT) are one
+//! stream without time stamps; XDF files have one stream per LSL outlet with
+//! clock-corrected stamps.
+
+use std::path::{Path, PathBuf};
+
+use limpid_core::{Error, Result};
+
+pub mod xdf;
+
+/// Everything a reader found in one file.
+#[derive(Debug, Clone)]
+pub struct Source {
+    /// The file.
+    pub path: PathBuf,
+    /// Its format, as a user names it (`XDF`, `CSV`, ...).
+    pub format: &'static str,
+    /// Its streams, in file order.
+    pub streams: Vec<Stream>,
+    /// What the reader noticed and the user should know (one line each).
+    pub notes: Vec<String>,
+}
+
+/// One stream: channels sampled together on one clock.
+#[derive(Debug, Clone, Default)]
+pub struct Stream {
+    /// The stream's name (XDF `<name>`, TDMS group, C3D `analog`/`points`;
+    /// empty for a table).
+    pub name: String,
+    /// Its declared content type (XDF `<type>`), if any.
+    pub kind: Option<String>,
+    /// Its declared sample rate (Hz); `None` for irregular or unknown.
+    pub nominal_rate: Option<f64>,
+    /// Time of each sample (s), clock-corrected; `None` when the file gives
+    /// no time base (a table: its time is one of its channels).
+    pub stamps: Option<Vec<f64>>,
+    /// Numeric channels, each with one value per sample.
+    pub channels: Vec<Channel>,
+    /// Text samples of a string-valued stream, in time order.
+    pub markers: Vec<Marker>,
+    /// How many clock-offset records were applied to the stamps.
+    pub clock_offsets: usize,
+}
+
+/// One numeric channel.
+#[derive(Debug, Clone)]
+pub struct Channel {
+    /// Its name in the file.
+    pub name: String,
+    /// The unit the file declares for it, if any.
+    pub unit: Option<String>,
+    /// Its samples, as stored (no unit conversion).
+    pub values: Vec<f64>,
+}
+
+/// One text sample of a marker stream.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Marker {
+    /// Its time (s, on the same clock as the numeric streams' stamps).
+    pub time: f64,
+    /// Its text.
+    pub text: String,
+}
+
+impl Stream {
+    /// Number of samples (numeric or text).
+    pub fn len(&self) -> usize {
+        self.stamps
+            .as_ref()
+            .map(Vec::len)
+            .or_else(|| self.channels.first().map(|c| c.values.len()))
+            .unwrap_or(self.markers.len())
+    }
+
+    /// True without any sample.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The stream as a user names it in messages.
+    pub fn label(&self) -> String {
+        if self.name.is_empty() {
+            "the table".into()
+        } else {
+            format!("stream {:?}", self.name)
+        }
+    }
+
+    /// Gaps in the stamps: (sample index after the gap, gap length in s)
+    /// where an interval exceeds 1.5 nominal intervals (the median interval
+    /// when no rate is declared).
+    pub fn gaps(&self) -> Vec<(usize, f64)> {
+        let Some(stamps) = &self.stamps else {
+            return Vec::new();
+        };
+        let Some(step) = self.interval() else {
+            return Vec::new();
+        };
+        stamps
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| w[1] - w[0] > 1.5 * step)
+            .map(|(i, w)| (i + 1, w[1] - w[0]))
+            .collect()
+    }
+
+    /// The sampling interval (s): 1 / nominal rate, else the median interval.
+    pub fn interval(&self) -> Option<f64> {
+        if let Some(rate) = self.nominal_rate.filter(|r| *r > 0.0) {
+            return Some(1.0 / rate);
+        }
+        let stamps = self.stamps.as_ref()?;
+        if stamps.len() < 2 {
+            return None;
+        }
+        let mut d: Vec<f64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
+        let mid = d.len() / 2;
+        let (_, m, _) = d.select_nth_unstable_by(mid, f64::total_cmp);
+        (*m > 0.0).then_some(*m)
+    }
+}
+
+/// True when the path names a file that [`read_source`] reads as a
+/// multi-stream lab file (not a FORMAT.md table).
+pub fn is_lab_file(path: &Path) -> bool {
+    matches!(extension(path).as_deref(), Some("xdf"))
+}
+
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+}
+
+/// Read any file limpid knows as a [`Source`], choosing the reader by
+/// extension: `.xdf` (Lab Streaming Layer), else a table (CSV, Parquet, MAT)
+/// as one stream without stamps.
+pub fn read_source(path: &Path) -> Result<Source> {
+    match extension(path).as_deref() {
+        Some("xdf") => xdf::read(path),
+        _ => {
+            let table = crate::read_table(path)?;
+            Ok(Source::from_table(path, table))
+        }
+    }
+}
+
+impl Source {
+    /// A table as a source of one stream without stamps.
+    pub fn from_table(path: &Path, table: crate::Table) -> Source {
+        let format = if crate::is_parquet(path) {
+            "Parquet"
+        } else if crate::is_mat(path) {
+            "MAT"
+        } else {
+            "CSV"
+        };
+        let channels = table
+            .names
+            .into_iter()
+            .zip(table.columns)
+            .map(|(name, values)| Channel {
+                name,
+                unit: None,
+                values,
+            })
+            .collect();
+        Source {
+            path: path.to_path_buf(),
+            format,
+            streams: vec![Stream {
+                channels,
+                ..Stream::default()
+            }],
+            notes: table.warnings,
+        }
+    }
+
+    /// An error about this file.
+    pub fn error(&self, message: impl Into<String>) -> Error {
+        Error::Format {
+            path: self.path.clone(),
+            message: message.into(),
+        }
+    }
+}
