@@ -172,6 +172,16 @@ pub fn estimate_cocontraction(
     let stats = per_level(&index, levels_col, emg.tolerance);
     let mut levels = Vec::with_capacity(stats.len());
     let mut warnings = Vec::new();
+    if muscles.iter().any(|m| crate::emg::is_envelope_column(m)) {
+        warnings.push(Warning::new(
+            WarningCode::EnvelopesGiven,
+            format!(
+                "the EMG envelopes are the recording's env_ columns ({}), made at the EMG's native rate by a channel map; the {} Hz envelope low-pass is not applied again",
+                muscles.join(", "),
+                emg.cutoff_hz
+            ),
+        ));
+    }
     for s in &stats {
         let params = PrepareParams {
             level: Some(s.level),

@@ -43,13 +43,39 @@ impl Default for EmgParams {
     }
 }
 
-/// Names of the EMG columns (`emg_*`), in file order.
+/// Names of the EMG columns, in file order: the raw `emg_*` columns, or
+/// when there are none the envelopes `env_*` a channel map made at the EMG's
+/// native rate (limpid-io `map`).
 pub fn emg_columns(rec: &Recording) -> Vec<String> {
-    rec.names()
+    let raw: Vec<String> = rec
+        .names()
         .iter()
         .filter(|n| n.starts_with("emg_"))
         .cloned()
+        .collect();
+    if !raw.is_empty() {
+        return raw;
+    }
+    rec.names()
+        .iter()
+        .filter(|n| n.starts_with("env_"))
+        .cloned()
         .collect()
+}
+
+/// True for an envelope column made before the recording (`env_*`).
+pub fn is_envelope_column(name: &str) -> bool {
+    name.starts_with("env_")
+}
+
+/// The envelope of column `name`: processed here from raw EMG, or as it is
+/// for an `env_` column (already rectified and low-passed at the native rate).
+fn column_envelope(name: &str, values: &[f64], fs: f64, params: &EmgParams) -> Result<Vec<f64>> {
+    if is_envelope_column(name) {
+        Ok(values.to_vec())
+    } else {
+        envelope(values, fs, params)
+    }
 }
 
 /// Rectified and low-passed envelope of one raw EMG signal (V).
@@ -72,7 +98,7 @@ pub fn mvc_maxima(mvc: &Recording, muscles: &[String], params: &EmgParams) -> Re
                 m,
                 "the MVC recording must have every EMG channel of the trials",
             )?;
-            let env = envelope(raw, mvc.sample_rate(), params)?;
+            let env = column_envelope(m, raw, mvc.sample_rate(), params)?;
             let max = env.iter().fold(0.0f64, |a, v| a.max(*v));
             if max > 0.0 {
                 Ok(max)
@@ -106,7 +132,7 @@ pub fn cocontraction_index(
     let mut index = vec![0.0; rec.len()];
     for (m, max) in muscles.iter().zip(maxima) {
         let raw = rec.require(m, "EMG channel")?;
-        let env = envelope(raw, rec.sample_rate(), params)?;
+        let env = column_envelope(m, raw, rec.sample_rate(), params)?;
         for (c, e) in index.iter_mut().zip(&env) {
             *c += e / max;
         }

@@ -52,7 +52,7 @@ pub fn magnitude_limit(name: &str) -> (f64, &'static str) {
         _ if name.strip_prefix('q').is_some_and(digits) => (1e4, "rad"),
         _ if name.strip_prefix("tau").is_some_and(digits) => (1e6, "N m"),
         "trial" | "level" => (1e12, ""),
-        _ if name.starts_with("emg_") => (1e6, "V"),
+        _ if name.starts_with("emg_") || name.starts_with("env_") => (1e6, "V"),
         _ => (1e15, ""),
     }
 }

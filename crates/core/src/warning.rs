@@ -35,6 +35,9 @@ pub enum WarningCode {
     MarkersSlipped,
     /// A co-contraction level had no complete trial and was skipped.
     LevelSkipped,
+    /// The EMG envelopes came with the recording (`env_` columns made at the
+    /// EMG's native rate by a channel map), not from raw EMG.
+    EnvelopesGiven,
 }
 
 /// A warning attached to a result.

@@ -145,7 +145,10 @@ fn suggest(stream: &Stream, channel: &str) -> Option<String> {
     let last = *tokens.last()?;
     let joined = tokens.join("_");
     let marker_axis = tokens.len() > 1 && matches!(last, "x" | "y" | "z");
-    if limpid_core::recording::is_format_column(&joined) && !joined.starts_with("emg_") && !marker_axis {
+    if limpid_core::recording::is_format_column(&joined)
+        && !joined.starts_with("emg_")
+        && !marker_axis
+    {
         return Some(joined);
     }
     let context = format!(

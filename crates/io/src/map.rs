@@ -85,7 +85,13 @@ pub struct ColumnRule {
     pub marker: Option<String>,
     /// Markers starting with this text carry the column's value after it.
     pub marker_prefix: Option<String>,
+    /// For an `env_<muscle>` column: the low-pass cut-off (Hz) of the EMG
+    /// envelope made at the channel's native rate (default 8 Hz, seed 001).
+    pub envelope_hz: Option<f64>,
 }
+
+/// Default envelope cut-off of `env_` columns (Hz): seed 001's 8 Hz.
+pub const ENVELOPE_HZ: f64 = 8.0;
 
 impl ColumnSpec {
     fn rule(&self) -> ColumnRule {
@@ -341,6 +347,16 @@ impl ChannelMap {
             }
             if let Some(unit) = &r.unit {
                 Quantity::of(column).factor(unit).map_err(at)?;
+            }
+            if let Some(hz) = r.envelope_hz {
+                if !column.starts_with("env_") {
+                    return Err(at(
+                        "envelope_hz applies to env_<muscle> columns (an EMG envelope made at the native rate)".into(),
+                    ));
+                }
+                if !(hz.is_finite() && hz > 0.0) {
+                    return Err(at(format!("envelope_hz = {hz}: a cut-off in Hz above 0")));
+                }
             }
         }
         Ok(())
@@ -651,11 +667,25 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
             if column.as_str() == "t" {
                 base_time[first..last].to_vec()
             } else {
-                let v = convert(source, column, r, &found)?;
+                let mut v = convert(source, column, r, &found)?;
+                if column.starts_with("env_") {
+                    v = envelope(source, column, r, &found, v)?;
+                }
                 if std::ptr::eq(found.stream, base) {
                     v[first..last].to_vec()
                 } else {
                     let stamps = found.stream.stamps.as_ref().expect("checked above");
+                    let (native, target) = (found.stream.interval(), base.interval());
+                    if let (Some(native), Some(target)) = (native, target) {
+                        if column.starts_with("emg_") && native * 1.5 < target {
+                            notes.push(format!(
+                                "{column}: raw EMG at {} Hz picked at the time base's {} Hz (aliased); map it as env_{} to make the envelope at the native rate",
+                                limpid_core::error::significant(1.0 / native, 6),
+                                limpid_core::error::significant(1.0 / target, 6),
+                                &column[4..]
+                            ));
+                        }
+                    }
                     interpolate(stamps, &v, t_span)
                 }
             }
@@ -694,7 +724,10 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     order.sort_by_key(|&i| (column_rank(&names[i]), names[i].clone()));
     let names: Vec<String> = order.iter().map(|&i| names[i].clone()).collect();
     let mut slots: Vec<Option<Vec<f64>>> = columns.into_iter().map(Some).collect();
-    let columns: Vec<Vec<f64>> = order.iter().map(|&i| slots[i].take().expect("each once")).collect();
+    let columns: Vec<Vec<f64>> = order
+        .iter()
+        .map(|&i| slots[i].take().expect("each once"))
+        .collect();
     gap_in_base(source, base, &names, &columns)?;
     let mut recording = Recording::new(&source.path, names, columns, 1)?;
     for note in source.notes.iter().chain(&notes) {
@@ -803,6 +836,39 @@ fn convert(source: &Source, column: &str, r: &ColumnRule, found: &Found) -> Resu
         out.push(y);
     }
     Ok(out)
+}
+
+/// An EMG envelope at the channel's native rate: full-wave rectified, then
+/// a 2nd-order Butterworth low-pass run forwards and backwards (seed 001's
+/// processing, as `limpid_analysis::emg` does for `emg_` columns), so that
+/// a slower time base samples the envelope, not aliased raw EMG.
+fn envelope(
+    source: &Source,
+    column: &str,
+    r: &ColumnRule,
+    found: &Found,
+    raw: Vec<f64>,
+) -> Result<Vec<f64>> {
+    let hz = r.envelope_hz.unwrap_or(ENVELOPE_HZ);
+    let fs = found
+        .stream
+        .interval()
+        .map(|dt| 1.0 / dt)
+        .or(found.stream.nominal_rate)
+        .ok_or_else(|| {
+            source.error(format!(
+                "map column {column}: {} has no sample rate to make an envelope at",
+                found.stream.label()
+            ))
+        })?;
+    let lp = limpid_dsp::LowPass::butterworth(2, hz, fs).map_err(|e| {
+        source.error(format!(
+            "map column {column}: envelope_hz = {hz} at {fs} Hz: {e}"
+        ))
+    })?;
+    let rectified: Vec<f64> = raw.iter().map(|v| v.abs()).collect();
+    lp.filtfilt(&rectified)
+        .map_err(|e| source.error(format!("map column {column}: {e}")))
 }
 
 /// The markers a marker rule reads: the named stream's, else every marker stream's.

@@ -11,6 +11,7 @@ use nalgebra::DMatrix;
 use serde_json::Value;
 
 pub mod examples;
+pub mod xdf;
 
 pub use examples::limpid_examples;
 
