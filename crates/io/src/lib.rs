@@ -103,7 +103,7 @@ pub fn read_recording_bytes(path: impl AsRef<Path>, bytes: Vec<u8>) -> Result<Re
         });
     }
     if sources::is_lab_file(path) {
-        let source = sources::xdf::read_bytes(path, &bytes)?;
+        let source = sources::read_source_bytes(path, &bytes)?;
         map::apply(&source, &map::ChannelMap::implicit(&source)?).map(|c| c.recording)
     } else if is_parquet(path) {
         let data = StrictBytes(bytes::Bytes::from(bytes));

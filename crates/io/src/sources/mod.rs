@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 use limpid_core::{Error, Result};
 
+pub mod c3d;
 pub mod xdf;
 
 /// Everything a reader found in one file.
@@ -128,7 +129,7 @@ impl Stream {
 /// True when the path names a file that [`read_source`] reads as a
 /// multi-stream lab file (not a FORMAT.md table).
 pub fn is_lab_file(path: &Path) -> bool {
-    matches!(extension(path).as_deref(), Some("xdf"))
+    matches!(extension(path).as_deref(), Some("xdf" | "c3d"))
 }
 
 fn extension(path: &Path) -> Option<String> {
@@ -138,15 +139,24 @@ fn extension(path: &Path) -> Option<String> {
 }
 
 /// Read any file limpid knows as a [`Source`], choosing the reader by
-/// extension: `.xdf` (Lab Streaming Layer), else a table (CSV, Parquet, MAT)
+/// extension: `.xdf` (Lab Streaming Layer), `.c3d` (motion capture), else a table (CSV, Parquet, MAT)
 /// as one stream without stamps.
 pub fn read_source(path: &Path) -> Result<Source> {
     match extension(path).as_deref() {
         Some("xdf") => xdf::read(path),
+        Some("c3d") => c3d::read(path),
         _ => {
             let table = crate::read_table(path)?;
             Ok(Source::from_table(path, table))
         }
+    }
+}
+
+/// [`read_source`] for a lab file held in memory (the fuzzer's entry).
+pub fn read_source_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
+    match extension(path).as_deref() {
+        Some("c3d") => c3d::read_bytes(path, bytes),
+        _ => xdf::read_bytes(path, bytes),
     }
 }
 

@@ -174,3 +174,35 @@ fn an_xdf_without_a_map_is_refused_with_the_way_to_write_one() {
         .to_string();
     assert!(e.contains("limpid inspect") && e.contains("--map"), "{e}");
 }
+
+#[test]
+fn a_c3d_file_converts_to_the_values_written() {
+    let rec = assert_matches("rig.c3d", "rig_c3d.toml");
+    assert!((rec.sample_rate() - 1000.0).abs() < 1e-6);
+    let source = limpid_io::sources::read_source(&fixture("rig.c3d")).unwrap();
+    let points = &source.streams[0];
+    assert_eq!(points.name, "points");
+    assert_eq!(points.channels[0].unit.as_deref(), Some("mm"));
+    // an invalid point (negative residual) is not passed off as the zeros stored there
+    let elbow = points
+        .channels
+        .iter()
+        .find(|c| c.name == "Elbow.X")
+        .unwrap();
+    assert!(
+        elbow.values[10].is_nan() && elbow.values[9] == 250.0,
+        "{:?}",
+        &elbow.values[8..14]
+    );
+    let map = ChannelMap::parse("[time]\nstream = \"analog\"\n[columns]\nx = \"Elbow.X\"").unwrap();
+    let e = limpid_io::read_recording_mapped(fixture("rig.c3d"), Some(&map))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("stream \"points\", channel \"Elbow.X\", sample 11"),
+        "{e}"
+    );
+    // labels lose the blanks the format pads them with
+    let analog = &source.streams[1];
+    assert_eq!(analog.channels[0].name, "Fx");
+}
