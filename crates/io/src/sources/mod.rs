@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use limpid_core::{Error, Result};
 
 pub mod c3d;
+pub mod tdms;
 pub mod xdf;
 
 /// Everything a reader found in one file.
@@ -129,7 +130,7 @@ impl Stream {
 /// True when the path names a file that [`read_source`] reads as a
 /// multi-stream lab file (not a FORMAT.md table).
 pub fn is_lab_file(path: &Path) -> bool {
-    matches!(extension(path).as_deref(), Some("xdf" | "c3d"))
+    matches!(extension(path).as_deref(), Some("xdf" | "c3d" | "tdms"))
 }
 
 fn extension(path: &Path) -> Option<String> {
@@ -139,12 +140,13 @@ fn extension(path: &Path) -> Option<String> {
 }
 
 /// Read any file limpid knows as a [`Source`], choosing the reader by
-/// extension: `.xdf` (Lab Streaming Layer), `.c3d` (motion capture), else a table (CSV, Parquet, MAT)
+/// extension: `.xdf` (Lab Streaming Layer), `.c3d` (motion capture), `.tdms` (LabVIEW), else a table (CSV, Parquet, MAT)
 /// as one stream without stamps.
 pub fn read_source(path: &Path) -> Result<Source> {
     match extension(path).as_deref() {
         Some("xdf") => xdf::read(path),
         Some("c3d") => c3d::read(path),
+        Some("tdms") => tdms::read(path),
         _ => {
             let table = crate::read_table(path)?;
             Ok(Source::from_table(path, table))
@@ -156,6 +158,7 @@ pub fn read_source(path: &Path) -> Result<Source> {
 pub fn read_source_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     match extension(path).as_deref() {
         Some("c3d") => c3d::read_bytes(path, bytes),
+        Some("tdms") => tdms::read_bytes(path, bytes),
         _ => xdf::read_bytes(path, bytes),
     }
 }

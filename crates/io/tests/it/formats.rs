@@ -206,3 +206,23 @@ fn a_c3d_file_converts_to_the_values_written() {
     let analog = &source.streams[1];
     assert_eq!(analog.channels[0].name, "Fx");
 }
+
+#[test]
+fn a_tdms_file_converts_to_the_values_written() {
+    let rec = assert_matches("rig.tdms", "rig_tdms.toml");
+    assert!((rec.sample_rate() - 500.0).abs() < 1e-6);
+    let source = limpid_io::sources::read_source(&fixture("rig.tdms")).unwrap();
+    let names: Vec<&str> = source.streams.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["Robot", "DAQ"]);
+    assert_eq!(source.streams[0].channels[0].unit.as_deref(), Some("mm"));
+    assert_eq!(source.streams[1].nominal_rate, Some(2000.0));
+    // a unit the file declares but limpid does not know is named, with the way out
+    let map = ChannelMap::parse("[time]\nstream = \"Robot\"\n[columns]\nq2 = \"Elbow\"").unwrap();
+    let e = limpid_io::read_recording_mapped(fixture("rig.tdms"), Some(&map))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("\"cdeg\"") && e.contains("the unit the file declares"),
+        "{e}"
+    );
+}
