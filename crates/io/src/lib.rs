@@ -215,7 +215,7 @@ fn read_mat_bytes(path: &Path, bytes: &[u8]) -> Result<Recording> {
 }
 
 /// The numeric vectors of a MAT-file as a table.
-fn read_mat_table(path: &Path, bytes: &[u8]) -> Result<Table> {
+pub(crate) fn read_mat_table(path: &Path, bytes: &[u8]) -> Result<Table> {
     if bytes.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),
@@ -226,11 +226,22 @@ fn read_mat_table(path: &Path, bytes: &[u8]) -> Result<Table> {
         message,
     };
     let header = String::from_utf8_lossy(&bytes[..bytes.len().min(116)]);
-    if header.starts_with("MATLAB 7.3 MAT-file") {
-        return Err(fail(
-            "a MAT-file v7.3 (HDF5) is not read; save it with save(..., '-v7') or as CSV/Parquet"
-                .into(),
-        ));
+    if sources::is_mat73(bytes) {
+        // v7.3: its top-level numeric vectors of one length are the table
+        let source = sources::mat73::read_bytes(path, bytes)?;
+        let stream = source.streams.into_iter().next().expect("one stream");
+        let (names, columns) = stream
+            .channels
+            .into_iter()
+            .filter(|c| !c.name.contains('.'))
+            .map(|c| (c.name, c.values))
+            .unzip();
+        return Ok(Table {
+            names,
+            columns,
+            first_row: 1,
+            warnings: source.notes,
+        });
     }
     if !header.starts_with("MATLAB 5.0 MAT-file") {
         return Err(fail(

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use limpid_core::{Error, Result};
 
 pub mod c3d;
+pub mod mat73;
 pub mod tdms;
 pub mod xdf;
 
@@ -147,11 +148,27 @@ pub fn read_source(path: &Path) -> Result<Source> {
         Some("xdf") => xdf::read(path),
         Some("c3d") => c3d::read(path),
         Some("tdms") => tdms::read(path),
+        Some("mat") => {
+            let bytes = limpid_core::files::read_bytes(path, crate::MAX_MAT_BYTES)?;
+            if is_mat73(&bytes) {
+                mat73::read_bytes(path, &bytes)
+            } else {
+                Ok(Source::from_table(
+                    path,
+                    crate::read_mat_table(path, &bytes)?,
+                ))
+            }
+        }
         _ => {
             let table = crate::read_table(path)?;
             Ok(Source::from_table(path, table))
         }
     }
+}
+
+/// True for a MATLAB `-v7.3` (HDF5) MAT-file's bytes.
+pub fn is_mat73(bytes: &[u8]) -> bool {
+    bytes.starts_with(b"MATLAB 7.3 MAT-file")
 }
 
 /// [`read_source`] for a lab file held in memory (the fuzzer's entry).

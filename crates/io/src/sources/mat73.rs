@@ -1,0 +1,308 @@
+//! MATLAB `-v7.3` MAT-files: HDF5 files (after a 512-byte MATLAB header)
+//! whose datasets carry a `MATLAB_class` attribute, read with the pure-Rust
+//! `hdf5-reader` crate (no system HDF5; bounds-checked, cycle- and
+//! depth-limited traversal).
+//!
+//! Channels are the real numeric vectors (any numeric class or logical),
+//! named by their dotted path from the top-level variable (`rec.EndEffX`,
+//! `rec.force.fx`; structs are HDF5 groups). MATLAB writes arrays
+//! column-major, so an N x 1 vector is stored 1 x N: either way it is a
+//! vector. The stream holds the vectors of the most common length; others
+//! (and scalars, matrices, strings) are listed in a note. Refused with the
+//! variable's name and class when named by a map: cell arrays, MATLAB
+//! objects such as `table` (save with `table2struct(T, 'ToScalar', true)`),
+//! sparse and complex arrays.
+
+use std::path::Path;
+
+use hdf5_reader::group::Group;
+use hdf5_reader::{Dataset, Datatype, Hdf5File};
+
+use super::{Channel, Source, Stream};
+use limpid_core::{Error, Result};
+
+/// Deepest struct nesting followed.
+const MAX_DEPTH: usize = 32;
+/// Most datasets listed.
+const MAX_OBJECTS: usize = 100_000;
+
+/// What is found at one path.
+struct Found {
+    path: String,
+    values: Option<Vec<f64>>,
+    why_not: Option<String>,
+}
+
+fn class_of_dataset(d: &Dataset) -> Option<String> {
+    d.attribute("MATLAB_class")
+        .ok()
+        .and_then(|a| a.read_string().ok())
+}
+
+fn class_of_group(g: &Group) -> Option<String> {
+    g.attribute("MATLAB_class")
+        .ok()
+        .and_then(|a| a.read_string().ok())
+}
+
+fn numeric_class(class: &str) -> bool {
+    matches!(
+        class,
+        "double"
+            | "single"
+            | "int8"
+            | "uint8"
+            | "int16"
+            | "uint16"
+            | "int32"
+            | "uint32"
+            | "int64"
+            | "uint64"
+            | "logical"
+    )
+}
+
+/// The values of a numeric dataset as f64.
+fn read_f64(d: &Dataset) -> std::result::Result<Vec<f64>, String> {
+    let e = |e: hdf5_reader::error::Error| e.to_string();
+    Ok(match d.dtype() {
+        Datatype::FloatingPoint { size: 8, .. } => {
+            d.read_array::<f64>().map_err(e)?.into_iter().collect()
+        }
+        Datatype::FloatingPoint { size: 4, .. } => d
+            .read_array::<f32>()
+            .map_err(e)?
+            .into_iter()
+            .map(f64::from)
+            .collect(),
+        Datatype::FixedPoint { size, signed, .. } => match (size, signed) {
+            (1, true) => d
+                .read_array::<i8>()
+                .map_err(e)?
+                .into_iter()
+                .map(f64::from)
+                .collect(),
+            (1, false) => d
+                .read_array::<u8>()
+                .map_err(e)?
+                .into_iter()
+                .map(f64::from)
+                .collect(),
+            (2, true) => d
+                .read_array::<i16>()
+                .map_err(e)?
+                .into_iter()
+                .map(f64::from)
+                .collect(),
+            (2, false) => d
+                .read_array::<u16>()
+                .map_err(e)?
+                .into_iter()
+                .map(f64::from)
+                .collect(),
+            (4, true) => d
+                .read_array::<i32>()
+                .map_err(e)?
+                .into_iter()
+                .map(f64::from)
+                .collect(),
+            (4, false) => d
+                .read_array::<u32>()
+                .map_err(e)?
+                .into_iter()
+                .map(f64::from)
+                .collect(),
+            (8, true) => d
+                .read_array::<i64>()
+                .map_err(e)?
+                .into_iter()
+                .map(|v| v as f64)
+                .collect(),
+            (8, false) => d
+                .read_array::<u64>()
+                .map_err(e)?
+                .into_iter()
+                .map(|v| v as f64)
+                .collect(),
+            _ => return Err(format!("integers of {size} bytes")),
+        },
+        Datatype::Compound { .. } => {
+            return Err("complex values; a recording holds real numbers".into())
+        }
+        other => return Err(format!("HDF5 type {other:?}")),
+    })
+}
+
+fn walk(
+    group: &Group,
+    prefix: &str,
+    depth: usize,
+    out: &mut Vec<Found>,
+) -> std::result::Result<(), String> {
+    if depth > MAX_DEPTH {
+        return Err(format!(
+            "{prefix}: structs nested deeper than {MAX_DEPTH} levels"
+        ));
+    }
+    let (groups, datasets) = group
+        .members()
+        .map_err(|e| format!("{}: {e}", if prefix.is_empty() { "/" } else { prefix }))?;
+    for d in datasets {
+        if out.len() >= MAX_OBJECTS {
+            return Err(format!("more than {MAX_OBJECTS} variables and fields"));
+        }
+        let name = d.name().to_string();
+        if name.starts_with('#') {
+            continue; // MATLAB's #refs# and #subsystem#
+        }
+        let path = if prefix.is_empty() {
+            name
+        } else {
+            format!("{prefix}.{name}")
+        };
+        let class = class_of_dataset(&d).unwrap_or_else(|| "unknown".into());
+        let shape: Vec<u64> = d.shape().to_vec();
+        let dims: Vec<String> = shape.iter().rev().map(u64::to_string).collect();
+        let described = format!("{path} ({}, {class})", dims.join(" x "));
+        let elements: u64 = shape.iter().product();
+        let vector =
+            shape.len() <= 2 && elements > 1 && shape.iter().filter(|s| **s > 1).count() == 1;
+        let empty = d.attribute("MATLAB_empty").is_ok();
+        let sparse = d.attribute("MATLAB_sparse").is_ok();
+        let why_not = if sparse {
+            Some(format!("{described}: a sparse array"))
+        } else if class == "cell" {
+            Some(format!(
+                "{described}: a cell array (save each column as a numeric vector)"
+            ))
+        } else if !numeric_class(&class) {
+            Some(format!(
+                "{described}: class {class} is not a numeric vector{}",
+                if class == "table" || class == "timetable" {
+                    " (save a table with table2struct(T, 'ToScalar', true), or writetable to CSV)"
+                } else {
+                    ""
+                }
+            ))
+        } else if empty || !vector {
+            Some(format!("{described}: not a vector"))
+        } else {
+            None
+        };
+        let values = match why_not {
+            None => Some(read_f64(&d).map_err(|m| format!("{described}: {m}"))?),
+            Some(_) => None,
+        };
+        out.push(Found {
+            path,
+            values,
+            why_not,
+        });
+    }
+    for g in groups {
+        let name = g.name().to_string();
+        if name.starts_with('#') {
+            continue;
+        }
+        let path = if prefix.is_empty() {
+            name
+        } else {
+            format!("{prefix}.{name}")
+        };
+        match class_of_group(&g).as_deref() {
+            Some("struct") | None => walk(&g, &path, depth + 1, out)?,
+            Some(class) => out.push(Found {
+                why_not: Some(format!(
+                    "{path} ({class}): a MATLAB object, not a struct{}",
+                    if class == "table" {
+                        " (save it with table2struct(T, 'ToScalar', true))"
+                    } else {
+                        ""
+                    }
+                )),
+                path,
+                values: None,
+            }),
+        }
+    }
+    Ok(())
+}
+
+/// Read a v7.3 MAT-file held in memory.
+pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
+    let fail = |message: String| Error::Format {
+        path: path.to_path_buf(),
+        message,
+    };
+    let file = limpid_core::error::catch_panic(path, "HDF5 decoder (corrupt file)", || {
+        Hdf5File::from_bytes(bytes).map_err(|e| {
+            fail(format!(
+                "a MAT-file v7.3 whose HDF5 part cannot be read: {e}"
+            ))
+        })
+    })?;
+    let mut found = Vec::new();
+    limpid_core::error::catch_panic(path, "HDF5 decoder (corrupt file)", || {
+        let root = file
+            .root_group()
+            .map_err(|e| fail(format!("HDF5 root group: {e}")))?;
+        walk(&root, "", 0, &mut found).map_err(|m| fail(format!("variable {m}")))
+    })?;
+    let mut lengths: Vec<(usize, usize)> = Vec::new();
+    for f in &found {
+        if let Some(v) = &f.values {
+            match lengths.iter_mut().find(|(n, _)| *n == v.len()) {
+                Some(slot) => slot.1 += 1,
+                None => lengths.push((v.len(), 1)),
+            }
+        }
+    }
+    let Some(&(length, _)) = lengths.iter().max_by_key(|(n, count)| (*count, *n)) else {
+        let listed: Vec<&str> = found
+            .iter()
+            .filter_map(|f| f.why_not.as_deref())
+            .take(10)
+            .collect();
+        return Err(fail(format!(
+            "no numeric vector to read as a channel (found: {})",
+            if listed.is_empty() {
+                "nothing".to_string()
+            } else {
+                listed.join("; ")
+            }
+        )));
+    };
+    let mut notes = Vec::new();
+    let mut skipped = Vec::new();
+    let mut channels = Vec::new();
+    for f in found {
+        match f.values {
+            Some(values) if values.len() == length => channels.push(Channel {
+                name: f.path,
+                unit: None,
+                values,
+            }),
+            Some(values) => skipped.push(format!(
+                "{} ({} samples, not {length})",
+                f.path,
+                values.len()
+            )),
+            None => skipped.push(f.why_not.unwrap_or(f.path)),
+        }
+    }
+    if !skipped.is_empty() {
+        notes.push(format!(
+            "MAT variables not read as channels: {}",
+            skipped.join("; ")
+        ));
+    }
+    Ok(Source {
+        path: path.to_path_buf(),
+        format: "MAT v7.3",
+        streams: vec![Stream {
+            channels,
+            ..Stream::default()
+        }],
+        notes,
+    })
+}
