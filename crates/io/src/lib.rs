@@ -214,6 +214,29 @@ fn read_mat_bytes(path: &Path, bytes: &[u8]) -> Result<Recording> {
     read_mat_table(path, bytes)?.into_recording(path)
 }
 
+/// A level-5 MAT-file as a source: numeric vectors by dotted struct path.
+pub(crate) fn read_mat_source(path: &Path, bytes: &[u8]) -> Result<sources::Source> {
+    if bytes.is_empty() {
+        return Err(Error::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    if !bytes.starts_with(b"MATLAB 5.0 MAT-file") {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: "not a MAT-file: the header does not start with \"MATLAB 5.0 MAT-file\""
+                .into(),
+        });
+    }
+    let vars = mat::variables(bytes).map_err(|message| Error::Format {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    let mut found = Vec::new();
+    mat::flatten(vars, "", &mut found);
+    sources::vectors_source(path, "MAT", found)
+}
+
 /// The numeric vectors of a MAT-file as a table.
 pub(crate) fn read_mat_table(path: &Path, bytes: &[u8]) -> Result<Table> {
     if bytes.is_empty() {

@@ -30,7 +30,13 @@ pub struct Variable {
     /// Real values (column-major) of a real numeric array; `None` otherwise.
     pub real: Option<Vec<f64>>,
     pub complex: bool,
+    /// The fields of a 1 x 1 struct, each named by its field name.
+    pub fields: Vec<Variable>,
 }
+
+/// Deepest struct nesting decoded.
+const MAX_DEPTH: usize = 32;
+const MX_STRUCT: u32 = 2;
 
 struct Reader<'a> {
     bytes: &'a [u8],
@@ -162,7 +168,7 @@ pub fn variables(bytes: &[u8]) -> Result<Vec<Variable>, String> {
     while at < bytes.len() {
         let (kind, range, next) = file.element(at)?;
         match kind {
-            MI_MATRIX => out.push(matrix(&file, range, at)?),
+            MI_MATRIX => out.push(matrix(&file, range, at, 0)?),
             MI_COMPRESSED => {
                 let inflated = inflate(&bytes[range], little, at, &mut decoded)?;
                 let inner = Reader {
@@ -171,7 +177,7 @@ pub fn variables(bytes: &[u8]) -> Result<Vec<Variable>, String> {
                 };
                 let (kind, range, _) = inner.element(0)?;
                 if kind == MI_MATRIX {
-                    out.push(matrix(&inner, range, at)?);
+                    out.push(matrix(&inner, range, at, 0)?);
                 }
             }
             _ => {} // other top-level elements carry no variable
@@ -217,19 +223,29 @@ fn inflate(data: &[u8], little: bool, at: usize, decoded: &mut usize) -> Result<
 }
 
 /// Decode an `miMATRIX` element's sub-elements.
-fn matrix(r: &Reader, range: std::ops::Range<usize>, at: usize) -> Result<Variable, String> {
+fn matrix(
+    r: &Reader,
+    range: std::ops::Range<usize>,
+    at: usize,
+    depth: usize,
+) -> Result<Variable, String> {
+    if depth > MAX_DEPTH {
+        return Err(format!(
+            "the variable at byte {at}: structs nested deeper than {MAX_DEPTH} levels"
+        ));
+    }
     let end = range.end;
     let sub = Reader {
         bytes: &r.bytes[..end],
         little: r.little,
     };
-    let mut p = range.start;
-    let mut next = || -> Result<(u32, std::ops::Range<usize>), String> {
-        if p >= end {
+    let p = std::cell::Cell::new(range.start);
+    let next = || -> Result<(u32, std::ops::Range<usize>), String> {
+        if p.get() >= end {
             return Err(format!("the variable at byte {at} ends before its parts"));
         }
-        let (kind, range, n) = sub.element(p)?;
-        p = n;
+        let (kind, range, n) = sub.element(p.get())?;
+        p.set(n);
         Ok((kind, range))
     };
     if range.is_empty() {
@@ -265,11 +281,85 @@ fn matrix(r: &Reader, range: std::ops::Range<usize>, at: usize) -> Result<Variab
     } else {
         None
     };
+    let mut fields = Vec::new();
+    // a struct without its field parts (an empty struct) has no fields
+    if class == MX_STRUCT && dims.iter().product::<usize>() == 1 && p.get() < end {
+        // field name length, the names (each that many bytes, NUL-padded), then one miMATRIX per field
+        let (kind, len) = next()?;
+        let len = r
+            .numbers(kind, &r.bytes[len])?
+            .first()
+            .copied()
+            .unwrap_or(0.0) as usize;
+        let (_, names) = next()?;
+        let names = &r.bytes[names];
+        if len == 0 || names.len() % len != 0 {
+            return Err(format!(
+                "struct {name}: field names of {} bytes do not split into names of {len}",
+                names.len()
+            ));
+        }
+        for raw in names.chunks(len) {
+            let field =
+                String::from_utf8_lossy(raw.split(|b| *b == 0).next().unwrap_or(&[])).into_owned();
+            let (kind, range) = next()?;
+            if kind != MI_MATRIX {
+                return Err(format!(
+                    "struct {name}: field {field} is not a MATLAB array"
+                ));
+            }
+            let mut v = matrix(r, range, at, depth + 1)?;
+            v.name = field;
+            fields.push(v);
+        }
+    }
     Ok(Variable {
         name,
         class: class_name(class),
         dims,
         real,
         complex,
+        fields,
     })
+}
+
+/// Every variable and struct field as (dotted path, values of a real numeric
+/// vector or `None`, why it is not a channel).
+pub fn flatten(vars: Vec<Variable>, prefix: &str, out: &mut Vec<crate::sources::Found>) {
+    for var in vars {
+        let path = if prefix.is_empty() {
+            var.name.clone()
+        } else {
+            format!("{prefix}.{}", var.name)
+        };
+        let samples: usize = var.dims.iter().product();
+        let vector = var.dims.len() == 2 && var.dims.contains(&1) && samples > 1;
+        let dims: Vec<String> = var.dims.iter().map(usize::to_string).collect();
+        let described = format!("{path} ({}, {})", dims.join(" x "), var.class);
+        if !var.fields.is_empty() {
+            flatten(var.fields, &path, out);
+            continue;
+        }
+        let why_not = if var.complex {
+            Some(format!("{described}: complex values"))
+        } else if var.real.is_none() {
+            Some(format!(
+                "{described}: not a numeric array{}",
+                if var.class == "cell" {
+                    " (a cell array)"
+                } else {
+                    ""
+                }
+            ))
+        } else if !vector {
+            Some(format!("{described}: not a vector"))
+        } else {
+            None
+        };
+        out.push(crate::sources::Found {
+            values: if why_not.is_none() { var.real } else { None },
+            path,
+            why_not,
+        });
+    }
 }

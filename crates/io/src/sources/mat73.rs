@@ -18,7 +18,7 @@ use std::path::Path;
 use hdf5_reader::group::Group;
 use hdf5_reader::{Dataset, Datatype, Hdf5File};
 
-use super::{Channel, Source, Stream};
+use super::Source;
 use limpid_core::{Error, Result};
 
 /// Deepest struct nesting followed.
@@ -26,12 +26,7 @@ const MAX_DEPTH: usize = 32;
 /// Most datasets listed.
 const MAX_OBJECTS: usize = 100_000;
 
-/// What is found at one path.
-struct Found {
-    path: String,
-    values: Option<Vec<f64>>,
-    why_not: Option<String>,
-}
+use super::Found;
 
 fn class_of_dataset(d: &Dataset) -> Option<String> {
     d.attribute("MATLAB_class")
@@ -248,61 +243,5 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
             .map_err(|e| fail(format!("HDF5 root group: {e}")))?;
         walk(&root, "", 0, &mut found).map_err(|m| fail(format!("variable {m}")))
     })?;
-    let mut lengths: Vec<(usize, usize)> = Vec::new();
-    for f in &found {
-        if let Some(v) = &f.values {
-            match lengths.iter_mut().find(|(n, _)| *n == v.len()) {
-                Some(slot) => slot.1 += 1,
-                None => lengths.push((v.len(), 1)),
-            }
-        }
-    }
-    let Some(&(length, _)) = lengths.iter().max_by_key(|(n, count)| (*count, *n)) else {
-        let listed: Vec<&str> = found
-            .iter()
-            .filter_map(|f| f.why_not.as_deref())
-            .take(10)
-            .collect();
-        return Err(fail(format!(
-            "no numeric vector to read as a channel (found: {})",
-            if listed.is_empty() {
-                "nothing".to_string()
-            } else {
-                listed.join("; ")
-            }
-        )));
-    };
-    let mut notes = Vec::new();
-    let mut skipped = Vec::new();
-    let mut channels = Vec::new();
-    for f in found {
-        match f.values {
-            Some(values) if values.len() == length => channels.push(Channel {
-                name: f.path,
-                unit: None,
-                values,
-            }),
-            Some(values) => skipped.push(format!(
-                "{} ({} samples, not {length})",
-                f.path,
-                values.len()
-            )),
-            None => skipped.push(f.why_not.unwrap_or(f.path)),
-        }
-    }
-    if !skipped.is_empty() {
-        notes.push(format!(
-            "MAT variables not read as channels: {}",
-            skipped.join("; ")
-        ));
-    }
-    Ok(Source {
-        path: path.to_path_buf(),
-        format: "MAT v7.3",
-        streams: vec![Stream {
-            channels,
-            ..Stream::default()
-        }],
-        notes,
-    })
+    super::vectors_source(path, "MAT v7.3", found)
 }

@@ -153,10 +153,7 @@ pub fn read_source(path: &Path) -> Result<Source> {
             if is_mat73(&bytes) {
                 mat73::read_bytes(path, &bytes)
             } else {
-                Ok(Source::from_table(
-                    path,
-                    crate::read_mat_table(path, &bytes)?,
-                ))
+                crate::read_mat_source(path, &bytes)
             }
         }
         _ => {
@@ -164,6 +161,82 @@ pub fn read_source(path: &Path) -> Result<Source> {
             Ok(Source::from_table(path, table))
         }
     }
+}
+
+/// One variable or struct field of a MAT-file, by dotted path.
+pub struct Found {
+    /// `rec.force.fx`.
+    pub path: String,
+    /// Its values when it is a real numeric vector.
+    pub values: Option<Vec<f64>>,
+    /// Why it is not a channel otherwise.
+    pub why_not: Option<String>,
+}
+
+/// A MAT-file's vectors as one stream: those of the most common length;
+/// the rest listed in a note.
+pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> Result<Source> {
+    let mut lengths: Vec<(usize, usize)> = Vec::new();
+    for f in &found {
+        if let Some(v) = &f.values {
+            match lengths.iter_mut().find(|(n, _)| *n == v.len()) {
+                Some(slot) => slot.1 += 1,
+                None => lengths.push((v.len(), 1)),
+            }
+        }
+    }
+    let Some(&(length, _)) = lengths.iter().max_by_key(|(n, count)| (*count, *n)) else {
+        let listed: Vec<&str> = found
+            .iter()
+            .filter_map(|f| f.why_not.as_deref())
+            .take(10)
+            .collect();
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "no numeric vector to read as a channel (found: {})",
+                if listed.is_empty() {
+                    "nothing".to_string()
+                } else {
+                    listed.join("; ")
+                }
+            ),
+        });
+    };
+    let mut skipped = Vec::new();
+    let mut channels = Vec::new();
+    for f in found {
+        match f.values {
+            Some(values) if values.len() == length => channels.push(Channel {
+                name: f.path,
+                unit: None,
+                values,
+            }),
+            Some(values) => skipped.push(format!(
+                "{} ({} samples, not {length})",
+                f.path,
+                values.len()
+            )),
+            None => skipped.push(f.why_not.unwrap_or(f.path)),
+        }
+    }
+    let notes = if skipped.is_empty() {
+        Vec::new()
+    } else {
+        vec![format!(
+            "MAT variables not read as channels: {}",
+            skipped.join("; ")
+        )]
+    };
+    Ok(Source {
+        path: path.to_path_buf(),
+        format,
+        streams: vec![Stream {
+            channels,
+            ..Stream::default()
+        }],
+        notes,
+    })
 }
 
 /// True for a MATLAB `-v7.3` (HDF5) MAT-file's bytes.

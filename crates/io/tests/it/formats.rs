@@ -226,3 +226,8 @@ fn a_tdms_file_converts_to_the_values_written() {
         "{e}"
     );
 }
+
+#[test]
+fn a_level5_mat_file_with_a_nested_struct_converts_by_the_same_paths() {
+    assert_matches("rig_v5struct.mat", "rig_mat73.toml");
+}
