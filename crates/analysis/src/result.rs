@@ -96,6 +96,9 @@ pub struct Run {
     /// the same inputs); absent for workflows that are not one estimate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub request: Option<limpid_ident::request::Request>,
+    /// The channel map (`--map`) the input files were read through, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channel_map: Option<InputFile>,
 }
 
 /// One file a result was made from.
@@ -131,18 +134,9 @@ impl Run {
             limpid_version: env!("CARGO_PKG_VERSION").into(),
             command_line,
             created_utc: rfc3339(std::time::SystemTime::now()),
-            inputs: inputs
-                .iter()
-                .map(|p| {
-                    let meta = std::fs::metadata(p).ok();
-                    InputFile {
-                        path: p.to_string_lossy().into_owned(),
-                        bytes: meta.as_ref().map(|m| m.len()),
-                        modified_utc: meta.and_then(|m| m.modified().ok()).map(rfc3339),
-                    }
-                })
-                .collect(),
+            inputs: inputs.iter().map(|p| InputFile::of(p)).collect(),
             request: None,
+            channel_map: None,
         }
     }
 
@@ -151,6 +145,26 @@ impl Run {
         Run {
             request: Some(request.clone()),
             ..self
+        }
+    }
+
+    /// The run with the channel map its inputs were read through.
+    pub fn with_channel_map(self, map: Option<&std::path::Path>) -> Run {
+        Run {
+            channel_map: map.map(InputFile::of),
+            ..self
+        }
+    }
+}
+
+impl InputFile {
+    /// A file as found now: path, size and date where it is a file.
+    pub fn of(p: &std::path::Path) -> InputFile {
+        let meta = std::fs::metadata(p).ok();
+        InputFile {
+            path: p.to_string_lossy().into_owned(),
+            bytes: meta.as_ref().map(|m| m.len()),
+            modified_utc: meta.and_then(|m| m.modified().ok()).map(rfc3339),
         }
     }
 }

@@ -111,7 +111,11 @@ pub fn estimate(
         .collect::<limpid_core::Result<Vec<_>>>()?;
     let mut estimated = limpid_app::estimate::run(&checked, recordings).map_err(with_flag_names)?;
     let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
-    estimated.document.run = Some(Run::of_this_process(&inputs).with_request(checked.request()));
+    estimated.document.run = Some(
+        Run::of_this_process(&inputs)
+            .with_request(checked.request())
+            .with_channel_map(crate::channel_map().and_then(|m| m.path.as_deref())),
+    );
     if let Some(path) = out.report {
         crate::report::write(&estimated.document, path)?;
     }

@@ -35,7 +35,7 @@ use clap::{Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
-    /// Channel map (TOML) that turns the lab files read by this command into recordings: channels, streams, units, signs, markers.
+    /// Channel map (TOML) for commands that read recordings: which channel of a lab file (XDF, C3D, TDMS, MAT, CSV) is which column, in which unit and sign.
     #[arg(long, global = true, value_name = "MAP.toml")]
     map: Option<std::path::PathBuf>,
 }
@@ -95,6 +95,14 @@ pub fn read_recording(
 }
 
 static CHANNEL_MAP: std::sync::OnceLock<limpid_io::map::ChannelMap> = std::sync::OnceLock::new();
+
+/// Read the channel map at `path` for every recording this process reads
+/// (`--map`, or the map a result was made with, for `limpid rerun`).
+pub fn set_channel_map(path: &std::path::Path) -> limpid_core::Result<()> {
+    let map = limpid_io::map::ChannelMap::read(path)?;
+    let _ = CHANNEL_MAP.set(map);
+    Ok(())
+}
 
 /// The channel map given with `--map`, if any.
 pub fn channel_map() -> Option<&'static limpid_io::map::ChannelMap> {
@@ -253,8 +261,19 @@ fn stdout_was_closed() -> bool {
 
 fn run(cli: Cli) -> CliResult {
     if let Some(path) = &cli.map {
-        let map = limpid_io::map::ChannelMap::read(path)?;
-        let _ = CHANNEL_MAP.set(map);
+        let reads_recordings = matches!(
+            cli.command,
+            Command::Estimate { .. }
+                | Command::WindowSweep(_)
+                | Command::Spectra(_)
+                | Command::GravityCompensate(_)
+                | Command::Live(_)
+                | Command::Convert(_)
+        );
+        if !reads_recordings {
+            return Err("--map applies to the commands that read recordings (estimate, window-sweep, spectra, gravity-compensate, live, convert); this one reads none".into());
+        }
+        set_channel_map(path)?;
     }
     match cli.command {
         Command::Inspect(args) => files::run_inspect(args),

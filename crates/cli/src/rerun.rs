@@ -42,6 +42,15 @@ pub fn run(args: RerunArgs) -> CliResult {
     };
     // a relative path is taken from here, else from the result's folder
     let folder = args.result.parent().unwrap_or(std::path::Path::new(""));
+    if let Some(map) = &run.channel_map {
+        let p = PathBuf::from(&map.path);
+        let p = if p.is_relative() && !p.exists() && folder.join(&p).exists() {
+            folder.join(p)
+        } else {
+            p
+        };
+        crate::set_channel_map(&p)?;
+    }
     let paths: Vec<PathBuf> = run
         .inputs
         .iter()

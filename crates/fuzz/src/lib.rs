@@ -67,6 +67,8 @@ pub fn execute(name: &str, bytes: &[u8]) -> Outcome {
     let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match kind(name) {
         "toml" => protocol(name, bytes),
         "wire" => datagrams(bytes),
+        "xdf" | "c3d" | "tdms" => lab_file(name, bytes),
+        "mat" if name.starts_with("rig") => lab_file(name, bytes),
         _ => recording(name, bytes),
     }));
     match run {
@@ -119,10 +121,55 @@ fn check(what: &str, v: &impl serde::Serialize) -> Option<String> {
     first_null(&value, what, ABSENT_BY_DESIGN)
 }
 
+/// The channel maps of the lab-file seeds (the fixtures of limpid-io).
+fn seed_map(name: &str) -> &'static str {
+    match kind(name) {
+        "xdf" => include_str!("../../io/tests/fixtures/formats/rig_xdf.toml"),
+        "c3d" => include_str!("../../io/tests/fixtures/formats/rig_c3d.toml"),
+        "tdms" => include_str!("../../io/tests/fixtures/formats/rig_tdms.toml"),
+        _ => include_str!("../../io/tests/fixtures/formats/rig_mat73.toml"),
+    }
+}
+
+/// A lab file (XDF, C3D, TDMS, MAT with structs): read, inspected, converted
+/// by its seed's channel map, then estimated as any recording. Accepted when
+/// the conversion succeeds.
+fn lab_file(name: &str, bytes: &[u8]) -> Outcome {
+    let path = Path::new(name);
+    let Ok(source) = limpid_io::sources::read_source_bytes(path, bytes) else {
+        return Outcome::Refused;
+    };
+    let inspection = limpid_io::inspect::inspect(&source);
+    if let Some(map) = &inspection.proposed_map {
+        if let Err(e) = limpid_io::map::ChannelMap::parse(map) {
+            return Outcome::Finding(format!("the proposed map does not parse ({e}): {map}"));
+        }
+    }
+    let map = limpid_io::map::ChannelMap::parse(seed_map(name)).expect("the seed maps parse");
+    match limpid_io::map::apply(&source, &map) {
+        Ok(converted) => match estimate_all(&converted.recording).0.into_iter().next() {
+            Some(f) => Outcome::Finding(f),
+            None => Outcome::Accepted,
+        },
+        Err(_) => Outcome::Refused,
+    }
+}
+
 fn recording(name: &str, bytes: &[u8]) -> Outcome {
     let Ok(rec) = limpid_io::read_recording_bytes(name, bytes.to_vec()) else {
         return Outcome::Refused;
     };
+    let (findings, any) = estimate_all(&rec);
+    match findings.into_iter().next() {
+        Some(f) => Outcome::Finding(f),
+        None if any => Outcome::Accepted,
+        None => Outcome::Refused,
+    }
+}
+
+/// Every estimator the recording's columns allow: the findings, and whether any ran.
+fn estimate_all(rec: &limpid_core::Recording) -> (Vec<String>, bool) {
+    let rec = rec.clone();
     let mut findings = Vec::new();
     let mut any = false;
     // linear (3-D, planar end-point, joint, rig coordinates)
@@ -174,11 +221,7 @@ fn recording(name: &str, bytes: &[u8]) -> Outcome {
             findings.extend(check("cocontraction", &r));
         }
     }
-    match findings.into_iter().next() {
-        Some(f) => Outcome::Finding(f),
-        None if any => Outcome::Accepted,
-        None => Outcome::Refused,
-    }
+    (findings, any)
 }
 
 fn protocol(name: &str, bytes: &[u8]) -> Outcome {

@@ -186,6 +186,23 @@ fn suggest(stream: &Stream, channel: &str) -> Option<String> {
     }
 }
 
+/// `text` as a TOML basic string: quotes and backslashes escaped, control
+/// characters as `\uXXXX` (Rust's `{:?}` writes `\u{8}`, which TOML refuses).
+fn quote(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 2);
+    out.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if c.is_control() => out.push_str(&format!("\\u{:04X}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
 /// A proposed map: the recognisable channels, their declared units, the
 /// time base the stream holding most of them, and a trial rule when a
 /// marker stream exists.
@@ -199,13 +216,19 @@ pub fn propose(source: &Source) -> Option<String> {
                 if lines.iter().any(|(k, _)| *k == col) {
                     continue;
                 }
+                // a declared unit of another quantity means the guess is wrong
+                if let Some(u) = &c.unit {
+                    if crate::map::unit_factor(&col, u).is_err() && !u.trim().is_empty() {
+                        continue;
+                    }
+                }
                 n += 1;
-                let mut fields = vec![format!("channel = {:?}", c.name)];
+                let mut fields = vec![format!("channel = {}", quote(&c.name))];
                 if source.streams.len() > 1 {
-                    fields.push(format!("stream = {:?}", s.name));
+                    fields.push(format!("stream = {}", quote(&s.name)));
                 }
                 if let Some(u) = &c.unit {
-                    fields.push(format!("unit = {u:?}"));
+                    fields.push(format!("unit = {}", quote(u)));
                 }
                 lines.push((col, format!("{{ {} }}", fields.join(", "))));
             }
@@ -222,7 +245,7 @@ pub fn propose(source: &Source) -> Option<String> {
             .max_by_key(|p| p.0)
             .map(|p| p.1)
             .unwrap_or("");
-        text.push_str(&format!("[time]\nstream = {best:?}\n"));
+        text.push_str(&format!("[time]\nstream = {}\n", quote(best)));
     }
     text.push_str("[columns]\n");
     for (col, spec) in &lines {
@@ -241,7 +264,8 @@ pub fn propose(source: &Source) -> Option<String> {
     };
     if let Some((most, _)) = marker_texts.first() {
         text.push_str(&format!(
-            "# trial = {{ marker = {most:?} }}   # a trial starts at each such marker\n"
+            "# trial = {{ marker = {} }}   # a trial starts at each such marker\n",
+            quote(most)
         ));
     }
     Some(text)

@@ -243,6 +243,12 @@ impl Quantity {
     }
 }
 
+/// The factor that converts `unit` to the SI unit of FORMAT.md column
+/// `column`, or why it cannot.
+pub fn unit_factor(column: &str, unit: &str) -> std::result::Result<f64, String> {
+    Quantity::of(column).factor(unit)
+}
+
 /// ", nearest: a, b" (the closest names by edit distance), or the list of all when few.
 pub fn nearest_hint(wanted: &str, names: &[&str]) -> String {
     if names.is_empty() {

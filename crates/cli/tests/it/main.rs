@@ -8,6 +8,7 @@ mod coverage;
 mod examples;
 mod gravity;
 mod hostile;
+mod lab_files;
 mod live;
 mod live_common;
 mod live_load;

@@ -249,6 +249,8 @@ pub fn read_source_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     match extension(path).as_deref() {
         Some("c3d") => c3d::read_bytes(path, bytes),
         Some("tdms") => tdms::read_bytes(path, bytes),
+        Some("mat") if is_mat73(bytes) => mat73::read_bytes(path, bytes),
+        Some("mat") => crate::read_mat_source(path, bytes),
         _ => xdf::read_bytes(path, bytes),
     }
 }
