@@ -132,8 +132,13 @@ fn walk(
     group: &Group,
     prefix: &str,
     depth: usize,
+    seen: &mut std::collections::HashSet<u64>,
     out: &mut Vec<Found>,
 ) -> std::result::Result<(), String> {
+    // a group linked from two places (or from inside itself: a cycle) is read once
+    if !seen.insert(group.address()) {
+        return Ok(());
+    }
     if depth > MAX_DEPTH {
         return Err(format!(
             "{prefix}: structs nested deeper than {MAX_DEPTH} levels"
@@ -205,7 +210,7 @@ fn walk(
             format!("{prefix}.{name}")
         };
         match class_of_group(&g).as_deref() {
-            Some("struct") | None => walk(&g, &path, depth + 1, out)?,
+            Some("struct") | None => walk(&g, &path, depth + 1, seen, out)?,
             Some(class) => out.push(Found {
                 why_not: Some(format!(
                     "{path} ({class}): a MATLAB object, not a struct{}",
@@ -241,7 +246,8 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         let root = file
             .root_group()
             .map_err(|e| fail(format!("HDF5 root group: {e}")))?;
-        walk(&root, "", 0, &mut found).map_err(|m| fail(format!("variable {m}")))
+        walk(&root, "", 0, &mut Default::default(), &mut found)
+            .map_err(|m| fail(format!("variable {m}")))
     })?;
     super::vectors_source(path, "MAT v7.3", found)
 }

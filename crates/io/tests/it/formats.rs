@@ -231,3 +231,129 @@ fn a_tdms_file_converts_to_the_values_written() {
 fn a_level5_mat_file_with_a_nested_struct_converts_by_the_same_paths() {
     assert_matches("rig_v5struct.mat", "rig_mat73.toml");
 }
+
+/// Every cut of `file` (every `step` bytes) is refused or read, never a panic,
+/// and refusals are one line naming the file.
+fn survives_cuts(file: &str, step: usize) {
+    let whole = std::fs::read(fixture(file)).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(file);
+    for cut in (0..whole.len()).step_by(step) {
+        std::fs::write(&path, &whole[..cut]).unwrap();
+        if let Err(e) = limpid_io::sources::read_source(&path) {
+            let e = e.to_string();
+            assert_eq!(e.lines().count(), 1, "{file} cut at {cut}: {e}");
+            assert!(e.contains(file), "{file} cut at {cut}: {e}");
+        }
+    }
+}
+
+#[test]
+fn truncated_lab_files_are_refused_in_one_line() {
+    survives_cuts("rig.xdf", 37);
+    survives_cuts("rig.c3d", 61);
+    survives_cuts("rig.tdms", 29);
+    survives_cuts("rig73.mat", 211);
+    survives_cuts("rig_v5struct.mat", 53);
+}
+
+fn patched(file: &str, at: usize, bytes: &[u8]) -> (tempfile::TempDir, PathBuf) {
+    let mut whole = std::fs::read(fixture(file)).unwrap();
+    whole[at..at + bytes.len()].copy_from_slice(bytes);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(file);
+    std::fs::write(&path, whole).unwrap();
+    (dir, path)
+}
+
+#[test]
+fn declared_sizes_beyond_the_file_are_refused_without_allocating_them() {
+    // XDF: the first chunk (the file header) claims 2^60 bytes
+    let (_d, p) = patched("rig.xdf", 4, &[8]);
+    let mut bytes = std::fs::read(&p).unwrap();
+    bytes.splice(5..6, (1u64 << 60).to_le_bytes());
+    std::fs::write(&p, &bytes).unwrap();
+    let e = limpid_io::sources::read_source(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("byte 4") && e.contains("left in the file"),
+        "{e}"
+    );
+    // TDMS: the first segment declares 2^31 objects
+    let (_d, p) = patched("rig.tdms", 28, &0x8000_0000u32.to_le_bytes());
+    let e = limpid_io::sources::read_source(&p).unwrap_err().to_string();
+    assert!(e.contains("objects declared"), "{e}");
+    // C3D: the header claims 65535 frames (last_frame, word 5) of data that is not there
+    let (_d, p) = patched("rig.c3d", 8, &[0xff, 0xff]);
+    match limpid_io::sources::read_source(&p) {
+        Ok(s) => assert!(
+            s.streams[0].len() <= 50,
+            "{} frames read",
+            s.streams[0].len()
+        ),
+        Err(e) => assert_eq!(e.to_string().lines().count(), 1, "{e}"),
+    }
+}
+
+#[test]
+fn an_hdf5_group_that_links_to_itself_is_read_once() {
+    let source = limpid_io::sources::read_source(&fixture("cyclic.mat")).unwrap();
+    let names: Vec<&str> = source.streams[0]
+        .channels
+        .iter()
+        .map(|c| c.name.as_str())
+        .collect();
+    assert_eq!(names, ["rec.x"]);
+}
+
+/// An XDF file of one unlabelled double64 channel (read as `ch1`) in stream "robot" with these stamps.
+fn xdf_with_stamps(stamps: &[f64]) -> Vec<u8> {
+    fn chunk(out: &mut Vec<u8>, tag: u16, content: &[u8]) {
+        out.push(4);
+        out.extend_from_slice(&((content.len() + 2) as u32).to_le_bytes());
+        out.extend_from_slice(&tag.to_le_bytes());
+        out.extend_from_slice(content);
+    }
+    let mut out = b"XDF:".to_vec();
+    let xml = "<info><name>robot</name><channel_count>1</channel_count><nominal_srate>100</nominal_srate><channel_format>double64</channel_format></info>";
+    chunk(
+        &mut out,
+        2,
+        &[&1u32.to_le_bytes()[..], xml.as_bytes()].concat(),
+    );
+    let mut samples = 1u32.to_le_bytes().to_vec();
+    samples.extend_from_slice(&[4]);
+    samples.extend_from_slice(&(stamps.len() as u32).to_le_bytes());
+    for (i, t) in stamps.iter().enumerate() {
+        samples.push(8);
+        samples.extend_from_slice(&t.to_le_bytes());
+        samples.extend_from_slice(&(i as f64).to_le_bytes());
+    }
+    chunk(&mut out, 3, &samples);
+    out
+}
+
+#[test]
+fn an_xdf_stream_whose_clock_goes_backwards_is_refused_naming_stream_and_sample() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("back.xdf");
+    std::fs::write(&path, xdf_with_stamps(&[1.0, 1.01, 1.02, 1.015, 1.03])).unwrap();
+    let e = limpid_io::sources::read_source(&path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("back.xdf")
+            && e.contains("stream \"robot\", sample 4")
+            && e.contains("backwards"),
+        "{e}"
+    );
+    // a drop-out in the time base is named too, not interpolated over
+    std::fs::write(&path, xdf_with_stamps(&[1.0, 1.01, 1.02, 1.08, 1.09])).unwrap();
+    let map = ChannelMap::parse("[columns]\nx = \"ch1\"").unwrap();
+    let e = limpid_io::read_recording_mapped(&path, Some(&map))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("stream \"robot\", sample 4") && e.contains("dropped samples"),
+        "{e}"
+    );
+}
