@@ -298,6 +298,13 @@ impl ChannelMap {
         Ok(map)
     }
 
+    /// A map built another way (e.g. deserialised from Python), checked as
+    /// [`ChannelMap::parse`] checks the TOML form.
+    pub fn checked(self) -> std::result::Result<ChannelMap, String> {
+        self.check()?;
+        Ok(self)
+    }
+
     fn check(&self) -> std::result::Result<(), String> {
         if self.columns.is_empty() {
             return Err("[columns] names no column".into());

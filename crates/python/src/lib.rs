@@ -380,12 +380,50 @@ fn columns_dict<'py>(py: Python<'py>, rec: &Recording) -> PyResult<Bound<'py, Py
     Ok(d)
 }
 
-/// A recording file as a dict of numpy arrays (column order kept).
+/// A channel map from a TOML file's path or from a dict of the same shape
+/// (through serde, as requests are).
+fn channel_map(map: &Bound<'_, PyAny>) -> PyResult<limpid_io::map::ChannelMap> {
+    if let Ok(path) = map.extract::<std::path::PathBuf>() {
+        return limpid_io::map::ChannelMap::read(&path).map_err(err);
+    }
+    if map.cast::<PyDict>().is_err() {
+        return Err(PyValueError::new_err(
+            "map is the path of a channel map (TOML) or a dict like {'time': {...}, 'columns': {...}}",
+        ));
+    }
+    let mut de = pythonize::Depythonizer::from_object(map);
+    let parsed: limpid_io::map::ChannelMap = serde::Deserialize::deserialize(&mut de)
+        .map_err(|e| PyValueError::new_err(format!("channel map: {e}")))?;
+    parsed
+        .checked()
+        .map_err(|m| PyValueError::new_err(format!("channel map: {m}")))
+}
+
+/// A recording file as a dict of numpy arrays (column order kept); lab
+/// files (XDF, C3D, TDMS, MAT structs) through a channel map.
 #[pyfunction]
-fn read_recording<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
-    let rec = detached(py, || limpid_io::read_recording(&path)).map_err(err)?;
+#[pyo3(signature = (path, map=None))]
+fn read_recording<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    map: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let map = map.as_ref().map(channel_map).transpose()?;
+    let rec =
+        detached(py, || limpid_io::read_recording_mapped(&path, map.as_ref())).map_err(err)?;
     warn_about(py, &rec)?;
     columns_dict(py, &rec)
+}
+
+/// What a lab file holds (streams, channels, rates, units, gaps, markers,
+/// a proposed map), as JSON text.
+#[pyfunction]
+fn inspect(py: Python<'_>, path: std::path::PathBuf) -> PyResult<String> {
+    let found = detached(py, || {
+        limpid_io::sources::read_source(&path).map(|s| limpid_io::inspect::inspect(&s))
+    })
+    .map_err(err)?;
+    serde_json::to_string(&found).map_err(value_err)
 }
 
 /// A method's request from flat keyword options (`limpid_ident::request`):
@@ -719,6 +757,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(lowpass_filtfilt, m)?)?;
     m.add_function(wrap_pyfunction!(frequency_response, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(inspect, m)?)?;
     m.add_function(wrap_pyfunction!(request, m)?)?;
     m.add_function(wrap_pyfunction!(estimate, m)?)?;
     m.add_function(wrap_pyfunction!(gravity_compensate, m)?)?;

@@ -263,6 +263,34 @@ def test_matlab_files_read_like_their_csv():
         limpid.read_recording(fixtures / "complex.mat")
 
 
+def test_lab_files_read_through_a_map_given_as_a_file_or_a_dict():
+    formats = pathlib.Path(__file__).resolve().parents[2] / "io" / "tests" / "fixtures" / "formats"
+    expected = json.loads((formats / "rig.tdms.expected.json").read_text())
+    with pytest.warns(UserWarning):
+        from_file = limpid.read_recording(formats / "rig.tdms", map=formats / "rig_tdms.toml")
+    as_dict = {
+        "time": {"stream": "Robot"},
+        "columns": {
+            "x": {"channel": "EndEffX"},
+            "fx": {"channel": "Force X", "scale": -1.0},
+            "q2": {"channel": "Elbow", "unit": "deg", "scale": 0.01},
+            "emg_biceps": {"channel": "EMG 1", "stream": "DAQ"},
+        },
+    }
+    with pytest.warns(UserWarning):
+        from_dict = limpid.read_recording(str(formats / "rig.tdms"), map=as_dict)
+    for name, values in expected.items():
+        np.testing.assert_allclose(from_file[name], values, rtol=1e-9, atol=1e-12)
+        np.testing.assert_array_equal(from_dict[name], from_file[name])
+    found = limpid.inspect(formats / "rig.xdf")
+    assert [s["name"] for s in found["streams"]] == ["robot", "emg", "markers"]
+    assert "EndEff.X" in found["proposed_map"]
+    with pytest.raises(ValueError, match="unknown unit"):
+        limpid.read_recording(formats / "rig.tdms", map={"columns": {"x": {"channel": "EndEffX", "unit": "furlong"}}})
+    with pytest.raises(ValueError, match="no channel"):
+        limpid.read_recording(formats / "rig.tdms", map={"time": {"stream": "Robot"}, "columns": {"x": "EndEfX"}})
+
+
 def test_window_sweep_rows_match_single_estimates():
     case = examples("planar") / "ex_joint_180"
     truth = json.loads(case.with_suffix(".truth.json").read_text())

@@ -32,6 +32,7 @@ from . import _limpid, _spectral
 __all__ = [
     "Result",
     "read_recording",
+    "inspect",
     "psd",
     "csd",
     "coherence",
@@ -223,9 +224,28 @@ def _recording(rec: RecordingLike) -> Any:
     raise ValueError("a recording is a path, a dict of 1-D arrays or a pandas DataFrame")
 
 
-def read_recording(path: Union[str, "os.PathLike[str]"]) -> Dict[str, np.ndarray]:
-    """Read a CSV, Parquet or MATLAB level-5 (.mat, -v6/-v7) recording (docs/src/format.md) into a dict of arrays."""
-    return _limpid.read_recording(path)
+def read_recording(path: Union[str, "os.PathLike[str]"],
+                   map: Union[None, str, "os.PathLike[str]", Mapping[str, Any]] = None) -> Dict[str, np.ndarray]:
+    """Read a recording (docs/src/format.md) into a dict of arrays.
+
+    CSV, Parquet and MAT files whose columns carry FORMAT.md's names are read
+    as they are. Lab files (XDF, C3D, TDMS, MAT v7.3, MAT structs, or a CSV
+    with the lab's own names) are read through a channel map: the path of its
+    TOML file, or a dict of the same shape, e.g.
+    ``{"time": {"stream": "robot"}, "columns": {"x": {"channel": "EndEff.X", "unit": "mm"}}}``
+    (docs/src/reference/lab-files.md). Conversion notes arrive as warnings.
+    """
+    if map is not None and not isinstance(map, (str, os.PathLike)):
+        map = dict(map)
+    return _limpid.read_recording(path, map)
+
+
+def inspect(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Any]:
+    """What a lab file holds: its streams with channels, units, rates, gaps and
+    marker texts, and a proposed channel map (``proposed_map``, TOML text) where
+    channel names are recognisable, as ``limpid inspect FILE --json`` prints."""
+    found: Dict[str, Any] = json.loads(_limpid.inspect(path))
+    return found
 
 
 def _welch_args(n: int, nperseg: Optional[int], noverlap: Optional[int], nfft: Optional[int],
