@@ -27,6 +27,44 @@ pub fn read(path: &Path) -> Result<Source> {
     read_bytes(path, &bytes)
 }
 
+/// The header's frame layout against the data the file holds, before the
+/// crate allocates its grids from the declared sizes (a corrupt header once
+/// made it fault in gigabytes): points x 4 values + analog samples per frame,
+/// 2 bytes each (integer format) or 4 (float, negative scale).
+fn check_frame_size(bytes: &[u8]) -> std::result::Result<(), String> {
+    let param_block = usize::from(bytes[0]).max(1);
+    // processor type: byte 3 of the parameter section, 83 + (1 Intel, 2 DEC, 3 MIPS)
+    let big_endian = bytes.get((param_block - 1) * 512 + 3) == Some(&86);
+    let word = |i: usize| {
+        let b = [bytes[2 * i], bytes[2 * i + 1]];
+        usize::from(if big_endian { u16::from_be_bytes(b) } else { u16::from_le_bytes(b) })
+    };
+    let (points, analog) = (word(1), word(2));
+    let (first, last) = (word(3), word(4));
+    let scale_bytes: [u8; 4] = bytes[12..16].try_into().expect("4 bytes");
+    let scale = if big_endian { f32::from_be_bytes(scale_bytes) } else { f32::from_le_bytes(scale_bytes) };
+    let value_bytes = if scale < 0.0 { 4 } else { 2 };
+    let data_start = word(8).max(1);
+    let data_bytes = bytes.len().saturating_sub((data_start - 1) * 512);
+    let frame = (points * 4 + analog) * value_bytes;
+    if frame > data_bytes {
+        return Err(format!(
+            "the header declares frames of {frame} bytes ({points} points, {analog} analog samples each), more than the {data_bytes} bytes of data in the file (corrupt header?)"
+        ));
+    }
+    if last >= first && frame > 0 {
+        let frames = last - first + 1;
+        if frames.saturating_mul(frame) > data_bytes.saturating_mul(2) + (1 << 20) {
+            // a long recording keeps its frame count in POINT:FRAMES; the crate caps
+            // the count by the data, but not before an analog grid is sized from it
+            return Err(format!(
+                "the header declares {frames} frames of {frame} bytes, far more than the {data_bytes} bytes of data in the file (corrupt header?)"
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Read C3D bytes; `path` names the file in errors.
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     let fail = |message: String| Error::Format {
@@ -43,6 +81,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
             "not a C3D file: the header's second byte is not 0x50 (the C3D key)".into(),
         ));
     }
+    check_frame_size(bytes).map_err(fail)?;
     let c3d = limpid_core::error::catch_panic(path, "C3D decoder (corrupt file)", || {
         c3dio::C3d::from_bytes(bytes).map_err(|e| fail(format!("not a readable C3D file: {e}")))
     })?;
