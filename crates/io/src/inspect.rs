@@ -259,7 +259,7 @@ pub fn propose(source: &Source) -> Option<String> {
             }
         }
         let mut v: Vec<_> = counts.into_iter().collect();
-        v.sort_by(|a, b| b.1.cmp(&a.1));
+        v.sort_by_key(|m| std::cmp::Reverse(m.1));
         v
     };
     if let Some((most, _)) = marker_texts.first() {

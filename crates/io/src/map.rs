@@ -579,7 +579,7 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
             r.channel.as_deref().unwrap_or(""),
             r.stream.as_deref(),
         )?;
-        convert(source, "t", &r, &found)?
+        convert(source, "t", r, &found)?
     } else if let Some(stamps) = &base.stamps {
         stamps.clone()
     } else if let Some(rate) = map.time.rate {

@@ -293,7 +293,7 @@ fn matrix(
             .unwrap_or(0.0) as usize;
         let (_, names) = next()?;
         let names = &r.bytes[names];
-        if len == 0 || names.len() % len != 0 {
+        if len == 0 || !names.len().is_multiple_of(len) {
             return Err(format!(
                 "struct {name}: field names of {} bytes do not split into names of {len}",
                 names.len()

@@ -37,12 +37,20 @@ fn check_frame_size(bytes: &[u8]) -> std::result::Result<(), String> {
     let big_endian = bytes.get((param_block - 1) * 512 + 3) == Some(&86);
     let word = |i: usize| {
         let b = [bytes[2 * i], bytes[2 * i + 1]];
-        usize::from(if big_endian { u16::from_be_bytes(b) } else { u16::from_le_bytes(b) })
+        usize::from(if big_endian {
+            u16::from_be_bytes(b)
+        } else {
+            u16::from_le_bytes(b)
+        })
     };
     let (points, analog) = (word(1), word(2));
     let (first, last) = (word(3), word(4));
     let scale_bytes: [u8; 4] = bytes[12..16].try_into().expect("4 bytes");
-    let scale = if big_endian { f32::from_be_bytes(scale_bytes) } else { f32::from_le_bytes(scale_bytes) };
+    let scale = if big_endian {
+        f32::from_be_bytes(scale_bytes)
+    } else {
+        f32::from_le_bytes(scale_bytes)
+    };
     let value_bytes = if scale < 0.0 { 4 } else { 2 };
     let data_start = word(8).max(1);
     let data_bytes = bytes.len().saturating_sub((data_start - 1) * 512);

@@ -337,8 +337,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
                 .iter()
                 .map(|(_, i, s)| i.values.saturating_mul(*s as u64))
                 .fold(0u64, u64::saturating_add);
-            if chunk > 0 {
-                let chunks = raw.len() as u64 / chunk;
+            if let Some(chunks) = (raw.len() as u64).checked_div(chunk) {
                 if chunks == 0 {
                     return Err(fail(where_(&format!(
                         "raw data of {} bytes, but one chunk of its channels needs {chunk}",

@@ -291,7 +291,7 @@ fn header(id: u32, xml: &str) -> std::result::Result<Building, String> {
         .unwrap_or_else(|| "0".into())
         .parse()
         .map_err(|_| format!("{what}: <nominal_srate> is not a number"))?;
-    if !rate.is_finite() || rate < 0.0 || rate > 1e7 {
+    if !rate.is_finite() || !(0.0..=1e7).contains(&rate) {
         return Err(format!("{what}: nominal_srate {rate} is not a rate limpid reads (0 for irregular, up to 10 MHz)"));
     }
     let mut labels: Vec<(String, Option<String>)> = info
