@@ -105,9 +105,18 @@ pub fn estimate(
         return Ok(());
     }
     let checked = request.check().map_err(with_flag_names)?;
+    // the MVC recording beside a co-contraction session records less (EMG only)
+    let supporting = |i: usize| matches!(checked.request(), Request::Cocontraction(_)) && i > 0;
     let recordings = paths
         .iter()
-        .map(crate::read_recording)
+        .enumerate()
+        .map(|(i, p)| {
+            if supporting(i) {
+                crate::read_supporting_recording(p)
+            } else {
+                crate::read_recording(p)
+            }
+        })
         .collect::<limpid_core::Result<Vec<_>>>()?;
     let mut estimated = limpid_app::estimate::run(&checked, recordings).map_err(with_flag_names)?;
     let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();

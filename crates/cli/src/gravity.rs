@@ -45,11 +45,11 @@ pub fn run(args: GravityArgs) -> CliResult {
     let robot = args.robot.robot()?;
     let summary = match (&args.calibration, &args.bias) {
         (Some(path), _) => {
-            let cal = crate::read_recording(path)?;
+            let cal = crate::read_supporting_recording(path)?;
             compensate(&mut rec, LoadSource::Calibration(&cal), robot.as_ref())?
         }
         (None, Some(path)) => {
-            let bias = crate::read_recording(path)?;
+            let bias = crate::read_supporting_recording(path)?;
             let source = LoadSource::TwoSteps {
                 bias: &bias,
                 initial_s: args.initial_s,

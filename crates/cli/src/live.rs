@@ -48,7 +48,11 @@ pub struct LiveArgs {
 }
 
 pub fn run(args: LiveArgs) -> CliResult {
-    let mvc = args.mvc.as_ref().map(crate::read_recording).transpose()?;
+    let mvc = args
+        .mvc
+        .as_ref()
+        .map(crate::read_supporting_recording)
+        .transpose()?;
     let replay = args
         .replay
         .as_ref()

@@ -109,6 +109,18 @@ pub fn channel_map() -> Option<&'static limpid_io::map::ChannelMap> {
     CHANNEL_MAP.get()
 }
 
+/// Read a file beside the main recording (an MVC recording, calibration
+/// poses) through the map, leaving out the columns it does not record.
+pub fn read_supporting_recording(
+    path: impl AsRef<std::path::Path>,
+) -> limpid_core::Result<limpid_core::Recording> {
+    let rec = limpid_io::read_supporting_recording(path, channel_map())?;
+    for w in rec.warnings() {
+        eprintln!("limpid: warning: {}: {w}", rec.path().display());
+    }
+    Ok(rec)
+}
+
 /// Every command, with negative numbers taken as values (`--cutoff -5` is
 /// a bad cut-off, not an unknown flag `-5`).
 fn command_accepting_negative_numbers(cmd: clap::Command) -> clap::Command {

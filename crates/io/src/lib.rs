@@ -93,6 +93,20 @@ pub fn convert(path: impl AsRef<Path>, map: Option<&map::ChannelMap>) -> Result<
     }
 }
 
+/// [`read_recording_mapped`] for a file beside the main recording (an MVC
+/// recording, calibration poses): with a map, columns the file does not
+/// record are left out ([`map::apply_partial`]).
+pub fn read_supporting_recording(
+    path: impl AsRef<Path>,
+    map: Option<&map::ChannelMap>,
+) -> Result<Recording> {
+    let path = path.as_ref();
+    match map {
+        Some(map) => Ok(map::apply_partial(&sources::read_source(path)?, map)?.recording),
+        None => read_recording_mapped(path, None),
+    }
+}
+
 /// Read a recording held in memory; `path` names it in errors and picks the
 /// format by its extension, as [`read_recording`] does (used by the fuzzer).
 pub fn read_recording_bytes(path: impl AsRef<Path>, bytes: Vec<u8>) -> Result<Recording> {
@@ -309,9 +323,9 @@ pub(crate) fn read_mat_table(path: &Path, bytes: &[u8]) -> Result<Table> {
     }
     let mut warnings = Vec::new();
     if !skipped.is_empty() {
+        // the reader of the warnings names the file (CLI, Python)
         warnings.push(format!(
-            "{}: skipped MAT variables that are not numeric vectors: {}",
-            path.display(),
+            "skipped MAT variables that are not numeric vectors: {}",
             skipped.join("; ")
         ));
     }

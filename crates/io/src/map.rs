@@ -519,6 +519,79 @@ fn interpolate(stamps: &[f64], values: &[f64], at: &[f64]) -> Vec<f64> {
     out
 }
 
+/// Apply `map` to a file that records less than the main one (an MVC
+/// recording beside a co-contraction session, calibration poses): columns
+/// whose channel or markers the file lacks are left out (reported), and when
+/// the map's time-base stream is absent the stream holding most of the
+/// remaining channels sets the time. An error when nothing of the map is
+/// in the file.
+pub fn apply_partial(source: &Source, map: &ChannelMap) -> Result<Converted> {
+    let mut kept = BTreeMap::new();
+    let mut left_out = Vec::new();
+    let mut per_stream: Vec<(usize, String)> = Vec::new();
+    for (column, spec) in &map.columns {
+        let r = spec.rule();
+        let present = match &r.channel {
+            Some(ch) => match find_channel(source, column, ch, r.stream.as_deref()) {
+                Ok(found) => {
+                    match per_stream.iter_mut().find(|p| p.1 == found.stream.name) {
+                        Some(p) => p.0 += 1,
+                        None => per_stream.push((1, found.stream.name.clone())),
+                    }
+                    true
+                }
+                Err(_) => false,
+            },
+            None => source.streams.iter().any(|s| {
+                s.markers
+                    .iter()
+                    .any(|m| match (&r.marker, &r.marker_prefix) {
+                        (Some(text), _) => &m.text == text,
+                        (_, Some(prefix)) => m.text.starts_with(prefix.as_str()),
+                        _ => false,
+                    })
+            }),
+        };
+        if present {
+            kept.insert(column.clone(), spec.clone());
+        } else {
+            left_out.push(column.clone());
+        }
+    }
+    if kept.is_empty() {
+        return Err(source
+            .error("none of the channel map's channels or markers is in this file".to_string()));
+    }
+    let time_present = map
+        .time
+        .stream
+        .as_ref()
+        .is_some_and(|name| source.streams.iter().any(|s| &s.name == name));
+    let stream = if time_present || map.time.stream.is_none() {
+        map.time.stream.clone()
+    } else {
+        per_stream.iter().max_by_key(|p| p.0).map(|p| p.1.clone())
+    };
+    let partial = ChannelMap {
+        time: TimeSpec {
+            stream,
+            rate: map.time.rate,
+        },
+        columns: kept,
+        path: map.path.clone(),
+    };
+    let mut converted = apply(source, &partial)?;
+    if !left_out.is_empty() {
+        let note = format!(
+            "columns of the map this file does not record were left out: {}",
+            left_out.join(", ")
+        );
+        converted.recording.warn(note.clone());
+        converted.notes.push(note);
+    }
+    Ok(converted)
+}
+
 /// Apply `map` to `source`: a FORMAT.md recording.
 pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     let mut notes = Vec::new();
@@ -744,7 +817,8 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     gap_in_base(source, base, &names, &columns)?;
     let mut recording = Recording::new(&source.path, names, columns, 1)?;
     for note in source.notes.iter().chain(&notes) {
-        recording.warn(format!("{}: {note}", source.path.display()));
+        // the reader of the warnings names the file (CLI, Python)
+        recording.warn(note.clone());
     }
     Ok(Converted { recording, notes })
 }

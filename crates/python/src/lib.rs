@@ -402,15 +402,22 @@ fn channel_map(map: &Bound<'_, PyAny>) -> PyResult<limpid_io::map::ChannelMap> {
 /// A recording file as a dict of numpy arrays (column order kept); lab
 /// files (XDF, C3D, TDMS, MAT structs) through a channel map.
 #[pyfunction]
-#[pyo3(signature = (path, map=None))]
+#[pyo3(signature = (path, map=None, partial=false))]
 fn read_recording<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
     map: Option<Bound<'py, PyAny>>,
+    partial: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let map = map.as_ref().map(channel_map).transpose()?;
-    let rec =
-        detached(py, || limpid_io::read_recording_mapped(&path, map.as_ref())).map_err(err)?;
+    let rec = detached(py, || {
+        if partial {
+            limpid_io::read_supporting_recording(&path, map.as_ref())
+        } else {
+            limpid_io::read_recording_mapped(&path, map.as_ref())
+        }
+    })
+    .map_err(err)?;
     warn_about(py, &rec)?;
     columns_dict(py, &rec)
 }

@@ -289,6 +289,12 @@ def test_lab_files_read_through_a_map_given_as_a_file_or_a_dict():
         limpid.read_recording(formats / "rig.tdms", map={"columns": {"x": {"channel": "EndEffX", "unit": "furlong"}}})
     with pytest.raises(ValueError, match="no channel"):
         limpid.read_recording(formats / "rig.tdms", map={"time": {"stream": "Robot"}, "columns": {"x": "EndEfX"}})
+    # a file beside the main one: the same map, without the columns it lacks
+    only_emg = {"time": {"stream": "Robot"}, "columns": {"x": {"channel": "EndEffX", "stream": "Arm"},
+                                                         "emg_biceps": {"channel": "EMG 1", "stream": "DAQ"}}}
+    with pytest.warns(UserWarning, match="left out: x"):
+        emg = limpid.read_recording(formats / "rig.tdms", map=only_emg, partial=True)
+    assert list(emg) == ["t", "emg_biceps"] and len(emg["t"]) == 200  # on the Robot clock, which the file has
 
 
 def test_window_sweep_rows_match_single_estimates():

@@ -357,3 +357,29 @@ fn an_xdf_stream_whose_clock_goes_backwards_is_refused_naming_stream_and_sample(
         "{e}"
     );
 }
+
+#[test]
+fn a_file_beside_the_main_one_takes_the_same_map_without_the_columns_it_lacks() {
+    // an MVC recording made by the same rig records only EMG: the session's
+    // map applies, its robot columns and marker rules are left out, and the
+    // EMG stream sets the time
+    let map = ChannelMap::read(&fixture("rig_xdf.toml")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("mvc.xdf");
+    std::fs::write(&path, xdf_with_stamps(&[1.0, 1.01, 1.02, 1.03, 1.04])).unwrap();
+    // this file's only stream is called robot and its channel ch1: nothing of the map
+    let e = limpid_io::read_supporting_recording(&path, Some(&map))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("none of the channel map's channels"), "{e}");
+    let partial = ChannelMap::parse(
+        "[time]\nstream = \"robot\"\n[columns]\nx = { channel = \"EndEff.X\", stream = \"arm\" }\nemg_biceps = \"ch1\"\ntrial = { marker = \"go\" }",
+    )
+    .unwrap();
+    let rec = limpid_io::read_supporting_recording(&path, Some(&partial)).unwrap();
+    assert_eq!(rec.names(), ["t", "emg_biceps"]);
+    let warnings = rec.warnings().join(" ");
+    assert!(warnings.contains("left out: trial, x"), "{warnings}");
+    // the main recording keeps the strict reading
+    assert!(limpid_io::read_recording_mapped(&path, Some(&partial)).is_err());
+}

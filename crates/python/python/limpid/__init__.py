@@ -225,7 +225,8 @@ def _recording(rec: RecordingLike) -> Any:
 
 
 def read_recording(path: Union[str, "os.PathLike[str]"],
-                   map: Union[None, str, "os.PathLike[str]", Mapping[str, Any]] = None) -> Dict[str, np.ndarray]:
+                   map: Union[None, str, "os.PathLike[str]", Mapping[str, Any]] = None,
+                   partial: bool = False) -> Dict[str, np.ndarray]:
     """Read a recording (docs/src/format.md) into a dict of arrays.
 
     CSV, Parquet and MAT files whose columns carry FORMAT.md's names are read
@@ -234,10 +235,12 @@ def read_recording(path: Union[str, "os.PathLike[str]"],
     TOML file, or a dict of the same shape, e.g.
     ``{"time": {"stream": "robot"}, "columns": {"x": {"channel": "EndEff.X", "unit": "mm"}}}``
     (docs/src/reference/lab-files.md). Conversion notes arrive as warnings.
+    ``partial=True`` reads a file beside the main one (an MVC recording) with
+    the same map, leaving out the columns it does not record.
     """
     if map is not None and not isinstance(map, (str, os.PathLike)):
         map = dict(map)
-    return _limpid.read_recording(path, map)
+    return _limpid.read_recording(path, map, partial)
 
 
 def inspect(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Any]:
