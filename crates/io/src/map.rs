@@ -423,6 +423,21 @@ impl ChannelMap {
     }
 }
 
+/// The stream called `name`, or an error naming the nearest streams.
+fn named_stream<'a>(source: &'a Source, name: &str, what: &str) -> Result<&'a Stream> {
+    source
+        .streams
+        .iter()
+        .find(|s| s.name == name)
+        .ok_or_else(|| {
+            let names: Vec<&str> = source.streams.iter().map(|s| s.name.as_str()).collect();
+            source.error(format!(
+                "{what}: no stream {name:?} in the file{}",
+                nearest_hint(name, &names)
+            ))
+        })
+}
+
 /// A channel found in a source.
 struct Found<'a> {
     stream: &'a Stream,
@@ -438,18 +453,7 @@ fn find_channel<'a>(
 ) -> Result<Found<'a>> {
     let candidates: Vec<&Stream> = match stream {
         Some(name) => {
-            let s = source
-                .streams
-                .iter()
-                .find(|s| s.name == name)
-                .ok_or_else(|| {
-                    let names: Vec<&str> = source.streams.iter().map(|s| s.name.as_str()).collect();
-                    source.error(format!(
-                        "map column {column}: no stream {name:?}{}",
-                        nearest_hint(name, &names)
-                    ))
-                })?;
-            vec![s]
+            vec![named_stream(source, name, &format!("map column {column}"))?]
         }
         None => source.streams.iter().collect(),
     };
@@ -613,17 +617,7 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
         )?
         .stream
     } else if let Some(name) = &map.time.stream {
-        source
-            .streams
-            .iter()
-            .find(|s| &s.name == name)
-            .ok_or_else(|| {
-                let names: Vec<&str> = source.streams.iter().map(|s| s.name.as_str()).collect();
-                source.error(format!(
-                    "{map_name}: [time] stream {name:?} is not in the file{}",
-                    nearest_hint(name, &names)
-                ))
-            })?
+        named_stream(source, name, &format!("{map_name}: [time]"))?
     } else if source.streams.len() == 1 {
         &source.streams[0]
     } else {
@@ -796,16 +790,13 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
             c.drain(..before_markers);
         }
     }
-    if !names.iter().any(|n| n == "t") {
+    let names_had_t = names.iter().any(|n| n == "t");
+    if !names_had_t {
         names.insert(0, "t".into());
         let t0 = t_span[before_markers];
         columns.insert(0, t_span[before_markers..].iter().map(|t| t - t0).collect());
-        if t0 != 0.0 {
-            notes.push(format!(
-                "t counts from the first sample kept ({t0} s on the file's clock)"
-            ));
-        }
     }
+    let origin = t_span[before_markers];
     let mut order: Vec<usize> = (0..names.len()).collect();
     order.sort_by_key(|&i| (column_rank(&names[i]), names[i].clone()));
     let names: Vec<String> = order.iter().map(|&i| names[i].clone()).collect();
@@ -819,6 +810,12 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     for note in source.notes.iter().chain(&notes) {
         // the reader of the warnings names the file (CLI, Python)
         recording.warn(note.clone());
+    }
+    // where t starts is worth saying in a conversion, not a warning on every read
+    if !names_had_t && origin != 0.0 {
+        notes.push(format!(
+            "t counts from the first sample kept ({origin} s on the file's clock)"
+        ));
     }
     Ok(Converted { recording, notes })
 }
@@ -961,20 +958,9 @@ fn envelope(
 /// The markers a marker rule reads: the named stream's, else every marker stream's.
 fn markers_for(source: &Source, column: &str, r: &ColumnRule) -> Result<Vec<Marker>> {
     let mut markers: Vec<Marker> = match &r.stream {
-        Some(name) => {
-            let s = source
-                .streams
-                .iter()
-                .find(|s| &s.name == name)
-                .ok_or_else(|| {
-                    let names: Vec<&str> = source.streams.iter().map(|s| s.name.as_str()).collect();
-                    source.error(format!(
-                        "map column {column}: no stream {name:?}{}",
-                        nearest_hint(name, &names)
-                    ))
-                })?;
-            s.markers.clone()
-        }
+        Some(name) => named_stream(source, name, &format!("map column {column}"))?
+            .markers
+            .clone(),
         None => source
             .streams
             .iter()

@@ -166,3 +166,159 @@ fn map_is_refused_where_no_recording_is_read() {
         out.stderr
     );
 }
+
+/// The streams a rig would record for `rec`: robot pose and force (mm, N),
+/// EMG (uV) and, where the recording has trials, markers for each trial's
+/// start and level.
+fn rig_streams(rec: &limpid_core::Recording) -> Vec<XdfStream> {
+    let t = rec.t();
+    let lsl = |t: &f64| 5000.0 + t;
+    let mut out = Vec::new();
+    let robot: Vec<&str> = ["x", "y", "z", "fx", "fy", "fz"]
+        .into_iter()
+        .filter(|c| rec.has(c))
+        .collect();
+    if !robot.is_empty() {
+        out.push(XdfStream {
+            name: "robot".into(),
+            kind: "Position".into(),
+            rate: rec.sample_rate(),
+            channels: robot
+                .iter()
+                .map(|c| {
+                    (
+                        format!("EE.{c}"),
+                        if c.starts_with('f') { "N" } else { "mm" }.to_string(),
+                    )
+                })
+                .collect(),
+            stamps: t.iter().map(lsl).collect(),
+            values: robot
+                .iter()
+                .map(|c| {
+                    let k = if c.starts_with('f') { 1.0 } else { 1e3 };
+                    rec.column(c).unwrap().iter().map(|v| v * k).collect()
+                })
+                .collect(),
+            texts: Vec::new(),
+            clock_offsets: Vec::new(),
+        });
+    }
+    let emg: Vec<&String> = rec
+        .names()
+        .iter()
+        .filter(|n| n.starts_with("emg_"))
+        .collect();
+    out.push(XdfStream {
+        name: "emg".into(),
+        kind: "EMG".into(),
+        rate: rec.sample_rate(),
+        channels: emg
+            .iter()
+            .map(|n| (n[4..].to_string(), "uV".to_string()))
+            .collect(),
+        stamps: t.iter().map(lsl).collect(),
+        values: emg
+            .iter()
+            .map(|n| rec.column(n).unwrap().iter().map(|v| v * 1e6).collect())
+            .collect(),
+        texts: Vec::new(),
+        clock_offsets: Vec::new(),
+    });
+    if let (Some(trial), Some(level)) = (rec.column("trial"), rec.column("level")) {
+        let starts: Vec<usize> = (0..t.len())
+            .filter(|&i| i == 0 || trial[i] != trial[i - 1])
+            .collect();
+        out.push(XdfStream {
+            name: "events".into(),
+            kind: "Markers".into(),
+            rate: 0.0,
+            channels: Vec::new(),
+            stamps: starts
+                .iter()
+                .flat_map(|&i| [lsl(&t[i]), lsl(&t[i])])
+                .collect(),
+            values: Vec::new(),
+            texts: starts
+                .iter()
+                .flat_map(|&i| ["start".to_string(), format!("level {}", level[i])])
+                .collect(),
+            clock_offsets: Vec::new(),
+        });
+    }
+    out
+}
+
+#[test]
+fn a_cocontraction_session_and_its_mvc_recording_read_through_one_map() {
+    let dir = examples("cocontraction");
+    let (csv, mvc_csv) = (dir.join("ex_config4.csv"), dir.join("ex_config4.mvc.csv"));
+    let rec = limpid_io::read_recording(&csv).unwrap();
+    let mvc = limpid_io::read_recording(&mvc_csv).unwrap();
+    let d = tempfile::tempdir().unwrap();
+    let (session, mvc_xdf) = (d.path().join("session.xdf"), d.path().join("mvc.xdf"));
+    write(&session, &rig_streams(&rec)).unwrap();
+    // the MVC contractions recorded by the EMG amplifier alone
+    let emg_only: Vec<XdfStream> = rig_streams(&mvc)
+        .into_iter()
+        .filter(|s| s.name == "emg")
+        .collect();
+    write(&mvc_xdf, &emg_only).unwrap();
+    let map = d.path().join("rig.toml");
+    let mut text = String::from("[time]\nstream = \"robot\"\n[columns]\ntrial = { marker = \"start\" }\nlevel = { marker_prefix = \"level \" }\n");
+    for c in ["x", "y", "z", "fx", "fy", "fz"] {
+        text += &format!("{c} = \"EE.{c}\"\n");
+    }
+    for n in rec.names().iter().filter(|n| n.starts_with("emg_")) {
+        text += &format!("{n} = {{ channel = \"{}\", stream = \"emg\" }}\n", &n[4..]);
+    }
+    std::fs::write(&map, text).unwrap();
+    let from_csv = json(&[
+        "estimate",
+        "cocontraction",
+        csv.to_str().unwrap(),
+        "--mvc",
+        mvc_csv.to_str().unwrap(),
+        "--json",
+    ]);
+    let out = limpid(&[
+        "estimate",
+        "cocontraction",
+        session.to_str().unwrap(),
+        "--mvc",
+        mvc_xdf.to_str().unwrap(),
+        "--map",
+        map.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    // the MVC file has no robot stream and no markers: the map's other columns are left out, said once
+    assert!(
+        out.stderr.contains("mvc.xdf") && out.stderr.contains("left out"),
+        "{}",
+        out.stderr
+    );
+    let from_xdf: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    let (a, b) = (
+        from_csv["levels"].as_array().unwrap(),
+        from_xdf["levels"].as_array().unwrap(),
+    );
+    assert_eq!(a.len(), b.len());
+    for (la, lb) in a.iter().zip(b) {
+        let (ia, ib) = (
+            la["cocontraction_index"].as_f64().unwrap(),
+            lb["cocontraction_index"].as_f64().unwrap(),
+        );
+        assert!((ia - ib).abs() <= 1e-9, "index {ia} vs {ib}");
+        let (ka, kb) = (&la["stiffness"], &lb["stiffness"]);
+        for (ra, rb) in ka.as_array().unwrap().iter().zip(kb.as_array().unwrap()) {
+            for (x, y) in ra.as_array().unwrap().iter().zip(rb.as_array().unwrap()) {
+                let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+                assert!(
+                    (x - y).abs() <= 1e-6 * x.abs().max(1.0),
+                    "stiffness {x} vs {y}"
+                );
+            }
+        }
+    }
+}

@@ -75,10 +75,7 @@ fn check_frame_size(bytes: &[u8]) -> std::result::Result<(), String> {
 
 /// Read C3D bytes; `path` names the file in errors.
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
-    let fail = |message: String| Error::Format {
-        path: path.to_path_buf(),
-        message,
-    };
+    let fail = super::format_error(path);
     if bytes.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),

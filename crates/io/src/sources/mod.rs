@@ -255,6 +255,34 @@ pub fn read_source_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     }
 }
 
+/// The start every reader shares: an empty file and a file without the
+/// format's `magic` bytes are refused, naming the format.
+pub(crate) fn check_start(path: &Path, bytes: &[u8], magic: &[u8], format: &str) -> Result<()> {
+    if bytes.is_empty() {
+        return Err(Error::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    if !bytes.starts_with(magic) {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "not {format} file: it does not start with {:?}",
+                String::from_utf8_lossy(magic)
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The error of a reader: `path` and a message.
+pub(crate) fn format_error(path: &Path) -> impl Fn(String) -> Error + Copy + '_ {
+    move |message| Error::Format {
+        path: path.to_path_buf(),
+        message,
+    }
+}
+
 impl Source {
     /// A table as a source of one stream without stamps.
     pub fn from_table(path: &Path, table: crate::Table) -> Source {

@@ -22,7 +22,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use super::{Channel, Source, Stream};
-use limpid_core::{Error, Result};
+use limpid_core::Result;
 
 /// Largest TDMS file read (bytes).
 pub const MAX_TDMS_BYTES: u64 = 4 << 30;
@@ -190,20 +190,8 @@ fn split_path(path: &str) -> Vec<String> {
 
 /// Read TDMS bytes; `path` names the file in errors.
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
-    let fail = |message: String| Error::Format {
-        path: path.to_path_buf(),
-        message,
-    };
-    if bytes.is_empty() {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    if !bytes.starts_with(b"TDSm") {
-        return Err(fail(
-            "not a TDMS file: it does not start with \"TDSm\"".into(),
-        ));
-    }
+    let fail = super::format_error(path);
+    super::check_start(path, bytes, b"TDSm", "a TDMS")?;
     let mut objects: HashMap<String, Object> = HashMap::new();
     let mut order: Vec<String> = Vec::new();
     let mut active: Vec<String> = Vec::new();

@@ -29,7 +29,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::{Channel, Marker, Source, Stream};
-use limpid_core::{Error, Result};
+use limpid_core::Result;
 
 /// Largest XDF file read (bytes).
 pub const MAX_XDF_BYTES: u64 = 4 << 30;
@@ -156,20 +156,8 @@ impl<'a> Cursor<'a> {
 
 /// Read XDF bytes; `path` names the file in errors.
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
-    let fail = |message: String| Error::Format {
-        path: path.to_path_buf(),
-        message,
-    };
-    if bytes.is_empty() {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    if !bytes.starts_with(b"XDF:") {
-        return Err(fail(
-            "not an XDF file: it does not start with \"XDF:\"".into(),
-        ));
-    }
+    let fail = super::format_error(path);
+    super::check_start(path, bytes, b"XDF:", "an XDF")?;
     let mut file = Cursor {
         bytes,
         at: 4,
