@@ -61,6 +61,9 @@ pub struct StudyMeta {
     /// request (`[study.request]` with `tolerance`, `[study.request.prepare]`
     /// with the preparation options); absent: the defaults.
     pub request: Option<CocontractionRequest>,
+    /// The channel map every recording is read through (a rig's lab files:
+    /// docs/src/reference/lab-files.md), relative to the manifest.
+    pub map: Option<PathBuf>,
 }
 
 impl StudyMeta {
@@ -93,6 +96,10 @@ pub struct Entry {
     pub file: PathBuf,
     /// Its MVC recording.
     pub mvc: PathBuf,
+    /// The channel map both are read through (lab files; `[study] map` when
+    /// the entry gives none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map: Option<PathBuf>,
 }
 
 /// Tables 1-4 row: one configuration at one level.

@@ -37,6 +37,22 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
     for e in &mut m.recording {
         e.file = base.join(&e.file);
         e.mvc = base.join(&e.mvc);
+        e.map = e
+            .map
+            .take()
+            .or_else(|| m.study.map.clone())
+            .map(|p| base.join(p));
+    }
+    // every map is read once here, so a mistake in one is found before any recording
+    let mut maps: Vec<&Path> = m
+        .recording
+        .iter()
+        .filter_map(|e| e.map.as_deref())
+        .collect();
+    maps.sort();
+    maps.dedup();
+    for map in maps {
+        limpid_io::map::ChannelMap::read(map)?;
     }
     refuse_repeats(path, &m.recording)?;
     Ok(m)
@@ -76,8 +92,14 @@ pub fn process_entry(
 ) -> std::result::Result<Processed, Failure> {
     let run = || -> Result<CocontractionResult> {
         let checked = Request::Cocontraction(request.clone()).check()?;
-        let rec = limpid_io_read(&e.file)?;
-        let mvc = limpid_io_read(&e.mvc)?;
+        let map = e
+            .map
+            .as_deref()
+            .map(limpid_io::map::ChannelMap::read)
+            .transpose()?;
+        let rec = limpid_io::read_recording_mapped(&e.file, map.as_ref())?;
+        // the MVC recording may record less than the session (EMG only)
+        let mvc = limpid_io::read_supporting_recording(&e.mvc, map.as_ref())?;
         if !["x", "y", "z"].iter().all(|c| rec.has(c)) {
             return Err(Error::Format {
                 path: e.file.clone(),
@@ -196,10 +218,6 @@ pub fn simulate_study(
     let path = dir.join("study.toml");
     limpid_core::files::write_file(&path, manifest.as_bytes())?;
     Ok((population.len(), path))
-}
-
-fn limpid_io_read(path: &Path) -> Result<limpid_core::Recording> {
-    limpid_io::read_recording(path)
 }
 
 /// Write `tables.csv`, `rotation.csv`, `study.json`, `tables.md` into `dir`.

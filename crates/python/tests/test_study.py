@@ -102,3 +102,34 @@ def test_repeated_recordings_of_one_subject_and_configuration_keep_their_own_fil
         limpid.study_run(twice)
     limpid.study_run(path, out=tmp_path / "t")
     assert sorted(p.name for p in (tmp_path / "t" / "recordings").iterdir()) == ["s1_c4.json", "s1_c4_2.json"]
+
+
+def test_study_entries_carry_the_manifest_map_to_each_process(tmp_path):
+    # the lab's CSV: its own column names, positions in mm
+    import numpy as np
+    src = limpid.read_recording(SHARED / "ex_config4.csv")
+    mvc = limpid.read_recording(SHARED / "ex_config4.mvc.csv")
+
+    def lab_csv(rec, path):
+        names = {"x": "HandX_mm", "y": "HandY_mm", "z": "HandZ_mm"}
+        cols = [(names.get(k, k), v * 1e3 if k in names else v) for k, v in rec.items()]
+        header = ",".join(n for n, _ in cols)
+        np.savetxt(path, np.column_stack([v for _, v in cols]), delimiter=",", header=header, comments="", fmt="%.17g")
+
+    lab_csv(src, tmp_path / "s1.csv")
+    lab_csv(mvc, tmp_path / "s1_mvc.csv")
+    columns = "\n".join(f'{k} = {{ channel = "Hand{k.upper()}_mm", unit = "mm" }}' for k in "xyz")
+    others = "\n".join(f'{k} = "{k}"' for k in src if k not in "xyz")
+    (tmp_path / "rig.toml").write_text(f"[columns]\n{columns}\n{others}\n")
+    path = tmp_path / "study.toml"
+    path.write_text('[study]\nname = "lab csv"\nmap = "rig.toml"\n\n[[recording]]\nsubject = "1"\n'
+                    'configuration = "4"\nfile = "s1.csv"\nmvc = "s1_mvc.csv"\n')
+    entries = limpid.study_entries(path)
+    assert entries[0]["map"] == str(tmp_path / "rig.toml")
+    outcome = limpid.study_process(entries[0])
+    direct = limpid.estimate_cocontraction(SHARED / "ex_config4.csv", SHARED / "ex_config4.mvc.csv").to_dict()
+    assert outcome.ok, outcome.error
+    levels = outcome.result().to_dict()["levels"]
+    assert len(levels) == len(direct["levels"]) == 4
+    for a, b in zip(levels, direct["levels"]):
+        np.testing.assert_allclose(a["stiffness"], b["stiffness"], rtol=1e-9)

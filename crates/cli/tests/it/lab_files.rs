@@ -322,3 +322,94 @@ fn a_cocontraction_session_and_its_mvc_recording_read_through_one_map() {
         }
     }
 }
+
+#[test]
+fn a_study_manifest_reads_its_lab_files_through_its_map() {
+    let ex = examples("cocontraction");
+    let d = tempfile::tempdir().unwrap();
+    let rec = limpid_io::read_recording(ex.join("ex_config4.csv")).unwrap();
+    let mvc = limpid_io::read_recording(ex.join("ex_config4.mvc.csv")).unwrap();
+    write(&d.path().join("s1.xdf"), &rig_streams(&rec)).unwrap();
+    let emg_only: Vec<XdfStream> = rig_streams(&mvc)
+        .into_iter()
+        .filter(|s| s.name == "emg")
+        .collect();
+    write(&d.path().join("s1_mvc.xdf"), &emg_only).unwrap();
+    let mut map = String::from("[time]\nstream = \"robot\"\n[columns]\ntrial = { marker = \"start\" }\nlevel = { marker_prefix = \"level \" }\n");
+    for c in ["x", "y", "z", "fx", "fy", "fz"] {
+        map += &format!("{c} = \"EE.{c}\"\n");
+    }
+    for n in rec.names().iter().filter(|n| n.starts_with("emg_")) {
+        map += &format!("{n} = {{ channel = \"{}\", stream = \"emg\" }}\n", &n[4..]);
+    }
+    std::fs::write(d.path().join("rig.toml"), map).unwrap();
+    let entry = |file: &str, mvc: &str| {
+        format!("[[recording]]\nsubject = \"1\"\nconfiguration = \"4\"\nfile = \"{file}\"\nmvc = \"{mvc}\"\n")
+    };
+    let lab = d.path().join("lab.toml");
+    std::fs::write(
+        &lab,
+        format!(
+            "[study]\nname = \"lab\"\nmap = \"rig.toml\"\n\n{}",
+            entry("s1.xdf", "s1_mvc.xdf")
+        ),
+    )
+    .unwrap();
+    let csv = d.path().join("csv.toml");
+    let (a, b) = (ex.join("ex_config4.csv"), ex.join("ex_config4.mvc.csv"));
+    std::fs::write(
+        &csv,
+        format!(
+            "[study]\nname = \"csv\"\n\n{}",
+            entry(a.to_str().unwrap(), b.to_str().unwrap())
+        ),
+    )
+    .unwrap();
+    let run = |manifest: &std::path::Path, out: &str| {
+        let o = limpid(&[
+            "study",
+            "run",
+            manifest.to_str().unwrap(),
+            "--out",
+            d.path().join(out).to_str().unwrap(),
+        ]);
+        assert_eq!(o.code, 0, "{}", o.stderr);
+        assert!(
+            o.stdout.contains("1 of 1 recordings processed"),
+            "{}",
+            o.stdout
+        );
+        std::fs::read_to_string(d.path().join(out).join("tables.csv")).unwrap()
+    };
+    let (from_lab, from_csv) = (run(&lab, "lab"), run(&csv, "csv"));
+    for (l, c) in from_lab.lines().zip(from_csv.lines()).skip(1) {
+        let nums = |s: &str| {
+            s.split(',')
+                .skip(2)
+                .filter_map(|v| v.parse::<f64>().ok())
+                .collect::<Vec<_>>()
+        };
+        for (x, y) in nums(l).iter().zip(nums(c)) {
+            assert!((x - y).abs() <= 1e-6 * y.abs().max(1.0), "{l}\n{c}");
+        }
+    }
+    // a manifest whose map has a mistake is refused before any recording is read
+    std::fs::write(
+        d.path().join("rig.toml"),
+        "[columns]\nx = { channel = \"a\", unit = \"parsec\" }\n",
+    )
+    .unwrap();
+    let o = limpid(&[
+        "study",
+        "run",
+        lab.to_str().unwrap(),
+        "--out",
+        d.path().join("bad").to_str().unwrap(),
+    ]);
+    assert_eq!(o.code, 2);
+    assert!(
+        o.stderr.contains("rig.toml") && o.stderr.contains("parsec"),
+        "{}",
+        o.stderr
+    );
+}

@@ -677,6 +677,8 @@ def study_process(entry: Mapping[str, Any]) -> StudyOutcome:
     of failures, as ``limpid study run`` does."""
     e = {k: os.fspath(entry[k]) if k in ("file", "mvc") else str(entry[k])
          for k in ("subject", "configuration", "file", "mvc")}
+    if entry.get("map") is not None:
+        e["map"] = os.fspath(entry["map"])
     options = dict(entry.get("request") or {})
     if entry.get("tolerance") is not None:  # entries made before requests
         options["tolerance"] = entry["tolerance"]
