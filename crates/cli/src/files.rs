@@ -1,5 +1,5 @@
 //! `limpid inspect FILE` and `limpid convert FILE --map M -o REC`: lab files
-//! (XDF, and any table) seen as streams and channels, and turned into
+//! (XDF, C3D, TDMS, MAT, and any table) seen as streams and channels, and turned into
 //! FORMAT.md recordings by a channel map (limpid-io `sources`, `map`).
 
 use std::path::PathBuf;
@@ -11,7 +11,7 @@ use crate::CliResult;
 /// `limpid inspect`.
 #[derive(Args)]
 pub struct InspectArgs {
-    /// The file (XDF, CSV, Parquet, MAT).
+    /// The file (XDF, C3D, TDMS, MAT, CSV, Parquet).
     pub file: PathBuf,
     /// Print JSON instead of text.
     #[arg(long)]
@@ -21,7 +21,7 @@ pub struct InspectArgs {
 /// `limpid convert`.
 #[derive(Args)]
 pub struct ConvertArgs {
-    /// The file (XDF, CSV, Parquet, MAT).
+    /// The file (XDF, C3D, TDMS, MAT, CSV, Parquet).
     pub file: PathBuf,
     /// Output recording (.csv or .parquet).
     #[arg(short, long)]

@@ -72,7 +72,7 @@ enum Command {
     Reproduce(reproduce::ReproduceArgs),
     /// Run the request recorded in a result's run block again, on the same input files.
     Rerun(rerun::RerunArgs),
-    /// Show the streams, channels, rates, units, gaps and markers of a lab file (XDF, CSV, Parquet, MAT), with a proposed channel map.
+    /// Show the streams, channels, rates, units, gaps and markers of a lab file (XDF, C3D, TDMS, MAT, CSV, Parquet), with a proposed channel map.
     Inspect(files::InspectArgs),
     /// Convert a lab file to a recording (CSV or Parquet) through a channel map (--map).
     Convert(files::ConvertArgs),

@@ -11,8 +11,14 @@
 //! (`mat.rs`). Each
 //! column is a real numeric vector variable (row or column, any numeric
 //! class) named like the column; scalars, matrices, strings, structs and
-//! cells are skipped. `-v7.3` files are HDF5 and are refused with a hint. In
-//! errors, "row" counts samples from 1, as MATLAB indexes them.
+//! cells are skipped. `-v7.3` files (HDF5) are read the same way, their
+//! top-level vectors as columns (`sources::mat73`). In errors, "row" counts
+//! samples from 1, as MATLAB indexes them.
+//!
+//! Lab files (issue 40): XDF, C3D, TDMS and MAT files with structs are read
+//! as streams ([`sources`]) and turned into recordings by a channel map
+//! ([`map`]); [`inspect`] summarises them. [`read_recording_mapped`] and
+//! [`convert`] are the entry points.
 
 #![warn(missing_docs)]
 
