@@ -169,6 +169,19 @@ fn suggest(stream: &Stream, channel: &str) -> Option<String> {
     if has(&["emg"]) {
         return Some(format!("emg_{last}"));
     }
+    // a name that ends in its axis: EndEffX, HandY, ForceZ, FX
+    if last.len() > 1 {
+        let (stem, axis) = last.split_at(last.len() - 1);
+        if matches!(axis, "x" | "y" | "z") {
+            let position = ["pos", "endeff", "hand", "ee", "cart", "handle", "end"];
+            if ["force", "f", "ft", "load"].contains(&stem) {
+                return Some(format!("f{axis}"));
+            }
+            if position.iter().any(|w| stem.contains(w)) {
+                return Some(axis.into());
+            }
+        }
+    }
     match last {
         "time" | "timestamp" | "t" if stream.stamps.is_none() => Some("t".into()),
         "trial" | "trialno" | "trialnumber" | "trialnum" => Some("trial".into()),

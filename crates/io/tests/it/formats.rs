@@ -383,3 +383,45 @@ fn a_file_beside_the_main_one_takes_the_same_map_without_the_columns_it_lacks() 
     // the main recording keeps the strict reading
     assert!(limpid_io::read_recording_mapped(&path, Some(&partial)).is_err());
 }
+
+#[test]
+fn a_mat_v73_file_converts_by_dotted_struct_paths() {
+    let rec = assert_matches("rig73.mat", "rig_mat73.toml");
+    assert!((rec.sample_rate() - 500.0).abs() < 1e-6);
+    let source = limpid_io::sources::read_source(&fixture("rig73.mat")).unwrap();
+    let names: Vec<&str> = source.streams[0]
+        .channels
+        .iter()
+        .map(|c| c.name.as_str())
+        .collect();
+    assert_eq!(
+        names,
+        ["rec.EndEffX", "rec.Time", "rec.TrialNo", "rec.Force.Fx"]
+    );
+    // what is not a channel is named with its class
+    let notes = source.notes.join(" ");
+    assert!(
+        notes.contains("notes (1 x 2, cell): a cell array"),
+        "{notes}"
+    );
+    assert!(notes.contains("subject (1 x 3, char)"), "{notes}");
+    // names that end in their axis are recognised, and the proposal parses
+    let proposed = limpid_io::inspect::inspect(&source).proposed_map.unwrap();
+    assert!(
+        proposed.contains("x = { channel = \"rec.EndEffX\" }"),
+        "{proposed}"
+    );
+    assert!(
+        proposed.contains("fx = { channel = \"rec.Force.Fx\" }"),
+        "{proposed}"
+    );
+    ChannelMap::parse(&proposed).unwrap();
+    let map = ChannelMap::parse("[time]\nrate = 500\n[columns]\nx = \"rec.EndEfX\"").unwrap();
+    let e = limpid_io::read_recording_mapped(fixture("rig73.mat"), Some(&map))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no channel \"rec.EndEfX\"") && e.contains("rec.EndEffX"),
+        "{e}"
+    );
+}
