@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use limpid_core::{Error, Result};
 
 pub mod c3d;
+mod cursor;
 pub mod mat73;
 pub mod tdms;
 pub mod xdf;

@@ -21,6 +21,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use super::cursor::Cursor;
 use super::{Channel, Source, Stream};
 use limpid_core::Result;
 
@@ -78,36 +79,7 @@ fn type_name(t: u32) -> String {
     }
 }
 
-struct Cursor<'a> {
-    bytes: &'a [u8],
-    at: usize,
-}
-
-impl<'a> Cursor<'a> {
-    fn take(&mut self, n: usize, what: &str) -> std::result::Result<&'a [u8], String> {
-        match self.at.checked_add(n).filter(|e| *e <= self.bytes.len()) {
-            Some(end) => {
-                let s = &self.bytes[self.at..end];
-                self.at = end;
-                Ok(s)
-            }
-            None => Err(format!(
-                "byte {}: truncated: {what} needs {n} bytes, {} are left",
-                self.at,
-                self.bytes.len() - self.at
-            )),
-        }
-    }
-    fn u32(&mut self, what: &str) -> std::result::Result<u32, String> {
-        Ok(u32::from_le_bytes(
-            self.take(4, what)?.try_into().expect("4"),
-        ))
-    }
-    fn u64(&mut self, what: &str) -> std::result::Result<u64, String> {
-        Ok(u64::from_le_bytes(
-            self.take(8, what)?.try_into().expect("8"),
-        ))
-    }
+impl Cursor<'_> {
     fn string(&mut self, what: &str) -> std::result::Result<String, String> {
         let n = self.u32(what)? as usize;
         let b = self.take(n, what)?;
@@ -199,7 +171,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     let mut segment = 0usize;
     while at < bytes.len() {
         segment += 1;
-        let mut c = Cursor { bytes, at };
+        let mut c = Cursor { bytes, at, base: 0 };
         let tag = c.take(4, "segment tag").map_err(&fail)?;
         if tag != b"TDSm" {
             return Err(fail(format!(
@@ -237,6 +209,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
             let mut m = Cursor {
                 bytes: &bytes[..lead_end + raw_offset as usize],
                 at: lead_end,
+                base: 0,
             };
             let count = m.u32("object count").map_err(&fail)?;
             if count as usize > (m.bytes.len() - m.at) / 8 {

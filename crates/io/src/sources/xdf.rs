@@ -28,6 +28,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use super::cursor::Cursor;
 use super::{Channel, Marker, Source, Stream};
 use limpid_core::Result;
 
@@ -94,44 +95,7 @@ struct Building {
     anchor: Option<(f64, usize)>,
 }
 
-struct Cursor<'a> {
-    bytes: &'a [u8],
-    at: usize,
-    /// Absolute offset of `bytes[0]` in the file, for messages.
-    base: usize,
-}
-
-impl<'a> Cursor<'a> {
-    fn take(&mut self, n: usize, what: &str) -> std::result::Result<&'a [u8], String> {
-        let end = self.at.checked_add(n).filter(|e| *e <= self.bytes.len());
-        match end {
-            Some(end) => {
-                let s = &self.bytes[self.at..end];
-                self.at = end;
-                Ok(s)
-            }
-            None => Err(format!(
-                "byte {}: truncated: {what} needs {n} bytes, {} are left",
-                self.base + self.at,
-                self.bytes.len() - self.at
-            )),
-        }
-    }
-
-    fn u8(&mut self, what: &str) -> std::result::Result<u8, String> {
-        Ok(self.take(1, what)?[0])
-    }
-
-    fn u32(&mut self, what: &str) -> std::result::Result<u32, String> {
-        let b = self.take(4, what)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-
-    fn f64(&mut self, what: &str) -> std::result::Result<f64, String> {
-        let b = self.take(8, what)?;
-        Ok(f64::from_le_bytes(b.try_into().expect("8 bytes")))
-    }
-
+impl Cursor<'_> {
     /// A variable-width count: a width byte (1, 4 or 8), then the value.
     fn varlen(&mut self, what: &str) -> std::result::Result<u64, String> {
         let at = self.base + self.at;
@@ -147,10 +111,6 @@ impl<'a> Cursor<'a> {
         let mut v = [0u8; 8];
         v[..b.len()].copy_from_slice(b);
         Ok(u64::from_le_bytes(v))
-    }
-
-    fn left(&self) -> usize {
-        self.bytes.len() - self.at
     }
 }
 
