@@ -26,6 +26,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use limpid_core::error::significant;
 use limpid_core::recording::magnitude_limit;
 use limpid_core::{Error, Recording, Result};
 use serde::Deserialize;
@@ -312,7 +313,8 @@ impl ChannelMap {
         if let Some(rate) = self.time.rate {
             if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
                 return Err(format!(
-                    "[time] rate = {rate}: a sample rate in Hz, above 0 and at most 1e7"
+                    "[time] rate = {}: a sample rate in Hz, above 0 and at most 1e7",
+                    significant(rate, 6)
                 ));
             }
         }
@@ -351,7 +353,10 @@ impl ChannelMap {
             for (name, v) in [("scale", r.scale), ("offset", r.offset)] {
                 if let Some(v) = v {
                     if !v.is_finite() || v.abs() > 1e15 {
-                        return Err(at(format!("{name} = {v} is not a usable finite number")));
+                        return Err(at(format!(
+                            "{name} = {} is not a usable finite number",
+                            significant(v, 6)
+                        )));
                     }
                 }
             }
@@ -368,7 +373,10 @@ impl ChannelMap {
                     ));
                 }
                 if !(hz.is_finite() && hz > 0.0) {
-                    return Err(at(format!("envelope_hz = {hz}: a cut-off in Hz above 0")));
+                    return Err(at(format!(
+                        "envelope_hz = {}: a cut-off in Hz above 0",
+                        significant(hz, 6)
+                    )));
                 }
             }
         }
