@@ -346,19 +346,20 @@ pub struct ShoulderPosture {
 
 impl ShoulderPosture {
     /// The arm model and the posture's angles (rad); lengths must be in
-    /// (0, 2] m and every angle finite.
+    /// [0.01, 2] m (a human segment; shorter ones make J_h numerically
+    /// singular) and every angle finite.
     pub fn shoulder(&self) -> Result<(limpid_core::arm::Shoulder, [f64; 3])> {
         for (name, v) in [
             ("upper arm length", self.upper_arm_m),
             ("forearm length", self.forearm_m),
         ] {
-            if !(v > 0.0 && v <= 2.0) {
+            if !((0.01..=2.0).contains(&v)) {
                 return Err(Error::invalid(
                     "shoulder",
-                    if v.abs() < 1e6 {
-                        format!("{name} must be in (0, 2] m, found {v}")
+                    if v.abs() < 1e6 && (v == 0.0 || v.abs() >= 1e-3) {
+                        format!("{name} must be in [0.01, 2] m, found {v}")
                     } else {
-                        format!("{name} must be in (0, 2] m, found {v:e}")
+                        format!("{name} must be in [0.01, 2] m, found {v:e}")
                     },
                 ));
             }

@@ -212,11 +212,18 @@ impl Document {
     pub fn from_json(name: &str, text: &str) -> Result<Self, String> {
         let v: serde_json::Value =
             serde_json::from_str(text).map_err(|e| format!("{name}: not JSON: {e}"))?;
-        match v.get("schema").and_then(|s| s.as_u64()) {
+        let schema = v.get("schema");
+        match schema.and_then(|s| s.as_u64()) {
             Some(s) if s == SCHEMA_VERSION as u64 => {}
             Some(s) => {
                 return Err(format!(
                     "{name}: result schema {s}, this limpid reads schema {SCHEMA_VERSION}"
+                ))
+            }
+            None if schema.is_some() => {
+                return Err(format!(
+                    "{name}: \"schema\" is {}, expected the whole number {SCHEMA_VERSION}",
+                    schema.map(|s| s.to_string()).unwrap_or_default()
                 ))
             }
             None => {

@@ -26,6 +26,15 @@ pub fn load_manifest(path: &Path) -> Result<Manifest> {
             message: "no [[recording]] entry: nothing to process".into(),
         });
     }
+    if m.recording.len() > MAX_STUDY_RECORDINGS {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "{} [[recording]] entries; limpid runs at most {MAX_STUDY_RECORDINGS} per study: split it",
+                m.recording.len()
+            ),
+        });
+    }
     // the request is checked here, at the boundary, not once per recording
     Request::Cocontraction(m.study.request()?)
         .check()
@@ -147,6 +156,91 @@ pub fn run_study(m: &Manifest, progress: &(dyn Fn() + Sync)) -> Result<StudyResu
     ))
 }
 
+/// Largest number of `[[recording]]` entries a manifest may list.
+pub const MAX_STUDY_RECORDINGS: usize = 100_000;
+
+/// [`run_study`] for a study written to `dir`: each recording's full result
+/// (with its fit traces) is staged as `recordings/<name>.json` in `outputs`
+/// as soon as it is processed, and only the slim result (no traces) is kept,
+/// so memory does not grow with the traces of every recording (issue 36:
+/// 0.6 MB per entry). Commit `outputs` after [`stage_tables`].
+pub fn run_study_staged(
+    m: &Manifest,
+    dir: &Path,
+    outputs: &mut limpid_core::files::OutputSet,
+    progress: &(dyn Fn() + Sync),
+) -> Result<StudyResult> {
+    let request = m.study.request()?;
+    outputs.create_dir(&dir.join("recordings"))?;
+    let names = recording_names(
+        m.recording
+            .iter()
+            .map(|e| (e.subject.as_str(), e.configuration.as_str())),
+    );
+    let staging = std::sync::Mutex::new((outputs, Vec::<Error>::new()));
+    let outcomes: Vec<std::result::Result<Processed, Failure>> = m
+        .recording
+        .par_iter()
+        .zip(&names)
+        .map(|(e, name)| {
+            let mut out = process_entry(e, &request);
+            if let Ok(p) = &mut out {
+                let doc = limpid_analysis::result::Document::new(Estimate::Cocontraction(
+                    p.result.clone(),
+                ));
+                let text = doc.to_json();
+                let mut guard = staging.lock().unwrap_or_else(|e| e.into_inner());
+                if let Err(err) = guard.0.add(&dir.join(name), text.as_bytes()) {
+                    guard.1.push(err);
+                }
+                drop(guard);
+                slim(&mut p.result);
+            }
+            progress();
+            out
+        })
+        .collect();
+    let (_, errors) = staging.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some(e) = errors.into_iter().next() {
+        return Err(e);
+    }
+    Ok(summarise(
+        m.study.name.clone().unwrap_or_else(|| "study".into()),
+        outcomes,
+    ))
+}
+
+/// A co-contraction result without its fit traces (kept in the per-recording files).
+fn slim(r: &mut CocontractionResult) {
+    for l in &mut r.levels {
+        let t = &mut l.estimate.fit.traces;
+        t.time = Vec::new();
+        t.measured.iter_mut().for_each(|v| *v = Vec::new());
+        t.predicted.iter_mut().for_each(|v| *v = Vec::new());
+    }
+}
+
+/// `recordings/s<subject>_c<configuration>.json` per manifest entry, in
+/// manifest order; a subject's second recording of one configuration is `_2`.
+fn recording_names<'a>(ids: impl Iterator<Item = (&'a str, &'a str)>) -> Vec<String> {
+    let mut used = std::collections::HashSet::new();
+    ids.map(|(subject, configuration)| {
+        let stem = format!(
+            "recordings/s{}_c{}",
+            file_safe(subject),
+            file_safe(configuration)
+        );
+        let mut name = format!("{stem}.json");
+        let mut k = 2;
+        while !used.insert(name.clone()) {
+            name = format!("{stem}_{k}.json");
+            k += 1;
+        }
+        name
+    })
+    .collect()
+}
+
 /// A virtual seed 001 study: `subjects` drawn from the seed 001 population,
 /// each in the 7 arm configurations, simulated (`limpid_lab`) and written to
 /// `dir` as `s<subject>_c<config>.parquet`, its MVC recording and a
@@ -220,13 +314,36 @@ pub fn simulate_study(
     Ok((population.len(), path))
 }
 
-/// Write `tables.csv`, `rotation.csv`, `study.json`, `tables.md` into `dir`.
+/// Write `tables.csv`, `rotation.csv`, `study.json`, `tables.md` and each
+/// recording's full result (`recordings/`) into `dir`, as one set: all or
+/// none (issue 36).
 pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
-    limpid_core::files::create_dir(dir)?;
-    let write = |name: &str, text: String| -> Result<PathBuf> {
-        let p = dir.join(name);
-        limpid_core::files::write_file(&p, text.as_bytes())?;
-        Ok(p)
+    let mut outputs = limpid_core::files::OutputSet::new();
+    outputs.create_dir(&dir.join("recordings"))?;
+    let mut written = stage_tables(r, dir, &mut outputs)?;
+    let names = recording_names(
+        r.recordings
+            .iter()
+            .map(|p| (p.subject.as_str(), p.configuration.as_str())),
+    );
+    for (p, name) in r.recordings.iter().zip(names) {
+        let doc = limpid_analysis::result::Document::new(Estimate::Cocontraction(p.result.clone()));
+        written.push(outputs.add(&dir.join(&name), doc.to_json().as_bytes())?);
+    }
+    outputs.commit()?;
+    Ok(written)
+}
+
+/// Stage `tables.csv`, `rotation.csv`, `study.json`, `tables.md` of `dir`
+/// in `outputs`; returns their paths.
+pub fn stage_tables(
+    r: &StudyResult,
+    dir: &Path,
+    outputs: &mut limpid_core::files::OutputSet,
+) -> Result<Vec<PathBuf>> {
+    outputs.create_dir(dir)?;
+    let mut write = |name: &str, text: String| -> Result<PathBuf> {
+        outputs.add(&dir.join(name), text.as_bytes())
     };
     let mut csv = String::from(
         "configuration,level,subjects,cocontraction_index,cocontraction_index_sd,kxx,kxx_sd,kyy,kyy_sd,kzz,kzz_sd,k_max_a,k_max_a_sd,k1,k1_sd,k2,k2_sd,k3,k3_sd\n",
@@ -286,47 +403,20 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
     }
     // study.json keeps every number but not the fit traces (150 kB per level
     // and recording); each recording's full result is in recordings/
-    let mut slim = r.clone();
-    for p in &mut slim.recordings {
-        for l in &mut p.result.levels {
-            let t = &mut l.estimate.fit.traces;
-            t.time.clear();
-            t.measured.iter_mut().for_each(Vec::clear);
-            t.predicted.iter_mut().for_each(Vec::clear);
-        }
+    let mut slimmed = r.clone();
+    for p in &mut slimmed.recordings {
+        slim(&mut p.result);
     }
-    let json = study_json(&slim).map_err(|e| Error::Format {
+    let json = study_json(&slimmed).map_err(|e| Error::Format {
         path: dir.join("study.json"),
         message: e.to_string(),
     })?;
-    let mut written = vec![
+    Ok(vec![
         write("tables.csv", csv)?,
         write("rotation.csv", rot)?,
         write("study.json", json)?,
         write("tables.md", markdown(r))?,
-    ];
-    let per = dir.join("recordings");
-    limpid_core::files::create_dir(&per)?;
-    let mut used = std::collections::HashSet::new();
-    for p in &r.recordings {
-        // a subject may have several recordings of one configuration: number them
-        let stem = format!(
-            "recordings/s{}_c{}",
-            file_safe(&p.subject),
-            file_safe(&p.configuration)
-        );
-        let mut name = format!("{stem}.json");
-        let mut k = 2;
-        while !used.insert(name.clone()) {
-            name = format!("{stem}_{k}.json");
-            k += 1;
-        }
-        let doc = limpid_analysis::result::Document::new(
-            limpid_analysis::result::Estimate::Cocontraction(p.result.clone()),
-        );
-        written.push(write(&name, doc.to_json())?);
-    }
-    Ok(written)
+    ])
 }
 
 /// An id as part of a file name: letters, digits, '-' and '_' kept, others '_'.

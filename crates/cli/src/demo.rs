@@ -54,6 +54,9 @@ pub struct DemoArgs {
 }
 
 pub fn run(args: DemoArgs) -> CliResult {
+    if let Some(path) = &args.report {
+        limpid_core::files::check_output_path(path)?;
+    }
     let profile = match args.profile {
         ProfileArg::Cubic => Profile::Cubic,
         ProfileArg::Trapezoid => Profile::Trapezoid,
@@ -78,16 +81,21 @@ pub fn run(args: DemoArgs) -> CliResult {
         unreachable!("made above")
     };
 
-    limpid_core::files::create_dir(&args.out)?;
+    // the result, its table and its report are one set: an unwritable
+    // --report path leaves no half-written output folder (issue 36)
+    let mut outputs = limpid_core::files::OutputSet::new();
+    outputs.create_dir(&args.out)?;
     let json_path = args.out.join("demo.json");
-    limpid_core::files::write_file(&json_path, doc.to_json_pretty().as_bytes())?;
+    outputs.add(&json_path, doc.to_json_pretty().as_bytes())?;
     let csv_path = args.out.join("demo.csv");
-    limpid_core::files::write_file(&csv_path, demo_csv(result).as_bytes())?;
+    outputs.add(&csv_path, demo_csv(result).as_bytes())?;
     let report_path = args
         .report
         .clone()
         .unwrap_or_else(|| args.out.join("report.html"));
-    crate::report::write(&doc, &report_path)?;
+    outputs.add(&report_path, crate::report::page(&doc).as_bytes())?;
+    outputs.commit()?;
+    eprintln!("report: {}", report_path.display());
 
     if args.json {
         println!("{}", doc.to_json_pretty());

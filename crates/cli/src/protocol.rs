@@ -102,7 +102,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             robot,
             output,
         } => match (read_design(&protocol)?.0, robot) {
-            (Design::CentreOut(p), Some(robot)) => export(&p, &robot, &output),
+            (Design::CentreOut(p), Some(robot)) => export(&p, &robot, &protocol, &output),
             (Design::CentreOut(_), None) => {
                 Err("a centre-out protocol is exported for a robot: add --robot kuka-lwr4|puma3|FILE.urdf".into())
             }
@@ -190,9 +190,14 @@ fn print_ratios(c: &[f64; 3]) {
 }
 
 /// Write a centre-out schedule (`limpid_lab::export`) and say so.
-fn export(p: &Protocol, robot: &str, output: &Path) -> CliResult {
+fn export(p: &Protocol, robot: &str, protocol: &Path, output: &Path) -> CliResult {
+    let urdf = Path::new(robot);
+    let is_urdf = urdf
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+    let source = if is_urdf { urdf } else { protocol };
     let robot = placed_robot(robot, p)?;
-    let rec = limpid_lab::export::centre_out_schedule(p, &robot, output)?;
+    let rec = limpid_lab::export::centre_out_schedule(p, &robot, source)?;
     limpid_io::write_recording(&rec, output)?;
     println!(
         "wrote {}: {} samples of end-effector positions and {} joint angles ({})",

@@ -21,21 +21,15 @@ pub struct ReportArgs {
     pub figures: Option<PathBuf>,
 }
 
-/// Write the report of named results (with how each was made, where known);
-/// returns the report for `--figures`.
-fn write_named(
-    inputs: &[(String, Estimate)],
-    runs: &[Option<&Run>],
-    path: &Path,
-) -> CliResult<limpid_report::Report> {
+/// The report of named results (with how each was made, where known).
+fn build_named(inputs: &[(String, Estimate)], runs: &[Option<&Run>]) -> limpid_report::Report {
     let mut report = limpid_report::build(inputs);
     for (section, run) in report.sections.iter_mut().zip(runs) {
         if let Some(run) = run {
             section.tables.insert(0, limpid_report::run_table(run));
         }
     }
-    limpid_core::files::write_file(path, limpid_report::to_html(&report).as_bytes())?;
-    Ok(report)
+    report
 }
 
 /// A section's name: the recording's file name where the result names it,
@@ -59,13 +53,18 @@ fn section_name(doc: &Document, i: usize) -> String {
         .unwrap_or_else(|| format!("result {}", i + 1))
 }
 
-/// `--report FILE` of the other commands: the result of this run.
-pub fn write(doc: &Document, path: &Path) -> CliResult {
-    write_named(
+/// The HTML page of `--report FILE` of the other commands: the result of this run.
+pub fn page(doc: &Document) -> String {
+    let report = build_named(
         &[(section_name(doc, 0), doc.estimate.clone())],
         &[doc.run.as_ref()],
-        path,
-    )?;
+    );
+    limpid_report::to_html(&report)
+}
+
+/// `--report FILE` of the other commands: the result of this run.
+pub fn write(doc: &Document, path: &Path) -> CliResult {
+    limpid_core::files::write_file(path, page(doc).as_bytes())?;
     eprintln!("report: {}", path.display());
     Ok(())
 }
@@ -82,14 +81,15 @@ pub fn run(args: ReportArgs) -> CliResult {
         .map(|(name, d)| (name.clone(), d.estimate.clone()))
         .collect();
     let runs: Vec<Option<&Run>> = docs.iter().map(|(_, d)| d.run.as_ref()).collect();
-    let report = write_named(&inputs, &runs, &args.output)?;
-    println!("wrote {}", args.output.display());
+    let report = build_named(&inputs, &runs);
+    // the page and its figures are one set: a figures folder that cannot be
+    // made or written leaves no page behind either (issue 36)
+    let mut outputs = limpid_core::files::OutputSet::new();
+    outputs.add(&args.output, limpid_report::to_html(&report).as_bytes())?;
+    let mut figures = 0;
     if let Some(dir) = &args.figures {
-        limpid_core::files::create_dir(dir)?;
+        outputs.create_dir(dir)?;
         let files = limpid_report::figure_files(&report);
-        for (stem, svg) in &files {
-            limpid_core::files::write_file(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
-        }
         // the bitmaps in parallel: rasterising is the slow part
         use rayon::prelude::*;
         let pngs: Vec<(String, Vec<u8>)> = files
@@ -98,12 +98,20 @@ pub fn run(args: ReportArgs) -> CliResult {
                 limpid_report::png::svg_to_png(svg).map(|png| (format!("{stem}.png"), png))
             })
             .collect::<Result<_, String>>()?;
-        for (name, png) in &pngs {
-            limpid_core::files::write_file(&dir.join(name), png)?;
+        for (stem, svg) in &files {
+            outputs.add(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
         }
+        for (name, png) in &pngs {
+            outputs.add(&dir.join(name), png)?;
+        }
+        figures = files.len();
+    }
+    outputs.commit()?;
+    println!("wrote {}", args.output.display());
+    if let Some(dir) = &args.figures {
         println!(
             "wrote {} figures to {} (SVG, and PNG at {} x)",
-            files.len(),
+            figures,
             dir.display(),
             limpid_report::png::SCALE
         );

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use limpid_app::study::{load_manifest, run_study, simulate_study, write_tables};
+use limpid_app::study::{load_manifest, run_study_staged, simulate_study, stage_tables};
 
 use crate::CliResult;
 
@@ -64,8 +64,14 @@ pub fn run(cmd: StudyCommand) -> CliResult {
     match cmd {
         StudyCommand::Run(args) => {
             let manifest = load_manifest(&args.manifest)?;
+            if let Some(path) = &args.report {
+                limpid_core::files::check_output_path(path)?;
+            }
             let progress = bar(manifest.recording.len(), "processing recordings")?;
-            let result = run_study(&manifest, &|| progress.inc(1))?;
+            // every output of the study is one set, committed at the end: a
+            // full disk or an unwritable --report leaves none of them (issue 36)
+            let mut outputs = limpid_core::files::OutputSet::new();
+            let result = run_study_staged(&manifest, &args.out, &mut outputs, &|| progress.inc(1))?;
             progress.finish_and_clear();
             let ok = result.recordings.len();
             if ok == 0 {
@@ -77,7 +83,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                     format!("no recording could be processed (nothing written){first}").into(),
                 );
             }
-            let files = write_tables(&result, &args.out)?;
+            let tables = stage_tables(&result, &args.out, &mut outputs)?;
             let doc = limpid_analysis::result::Document::new(
                 limpid_analysis::result::Estimate::Study(result),
             )
@@ -85,7 +91,11 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 &args.manifest
             ]));
             if let Some(path) = &args.report {
-                crate::report::write(&doc, path)?;
+                outputs.add(path, crate::report::page(&doc).as_bytes())?;
+            }
+            outputs.commit()?;
+            if let Some(path) = &args.report {
+                eprintln!("report: {}", path.display());
             }
             let limpid_analysis::result::Estimate::Study(result) = &doc.estimate else {
                 unreachable!("made above")
@@ -105,9 +115,6 @@ pub fn run(cmd: StudyCommand) -> CliResult {
             if args.print {
                 println!("\n{}", limpid_app::study::markdown(result));
             }
-            let (per_recording, tables): (Vec<_>, Vec<_>) = files
-                .iter()
-                .partition(|p| p.parent().is_some_and(|d| d.ends_with("recordings")));
             println!(
                 "wrote {} and {} per-recording results in {}",
                 tables
@@ -115,7 +122,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                     .map(|p| p.display().to_string())
                     .collect::<Vec<_>>()
                     .join(", "),
-                per_recording.len(),
+                ok,
                 args.out.join("recordings").display()
             );
             Ok(())

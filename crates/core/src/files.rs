@@ -162,6 +162,142 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic(path, |w| w.write_all(bytes).map_err(|e| io_error(path, e)))
 }
 
+/// Before a long computation: can a file be written at `path`? Its folder
+/// must exist (outputs do not make folders for files) and `path` must not be
+/// a folder. The write itself may still fail (permissions, a full disk).
+pub fn check_output_path(path: &Path) -> Result<()> {
+    let folder = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(folder) = folder {
+        if !folder.is_dir() {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "cannot be written: {} is not an existing folder",
+                    folder.display()
+                ),
+            });
+        }
+    }
+    if path.is_dir() {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: "is a directory, not a file to write".into(),
+        });
+    }
+    Ok(())
+}
+
+/// Several outputs of one command written as a set (issue 36): each file is
+/// staged into a temporary file beside it as it is added, and all are
+/// renamed into place by [`OutputSet::commit`]. If any staging fails (a
+/// full disk, a folder that cannot be written) or the set is dropped
+/// uncommitted, the temporaries are removed and none of the set's files is
+/// written. Outputs that are not regular files (FIFOs, devices) are written
+/// through at commit; links are followed, as in [`write_atomic`].
+#[derive(Debug, Default)]
+pub struct OutputSet {
+    staged: Vec<(PathBuf, PathBuf)>,
+    through: Vec<(PathBuf, Vec<u8>)>,
+    folders: Vec<PathBuf>,
+}
+
+impl OutputSet {
+    /// An empty set.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Stage `bytes` for `path`; returns `path`.
+    pub fn add(&mut self, path: &Path, bytes: &[u8]) -> Result<PathBuf> {
+        let mut target = path.to_path_buf();
+        if let Ok(meta) = std::fs::symlink_metadata(path) {
+            let kind = meta.file_type();
+            if kind.is_symlink() {
+                match std::fs::canonicalize(path) {
+                    Ok(t) => target = t,
+                    Err(_) => {
+                        self.through.push((path.to_path_buf(), bytes.to_vec()));
+                        return Ok(path.to_path_buf());
+                    }
+                }
+            }
+            let kind = std::fs::metadata(&target).map(|m| m.file_type());
+            if kind.as_ref().is_ok_and(|k| k.is_dir()) {
+                return Err(Error::Format {
+                    path: path.to_path_buf(),
+                    message: "is a directory, not a file to write".into(),
+                });
+            }
+            if kind.is_ok_and(|k| !k.is_file()) {
+                self.through.push((target, bytes.to_vec()));
+                return Ok(path.to_path_buf());
+            }
+        }
+        if self.staged.iter().any(|(_, t)| t == &target) {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: "named twice among this command's outputs".into(),
+            });
+        }
+        let tmp = temporary_name(&target);
+        let staged = (|| -> std::io::Result<()> {
+            let mut file = File::create(&tmp)?;
+            file.write_all(bytes)?;
+            file.sync_all()
+        })();
+        if let Err(e) = staged {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(io_error(path, e));
+        }
+        self.staged.push((tmp, target));
+        Ok(path.to_path_buf())
+    }
+
+    /// Make an output folder (and its parents) as [`create_dir`] does; the
+    /// folders it made are removed again if the set is not committed.
+    pub fn create_dir(&mut self, dir: &Path) -> Result<()> {
+        let mut missing = Vec::new();
+        let mut d = Some(dir);
+        while let Some(p) = d.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {
+            missing.push(p.to_path_buf());
+            d = p.parent();
+        }
+        create_dir(dir)?;
+        // innermost first, so that removing them in order empties each parent
+        self.folders.extend(missing);
+        Ok(())
+    }
+
+    /// Rename every staged file into place and write the others through.
+    pub fn commit(mut self) -> Result<()> {
+        self.folders.clear();
+        for (tmp, target) in std::mem::take(&mut self.staged) {
+            std::fs::rename(&tmp, &target).map_err(|e| {
+                let _ = std::fs::remove_file(&tmp);
+                io_error(&target, e)
+            })?;
+        }
+        for (path, bytes) in std::mem::take(&mut self.through) {
+            write_through(&path, |w| {
+                w.write_all(&bytes).map_err(|e| io_error(&path, e))
+            })?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for OutputSet {
+    fn drop(&mut self) {
+        for (tmp, _) in &self.staged {
+            let _ = std::fs::remove_file(tmp);
+        }
+        for dir in &self.folders {
+            // only if empty: a folder the user filled meanwhile stays
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
+}
+
 /// `.name.limpid-tmp-PID` beside `path` (hidden, unique per process).
 fn temporary_name(path: &Path) -> PathBuf {
     let name = path
@@ -174,6 +310,39 @@ fn temporary_name(path: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_output_set_is_written_whole_or_not_at_all() {
+        let dir = std::env::temp_dir().join(format!("limpid-set-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // the second file's folder does not exist: the first is not written,
+        // and the folder the set made is gone again
+        let mut set = OutputSet::new();
+        set.create_dir(&dir.join("new/deeper")).unwrap();
+        set.add(&dir.join("new/deeper/x.json"), b"x").unwrap();
+        set.add(&dir.join("a.json"), b"a").unwrap();
+        let e = set.add(&dir.join("missing/b.html"), b"b").unwrap_err();
+        assert!(e.to_string().contains("missing/b.html"), "{e}");
+        drop(set);
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert!(left.is_empty(), "{left:?}");
+        // committed: both in place, no temporaries
+        let mut set = OutputSet::new();
+        set.add(&dir.join("a.json"), b"a").unwrap();
+        set.add(&dir.join("b.html"), b"b").unwrap();
+        assert!(!dir.join("a.json").exists());
+        set.commit().unwrap();
+        assert_eq!(std::fs::read(dir.join("a.json")).unwrap(), b"a");
+        assert_eq!(std::fs::read(dir.join("b.html")).unwrap(), b"b");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+        // a folder as an output, or one path twice, is refused
+        let mut set = OutputSet::new();
+        assert!(set.add(&dir, b"x").is_err());
+        set.add(&dir.join("c"), b"x").unwrap();
+        assert!(set.add(&dir.join("c"), b"y").is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn special_files_are_refused_before_opening() {

@@ -302,22 +302,30 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             ),
         ));
     }
-    let [d, other_decimation] = decimate(q, tq, fs, p)?;
-    let n = d.position.len();
-    let lag = |s: f64| (s * d.fs).round() as usize;
+    // the length check comes before decimation, whose zero-phase filter
+    // would refuse a short recording without naming it
+    let ratio = ((fs / p.decimated_rate_hz).round() as usize).max(1);
+    let fsd = fs / ratio as f64;
+    let n = q.len().div_ceil(ratio);
+    let lag = |s: f64| (s * fsd).round() as usize;
     let half = lag(p.intrinsic_half_width_s).max(1);
     let n_reflex = lag(p.reflex_irf_s).max(2);
-    if n < 5 * n_reflex.max(2 * half + 1) {
-        return Err(Error::invalid(
-            rec.path().display().to_string(),
-            format!(
-                "the parallel-cascade method needs at least 5 reflex-IRF lengths ({:.1} s at {} Hz), found {:.1} s",
-                5.0 * n_reflex as f64 / d.fs,
-                limpid_core::short_number(d.fs),
-                n as f64 / d.fs
+    let needed = 5 * n_reflex.max(2 * half + 1);
+    if n < needed {
+        return Err(Error::TooFewSamples {
+            path: rec.path().to_path_buf(),
+            what: format!(
+                "the parallel-cascade method at {} Hz (5 reflex-IRF lengths, {:.1} s; found {:.2} s)",
+                limpid_core::short_number(fsd),
+                needed as f64 / fsd,
+                n as f64 / fsd
             ),
-        ));
+            needed: needed * ratio,
+            found: q.len(),
+        });
     }
+    let [d, other_decimation] = decimate(q, tq, fs, p)?;
+    debug_assert_eq!(d.position.len(), n);
     for (name, raw) in [(&p.position, q), (&p.torque, tq)] {
         let scale = raw.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         // scaled first, so that tiny or huge columns do not under- or overflow here

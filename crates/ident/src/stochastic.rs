@@ -115,6 +115,10 @@ pub struct StochasticEstimate {
     pub warnings: Vec<Warning>,
 }
 
+/// Largest magnitude of an expected-model entry (kg, N s/m, N/m or their
+/// rotational forms).
+pub const EXPECTED_MODEL_LIMIT: f64 = 1e9;
+
 /// The expected model of [`Accuracy`] (e.g. the spring array's M, B, K).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct ExpectedModel {
@@ -148,6 +152,16 @@ impl ExpectedModel {
                 return Err(Error::Format {
                     path: path.to_path_buf(),
                     message: format!("key {key}: expected a square matrix of finite numbers"),
+                });
+            }
+            // Far beyond any limb or spring array, and far from overflow when
+            // squared by the frequency (a 1e308 entry made phi_T infinite).
+            if let Some(v) = m.iter().find(|v| v.abs() > EXPECTED_MODEL_LIMIT) {
+                return Err(Error::Format {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "key {key}: implausible entry {v:e}; expected-model entries are at most {EXPECTED_MODEL_LIMIT:e} in magnitude (SI units)"
+                    ),
                 });
             }
         }

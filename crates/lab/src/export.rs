@@ -26,11 +26,12 @@ pub fn placed_robot(name: &str, p: &Protocol) -> Result<Robot> {
 /// Every phase of every trial of a centre-out protocol (rest, centre-out,
 /// hold, return by the same profile reversed, relax, and seed 001's rests
 /// between sets), tracked by `robot` with the orientation of its home pose
-/// held: columns t, start_point, trial, x, y, z, robot_q1..n. `output` names
-/// the recording (and the errors).
-pub fn centre_out_schedule(p: &Protocol, robot: &Robot, output: &Path) -> Result<Recording> {
+/// held: columns t, start_point, trial, x, y, z, robot_q1..n. `source` is the
+/// file errors name: the robot's URDF, or the protocol for a built-in robot
+/// (a start point out of reach is theirs, not the output's).
+pub fn centre_out_schedule(p: &Protocol, robot: &Robot, source: &Path) -> Result<Recording> {
     let fail = |message: String| Error::Format {
-        path: output.to_path_buf(),
+        path: source.to_path_buf(),
         message,
     };
     let home = robot.home();
@@ -114,7 +115,7 @@ pub fn centre_out_schedule(p: &Protocol, robot: &Robot, output: &Path) -> Result
         .map(String::from)
         .to_vec();
     names.extend((1..=n).map(|i| format!("robot_q{i}")));
-    Recording::new(output, names, cols, 2)
+    Recording::new(source, names, cols, 2)
 }
 
 /// Seed 003's session: the posture held through random waits, each followed

@@ -33,4 +33,10 @@ fn documents_of_another_schema_or_none_are_refused_in_one_line() {
     let e = Document::from_json("odd.json", "{\"schema\": 1, \"kind\": \"banana\"}").unwrap_err();
     assert!(e.contains("banana"), "{e}");
     assert!(!e.contains('\n'));
+    // a schema key that is not a whole number is named as such, not as missing
+    for odd in ["1.0", "\"1\"", "-1", "null"] {
+        let text = format!("{{\"schema\": {odd}, \"kind\": \"linear\"}}");
+        let e = Document::from_json("odd.json", &text).unwrap_err();
+        assert!(e.contains("expected the whole number 1"), "{odd}: {e}");
+    }
 }

@@ -252,9 +252,11 @@ fn stochastic_shoulder_posture_that_is_singular_or_a_recording_without_z() {
         ("0.3,0.35,90,30", "invalid --shoulder: expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found 4"),
         // abduction 0: the arm in the sagittal plane, X and Z both follow flexion only
         ("0.3,0.35,90,30,0,0", "invalid --shoulder: at flexion 30 deg, abduction 0 deg the hand's X and Z do not determine the two angles (condition number of J_h"),
-        ("-0.3,0.35,90,30,45,0", "invalid --shoulder: upper arm length must be in (0, 2] m, found -0.3"),
-        ("0.3,1e307,90,30,45,0", "invalid --shoulder: forearm length must be in (0, 2] m, found 1e307"),
+        ("-0.3,0.35,90,30,45,0", "invalid --shoulder: upper arm length must be in [0.01, 2] m, found -0.3"),
+        ("0.3,1e307,90,30,45,0", "invalid --shoulder: forearm length must be in [0.01, 2] m, found 1e307"),
         ("0.3,0.35,90,30,nan,0", "invalid --shoulder: angles must be finite degrees"),
+        // a nanometre arm made J_h numerically singular ("condition number NaN")
+        ("1e-9,0.35,90,30,45,0", "invalid --shoulder: upper arm length must be in [0.01, 2] m, found 1e-9"),
     ] {
         let out = limpid(&["estimate", "stochastic", sa3, "--shoulder", extra]);
         assert_eq!(out.code, 2, "{}", out.stderr);
@@ -391,4 +393,33 @@ fn usage_errors_are_one_line_and_negative_numbers_are_values() {
     let out = limpid(&["estimate", "linear", "--help"]);
     assert_eq!(out.code, 0);
     assert!(out.stdout.contains("Usage:"), "{}", out.stdout);
+}
+
+#[test]
+fn an_expected_model_beyond_any_limb_is_refused_not_compared() {
+    // 1e308 N/m made phi_T infinite (printed "inf", null in the JSON, exit 0)
+    let sa3 = examples("stochastic").join("ex_sa3.csv");
+    let d = tempfile::tempdir().unwrap();
+    let zero = "[[0,0,0],[0,0,0],[0,0,0]]";
+    let huge = "[[1e308,0,0],[0,1e308,0],[0,0,1e308]]";
+    let p = write(
+        &d,
+        "expected.json",
+        &format!("{{\"inertia\": {zero}, \"damping\": {zero}, \"stiffness\": {huge}}}"),
+    );
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        sa3.to_str().unwrap(),
+        "--expected",
+        p.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stdout);
+    assert_eq!(out.stderr.lines().count(), 1, "{}", out.stderr);
+    assert!(
+        out.stderr
+            .contains("expected.json: key stiffness: implausible entry 1e308"),
+        "{}",
+        out.stderr
+    );
 }

@@ -489,3 +489,126 @@ fn a_study_refuses_one_recording_listed_twice() {
         out.stderr
     );
 }
+
+/// Issue 36: a command's outputs are one set. An output that cannot be
+/// written (here: a path under a regular file) leaves none of the others
+/// behind: no page without its figures, no tables without their report.
+#[test]
+fn a_command_writes_all_its_outputs_or_none() {
+    let d = tempfile::tempdir().unwrap();
+    let blocker = d.path().join("a-file");
+    std::fs::write(&blocker, "not a folder").unwrap();
+    let under = |name: &str| blocker.join(name).to_str().unwrap().to_string();
+    let entries = |p: &Path| std::fs::read_dir(p).map_or(0, |r| r.count());
+
+    // demo: refused before simulating, no output folder
+    let demo = d.path().join("demo");
+    let out = limpid(&[
+        "demo",
+        "--out",
+        demo.to_str().unwrap(),
+        "--report",
+        &under("r.html"),
+    ]);
+    let line = one_line_error(&out);
+    assert!(
+        line.contains("a-file/r.html") && line.contains("not an existing folder"),
+        "{line}"
+    );
+    assert!(!demo.exists());
+
+    // report --figures under a file: no page either
+    let result = d.path().join("result.json");
+    let sa3 = examples("stochastic").join("ex_sa3.csv");
+    let est = limpid(&["estimate", "stochastic", sa3.to_str().unwrap(), "--json"]);
+    assert_eq!(est.code, 0, "{}", est.stderr);
+    std::fs::write(&result, &est.stdout).unwrap();
+    let page = d.path().join("page.html");
+    let out = limpid(&[
+        "report",
+        result.to_str().unwrap(),
+        "-o",
+        page.to_str().unwrap(),
+        "--figures",
+        &under("figures"),
+    ]);
+    one_line_error(&out);
+    assert!(!page.exists());
+    // a page whose folder is missing: no figures folder left behind
+    let figures = d.path().join("figures");
+    let out = limpid(&[
+        "report",
+        result.to_str().unwrap(),
+        "-o",
+        d.path().join("missing/page.html").to_str().unwrap(),
+        "--figures",
+        figures.to_str().unwrap(),
+    ]);
+    one_line_error(&out);
+    assert!(!figures.exists());
+
+    // study run: an unwritable report stops it before any recording; a
+    // report that fails only at the end (a folder in its place) leaves no tables
+    let sim = d.path().join("sim");
+    let out = limpid(&[
+        "study",
+        "simulate",
+        "--subjects",
+        "1",
+        "--subject",
+        "ideal",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let manifest = sim.join("study.toml");
+    let tables = d.path().join("tables");
+    let out = limpid(&[
+        "study",
+        "run",
+        manifest.to_str().unwrap(),
+        "--out",
+        tables.to_str().unwrap(),
+        "--report",
+        &under("r.html"),
+    ]);
+    one_line_error(&out);
+    assert!(!tables.exists());
+    let busy = d.path().join("busy.html");
+    std::fs::create_dir(&busy).unwrap();
+    let out = limpid(&[
+        "study",
+        "run",
+        manifest.to_str().unwrap(),
+        "--out",
+        tables.to_str().unwrap(),
+        "--report",
+        busy.to_str().unwrap(),
+    ]);
+    let line = one_line_error(&out);
+    assert!(
+        line.contains("busy.html") && line.contains("directory"),
+        "{line}"
+    );
+    assert!(!tables.exists(), "{} entries left", entries(&tables));
+    // and when every output can be written, all are
+    let out = limpid(&[
+        "study",
+        "run",
+        manifest.to_str().unwrap(),
+        "--out",
+        tables.to_str().unwrap(),
+        "--report",
+        d.path().join("study.html").to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert_eq!(entries(&tables), 5);
+    assert_eq!(entries(&tables.join("recordings")), 7);
+    assert!(d.path().join("study.html").exists());
+    let hidden: Vec<_> = std::fs::read_dir(&tables)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "temporaries left: {hidden:?}");
+}

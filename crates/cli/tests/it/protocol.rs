@@ -225,6 +225,39 @@ fn urdf_robot_exports_the_same_joint_trajectory_as_its_dh_model() {
     // seed 001's sets of 6 with a 10 s rest between sets: 2 set rests of 10 s at 1 kHz
     let per_trial = ((0.05 + 0.1 + 0.5 + 0.1 + 1.0) * 1000.0f64).round() as usize;
     assert_eq!(recs[0].len(), 18 * per_trial + 2 * 10_000);
+    // a robot that cannot reach the start points is the URDF's fault, and
+    // the error names the URDF, not the output file
+    let text = std::fs::read_to_string(&urdf).unwrap();
+    assert!(text.contains("xyz=\"0 0 0.3105\""));
+    let tiny = dir.path().join("tiny.urdf");
+    std::fs::write(
+        &tiny,
+        text.replacen("xyz=\"0 0 0.3105\"", "xyz=\"0 0 1e-9\"", 1),
+    )
+    .unwrap();
+    let out_path = dir.path().join("never.csv");
+    let out = limpid(&[
+        "protocol",
+        "export",
+        p.to_str().unwrap(),
+        "--robot",
+        tiny.to_str().unwrap(),
+        "-o",
+        out_path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stdout);
+    assert!(
+        out.stderr
+            .starts_with(&format!("limpid: {}: ", tiny.display())),
+        "{}",
+        out.stderr
+    );
+    assert!(out.stderr.contains("start point 1"), "{}", out.stderr);
+    assert!(
+        !out.stderr.contains("never.csv") && !out_path.exists(),
+        "{}",
+        out.stderr
+    );
 }
 
 #[test]

@@ -101,7 +101,26 @@ fn reflex_refusals() {
     let out = limpid(&["estimate", "reflex", short.to_str().unwrap()]);
     assert_eq!(out.code, 2);
     assert!(
-        out.stderr.contains("at least 5 reflex-IRF lengths"),
+        out.stderr
+            .starts_with(&format!("limpid: {}: ", short.display()))
+            && out.stderr.contains("5 reflex-IRF lengths")
+            && out.stderr.contains("at least"),
+        "{}",
+        out.stderr
+    );
+    // 20 rows: once refused by the decimation filter without the file's name
+    let tiny = dir.path().join("tiny.csv");
+    joint_csv(&tiny, 20, |t| {
+        (
+            ((t * 7.0).sin() * 0.01).to_string(),
+            (t * 7.0).sin().to_string(),
+        )
+    });
+    let out = limpid(&["estimate", "reflex", tiny.to_str().unwrap()]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr
+            .starts_with(&format!("limpid: {}: 20 samples usable", tiny.display())),
         "{}",
         out.stderr
     );
