@@ -390,8 +390,34 @@ fn mvc_reply(r: Result<()>) -> impl IntoResponse {
     }
 }
 
-async fn ws_handler(ws: WebSocketUpgrade, AxState(s): AxState<Arc<Session>>) -> impl IntoResponse {
-    ws.on_upgrade(move |socket| push(socket, s))
+async fn ws_handler(
+    headers: axum::http::HeaderMap,
+    ws: WebSocketUpgrade,
+    AxState(s): AxState<Arc<Session>>,
+) -> axum::response::Response {
+    let key = headers
+        .get("sec-websocket-key")
+        .map(|v| v.as_bytes())
+        .unwrap_or_default();
+    if !is_websocket_key(key) {
+        return (
+            axum::http::StatusCode::BAD_REQUEST,
+            "Sec-WebSocket-Key must be 16 bytes in base64 (RFC 6455, section 4.1)",
+        )
+            .into_response();
+    }
+    ws.on_upgrade(move |socket| push(socket, s)).into_response()
+}
+
+/// RFC 6455 section 4.1: the key is a random 16-byte value in base64, that
+/// is 22 base64 digits and "==", the last digit carrying 2 bits (its low 4
+/// bits zero: A, Q, g or w).
+pub fn is_websocket_key(key: &[u8]) -> bool {
+    let digit = |b: &u8| b.is_ascii_alphanumeric() || *b == b'+' || *b == b'/';
+    key.len() == 24
+        && key[..22].iter().all(digit)
+        && matches!(key[21], b'A' | b'Q' | b'g' | b'w')
+        && &key[22..] == b"=="
 }
 
 async fn push(mut socket: WebSocket, s: Arc<Session>) {
@@ -615,6 +641,23 @@ pub const PAGE: &str = include_str!("page.html");
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn websocket_keys_are_16_bytes_of_base64() {
+        // RFC 6455's example key, and 16 bytes of 0xff
+        assert!(is_websocket_key(b"dGhlIHNhbXBsZSBub25jZQ=="));
+        assert!(is_websocket_key(b"/////////////////////w=="));
+        for bad in [
+            &b""[..],
+            b"not-a-key",
+            b"dGhlIHNhbXBsZSBub25jZQ=",
+            b"dGhlIHNhbXBsZSBub25jZR==", // 'R' leaves bits beyond 16 bytes
+            b"dGhlIHNhbXBsZSBub25j!Q==",
+            b"dGhlIHNhbXBsZSBub25jZQ==x",
+        ] {
+            assert!(!is_websocket_key(bad), "{}", String::from_utf8_lossy(bad));
+        }
+    }
 
     #[test]
     fn gaps_count_as_lost_and_jumps_do_not() {

@@ -291,3 +291,28 @@ fn replay_at_4x_shows_each_levels_stiffness_within_10_percent_of_offline() {
         "table and history on the page"
     );
 }
+
+/// Issue 36: an upgrade to the page's WebSocket with a key that is not 16
+/// bytes of base64 (RFC 6455 section 4.1) is refused; a valid one is served.
+#[test]
+fn websocket_upgrades_need_a_valid_key() {
+    use std::io::{Read, Write};
+    let live = start(&["--channels", "emg_a", "--rate", "1000"]);
+    let status = |key: &str| {
+        let mut s = std::net::TcpStream::connect(&live.http).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+        write!(
+            s,
+            "GET /ws HTTP/1.1\r\nHost: {}\r\nConnection: Upgrade\r\nUpgrade: websocket\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Key: {key}\r\n\r\n",
+            live.http
+        )
+        .unwrap();
+        let mut head = [0u8; 12];
+        s.read_exact(&mut head).unwrap();
+        String::from_utf8_lossy(&head[9..12]).to_string()
+    };
+    assert_eq!(status("dGhlIHNhbXBsZSBub25jZQ=="), "101");
+    for bad in ["x", "dGhlIHNhbXBsZSBub25jZR==", "!!!!!!!!!!!!!!!!!!!!!!=="] {
+        assert_eq!(status(bad), "400", "{bad}");
+    }
+}
