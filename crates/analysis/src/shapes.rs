@@ -10,42 +10,16 @@
 
 use limpid_core::Matrix;
 
+use crate::cocontraction::CocontractionResult;
 use crate::linear::LinearResult;
 use crate::result::Estimate;
+use limpid_ident::planar::PlanarEstimate;
 
 /// `Err(field: what is wrong)` for the first disagreement in `e`.
 pub fn check(e: &Estimate) -> Result<(), String> {
     match e {
         Estimate::Linear(r) => linear("", r),
-        Estimate::Cocontraction(c) => {
-            for (i, l) in c.levels.iter().enumerate() {
-                let at = format!("levels[{i}].");
-                linear(&format!("{at}estimate."), &l.estimate)?;
-                let d = l.estimate.stiffness.0.nrows();
-                for (name, m) in [
-                    ("stiffness", &l.stiffness),
-                    ("damping", &l.damping),
-                    ("inertia", &l.inertia),
-                ] {
-                    square(&format!("{at}{name}"), m, d)?;
-                }
-            }
-            for (i, c) in c.comparisons.iter().enumerate() {
-                let n = c.principal_change_percent.len();
-                for (name, len) in [
-                    ("rotation_deg", c.rotation_deg.len()),
-                    ("ambiguous", c.ambiguous.len()),
-                ] {
-                    same(
-                        &format!("comparisons[{i}].{name}"),
-                        len,
-                        n,
-                        "principal_change_percent",
-                    )?;
-                }
-            }
-            Ok(())
-        }
+        Estimate::Cocontraction(c) => cocontraction("", c),
         Estimate::Stochastic(s) => {
             let (nf, no, ni) = (s.frequencies.len(), s.coordinates.len(), s.inputs.len());
             same("impedance", s.impedance.len(), nf, "frequencies")?;
@@ -99,18 +73,40 @@ pub fn check(e: &Estimate) -> Result<(), String> {
             }
             Ok(())
         }
-        Estimate::Planar(p) => {
-            for (name, m) in [
-                ("stiffness", &p.stiffness),
-                ("damping", &p.damping),
-                ("endpoint_stiffness", &p.endpoint_stiffness),
-                ("standard_errors.stiffness", &p.standard_errors.stiffness),
-                ("standard_errors.damping", &p.standard_errors.damping),
-            ] {
-                square(name, m, 2)?;
+        Estimate::Planar(p) => planar("", p),
+        Estimate::WindowSweep(w) => {
+            for (i, row) in w.rows.iter().enumerate() {
+                planar(&format!("rows[{i}].estimate."), &row.estimate)?;
             }
-            if let Some(t) = &p.traces {
-                traces("traces", t, 2)?;
+            for (i, row) in w.intervals.iter().enumerate() {
+                planar(&format!("intervals[{i}].estimate."), &row.estimate)?;
+            }
+            Ok(())
+        }
+        Estimate::Study(st) => {
+            for (i, l) in st.levels.iter().enumerate() {
+                let d = l.stiffness.0.nrows();
+                square(&format!("levels[{i}].stiffness"), &l.stiffness, d)?;
+                if let Some(e) = &l.ellipsoid {
+                    ellipsoid(&format!("levels[{i}].ellipsoid"), e, d)?;
+                }
+            }
+            for (i, r) in st.recordings.iter().enumerate() {
+                cocontraction(&format!("recordings[{i}].result."), &r.result)?;
+            }
+            Ok(())
+        }
+        Estimate::Demo(d) => {
+            for (i, p) in d.points.iter().enumerate() {
+                linear(&format!("points[{i}].estimate."), &p.estimate)?;
+                let n = p.estimate.stiffness.0.nrows();
+                for (name, m) in [
+                    ("true_stiffness", &p.true_stiffness),
+                    ("true_damping", &p.true_damping),
+                    ("true_inertia", &p.true_inertia),
+                ] {
+                    square(&format!("points[{i}].{name}"), m, n)?;
+                }
             }
             Ok(())
         }
@@ -156,6 +152,55 @@ pub fn check(e: &Estimate) -> Result<(), String> {
     }
 }
 
+fn cocontraction(at0: &str, c: &CocontractionResult) -> Result<(), String> {
+    for (i, l) in c.levels.iter().enumerate() {
+        let at = format!("{at0}levels[{i}].");
+        linear(&format!("{at}estimate."), &l.estimate)?;
+        let d = l.estimate.stiffness.0.nrows();
+        for (name, m) in [
+            ("stiffness", &l.stiffness),
+            ("damping", &l.damping),
+            ("inertia", &l.inertia),
+        ] {
+            square(&format!("{at}{name}"), m, d)?;
+        }
+        if let Some(e) = &l.ellipsoid {
+            ellipsoid(&format!("{at}ellipsoid"), e, d)?;
+        }
+    }
+    for (i, c) in c.comparisons.iter().enumerate() {
+        let n = c.principal_change_percent.len();
+        for (name, len) in [
+            ("rotation_deg", c.rotation_deg.len()),
+            ("ambiguous", c.ambiguous.len()),
+        ] {
+            same(
+                &format!("{at0}comparisons[{i}].{name}"),
+                len,
+                n,
+                "principal_change_percent",
+            )?;
+        }
+    }
+    Ok(())
+}
+
+fn planar(at: &str, p: &PlanarEstimate) -> Result<(), String> {
+    for (name, m) in [
+        ("stiffness", &p.stiffness),
+        ("damping", &p.damping),
+        ("endpoint_stiffness", &p.endpoint_stiffness),
+        ("standard_errors.stiffness", &p.standard_errors.stiffness),
+        ("standard_errors.damping", &p.standard_errors.damping),
+    ] {
+        square(&format!("{at}{name}"), m, 2)?;
+    }
+    if let Some(t) = &p.traces {
+        traces(&format!("{at}traces"), t, 2)?;
+    }
+    Ok(())
+}
+
 fn linear(at: &str, r: &LinearResult) -> Result<(), String> {
     let d = r.stiffness.0.nrows();
     for (name, m) in [
@@ -178,7 +223,50 @@ fn linear(at: &str, r: &LinearResult) -> Result<(), String> {
     ] {
         same(&format!("{at}{name}"), len, d, "coordinates")?;
     }
+    for (name, e) in [
+        ("stiffness", &r.ellipsoids.stiffness),
+        ("damping", &r.ellipsoids.damping),
+        ("inertia", &r.ellipsoids.inertia),
+    ] {
+        if let Some(e) = e {
+            ellipsoid(&format!("{at}ellipsoids.{name}"), e, d)?;
+        }
+    }
     traces(&format!("{at}fit.traces"), &r.fit.traces, d)
+}
+
+/// An ellipsoid's lists have one entry per axis, and its axes are a
+/// rotation: unit columns at right angles (the report draws with them; a
+/// hand-edited axis of 1e307 drew NaN coordinates).
+fn ellipsoid(name: &str, e: &crate::Ellipsoid, d: usize) -> Result<(), String> {
+    square(&format!("{name}.axes"), &e.axes, d)?;
+    same(
+        &format!("{name}.eigenvalues"),
+        e.eigenvalues.len(),
+        d,
+        "axes",
+    )?;
+    same(
+        &format!("{name}.radii_proportional"),
+        e.radii_proportional.len(),
+        d,
+        "axes",
+    )?;
+    if let Some(r) = &e.radii_inverse_sqrt {
+        same(&format!("{name}.radii_inverse_sqrt"), r.len(), d, "axes")?;
+    }
+    let a = &e.axes.0;
+    let gram = a.transpose() * a;
+    let off = (0..d)
+        .flat_map(|i| (0..d).map(move |j| (i, j)))
+        .map(|(i, j)| (gram[(i, j)] - if i == j { 1.0 } else { 0.0 }).abs())
+        .fold(0.0, f64::max);
+    if !(off <= 1e-6) {
+        return Err(format!(
+            "{name}.axes: not a rotation (its columns must be unit vectors at right angles)"
+        ));
+    }
+    Ok(())
 }
 
 fn traces(at: &str, t: &limpid_ident::linear::FitTraces, d: usize) -> Result<(), String> {

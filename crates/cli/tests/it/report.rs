@@ -824,8 +824,34 @@ fn a_result_whose_arrays_disagree_is_refused_naming_the_field() {
             .unwrap(),
         "--json",
     ]);
+    // a small window-sweep document (the fuzzer's seed, made by limpid)
+    let sweep: Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../fuzz/corpus/seeds/result-window_sweep.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
     type Mutation = fn(&mut Value);
     let cases: Vec<(&str, &Value, Mutation, &str)> = vec![
+        (
+            "a sweep row's stiffness one row short (found by the fuzzer)",
+            &sweep,
+            |v| {
+                v["rows"][1]["estimate"]["stiffness"]
+                    .as_array_mut()
+                    .unwrap()
+                    .pop();
+            },
+            "rows[1].estimate.stiffness: 1 x 2, expected 2 x 2",
+        ),
+        (
+            "an ellipsoid axis of 1e307 (drew NaN coordinates)",
+            &linear,
+            |v| v["ellipsoids"]["stiffness"]["axes"][0][0] = serde_json::json!(1e307),
+            "ellipsoids.stiffness.axes: not a rotation",
+        ),
         (
             "empty partial",
             &stochastic,
@@ -905,7 +931,7 @@ fn a_result_whose_arrays_disagree_is_refused_naming_the_field() {
         assert!(!html.exists(), "{what}: a report was written");
     }
     // the unmutated documents still read
-    for base in [&stochastic, &linear] {
+    for base in [&stochastic, &linear, &sweep] {
         let path = dir.path().join("good.json");
         std::fs::write(&path, base.to_string()).unwrap();
         let html = dir.path().join("good.html");
