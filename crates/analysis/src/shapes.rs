@@ -261,7 +261,7 @@ fn ellipsoid(name: &str, e: &crate::Ellipsoid, d: usize) -> Result<(), String> {
         .flat_map(|i| (0..d).map(move |j| (i, j)))
         .map(|(i, j)| (gram[(i, j)] - if i == j { 1.0 } else { 0.0 }).abs())
         .fold(0.0, f64::max);
-    if !(off <= 1e-6) {
+    if off.is_nan() || off > 1e-6 {
         return Err(format!(
             "{name}.axes: not a rotation (its columns must be unit vectors at right angles)"
         ));
