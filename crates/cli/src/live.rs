@@ -83,9 +83,6 @@ pub fn run(args: LiveArgs) -> CliResult {
         .as_ref()
         .map(|m| mvc_maxima(m, &channels, &EmgParams::default()))
         .transpose()?;
-    if args.speed.is_nan() || args.speed <= 0.0 {
-        return Err(format!("--speed must be positive, found {}", args.speed).into());
-    }
     let config = Config {
         udp: args.udp,
         channels,

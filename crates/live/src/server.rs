@@ -42,6 +42,60 @@ pub struct Config {
     pub lsl: Option<String>,
 }
 
+/// Fastest stream the live page takes (Hz); EMG amplifiers sample at a few kHz.
+pub const MAX_LIVE_RATE_HZ: f64 = 1e6;
+/// Fastest replay (times real time).
+pub const MAX_REPLAY_SPEED: f64 = 1000.0;
+
+impl Config {
+    /// The numbers a session runs on, each in its range; errors name the flag.
+    pub fn check(&self) -> Result<()> {
+        let number = |v: f64| limpid_core::short_number(v);
+        if !(self.sample_rate > 0.0 && self.sample_rate <= MAX_LIVE_RATE_HZ) {
+            return Err(Error::invalid(
+                "sample rate",
+                format!(
+                    "expected a sample rate above 0 and up to {MAX_LIVE_RATE_HZ:e} Hz, found {}",
+                    number(self.sample_rate)
+                ),
+            ));
+        }
+        if let Some(t) = self.target {
+            if !(0.0..=2.0).contains(&t) {
+                return Err(Error::invalid(
+                    "target level",
+                    format!(
+                        "expected a co-contraction level from 0 to 2 (fraction of MVC), found {}",
+                        number(t)
+                    ),
+                ));
+            }
+        }
+        if !(self.tolerance > 0.0 && self.tolerance <= 1.0) {
+            return Err(Error::invalid(
+                "target tolerance",
+                format!(
+                    "expected a half-width above 0 and up to 1 (fraction of MVC), found {}",
+                    number(self.tolerance)
+                ),
+            ));
+        }
+        if let Some((_, speed)) = &self.replay {
+            if !(*speed > 0.0 && *speed <= MAX_REPLAY_SPEED) {
+                return Err(Error::invalid(
+                    "replay speed",
+                    format!(
+                        "expected a replay speed above 0 and up to {} (times real time), found {}",
+                        number(MAX_REPLAY_SPEED),
+                        number(*speed)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Latency histogram: 10 µs buckets up to 100 ms.
 struct Histogram {
     buckets: Vec<u64>,
@@ -245,6 +299,7 @@ fn now_unix_ns() -> u64 {
 impl Session {
     /// Bind the UDP socket and start the receiver (and the replay, if any).
     pub fn start(config: &Config) -> Result<Session> {
+        config.check()?;
         let processor = Processor::new(
             config.channels.len(),
             config.sample_rate,

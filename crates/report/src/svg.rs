@@ -104,14 +104,19 @@ fn tick_label(v: f64) -> String {
     }
 }
 
+/// Largest magnitude a chart draws.
+const DRAWABLE: f64 = 1e300;
+
 impl Chart {
     fn finite_points<'a>(&'a self, s: &'a Series) -> impl Iterator<Item = (f64, f64)> + 'a {
         s.x.iter()
             .zip(&s.y)
             .map(|(x, y)| (*x, *y))
+            // beyond 1e300 the axis span (hi - lo) would overflow into NaN
+            // coordinates; such a value cannot be drawn beside others anyway
             .filter(move |(x, y)| {
-                x.is_finite()
-                    && y.is_finite()
+                x.abs() <= DRAWABLE
+                    && y.abs() <= DRAWABLE
                     && (!self.x_log || *x > 0.0)
                     && (!self.y_log || *y > 0.0)
             })
@@ -330,5 +335,27 @@ mod tests {
         assert_eq!(one.split('"').next().unwrap().matches('L').count(), 1);
         let two = svg.split(r#"data-name="two" d=""#).nth(1).unwrap();
         assert_eq!(two.split('"').next().unwrap().matches('L').count(), 0);
+    }
+
+    #[test]
+    fn values_beside_1e308_are_left_out_not_drawn_as_nan() {
+        // a span of +-1e308 overflowed the axis into NaN coordinates (fuzzer)
+        let chart = Chart {
+            title: "K".into(),
+            x_label: "T (ms)".into(),
+            y_label: "K".into(),
+            x_log: false,
+            y_log: false,
+            y_range: None,
+            series: vec![Series {
+                name: "one".into(),
+                x: vec![50.0, 100.0, 150.0],
+                y: vec![-1e308, 20.0, 1e308],
+                stroke: Stroke::Solid,
+                color: PALETTE[0].into(),
+            }],
+        };
+        let svg = chart.to_svg(400.0, 300.0);
+        assert!(!svg.contains("NaN") && !svg.contains("inf"), "{svg}");
     }
 }

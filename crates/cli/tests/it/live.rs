@@ -316,3 +316,56 @@ fn websocket_upgrades_need_a_valid_key() {
         assert_eq!(status(bad), "400", "{bad}");
     }
 }
+
+/// Issue 36: the live page's numbers are checked before it starts (a NaN
+/// target or a negative tolerance used to start a page that drew nothing).
+#[test]
+fn live_settings_out_of_range_are_one_line_errors() {
+    let replay = examples("cocontraction").join("ex_config4.csv");
+    let replay = replay.to_str().unwrap();
+    for (extra, says) in [
+        (
+            vec!["--rate", "1e308"],
+            "invalid sample rate: expected a sample rate above 0 and up to 1e6 Hz",
+        ),
+        (
+            vec!["--rate", "1000", "--target", "nan"],
+            "invalid target level",
+        ),
+        (
+            vec!["--rate", "1000", "--target", "5"],
+            "invalid target level",
+        ),
+        (
+            vec!["--rate", "1000", "--tolerance", "-1"],
+            "invalid target tolerance",
+        ),
+        (
+            vec!["--replay", replay, "--speed", "1e308"],
+            "invalid replay speed",
+        ),
+        (
+            vec!["--replay", replay, "--speed", "0"],
+            "invalid replay speed",
+        ),
+    ] {
+        let mut args = vec![
+            "live",
+            "--listen",
+            "127.0.0.1:0",
+            "--udp",
+            "127.0.0.1:0",
+            "--channels",
+            "emg_a",
+        ];
+        args.extend(extra.iter().copied());
+        let out = limpid(&args);
+        assert_eq!(out.code, 2, "{extra:?}: {}", out.stdout);
+        assert!(
+            out.stderr.starts_with(&format!("limpid: {says}")),
+            "{extra:?}: {}",
+            out.stderr
+        );
+        assert_eq!(out.stderr.lines().count(), 1, "{}", out.stderr);
+    }
+}
