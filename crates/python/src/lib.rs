@@ -636,6 +636,31 @@ fn finish_study(
     Ok(document(Estimate::Study(result)))
 }
 
+/// `value ± se` rounded to the standard error, as the report and the CLI
+/// print it (limpid_core::with_standard_error).
+#[pyfunction]
+fn with_standard_error(value: f64, se: f64) -> String {
+    limpid_core::with_standard_error(value, se)
+}
+
+/// The unit of element (row, column) of a stiffness, damping or inertia
+/// matrix for these coordinate names (as the report writes it).
+#[pyfunction]
+fn matrix_element_unit(kind: &str, row: &str, column: &str) -> PyResult<String> {
+    use limpid_core::criteria::MatrixKind;
+    let kind = match kind {
+        "stiffness" => MatrixKind::Stiffness,
+        "damping" => MatrixKind::Damping,
+        "inertia" => MatrixKind::Inertia,
+        other => {
+            return Err(value_err(format!(
+                "expected stiffness, damping or inertia, found {other:?}"
+            )))
+        }
+    };
+    Ok(limpid_report::matrix_element_unit(kind, row, column))
+}
+
 /// The ellipsoid of the symmetric part of a 2 x 2 or 3 x 3 matrix; JSON text.
 #[pyfunction]
 fn ellipsoid(matrix: Vec<Vec<f64>>) -> PyResult<String> {
@@ -777,5 +802,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(protocol_check, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(report, m)?)?;
+    m.add_function(wrap_pyfunction!(with_standard_error, m)?)?;
+    m.add_function(wrap_pyfunction!(matrix_element_unit, m)?)?;
     Ok(())
 }

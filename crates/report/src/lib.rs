@@ -176,7 +176,7 @@ fn element_unit(row: &str, column: &str) -> &'static str {
 /// Unit of element (row, column) of K, B or M when the coordinates mix
 /// positions and angles: the row's force (N) or torque (N m) per the
 /// column's displacement (m or rad), velocity or acceleration.
-fn matrix_element_unit(kind: MatrixKind, row: &str, column: &str) -> String {
+pub fn matrix_element_unit(kind: MatrixKind, row: &str, column: &str) -> String {
     let angular = |c: &str| c == "theta" || c.starts_with('q');
     let force = if angular(row) { "N m" } else { "N" };
     let per = if angular(column) { "rad" } else { "m" };

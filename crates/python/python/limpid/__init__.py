@@ -10,7 +10,10 @@ A thin layer over the Rust library (``limpid._limpid``):
   ``estimate_stochastic``, ``estimate_cocontraction``) returning
   :class:`Result` objects whose ``to_dict()`` has the keys of the CLI's JSON;
 - the virtual lab (``protocol_preset``, ``protocol_check``, ``simulate``),
-  ``ellipsoid`` and ``report``.
+  ``ellipsoid`` and ``report``;
+- in a notebook, results display as tables (value ± SE rounded to the SE,
+  units, verdicts, warnings), become tidy DataFrames (``to_pandas()``) and
+  figures (:mod:`limpid.plot`, with matplotlib).
 
 Bad input raises ``ValueError`` (files: ``OSError``) with the library's
 one-line message; long computations release the GIL.
@@ -27,10 +30,11 @@ from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, 
 
 import numpy as np
 
-from . import _limpid, _spectral
+from . import _display, _limpid, _spectral, plot
 
 __all__ = [
     "Result",
+    "plot",
     "read_recording",
     "inspect",
     "psd",
@@ -161,7 +165,48 @@ class Result:
         return Result(copy.deepcopy(self._data, memo))
 
     def __repr__(self) -> str:
-        return f"limpid.Result({', '.join(self._data.keys())})"
+        return _display.summary(self._data)
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: value ± SE per matrix element with units,
+        rounded to the SE, the verdict per matrix, fit quality, warnings."""
+        return _display.to_html(self._data)
+
+    def to_pandas(self, table: str = "parameters") -> Any:
+        """A tidy ``pandas.DataFrame`` of the result (pandas must be installed).
+
+        ``table="parameters"`` (default): one row per matrix element (and per
+        level, window or schedule point, as the kind has them) with columns
+        ``quantity, element, row, column, value, se, unit, verdict``; reflex:
+        one row per pathway parameter; study: the seed 001 tables (one row per
+        configuration and level, ``*_sd`` columns). ``table="impedance"``
+        (stochastic): one row per frequency and element of Z(f) (real,
+        imaginary, magnitude, phase, unit); ``table="coherence"``
+        (stochastic): multiple and partial coherence per frequency, output
+        and input. ``table="rotation"`` (study): the ellipsoid rotations.
+        The values are the result's own floats; absent ones are NaN."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Result.to_pandas needs pandas: pip install pandas") from None
+        return pd.DataFrame.from_records(_display.records(self._data, table))
+
+    def to_xarray(self) -> Any:
+        """A stochastic result's Z(f) as an ``xarray.DataArray`` (complex,
+        dims ``frequency, output, displacement``; xarray must be installed)."""
+        if self._data.get("kind") != "stochastic":
+            raise ValueError(f"to_xarray is for stochastic results, this one is {self._data.get('kind')!r}")
+        try:
+            import xarray as xr
+        except ImportError:
+            raise ImportError("Result.to_xarray needs xarray: pip install xarray") from None
+        z = np.asarray(self._data["impedance"], dtype=float)
+        coords = self._data["coordinates"]
+        return xr.DataArray(z[..., 0] + 1j * z[..., 1], dims=("frequency", "output", "displacement"),
+                            coords={"frequency": self._data["frequencies"], "output": coords,
+                                    "displacement": coords},
+                            name="impedance", attrs={"units": "N/m, N/rad, N m/m or N m/rad by element",
+                                                     "frequency_units": "Hz"})
 
 
 def _integer(name: str, value: Any, *, minimum: Optional[int] = None) -> int:
@@ -806,6 +851,11 @@ def _value_errors(f: Any) -> Any:
             raise ValueError(f"{f.__name__}: {e}") from e
 
     return checked
+
+
+def __dir__() -> List[str]:
+    """The public API only (not the modules and typing names used inside)."""
+    return sorted(__all__)
 
 
 for _name in __all__:

@@ -1,0 +1,429 @@
+"""How a result shows itself in a notebook (issue 39): tidy records (the
+rows of ``Result.to_pandas()``), a short ``repr`` and an HTML table.
+
+Numbers are the JSON result's own floats (the records copy them, never
+recompute them); the text rounds each value to its standard error with the
+library's rule (``_limpid.with_standard_error``, the report's and the CLI's),
+and units come from the library too (``_limpid.matrix_element_unit``).
+"""
+
+from __future__ import annotations
+
+import html as _html
+import math
+from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
+
+from . import _limpid
+
+MATRICES = ("stiffness", "damping", "inertia")
+SYMBOL = {"stiffness": "K", "damping": "B", "inertia": "M"}
+PLANAR_SYMBOL = {"stiffness": "K", "damping": "D", "inertia": "M"}
+
+Record = Dict[str, Any]
+
+
+def _float(v: Any) -> float:
+    """A JSON number as a float; None (absent) becomes NaN, pandas' missing value."""
+    return float("nan") if v is None else float(v)
+
+
+def _sub(coords: Sequence[str], i: int, j: int) -> str:
+    """Element subscript as the report writes it: Kxx, or K1,2 for joint names."""
+    if all(len(c) == 1 for c in coords):
+        return f"{coords[i]}{coords[j]}"
+    short = [c[1:] if c.startswith("q") else c for c in coords]
+    return f"{short[i]},{short[j]}"
+
+
+def _unit(kind: str, row: str, column: str) -> str:
+    return _limpid.matrix_element_unit(kind, row, column)
+
+
+def _matrix_records(d: Dict[str, Any], coords: Sequence[str], kinds: Iterable[str],
+                    se: Optional[Dict[str, Any]], verdicts: Optional[Dict[str, Any]],
+                    extra: Optional[Record] = None, se_suffix: str = "",
+                    symbols: Optional[Dict[str, str]] = None) -> List[Record]:
+    out: List[Record] = []
+    for kind in kinds:
+        m = d.get(kind)
+        if m is None:
+            continue
+        s = None if se is None else se.get(kind + se_suffix)
+        for i, ci in enumerate(coords):
+            for j, cj in enumerate(coords):
+                rec: Record = dict(extra or {})
+                rec.update(
+                    quantity=kind,
+                    element=(symbols or SYMBOL)[kind] + _sub(coords, i, j),
+                    row=ci,
+                    column=cj,
+                    value=_float(m[i][j]),
+                    se=_float(None if s is None else s[i][j]),
+                    unit=_unit(kind, ci, cj),
+                    verdict=None if verdicts is None else verdicts.get(kind),
+                )
+                out.append(rec)
+    return out
+
+
+def _linear(d: Dict[str, Any], extra: Optional[Record] = None) -> List[Record]:
+    coords = d["provenance"]["coordinates"]
+    return _matrix_records(d, coords, MATRICES, d.get("standard_errors"),
+                           d.get("criteria", {}).get("verdicts"), extra)
+
+
+def records(d: Dict[str, Any], table: str = "parameters") -> List[Record]:
+    """The tidy rows of a result document (see ``Result.to_pandas``)."""
+    kind = d.get("kind")
+    if table == "impedance":
+        if kind != "stochastic":
+            raise ValueError(f"table 'impedance' is for stochastic results, this one is {kind!r}")
+        return _impedance(d)
+    if table == "coherence":
+        if kind != "stochastic":
+            raise ValueError(f"table 'coherence' is for stochastic results, this one is {kind!r}")
+        return _coherence(d)
+    if table == "rotation":
+        if kind != "study":
+            raise ValueError(f"table 'rotation' is for study results, this one is {kind!r}")
+        return [dict(r) for r in d["rotation"]]
+    if table != "parameters":
+        raise ValueError(f"table: expected 'parameters', 'impedance', 'coherence' or 'rotation', found {table!r}")
+    if kind == "linear":
+        return _linear(d)
+    if kind == "cocontraction":
+        out: List[Record] = []
+        for lv in d["levels"]:
+            extra = {"level": _float(lv["level"])}
+            out.append(dict(extra, quantity="cocontraction_index", element="CCI", row=None, column=None,
+                            value=_float(lv["cocontraction_index"]), se=float("nan"),
+                            unit="fraction of MVC", verdict=None))
+            out.extend(_linear(lv["estimate"], extra))
+        return out
+    if kind == "planar":
+        return _planar(d)
+    if kind == "window_sweep":
+        out = []
+        for row in d["rows"]:
+            extra = {"window_ms": _float(row["observation_window_ms"]),
+                     "trusted": bool(row["trusted"])}
+            out.extend(_planar(row["estimate"], extra))
+        return out
+    if kind == "stochastic":
+        c = d["criteria"]
+        return _matrix_records(d, d["coordinates"], MATRICES, d["standard_errors"], c.get("verdicts"))
+    if kind == "varying":
+        out = []
+        coords = d["coordinates"]
+        sched = d["schedule"]
+        for p in d["points"]:
+            extra = {"sigma": _float(p["sigma"]), "identifiable": bool(p["identifiable"])}
+            if not p["identifiable"]:
+                continue
+            out.extend(_matrix_records(p, coords, MATRICES, p, p.get("verdicts"), extra, se_suffix="_se"))
+        for r in out:
+            r["schedule"] = f"{sched['name']} ({sched['unit']})" if sched.get("unit") else sched["name"]
+        return out
+    if kind == "reflex":
+        return _reflex(d)
+    if kind == "study":
+        out = []
+        for r in d["levels"]:
+            row = {k: v for k, v in r.items() if k not in ("sd", "stiffness", "ellipsoid")}
+            row.update({f"{k}_sd": v for k, v in (r.get("sd") or {}).items()})
+            out.append(row)
+        return out
+    if kind == "demo":
+        out = []
+        for p in d["points"]:
+            extra = {"start_point": p["start_point"]}
+            recs = _linear(p["estimate"], extra)
+            coords = p["estimate"]["provenance"]["coordinates"]
+            for r in recs:
+                i, j = coords.index(r["row"]), coords.index(r["column"])
+                r["truth"] = _float(p["true_" + r["quantity"]][i][j])
+            out.extend(recs)
+        return out
+    raise ValueError(f"no table for results of kind {kind!r}")
+
+
+def _planar(d: Dict[str, Any], extra: Optional[Record] = None) -> List[Record]:
+    coords = ["q1", "q2"]
+    se = d["standard_errors"]
+    # seed 003 writes the damping D
+    out = _matrix_records(d, coords, ("stiffness", "damping"), se, d["criteria"].get("verdicts"), extra,
+                          symbols=PLANAR_SYMBOL)
+    for i, (v, s) in enumerate(zip(d["inertial_parameters"], se["inertial_parameters"])):
+        out.append(dict(extra or {}, quantity="inertial_parameter", element=f"xi{i + 1}", row=None, column=None,
+                        value=_float(v), se=_float(s), unit="kg m^2", verdict=None))
+    return out
+
+
+def _reflex(d: Dict[str, Any]) -> List[Record]:
+    pos = d["position"]
+    intr = d["intrinsic"]
+    out: List[Record] = []
+    for kind in MATRICES:
+        out.append(dict(quantity=f"intrinsic_{kind}", element="intrinsic " + SYMBOL[kind], row=None, column=None,
+                        value=_float(intr[kind]), se=_float(intr["standard_errors"].get(kind)),
+                        unit=_unit(kind, pos, pos), verdict=None))
+    r = d["reflex"]
+    out.append(dict(quantity="reflex_gain", element="G", row=None, column=None, value=_float(r["gain"]),
+                    se=_float(r.get("gain_se")), unit=_unit("damping", pos, pos), verdict=None))
+    out.append(dict(quantity="reflex_delay", element="delay", row=None, column=None, value=_float(r["delay_s"]),
+                    se=float("nan"), unit="s",
+                    verdict=None if r.get("delay_identifiable") else "not identifiable"))
+    for q, unit in (("natural_frequency_hz", "Hz"), ("damping_ratio", "")):
+        out.append(dict(quantity=f"reflex_{q}", element=q, row=None, column=None, value=_float(r[q]),
+                        se=float("nan"), unit=unit, verdict=None))
+    return out
+
+
+def _impedance(d: Dict[str, Any]) -> List[Record]:
+    coords = d["coordinates"]
+    out: List[Record] = []
+    for k, f in enumerate(d["frequencies"]):
+        for i, ci in enumerate(coords):
+            for j, cj in enumerate(coords):
+                re_, im = d["impedance"][k][i][j]
+                out.append(dict(frequency_hz=_float(f), output=ci, displacement=cj, real=_float(re_),
+                                imag=_float(im), magnitude=math.hypot(re_, im),
+                                phase_deg=math.degrees(math.atan2(im, re_)),
+                                unit=_unit("stiffness", ci, cj)))
+    return out
+
+
+def _coherence(d: Dict[str, Any]) -> List[Record]:
+    coh = d["coherence"]
+    out: List[Record] = []
+    for o, name in enumerate(coh["outputs"]):
+        for k, f in enumerate(d["frequencies"]):
+            for j, inp in enumerate(d["inputs"]):
+                out.append(dict(frequency_hz=_float(f), output=name, input=inp,
+                                multiple=_float(coh["multiple"][o][k]),
+                                partial=_float(coh["partial"][o][j][k])))
+    return out
+
+
+# ---------------------------------------------------------------- text
+
+
+def with_se(value: float, se: float) -> str:
+    return _limpid.with_standard_error(value, se)
+
+
+def _words(verdict: Optional[str]) -> str:
+    return "" if verdict is None else str(verdict).replace("_", " ")
+
+
+def _recording(d: Dict[str, Any]) -> Optional[str]:
+    for path in (("provenance", "recording"), ("recording",)):
+        v: Any = d
+        for k in path:
+            v = v.get(k) if isinstance(v, dict) else None
+        if isinstance(v, str):
+            return v.rsplit("/", 1)[-1]
+    return None
+
+
+def _diagonal(recs: List[Record], quantity: str = "stiffness") -> str:
+    diag = [r for r in recs if r["quantity"] == quantity and r["row"] == r["column"]]
+    return ", ".join(f"{r['element']} = {with_se(r['value'], r['se'])} {r['unit']}" for r in diag)
+
+
+def summary(d: Dict[str, Any]) -> str:
+    """A short repr: kind, recording and the headline numbers."""
+    kind = d.get("kind", "?")
+    head = f"limpid.Result(kind={kind!r}"
+    rec = _recording(d)
+    if rec:
+        head += f", recording={rec!r}"
+    body = ""
+    try:
+        if kind in ("linear", "stochastic", "planar"):
+            recs = records(d)
+            v = (d.get("criteria") or {}).get("verdicts") or {}
+            body = _diagonal(recs) + (f"; stiffness {_words(v.get('stiffness'))}" if v.get("stiffness") else "")
+        elif kind == "cocontraction":
+            body = f"{len(d['levels'])} levels, muscles {', '.join(d['muscles'])}"
+        elif kind == "window_sweep":
+            t = d.get("shortest_trusted_ms")
+            body = f"{len(d['rows'])} windows; shortest trusted: " + ("none" if t is None else f"{t:g} ms")
+        elif kind == "reflex":
+            recs = records(d)
+            k = recs[2]
+            g = next(r for r in recs if r["quantity"] == "reflex_gain")
+            body = (f"intrinsic K = {with_se(k['value'], k['se'])} {k['unit']}, "
+                    f"reflex gain = {with_se(g['value'], g['se'])} {g['unit']}")
+        elif kind == "varying":
+            n = sum(1 for p in d["points"] if p["identifiable"])
+            body = f"{d['method']}, {n} of {len(d['points'])} points identifiable"
+        elif kind == "study":
+            body = f"{d.get('name')!r}: {len(d['recordings'])} recordings, {len(d['failures'])} failed"
+    except (KeyError, IndexError, TypeError, ValueError, StopIteration):
+        body = ""
+    warnings_ = d.get("warnings") or []
+    tail = f", {len(warnings_)} warning{'s' if len(warnings_) != 1 else ''}" if warnings_ else ""
+    return head + (f": {body}" if body else "") + tail + ")"
+
+
+# ---------------------------------------------------------------- HTML
+
+_STYLE = ("<style>.limpid-result table{border-collapse:collapse;margin:0 1.2em .6em 0;display:inline-table;"
+          "vertical-align:top}.limpid-result th,.limpid-result td{padding:.15em .6em;text-align:right;"
+          "border-bottom:1px solid #ddd}.limpid-result caption{text-align:left;font-weight:bold}"
+          ".limpid-result td{white-space:nowrap}.limpid-result td.note{white-space:normal;text-align:left;"
+          "max-width:36em;font-size:90%}.limpid-result .bad{color:#b00}.limpid-result .ok{color:#070}</style>")
+
+
+def _e(v: Any) -> str:
+    return _html.escape(str(v))
+
+
+def _verdict_html(v: Optional[str]) -> str:
+    if not v:
+        return ""
+    cls = "ok" if v == "trusted" else "bad"
+    return f' <span class="{cls}">({_e(_words(v))})</span>'
+
+
+def _matrix_table(recs: List[Record], quantity: str, caption: str) -> str:
+    rs = [r for r in recs if r["quantity"] == quantity]
+    if not rs:
+        return ""
+    rows = list(dict.fromkeys(r["row"] for r in rs))
+    cols = list(dict.fromkeys(r["column"] for r in rs))
+    cell = {(r["row"], r["column"]): r for r in rs}
+    units = sorted({r["unit"] for r in rs})
+    unit = units[0] if len(units) == 1 else "SI"
+    out = [f"<table><caption>{_e(caption)} ({_e(unit)}){_verdict_html(rs[0]['verdict'])}</caption>"
+           "<tr><th></th>" + "".join(f"<th>{_e(c)}</th>" for c in cols) + "</tr>"]
+    for r in rows:
+        out.append(f"<tr><th>{_e(r)}</th>" + "".join(
+            f"<td>{_e(with_se(cell[(r, c)]['value'], cell[(r, c)]['se']))}"
+            + ("" if unit != "SI" else f" {_e(cell[(r, c)]['unit'])}") + "</td>" for c in cols) + "</tr>")
+    out.append("</table>")
+    return "".join(out)
+
+
+def _list_table(header: Sequence[str], rows: Sequence[Sequence[Any]], caption: str) -> str:
+    out = [f"<table><caption>{_e(caption)}</caption><tr>" + "".join(f"<th>{_e(h)}</th>" for h in header) + "</tr>"]
+    for row in rows:
+        out.append("<tr>" + "".join(
+            f'<td class="note">{_e(c)}</td>' if len(str(c)) > 30 else f"<td>{_e(c)}</td>" for c in row) + "</tr>")
+    out.append("</table>")
+    return "".join(out)
+
+
+def _fit_line(d: Dict[str, Any]) -> str:
+    fit = d.get("fit") or {}
+    parts = []
+    vaf = fit.get("vaf")
+    if isinstance(vaf, list) and vaf:
+        parts.append("VAF " + ", ".join(f"{v:.1f} %" for v in vaf if v is not None))
+    elif isinstance(vaf, (int, float)):
+        parts.append(f"VAF {vaf:.1f} %")
+    for k in ("vaf_total", "cross_validated_vaf"):
+        v = fit.get(k, d.get(k))
+        if isinstance(v, (int, float)):
+            parts.append(f"{k.replace('_', ' ')} {v:.1f} %")
+    crit = d.get("criteria") or {}
+    for k, label in (("condition_number", "condition number"), ("mean_multiple_coherence", "mean multiple coherence"),
+                     ("fit_vaf", "parametric fit VAF")):
+        v = crit.get(k)
+        if isinstance(v, (int, float)):
+            parts.append(f"{label} {v:.4g}")
+    return f"<p>Fit: {_e('; '.join(parts))}</p>" if parts else ""
+
+
+def _warnings_html(d: Dict[str, Any]) -> str:
+    ws = d.get("warnings") or []
+    if not ws:
+        return ""
+    groups: Dict[str, List[str]] = {}
+    for w in ws:
+        code = w.get("code", "note") if isinstance(w, dict) else "note"
+        msg = w.get("message", str(w)) if isinstance(w, dict) else str(w)
+        groups.setdefault(code, []).append(msg)
+    items = "".join(f"<li><b>{_e(code.replace('_', ' '))}</b>: " + "<br>".join(_e(m) for m in msgs) + "</li>"
+                    for code, msgs in groups.items())
+    return f"<details open><summary>{len(ws)} warning{'s' if len(ws) != 1 else ''}</summary><ul>{items}</ul></details>"
+
+
+def _matrices(recs: List[Record], kinds: Sequence[str] = MATRICES, symbols: Optional[Dict[str, str]] = None) -> str:
+    return "".join(_matrix_table(recs, k, f"{k.capitalize()} {(symbols or SYMBOL)[k]}") for k in kinds)
+
+
+def to_html(d: Dict[str, Any]) -> str:
+    """The result as HTML tables (``Result._repr_html_``)."""
+    kind = d.get("kind", "?")
+    title = f"<p><b>limpid {_e(kind)} result</b>"
+    rec = _recording(d)
+    if rec:
+        title += f" &mdash; {_e(rec)}"
+    parts = [title + "</p>"]
+    if kind in ("linear", "stochastic"):
+        parts.append(_matrices(records(d)))
+        parts.append(_fit_line(d))
+    elif kind == "planar":
+        recs = records(d)
+        parts.append(_matrices(recs, ("stiffness", "damping"), PLANAR_SYMBOL))
+        xi = [r for r in recs if r["quantity"] == "inertial_parameter"]
+        parts.append(_list_table(["parameter", "value ± SE", "unit"],
+                                 [[r["element"], with_se(r["value"], r["se"]), r["unit"]] for r in xi],
+                                 "Base inertial parameters"))
+        parts.append(_fit_line(d))
+    elif kind == "cocontraction":
+        recs = records(d)
+        for lv in d["levels"]:
+            at = [r for r in recs if r.get("level") == lv["level"]]
+            parts.append(f"<p><b>level {lv['level']:g}</b>: co-contraction index "
+                         f"{lv['cocontraction_index']:.3f} (sd {lv['cocontraction_sd']:.3f})</p>")
+            parts.append(_matrices(at))
+    elif kind == "window_sweep":
+        rows = []
+        for row in d["rows"]:
+            e = row["estimate"]
+            recs = _planar(e)
+            diag = [r for r in recs if r["quantity"] in ("stiffness", "damping") and r["row"] == r["column"]]
+            rows.append([f"{row['observation_window_ms']:g}"]
+                        + [with_se(r["value"], r["se"]) for r in diag]
+                        + ["yes" if row["trusted"] else "no: " + "; ".join(row.get("reasons") or [])])
+        recs0 = _planar(d["rows"][0]["estimate"]) if d["rows"] else []
+        diag0 = [r for r in recs0 if r["quantity"] in ("stiffness", "damping") and r["row"] == r["column"]]
+        header = ["T_obs (ms)"] + [f"{r['element']} ({r['unit']})" for r in diag0] + ["trusted"]
+        parts.append(_list_table(header, rows, "Estimates against the observation window"))
+        t = d.get("shortest_trusted_ms")
+        parts.append(f"<p>Shortest trusted window: {'none' if t is None else f'{t:g} ms'}</p>")
+    elif kind == "reflex":
+        recs = records(d)
+        parts.append(_list_table(["quantity", "value ± SE", "unit", "note"],
+                                 [[r["element"], with_se(r["value"], r["se"]), r["unit"], r["verdict"] or ""]
+                                  for r in recs], "Intrinsic and reflex pathways (parallel cascade)"))
+        parts.append(_fit_line(d))
+    elif kind == "varying":
+        recs = records(d)
+        coords = d["coordinates"]
+        diag = [f"{SYMBOL['stiffness']}{_sub(coords, i, i)}" for i in range(len(coords))]
+        rows = []
+        for p in d["points"]:
+            if not p["identifiable"]:
+                rows.append([f"{p['sigma']:.4g}"] + ["—"] * len(diag) + [p.get("reason") or "not identifiable"])
+                continue
+            at = {r["element"]: r for r in recs if r["sigma"] == p["sigma"] and r["quantity"] == "stiffness"}
+            rows.append([f"{p['sigma']:.4g}"] + [with_se(at[e]["value"], at[e]["se"]) for e in diag] + [""])
+        unit = _unit("stiffness", coords[0], coords[0])
+        s = d["schedule"]
+        parts.append(_list_table([f"{s['name']} ({s['unit']})"] + [f"{e} ({unit})" for e in diag] + ["note"],
+                                 rows, f"Stiffness against {s['name']} ({d['method']})"))
+        parts.append(_fit_line(d))
+    elif kind == "study":
+        header = ["configuration", "level", "subjects", "CCI", "Kxx", "Kyy", "Kzz"]
+        rows = [[r["configuration"], f"{r['level']:g}", r["subjects"]]
+                + ["" if r.get(k) is None else f"{r[k]:.4g}" for k in ("cocontraction_index", "kxx", "kyy", "kzz")]
+                for r in d["levels"]]
+        parts.append(_list_table(header, rows, "Mean over subjects (stiffness in N/m)"))
+    else:
+        parts.append(f"<p>{_e(summary(d))}</p>")
+    parts.append(_warnings_html(d))
+    return _STYLE + '<div class="limpid-result">' + "".join(parts) + "</div>"
