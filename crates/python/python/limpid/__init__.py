@@ -186,7 +186,9 @@ class Result:
         and input. ``table="rotation"`` (study): the ellipsoid rotations.
         The values are the result's own floats; absent ones are NaN."""
         try:
-            import pandas as pd
+            import importlib
+
+            pd = importlib.import_module("pandas")  # optional: no stubs needed to type-check limpid
         except ImportError:
             raise ImportError("Result.to_pandas needs pandas: pip install pandas") from None
         return pd.DataFrame.from_records(_display.records(self._data, table))

@@ -221,7 +221,7 @@ def _recording(d: Dict[str, Any]) -> Optional[str]:
         v: Any = d
         for k in path:
             v = v.get(k) if isinstance(v, dict) else None
-        if isinstance(v, str):
+        if isinstance(v, str) and not v.startswith("<"):  # "<arrays>": made from arrays
             return v.rsplit("/", 1)[-1]
     return None
 
@@ -251,7 +251,7 @@ def summary(d: Dict[str, Any]) -> str:
             body = f"{len(d['rows'])} windows; shortest trusted: " + ("none" if t is None else f"{t:g} ms")
         elif kind == "reflex":
             recs = records(d)
-            k = recs[2]
+            k = next(r for r in recs if r["quantity"] == "intrinsic_stiffness")
             g = next(r for r in recs if r["quantity"] == "reflex_gain")
             body = (f"intrinsic K = {with_se(k['value'], k['se'])} {k['unit']}, "
                     f"reflex gain = {with_se(g['value'], g['se'])} {g['unit']}")
@@ -404,18 +404,18 @@ def to_html(d: Dict[str, Any]) -> str:
     elif kind == "varying":
         recs = records(d)
         coords = d["coordinates"]
-        diag = [f"{SYMBOL['stiffness']}{_sub(coords, i, i)}" for i in range(len(coords))]
-        rows = []
+        names = [f"{SYMBOL['stiffness']}{_sub(coords, i, i)}" for i in range(len(coords))]
+        table_rows: List[List[str]] = []
         for p in d["points"]:
             if not p["identifiable"]:
-                rows.append([f"{p['sigma']:.4g}"] + ["—"] * len(diag) + [p.get("reason") or "not identifiable"])
+                table_rows.append([f"{p['sigma']:.4g}"] + ["—"] * len(names) + [p.get("reason") or "not identifiable"])
                 continue
-            at = {r["element"]: r for r in recs if r["sigma"] == p["sigma"] and r["quantity"] == "stiffness"}
-            rows.append([f"{p['sigma']:.4g}"] + [with_se(at[e]["value"], at[e]["se"]) for e in diag] + [""])
+            here = {r["element"]: r for r in recs if r["sigma"] == p["sigma"] and r["quantity"] == "stiffness"}
+            table_rows.append([f"{p['sigma']:.4g}"] + [with_se(here[e]["value"], here[e]["se"]) for e in names] + [""])
         unit = _unit("stiffness", coords[0], coords[0])
         s = d["schedule"]
-        parts.append(_list_table([f"{s['name']} ({s['unit']})"] + [f"{e} ({unit})" for e in diag] + ["note"],
-                                 rows, f"Stiffness against {s['name']} ({d['method']})"))
+        parts.append(_list_table([f"{s['name']} ({s['unit']})"] + [f"{e} ({unit})" for e in names] + ["note"],
+                                 table_rows, f"Stiffness against {s['name']} ({d['method']})"))
         parts.append(_fit_line(d))
     elif kind == "study":
         header = ["configuration", "level", "subjects", "CCI", "Kxx", "Kyy", "Kzz"]

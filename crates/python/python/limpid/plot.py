@@ -181,6 +181,7 @@ def fit(result: Any, axes: Any = None) -> Any:
         ax.set_ylabel(f"torque {d['torque']} ({unit})")
         ax.set_title(f"Parallel-cascade fit (VAF {d['fit']['vaf_total']:.1f} %)")
         ax.legend(fontsize="small")
+        fig.tight_layout()
         return fig
     if kind == "linear":
         tr = d["fit"]["traces"]
@@ -235,8 +236,9 @@ def bode(result: Any, axes: Any = None) -> Any:
             mag, ph = a[2 * i, j], a[2 * i + 1, j]
             mag.loglog(f[ok], np.abs(z[ok, i, j]), color="#000000", linewidth=1, label="Z(f)")
             mag.loglog(f[ok], np.abs(model[ok, i, j]), color="#0072B2", linestyle="--", label="fit")
-            ph.semilogx(f[ok], np.degrees(np.angle(z[ok, i, j])), color="#000000", linewidth=1)
-            ph.semilogx(f[ok], np.degrees(np.angle(model[ok, i, j])), color="#0072B2", linestyle="--")
+            # unwrapped, so that a phase near ±180° does not jump across the panel
+            ph.semilogx(f[ok], np.degrees(np.unwrap(np.angle(z[ok, i, j]))), color="#000000", linewidth=1)
+            ph.semilogx(f[ok], np.degrees(np.unwrap(np.angle(model[ok, i, j]))), color="#0072B2", linestyle="--")
             for axx in (mag, ph):
                 axx.axvspan(lo, hi, color="#f0f0f0", zorder=0)
             mag.set_title(f"Z {coords[i]},{coords[j]}", fontsize="medium")
