@@ -168,13 +168,14 @@ def _reflex(d: Dict[str, Any]) -> List[Record]:
                         value=_float(intr[kind]), se=_float(intr["standard_errors"].get(kind)),
                         unit=_unit(kind, pos, pos), verdict=None))
     r = d["reflex"]
-    out.append(dict(quantity="reflex_gain", element="G", row=None, column=None, value=_float(r["gain"]),
+    out.append(dict(quantity="reflex_gain", element="reflex gain G", row=None, column=None, value=_float(r["gain"]),
                     se=_float(r.get("gain_se")), unit=_unit("damping", pos, pos), verdict=None))
-    out.append(dict(quantity="reflex_delay", element="delay", row=None, column=None, value=_float(r["delay_s"]),
-                    se=float("nan"), unit="s",
+    out.append(dict(quantity="reflex_delay", element="reflex delay", row=None, column=None,
+                    value=_float(r["delay_s"]), se=float("nan"), unit="s",
                     verdict=None if r.get("delay_identifiable") else "not identifiable"))
-    for q, unit in (("natural_frequency_hz", "Hz"), ("damping_ratio", "")):
-        out.append(dict(quantity=f"reflex_{q}", element=q, row=None, column=None, value=_float(r[q]),
+    for q, name, unit in (("natural_frequency_hz", "reflex low-pass natural frequency", "Hz"),
+                          ("damping_ratio", "reflex low-pass damping ratio", "")):
+        out.append(dict(quantity=f"reflex_{q}", element=name, row=None, column=None, value=_float(r[q]),
                         se=float("nan"), unit=unit, verdict=None))
     return out
 
@@ -209,6 +210,9 @@ def _coherence(d: Dict[str, Any]) -> List[Record]:
 
 
 def with_se(value: float, se: float) -> str:
+    """``value ± se`` rounded to the SE; a quantity without an SE (NaN) to 4 significant digits."""
+    if math.isnan(se):
+        return "n/a" if math.isnan(value) else f"{value:.4g}"
     return _limpid.with_standard_error(value, se)
 
 
@@ -258,6 +262,9 @@ def summary(d: Dict[str, Any]) -> str:
         elif kind == "varying":
             n = sum(1 for p in d["points"] if p["identifiable"])
             body = f"{d['method']}, {n} of {len(d['points'])} points identifiable"
+        elif kind == "demo":
+            worst = max(p["stiffness_error_percent"] for p in d["points"])
+            body = f"{len(d['points'])} start points, stiffness within {worst:.1f} % of the truth"
         elif kind == "study":
             body = f"{d.get('name')!r}: {len(d['recordings'])} recordings, {len(d['failures'])} failed"
     except (KeyError, IndexError, TypeError, ValueError, StopIteration):
@@ -323,10 +330,10 @@ def _fit_line(d: Dict[str, Any]) -> str:
         parts.append("VAF " + ", ".join(f"{v:.1f} %" for v in vaf if v is not None))
     elif isinstance(vaf, (int, float)):
         parts.append(f"VAF {vaf:.1f} %")
-    for k in ("vaf_total", "cross_validated_vaf"):
+    for k, label in (("vaf_total", "VAF (both pathways)"), ("cross_validated_vaf", "cross-validated VAF")):
         v = fit.get(k, d.get(k))
         if isinstance(v, (int, float)):
-            parts.append(f"{k.replace('_', ' ')} {v:.1f} %")
+            parts.append(f"{label} {v:.1f} %")
     crit = d.get("criteria") or {}
     for k, label in (("condition_number", "condition number"), ("mean_multiple_coherence", "mean multiple coherence"),
                      ("fit_vaf", "parametric fit VAF")):
@@ -411,7 +418,9 @@ def to_html(d: Dict[str, Any]) -> str:
                 table_rows.append([f"{p['sigma']:.4g}"] + ["—"] * len(names) + [p.get("reason") or "not identifiable"])
                 continue
             here = {r["element"]: r for r in recs if r["sigma"] == p["sigma"] and r["quantity"] == "stiffness"}
-            table_rows.append([f"{p['sigma']:.4g}"] + [with_se(here[e]["value"], here[e]["se"]) for e in names] + [""])
+            verdict = _words((p.get("verdicts") or {}).get("stiffness"))
+            table_rows.append([f"{p['sigma']:.4g}"] + [with_se(here[e]["value"], here[e]["se"]) for e in names]
+                              + [f"K {verdict}" if verdict else ""])
         unit = _unit("stiffness", coords[0], coords[0])
         s = d["schedule"]
         parts.append(_list_table([f"{s['name']} ({s['unit']})"] + [f"{e} ({unit})" for e in names] + ["note"],
@@ -423,7 +432,18 @@ def to_html(d: Dict[str, Any]) -> str:
                 + ["" if r.get(k) is None else f"{r[k]:.4g}" for k in ("cocontraction_index", "kxx", "kyy", "kzz")]
                 for r in d["levels"]]
         parts.append(_list_table(header, rows, "Mean over subjects (stiffness in N/m)"))
+    elif kind == "demo":
+        rows = []
+        for p in d["points"]:
+            recs = _linear(p["estimate"])
+            diag = [r for r in recs if r["quantity"] == "stiffness" and r["row"] == r["column"]]
+            rows.append([p["start_point"]] + [with_se(r["value"], r["se"]) for r in diag]
+                        + [f"{p['stiffness_error_percent']:.1f} %", f"{p['damping_error_percent']:.1f} %"])
+        parts.append(_list_table(["start point", "Kxx (N/m)", "Kyy (N/m)", "Kzz (N/m)", "K error", "B error"],
+                                 rows, "Estimates against the virtual subject's truth"))
     else:
-        parts.append(f"<p>{_e(summary(d))}</p>")
+        scalars = [[k.replace("_", " "), f"{v:.4g}" if isinstance(v, float) else v]
+                   for k, v in d.items() if isinstance(v, (int, float, str)) and k not in ("schema", "kind")]
+        parts.append(_list_table(["field", "value"], scalars, summary(d)))
     parts.append(_warnings_html(d))
     return _STYLE + '<div class="limpid-result">' + "".join(parts) + "</div>"
