@@ -1,0 +1,192 @@
+//! The section of a parallel-cascade estimate (Kearney et al. 1997): intrinsic and reflex pathways, IRFs, the delay scan, the fit.
+
+#[allow(unused_imports)]
+use crate::*;
+
+pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimate) -> Section {
+    let r = &v.reflex;
+    let i = &v.intrinsic;
+    let verdict = if r.delay_identifiable {
+        format!(
+            "reflex identified: delay {} ms (95 % interval {}-{} ms), gain {} ± {} N m s/rad; total VAF {} % (cross-validated {} %)",
+            fmt(r.delay_s * 1e3), fmt(r.delay_interval_s[0] * 1e3), fmt(r.delay_interval_s[1] * 1e3),
+            fmt(r.gain), fmt(r.gain_se), fmt(v.fit.vaf_total), fmt(v.cross_validated_vaf)
+        )
+    } else {
+        format!(
+            "reflex delay NOT identifiable; total VAF {} % (cross-validated {} %)",
+            fmt(v.fit.vaf_total),
+            fmt(v.cross_validated_vaf)
+        )
+    };
+    let row = |what: &str, value: f64, se: Option<f64>, unit: &str| {
+        vec![
+            what.to_string(),
+            fmt(value),
+            se.map_or_else(|| "".into(), fmt),
+            unit.to_string(),
+        ]
+    };
+    let parameters = Table {
+        caption: "Parallel-cascade model (Kearney et al. 1997)".into(),
+        header: vec![
+            "parameter".into(),
+            "value".into(),
+            "standard error".into(),
+            "unit".into(),
+        ],
+        rows: vec![
+            row(
+                "intrinsic inertia I",
+                i.inertia,
+                Some(i.standard_errors.inertia),
+                "kg m²",
+            ),
+            row(
+                "intrinsic damping B",
+                i.damping,
+                Some(i.standard_errors.damping),
+                "N m s/rad",
+            ),
+            row(
+                "intrinsic stiffness K",
+                i.stiffness,
+                Some(i.standard_errors.stiffness),
+                "N m/rad",
+            ),
+            row(
+                "reflex-free fit: K",
+                v.reflex_free.parameters.stiffness,
+                None,
+                "N m/rad",
+            ),
+            row("reflex gain G", r.gain, Some(r.gain_se), "N m s/rad"),
+            row("reflex delay", r.delay_s * 1e3, None, "ms"),
+            row(
+                "reflex low-pass natural frequency",
+                r.natural_frequency_hz,
+                None,
+                "Hz",
+            ),
+            row("reflex low-pass damping ratio", r.damping_ratio, None, ""),
+        ],
+    };
+    let vafs = Table {
+        caption: "Variance accounted for (decimated torque, first reflex-IRF length left out)"
+            .into(),
+        header: vec!["model".into(), "VAF (%)".into()],
+        rows: vec![
+            vec!["intrinsic + reflex pathways".into(), fmt(v.fit.vaf_total)],
+            vec!["intrinsic pathway alone".into(), fmt(v.fit.vaf_intrinsic)],
+            vec!["reflex pathway alone".into(), fmt(v.fit.vaf_reflex)],
+            vec!["joint parametric model".into(), fmt(v.fit.vaf_parametric)],
+            vec![
+                "cross-validated (fit 2/3, predict 1/3)".into(),
+                fmt(v.cross_validated_vaf),
+            ],
+            vec!["reflex-free I-B-K fit".into(), fmt(v.reflex_free.vaf)],
+        ],
+    };
+    let line = |id: &str, title: &str, x_label: &str, y_label: &str, series: Vec<Series>| Figure {
+        id: id.into(),
+        chart: Chart {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            x_log: false,
+            y_log: false,
+            y_range: None,
+            series,
+        },
+    };
+    let s = |name: &str, x: &[f64], y: Vec<f64>, k: usize| Series {
+        name: name.into(),
+        x: x.to_vec(),
+        y,
+        stroke: Stroke::Solid,
+        color: PALETTE[k].into(),
+    };
+    let ms = |x: &[f64]| x.iter().map(|t| t * 1e3).collect::<Vec<_>>();
+    let (rect_in, rect_out): (Vec<f64>, Vec<f64>) = (-20..=20)
+        .map(|k| {
+            let x = k as f64 / 20.0;
+            let y = match r.polarity {
+                limpid_ident::reflex::Polarity::Positive => x.max(0.0),
+                limpid_ident::reflex::Polarity::Negative => (-x).max(0.0),
+            };
+            (x, y)
+        })
+        .unzip();
+    let t = &v.traces.t_s;
+    let figures = vec![
+        line(
+            "reflex-intrinsic-irf",
+            "Intrinsic IRF (position to torque)",
+            "lag (ms)",
+            "N m/rad/s",
+            vec![s(
+                "intrinsic IRF",
+                &ms(&i.irf.lags_s),
+                i.irf.values.clone(),
+                0,
+            )],
+        ),
+        line(
+            "reflex-reflex-irf",
+            "Reflex IRF (rectified velocity to torque)",
+            "lag (ms)",
+            "N m s/rad/s",
+            vec![s("reflex IRF", &ms(&r.irf.lags_s), r.irf.values.clone(), 1)],
+        ),
+        line(
+            "reflex-nonlinearity",
+            "Static nonlinearity: half-wave rectifier",
+            "velocity (relative)",
+            "rectified (relative)",
+            vec![s("rectifier", &rect_in, rect_out, 2)],
+        ),
+        line(
+            "reflex-delay-scan",
+            "Joint parametric fit against reflex delay",
+            "delay (ms)",
+            "total VAF (%)",
+            vec![s(
+                "VAF",
+                &ms(&r.delay_scan.delays_s),
+                r.delay_scan.vaf.clone(),
+                0,
+            )],
+        ),
+        line(
+            "reflex-torque",
+            "Measured and predicted torque (10 s)",
+            "time (s)",
+            "torque (N m)",
+            vec![
+                s("measured", t, v.traces.measured.clone(), 0),
+                s(
+                    "intrinsic + reflex",
+                    t,
+                    v.traces
+                        .intrinsic
+                        .iter()
+                        .zip(&v.traces.reflex)
+                        .map(|(a, b)| a + b)
+                        .collect(),
+                    1,
+                ),
+                s("intrinsic", t, v.traces.intrinsic.clone(), 2),
+                s("reflex", t, v.traces.reflex.clone(), 3),
+            ],
+        ),
+    ];
+    Section {
+        heading: format!("Intrinsic and reflex stiffness: {name}"),
+        verdict,
+        warnings: v.warnings.iter().map(|w| w.message.clone()).collect(),
+        tables: vec![parameters, vafs],
+        figures,
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}

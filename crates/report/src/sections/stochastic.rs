@@ -1,0 +1,387 @@
+//! The section of a stochastic MIMO estimate (seed 004): Bode plots of Z(f) with the parametric fit (Fig. 9), multiple and partial coherences (Fig. 10), criteria and verdicts.
+
+#[allow(unused_imports)]
+use crate::*;
+
+/// The stochastic estimate's verdicts and the criteria behind them (seed 004
+/// §III: coherences, input coherence, fit of the parametric model).
+pub(crate) fn stochastic_criteria_table(v: &StochasticEstimate) -> Table {
+    let c = &v.criteria;
+    let words = |m: &MatrixVerdict| match m {
+        MatrixVerdict::Trusted => "trusted",
+        MatrixVerdict::PoorFit => "poor fit: do not use",
+        MatrixVerdict::NotIdentifiable => "not identifiable from this data",
+        MatrixVerdict::NotPassive => "not passive: symmetric part not positive definite",
+        MatrixVerdict::Imprecise => "imprecise: 2 SE exceed the tolerance",
+    };
+    let mut rows = vec![
+        vec![
+            "stiffness K".into(),
+            words(&c.verdicts.stiffness).into(),
+            String::new(),
+        ],
+        vec![
+            "damping B".into(),
+            words(&c.verdicts.damping).into(),
+            String::new(),
+        ],
+    ];
+    if let Some(m) = &c.verdicts.inertia {
+        rows.push(vec!["inertia M".into(), words(m).into(), String::new()]);
+    }
+    let band = format!("{}-{} Hz", fmt(c.band_hz[0]), fmt(c.band_hz[1]));
+    rows.extend([
+        vec![
+            "mean multiple coherence".into(),
+            fmt(c.mean_multiple_coherence),
+            format!(
+                "over {band}; at least {} for any matrix to be trusted",
+                fmt(limpid_ident::stochastic::MIN_MEAN_COHERENCE)
+            ),
+        ],
+        vec![
+            "lowest multiple coherence".into(),
+            fmt(c.min_multiple_coherence),
+            format!("over {band}"),
+        ],
+        vec![
+            "largest input coherence".into(),
+            fmt(c.max_input_coherence),
+            "between two perturbation inputs; Park & Chang (2011) asks below 0.6".into(),
+        ],
+        vec![
+            "fit VAF".into(),
+            format!("{} %", fmt(c.fit_vaf)),
+            format!(
+                "of Z by the parametric model; at least {} % to trust it",
+                fmt(limpid_core::criteria::VAF_FLOOR_PERCENT)
+            ),
+        ],
+        vec![
+            "phi_T, Z against the fit".into(),
+            fmt(c.phi_t_vs_fit),
+            "Park & Chang (2011) eq. (15)".into(),
+        ],
+        vec![
+            "Welch".into(),
+            format!("{} segments of {} samples", c.segments, c.nperseg),
+            format!("resolution {} Hz", fmt(c.frequency_resolution_hz)),
+        ],
+    ]);
+    Table {
+        caption: "Verdicts and the criteria behind them".into(),
+        header: vec!["item".into(), "value".into(), "meaning".into()],
+        rows,
+    }
+}
+
+/// Phase along frequency without ±360° jumps: each point is moved by whole
+/// turns to lie within 180° of the previous one (numpy's `unwrap`, degrees).
+pub fn unwrap_degrees(phase: impl IntoIterator<Item = f64>) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::new();
+    for p in phase {
+        let v = match out.last() {
+            Some(prev) if p.is_finite() && prev.is_finite() => {
+                p - 360.0 * ((p - prev) / 360.0).round()
+            }
+            _ => p,
+        };
+        out.push(v);
+    }
+    out
+}
+
+/// Phase traces drawn together, each moved by whole turns so that it starts
+/// within 180° of the first trace (an estimate at -179° and its fit at +180°
+/// are the same phase); magnitudes (`phase` false) are returned as they are.
+pub(crate) fn align_turns(mut traces: Vec<Vec<f64>>, phase: bool) -> Vec<Vec<f64>> {
+    let first = |t: &[f64]| t.iter().copied().find(|v| v.is_finite());
+    if let (true, Some(reference)) = (phase, traces.first().and_then(|t| first(t))) {
+        for t in traces.iter_mut().skip(1) {
+            if let Some(start) = first(t) {
+                let turns = 360.0 * ((reference - start) / 360.0).round();
+                t.iter_mut().for_each(|v| *v += turns);
+            }
+        }
+    }
+    traces
+}
+
+/// Z(f) element (i, j) of a model M, B, K: K - ω² M + j ω B.
+pub(crate) fn model_z(
+    m: &Matrix,
+    b: &Matrix,
+    k: &Matrix,
+    i: usize,
+    j: usize,
+    f: f64,
+) -> (f64, f64) {
+    let w = 2.0 * std::f64::consts::PI * f;
+    (k[(i, j)] - w * w * m[(i, j)], w * b[(i, j)])
+}
+
+pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
+    let freqs = &v.frequencies;
+    let coords = &v.coordinates;
+    let n = coords.len();
+    let expected = v.accuracy.as_ref().map(|a| &a.expected);
+    let band = (v.criteria.band_hz[0], v.criteria.band_hz[1]);
+    let positive: Vec<usize> = (0..freqs.len()).filter(|&i| freqs[i] > 0.0).collect();
+    let fx: Vec<f64> = positive.iter().map(|&i| freqs[i]).collect();
+    let mut figures = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let est: Vec<(f64, f64)> = positive
+                .iter()
+                .map(|&f| {
+                    let c = v.impedance[f][i][j];
+                    (c[0], c[1])
+                })
+                .collect();
+            let fit: Vec<(f64, f64)> = fx
+                .iter()
+                .map(|&f| model_z(&v.inertia, &v.damping, &v.stiffness, i, j, f))
+                .collect();
+            let mut curves = vec![
+                ("estimate Z", est, Stroke::Solid, PALETTE[0]),
+                ("parametric fit", fit, Stroke::Dashed, PALETTE[1]),
+            ];
+            if let Some(t) = expected {
+                curves.push((
+                    "expected",
+                    fx.iter()
+                        .map(|&f| model_z(&t.inertia, &t.damping, &t.stiffness, i, j, f))
+                        .collect(),
+                    Stroke::Dotted,
+                    PALETTE[6],
+                ));
+            }
+            // random error of Z[i][j] from the coherences (Bendat & Piersol's
+            // gain-factor error sqrt(1 - g^2) / (|g| sqrt(2 n_d)) of the force
+            // i and position j outputs, added in quadrature); band = +- 2 errors
+            let nd = v.criteria.segments.max(1) as f64;
+            let error = |o: usize, f: usize| {
+                let g2 = v.coherence.multiple.get(o).and_then(|m| m.get(f)).copied();
+                g2.filter(|g| *g > 0.0 && *g <= 1.0)
+                    .map_or(f64::INFINITY, |g| ((1.0 - g) / (2.0 * nd * g)).sqrt())
+            };
+            let eps: Vec<f64> = positive
+                .iter()
+                .map(|&f| error(n + i, f).hypot(error(j, f)))
+                .collect();
+            let element = format!("Z[{},{}]", coords[i], coords[j]);
+            let with_band = |mut chart: Chart, phase: bool| {
+                let y = chart.series[0].y.clone();
+                for sign in [1.0, -1.0] {
+                    let band: Vec<f64> = y
+                        .iter()
+                        .zip(&eps)
+                        .map(|(v, e)| {
+                            if phase {
+                                v + sign * (2.0 * e).min(std::f64::consts::FRAC_PI_2).to_degrees()
+                            } else {
+                                let r = v * (1.0 + sign * 2.0 * e);
+                                if r > 0.0 {
+                                    r
+                                } else {
+                                    f64::NAN
+                                }
+                            }
+                        })
+                        .collect();
+                    chart.series.insert(
+                        1,
+                        Series {
+                            name: "95 % band (coherence)".into(),
+                            x: fx.clone(),
+                            y: band,
+                            stroke: Stroke::Dotted,
+                            color: PALETTE[0].into(),
+                        },
+                    );
+                }
+                chart
+            };
+            let mk = |phase: bool| Chart {
+                title: format!("{element} {}", if phase { "phase" } else { "magnitude" }),
+                x_label: "frequency (Hz)".into(),
+                y_label: if phase {
+                    "phase (deg)".into()
+                } else {
+                    format!("|Z| ({})", element_unit(&coords[i], &coords[j]))
+                },
+                x_log: true,
+                y_log: !phase,
+                y_range: None,
+                series: curves
+                    .iter()
+                    .zip(align_turns(
+                        curves
+                            .iter()
+                            .map(|(_, c, _, _)| {
+                                if phase {
+                                    unwrap_degrees(
+                                        c.iter().map(|(re, im)| im.atan2(*re).to_degrees()),
+                                    )
+                                } else {
+                                    c.iter().map(|(re, im)| re.hypot(*im)).collect()
+                                }
+                            })
+                            .collect(),
+                        phase,
+                    ))
+                    .map(|((label, _, stroke, color), y)| Series {
+                        name: (*label).into(),
+                        x: fx.clone(),
+                        y,
+                        stroke: *stroke,
+                        color: (*color).into(),
+                    })
+                    .collect(),
+            };
+            figures.push(Figure {
+                id: format!("bode-mag-{}{}", coords[i], coords[j]),
+                chart: with_band(mk(false), false),
+            });
+            figures.push(Figure {
+                id: format!("bode-phase-{}{}", coords[i], coords[j]),
+                chart: with_band(mk(true), true),
+            });
+        }
+    }
+    // coherences (seed 004 Fig. 10)
+    let outputs = &v.coherence.outputs;
+    let multiple = &v.coherence.multiple;
+    figures.push(Figure {
+        id: "coherence-multiple".into(),
+        chart: Chart {
+            title: "Multiple coherence of each output on all inputs".into(),
+            x_label: "frequency (Hz)".into(),
+            y_label: "coherence".into(),
+            x_log: true,
+            y_log: false,
+            y_range: Some((0.0, 1.0)),
+            series: outputs
+                .iter()
+                .enumerate()
+                .map(|(o, name)| Series {
+                    name: name.clone(),
+                    x: fx.clone(),
+                    y: positive.iter().map(|&f| multiple[o][f]).collect(),
+                    stroke: Stroke::Solid,
+                    color: PALETTE[o % PALETTE.len()].into(),
+                })
+                .collect(),
+        },
+    });
+    let partial = &v.coherence.partial;
+    for (o, name) in outputs.iter().enumerate() {
+        figures.push(Figure {
+            id: format!("coherence-partial-{name}"),
+            chart: Chart {
+                title: format!("Partial coherence of {name} with each input"),
+                x_label: "frequency (Hz)".into(),
+                y_label: "coherence".into(),
+                x_log: true,
+                y_log: false,
+                y_range: Some((0.0, 1.0)),
+                series: v
+                    .inputs
+                    .iter()
+                    .enumerate()
+                    .map(|(u, input)| Series {
+                        name: input.clone(),
+                        x: fx.clone(),
+                        y: positive.iter().map(|&f| partial[o][u][f]).collect(),
+                        stroke: Stroke::Solid,
+                        color: PALETTE[u % PALETTE.len()].into(),
+                    })
+                    .collect(),
+            },
+        });
+    }
+    let c = &v.criteria;
+    let mut verdict = format!(
+        "mean multiple coherence {} (lowest {}) over {}-{} Hz; largest input coherence {}; parametric fit VAF {} %",
+        fmt(c.mean_multiple_coherence),
+        fmt(c.min_multiple_coherence),
+        fmt(band.0),
+        fmt(band.1),
+        fmt(c.max_input_coherence),
+        fmt(c.fit_vaf)
+    );
+    if let Some(a) = &v.accuracy {
+        let _ = write!(
+            verdict,
+            "; mean relative error vs. the expected model {} %",
+            fmt(100.0 * a.mean_relative_error)
+        );
+    }
+    let se = &v.standard_errors;
+    let matrix_tables = [
+        (
+            MatrixKind::Stiffness,
+            "K",
+            &v.stiffness,
+            &se.stiffness,
+            expected.map(|e| &e.stiffness),
+        ),
+        (
+            MatrixKind::Damping,
+            "B",
+            &v.damping,
+            &se.damping,
+            expected.map(|e| &e.damping),
+        ),
+        (
+            MatrixKind::Inertia,
+            "M",
+            &v.inertia,
+            &se.inertia,
+            expected.map(|e| &e.inertia),
+        ),
+    ]
+    .into_iter()
+    .map(|(kind, sym, m, se, truth)| {
+        let mixed = kind_unit(kind, coords) == "SI";
+        let unit = if mixed {
+            "unit per element".to_string()
+        } else {
+            kind_unit(kind, coords).to_string()
+        };
+        let mut t = matrix_table(
+            &format!(
+                "{sym} ({}, {unit}, parametric fit over the band) ± standard error",
+                kind.name()
+            ),
+            coords,
+            m,
+            Some(se),
+            truth,
+        );
+        if mixed {
+            for (i, row) in t.rows.iter_mut().enumerate() {
+                for (j, cell) in row.iter_mut().skip(1).enumerate() {
+                    let _ = write!(
+                        cell,
+                        " {}",
+                        matrix_element_unit(kind, &coords[i], &coords[j])
+                    );
+                }
+            }
+        }
+        t
+    })
+    .collect::<Vec<_>>();
+    let mut tables = vec![stochastic_criteria_table(v)];
+    tables.extend(matrix_tables);
+    Section {
+        heading: format!("Stochastic estimate: {name}"),
+        verdict,
+        warnings: messages(&v.warnings),
+        tables,
+        figures,
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}
