@@ -1,0 +1,244 @@
+//! Seed 003 §IV: trials from a recording (joint space, or end-point data through inverse kinematics and τ = J^T F), rest offsets, onsets, zero-phase filtering and derivatives.
+
+#[allow(unused_imports)]
+use super::*;
+
+impl PlanarPrepare {
+    /// Link lengths (m), shoulder at the origin, the elbow flexed (q2 > 0),
+    /// the default low-pass and a 4th-order Butterworth.
+    pub fn new(l1: f64, l2: f64) -> Self {
+        PlanarPrepare {
+            arm: Arm {
+                l1,
+                l2,
+                shoulder: [0.0, 0.0],
+            },
+            cutoff_hz: None,
+            order: 4,
+            elbow_positive: true,
+        }
+    }
+}
+
+/// Prepared planar data.
+#[derive(Debug, Clone)]
+pub struct PlanarData {
+    /// The recording's path.
+    pub path: std::path::PathBuf,
+    /// Sample rate (Hz).
+    pub fs: f64,
+    /// The arm the data were converted with.
+    pub arm: Arm,
+    /// Prepared trials.
+    pub trials: Vec<PlanarTrial>,
+    /// True when the recording held end-point data converted to joint space.
+    pub from_endpoint: bool,
+    /// Low-pass cut-off used (Hz).
+    pub cutoff_hz: f64,
+}
+
+impl PlanarData {
+    /// Longest observation window available in every trial (s).
+    pub fn max_window_s(&self) -> f64 {
+        self.trials.iter().map(|t| t.dq[0].len()).min().unwrap_or(0) as f64 / self.fs
+    }
+}
+
+/// The longest a torque may lead the motion and still mark the onset (s);
+/// physically the torque leads by the few ms the quintic needs to move the
+/// angles out of their noise band.
+pub const ONSET_LEAD_S: f64 = 0.03;
+
+/// Convert, cut into trials, take baselines, filter and differentiate.
+pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> {
+    let fs = rec.sample_rate();
+    let arm = p.arm;
+    // a human arm's segments: a 4.9e-324 m forearm made every end-point
+    // stiffness null (issue 36)
+    if ![arm.l1, arm.l2]
+        .iter()
+        .all(|l| (MIN_LINK_M..=MAX_LINK_M).contains(l))
+    {
+        return Err(Error::invalid(
+            "link lengths",
+            format!(
+                "expected two lengths from {MIN_LINK_M} to {MAX_LINK_M} m, found {}, {}",
+                arm.l1, arm.l2
+            ),
+        ));
+    }
+    // the recordings' own position limit
+    let (limit, _) = limpid_core::recording::magnitude_limit("x");
+    if !arm
+        .shoulder
+        .iter()
+        .all(|v| v.is_finite() && v.abs() <= limit)
+    {
+        return Err(Error::invalid(
+            "shoulder",
+            format!(
+                "expected a position within {limit} m, found {}, {}",
+                arm.shoulder[0], arm.shoulder[1]
+            ),
+        ));
+    }
+    let from_endpoint = !rec.has("q1");
+    if from_endpoint {
+        if let (Some(x), Some(y), Some(z)) = (rec.column("x"), rec.column("y"), rec.column("z")) {
+            let range = |c: &[f64]| {
+                let (lo, hi) = c
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                        (l.min(*v), h.max(*v))
+                    });
+                hi - lo
+            };
+            let (rz, rxy) = (range(z), range(x).max(range(y)));
+            if rz > 0.1 * rxy {
+                return Err(Error::Format {
+                    path: rec.path().to_path_buf(),
+                    message: format!(
+                        "the end point moves in z (range {rz:.4} m against {rxy:.4} m in x, y): a planar estimate would ignore that motion; use estimate linear for 3-D data"
+                    ),
+                });
+            }
+        }
+    }
+    let (q, tau): ([Vec<f64>; 2], [Vec<f64>; 2]) = if from_endpoint {
+        let x = rec.require("x", "end-point position (or give q1,q2 joint angles)")?;
+        let y = rec.require("y", "end-point position")?;
+        let fx = rec.require("fx", "end-point force")?;
+        let fy = rec.require("fy", "end-point force")?;
+        let mut q = [Vec::with_capacity(rec.len()), Vec::with_capacity(rec.len())];
+        let mut tau = [Vec::with_capacity(rec.len()), Vec::with_capacity(rec.len())];
+        for i in 0..rec.len() {
+            let qi = arm.ik([x[i], y[i]], p.elbow_positive).ok_or_else(|| Error::Numerical {
+                path: rec.path().to_path_buf(),
+                message: format!(
+                    "row {}, columns x,y: ({}, {}) is out of reach of links {} + {} m from the shoulder at ({}, {})",
+                    rec.row_of(i), x[i], y[i], arm.l1, arm.l2, arm.shoulder[0], arm.shoulder[1]
+                ),
+            })?;
+            let t = arm.jacobian(qi).transpose() * Vector2::new(fx[i], fy[i]);
+            for k in 0..2 {
+                q[k].push(qi[k]);
+                tau[k].push(t[k]);
+            }
+        }
+        (q, tau)
+    } else {
+        let get = |n: &str, why: &str| rec.require(n, why).map(<[f64]>::to_vec);
+        (
+            [
+                get("q1", "shoulder angle")?,
+                get("q2", "relative elbow angle")?,
+            ],
+            [
+                get("tau1", "shoulder torque")?,
+                get("tau2", "elbow torque")?,
+            ],
+        )
+    };
+    let cutoff = p
+        .cutoff_hz
+        .unwrap_or_else(|| crate::prepare::default_cutoff(fs));
+    let lp = LowPass::butterworth(p.order, cutoff, fs)?;
+    let signals: Vec<&[f64]> = vec![&q[0], &q[1], &tau[0], &tau[1]];
+    let sigmas: Vec<f64> = signals.iter().map(|c| noise_sigma(c)).collect();
+    let floors = change_floors(&signals);
+    let windows = windows_from_trial_column(rec, "trial")?;
+    let dt = 1.0 / fs;
+    let min_rest = ((0.02 * fs).round() as usize).max(3);
+    let qs: Vec<&[f64]> = vec![&q[0], &q[1]];
+    let trials = windows
+        .iter()
+        .map(|w| {
+            let r = w.range.clone();
+            // Onset: the first of the angles and torques to leave rest, as
+            // long as the torque leads the motion by at most ONSET_LEAD_S.
+            // A torque that leaves earlier is the subject's slow force
+            // fluctuation or grip drift, not the perturbation: the angles
+            // (the robot's motion) decide then.
+            let lead_max = (ONSET_LEAD_S * fs).round() as usize;
+            let any = detect_onset(&signals, r.clone(), &sigmas, &floors);
+            let motion = detect_onset(&signals[..2], r.clone(), &sigmas[..2], &floors[..2]);
+            let onset = match (any, motion) {
+                (Some(a), Some(m)) if m - a <= lead_max => a,
+                (_, Some(m)) => {
+                    // refine with the torques against their level just before
+                    // the lead window (the fluctuation moves little in 40 ms)
+                    let from = m.saturating_sub(lead_max + 10).max(r.start);
+                    match detect_onset(&signals, from..r.end, &sigmas, &floors) {
+                        Some(a) if a + lead_max >= m && a >= from + 10 => a,
+                        _ => m,
+                    }
+                }
+                (a, None) => a.unwrap_or(r.end),
+            };
+            if onset - r.start < min_rest {
+                return Err(Error::NoRestBeforeOnset {
+                    path: rec.path().to_path_buf(),
+                    row: rec.row_of(r.start),
+                    column: "trial".into(),
+                    trial: w.id,
+                    rest_samples: onset - r.start,
+                    needed: min_rest,
+                });
+            }
+            if r.len() <= lp.padlen() + 1 {
+                return Err(Error::TooFewSamples {
+                    path: rec.path().to_path_buf(),
+                    what: format!("trial {} with zero-phase filtering", w.id),
+                    needed: lp.padlen() + 2,
+                    found: r.len(),
+                });
+            }
+            let rest_end = onset.saturating_sub(2).max(r.start + 1);
+            let span = ((fs / cutoff).round() as usize).max(3);
+            let (left, right) = edge_kinds(&qs, r.clone(), span, dt);
+            let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
+            let mut t = PlanarTrial {
+                id: w.id,
+                q: Default::default(),
+                qd: Default::default(),
+                qdd: Default::default(),
+                dq: Default::default(),
+                dtau: Default::default(),
+                q0: [0.0; 2],
+                tau0: [0.0; 2],
+            };
+            let start = onset - r.start;
+            for k in 0..2 {
+                let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+                t.q0[k] = mean(&q[k][r.start..rest_end]);
+                t.tau0[k] = mean(&tau[k][r.start..rest_end]);
+                let qf = lp.filtfilt_edges(&q[k][r.clone()], left, right, extra)?;
+                let tf = lp.filtfilt_edges(&tau[k][r.clone()], left, right, extra)?;
+                let qd = central_first(&qf, dt);
+                let qdd = central_second(&qf, dt);
+                t.dq[k] = qf[start..].iter().map(|v| v - t.q0[k]).collect();
+                t.dtau[k] = tf[start..].iter().map(|v| v - t.tau0[k]).collect();
+                t.q[k] = qf[start..].to_vec();
+                t.qd[k] = qd[start..].to_vec();
+                t.qdd[k] = qdd[start..].to_vec();
+            }
+            Ok(t)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    if trials.len() < 2 {
+        return Err(Error::TooFewSamples {
+            path: rec.path().to_path_buf(),
+            what: "a planar estimate (trials)".into(),
+            needed: 2,
+            found: trials.len(),
+        });
+    }
+    Ok(PlanarData {
+        path: rec.path().to_path_buf(),
+        fs,
+        arm,
+        trials,
+        from_endpoint,
+        cutoff_hz: cutoff,
+    })
+}
