@@ -1,0 +1,480 @@
+//! The parametric models of the pathways: intrinsic I, B, K by least squares, the reflex (rectified velocity, delay, gain, second-order low-pass) fitted jointly over delays, with jackknife standard errors inflated for autocorrelated residuals.
+
+#[allow(unused_imports)]
+use super::*;
+
+/// The torque of the intrinsic I-B-K model (centred).
+pub(crate) fn parametric_intrinsic(d: &Decimated, p: &Ibk) -> Vec<f64> {
+    (0..d.torque.len())
+        .map(|t| {
+            p.inertia * d.acceleration[t] + p.damping * d.velocity[t] + p.stiffness * d.position[t]
+        })
+        .collect()
+}
+
+/// I-B-K (with a constant) by least squares on `rows[skip..]`, with
+/// 10-block jackknife standard errors, and the fit's VAF.
+pub(crate) fn ibk_fit(regressors: &[&[f64]; 3], y: &[f64], skip: usize) -> (Ibk, Ibk, f64) {
+    let n = y.len();
+    let rows = skip..n;
+    let scale: Vec<f64> = regressors
+        .iter()
+        .map(|x| variance(&x[rows.clone()]).sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    let blocks = 10;
+    let len = rows.len();
+    let mut grams = vec![(DMatrix::<f64>::zeros(4, 4), DVector::<f64>::zeros(4)); blocks];
+    for (b, (g, r)) in grams.iter_mut().enumerate() {
+        for t in skip + b * len / blocks..skip + (b + 1) * len / blocks {
+            let x = [
+                regressors[0][t] / scale[0],
+                regressors[1][t] / scale[1],
+                regressors[2][t] / scale[2],
+                1.0,
+            ];
+            for i in 0..4 {
+                r[i] += x[i] * y[t];
+                for j in 0..4 {
+                    g[(i, j)] += x[i] * x[j];
+                }
+            }
+        }
+    }
+    let solve = |skip_block: Option<usize>| -> [f64; 3] {
+        let mut g = DMatrix::<f64>::zeros(4, 4);
+        let mut r = DVector::<f64>::zeros(4);
+        for (b, (gb, rb)) in grams.iter().enumerate() {
+            if Some(b) != skip_block {
+                g += gb;
+                r += rb;
+            }
+        }
+        let th = g
+            .clone()
+            .cholesky()
+            .map(|c| c.solve(&r))
+            .or_else(|| g.lu().solve(&r));
+        match th {
+            Some(th) => [th[0] / scale[0], th[1] / scale[1], th[2] / scale[2]],
+            None => [f64::NAN; 3],
+        }
+    };
+    let full = solve(None);
+    let reps: Vec<[f64; 3]> = (0..blocks).map(|b| solve(Some(b))).collect();
+    let se: Vec<f64> = (0..3)
+        .map(|k| {
+            let m = reps.iter().map(|r| r[k]).sum::<f64>() / blocks as f64;
+            let ss: f64 = reps.iter().map(|r| (r[k] - m).powi(2)).sum();
+            (ss * (blocks - 1) as f64 / blocks as f64).sqrt()
+        })
+        .collect();
+    let fitted: Vec<f64> = (0..n)
+        .map(|t| {
+            full[0] * regressors[0][t] + full[1] * regressors[1][t] + full[2] * regressors[2][t]
+        })
+        .collect();
+    let v = vaf(y, &fitted, skip);
+    (
+        Ibk {
+            inertia: full[0],
+            damping: full[1],
+            stiffness: full[2],
+        },
+        Ibk {
+            inertia: se[0],
+            damping: se[1],
+            stiffness: se[2],
+        },
+        v,
+    )
+}
+
+/// Unit-DC second-order low-pass by the bilinear transform, prewarped at its natural frequency.
+pub(crate) fn low_pass(x: &[f64], natural_hz: f64, zeta: f64, fs: f64) -> Vec<f64> {
+    let w = 2.0 * std::f64::consts::PI * natural_hz;
+    let k = w / (w / (2.0 * fs)).tan();
+    let a0 = k * k + 2.0 * zeta * w * k + w * w;
+    let b = [w * w / a0, 2.0 * w * w / a0, w * w / a0];
+    let a1 = (2.0 * w * w - 2.0 * k * k) / a0;
+    let a2 = (k * k - 2.0 * zeta * w * k + w * w) / a0;
+    let mut y = vec![0.0; x.len()];
+    // start in the steady state of the first sample (unit DC gain)
+    let x0 = x.first().copied().unwrap_or(0.0);
+    let (mut x1, mut x2, mut y1, mut y2) = (x0, x0, x0, x0);
+    for (yi, &xi) in y.iter_mut().zip(x) {
+        let v = b[0] * xi + b[1] * x1 + b[2] * x2 - a1 * y1 - a2 * y2;
+        x2 = x1;
+        x1 = xi;
+        y2 = y1;
+        y1 = v;
+        *yi = v;
+    }
+    y
+}
+
+pub(crate) struct Parametric {
+    pub(crate) intrinsic: Ibk,
+    pub(crate) intrinsic_se: Ibk,
+    pub(crate) gain: f64,
+    pub(crate) gain_se: f64,
+    pub(crate) delay_s: f64,
+    pub(crate) interval: [f64; 2],
+    pub(crate) interval_contiguous: bool,
+    pub(crate) at_scan_edge: bool,
+    pub(crate) natural_hz: f64,
+    pub(crate) damping_ratio: f64,
+    pub(crate) total_vaf: f64,
+    pub(crate) intrinsic_only_vaf: f64,
+    pub(crate) scan_delays_s: Vec<f64>,
+    pub(crate) scan_vaf: Vec<f64>,
+}
+
+/// The I-B-K regressors over the fitted rows, centred, with their Gram
+/// matrix inverse, the I-B-K-only solution and its residual.
+pub(crate) struct Fixed {
+    pub(crate) columns: [Vec<f64>; 3],
+    pub(crate) gram_inv: nalgebra::Matrix3<f64>,
+    pub(crate) theta: nalgebra::Vector3<f64>,
+    pub(crate) residual: Vec<f64>,
+    pub(crate) rss: f64,
+    pub(crate) total_ss: f64,
+}
+
+pub(crate) fn fixed_fit(d: &Decimated, skip: usize) -> Option<Fixed> {
+    let centred = |x: &[f64]| {
+        let mut c = x[skip..].to_vec();
+        centre(&mut c);
+        c
+    };
+    let columns = [
+        centred(&d.acceleration),
+        centred(&d.velocity),
+        centred(&d.position),
+    ];
+    let y = centred(&d.torque);
+    let mut g = nalgebra::Matrix3::<f64>::zeros();
+    let mut r = nalgebra::Vector3::<f64>::zeros();
+    for i in 0..3 {
+        r[i] = dot(&columns[i], &y);
+        for j in 0..3 {
+            g[(i, j)] = dot(&columns[i], &columns[j]);
+        }
+    }
+    let gram_inv = g.try_inverse()?;
+    let theta = gram_inv * r;
+    let residual: Vec<f64> = (0..y.len())
+        .map(|t| {
+            y[t] - theta[0] * columns[0][t] - theta[1] * columns[1][t] - theta[2] * columns[2][t]
+        })
+        .collect();
+    Some(Fixed {
+        rss: dot(&residual, &residual),
+        total_ss: dot(&y, &y),
+        columns,
+        gram_inv,
+        theta,
+        residual,
+    })
+}
+
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Residual sum of squares and gain of the joint model
+/// `tq = I q'' + B q' + K q + G x + c` for one reflex regressor `x` (over the fitted rows).
+pub(crate) fn joint_rss(f: &Fixed, x: &[f64]) -> (f64, f64) {
+    let m = x.len() as f64;
+    let [c0, c1, c2] = &f.columns;
+    let (mut sx, mut xx, mut xe, mut b0, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    // one pass over memory: the six sums the Schur complement needs
+    for ((((&xv, &e), &a0), &a1), &a2) in x.iter().zip(&f.residual).zip(c0).zip(c1).zip(c2) {
+        sx += xv;
+        xx += xv * xv;
+        xe += xv * e;
+        b0 += xv * a0;
+        b1 += xv * a1;
+        b2 += xv * a2;
+    }
+    let b = nalgebra::Vector3::new(b0, b1, b2);
+    let xx_resid = xx - sx * sx / m - (b.transpose() * f.gram_inv * b)[0];
+    if xx_resid <= 1e-12 * xx {
+        return (f.rss, 0.0);
+    }
+    let gain = xe / xx_resid;
+    ((f.rss - xe * gain).max(0.0), gain)
+}
+
+/// Decimation phases of `y`: `phases[r][k] = y[k ratio - r]` (zero before the record).
+pub(crate) fn phases(y: &[f64], ratio: usize, n: usize) -> Vec<Vec<f64>> {
+    (0..ratio)
+        .map(|r| {
+            (0..n)
+                .map(|k| {
+                    if k * ratio >= r {
+                        y.get(k * ratio - r).copied().unwrap_or(0.0)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The reflex regressor over the fitted rows `skip..n` for a delay of
+/// `delay` recorded samples: a slice of one decimation phase.
+pub(crate) fn delayed(
+    phases: &[Vec<f64>],
+    ratio: usize,
+    delay: usize,
+    skip: usize,
+    n: usize,
+) -> &[f64] {
+    let (m, r) = (delay / ratio, delay % ratio);
+    &phases[r][skip - m..n - m]
+}
+
+/// The fully parametric model, fitted jointly: intrinsic I-B-K plus
+/// rectified velocity -> delay -> gain -> unit-DC second-order low-pass. For
+/// a given delay and low-pass the model is linear in I, B, K, G; delay and
+/// low-pass are scanned (delays on the recorded rate's grid).
+pub(crate) fn reflex_parametric(
+    d: &Decimated,
+    polarity: usize,
+    skip: usize,
+    p: &ReflexParams,
+    fs: f64,
+) -> Option<Parametric> {
+    let f = fixed_fit(d, skip)?;
+    let n = d.torque.len();
+    let full = &d.rectified_full[polarity];
+    let max_delay = (p.max_delay_s * fs).round() as usize;
+    let delays = max_delay + 1;
+    let nyquist = d.fs / 2.0;
+    let scan = |combos: &[(f64, f64)]| -> Vec<Vec<(f64, f64)>> {
+        combos
+            .par_iter()
+            .map(|&(w, z)| {
+                let ph = phases(&low_pass(full, w, z, fs), d.ratio, n);
+                (0..delays)
+                    .map(|dl| joint_rss(&f, delayed(&ph, d.ratio, dl, skip, n)))
+                    .collect()
+            })
+            .collect()
+    };
+    let mut combos: Vec<(f64, f64)> = (0..10)
+        .map(|i| 0.8 * 25f64.powf(i as f64 / 9.0))
+        .filter(|w| *w < 0.45 * nyquist)
+        .flat_map(|w| [0.3, 0.5, 0.75, 1.1, 1.6].map(|z| (w, z)))
+        .collect();
+    if combos.is_empty() {
+        // no low-pass of the grid lies below the decimated Nyquist frequency
+        return None;
+    }
+    let mut fits = scan(&combos);
+    let best = |fits: &[Vec<(f64, f64)>]| {
+        let mut b = (f64::INFINITY, 0, 0);
+        for (ci, row) in fits.iter().enumerate() {
+            for (dl, &(rss, _)) in row.iter().enumerate() {
+                if rss < b.0 {
+                    b = (rss, ci, dl);
+                }
+            }
+        }
+        b
+    };
+    let (_, c0, _) = best(&fits);
+    let (w0, z0) = combos[c0];
+    let local: Vec<(f64, f64)> = (-2..=2)
+        .flat_map(|i| (-2..=2).map(move |j| (w0 * 1.08f64.powi(i), z0 * 1.1f64.powi(j))))
+        .filter(|(w, _)| *w < 0.45 * nyquist)
+        .collect();
+    fits.extend(scan(&local));
+    combos.extend(local);
+    let (rss_min, ci, delay) = best(&fits);
+    let (w, z) = combos[ci];
+    let profile: Vec<f64> = (0..delays)
+        .map(|dl| {
+            fits.iter()
+                .map(|row| row[dl].0)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+
+    // the joint fit at the optimum, its residual and jackknife errors
+    let ph = phases(&low_pass(full, w, z, fs), d.ratio, n);
+    let x = delayed(&ph, d.ratio, delay, skip, n);
+    let (_, gain) = joint_rss(&f, x);
+    let xm = mean(x);
+    let bx = nalgebra::Vector3::new(
+        dot(x, &f.columns[0]),
+        dot(x, &f.columns[1]),
+        dot(x, &f.columns[2]),
+    );
+    let theta = f.theta - f.gram_inv * bx * gain;
+    let resid: Vec<f64> = (0..x.len())
+        .map(|t| {
+            f.residual[t] - gain * (x[t] - xm)
+                + (f.theta - theta).dot(&nalgebra::Vector3::new(
+                    f.columns[0][t],
+                    f.columns[1][t],
+                    f.columns[2][t],
+                ))
+        })
+        .collect();
+    let inflation = autocorrelation_inflation(&resid);
+    let m = x.len() as f64;
+    let n_eff = (m / inflation).max(5.0);
+    let threshold = rss_min * (1.0 + 3.84 / n_eff);
+    let inside: Vec<bool> = profile.iter().map(|r| *r <= threshold).collect();
+    let (mut lo, mut hi) = (delay, delay);
+    while lo > 0 && inside[lo - 1] {
+        lo -= 1;
+    }
+    while hi < max_delay && inside[hi + 1] {
+        hi += 1;
+    }
+    let contiguous = inside
+        .iter()
+        .enumerate()
+        .all(|(i, &v)| !v || (lo..=hi).contains(&i));
+    let mut se = joint_jackknife(&f, x);
+    // the jackknife holds the delay fixed; B, K, I and G move with it, so the
+    // largest change over the delay's interval is added (in quadrature)
+    let at = |x: &[f64]| {
+        let (_, g) = joint_rss(&f, x);
+        let bx = nalgebra::Vector3::new(
+            dot(x, &f.columns[0]),
+            dot(x, &f.columns[1]),
+            dot(x, &f.columns[2]),
+        );
+        let t = f.theta - f.gram_inv * bx * g;
+        [t[0], t[1], t[2], g]
+    };
+    let mut shift = [0.0f64; 4];
+    for dl in [lo, hi] {
+        let other = at(delayed(&ph, d.ratio, dl, skip, n));
+        for (s, (o, v)) in shift
+            .iter_mut()
+            .zip(other.iter().zip([theta[0], theta[1], theta[2], gain]))
+        {
+            *s = s.max((o - v).abs());
+        }
+    }
+    for (e, s) in se.iter_mut().zip(shift) {
+        *e = e.hypot(s);
+    }
+    Some(Parametric {
+        intrinsic: Ibk {
+            inertia: theta[0],
+            damping: theta[1],
+            stiffness: theta[2],
+        },
+        intrinsic_se: Ibk {
+            inertia: se[0],
+            damping: se[1],
+            stiffness: se[2],
+        },
+        gain,
+        gain_se: se[3],
+        delay_s: delay as f64 / fs,
+        interval: [lo as f64 / fs, hi as f64 / fs],
+        interval_contiguous: contiguous,
+        at_scan_edge: delay == 0 || delay == max_delay,
+        natural_hz: w,
+        damping_ratio: z,
+        total_vaf: 100.0 * (1.0 - rss_min / f.total_ss),
+        intrinsic_only_vaf: 100.0 * (1.0 - f.rss / f.total_ss),
+        scan_delays_s: (0..delays).map(|i| i as f64 / fs).collect(),
+        scan_vaf: profile
+            .iter()
+            .map(|r| 100.0 * (1.0 - r / f.total_ss))
+            .collect(),
+    })
+}
+
+/// 10-block delete-one jackknife standard errors of (I, B, K, G) of the joint model.
+pub(crate) fn joint_jackknife(f: &Fixed, x: &[f64]) -> [f64; 4] {
+    let blocks = 10;
+    let m = x.len();
+    let y: Vec<f64> = (0..m)
+        .map(|t| {
+            f.residual[t]
+                + f.theta.dot(&nalgebra::Vector3::new(
+                    f.columns[0][t],
+                    f.columns[1][t],
+                    f.columns[2][t],
+                ))
+        })
+        .collect();
+    let scale: Vec<f64> = f
+        .columns
+        .iter()
+        .map(|c| c.as_slice())
+        .chain([x])
+        .map(|c| (dot(c, c) / m as f64).sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    let row = |t: usize| {
+        [
+            f.columns[0][t] / scale[0],
+            f.columns[1][t] / scale[1],
+            f.columns[2][t] / scale[2],
+            x[t] / scale[3],
+            1.0,
+        ]
+    };
+    let mut grams = vec![
+        (
+            nalgebra::SMatrix::<f64, 5, 5>::zeros(),
+            nalgebra::SVector::<f64, 5>::zeros()
+        );
+        blocks
+    ];
+    for (b, (g, r)) in grams.iter_mut().enumerate() {
+        #[allow(clippy::needless_range_loop)] // row(t) reads five columns at t
+        for t in b * m / blocks..(b + 1) * m / blocks {
+            let v = nalgebra::SVector::<f64, 5>::from(row(t));
+            *g += v * v.transpose();
+            *r += v * y[t];
+        }
+    }
+    let reps: Vec<[f64; 4]> = (0..blocks)
+        .map(|skip| {
+            let mut g = nalgebra::SMatrix::<f64, 5, 5>::zeros();
+            let mut r = nalgebra::SVector::<f64, 5>::zeros();
+            for (b, (gb, rb)) in grams.iter().enumerate() {
+                if b != skip {
+                    g += gb;
+                    r += rb;
+                }
+            }
+            match g.lu().solve(&r) {
+                Some(th) => [0, 1, 2, 3].map(|k| th[k] / scale[k]),
+                None => [f64::NAN; 4],
+            }
+        })
+        .collect();
+    [0, 1, 2, 3].map(|k| {
+        let mk = reps.iter().map(|r| r[k]).sum::<f64>() / blocks as f64;
+        let ss: f64 = reps.iter().map(|r| (r[k] - mk).powi(2)).sum();
+        (ss * (blocks - 1) as f64 / blocks as f64).sqrt()
+    })
+}
+
+/// `1 + 2 sum rho_k` over the residual's autocorrelation, summed until it first turns negative (at most 200 lags).
+pub(crate) fn autocorrelation_inflation(e: &[f64]) -> f64 {
+    let v = correlation(e, e, 0);
+    if v <= 0.0 {
+        return 1.0;
+    }
+    let mut s = 1.0;
+    for k in 1..200.min(e.len() / 4) {
+        let r = correlation(e, e, k as isize) / v;
+        if r <= 0.0 {
+            break;
+        }
+        s += 2.0 * r;
+    }
+    s
+}
