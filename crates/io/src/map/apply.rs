@@ -1,438 +1,10 @@
-//! Channel maps: a rig's file (any stream, channel names, units and signs)
-//! turned into a FORMAT.md recording (issue 40).
-//!
-//! A map is TOML, written once per rig:
-//!
-//! ```toml
-//! [time]
-//! stream = "robot"          # the stream whose stamps are the recording's t
-//! [columns]
-//! x  = { channel = "EndEff.X", unit = "mm" }
-//! fx = { channel = "Force.Fx", unit = "N", scale = -1.0 }
-//! emg_biceps = { channel = "EMG1", stream = "emg", unit = "mV" }
-//! trial = { marker = "perturbation_start" }
-//! level = { marker_prefix = "level=" }
-//! ```
-//!
-//! value = convert(raw, unit) x scale + offset (offset in SI). The unit
-//! defaults to the one the file declares for the channel, else SI. Channels
-//! of other streams are interpolated linearly, as raw samples, onto the
-//! time-base stream's stamps; the table is cut to the span every stream
-//! covers; gaps are reported. A `marker` rule numbers trials 1, 2, ... at
-//! each marker of exactly that text; a `marker_prefix` rule sets a value
-//! (the number after the prefix) from each such marker on; samples before
-//! the first marker of a rule are dropped.
+//! A channel map applied to a lab file: channels found by stream and name, converted to SI, interpolated onto the time-base stream, cut to the common span, markers turned into trial and level columns, EMG envelopes made at their native rate.
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-
-use limpid_core::error::significant;
-use limpid_core::recording::magnitude_limit;
-use limpid_core::{Error, Recording, Result};
-use serde::Deserialize;
-
-use crate::sources::{Marker, Source, Stream};
-
-/// A parsed, checked channel map.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ChannelMap {
-    /// Where the recording's time comes from.
-    #[serde(default)]
-    pub time: TimeSpec,
-    /// FORMAT.md column name -> where its values come from.
-    pub columns: BTreeMap<String, ColumnSpec>,
-    /// The file the map was read from (for messages).
-    #[serde(skip)]
-    pub path: Option<PathBuf>,
-}
-
-/// The `[time]` table.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TimeSpec {
-    /// The stream whose stamps become `t` (XDF stream name, TDMS group,
-    /// C3D `analog` or `points`).
-    pub stream: Option<String>,
-    /// Sample rate (Hz) of a table without a time column.
-    pub rate: Option<f64>,
-}
-
-/// One column's source: a channel, or a marker rule.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
-pub enum ColumnSpec {
-    /// Just the channel's name.
-    Channel(String),
-    /// The full form.
-    Full(ColumnRule),
-}
-
-/// The full form of a column's source.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ColumnRule {
-    /// The channel's name in the file.
-    pub channel: Option<String>,
-    /// The stream that holds it (needed when names repeat across streams).
-    pub stream: Option<String>,
-    /// Its unit in the file (defaults to the declared one, else SI).
-    pub unit: Option<String>,
-    /// Multiplies the converted value (e.g. -1 for a sensor that reads the hand's force).
-    pub scale: Option<f64>,
-    /// Added after scaling, in SI units.
-    pub offset: Option<f64>,
-    /// Trials start at each marker of exactly this text.
-    pub marker: Option<String>,
-    /// Markers starting with this text carry the column's value after it.
-    pub marker_prefix: Option<String>,
-    /// For an `env_<muscle>` column: the low-pass cut-off (Hz) of the EMG
-    /// envelope made at the channel's native rate (default 8 Hz, seed 001).
-    pub envelope_hz: Option<f64>,
-}
-
-/// Default envelope cut-off of `env_` columns (Hz): seed 001's 8 Hz.
-pub const ENVELOPE_HZ: f64 = 8.0;
-
-impl ColumnSpec {
-    fn rule(&self) -> ColumnRule {
-        match self {
-            ColumnSpec::Channel(name) => ColumnRule {
-                channel: Some(name.clone()),
-                ..ColumnRule::default()
-            },
-            ColumnSpec::Full(rule) => rule.clone(),
-        }
-    }
-}
-
-/// The physical quantity of a FORMAT.md column, from its unit.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Quantity {
-    Time,
-    Length,
-    Angle,
-    Force,
-    Torque,
-    Voltage,
-    Number,
-}
-
-impl Quantity {
-    fn of(column: &str) -> Quantity {
-        match magnitude_limit(column).1 {
-            "s" => Quantity::Time,
-            "m" => Quantity::Length,
-            "rad" => Quantity::Angle,
-            "N" => Quantity::Force,
-            "N m" => Quantity::Torque,
-            "V" => Quantity::Voltage,
-            _ => Quantity::Number,
-        }
-    }
-
-    fn name(self) -> &'static str {
-        match self {
-            Quantity::Time => "a time (s)",
-            Quantity::Length => "a length (m)",
-            Quantity::Angle => "an angle (rad)",
-            Quantity::Force => "a force (N)",
-            Quantity::Torque => "a torque (N m)",
-            Quantity::Voltage => "a voltage (V)",
-            Quantity::Number => "a number without unit",
-        }
-    }
-
-    /// Units limpid converts, with their factor to SI.
-    fn units(self) -> &'static [(&'static str, f64)] {
-        const DEG: f64 = std::f64::consts::PI / 180.0;
-        const LBF: f64 = 4.448_221_615_260_5;
-        match self {
-            Quantity::Time => &[
-                ("s", 1.0),
-                ("ms", 1e-3),
-                ("us", 1e-6),
-                ("µs", 1e-6),
-                ("min", 60.0),
-            ],
-            Quantity::Length => &[
-                ("m", 1.0),
-                ("cm", 1e-2),
-                ("mm", 1e-3),
-                ("um", 1e-6),
-                ("µm", 1e-6),
-                ("in", 0.0254),
-                ("ft", 0.3048),
-            ],
-            Quantity::Angle => &[
-                ("rad", 1.0),
-                ("mrad", 1e-3),
-                ("deg", DEG),
-                ("degree", DEG),
-                ("degrees", DEG),
-                ("°", DEG),
-            ],
-            Quantity::Force => &[
-                ("N", 1.0),
-                ("kN", 1e3),
-                ("mN", 1e-3),
-                ("lbf", LBF),
-                ("kgf", 9.806_65),
-            ],
-            Quantity::Torque => &[
-                ("N m", 1.0),
-                ("N*m", 1.0),
-                ("N.m", 1.0),
-                ("N·m", 1.0),
-                ("Nm", 1.0),
-                ("N mm", 1e-3),
-                ("N*mm", 1e-3),
-                ("N.mm", 1e-3),
-                ("Nmm", 1e-3),
-                ("mN m", 1e-3),
-                ("mN*m", 1e-3),
-                ("mNm", 1e-3),
-                ("kN m", 1e3),
-                ("lbf in", LBF * 0.0254),
-                ("lbf*in", LBF * 0.0254),
-            ],
-            Quantity::Voltage => &[
-                ("V", 1.0),
-                ("mV", 1e-3),
-                ("uV", 1e-6),
-                ("µV", 1e-6),
-                ("kV", 1e3),
-            ],
-            Quantity::Number => &[("1", 1.0), ("", 1.0), ("count", 1.0)],
-        }
-    }
-
-    /// The factor to SI of `unit`, or why it cannot be converted.
-    fn factor(self, unit: &str) -> std::result::Result<f64, String> {
-        let unit = unit.trim();
-        if let Some((_, f)) = self.units().iter().find(|(u, _)| *u == unit) {
-            return Ok(*f);
-        }
-        // a unit of another quantity is a different mistake than a typo
-        for other in [
-            Quantity::Time,
-            Quantity::Length,
-            Quantity::Angle,
-            Quantity::Force,
-            Quantity::Torque,
-            Quantity::Voltage,
-        ] {
-            if other != self && other.units().iter().any(|(u, _)| *u == unit) {
-                return Err(format!(
-                    "unit {unit:?} is {}, but the column is {}",
-                    other.name(),
-                    self.name()
-                ));
-            }
-        }
-        let names: Vec<&str> = self
-            .units()
-            .iter()
-            .map(|(u, _)| *u)
-            .filter(|u| !u.is_empty())
-            .collect();
-        Err(format!(
-            "unknown unit {unit:?} for {}{}",
-            self.name(),
-            nearest_hint(unit, &names)
-        ))
-    }
-}
-
-/// The factor that converts `unit` to the SI unit of FORMAT.md column
-/// `column`, or why it cannot.
-pub fn unit_factor(column: &str, unit: &str) -> std::result::Result<f64, String> {
-    Quantity::of(column).factor(unit)
-}
-
-/// ", nearest: a, b" (the closest names by edit distance), or the list of all when few.
-pub fn nearest_hint(wanted: &str, names: &[&str]) -> String {
-    if names.is_empty() {
-        return String::new();
-    }
-    let mut scored: Vec<(usize, &str)> = names
-        .iter()
-        .map(|n| {
-            let d = strsim::levenshtein(&wanted.to_lowercase(), &n.to_lowercase());
-            (d, *n)
-        })
-        .collect();
-    scored.sort();
-    let close: Vec<&str> = scored.iter().take(3).map(|(_, n)| *n).collect();
-    format!("; nearest: {}", close.join(", "))
-}
-
-impl ChannelMap {
-    /// Read and check a map file.
-    pub fn read(path: &Path) -> Result<ChannelMap> {
-        let bytes = limpid_core::files::read_bytes(path, 1 << 20)?;
-        let text = String::from_utf8(bytes).map_err(|_| Error::Format {
-            path: path.to_path_buf(),
-            message: "a channel map is UTF-8 text (TOML)".into(),
-        })?;
-        let mut map = ChannelMap::parse(&text).map_err(|message| Error::Format {
-            path: path.to_path_buf(),
-            message,
-        })?;
-        map.path = Some(path.to_path_buf());
-        Ok(map)
-    }
-
-    /// Parse and check map text (TOML).
-    pub fn parse(text: &str) -> std::result::Result<ChannelMap, String> {
-        let map: ChannelMap = toml::from_str(text).map_err(|e| {
-            let msg = e.message().to_string();
-            match e.span() {
-                Some(span) => {
-                    let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
-                    format!("line {line}: {msg}")
-                }
-                None => msg,
-            }
-        })?;
-        map.check()?;
-        Ok(map)
-    }
-
-    /// A map built another way (e.g. deserialised from Python), checked as
-    /// [`ChannelMap::parse`] checks the TOML form.
-    pub fn checked(self) -> std::result::Result<ChannelMap, String> {
-        self.check()?;
-        Ok(self)
-    }
-
-    fn check(&self) -> std::result::Result<(), String> {
-        if self.columns.is_empty() {
-            return Err("[columns] names no column".into());
-        }
-        if let Some(rate) = self.time.rate {
-            if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
-                return Err(format!(
-                    "[time] rate = {}: a sample rate in Hz, above 0 and at most 1e7",
-                    significant(rate, 6)
-                ));
-            }
-        }
-        for (column, spec) in &self.columns {
-            let r = spec.rule();
-            let at = |m: String| format!("[columns] {column}: {m}");
-            if column.is_empty() || column.chars().any(|c| c.is_control() || c == ',') {
-                return Err(format!("[columns] {column:?}: not a usable column name"));
-            }
-            let sources = [
-                r.channel.is_some(),
-                r.marker.is_some(),
-                r.marker_prefix.is_some(),
-            ]
-            .iter()
-            .filter(|b| **b)
-            .count();
-            if sources != 1 {
-                return Err(at(
-                    "give exactly one of channel, marker or marker_prefix".into()
-                ));
-            }
-            if r.channel.as_deref() == Some("") || r.marker.as_deref() == Some("") {
-                return Err(at("an empty channel or marker name".into()));
-            }
-            if r.channel.is_none() {
-                if r.unit.is_some() || r.scale.is_some() || r.offset.is_some() {
-                    return Err(at(
-                        "unit, scale and offset apply to channels, not to marker rules".into(),
-                    ));
-                }
-                if column == "t" {
-                    return Err(at("time cannot come from markers".into()));
-                }
-            }
-            for (name, v) in [("scale", r.scale), ("offset", r.offset)] {
-                if let Some(v) = v {
-                    if !v.is_finite() || v.abs() > 1e15 {
-                        return Err(at(format!(
-                            "{name} = {} is not a usable finite number",
-                            significant(v, 6)
-                        )));
-                    }
-                }
-            }
-            if r.scale == Some(0.0) {
-                return Err(at("scale = 0 would erase the channel".into()));
-            }
-            if let Some(unit) = &r.unit {
-                Quantity::of(column).factor(unit).map_err(at)?;
-            }
-            if let Some(hz) = r.envelope_hz {
-                if !column.starts_with("env_") {
-                    return Err(at(
-                        "envelope_hz applies to env_<muscle> columns (an EMG envelope made at the native rate)".into(),
-                    ));
-                }
-                if !(hz.is_finite() && hz > 0.0) {
-                    return Err(at(format!(
-                        "envelope_hz = {}: a cut-off in Hz above 0",
-                        significant(hz, 6)
-                    )));
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// The map a file without one gets: every channel named like a FORMAT.md
-    /// column, the time base the stream holding most of them.
-    pub fn implicit(source: &Source) -> Result<ChannelMap> {
-        let count = |s: &Stream| {
-            s.channels
-                .iter()
-                .filter(|c| limpid_core::recording::is_format_column(&c.name))
-                .count()
-        };
-        let best = source
-            .streams
-            .iter()
-            .max_by_key(|s| count(s))
-            .filter(|s| count(s) > 0)
-            .ok_or_else(|| {
-                source.error(format!(
-                    "no channel is named like a FORMAT.md column (t, x, fx, q1, emg_..., ...); write a channel map (`limpid inspect {}` proposes one) and pass it with --map",
-                    source.path.display()
-                ))
-            })?;
-        let mut columns = BTreeMap::new();
-        for s in std::iter::once(best).chain(source.streams.iter()) {
-            for c in &s.channels {
-                if limpid_core::recording::is_format_column(&c.name)
-                    && !columns.contains_key(&c.name)
-                {
-                    columns.insert(
-                        c.name.clone(),
-                        ColumnSpec::Full(ColumnRule {
-                            channel: Some(c.name.clone()),
-                            stream: Some(s.name.clone()),
-                            ..ColumnRule::default()
-                        }),
-                    );
-                }
-            }
-        }
-        Ok(ChannelMap {
-            time: TimeSpec {
-                stream: Some(best.name.clone()),
-                rate: None,
-            },
-            columns,
-            path: None,
-        })
-    }
-}
+#[allow(unused_imports)]
+use super::*;
 
 /// The stream called `name`, or an error naming the nearest streams.
-fn named_stream<'a>(source: &'a Source, name: &str, what: &str) -> Result<&'a Stream> {
+pub(crate) fn named_stream<'a>(source: &'a Source, name: &str, what: &str) -> Result<&'a Stream> {
     source
         .streams
         .iter()
@@ -447,13 +19,13 @@ fn named_stream<'a>(source: &'a Source, name: &str, what: &str) -> Result<&'a St
 }
 
 /// A channel found in a source.
-struct Found<'a> {
-    stream: &'a Stream,
-    values: &'a [f64],
-    declared_unit: Option<&'a str>,
+pub(crate) struct Found<'a> {
+    pub(crate) stream: &'a Stream,
+    pub(crate) values: &'a [f64],
+    pub(crate) declared_unit: Option<&'a str>,
 }
 
-fn find_channel<'a>(
+pub(crate) fn find_channel<'a>(
     source: &'a Source,
     column: &str,
     channel: &str,
@@ -513,7 +85,7 @@ pub struct Converted {
 
 /// Linear interpolation of `values` sampled at `stamps` (increasing) at `at`
 /// (increasing, inside the stamps' span).
-fn interpolate(stamps: &[f64], values: &[f64], at: &[f64]) -> Vec<f64> {
+pub(crate) fn interpolate(stamps: &[f64], values: &[f64], at: &[f64]) -> Vec<f64> {
     let mut out = Vec::with_capacity(at.len());
     let mut k = 0;
     for &t in at {
@@ -830,7 +402,7 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
 
 /// Where a column goes in a converted table: FORMAT.md's order (time,
 /// end-point, joints, inputs, robot, labels, EMG), then the rest by name.
-fn column_rank(name: &str) -> usize {
+pub(crate) fn column_rank(name: &str) -> usize {
     const FIXED: [&str; 15] = [
         "t", "x", "y", "z", "fx", "fy", "fz", "theta", "tauy", "ux", "uy", "uz", "utheta", "trial",
         "level",
@@ -855,7 +427,7 @@ fn column_rank(name: &str) -> usize {
 
 /// A dropped sample inside a trial of the time-base stream, named by stream
 /// and time, before the recording's own check (which names only a row).
-fn gap_in_base(
+pub(crate) fn gap_in_base(
     source: &Source,
     base: &Stream,
     names: &[String],
@@ -891,7 +463,12 @@ fn gap_in_base(
 }
 
 /// The values of a channel in SI, scaled and offset; non-finite samples refused.
-fn convert(source: &Source, column: &str, r: &ColumnRule, found: &Found) -> Result<Vec<f64>> {
+pub(crate) fn convert(
+    source: &Source,
+    column: &str,
+    r: &ColumnRule,
+    found: &Found,
+) -> Result<Vec<f64>> {
     let quantity = Quantity::of(column);
     let unit = r.unit.as_deref().or(found.declared_unit);
     let factor = match unit {
@@ -934,7 +511,7 @@ fn convert(source: &Source, column: &str, r: &ColumnRule, found: &Found) -> Resu
 /// a 2nd-order Butterworth low-pass run forwards and backwards (seed 001's
 /// processing, as `limpid_analysis::emg` does for `emg_` columns), so that
 /// a slower time base samples the envelope, not aliased raw EMG.
-fn envelope(
+pub(crate) fn envelope(
     source: &Source,
     column: &str,
     r: &ColumnRule,
@@ -964,7 +541,7 @@ fn envelope(
 }
 
 /// The markers a marker rule reads: the named stream's, else every marker stream's.
-fn markers_for(source: &Source, column: &str, r: &ColumnRule) -> Result<Vec<Marker>> {
+pub(crate) fn markers_for(source: &Source, column: &str, r: &ColumnRule) -> Result<Vec<Marker>> {
     let mut markers: Vec<Marker> = match &r.stream {
         Some(name) => named_stream(source, name, &format!("map column {column}"))?
             .markers
@@ -981,7 +558,7 @@ fn markers_for(source: &Source, column: &str, r: &ColumnRule) -> Result<Vec<Mark
 
 /// A trial or value column from markers at the times `t`; also how many
 /// leading samples precede the first marker that applies.
-fn marker_column(
+pub(crate) fn marker_column(
     column: &str,
     r: &ColumnRule,
     markers: &[Marker],
