@@ -177,7 +177,8 @@ pub fn run_study_staged(
             .iter()
             .map(|e| (e.subject.as_str(), e.configuration.as_str())),
     );
-    let staging = std::sync::Mutex::new((outputs, Vec::<Error>::new()));
+    // the first staging error (a full disk) is the study's
+    let staging = std::sync::Mutex::new((outputs, None::<Error>));
     let outcomes: Vec<std::result::Result<Processed, Failure>> = m
         .recording
         .par_iter()
@@ -185,13 +186,10 @@ pub fn run_study_staged(
         .map(|(e, name)| {
             let mut out = process_entry(e, &request);
             if let Ok(p) = &mut out {
-                let doc = limpid_analysis::result::Document::new(Estimate::Cocontraction(
-                    p.result.clone(),
-                ));
-                let text = doc.to_json();
+                let text = recording_json(&p.result);
                 let mut guard = staging.lock().unwrap_or_else(|e| e.into_inner());
                 if let Err(err) = guard.0.add(&dir.join(name), text.as_bytes()) {
-                    guard.1.push(err);
+                    guard.1.get_or_insert(err);
                 }
                 drop(guard);
                 slim(&mut p.result);
@@ -200,14 +198,19 @@ pub fn run_study_staged(
             out
         })
         .collect();
-    let (_, errors) = staging.into_inner().unwrap_or_else(|e| e.into_inner());
-    if let Some(e) = errors.into_iter().next() {
+    let (_, error) = staging.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some(e) = error {
         return Err(e);
     }
     Ok(summarise(
         m.study.name.clone().unwrap_or_else(|| "study".into()),
         outcomes,
     ))
+}
+
+/// A recording's full result document, as `recordings/<name>.json` holds it.
+fn recording_json(r: &CocontractionResult) -> String {
+    limpid_analysis::result::Document::new(Estimate::Cocontraction(r.clone())).to_json()
 }
 
 /// A co-contraction result without its fit traces (kept in the per-recording files).
@@ -327,8 +330,7 @@ pub fn write_tables(r: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>> {
             .map(|p| (p.subject.as_str(), p.configuration.as_str())),
     );
     for (p, name) in r.recordings.iter().zip(names) {
-        let doc = limpid_analysis::result::Document::new(Estimate::Cocontraction(p.result.clone()));
-        written.push(outputs.add(&dir.join(&name), doc.to_json().as_bytes())?);
+        written.push(outputs.add(&dir.join(&name), recording_json(&p.result).as_bytes())?);
     }
     outputs.commit()?;
     Ok(written)

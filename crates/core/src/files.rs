@@ -81,25 +81,11 @@ pub fn write_atomic<T>(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<T>,
 ) -> Result<T> {
-    if let Ok(meta) = std::fs::symlink_metadata(path) {
-        let kind = meta.file_type();
-        if kind.is_symlink() {
-            return match std::fs::canonicalize(path) {
-                Ok(target) => write_atomic(&target, write),
-                // a dangling link: create its target through it
-                Err(_) => write_through(path, write),
-            };
-        }
-        if kind.is_dir() {
-            return Err(Error::Format {
-                path: path.to_path_buf(),
-                message: "is a directory, not a file to write".into(),
-            });
-        }
-        if !kind.is_file() {
-            return write_through(path, write);
-        }
-    }
+    let target = match output_target(path)? {
+        OutputTarget::Replace(target) => target,
+        OutputTarget::Through(target) => return write_through(&target, write),
+    };
+    let path = target.as_path();
     let tmp = temporary_name(path);
     let file = File::create(&tmp).map_err(|e| io_error(path, e))?;
     let mut w = BufWriter::new(file);
@@ -121,6 +107,37 @@ pub fn write_atomic<T>(
             let _ = std::fs::remove_file(&tmp);
             Err(e)
         }
+    }
+}
+
+/// Where an output goes: a regular (or new) file, replaced by renaming a
+/// temporary over it, or something written through in place.
+enum OutputTarget {
+    Replace(PathBuf),
+    Through(PathBuf),
+}
+
+/// The target of an output path: a symbolic link is followed (a dangling
+/// one written through, creating its target), a FIFO, device or socket is
+/// written through, a directory is refused naming `path`.
+fn output_target(path: &Path) -> Result<OutputTarget> {
+    let Ok(meta) = std::fs::symlink_metadata(path) else {
+        return Ok(OutputTarget::Replace(path.to_path_buf()));
+    };
+    let mut target = path.to_path_buf();
+    if meta.file_type().is_symlink() {
+        match std::fs::canonicalize(path) {
+            Ok(t) => target = t,
+            Err(_) => return Ok(OutputTarget::Through(target)),
+        }
+    }
+    match std::fs::metadata(&target).map(|m| m.file_type()) {
+        Ok(kind) if kind.is_dir() => Err(Error::Format {
+            path: path.to_path_buf(),
+            message: "is a directory, not a file to write".into(),
+        }),
+        Ok(kind) if !kind.is_file() => Ok(OutputTarget::Through(target)),
+        _ => Ok(OutputTarget::Replace(target)),
     }
 }
 
@@ -209,30 +226,13 @@ impl OutputSet {
 
     /// Stage `bytes` for `path`; returns `path`.
     pub fn add(&mut self, path: &Path, bytes: &[u8]) -> Result<PathBuf> {
-        let mut target = path.to_path_buf();
-        if let Ok(meta) = std::fs::symlink_metadata(path) {
-            let kind = meta.file_type();
-            if kind.is_symlink() {
-                match std::fs::canonicalize(path) {
-                    Ok(t) => target = t,
-                    Err(_) => {
-                        self.through.push((path.to_path_buf(), bytes.to_vec()));
-                        return Ok(path.to_path_buf());
-                    }
-                }
-            }
-            let kind = std::fs::metadata(&target).map(|m| m.file_type());
-            if kind.as_ref().is_ok_and(|k| k.is_dir()) {
-                return Err(Error::Format {
-                    path: path.to_path_buf(),
-                    message: "is a directory, not a file to write".into(),
-                });
-            }
-            if kind.is_ok_and(|k| !k.is_file()) {
+        let target = match output_target(path)? {
+            OutputTarget::Replace(target) => target,
+            OutputTarget::Through(target) => {
                 self.through.push((target, bytes.to_vec()));
                 return Ok(path.to_path_buf());
             }
-        }
+        };
         if self.staged.iter().any(|(_, t)| t == &target) {
             return Err(Error::Format {
                 path: path.to_path_buf(),
