@@ -25,7 +25,7 @@ type M3 = [[f64; 3]; 3];
 struct Seen {
     level: f64,
     at_3s: Option<(M3, M3)>,
-    at_end: Option<M3>,
+    at_end: Option<(M3, M3)>,
     status_before: Vec<String>,
 }
 
@@ -59,7 +59,7 @@ fn replay(case: &str) -> (Vec<Seen>, Vec<(f64, limpid_core::Matrix)>) {
     for n in 0..t.len() {
         if seen.last().is_none_or(|s| s.level != level[n]) {
             if let Some(s) = seen.last_mut() {
-                s.at_end = p.online.estimate().map(|e| e.stiffness);
+                s.at_end = p.online.estimate().map(|e| (e.stiffness, e.stiffness_se));
             }
             seen.push(Seen {
                 level: level[n],
@@ -100,7 +100,7 @@ fn replay(case: &str) -> (Vec<Seen>, Vec<(f64, limpid_core::Matrix)>) {
             ));
         }
     }
-    seen.last_mut().unwrap().at_end = p.online.estimate().map(|e| e.stiffness);
+    seen.last_mut().unwrap().at_end = p.online.estimate().map(|e| (e.stiffness, e.stiffness_se));
     assert_eq!(
         p.level_changes as usize,
         seen.len() - 1,
@@ -115,15 +115,17 @@ fn check(case: &str) {
         let (_, k_off) = offline.iter().find(|(l, _)| *l == s.level).unwrap();
         let (k3, se3) = s.at_3s.unwrap();
         let e3 = frobenius_error(&k3, k_off);
-        let end = s.at_end.expect("an estimate at the level's end");
+        let (end, se_end) = s.at_end.expect("an estimate at the level's end");
         let e_end = frobenius_error(&end, k_off);
         let se_rel = norm(&se3) / k_off.0.norm();
+        let se_rel_end = norm(&se_end) / k_off.0.norm();
         println!(
-            "{case} level {}: online vs offline K {:.1} % after 3 s, {:.1} % at the end; SE/|K| {:.1} %; before 3 s: {:?}",
+            "{case} level {}: online vs offline K {:.1} % after 3 s, {:.1} % at the end; SE/|K| {:.1} % after 3 s, {:.1} % at the end; before 3 s: {:?}",
             s.level,
             100.0 * e3,
             100.0 * e_end,
             100.0 * se_rel,
+            100.0 * se_rel_end,
             s.status_before.iter().collect::<std::collections::BTreeSet<_>>()
         );
         assert!(
