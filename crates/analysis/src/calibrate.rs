@@ -72,7 +72,7 @@ pub struct MethodCalibration {
 /// The observation-window sweep's trust over planar subjects (seed 003).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct SweepCalibration {
-    /// Sweeps run (50-400 ms in 10 ms steps).
+    /// Sweeps run (50-400 ms in 10 ms steps, or to the trials' end).
     pub sweeps: usize,
     /// Of those, subjects with a stretch reflex.
     pub with_reflex: usize,
@@ -84,6 +84,19 @@ pub struct SweepCalibration {
     pub correct_windows: usize,
     /// Sweeps that trusted at least one window, without and with a reflex.
     pub sweeps_with_a_trusted_window: [usize; 2],
+    /// Of the sweeps, those on end-point data (positions through inverse kinematics).
+    #[serde(default)]
+    pub endpoint_sweeps: usize,
+    /// Of the sweeps, those through a cuff of soft tissue.
+    #[serde(default)]
+    pub cuff_sweeps: usize,
+    /// Sweeps that claimed a change of the impedance within the trials (a
+    /// reflex?), without and with a reflex: false alarms and detections.
+    #[serde(default)]
+    pub changes_claimed: [usize; 2],
+    /// Subjects whose simulation, preparation or sweep failed (not counted above).
+    #[serde(default)]
+    pub refused: usize,
     /// Wall-clock time (s).
     pub seconds: f64,
 }
@@ -97,8 +110,12 @@ pub struct Calibration {
     pub recordings_per_method: usize,
     /// One entry per method.
     pub methods: Vec<MethodCalibration>,
-    /// The window sweep.
+    /// The window sweep on seed 003's session around its subject.
     pub window_sweep: SweepCalibration,
+    /// The window sweep on subjects unlike it: end-point data, 20-60 trials,
+    /// T_k 150-250 ms observed for T_k + 70 or 450 ms, cuffs, other sensor noise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window_sweep_varied: Option<SweepCalibration>,
     /// Reflex claims of the parameter-varying ankle.
     #[serde(default)]
     pub varying_reflex: ReflexClaims,

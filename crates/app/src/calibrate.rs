@@ -34,7 +34,7 @@ use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
 use limpid_lab::cocontraction::{
     seed001_population, simulate_cocontraction, CocontractionProtocol,
 };
-use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject, Reflex};
+use limpid_lab::planar::{simulate_planar, Cuff, PlanarProtocol, PlanarSubject, Reflex};
 use limpid_lab::rig::{simulate_rig, RigExperiment};
 use limpid_lab::{simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
 
@@ -298,11 +298,73 @@ fn planar(seed: u64) -> std::result::Result<Outcome, String> {
     Ok(o)
 }
 
-/// What one sweep contributes: (trusted windows, trusted but wrong, correct windows, any trusted).
-type SweepOutcome = (usize, usize, usize, bool);
+/// What one sweep contributes.
+#[derive(Debug, Clone, Copy)]
+struct SweepOutcome {
+    trusted: usize,
+    trusted_but_wrong: usize,
+    correct: usize,
+    /// The sweep claimed a change of the impedance within the trials.
+    change_claimed: bool,
+    endpoint: bool,
+    cuff: bool,
+}
 
-fn sweep(seed: u64, reflex: bool) -> Option<SweepOutcome> {
-    let (subject, data) = planar_session(seed, reflex).ok()?;
+/// A window-sweep subject unlike seed 003's lab alone (issue 37: the change
+/// scan cried "reflex" on another generator's reflex-free arms): joint or
+/// end-point data (positions through inverse kinematics, white position and
+/// force noise), 20-60 trials, T_k 150-250 ms observed for T_k + 70 ms (the
+/// held-out generator) or 450 ms (limpid's), a cuff in a quarter, random
+/// link lengths, rest torques and sensor noise.
+fn sweep_session(
+    seed: u64,
+    reflex: bool,
+) -> std::result::Result<(PlanarSubject, limpid_ident::planar::PlanarData, bool), String> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut subject = planar_subject(&mut rng, reflex);
+    let arm = limpid_core::arm::Arm {
+        l1: uniform(&mut rng, 0.26, 0.34),
+        l2: uniform(&mut rng, 0.28, 0.36),
+        shoulder: [0.0, 0.0],
+    };
+    subject.tau0 = [uniform(&mut rng, -0.5, 0.5), uniform(&mut rng, -0.5, 0.5)];
+    if rng.random::<f64>() < 0.25 {
+        subject.cuff = Some(Cuff::seed003(&arm, subject.q0));
+    }
+    let mut protocol = PlanarProtocol::seed003();
+    protocol.trials = rng.random_range(20..=60);
+    protocol.interpolation_s = uniform(&mut rng, 0.15, 0.25);
+    protocol.after_s = if rng.random::<bool>() {
+        protocol.interpolation_s + 0.07
+    } else {
+        0.45
+    };
+    let endpoint = rng.random::<bool>();
+    let rec = if endpoint {
+        let joint =
+            simulate_planar(&subject, &protocol, 0.0, 0.0, seed).map_err(|e| e.to_string())?;
+        let (position_std, force_std) =
+            (uniform(&mut rng, 1e-5, 5e-5), uniform(&mut rng, 0.05, 0.2));
+        limpid_lab::planar::to_endpoint(&joint, &arm, position_std, force_std, seed ^ 0x5eed)
+            .map_err(|e| e.to_string())?
+    } else {
+        let (torque_std, angle_std) =
+            (uniform(&mut rng, 0.01, 0.05), uniform(&mut rng, 5e-6, 5e-5));
+        simulate_planar(&subject, &protocol, torque_std, angle_std, seed)
+            .map_err(|e| e.to_string())?
+    };
+    let data =
+        prepare_planar(&rec, &PlanarPrepare::new(arm.l1, arm.l2)).map_err(|e| e.to_string())?;
+    Ok((subject, data, endpoint))
+}
+
+fn sweep(seed: u64, reflex: bool, varied: bool) -> Option<SweepOutcome> {
+    let (subject, data, endpoint) = if varied {
+        sweep_session(seed, reflex).ok()?
+    } else {
+        let (subject, data) = planar_session(seed, reflex).ok()?;
+        (subject, data, false)
+    };
     let [from, to, step] = limpid_ident::request::DEFAULT_SWEEP_MS;
     let s = window_sweep(&data, from, to, step, None).ok()?;
     let (k, d) = (
@@ -310,16 +372,23 @@ fn sweep(seed: u64, reflex: bool) -> Option<SweepOutcome> {
         Matrix::from(subject.damping),
     );
     let rel = |e: &Matrix, t: &Matrix| (&e.0 - &t.0).norm() / t.norm();
-    let (mut trusted, mut wrong, mut correct) = (0, 0, 0);
+    let mut o = SweepOutcome {
+        trusted: 0,
+        trusted_but_wrong: 0,
+        correct: 0,
+        change_claimed: s.impedance_change.is_some(),
+        endpoint,
+        cuff: subject.cuff.is_some(),
+    };
     for r in &s.rows {
         let ok = rel(&r.estimate.stiffness, &k) <= 0.10 && rel(&r.estimate.damping, &d) <= 0.25;
-        correct += usize::from(ok);
+        o.correct += usize::from(ok);
         if r.trusted {
-            trusted += 1;
-            wrong += usize::from(!ok);
+            o.trusted += 1;
+            o.trusted_but_wrong += usize::from(!ok);
         }
     }
-    Some((trusted, wrong, correct, trusted > 0))
+    Some(o)
 }
 
 fn stochastic(seed: u64) -> std::result::Result<Outcome, String> {
@@ -559,8 +628,11 @@ fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool), String> {
 /// Methods of the study (each `recordings` virtual recordings).
 pub const METHODS: usize = 9;
 
-/// Window sweeps run beside `recordings` per method: half as many (each fits
-/// some 70 windows and split models), at least 10.
+/// Sets of window sweeps: seed 003's session, and the varied subjects.
+pub const SWEEP_SETS: usize = 2;
+
+/// Window sweeps per set run beside `recordings` per method: half as many
+/// (each fits some 70 windows and split models), at least 10.
 pub fn sweeps_for(recordings: usize) -> usize {
     (recordings / 2).max(10)
 }
@@ -655,15 +727,41 @@ pub fn calibrate(
         started.elapsed().as_secs_f64(),
     ));
     debug_assert_eq!(methods.len(), METHODS);
+    let window_sweep = calibrate_sweeps(sweeps_for(recordings), seed, false, progress);
+    let window_sweep_varied = Some(calibrate_sweeps(
+        sweeps_for(recordings),
+        seed ^ 0x3737,
+        true,
+        progress,
+    ));
+    Ok(Calibration {
+        seed,
+        recordings_per_method: recordings,
+        methods,
+        window_sweep,
+        window_sweep_varied,
+        varying_reflex,
+    })
+}
+
+/// The window sweep's part of [`calibrate`]: `sweeps` subjects, a third
+/// with a stretch reflex; seed 003's session around its subject, or (`varied`)
+/// the subjects of [`sweep_session`].
+pub fn calibrate_sweeps(
+    sweeps: usize,
+    seed: u64,
+    varied: bool,
+    progress: &(dyn Fn() + Sync),
+) -> SweepCalibration {
     let started = std::time::Instant::now();
-    // half as many sweeps: each fits some 70 windows and split models
-    let sweeps: Vec<(bool, Option<SweepOutcome>)> = (0..sweeps_for(recordings) as u64)
+    let outcomes: Vec<(bool, Option<SweepOutcome>)> = (0..sweeps as u64)
         .into_par_iter()
         .map(|i| {
             let reflex = i % 3 == 0;
             let r = sweep(
                 seed.wrapping_mul(1_000_003).wrapping_add(700_000 + i),
                 reflex,
+                varied,
             );
             progress();
             (reflex, r)
@@ -676,23 +774,26 @@ pub fn calibrate(
         trusted_but_wrong: 0,
         correct_windows: 0,
         sweeps_with_a_trusted_window: [0, 0],
+        endpoint_sweeps: 0,
+        cuff_sweeps: 0,
+        changes_claimed: [0, 0],
+        refused: 0,
         seconds: started.elapsed().as_secs_f64(),
     };
-    for (reflex, r) in sweeps {
-        if let Some((t, w, c, any)) = r {
-            window_sweep.sweeps += 1;
-            window_sweep.with_reflex += usize::from(reflex);
-            window_sweep.trusted_windows += t;
-            window_sweep.trusted_but_wrong += w;
-            window_sweep.correct_windows += c;
-            window_sweep.sweeps_with_a_trusted_window[usize::from(reflex)] += usize::from(any);
+    for (reflex, r) in outcomes {
+        window_sweep.refused += usize::from(r.is_none());
+        if let Some(o) = r {
+            let w = &mut window_sweep;
+            w.sweeps += 1;
+            w.with_reflex += usize::from(reflex);
+            w.endpoint_sweeps += usize::from(o.endpoint);
+            w.cuff_sweeps += usize::from(o.cuff);
+            w.trusted_windows += o.trusted;
+            w.trusted_but_wrong += o.trusted_but_wrong;
+            w.correct_windows += o.correct;
+            w.sweeps_with_a_trusted_window[usize::from(reflex)] += usize::from(o.trusted > 0);
+            w.changes_claimed[usize::from(reflex)] += usize::from(o.change_claimed);
         }
     }
-    Ok(Calibration {
-        seed,
-        recordings_per_method: recordings,
-        methods,
-        window_sweep,
-        varying_reflex,
-    })
+    window_sweep
 }

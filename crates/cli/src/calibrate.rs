@@ -4,7 +4,7 @@
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use limpid_analysis::result::{Document, Estimate};
-use limpid_app::calibrate::{calibrate, sweeps_for, METHODS};
+use limpid_app::calibrate::{calibrate, sweeps_for, METHODS, SWEEP_SETS};
 
 use crate::CliResult;
 
@@ -29,7 +29,7 @@ pub fn run(args: CalibrateArgs) -> CliResult {
         )
         .into());
     }
-    let total = METHODS * args.recordings + sweeps_for(args.recordings);
+    let total = METHODS * args.recordings + SWEEP_SETS * sweeps_for(args.recordings);
     let bar = ProgressBar::new(total as u64);
     bar.set_style(
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} recordings ({elapsed})")
@@ -60,11 +60,33 @@ pub fn run(args: CalibrateArgs) -> CliResult {
     for r in &rows {
         println!("| {} |", r.join(" | "));
     }
-    let w = &result.window_sweep;
+    print_sweeps(
+        "window sweep (Lakatos et al. 2011, 50-400 ms), seed 003's session",
+        &result.window_sweep,
+    );
+    if let Some(w) = &result.window_sweep_varied {
+        print_sweeps(
+            "window sweep on varied subjects (end-point data, 20-60 trials, T_k 150-250 ms, cuffs)",
+            w,
+        );
+    }
+    let r = &result.varying_reflex;
     println!(
-        "\nwindow sweep (Lakatos et al. 2011, 50-400 ms): {} sweeps ({} with a stretch reflex); {} windows trusted, {} of them beyond K 10 % or D 25 % of the truth; {} windows were within both; sweeps trusting some window: {} of {} without reflex, {} of {} with",
+        "parameter-varying ankle: a reflex claimed in {} of {} subjects without one, detected in {} of {} with one",
+        r.claimed_without, r.without_reflex, r.detected, r.with_reflex
+    );
+    Ok(())
+}
+
+/// The text lines of one set of window sweeps.
+fn print_sweeps(title: &str, w: &limpid_app::calibrate::SweepCalibration) {
+    println!(
+        "\n{title}: {} sweeps ({} with a stretch reflex, {} on end-point data, {} through a cuff, {} refused); {} windows trusted, {} of them beyond K 10 % or D 25 % of the truth; {} windows were within both; sweeps trusting some window: {} of {} without reflex, {} of {} with",
         w.sweeps,
         w.with_reflex,
+        w.endpoint_sweeps,
+        w.cuff_sweeps,
+        w.refused,
         w.trusted_windows,
         w.trusted_but_wrong,
         w.correct_windows,
@@ -73,10 +95,11 @@ pub fn run(args: CalibrateArgs) -> CliResult {
         w.sweeps_with_a_trusted_window[1],
         w.with_reflex
     );
-    let r = &result.varying_reflex;
     println!(
-        "parameter-varying ankle: a reflex claimed in {} of {} subjects without one, detected in {} of {} with one",
-        r.claimed_without, r.without_reflex, r.detected, r.with_reflex
+        "  change scan (a reflex?): claimed in {} of {} reflex-free sweeps (false alarms), in {} of {} with a reflex (detections)",
+        w.changes_claimed[0],
+        w.sweeps - w.with_reflex,
+        w.changes_claimed[1],
+        w.with_reflex,
     );
-    Ok(())
 }

@@ -293,3 +293,49 @@ pub fn add_torque_fluctuation(
     }
     Ok(())
 }
+
+/// The end-point version of a joint-space planar recording (`q1,q2,tau1,tau2`
+/// -> `x,y,fx,fy`): hand position x = FK(q) and hand force f = J(q)^-T τ, as
+/// a robot handle records them, then white position (m) and force (N) noise.
+/// Noise on the joint recording becomes correlated end-point noise; simulate
+/// it noise-free to get the end-point sensors' noise only.
+pub fn to_endpoint(
+    rec: &Recording,
+    arm: &limpid_core::arm::Arm,
+    position_std: f64,
+    force_std: f64,
+    seed: u64,
+) -> Result<Recording> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let unit = Normal::new(0.0, 1.0).expect("unit normal is valid");
+    let get = |n: &str| rec.require(n, "a joint-space planar recording");
+    let (t, q1, q2, tau1, tau2, trial) = (
+        get("t")?,
+        get("q1")?,
+        get("q2")?,
+        get("tau1")?,
+        get("tau2")?,
+        get("trial")?,
+    );
+    let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(rec.len())).collect();
+    for i in 0..rec.len() {
+        let q = [q1[i], q2[i]];
+        let x = arm.fk(q);
+        let f = arm.jacobian(q).transpose().try_inverse().ok_or_else(|| {
+            limpid_core::Error::invalid(
+                "arm configuration",
+                format!("the Jacobian is singular at q = ({}, {}) rad", q[0], q[1]),
+            )
+        })? * Vector2::new(tau1[i], tau2[i]);
+        cols[0].push(t[i]);
+        cols[1].push(x[0] + position_std * unit.sample(&mut rng));
+        cols[2].push(x[1] + position_std * unit.sample(&mut rng));
+        cols[3].push(f[0] + force_std * unit.sample(&mut rng));
+        cols[4].push(f[1] + force_std * unit.sample(&mut rng));
+        cols[5].push(trial[i]);
+    }
+    let names = ["t", "x", "y", "fx", "fy", "trial"]
+        .map(String::from)
+        .to_vec();
+    Recording::new("virtual:planar-endpoint", names, cols, 2)
+}

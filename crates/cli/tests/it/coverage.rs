@@ -236,6 +236,21 @@ fn calibrate_measures_coverage_and_wrong_verdicts_of_every_method() {
     let w = &r["window_sweep"];
     assert_eq!(w["trusted_but_wrong"], 0, "{w}");
     assert!(w["trusted_windows"].as_u64().unwrap() > 0, "{w}");
+    // the varied subjects: end-point data among them, every sweep accounted
+    // for, claims of a change counted apart for sweeps without and with a reflex
+    let v = &r["window_sweep_varied"];
+    let n = |k: &str| v[k].as_u64().unwrap();
+    assert_eq!(n("sweeps") + n("refused"), 10, "{v}");
+    assert!(
+        n("endpoint_sweeps") > 0 && n("endpoint_sweeps") < n("sweeps"),
+        "{v}"
+    );
+    let claimed = &v["changes_claimed"];
+    assert!(
+        claimed[0].as_u64().unwrap() <= n("sweeps") - n("with_reflex"),
+        "{v}"
+    );
+    assert!(claimed[1].as_u64().unwrap() <= n("with_reflex"), "{v}");
     // refused: fewer than 10 recordings cannot measure a coverage
     let out = limpid(&["calibrate", "--recordings", "3"]);
     assert_eq!(out.code, 2);

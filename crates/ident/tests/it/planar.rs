@@ -415,3 +415,39 @@ fn a_cuff_in_series_lengthens_the_window_the_criteria_need() {
         "K11 {k11}"
     );
 }
+
+#[test]
+fn the_end_point_version_of_a_session_gives_the_joint_estimate() {
+    // limpid's lab writes what a robot handle records (x = FK(q), f = J^-T tau,
+    // position and force noise); the estimate through inverse kinematics and
+    // tau = J^T f must agree with the joint-space one and with the truth
+    use limpid_lab::planar::{simulate_planar, to_endpoint, PlanarProtocol, PlanarSubject};
+    let subject = PlanarSubject::seed003();
+    let joint = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.0, 0.0, 11).unwrap();
+    let endpoint = to_endpoint(&joint, &seed003_arm(), 2e-5, 0.1, 11).unwrap();
+    assert!(endpoint.has("x") && endpoint.has("fy") && !endpoint.has("q1"));
+    let fit = |rec: &limpid_core::Recording| {
+        let data = prepare_seed003(rec);
+        let all: Vec<usize> = (0..data.trials.len()).collect();
+        (
+            data.from_endpoint,
+            fit_planar(&data, usize::MAX, None, &all).unwrap(),
+        )
+    };
+    let (from_joint, j) = fit(&joint);
+    let (from_endpoint, e) = fit(&endpoint);
+    assert!(!from_joint && from_endpoint);
+    let truth_k = limpid_core::Matrix::from(subject.stiffness);
+    let truth_d = limpid_core::Matrix::from(subject.damping);
+    let rel = |a: &limpid_core::Matrix, b: &limpid_core::Matrix| (&a.0 - &b.0).norm() / b.norm();
+    assert!(rel(&j.stiffness, &truth_k) < 0.01, "{:?}", j.stiffness);
+    assert!(rel(&e.stiffness, &truth_k) < 0.05, "{:?}", e.stiffness);
+    assert!(rel(&e.damping, &truth_d) < 0.15, "{:?}", e.damping);
+    assert!(rel(&e.stiffness, &j.stiffness) < 0.05);
+    // a singular arm (elbow straight) cannot carry end-point forces: an error, not inf
+    let mut straight = joint.clone();
+    let n = straight.len();
+    straight.set_column("q2", vec![0.0; n]).unwrap();
+    let err = to_endpoint(&straight, &seed003_arm(), 0.0, 0.0, 1).unwrap_err();
+    assert!(err.to_string().contains("singular"), "{err}");
+}
