@@ -178,6 +178,30 @@ fn random_matrix3(rng: &mut StdRng, lo: f64, hi: f64) -> Matrix3<f64> {
     s + a * (share * s.norm() / a.norm().max(1e-12))
 }
 
+/// Sensors of the end-point subjects (issue 37: coverage on subjects unlike
+/// the calibration generator's): half the outside examples' noise, half
+/// drawn from wider ranges: white force noise 0.05-0.5 N, a force offset
+/// drifting within the trials (0-0.5 N below 0.2-2 Hz), force noise
+/// proportional to the force (0-5 %, coloured below 2 Hz), a coarser force
+/// resolution (1/160-1/20 N), position noise 5-50 µm and a posture drifting
+/// by 0-0.5 mm.
+fn sensors(rng: &mut StdRng) -> NoiseModel {
+    let base = NoiseModel::default();
+    if rng.random::<bool>() {
+        return base;
+    }
+    NoiseModel {
+        white_std_n: uniform(rng, 0.05, 0.5),
+        drift_std_n: uniform(rng, 0.0, 0.5),
+        drift_lowpass_hz: uniform(rng, 0.2, 2.0),
+        force_noise_fraction: uniform(rng, 0.0, 0.05),
+        force_quantum_n: 1.0 / uniform(rng, 20.0, 160.0),
+        position_std_m: uniform(rng, 5e-6, 5e-5),
+        posture_drift_std_m: uniform(rng, 0.0, 5e-4),
+        ..base
+    }
+}
+
 fn centre_out(profile: Profile, seed: u64) -> std::result::Result<Outcome, String> {
     let mut rng = StdRng::seed_from_u64(seed);
     let inertia = Matrix3::from_diagonal(&Vector3::from_fn(|_, _| uniform(&mut rng, 0.2, 2.0)));
@@ -190,7 +214,7 @@ fn centre_out(profile: Profile, seed: u64) -> std::result::Result<Outcome, Strin
     };
     let noise = NoiseModel {
         servo_bandwidth_hz: if rng.random::<bool>() { 30.0 } else { 0.0 },
-        ..NoiseModel::default()
+        ..sensors(&mut rng)
     };
     let rec = simulate_centre_out(&posture, &CentreOut::seed000(profile), &noise, seed)
         .map_err(|e| e.to_string())?;
@@ -208,10 +232,11 @@ fn centre_out(profile: Profile, seed: u64) -> std::result::Result<Outcome, Strin
 fn cocontraction(seed: u64) -> std::result::Result<Outcome, String> {
     let population = seed001_population(1, seed);
     let (_, _, subject) = &population[(seed % population.len() as u64) as usize];
+    let mut rng = StdRng::seed_from_u64(seed ^ 0x5e45);
     let (rec, mvc) = simulate_cocontraction(
         subject,
         &CocontractionProtocol::seed001(),
-        &NoiseModel::default(),
+        &sensors(&mut rng),
         seed,
     )
     .map_err(|e| e.to_string())?;
