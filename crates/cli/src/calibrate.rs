@@ -91,14 +91,14 @@ fn print_sweeps(title: &str, w: &limpid_app::calibrate::SweepCalibration) {
         w.trusted_but_wrong,
         w.correct_windows,
         w.sweeps_with_a_trusted_window[0],
-        w.sweeps - w.with_reflex,
+        w.sweeps.saturating_sub(w.with_reflex),
         w.sweeps_with_a_trusted_window[1],
         w.with_reflex
     );
     println!(
         "  change scan (a reflex?): claimed in {} of {} reflex-free sweeps (false alarms), in {} of {} with a reflex (detections)",
         w.changes_claimed[0],
-        w.sweeps - w.with_reflex,
+        w.sweeps.saturating_sub(w.with_reflex),
         w.changes_claimed[1],
         w.with_reflex,
     );

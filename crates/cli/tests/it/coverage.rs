@@ -251,6 +251,27 @@ fn calibrate_measures_coverage_and_wrong_verdicts_of_every_method() {
         "{v}"
     );
     assert!(claimed[1].as_u64().unwrap() <= n("with_reflex"), "{v}");
+    // the result read back: the report names both sweep sets and their rates
+    let dir = tempfile::tempdir().unwrap();
+    let (res, html) = (dir.path().join("c.json"), dir.path().join("c.html"));
+    std::fs::write(&res, r.to_string()).unwrap();
+    let out = limpid(&[
+        "report",
+        res.to_str().unwrap(),
+        "-o",
+        html.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let text = std::fs::read_to_string(&html).unwrap();
+    let false_alarms = format!(
+        "claimed in {} of {} sweeps without a reflex",
+        claimed[0],
+        n("sweeps") - n("with_reflex")
+    );
+    assert!(
+        text.contains("varied subjects") && text.contains(&false_alarms),
+        "{false_alarms}"
+    );
     // refused: fewer than 10 recordings cannot measure a coverage
     let out = limpid(&["calibrate", "--recordings", "3"]);
     assert_eq!(out.code, 2);

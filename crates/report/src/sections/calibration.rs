@@ -8,13 +8,28 @@ pub(crate) fn calibration_section(
     v: &limpid_analysis::calibrate::Calibration,
 ) -> Section {
     let (header, rows) = v.table();
-    let w = &v.window_sweep;
+    let sweep = |title: &str, w: &limpid_analysis::calibrate::SweepCalibration| {
+        format!(
+            "; window sweep, {title}: {} of {} trusted windows beyond K 10 % / D 25 % of the truth, a change (reflex?) claimed in {} of {} sweeps without a reflex and {} of {} with one",
+            w.trusted_but_wrong,
+            w.trusted_windows,
+            w.changes_claimed[0],
+            w.sweeps.saturating_sub(w.with_reflex),
+            w.changes_claimed[1],
+            w.with_reflex
+        )
+    };
+    let mut verdict = format!(
+        "{} virtual recordings per method (seed {})",
+        v.recordings_per_method, v.seed
+    );
+    verdict += &sweep("seed 003's session", &v.window_sweep);
+    if let Some(w) = &v.window_sweep_varied {
+        verdict += &sweep("varied subjects", w);
+    }
     Section {
         heading: format!("Calibration of standard errors and verdicts: {name}"),
-        verdict: format!(
-            "{} virtual recordings per method (seed {}); window sweep: {} of {} trusted windows beyond K 10 % / D 25 % of the truth",
-            v.recordings_per_method, v.seed, w.trusted_but_wrong, w.trusted_windows
-        ),
+        verdict,
         warnings: vec![],
         tables: vec![Table {
             caption: "Per method and matrix: truth within ±2 reported SE, and how often a verdict is wrong".into(),
