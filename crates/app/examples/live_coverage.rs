@@ -3,10 +3,7 @@
 //! online estimator, restarted per level; every estimate after a completed
 //! perturbation is compared with the level's true K (issue 37):
 //! `cargo run --profile ci -p limpid-app --example live_coverage -- 20 1`
-use limpid_ident::online::{OnlineImpedance, OnlineSettings};
-use limpid_lab::cocontraction::{
-    seed001_population, simulate_cocontraction, CocontractionProtocol,
-};
+use limpid_app::live_check::live_stiffness_checks;
 use limpid_lab::NoiseModel;
 
 fn main() {
@@ -17,39 +14,13 @@ fn main() {
         let (mut within, mut total, mut zmax) = (0usize, 0usize, 0.0f64);
         let (mut se_rel, mut err_rel, mut signed) = (Vec::new(), Vec::new(), 0.0f64);
         for s in 0..n {
-            let seed = seed * 1000 + s;
-            let population = seed001_population(1, seed);
-            let (_, _, subject) = &population[(seed % population.len() as u64) as usize];
-            let (rec, _) =
-                simulate_cocontraction(subject, &CocontractionProtocol::seed001(), &noise, seed)
-                    .expect("simulated");
-            let col = |c: &str| rec.column(c).expect("column");
-            let (x, y, z) = (col("x"), col("y"), col("z"));
-            let (fx, fy, fz) = (col("fx"), col("fy"), col("fz"));
-            let level = col("level");
-            let mut est = OnlineImpedance::new(OnlineSettings::new(rec.sample_rate())).unwrap();
-            let mut seen = 0usize;
-            for i in 0..x.len() {
-                if i > 0 && level[i] != level[i - 1] {
-                    est.reset();
-                    seen = 0;
-                }
-                est.update([x[i], y[i], z[i]], [fx[i], fy[i], fz[i]]);
-                let Some(e) = est.estimate() else { continue };
-                if est.perturbations as usize == seen {
-                    continue;
-                }
-                seen = est.perturbations as usize;
-                let k = subject.stiffness(level[i]);
-                for o in 0..3 {
-                    let zv = (e.stiffness[o][o] - k[(o, o)]) / e.stiffness_se[o][o];
-                    within += usize::from(zv.abs() <= 2.0);
-                    total += 1;
-                    zmax = zmax.max(zv.abs());
-                    se_rel.push(e.stiffness_se[o][o] / k[(o, o)].abs());
-                    signed += (e.stiffness[o][o] - k[(o, o)]) / k[(o, o)].abs();
-                    err_rel.push((e.stiffness[o][o] - k[(o, o)]).abs() / k[(o, o)].abs());
-                }
+            for c in live_stiffness_checks(&noise, seed * 1000 + s).expect("simulated") {
+                within += usize::from(c.z.abs() <= 2.0);
+                total += 1;
+                zmax = zmax.max(c.z.abs());
+                se_rel.push(c.se_rel);
+                signed += c.error_rel;
+                err_rel.push(c.error_rel.abs());
             }
         }
         let median = |v: &mut Vec<f64>| {

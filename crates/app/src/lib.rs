@@ -15,6 +15,7 @@
 pub mod calibrate;
 pub mod demo;
 pub mod estimate;
+pub mod live_check;
 pub mod protocol;
 pub mod reproduce;
 pub mod study;

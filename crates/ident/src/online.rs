@@ -128,11 +128,7 @@ impl Sums {
 /// Raw sums of the segment in progress (centred when it closes).
 #[derive(Debug, Clone)]
 struct Segment {
-    n: f64,
-    sx: SVector<f64, P>,
-    sf: SVector<f64, 3>,
-    xtx: SMatrix<f64, P, P>,
-    xtf: SMatrix<f64, P, 3>,
+    raw: Block,
     ftf: SVector<f64, 3>,
     start: [f64; 3],
     max_disp: f64,
@@ -147,7 +143,8 @@ struct Segment {
     block_len: f64,
 }
 
-/// Raw regression sums of one block of a segment (for the standard errors).
+/// Raw regression sums of a segment or of one block of it (the blocks give
+/// the standard errors).
 #[derive(Debug, Clone, Copy)]
 struct Block {
     n: f64,
@@ -166,6 +163,23 @@ impl Block {
             xtx: SMatrix::zeros(),
             xtf: SMatrix::zeros(),
         }
+    }
+
+    fn add(&mut self, row: &SVector<f64, P>, force: &SVector<f64, 3>) {
+        self.n += 1.0;
+        self.sx += row;
+        self.sf += force;
+        // the full matrix (`syger` fills only the lower triangle): `score` multiplies it
+        self.xtx.ger(1.0, row, row, 1.0);
+        self.xtf.ger(1.0, row, force, 1.0);
+    }
+
+    fn merge(&mut self, o: &Block) {
+        self.n += o.n;
+        self.sx += o.sx;
+        self.sf += o.sf;
+        self.xtx += o.xtx;
+        self.xtf += o.xtf;
     }
 
     /// The block's least-squares score `Σ (x - x̄)(f - f̄ - (x - x̄)ᵀθ)` about
@@ -196,11 +210,7 @@ struct Closed {
 impl Segment {
     fn new(start: [f64; 3], onset: u64, block_len: f64, max_blocks: usize) -> Self {
         Segment {
-            n: 0.0,
-            sx: SVector::zeros(),
-            sf: SVector::zeros(),
-            xtx: SMatrix::zeros(),
-            xtf: SMatrix::zeros(),
+            raw: Block::zero(),
             ftf: SVector::zeros(),
             start,
             max_disp: 0.0,
@@ -215,21 +225,11 @@ impl Segment {
     }
 
     fn add(&mut self, row: &SVector<f64, P>, force: &SVector<f64, 3>) {
-        self.n += 1.0;
-        self.sx += row;
-        self.sf += force;
-        self.xtx.syger(1.0, row, row, 1.0);
-        self.xtf.ger(1.0, row, force, 1.0);
+        self.raw.add(row, force);
         self.ftf += force.component_mul(force);
-        let b = &mut self.block;
-        b.n += 1.0;
-        b.sx += row;
-        b.sf += force;
-        // full matrix (`syger` fills only the lower triangle): `score` multiplies it
-        b.xtx.ger(1.0, row, row, 1.0);
-        b.xtf.ger(1.0, row, force, 1.0);
-        if b.n >= self.block_len {
-            self.blocks.push(*b);
+        self.block.add(row, force);
+        if self.block.n >= self.block_len {
+            self.blocks.push(self.block);
             self.block = Block::zero();
         }
     }
@@ -237,27 +237,22 @@ impl Segment {
     /// Sums about the segment's own means (its force offset fitted away),
     /// with its blocks (a short last one joins the one before).
     fn close(mut self) -> Closed {
-        let n = self.n.max(1.0);
-        let mx = self.sx / n;
-        let mf = self.sf / n;
+        let raw = self.raw;
+        let n = raw.n.max(1.0);
+        let mx = raw.sx / n;
+        let mf = raw.sf / n;
         if self.block.n > 0.0 {
             match self.blocks.last_mut() {
-                Some(last) if self.block.n < 0.5 * self.block_len => {
-                    last.n += self.block.n;
-                    last.sx += self.block.sx;
-                    last.sf += self.block.sf;
-                    last.xtx += self.block.xtx;
-                    last.xtf += self.block.xtf;
-                }
+                Some(last) if self.block.n < 0.5 * self.block_len => last.merge(&self.block),
                 _ => self.blocks.push(self.block),
             }
         }
         Closed {
             sums: Sums {
-                n: self.n,
-                xtx: self.xtx - mx * self.sx.transpose(),
-                xtf: self.xtf - mx * self.sf.transpose(),
-                ftf: self.ftf - mf.component_mul(&self.sf),
+                n: raw.n,
+                xtx: raw.xtx - mx * raw.sx.transpose(),
+                xtf: raw.xtf - mx * raw.sf.transpose(),
+                ftf: self.ftf - mf.component_mul(&raw.sf),
             },
             mean_x: mx,
             mean_f: mf,
@@ -486,7 +481,7 @@ impl OnlineImpedance {
         let moved = seg.max_disp >= MOVED_M;
         // back where it started and nearly still: the perturbation is over
         let back = moved && disp < 0.1 * seg.max_disp && speed < 0.1 * seg.max_speed;
-        let too_long = seg.n >= self.settings.max_trial_s * fs;
+        let too_long = seg.raw.n >= self.settings.max_trial_s * fs;
         if !(back || too_long) {
             return;
         }
