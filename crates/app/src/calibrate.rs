@@ -32,7 +32,7 @@ use limpid_ident::planar::{prepare_planar, window_sweep, PlanarPrepare};
 use limpid_ident::stochastic::{estimate_stochastic, StochasticParams};
 use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
 use limpid_lab::cocontraction::{
-    seed001_population, simulate_cocontraction, CocontractionProtocol,
+    seed001_population, simulate_cocontraction, CocontractionProtocol, CocontractionSubject,
 };
 use limpid_lab::planar::{simulate_planar, Cuff, PlanarProtocol, PlanarSubject, Reflex};
 use limpid_lab::rig::{simulate_rig, RigExperiment};
@@ -229,9 +229,20 @@ fn centre_out(profile: Profile, seed: u64) -> std::result::Result<Outcome, Strin
     Ok(o)
 }
 
-fn cocontraction(seed: u64) -> std::result::Result<Outcome, String> {
+/// One of seed 001's configurations for a virtual co-contraction session,
+/// chosen by `seed`.
+pub(crate) fn cocontraction_subject(seed: u64) -> CocontractionSubject {
     let population = seed001_population(1, seed);
-    let (_, _, subject) = &population[(seed % population.len() as u64) as usize];
+    let index = (seed % population.len() as u64) as usize;
+    population
+        .into_iter()
+        .nth(index)
+        .expect("index within the population")
+        .2
+}
+
+fn cocontraction(seed: u64) -> std::result::Result<Outcome, String> {
+    let subject = &cocontraction_subject(seed);
     let mut rng = StdRng::seed_from_u64(seed ^ 0x5e45);
     let (rec, mvc) = simulate_cocontraction(
         subject,

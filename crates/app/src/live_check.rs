@@ -5,9 +5,7 @@
 //! level's true K. Used by the coverage test and `--example live_coverage`.
 
 use limpid_ident::online::{OnlineImpedance, OnlineSettings};
-use limpid_lab::cocontraction::{
-    seed001_population, simulate_cocontraction, CocontractionProtocol,
-};
+use limpid_lab::cocontraction::{simulate_cocontraction, CocontractionProtocol};
 use limpid_lab::NoiseModel;
 
 /// One diagonal element of the live K against the truth.
@@ -26,13 +24,12 @@ pub fn live_stiffness_checks(
     noise: &NoiseModel,
     seed: u64,
 ) -> std::result::Result<Vec<LiveCheck>, String> {
-    let population = seed001_population(1, seed);
-    let (_, _, subject) = &population[(seed % population.len() as u64) as usize];
+    let subject = &crate::calibrate::cocontraction_subject(seed);
     let (rec, _) = simulate_cocontraction(subject, &CocontractionProtocol::seed001(), noise, seed)
         .map_err(|e| e.to_string())?;
     let col = |c: &str| {
         rec.column(c)
-            .ok_or(format!("the simulation wrote no {c} column"))
+            .ok_or_else(|| format!("the simulation wrote no {c} column"))
     };
     let (x, y, z) = (col("x")?, col("y")?, col("z")?);
     let (fx, fy, fz) = (col("fx")?, col("fy")?, col("fz")?);

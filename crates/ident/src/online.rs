@@ -128,7 +128,8 @@ impl Sums {
 /// Raw sums of the segment in progress (centred when it closes).
 #[derive(Debug, Clone)]
 struct Segment {
-    raw: Block,
+    /// Samples so far.
+    n: f64,
     ftf: SVector<f64, 3>,
     start: [f64; 3],
     max_disp: f64,
@@ -137,7 +138,8 @@ struct Segment {
     discard: bool,
     /// Sample count at the onset (the first rest sample taken along).
     onset: u64,
-    /// Raw sums of the closed blocks and of the block in progress.
+    /// Raw sums of the closed blocks and of the block in progress (the
+    /// segment's own sums are theirs added up when it closes).
     blocks: Vec<Block>,
     block: Block,
     block_len: f64,
@@ -210,7 +212,7 @@ struct Closed {
 impl Segment {
     fn new(start: [f64; 3], onset: u64, block_len: f64, max_blocks: usize) -> Self {
         Segment {
-            raw: Block::zero(),
+            n: 0.0,
             ftf: SVector::zeros(),
             start,
             max_disp: 0.0,
@@ -225,7 +227,7 @@ impl Segment {
     }
 
     fn add(&mut self, row: &SVector<f64, P>, force: &SVector<f64, 3>) {
-        self.raw.add(row, force);
+        self.n += 1.0;
         self.ftf += force.component_mul(force);
         self.block.add(row, force);
         if self.block.n >= self.block_len {
@@ -237,16 +239,19 @@ impl Segment {
     /// Sums about the segment's own means (its force offset fitted away),
     /// with its blocks (a short last one joins the one before).
     fn close(mut self) -> Closed {
-        let raw = self.raw;
-        let n = raw.n.max(1.0);
-        let mx = raw.sx / n;
-        let mf = raw.sf / n;
         if self.block.n > 0.0 {
             match self.blocks.last_mut() {
                 Some(last) if self.block.n < 0.5 * self.block_len => last.merge(&self.block),
                 _ => self.blocks.push(self.block),
             }
         }
+        let mut raw = Block::zero();
+        for b in &self.blocks {
+            raw.merge(b);
+        }
+        let n = raw.n.max(1.0);
+        let mx = raw.sx / n;
+        let mf = raw.sf / n;
         Closed {
             sums: Sums {
                 n: raw.n,
@@ -481,7 +486,7 @@ impl OnlineImpedance {
         let moved = seg.max_disp >= MOVED_M;
         // back where it started and nearly still: the perturbation is over
         let back = moved && disp < 0.1 * seg.max_disp && speed < 0.1 * seg.max_speed;
-        let too_long = seg.raw.n >= self.settings.max_trial_s * fs;
+        let too_long = seg.n >= self.settings.max_trial_s * fs;
         if !(back || too_long) {
             return;
         }
