@@ -148,8 +148,59 @@ pub fn check(e: &Estimate) -> Result<(), String> {
             }
             Ok(())
         }
-        _ => Ok(()),
+        Estimate::Calibration(c) => {
+            sweep_counts("window_sweep", &c.window_sweep)?;
+            match &c.window_sweep_varied {
+                Some(w) => sweep_counts("window_sweep_varied", w),
+                None => Ok(()),
+            }
+        }
     }
+}
+
+/// The counts of a set of window sweeps are parts of their wholes.
+fn sweep_counts(at: &str, w: &crate::calibrate::SweepCalibration) -> Result<(), String> {
+    let without = w.sweeps.saturating_sub(w.with_reflex);
+    for (name, part, whole, of) in [
+        ("with_reflex", w.with_reflex, w.sweeps, "sweeps"),
+        ("endpoint_sweeps", w.endpoint_sweeps, w.sweeps, "sweeps"),
+        ("cuff_sweeps", w.cuff_sweeps, w.sweeps, "sweeps"),
+        (
+            "changes_claimed[0]",
+            w.changes_claimed[0],
+            without,
+            "sweeps without a reflex",
+        ),
+        (
+            "changes_claimed[1]",
+            w.changes_claimed[1],
+            w.with_reflex,
+            "with_reflex",
+        ),
+        (
+            "sweeps_with_a_trusted_window[0]",
+            w.sweeps_with_a_trusted_window[0],
+            without,
+            "sweeps without a reflex",
+        ),
+        (
+            "sweeps_with_a_trusted_window[1]",
+            w.sweeps_with_a_trusted_window[1],
+            w.with_reflex,
+            "with_reflex",
+        ),
+        (
+            "trusted_but_wrong",
+            w.trusted_but_wrong,
+            w.trusted_windows,
+            "trusted_windows",
+        ),
+    ] {
+        if part > whole {
+            return Err(format!("{at}.{name}: {part}, more than the {whole} {of}"));
+        }
+    }
+    Ok(())
 }
 
 fn cocontraction(at0: &str, c: &CocontractionResult) -> Result<(), String> {
@@ -301,5 +352,49 @@ fn same(name: &str, len: usize, want: usize, of: &str) -> Result<(), String> {
         Err(format!(
             "{name}: {len} entries, expected {want} (one per entry of {of})"
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::SweepCalibration;
+
+    fn sweeps() -> SweepCalibration {
+        SweepCalibration {
+            sweeps: 10,
+            with_reflex: 4,
+            trusted_windows: 50,
+            trusted_but_wrong: 1,
+            correct_windows: 60,
+            sweeps_with_a_trusted_window: [5, 0],
+            endpoint_sweeps: 5,
+            cuff_sweeps: 2,
+            changes_claimed: [6, 4],
+            refused: 0,
+            seconds: 1.0,
+        }
+    }
+
+    #[test]
+    fn sweep_counts_larger_than_their_wholes_are_named() {
+        assert_eq!(sweep_counts("w", &sweeps()), Ok(()));
+        let mut w = sweeps();
+        w.with_reflex = 11;
+        assert_eq!(
+            sweep_counts("w", &w).unwrap_err(),
+            "w.with_reflex: 11, more than the 10 sweeps"
+        );
+        let mut w = sweeps();
+        w.changes_claimed[0] = 7;
+        assert_eq!(
+            sweep_counts("w", &w).unwrap_err(),
+            "w.changes_claimed[0]: 7, more than the 6 sweeps without a reflex"
+        );
+        let mut w = sweeps();
+        w.trusted_but_wrong = 51;
+        assert!(sweep_counts("w", &w)
+            .unwrap_err()
+            .contains("trusted_windows"));
     }
 }
