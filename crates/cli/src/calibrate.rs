@@ -61,7 +61,7 @@ pub fn run(args: CalibrateArgs) -> CliResult {
         println!("| {} |", r.join(" | "));
     }
     print_sweeps(
-        "window sweep (Lakatos et al. 2011, 50-400 ms), seed 003's session",
+        "window sweep (Lakatos et al. 2011, 50-400 ms), their session",
         &result.window_sweep,
     );
     if let Some(w) = &result.window_sweep_varied {

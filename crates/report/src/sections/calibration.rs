@@ -23,7 +23,7 @@ pub(crate) fn calibration_section(
         "{} virtual recordings per method (seed {})",
         v.recordings_per_method, v.seed
     );
-    verdict += &sweep("seed 003's session", &v.window_sweep);
+    verdict += &sweep("Lakatos et al. (2011) session", &v.window_sweep);
     if let Some(w) = &v.window_sweep_varied {
         verdict += &sweep("varied subjects", w);
     }
