@@ -306,11 +306,13 @@ pub fn sweep_text(e: &Estimated, _: &Request, paths: &[PathBuf], csv: bool) -> C
     println!("  (trusted: {})", sweep.trust_definition);
     if let Some(c) = &sweep.impedance_change {
         println!(
-            "the impedance changes within the trials at about {} ms after the onset (a reflex?): K by {:.0} %, D by {:.0} % (z = {:.1}); windows reaching past it are not trusted",
+            "the impedance changes within the trials, most clearly at {} ms after the onset and significantly from {} ms on (a reflex, or soft tissue in series with the handle?): K by {:.0} %, D by {:.0} % (p = {:.1e} allowing for the scan); windows reaching past {} ms are not trusted",
             num(c.onset_ms),
+            num(c.significant_from_ms),
             100.0 * c.stiffness_change,
             100.0 * c.damping_change,
-            c.z
+            c.p_value,
+            num(c.significant_from_ms)
         );
     }
     println!(

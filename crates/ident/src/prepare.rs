@@ -695,7 +695,7 @@ pub fn savgol_window(fs: f64, cutoff: f64) -> usize {
 /// Sum of squared impulse responses of the displacement, velocity and
 /// acceleration operators: white noise of variance σ² in a position comes out
 /// with variance σ² × gain.
-fn noise_gains(
+pub(crate) fn noise_gains(
     derivative: Derivative,
     lowpass: &LowPass,
     sg_window: usize,

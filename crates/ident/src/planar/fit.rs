@@ -167,12 +167,17 @@ pub fn fit_planar(
         path: data.path.clone(),
         message: m,
     };
+    let model = RegressorNoise::new(&data.angle_noise, xi);
+    let noise: Vec<Option<DMatrix<f64>>> = use_trials
+        .iter()
+        .map(|&k| model.over(&data.trials[k], 0..window))
+        .collect();
     let BlockSolution {
         theta,
         condition_number_scaled: cond_scaled,
         replicates: reps,
         ..
-    } = solve_blocks(&blocks).map_err(numerical)?;
+    } = solve_blocks(&blocks, &noise).map_err(numerical)?;
     let gn = reps.len() as f64;
     let mean = reps.iter().fold(DVector::zeros(p), |a, t| a + t) / gn.max(1.0);
     let se = (reps
@@ -366,30 +371,39 @@ pub fn leave_one_out_vaf(
     Ok([fit_stats(&y1, &h1).1, fit_stats(&y2, &h2).1])
 }
 
+/// Reliability above which a column's noise is still compensated when
+/// correcting the less reliable ones too leaves the Gram matrix indefinite.
+const COMPENSATE_ONLY_ABOVE: f64 = 0.95;
+
 /// Least squares on per-trial blocks `[W | y]` (columns scaled to unit RMS,
 /// tall-skinny QR), with delete-one-trial jackknife replicates.
 pub(crate) struct BlockSolution {
     pub(crate) theta: DVector<f64>,
     pub(crate) condition_number_scaled: f64,
     pub(crate) replicates: Vec<DVector<f64>>,
+    /// Per parameter, the share of its regressor's mean square that is
+    /// signal rather than angle noise (1 without noise).
+    pub(crate) reliability: Vec<f64>,
 }
 
-pub(crate) fn solve_blocks(blocks: &[DMatrix<f64>]) -> std::result::Result<BlockSolution, String> {
+pub(crate) fn solve_blocks(
+    blocks: &[DMatrix<f64>],
+    noise: &[Option<DMatrix<f64>>],
+) -> std::result::Result<BlockSolution, String> {
     let q = blocks.first().map_or(1, |b| b.ncols());
     let p = q - 1;
     let rows: usize = blocks.iter().map(|b| b.nrows()).sum();
-    let mut scales = vec![0.0; q];
+    let mut sums = vec![0.0; q];
     for b in blocks {
-        for (j, s) in scales.iter_mut().enumerate() {
+        for (j, s) in sums.iter_mut().enumerate() {
             *s += b.column(j).norm_squared();
         }
     }
-    for s in &mut scales {
-        *s = (*s / rows.max(1) as f64).sqrt();
-        if *s == 0.0 {
-            *s = 1.0;
-        }
-    }
+    let scales: Vec<f64> = sums
+        .iter()
+        .map(|s| (s / rows.max(1) as f64).sqrt())
+        .map(|s| if s == 0.0 { 1.0 } else { s })
+        .collect();
     let tris: Vec<DMatrix<f64>> = blocks
         .par_iter()
         .map(|b| {
@@ -400,22 +414,75 @@ pub(crate) fn solve_blocks(blocks: &[DMatrix<f64>]) -> std::result::Result<Block
             triangle(b, q)
         })
         .collect();
-    // the linear estimator's triangle solver, with one right-hand side and no noise compensation
-    let no_noise = DMatrix::<f64>::zeros(p, p);
-    let solve = |r_aug: &DMatrix<f64>| {
-        solve_triangle(r_aug, p, 1, &scales, &no_noise, rows as f64)
-            .map(|s| (s.theta.column(0).into_owned(), s.condition_number))
-            .map_err(|_| "the observation matrix W is rank-deficient: the perturbations do not excite every parameter".to_string())
+    // the regressors' noise (errors in variables), scaled as the columns
+    let scaled_noise: Vec<DMatrix<f64>> = noise
+        .iter()
+        .flatten()
+        .map(|n| DMatrix::from_fn(q, q, |i, j| n[(i, j)] / (scales[i] * scales[j])))
+        .collect();
+    let per_block = scaled_noise.len() == blocks.len();
+    let total_noise = scaled_noise
+        .iter()
+        .fold(DMatrix::<f64>::zeros(q, q), |a, n| a + n);
+    // share of each column's mean square that is signal rather than noise
+    let reliability: Vec<f64> = (0..p)
+        .map(|j| {
+            if per_block {
+                (1.0 - total_noise[(j, j)] / (sums[j] / (scales[j] * scales[j]))).max(0.0)
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    // the columns to correct: the reliable enough (as the linear estimator),
+    // fewer when that leaves the corrected Gram matrix indefinite (a column
+    // barely above the noise, nearly collinear with the others)
+    let correctable_at = |least: f64| -> Vec<bool> {
+        (0..p)
+            .map(|j| per_block && total_noise[(j, j)] > 0.0 && reliability[j] >= least)
+            .collect()
     };
-    let (theta, condition_number_scaled) = solve(&merge(tris.iter(), q))?;
+    let levels = [
+        crate::linear::MIN_CORRECTABLE,
+        crate::linear::MIN_RELIABILITY,
+        COMPENSATE_ONLY_ABOVE,
+    ];
+    let no_noise = DMatrix::<f64>::zeros(p, p);
+    let unscale = |t: DVector<f64>| DVector::from_fn(p, |j, _| t[j] * scales[p] / scales[j]);
+    let merged = merge(tris.iter(), q);
+    let correctable = levels
+        .iter()
+        .map(|l| correctable_at(*l))
+        .find(|c| c.iter().any(|v| *v) && compensated_solve(&merged, &total_noise, c).is_some())
+        .unwrap_or_else(|| vec![false; p]);
+    let compensate = correctable.iter().any(|c| *c);
+    let solve = |r_aug: &DMatrix<f64>, noise: Option<DMatrix<f64>>| {
+        let plain = solve_triangle(r_aug, p, 1, &scales, &no_noise, rows as f64)
+            .map(|s| (s.theta.column(0).into_owned(), s.condition_number))
+            .map_err(|_| "the observation matrix W is rank-deficient: the perturbations do not excite every parameter".to_string())?;
+        let corrected = noise
+            .filter(|_| compensate)
+            .and_then(|n| compensated_solve(r_aug, &n, &correctable))
+            .map(unscale);
+        Ok::<_, String>((corrected.unwrap_or(plain.0), plain.1))
+    };
+    let (theta, condition_number_scaled) = solve(
+        &merge(tris.iter(), q),
+        compensate.then(|| total_noise.clone()),
+    )?;
     let replicates: Vec<DVector<f64>> = crate::lsq::leave_one_out(&tris, q)
         .par_iter()
-        .filter_map(|t| solve(t).ok().map(|s| s.0))
+        .enumerate()
+        .filter_map(|(b, t)| {
+            let noise = compensate.then(|| &total_noise - &scaled_noise[b]);
+            solve(t, noise).ok().map(|s| s.0)
+        })
         .collect();
     Ok(BlockSolution {
         theta,
         condition_number_scaled,
         replicates,
+        reliability,
     })
 }
 

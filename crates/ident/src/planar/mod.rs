@@ -40,10 +40,13 @@ use limpid_core::{Error, Recording, Result};
 use limpid_dsp::{central_first, central_second, LowPass};
 
 mod fit;
+mod noise;
 mod prepare;
 mod sweep;
 
 pub use fit::*;
+pub use noise::AngleNoise;
+pub(crate) use noise::{compensated_solve, RegressorNoise};
 pub use prepare::*;
 pub use sweep::*;
 

@@ -35,6 +35,8 @@ pub struct PlanarData {
     pub from_endpoint: bool,
     /// Low-pass cut-off used (Hz).
     pub cutoff_hz: f64,
+    /// The angles' white noise, compensated in every fit (errors in variables).
+    pub angle_noise: AngleNoise,
 }
 
 impl PlanarData {
@@ -148,6 +150,8 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
     let floors = change_floors(&signals);
     let windows = windows_from_trial_column(rec, "trial")?;
     let dt = 1.0 / fs;
+    let gains = crate::prepare::noise_gains(crate::prepare::Derivative::Central, &lp, 0, dt)?;
+    let angle_noise = AngleNoise::estimate(&q, gains);
     let min_rest = ((0.02 * fs).round() as usize).max(3);
     let qs: Vec<&[f64]> = vec![&q[0], &q[1]];
     let trials = windows
@@ -240,5 +244,6 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
         trials,
         from_endpoint,
         cutoff_hz: cutoff,
+        angle_noise,
     })
 }

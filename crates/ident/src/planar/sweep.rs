@@ -114,10 +114,10 @@ pub fn interval_sweep(data: &PlanarData, xi: Option<[f64; 3]>, step: usize) -> V
             let window_ms = estimate.observation_window_ms;
             let mut reasons = estimate.criteria.reasons.clone();
             let change = impedance_change(data, trials, shortest, step, xi);
-            if let Some(c) = change.filter(|c| window_ms > c.onset_ms) {
+            if let Some(c) = change.filter(|c| window_ms > c.significant_from_ms) {
                 reasons.push(format!(
-                    "the window reaches past a change of the impedance at {:.0} ms (a reflex?)",
-                    c.onset_ms
+                    "the window reaches past a change of the impedance from {:.0} ms on (a reflex, or soft tissue in series?)",
+                    c.significant_from_ms
                 ));
             }
             Some(IntervalRow {
@@ -139,11 +139,20 @@ pub fn interval_sweep(data: &PlanarData, xi: Option<[f64; 3]>, step: usize) -> V
 pub struct ImpedanceChange {
     /// Time after the perturbation onset at which the change is clearest (ms).
     pub onset_ms: f64,
+    /// The earliest split time at which the change is significant (ms):
+    /// windows reaching past it are not trusted.
+    #[serde(default)]
+    pub significant_from_ms: f64,
     /// ||K_after - K_before|| / ||K_before|| (relative Frobenius norm).
     pub stiffness_change: f64,
     /// The same for D.
     pub damping_change: f64,
-    /// The clearer of the two changes over its jackknife standard error.
+    /// Probability of so clear a change somewhere in the scan if K and D did
+    /// not change (Hotelling's test on the jackknife covariance, Bonferroni
+    /// over the split times scanned).
+    #[serde(default)]
+    pub p_value: f64,
+    /// The same as a standard normal deviate (one-sided).
     pub z: f64,
 }
 
@@ -184,8 +193,11 @@ pub const SWEEP_TOLERANCE_D: f64 = 0.25;
 /// Windows this close (ms) count as neighbours for the stability test.
 pub const NEIGHBOURHOOD_MS: f64 = 10.0;
 
-/// Jackknife z above which a change of K or D within the trials is real.
-pub const CHANGE_Z: f64 = 3.0;
+/// Largest probability, allowing for the scan over split times, at which a
+/// change of K or D within the trials counts as real (issue 37: the largest
+/// of some 40 jackknife z-values over 3 had cried "reflex" on most
+/// reflex-free arms with noisy angles).
+pub const CHANGE_P: f64 = 0.01;
 
 /// Columns of the split model: `trial_rows` with D and K duplicated into a
 /// "before sample `split`" and an "after" copy (xi shared).
@@ -212,6 +224,40 @@ pub(crate) fn split_rows(
     a
 }
 
+/// The regressors' noise of [`split_rows`]: the samples before `split`
+/// load the "before" copies of D and K, the rest the "after" copies.
+pub(crate) fn split_noise(
+    model: &RegressorNoise,
+    t: &PlanarTrial,
+    n: usize,
+    split: usize,
+    xi: Option<[f64; 3]>,
+) -> Option<DMatrix<f64>> {
+    let n = n.min(t.dq[0].len());
+    let split = split.min(n);
+    let parts = [model.over(t, 0..split)?, model.over(t, split..n)?];
+    let p = parts[0].ncols() - 1;
+    let first = if xi.is_some() { 0 } else { 3 };
+    let column = |c: usize, part: usize| {
+        if c < first {
+            c
+        } else if c < p {
+            c + 8 * part
+        } else {
+            p + 8
+        }
+    };
+    let mut out = DMatrix::<f64>::zeros(p + 9, p + 9);
+    for (part, noise) in parts.iter().enumerate() {
+        for i in 0..=p {
+            for j in 0..=p {
+                out[(column(i, part), column(j, part))] += noise[(i, j)];
+            }
+        }
+    }
+    Some(out)
+}
+
 /// Jackknife standard deviation of replicate values.
 pub(crate) fn jackknife_sd(values: &[f64]) -> f64 {
     let g = values.len() as f64;
@@ -222,10 +268,35 @@ pub(crate) fn jackknife_sd(values: &[f64]) -> f64 {
     ((g - 1.0) / g * values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()).sqrt()
 }
 
+/// Hotelling's test of a change `Δ` (k elements) with jackknife replicates:
+/// `T² = Δᵀ V⁻¹ Δ`, `V` the jackknife covariance from `g` replicates, and
+/// `(g - k) / (k (g - 1)) T² ~ F(k, g - k)` under "no change". The upper
+/// tail probability; None with too few replicates or a singular `V`.
+pub(crate) fn hotelling_p(change: &DVector<f64>, replicates: &[DVector<f64>]) -> Option<f64> {
+    use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+    let (k, g) = (change.len(), replicates.len());
+    if g <= k + 1 {
+        return None;
+    }
+    let gf = g as f64;
+    let mean = replicates.iter().fold(DVector::zeros(k), |a, r| a + r) / gf;
+    let cov = replicates.iter().fold(DMatrix::zeros(k, k), |a, r| {
+        let d = r - &mean;
+        a + &d * d.transpose()
+    }) * ((gf - 1.0) / gf);
+    let t2 = cov.cholesky()?.solve(change).dot(change);
+    let f = (gf - k as f64) / (k as f64 * (gf - 1.0)) * t2;
+    let dist = FisherSnedecor::new(k as f64, gf - k as f64).ok()?;
+    Some(dist.sf(f)).filter(|p| p.is_finite())
+}
+
 /// Scan the split time over the longest window: where K or D before and
-/// after differ most clearly (seed 003 §IV: reflexes bound the observation
-/// window). None when no split shows a change beyond the tolerance and
-/// [`CHANGE_Z`] jackknife standard errors.
+/// after differ most clearly, and from which split on they differ
+/// significantly (seed 003 §IV: reflexes bound the observation window). Each split is tested by [`hotelling_p`] on the change of K and of
+/// D (the smaller probability, doubled), the clearest split's probability
+/// multiplied by the number of splits scanned (Bonferroni); a change counts
+/// when that is below [`CHANGE_P`], the change exceeds half the tolerance and
+/// both parts are precise. None otherwise.
 pub fn impedance_change(
     data: &PlanarData,
     trials: &[usize],
@@ -242,6 +313,8 @@ pub fn impedance_change(
     let splits: Vec<usize> = (margin..=longest.saturating_sub(margin))
         .step_by(step.max(1))
         .collect();
+    let model = RegressorNoise::new(&data.angle_noise, xi);
+    let scanned = splits.len() as f64;
     splits
         .par_iter()
         .filter_map(|&split| {
@@ -249,7 +322,11 @@ pub fn impedance_change(
                 .iter()
                 .map(|&i| split_rows(&data.trials[i], longest, split, xi))
                 .collect();
-            let sol = solve_blocks(&blocks).ok()?;
+            let noise: Vec<Option<DMatrix<f64>>> = trials
+                .iter()
+                .map(|&i| split_noise(&model, &data.trials[i], longest, split, xi))
+                .collect();
+            let sol = solve_blocks(&blocks, &noise).ok()?;
             // relative jackknife SE of the 4 parameters from `at` (||SE|| / ||value||)
             let rel_se = |at: usize| {
                 let var: f64 = (at..at + 4)
@@ -261,31 +338,69 @@ pub fn impedance_change(
                 var.sqrt() / sol.theta.rows(at, 4).norm().max(1e-300)
             };
             // a change counts only between two precise estimates: a part
-            // without motion (the hold) or only a few samples long identifies nothing
-            let precise =
-                |at: usize, tol: f64| rel_se(at) <= tol / 2.0 && rel_se(at + 8) <= tol / 2.0;
+            // without motion (the hold) or only a few samples long identifies
+            // nothing, nor one whose motion is mostly angle noise
+            let reliable = |at: usize| {
+                (at..at + 4)
+                    .chain(at + 8..at + 12)
+                    .all(|j| sol.reliability[j] >= crate::linear::MIN_RELIABILITY)
+            };
+            let precise = |at: usize, tol: f64| {
+                rel_se(at) <= tol / 2.0 && rel_se(at + 8) <= tol / 2.0 && reliable(at)
+            };
+            let delta = |t: &DVector<f64>, at: usize| t.rows(at + 8, 4) - t.rows(at, 4);
+            let p_of = |at: usize, change: f64, tol: f64| {
+                if change > tol / 2.0 && precise(at, tol) {
+                    let reps: Vec<DVector<f64>> =
+                        sol.replicates.iter().map(|t| delta(t, at)).collect();
+                    hotelling_p(&delta(&sol.theta, at), &reps)
+                } else {
+                    None
+                }
+            };
             let (k, d) = (rel(&sol.theta, first + 4), rel(&sol.theta, first));
-            let kr: Vec<f64> = sol.replicates.iter().map(|t| rel(t, first + 4)).collect();
-            let dr: Vec<f64> = sol.replicates.iter().map(|t| rel(t, first)).collect();
-            let zk = if k > SWEEP_TOLERANCE_K / 2.0 && precise(first + 4, SWEEP_TOLERANCE_K) {
-                k / jackknife_sd(&kr)
-            } else {
-                0.0
-            };
-            let zd = if d > SWEEP_TOLERANCE_D / 2.0 && precise(first, SWEEP_TOLERANCE_D) {
-                d / jackknife_sd(&dr)
-            } else {
-                0.0
-            };
-            let z = zk.max(zd);
-            (z > CHANGE_Z).then(|| ImpedanceChange {
+            let p = [
+                p_of(first + 4, k, SWEEP_TOLERANCE_K),
+                p_of(first, d, SWEEP_TOLERANCE_D),
+            ]
+            .into_iter()
+            .flatten()
+            .fold(f64::INFINITY, f64::min);
+            let p_value = (2.0 * scanned * p).min(1.0);
+            (p_value < CHANGE_P).then(|| ImpedanceChange {
                 onset_ms: 1000.0 * split as f64 / data.fs,
+                significant_from_ms: 1000.0 * split as f64 / data.fs,
                 stiffness_change: k,
                 damping_change: d,
-                z,
+                p_value,
+                z: normal_deviate(p_value),
             })
         })
-        .max_by(|a, b| a.z.total_cmp(&b.z))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .fold(None, |best: Option<ImpedanceChange>, c| {
+            // the clearest split dates the change; the earliest significant
+            // one bounds the windows (every split before a change sees it in
+            // its "after" part, so the clearest may come late)
+            let first = best
+                .as_ref()
+                .map_or(c.onset_ms, |b| b.significant_from_ms.min(c.onset_ms));
+            let clearest = match best {
+                Some(b) if b.p_value <= c.p_value => b,
+                _ => c,
+            };
+            Some(ImpedanceChange {
+                significant_from_ms: first,
+                ..clearest
+            })
+        })
+}
+
+/// The standard normal deviate with upper tail probability `p` (at most
+/// 37.5: below 1e-300 double precision ends).
+pub(crate) fn normal_deviate(p: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    Normal::standard().inverse_cdf(p.max(1e-300)).abs()
 }
 
 /// Relative change below which a parameter group counts as constant.
@@ -459,10 +574,10 @@ pub(crate) fn judge_windows(rows: &mut [SweepRow], change: Option<&ImpedanceChan
                 ));
             }
             if let Some(c) = change {
-                if r.observation_window_ms > c.onset_ms {
+                if r.observation_window_ms > c.significant_from_ms {
                     why.push(format!(
-                        "the window reaches past a change of the impedance at {:.0} ms (a reflex?): K changes by {:.0} %, D by {:.0} %",
-                        c.onset_ms,
+                        "the window reaches past a change of the impedance from {:.0} ms on (a reflex, or soft tissue in series?): K changes by {:.0} %, D by {:.0} %",
+                        c.significant_from_ms,
                         100.0 * c.stiffness_change,
                         100.0 * c.damping_change
                     ));

@@ -451,3 +451,60 @@ fn the_end_point_version_of_a_session_gives_the_joint_estimate() {
     let err = to_endpoint(&straight, &seed003_arm(), 0.0, 0.0, 1).unwrap_err();
     assert!(err.to_string().contains("singular"), "{err}");
 }
+
+/// Noisy angles bias the fit (errors in the regressors): the shared inertia
+/// came out attenuated and its error entered K with opposite signs while the
+/// arm accelerated and decelerated, which the change scan read as a reflex
+/// (issue 37). With the noise compensated, reflex-free arms with 50 µrad
+/// angle noise (or 50 µm at the hand) show no change, and a reflex still does.
+#[test]
+fn angle_noise_is_compensated_and_not_read_as_a_reflex() {
+    use limpid_ident::planar::{window_sweep, AngleNoise};
+    use limpid_lab::planar::{simulate_planar, to_endpoint, PlanarProtocol, PlanarSubject, Reflex};
+    let subject = PlanarSubject::seed003();
+    let truth_k = limpid_core::Matrix::from(subject.stiffness);
+    let mut uncompensated_claims = 0;
+    for seed in [21, 22, 23] {
+        let joint =
+            simulate_planar(&subject, &PlanarProtocol::seed003(), 0.02, 5e-5, seed).unwrap();
+        let endpoint = {
+            let clean =
+                simulate_planar(&subject, &PlanarProtocol::seed003(), 0.0, 0.0, seed).unwrap();
+            to_endpoint(&clean, &seed003_arm(), 5e-5, 0.1, seed).unwrap()
+        };
+        for rec in [&joint, &endpoint] {
+            let mut data = prepare_seed003(rec);
+            let noise = data.angle_noise.covariance;
+            assert!(
+                noise[0][0] > 1e-10 && noise[1][1] > 1e-10,
+                "seed {seed}: angle noise {noise:?}"
+            );
+            let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
+            assert!(
+                sweep.impedance_change.is_none(),
+                "seed {seed}, end point {}: {:?}",
+                data.from_endpoint,
+                sweep.impedance_change
+            );
+            let k = &sweep.rows.last().unwrap().estimate.stiffness;
+            let ek = limpid_testkit::rel_err(k, &truth_k);
+            assert!(ek < 0.05, "seed {seed}: K error {ek}");
+            // the same data without the compensation: the bias the scan used to see
+            data.angle_noise = AngleNoise::default();
+            let plain = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
+            uncompensated_claims += usize::from(plain.impedance_change.is_some());
+        }
+    }
+    assert!(uncompensated_claims >= 3, "{uncompensated_claims} of 6");
+    // a reflex through the same noise is still found
+    let mut reflexive = subject.clone();
+    reflexive.reflex = Some(Reflex {
+        latency_s: 0.06,
+        stiffness_gain: 0.4,
+        damping_gain: 0.4,
+    });
+    let rec = simulate_planar(&reflexive, &PlanarProtocol::seed003(), 0.02, 5e-5, 24).unwrap();
+    let sweep = window_sweep(&prepare_seed003(&rec), 50.0, 400.0, 10.0, None).unwrap();
+    let change = sweep.impedance_change.expect("the reflex is detected");
+    assert!((40.0..=110.0).contains(&change.onset_ms), "{change:?}");
+}

@@ -352,7 +352,7 @@ pub(crate) fn sweep_section(name: &str, v: &Sweep) -> Section {
     if let Some(c) = &v.impedance_change {
         let _ = write!(
             verdict,
-            "; the impedance changes at about {} ms after the onset (a reflex?): K by {:.0} %, D by {:.0} %",
+            "; the impedance changes from about {} ms after the onset (a reflex, or soft tissue in series with the handle?): K by {:.0} %, D by {:.0} %",
             fmt(c.onset_ms),
             100.0 * c.stiffness_change,
             100.0 * c.damping_change
