@@ -94,6 +94,16 @@ pub struct SweepCalibration {
     /// reflex?), without and with a reflex: false alarms and detections.
     #[serde(default)]
     pub changes_claimed: [usize; 2],
+    /// Of the cuffed sweeps, those with a reflex.
+    #[serde(default)]
+    pub cuff_with_reflex: usize,
+    /// Of the changes claimed, those on cuffed sweeps (without and with a reflex).
+    #[serde(default)]
+    pub cuff_changes_claimed: [usize; 2],
+    /// Of the changes claimed, those the sweep put down to soft tissue in
+    /// series (a compliance explaining the trials), without and with a reflex.
+    #[serde(default)]
+    pub tissue_named: [usize; 2],
     /// Subjects whose simulation, preparation or sweep failed (not counted above).
     #[serde(default)]
     pub refused: usize,

@@ -178,6 +178,42 @@ fn sweep_counts(at: &str, w: &crate::calibrate::SweepCalibration) -> Result<(), 
             "with_reflex",
         ),
         (
+            "cuff_with_reflex",
+            w.cuff_with_reflex,
+            w.cuff_sweeps,
+            "cuff_sweeps",
+        ),
+        (
+            "cuff_with_reflex",
+            w.cuff_with_reflex,
+            w.with_reflex,
+            "with_reflex",
+        ),
+        (
+            "cuff_changes_claimed[0]",
+            w.cuff_changes_claimed[0],
+            w.changes_claimed[0],
+            "changes_claimed[0]",
+        ),
+        (
+            "cuff_changes_claimed[1]",
+            w.cuff_changes_claimed[1],
+            w.changes_claimed[1],
+            "changes_claimed[1]",
+        ),
+        (
+            "tissue_named[0]",
+            w.tissue_named[0],
+            w.changes_claimed[0],
+            "changes_claimed[0]",
+        ),
+        (
+            "tissue_named[1]",
+            w.tissue_named[1],
+            w.changes_claimed[1],
+            "changes_claimed[1]",
+        ),
+        (
             "sweeps_with_a_trusted_window[0]",
             w.sweeps_with_a_trusted_window[0],
             without,
@@ -371,6 +407,9 @@ mod tests {
             endpoint_sweeps: 5,
             cuff_sweeps: 2,
             changes_claimed: [6, 4],
+            cuff_with_reflex: 1,
+            cuff_changes_claimed: [1, 1],
+            tissue_named: [1, 0],
             refused: 0,
             seconds: 1.0,
         }
@@ -390,6 +429,12 @@ mod tests {
         assert_eq!(
             sweep_counts("w", &w).unwrap_err(),
             "w.changes_claimed[0]: 7, more than the 6 sweeps without a reflex"
+        );
+        let mut w = sweeps();
+        w.tissue_named[1] = 5;
+        assert_eq!(
+            sweep_counts("w", &w).unwrap_err(),
+            "w.tissue_named[1]: 5, more than the 4 changes_claimed[1]"
         );
         let mut w = sweeps();
         w.trusted_but_wrong = 51;

@@ -342,6 +342,8 @@ struct SweepOutcome {
     correct: usize,
     /// The sweep claimed a change of the impedance within the trials.
     change_claimed: bool,
+    /// ... and put it down to soft tissue in series.
+    tissue_named: bool,
     endpoint: bool,
     cuff: bool,
 }
@@ -413,6 +415,7 @@ fn sweep(seed: u64, reflex: bool, varied: bool) -> Option<SweepOutcome> {
         trusted_but_wrong: 0,
         correct: 0,
         change_claimed: s.impedance_change.is_some(),
+        tissue_named: s.series_compliance.is_some(),
         endpoint,
         cuff: subject.cuff.is_some(),
     };
@@ -813,6 +816,9 @@ pub fn calibrate_sweeps(
         endpoint_sweeps: 0,
         cuff_sweeps: 0,
         changes_claimed: [0, 0],
+        cuff_with_reflex: 0,
+        cuff_changes_claimed: [0, 0],
+        tissue_named: [0, 0],
         refused: 0,
         seconds: started.elapsed().as_secs_f64(),
     };
@@ -829,6 +835,9 @@ pub fn calibrate_sweeps(
             w.correct_windows += o.correct;
             w.sweeps_with_a_trusted_window[usize::from(reflex)] += usize::from(o.trusted > 0);
             w.changes_claimed[usize::from(reflex)] += usize::from(o.change_claimed);
+            w.cuff_with_reflex += usize::from(o.cuff && reflex);
+            w.cuff_changes_claimed[usize::from(reflex)] += usize::from(o.cuff && o.change_claimed);
+            w.tissue_named[usize::from(reflex)] += usize::from(o.tissue_named);
         }
     }
     window_sweep

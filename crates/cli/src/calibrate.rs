@@ -95,11 +95,18 @@ fn print_sweeps(title: &str, w: &limpid_app::calibrate::SweepCalibration) {
         w.sweeps_with_a_trusted_window[1],
         w.with_reflex
     );
+    let cuff_without = w.cuff_sweeps.saturating_sub(w.cuff_with_reflex);
     println!(
-        "  change scan (a reflex?): claimed in {} of {} reflex-free sweeps (false alarms), in {} of {} with a reflex (detections)",
+        "  change scan (a reflex?): claimed in {} of {} reflex-free sweeps (false alarms; {} of {} without a cuff), in {} of {} with a reflex (detections; {} of {} without a cuff); put down to soft tissue in series in {} and {} of them",
         w.changes_claimed[0],
         w.sweeps.saturating_sub(w.with_reflex),
+        w.changes_claimed[0].saturating_sub(w.cuff_changes_claimed[0]),
+        w.sweeps.saturating_sub(w.with_reflex).saturating_sub(cuff_without),
         w.changes_claimed[1],
         w.with_reflex,
+        w.changes_claimed[1].saturating_sub(w.cuff_changes_claimed[1]),
+        w.with_reflex.saturating_sub(w.cuff_with_reflex),
+        w.tissue_named[0],
+        w.tissue_named[1],
     );
 }

@@ -314,6 +314,13 @@ pub fn sweep_text(e: &Estimated, _: &Request, paths: &[PathBuf], csv: bool) -> C
             c.p_value,
             num(c.significant_from_ms)
         );
+        if let Some(t) = &sweep.series_compliance {
+            println!(
+                "  the rigid model leaves {:.0} times the residual of one with soft tissue in series with the handle (time constant {:.0} ms): the change is likely that tissue (a cuff), not a reflex, and a reflex behind it cannot be told apart",
+                t.residual_ratio,
+                1000.0 * t.time_constant_s
+            );
+        }
     }
     println!(
         "K positive definite from T_obs = {}",

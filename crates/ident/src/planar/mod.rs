@@ -39,11 +39,13 @@ use limpid_core::trial::{change_floors, detect_onset, noise_sigma, windows_from_
 use limpid_core::{Error, Recording, Result};
 use limpid_dsp::{central_first, central_second, LowPass};
 
+mod compliance;
 mod fit;
 mod noise;
 mod prepare;
 mod sweep;
 
+pub use compliance::{fit_series_compliance, SeriesCompliance, SERIES_COMPLIANCE_RATIO};
 pub use fit::*;
 pub use noise::AngleNoise;
 pub(crate) use noise::{compensated_solve, RegressorNoise};

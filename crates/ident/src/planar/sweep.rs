@@ -177,6 +177,13 @@ pub struct Sweep {
     pub impedance_change: Option<ImpedanceChange>,
     /// What "trusted" means for a window.
     pub trust_definition: String,
+    /// Soft tissue in series with the handle, when a change was found and a
+    /// compliance in series explains the trials at least
+    /// [`SERIES_COMPLIANCE_RATIO`] times better than the rigid model: the
+    /// change is then likely the tissue, and a reflex behind it cannot be
+    /// told apart.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub series_compliance: Option<SeriesCompliance>,
     /// Seed 003's T_k study ([`interval_sweep`]), when the recording holds
     /// several interpolation intervals.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -469,6 +476,11 @@ pub fn window_sweep(
     // split times on a grid of the sweep's step, at least 10 ms
     let step = ((step_ms.max(10.0) * data.fs / 1000.0).round() as usize).max(1);
     let change = impedance_change(data, &all, longest, step, xi);
+    // a change the rigid model shows may be tissue in series (a cuff)
+    let series_compliance = change
+        .as_ref()
+        .and_then(|_| fit_series_compliance(data, longest, xi))
+        .filter(|c| c.residual_ratio >= SERIES_COMPLIANCE_RATIO);
     judge_windows(&mut rows, change.as_ref());
     let from_which = |ok: &dyn Fn(&PlanarEstimate) -> bool| -> Option<f64> {
         let mut first = None;
@@ -509,6 +521,7 @@ pub fn window_sweep(
             .find(|r| r.trusted)
             .map(|r| r.observation_window_ms),
         impedance_change: change,
+        series_compliance,
         trust_definition: format!(
             "the estimate's own criteria met (well-conditioned, K and D positive definite and quasi-symmetric, physical inertial parameters); 2 SE of K within {:.0} % and of D within {:.0} % (relative Frobenius norm); K within {:.0} % and D within {:.1} % of every window within {NEIGHBOURHOOD_MS} ms; and the window ends before any change of K or D within the trials (a reflex)",
             100.0 * SWEEP_TOLERANCE_K,

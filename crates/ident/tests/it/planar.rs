@@ -508,3 +508,65 @@ fn angle_noise_is_compensated_and_not_read_as_a_reflex() {
     let change = sweep.impedance_change.expect("the reflex is detected");
     assert!((40.0..=110.0).contains(&change.onset_ms), "{change:?}");
 }
+
+/// Soft tissue in series (seed 003's cuff) makes the rigid model's K and D
+/// depend on the window, which the change scan finds; a compliance in series
+/// explains it (residual ratio far above [`SERIES_COMPLIANCE_RATIO`]), and
+/// without a cuff (with or without a reflex) it explains nothing.
+#[test]
+fn tissue_in_series_is_named_as_the_cause_of_a_change() {
+    use limpid_ident::planar::{fit_series_compliance, window_sweep, SERIES_COMPLIANCE_RATIO};
+    use limpid_lab::planar::{
+        simulate_planar, to_endpoint, Cuff, PlanarProtocol, PlanarSubject, Reflex,
+    };
+    let arm = seed003_arm();
+    for (cuff, reflex, endpoint, seed) in [
+        (false, false, false, 31),
+        (false, true, false, 32),
+        (false, false, true, 33),
+        (true, false, false, 34),
+        (true, false, true, 35),
+        (true, true, false, 36),
+    ] {
+        let mut subject = PlanarSubject::seed003();
+        if cuff {
+            subject.cuff = Some(Cuff::seed003(&arm, subject.q0));
+        }
+        if reflex {
+            subject.reflex = Some(Reflex {
+                latency_s: 0.06,
+                stiffness_gain: 0.4,
+                damping_gain: 0.4,
+            });
+        }
+        let rec = if endpoint {
+            let joint =
+                simulate_planar(&subject, &PlanarProtocol::seed003(), 0.0, 0.0, seed).unwrap();
+            to_endpoint(&joint, &arm, 3e-5, 0.15, seed).unwrap()
+        } else {
+            simulate_planar(&subject, &PlanarProtocol::seed003(), 0.03, 3e-5, seed).unwrap()
+        };
+        let data = prepare_seed003(&rec);
+        let ratio =
+            fit_series_compliance(&data, usize::MAX, None).map_or(1.0, |c| c.residual_ratio);
+        let case = format!("cuff {cuff}, reflex {reflex}, end point {endpoint}: ratio {ratio}");
+        if cuff {
+            assert!(ratio > 10.0 * SERIES_COMPLIANCE_RATIO, "{case}");
+            let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
+            assert!(sweep.impedance_change.is_some(), "{case}");
+            let tissue = sweep.series_compliance.expect("tissue named");
+            assert!(
+                (0.005..0.02).contains(&tissue.time_constant_s),
+                "{case}: T_c {}",
+                tissue.time_constant_s
+            );
+        } else {
+            assert!(ratio < SERIES_COMPLIANCE_RATIO / 1.5, "{case}");
+            if reflex {
+                let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
+                assert!(sweep.impedance_change.is_some(), "{case}");
+                assert!(sweep.series_compliance.is_none(), "{case}");
+            }
+        }
+    }
+}

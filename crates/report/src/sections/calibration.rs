@@ -10,13 +10,17 @@ pub(crate) fn calibration_section(
     let (header, rows) = v.table();
     let sweep = |title: &str, w: &limpid_analysis::calibrate::SweepCalibration| {
         format!(
-            "; window sweep, {title}: {} of {} trusted windows beyond K 10 % / D 25 % of the truth, a change (reflex?) claimed in {} of {} sweeps without a reflex and {} of {} with one",
+            "; window sweep, {title}: {} of {} trusted windows beyond K 10 % / D 25 % of the truth, a change (reflex?) claimed in {} of {} sweeps without a reflex and {} of {} with one ({} and {} of them on cuffed arms, {} and {} put down to soft tissue in series)",
             w.trusted_but_wrong,
             w.trusted_windows,
             w.changes_claimed[0],
             w.sweeps.saturating_sub(w.with_reflex),
             w.changes_claimed[1],
-            w.with_reflex
+            w.with_reflex,
+            w.cuff_changes_claimed[0],
+            w.cuff_changes_claimed[1],
+            w.tissue_named[0],
+            w.tissue_named[1]
         )
     };
     let mut verdict = format!(

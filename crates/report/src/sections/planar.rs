@@ -357,6 +357,13 @@ pub(crate) fn sweep_section(name: &str, v: &Sweep) -> Section {
             100.0 * c.stiffness_change,
             100.0 * c.damping_change
         );
+        if let Some(t) = &v.series_compliance {
+            let _ = write!(
+                verdict,
+                "; a compliance in series explains the trials {:.0} times better than the rigid model: likely soft tissue under the cuff, not a reflex",
+                t.residual_ratio
+            );
+        }
     }
     Section {
         heading: format!("Observation-window sweep: {name}"),
