@@ -163,6 +163,41 @@ pub fn detect_onset(
     None
 }
 
+/// The perturbation onset inside `range` from motion and force: the first of
+/// all `signals` (the first `motion` of them positions, the rest forces) to
+/// leave rest, as long as a force leads the motion by at most `lead_max`
+/// samples. A force that leaves earlier is the subject's slow fluctuation,
+/// grip drift or a coarse sensor's step, not the perturbation: the motion
+/// decides then, refined by the forces against their level just before the
+/// lead window (a fluctuation moves little in 40 ms).
+pub fn perturbation_onset(
+    signals: &[&[f64]],
+    motion: usize,
+    range: Range<usize>,
+    sigmas: &[f64],
+    floors: &[f64],
+    lead_max: usize,
+) -> Option<usize> {
+    let any = detect_onset(signals, range.clone(), sigmas, floors);
+    let moved = detect_onset(
+        &signals[..motion],
+        range.clone(),
+        &sigmas[..motion],
+        &floors[..motion],
+    );
+    match (any, moved) {
+        (Some(a), Some(m)) if m - a <= lead_max => Some(a),
+        (_, Some(m)) => {
+            let from = m.saturating_sub(lead_max + 10).max(range.start);
+            match detect_onset(signals, from..range.end, sigmas, floors) {
+                Some(a) if a + lead_max >= m && a >= from + 10 => Some(a),
+                _ => Some(m),
+            }
+        }
+        (a, None) => a,
+    }
+}
+
 /// Find perturbation windows in a recording without a `trial` column.
 ///
 /// The home position is the mean of the first 10 samples. A sample is "at
@@ -237,6 +272,48 @@ pub fn detect_windows(coords: &[&[f64]], min_rest: usize) -> Vec<Window> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A force sensor that steps by its resolution at rest (a coarse or
+    /// drifting sensor) leads the motion by far more than a perturbation
+    /// can: the motion decides, and the force's own onset near it is kept.
+    #[test]
+    fn a_force_leading_the_motion_by_far_does_not_mark_the_onset() {
+        let n = 600;
+        let motion_at = 400;
+        let position: Vec<f64> = (0..n)
+            .map(|i| {
+                if i < motion_at {
+                    0.0
+                } else {
+                    1e-4 * ((i - motion_at) as f64).powi(2)
+                }
+            })
+            .collect();
+        // a 0.05 N step at sample 8, then the perturbation's force 5 ms before the motion
+        let force: Vec<f64> = (0..n)
+            .map(|i| {
+                let step = if i >= 8 { 0.05 } else { 0.0 };
+                let push = if i + 5 >= motion_at {
+                    0.5 * (i + 5 - motion_at) as f64
+                } else {
+                    0.0
+                };
+                step + push
+            })
+            .collect();
+        let signals: Vec<&[f64]> = vec![&position, &force];
+        let (sigmas, floors) = ([1e-6, 0.0], [1e-5, 0.01]);
+        let any = detect_onset(&signals, 0..n, &sigmas, &floors);
+        assert_eq!(any, Some(8), "the step alone marks the onset");
+        let onset = perturbation_onset(&signals, 1, 0..n, &sigmas, &floors, 30).unwrap();
+        assert!(
+            (motion_at - 6..=motion_at).contains(&onset),
+            "onset {onset}"
+        );
+        // a force leading by less than the limit still marks it
+        let onset = perturbation_onset(&signals, 1, 0..n, &sigmas, &floors, 500).unwrap();
+        assert_eq!(onset, 8);
+    }
 
     /// The radix selection gives the median a full sort gives, on noise,
     /// on values with many ties, and on a constant signal.

@@ -23,7 +23,7 @@ use std::ops::Range;
 use std::path::PathBuf;
 
 use limpid_core::trial::{
-    change_floors, detect_onset, detect_windows, noise_sigma, windows_from_trial_column,
+    change_floors, detect_windows, noise_sigma, perturbation_onset, windows_from_trial_column,
 };
 use limpid_core::{Error, FrameTransform, Recording, Result, Window};
 use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
@@ -738,6 +738,13 @@ fn resolved_windowing(rec: &Recording, params: &PrepareParams) -> Windowing {
 
 /// Windows of a [`resolved_windowing`] `mode`; `force_noise` is needed (and
 /// given) only for trial windows.
+/// The longest a force may lead the motion and still mark a trial's onset
+/// (s): slow ramps (Artemiadis et al.'s cubic) move the force well before the
+/// displacement leaves its noise band; a force that leaves rest earlier than
+/// this is a drifting or coarse sensor (issue 37: 1-2 of 200 calibration
+/// recordings refused, "no rest before its perturbation onset").
+pub const FORCE_LEAD_S: f64 = 0.2;
+
 fn make_windows(
     rec: &Recording,
     mode: Windowing,
@@ -758,7 +765,10 @@ fn make_windows(
         Windowing::ContinuousTrials => windows_from_trial_column(rec, trial_column),
         Windowing::Trials => {
             // onset: the earlier of motion and force change (a step in acceleration
-            // moves the force before the displacement rises above the noise)
+            // moves the force before the displacement rises above the noise),
+            // unless the force leads by more than FORCE_LEAD_S (a drifting or
+            // coarse force sensor at rest: the motion decides)
+            let lead_max = (FORCE_LEAD_S * rec.sample_rate()).round() as usize;
             let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
             let sigmas: Vec<f64> = position_noise.iter().chain(force_noise).copied().collect();
             let floors: Vec<f64> = signals.par_iter().map(|c| change_floors(&[c])[0]).collect();
@@ -767,7 +777,15 @@ fn make_windows(
             let onsets: Vec<usize> = windows
                 .par_iter()
                 .map(|w| {
-                    detect_onset(&signals, w.range.clone(), &sigmas, &floors).unwrap_or(w.range.end)
+                    perturbation_onset(
+                        &signals,
+                        pos.len(),
+                        w.range.clone(),
+                        &sigmas,
+                        &floors,
+                        lead_max,
+                    )
+                    .unwrap_or(w.range.end)
                 })
                 .collect();
             for (w, onset) in windows.iter_mut().zip(onsets) {

@@ -35,7 +35,9 @@ use crate::linear::{fit_stats, solve_triangle};
 use crate::lsq::{merge, triangle};
 use crate::prepare::edge_kinds;
 pub use limpid_core::arm::{coriolis, mass_matrix, Arm};
-use limpid_core::trial::{change_floors, detect_onset, noise_sigma, windows_from_trial_column};
+use limpid_core::trial::{
+    change_floors, noise_sigma, perturbation_onset, windows_from_trial_column,
+};
 use limpid_core::{Error, Recording, Result};
 use limpid_dsp::{central_first, central_second, LowPass};
 

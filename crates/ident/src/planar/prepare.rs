@@ -159,26 +159,10 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
         .map(|w| {
             let r = w.range.clone();
             // Onset: the first of the angles and torques to leave rest, as
-            // long as the torque leads the motion by at most ONSET_LEAD_S.
-            // A torque that leaves earlier is the subject's slow force
-            // fluctuation or grip drift, not the perturbation: the angles
-            // (the robot's motion) decide then.
+            // long as the torque leads the motion by at most ONSET_LEAD_S
             let lead_max = (ONSET_LEAD_S * fs).round() as usize;
-            let any = detect_onset(&signals, r.clone(), &sigmas, &floors);
-            let motion = detect_onset(&signals[..2], r.clone(), &sigmas[..2], &floors[..2]);
-            let onset = match (any, motion) {
-                (Some(a), Some(m)) if m - a <= lead_max => a,
-                (_, Some(m)) => {
-                    // refine with the torques against their level just before
-                    // the lead window (the fluctuation moves little in 40 ms)
-                    let from = m.saturating_sub(lead_max + 10).max(r.start);
-                    match detect_onset(&signals, from..r.end, &sigmas, &floors) {
-                        Some(a) if a + lead_max >= m && a >= from + 10 => a,
-                        _ => m,
-                    }
-                }
-                (a, None) => a.unwrap_or(r.end),
-            };
+            let onset = perturbation_onset(&signals, 2, r.clone(), &sigmas, &floors, lead_max)
+                .unwrap_or(r.end);
             if onset - r.start < min_rest {
                 return Err(Error::NoRestBeforeOnset {
                     path: rec.path().to_path_buf(),
