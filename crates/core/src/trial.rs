@@ -169,14 +169,16 @@ pub fn detect_onset(
 /// samples. A force that leaves earlier is the subject's slow fluctuation,
 /// grip drift or a coarse sensor's step, not the perturbation: the motion
 /// decides then, refined by the forces against their level just before the
-/// lead window (a fluctuation moves little in 40 ms).
+/// lead window (a fluctuation moves little in 40 ms). So does the motion when
+/// a force leaves rest within the first `min_rest` samples: a perturbation
+/// starts from rest.
 pub fn perturbation_onset(
     signals: &[&[f64]],
     motion: usize,
     range: Range<usize>,
     sigmas: &[f64],
     floors: &[f64],
-    lead_max: usize,
+    (lead_max, min_rest): (usize, usize),
 ) -> Option<usize> {
     let any = detect_onset(signals, range.clone(), sigmas, floors);
     let moved = detect_onset(
@@ -186,7 +188,7 @@ pub fn perturbation_onset(
         &floors[..motion],
     );
     match (any, moved) {
-        (Some(a), Some(m)) if m - a <= lead_max => Some(a),
+        (Some(a), Some(m)) if m - a <= lead_max && a - range.start >= min_rest => Some(a),
         (_, Some(m)) => {
             let from = m.saturating_sub(lead_max + 10).max(range.start);
             match detect_onset(signals, from..range.end, sigmas, floors) {
@@ -305,14 +307,18 @@ mod tests {
         let (sigmas, floors) = ([1e-6, 0.0], [1e-5, 0.01]);
         let any = detect_onset(&signals, 0..n, &sigmas, &floors);
         assert_eq!(any, Some(8), "the step alone marks the onset");
-        let onset = perturbation_onset(&signals, 1, 0..n, &sigmas, &floors, 30).unwrap();
+        let onset = perturbation_onset(&signals, 1, 0..n, &sigmas, &floors, (30, 3)).unwrap();
         assert!(
             (motion_at - 6..=motion_at).contains(&onset),
             "onset {onset}"
         );
         // a force leading by less than the limit still marks it
-        let onset = perturbation_onset(&signals, 1, 0..n, &sigmas, &floors, 500).unwrap();
+        let onset = perturbation_onset(&signals, 1, 0..n, &sigmas, &floors, (500, 3)).unwrap();
         assert_eq!(onset, 8);
+        // ... unless it leaves less rest before it than a perturbation needs:
+        // then the motion's own onset
+        let onset = perturbation_onset(&signals, 1, 0..n, &sigmas, &floors, (500, 10)).unwrap();
+        assert_eq!(onset, motion_at + 1);
     }
 
     /// The radix selection gives the median a full sort gives, on noise,

@@ -783,7 +783,7 @@ fn make_windows(
                         w.range.clone(),
                         &sigmas,
                         &floors,
-                        lead_max,
+                        (lead_max, min_rest),
                     )
                     .unwrap_or(w.range.end)
                 })

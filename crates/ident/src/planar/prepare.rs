@@ -161,8 +161,15 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
             // Onset: the first of the angles and torques to leave rest, as
             // long as the torque leads the motion by at most ONSET_LEAD_S
             let lead_max = (ONSET_LEAD_S * fs).round() as usize;
-            let onset = perturbation_onset(&signals, 2, r.clone(), &sigmas, &floors, lead_max)
-                .unwrap_or(r.end);
+            let onset = perturbation_onset(
+                &signals,
+                2,
+                r.clone(),
+                &sigmas,
+                &floors,
+                (lead_max, min_rest),
+            )
+            .unwrap_or(r.end);
             if onset - r.start < min_rest {
                 return Err(Error::NoRestBeforeOnset {
                     path: rec.path().to_path_buf(),
