@@ -114,6 +114,7 @@ pub fn interval_sweep(data: &PlanarData, xi: Option<[f64; 3]>, step: usize) -> V
             let window_ms = estimate.observation_window_ms;
             let mut reasons = estimate.criteria.reasons.clone();
             let change = impedance_change(data, trials, shortest, step, xi);
+            reasons.extend(change_untestable(trials.len()));
             if let Some(c) = change.filter(|c| window_ms > c.significant_from_ms) {
                 reasons.push(format!(
                     "the window reaches past a change of the impedance from {:.0} ms on (a reflex, or soft tissue in series?)",
@@ -273,6 +274,21 @@ pub(crate) fn jackknife_sd(values: &[f64]) -> f64 {
     }
     let mean = values.iter().sum::<f64>() / g;
     ((g - 1.0) / g * values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()).sqrt()
+}
+
+/// Fewest trials the change test needs: Hotelling's T² of 4 elements from
+/// g jackknife replicates needs g > 5.
+pub const MIN_TRIALS_FOR_CHANGE_TEST: usize = 6;
+
+/// Why no window of `trials` trials can be trusted: with fewer than
+/// [`MIN_TRIALS_FOR_CHANGE_TEST`] a change within the trials (a reflex)
+/// cannot be tested, so it cannot be excluded.
+fn change_untestable(trials: usize) -> Option<String> {
+    (trials < MIN_TRIALS_FOR_CHANGE_TEST).then(|| {
+        format!(
+            "a change of the impedance within the trials (a reflex) cannot be excluded: the test needs at least {MIN_TRIALS_FOR_CHANGE_TEST} trials, found {trials}"
+        )
+    })
 }
 
 /// Hotelling's test of a change `Δ` (k elements) with jackknife replicates:
@@ -482,6 +498,12 @@ pub fn window_sweep(
         .and_then(|_| fit_series_compliance(data, longest, xi))
         .filter(|c| c.residual_ratio >= SERIES_COMPLIANCE_RATIO);
     judge_windows(&mut rows, change.as_ref());
+    if let Some(why) = change_untestable(all.len()) {
+        for r in &mut rows {
+            r.trusted = false;
+            r.reasons.push(why.clone());
+        }
+    }
     let from_which = |ok: &dyn Fn(&PlanarEstimate) -> bool| -> Option<f64> {
         let mut first = None;
         for r in rows.iter().rev() {

@@ -570,3 +570,30 @@ fn tissue_in_series_is_named_as_the_cause_of_a_change() {
         }
     }
 }
+
+/// With five trials the change test (Hotelling's T² of four elements from
+/// the jackknife) cannot run, so a reflex within the window cannot be
+/// excluded: no window is trusted, and each says why; six trials suffice.
+#[test]
+fn too_few_trials_to_test_for_a_change_trust_no_window() {
+    use limpid_ident::planar::{window_sweep, MIN_TRIALS_FOR_CHANGE_TEST};
+    use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject};
+    for trials in [MIN_TRIALS_FOR_CHANGE_TEST - 1, 12] {
+        let protocol = PlanarProtocol {
+            trials,
+            ..PlanarProtocol::seed003()
+        };
+        let rec = simulate_planar(&PlanarSubject::seed003(), &protocol, 0.02, 1e-5, 41).unwrap();
+        let sweep = window_sweep(&prepare_seed003(&rec), 100.0, 400.0, 10.0, None).unwrap();
+        let untestable = |r: &limpid_ident::planar::SweepRow| {
+            r.reasons.iter().any(|w| w.contains("cannot be excluded"))
+        };
+        if trials < MIN_TRIALS_FOR_CHANGE_TEST {
+            assert!(sweep.rows.iter().all(|r| !r.trusted && untestable(r)));
+            assert!(sweep.shortest_trusted_ms.is_none());
+        } else {
+            assert!(sweep.rows.iter().all(|r| !untestable(r)));
+            assert!(sweep.shortest_trusted_ms.is_some(), "{trials} trials");
+        }
+    }
+}
