@@ -545,7 +545,7 @@ pub fn window_sweep(
         impedance_change: change,
         series_compliance,
         trust_definition: format!(
-            "the estimate's own criteria met (well-conditioned, K and D positive definite and quasi-symmetric, physical inertial parameters); 2 SE of K within {:.0} % and of D within {:.0} % (relative Frobenius norm); K within {:.0} % and D within {:.1} % of every window within {NEIGHBOURHOOD_MS} ms; and the window ends before any change of K or D within the trials (a reflex)",
+            "the estimate's own criteria met (well-conditioned, K and D positive definite and quasi-symmetric, physical inertial parameters); 2 SE of K within {:.0} % and of D within {:.0} % (relative Frobenius norm); K within {:.0} % and D within {:.1} % of every window within {NEIGHBOURHOOD_MS} ms; and the window ends before any change of K or D within the trials (a reflex, or soft tissue in series with the handle), tested on at least {MIN_TRIALS_FOR_CHANGE_TEST} trials",
             100.0 * SWEEP_TOLERANCE_K,
             100.0 * SWEEP_TOLERANCE_D,
             100.0 * SWEEP_TOLERANCE_K / 2.0,
