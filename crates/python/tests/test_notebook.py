@@ -229,3 +229,18 @@ def test_the_tutorial_notebook_executes(tmp_path):
     assert "limpid-result" in shown, "the tutorial shows at least one result table"
     errors = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "error"]
     assert not errors
+
+
+def test_a_sweeps_change_and_tissue_in_series_are_said_in_its_table(results):
+    """Issue 37: the sweep's change (and, when a compliance in series explains
+    it, the tissue) is said under the table, not only in each row's reasons."""
+    d = results["window_sweep"].to_dict()
+    assert "changes within the trials" not in results["window_sweep"]._repr_html_()
+    d["impedance_change"] = {"onset_ms": 90.0, "significant_from_ms": 70.0, "stiffness_change": 0.35,
+                             "damping_change": 0.2, "p_value": 1e-6, "z": 4.75}
+    html = limpid.Result.from_dict(d)._repr_html_()
+    assert "significantly from 70 ms" in html and "K by 35 %" in html and "not a reflex" not in html
+    d["series_compliance"] = {"compliance": [[0.002, 0.0], [0.0, 0.001]], "time_constant_s": 0.01,
+                              "residual_ratio": 88.0}
+    html = limpid.Result.from_dict(d)._repr_html_()
+    assert "88 times better" in html and "not a reflex" in html

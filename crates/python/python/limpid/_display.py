@@ -402,6 +402,18 @@ def to_html(d: Dict[str, Any]) -> str:
         parts.append(_list_table(header, rows, "Estimates against the observation window"))
         t = d.get("shortest_trusted_ms")
         parts.append(f"<p>Shortest trusted window: {'none' if t is None else f'{t:g} ms'}</p>")
+        c = d.get("impedance_change")
+        if c:
+            line = (f"The impedance changes within the trials, significantly from "
+                    f"{c.get('significant_from_ms', c['onset_ms']):.0f} ms after the onset "
+                    f"(clearest at {c['onset_ms']:.0f} ms: K by {100 * c['stiffness_change']:.0f} %, "
+                    f"D by {100 * c['damping_change']:.0f} %, p = {c.get('p_value', 0.0):.1e}); "
+                    "windows reaching past it are not trusted.")
+            tissue = d.get("series_compliance")
+            if tissue:
+                line += (f" A compliance in series explains the trials {tissue['residual_ratio']:.0f} times "
+                         "better than the rigid model: likely soft tissue under the cuff, not a reflex.")
+            parts.append(f"<p>{_html.escape(line)}</p>")
     elif kind == "reflex":
         recs = records(d)
         parts.append(_list_table(["quantity", "value ± SE", "unit", "note"],
