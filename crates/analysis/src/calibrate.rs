@@ -70,7 +70,7 @@ pub struct MethodCalibration {
 }
 
 /// The observation-window sweep's trust over planar subjects (seed 003).
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
 pub struct SweepCalibration {
     /// Sweeps run (50-400 ms in 10 ms steps, or to the trials' end).
     pub sweeps: usize,
@@ -109,6 +109,13 @@ pub struct SweepCalibration {
     pub refused: usize,
     /// Wall-clock time (s).
     pub seconds: f64,
+}
+
+impl SweepCalibration {
+    /// Sweeps without a reflex.
+    pub fn without_reflex(&self) -> usize {
+        self.sweeps.saturating_sub(self.with_reflex)
+    }
 }
 
 /// The whole study.

@@ -160,7 +160,7 @@ pub fn check(e: &Estimate) -> Result<(), String> {
 
 /// The counts of a set of window sweeps are parts of their wholes.
 fn sweep_counts(at: &str, w: &crate::calibrate::SweepCalibration) -> Result<(), String> {
-    let without = w.sweeps.saturating_sub(w.with_reflex);
+    let without = w.without_reflex();
     for (name, part, whole, of) in [
         ("with_reflex", w.with_reflex, w.sweeps, "sweeps"),
         ("endpoint_sweeps", w.endpoint_sweeps, w.sweeps, "sweeps"),

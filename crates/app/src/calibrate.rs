@@ -807,20 +807,8 @@ pub fn calibrate_sweeps(
         })
         .collect();
     let mut window_sweep = SweepCalibration {
-        sweeps: 0,
-        with_reflex: 0,
-        trusted_windows: 0,
-        trusted_but_wrong: 0,
-        correct_windows: 0,
-        sweeps_with_a_trusted_window: [0, 0],
-        endpoint_sweeps: 0,
-        cuff_sweeps: 0,
-        changes_claimed: [0, 0],
-        cuff_with_reflex: 0,
-        cuff_changes_claimed: [0, 0],
-        tissue_named: [0, 0],
-        refused: 0,
         seconds: started.elapsed().as_secs_f64(),
+        ..SweepCalibration::default()
     };
     for (reflex, r) in outcomes {
         window_sweep.refused += usize::from(r.is_none());

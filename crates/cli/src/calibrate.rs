@@ -91,7 +91,7 @@ fn print_sweeps(title: &str, w: &limpid_app::calibrate::SweepCalibration) {
         w.trusted_but_wrong,
         w.correct_windows,
         w.sweeps_with_a_trusted_window[0],
-        w.sweeps.saturating_sub(w.with_reflex),
+        w.without_reflex(),
         w.sweeps_with_a_trusted_window[1],
         w.with_reflex
     );
@@ -99,9 +99,9 @@ fn print_sweeps(title: &str, w: &limpid_app::calibrate::SweepCalibration) {
     println!(
         "  change scan (a reflex?): claimed in {} of {} reflex-free sweeps (false alarms; {} of {} without a cuff), in {} of {} with a reflex (detections; {} of {} without a cuff); put down to soft tissue in series in {} and {} of them",
         w.changes_claimed[0],
-        w.sweeps.saturating_sub(w.with_reflex),
+        w.without_reflex(),
         w.changes_claimed[0].saturating_sub(w.cuff_changes_claimed[0]),
-        w.sweeps.saturating_sub(w.with_reflex).saturating_sub(cuff_without),
+        w.without_reflex().saturating_sub(cuff_without),
         w.changes_claimed[1],
         w.with_reflex,
         w.changes_claimed[1].saturating_sub(w.cuff_changes_claimed[1]),

@@ -736,8 +736,6 @@ fn resolved_windowing(rec: &Recording, params: &PrepareParams) -> Windowing {
     }
 }
 
-/// Windows of a [`resolved_windowing`] `mode`; `force_noise` is needed (and
-/// given) only for trial windows.
 /// The longest a force may lead the motion and still mark a trial's onset
 /// (s): slow ramps (Artemiadis et al.'s cubic) move the force well before the
 /// displacement leaves its noise band; a force that leaves rest earlier than
@@ -745,6 +743,8 @@ fn resolved_windowing(rec: &Recording, params: &PrepareParams) -> Windowing {
 /// recordings refused, "no rest before its perturbation onset").
 pub const FORCE_LEAD_S: f64 = 0.2;
 
+/// Windows of a [`resolved_windowing`] `mode`; `force_noise` is needed (and
+/// given) only for trial windows.
 fn make_windows(
     rec: &Recording,
     mode: Windowing,

@@ -151,19 +151,21 @@ pub fn fit_series_compliance(
             Ok(if r.is_finite() { r } else { f64::MAX })
         }
     }
+    // a simplex of `at` and one step along each parameter
+    let around = |at: &[f64], step: f64| -> Vec<Vec<f64>> {
+        (0..=at.len())
+            .map(|k| {
+                let mut v = at.to_vec();
+                if k > 0 {
+                    v[k - 1] += step;
+                }
+                v
+            })
+            .collect()
+    };
     let rigid = rss(data, window, xi);
-    let start = [0.5, 0.0, 0.5, 1.0];
-    let simplex: Vec<Vec<f64>> = (0..5)
-        .map(|k| {
-            let mut v = start.to_vec();
-            if k > 0 {
-                v[k - 1] += 0.3;
-            }
-            v
-        })
-        .collect();
-    let mut best = start.to_vec();
-    let mut simplex = simplex;
+    let mut best = vec![0.5, 0.0, 0.5, 1.0];
+    let mut simplex = around(&best, 0.3);
     for _ in 0..ROUNDS {
         let solver = NelderMead::new(simplex).with_sd_tolerance(1e-12).ok()?;
         let res = Executor::new(Problem { data, window, xi }, solver)
@@ -172,15 +174,7 @@ pub fn fit_series_compliance(
             .ok()?;
         best = res.state().best_param.clone()?;
         // restart around the best point: Nelder-Mead stalls on narrow valleys
-        simplex = (0..5)
-            .map(|k| {
-                let mut v = best.clone();
-                if k > 0 {
-                    v[k - 1] += 0.05;
-                }
-                v
-            })
-            .collect();
+        simplex = around(&best, 0.05);
     }
     let (c, tc) = unpack(&best);
     let with = rss(&behind_compliance(data, &c, tc), window, xi);

@@ -461,15 +461,11 @@ pub(crate) fn solve_blocks(
             .map(|s| (s.theta.column(0).into_owned(), s.condition_number))
             .map_err(|_| "the observation matrix W is rank-deficient: the perturbations do not excite every parameter".to_string())?;
         let corrected = noise
-            .filter(|_| compensate)
             .and_then(|n| compensated_solve(r_aug, &n, &correctable))
             .map(unscale);
         Ok::<_, String>((corrected.unwrap_or(plain.0), plain.1))
     };
-    let (theta, condition_number_scaled) = solve(
-        &merge(tris.iter(), q),
-        compensate.then(|| total_noise.clone()),
-    )?;
+    let (theta, condition_number_scaled) = solve(&merged, compensate.then(|| total_noise.clone()))?;
     let replicates: Vec<DVector<f64>> = crate::lsq::leave_one_out(&tris, q)
         .par_iter()
         .enumerate()

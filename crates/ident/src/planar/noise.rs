@@ -6,7 +6,7 @@
 //! with the noise covariance of every regressor row derived from the angles'
 //! white-noise covariance and the impulse response of the preparation.
 //!
-//! Why it matters: with 50 µm of angle noise (or end-point positions through
+//! Why it matters: with 50 µrad of angle noise (or end-point positions through
 //! the inverse kinematics) the shared inertia came out attenuated, and its
 //! error entered K with opposite signs while the arm accelerated and while it
 //! decelerated; the window sweep's change scan read that as a reflex in 20 of

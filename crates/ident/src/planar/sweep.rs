@@ -338,7 +338,7 @@ pub fn impedance_change(
         .collect();
     let model = RegressorNoise::new(&data.angle_noise, xi);
     let scanned = splits.len() as f64;
-    splits
+    let found: Vec<ImpedanceChange> = splits
         .par_iter()
         .filter_map(|&split| {
             let blocks: Vec<DMatrix<f64>> = trials
@@ -399,24 +399,18 @@ pub fn impedance_change(
                 z: normal_deviate(p_value),
             })
         })
-        .collect::<Vec<_>>()
+        .collect();
+    // the clearest split dates the change; the earliest significant one
+    // bounds the windows (every split before a change sees it in its "after"
+    // part, so the clearest may come late)
+    let first = found.iter().map(|c| c.onset_ms).min_by(f64::total_cmp)?;
+    let clearest = found
         .into_iter()
-        .fold(None, |best: Option<ImpedanceChange>, c| {
-            // the clearest split dates the change; the earliest significant
-            // one bounds the windows (every split before a change sees it in
-            // its "after" part, so the clearest may come late)
-            let first = best
-                .as_ref()
-                .map_or(c.onset_ms, |b| b.significant_from_ms.min(c.onset_ms));
-            let clearest = match best {
-                Some(b) if b.p_value <= c.p_value => b,
-                _ => c,
-            };
-            Some(ImpedanceChange {
-                significant_from_ms: first,
-                ..clearest
-            })
-        })
+        .min_by(|a, b| a.p_value.total_cmp(&b.p_value))?;
+    Some(ImpedanceChange {
+        significant_from_ms: first,
+        ..clearest
+    })
 }
 
 /// The standard normal deviate with upper tail probability `p` (at most

@@ -14,7 +14,7 @@ pub(crate) fn calibration_section(
             w.trusted_but_wrong,
             w.trusted_windows,
             w.changes_claimed[0],
-            w.sweeps.saturating_sub(w.with_reflex),
+            w.without_reflex(),
             w.changes_claimed[1],
             w.with_reflex,
             w.cuff_changes_claimed[0],
