@@ -75,6 +75,7 @@ pub fn check(e: &Estimate) -> Result<(), String> {
         }
         Estimate::Planar(p) => planar("", p),
         Estimate::WindowSweep(w) => {
+            sweep_findings(w)?;
             for (i, row) in w.rows.iter().enumerate() {
                 planar(&format!("rows[{i}].estimate."), &row.estimate)?;
             }
@@ -379,6 +380,51 @@ fn square(name: &str, m: &Matrix, d: usize) -> Result<(), String> {
             "{name}: {r} x {c}, expected {d} x {d} (one row and column per coordinate)"
         ))
     }
+}
+
+/// The change scan's and the tissue fit's numbers where a reader takes them
+/// as they are: a probability outside [0, 1] or a negative time would be
+/// printed unquestioned.
+fn sweep_findings(w: &limpid_ident::planar::Sweep) -> Result<(), String> {
+    if let Some(c) = &w.impedance_change {
+        for (name, v) in [
+            ("onset_ms", c.onset_ms),
+            ("significant_from_ms", c.significant_from_ms),
+            ("stiffness_change", c.stiffness_change),
+            ("damping_change", c.damping_change),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!(
+                    "impedance_change.{name}: {v}, expected a finite value >= 0"
+                ));
+            }
+        }
+        if !(0.0..=1.0).contains(&c.p_value) {
+            return Err(format!(
+                "impedance_change.p_value: {}, expected a probability in [0, 1]",
+                c.p_value
+            ));
+        }
+        if c.z.is_nan() {
+            return Err("impedance_change.z: NaN, expected a number".into());
+        }
+    }
+    if let Some(t) = &w.series_compliance {
+        for (name, v) in [
+            ("time_constant_s", t.time_constant_s),
+            ("residual_ratio", t.residual_ratio),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!(
+                    "series_compliance.{name}: {v}, expected a finite value >= 0"
+                ));
+            }
+        }
+        if t.compliance.iter().flatten().any(|v| !v.is_finite()) {
+            return Err("series_compliance.compliance: a value is not finite".into());
+        }
+    }
+    Ok(())
 }
 
 fn same(name: &str, len: usize, want: usize, of: &str) -> Result<(), String> {

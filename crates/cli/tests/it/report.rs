@@ -847,6 +847,36 @@ fn a_result_whose_arrays_disagree_is_refused_naming_the_field() {
             "rows[1].estimate.stiffness: 1 x 2, expected 2 x 2",
         ),
         (
+            "a change with a probability of 1.5",
+            &sweep,
+            |v| {
+                v["impedance_change"] = serde_json::json!({"onset_ms": 90.0,
+                    "significant_from_ms": 80.0, "stiffness_change": 0.3,
+                    "damping_change": 0.1, "p_value": 1.5, "z": 2.0});
+            },
+            "impedance_change.p_value: 1.5, expected a probability in [0, 1]",
+        ),
+        (
+            "a change significant from a negative time",
+            &sweep,
+            |v| {
+                v["impedance_change"] = serde_json::json!({"onset_ms": 90.0,
+                    "significant_from_ms": -40.0, "stiffness_change": 0.3,
+                    "damping_change": 0.1, "p_value": 0.001, "z": 3.1});
+            },
+            "impedance_change.significant_from_ms: -40",
+        ),
+        (
+            "a tissue time constant below zero",
+            &sweep,
+            |v| {
+                v["series_compliance"] = serde_json::json!({
+                    "compliance": [[0.01, 0.0], [0.0, 0.01]],
+                    "time_constant_s": -0.01, "residual_ratio": 30.0});
+            },
+            "series_compliance.time_constant_s: -0.01",
+        ),
+        (
             "an ellipsoid axis of 1e307 (drew NaN coordinates)",
             &linear,
             |v| v["ellipsoids"]["stiffness"]["axes"][0][0] = serde_json::json!(1e307),
