@@ -33,9 +33,9 @@ pub struct ReflexArgs {
     /// Largest reflex delay scanned (s).
     #[arg(long, default_value_t = ReflexRequest::default().max_delay_s, value_name = "S")]
     pub max_delay: f64,
-    /// Rectify the velocity before anti-aliasing (the physical order) instead of after (Kearney et al.).
+    /// Rectify the velocity after anti-aliasing (Kearney et al.'s order) instead of before it (the physical order, default); the difference goes into the standard errors.
     #[arg(long)]
-    pub rectify_first: bool,
+    pub rectify_after: bool,
     #[command(flatten)]
     pub output: crate::emit::OutputArgs,
 }
@@ -50,7 +50,7 @@ impl ReflexArgs {
             intrinsic_lags_s: self.intrinsic_lags,
             reflex_lags_s: self.reflex_lags,
             max_delay_s: self.max_delay,
-            rectify_first: self.rectify_first,
+            rectify_first: !self.rectify_after,
         })
     }
 }

@@ -387,7 +387,7 @@ pub struct ReflexRequest {
     pub reflex_lags_s: f64,
     /// Largest reflex delay scanned (s).
     pub max_delay_s: f64,
-    /// Rectify the velocity before anti-aliasing (the physical order) instead of after (Kearney et al.).
+    /// Rectify the velocity before anti-aliasing (the physical order, default) instead of after (Kearney et al.'s order).
     pub rectify_first: bool,
 }
 

@@ -616,8 +616,9 @@ def estimate_reflex(recording: RecordingLike, **options: Any) -> Result:
     joint (N m) under a stochastic perturbation, with time ``t`` (s). Options (defaults:
     ``limpid.request("reflex")``): ``position``, ``torque``, ``rate_hz`` (decimation before
     identification), ``intrinsic_lags_s``, ``reflex_lags_s``, ``max_delay_s`` (largest
-    reflex delay scanned), ``rectify_first`` (rectify the velocity before anti-aliasing,
-    the physical order, instead of after, Kearney et al.'s method).
+    reflex delay scanned), ``rectify_first`` (default true: rectify the velocity before
+    anti-aliasing, the physical order; false: after, Kearney et al.'s order, whose difference
+    then goes into the standard errors).
 
     Returns ``intrinsic`` (inertia, damping, stiffness with standard errors, IRF),
     ``reflex`` (polarity, gain N m s/rad, delay_s, delay_interval_s, IRF), ``fit`` (VAF in
