@@ -181,9 +181,9 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Residual sum of squares and gain of the joint model
+/// Residual sum of squares and `[I, B, K, G]` of the joint model
 /// `tq = I q'' + B q' + K q + G x + c` for one reflex regressor `x` (over the fitted rows).
-pub(crate) fn joint_rss(f: &Fixed, x: &[f64]) -> (f64, f64) {
+pub(crate) fn joint_fit(f: &Fixed, x: &[f64]) -> (f64, [f64; 4]) {
     let m = x.len() as f64;
     let [c0, c1, c2] = &f.columns;
     let (mut sx, mut xx, mut xe, mut b0, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
@@ -199,10 +199,11 @@ pub(crate) fn joint_rss(f: &Fixed, x: &[f64]) -> (f64, f64) {
     let b = nalgebra::Vector3::new(b0, b1, b2);
     let xx_resid = xx - sx * sx / m - (b.transpose() * f.gram_inv * b)[0];
     if xx_resid <= 1e-12 * xx {
-        return (f.rss, 0.0);
+        return (f.rss, [f.theta[0], f.theta[1], f.theta[2], 0.0]);
     }
     let gain = xe / xx_resid;
-    ((f.rss - xe * gain).max(0.0), gain)
+    let t = f.theta - f.gram_inv * b * gain;
+    ((f.rss - xe * gain).max(0.0), [t[0], t[1], t[2], gain])
 }
 
 /// Decimation phases of `y`: `phases[r][k] = y[k ratio - r]` (zero before the record).
@@ -252,8 +253,8 @@ pub(crate) fn reflex_parametric(
     let max_delay = (p.max_delay_s * fs).round() as usize;
     let delays = max_delay + 1;
     let nyquist = d.fs / 2.0;
-    // RSS and gain per low-pass and delay; delays outside `near` are not
-    // fitted (infinite RSS)
+    // RSS and [I, B, K, G] per low-pass and delay; delays outside `near` are
+    // not fitted (infinite RSS)
     let scan_near = |combos: &[(f64, f64)], near: std::ops::RangeInclusive<usize>| {
         combos
             .par_iter()
@@ -262,9 +263,9 @@ pub(crate) fn reflex_parametric(
                 (0..delays)
                     .map(|dl| {
                         if near.contains(&dl) {
-                            joint_rss(&f, delayed(&ph, d.ratio, dl, skip, n))
+                            joint_fit(&f, delayed(&ph, d.ratio, dl, skip, n))
                         } else {
-                            (f64::INFINITY, 0.0)
+                            (f64::INFINITY, [0.0; 4])
                         }
                     })
                     .collect::<Vec<_>>()
@@ -282,7 +283,7 @@ pub(crate) fn reflex_parametric(
         return None;
     }
     let mut fits = scan(&combos);
-    let best = |fits: &[Vec<(f64, f64)>]| {
+    let best = |fits: &[Vec<(f64, [f64; 4])>]| {
         let mut b = (f64::INFINITY, 0, 0);
         for (ci, row) in fits.iter().enumerate() {
             for (dl, &(rss, _)) in row.iter().enumerate() {
@@ -327,14 +328,10 @@ pub(crate) fn reflex_parametric(
     // the joint fit at the optimum, its residual and jackknife errors
     let ph = phases(&low_pass(full, w, z, fs), d.ratio, n);
     let x = delayed(&ph, d.ratio, delay, skip, n);
-    let (_, gain) = joint_rss(&f, x);
+    let at_best = fits[ci][delay].1;
+    let gain = at_best[3];
     let xm = mean(x);
-    let bx = nalgebra::Vector3::new(
-        dot(x, &f.columns[0]),
-        dot(x, &f.columns[1]),
-        dot(x, &f.columns[2]),
-    );
-    let theta = f.theta - f.gram_inv * bx * gain;
+    let theta = nalgebra::Vector3::new(at_best[0], at_best[1], at_best[2]);
     let resid: Vec<f64> = (0..x.len())
         .map(|t| {
             f.residual[t] - gain * (x[t] - xm)
@@ -367,37 +364,10 @@ pub(crate) fn reflex_parametric(
     // the velocity), so the largest change over their joint 95 % profile
     // region (every scanned delay and low-pass with an RSS under the
     // threshold) is added in quadrature
-    let at = |x: &[f64]| {
-        let (_, g) = joint_rss(&f, x);
-        let bx = nalgebra::Vector3::new(
-            dot(x, &f.columns[0]),
-            dot(x, &f.columns[1]),
-            dot(x, &f.columns[2]),
-        );
-        let t = f.theta - f.gram_inv * bx * g;
-        [t[0], t[1], t[2], g]
-    };
-    let at_best = [theta[0], theta[1], theta[2], gain];
-    let shifts: Vec<[f64; 4]> = fits
-        .par_iter()
-        .zip(combos.par_iter())
-        .filter(|(row, _)| row.iter().any(|r| r.0 <= threshold))
-        .map(|(row, &(w, z))| {
-            let ph = phases(&low_pass(full, w, z, fs), d.ratio, n);
-            let mut shift = [0.0f64; 4];
-            for (dl, _) in row.iter().enumerate().filter(|(_, r)| r.0 <= threshold) {
-                let other = at(delayed(&ph, d.ratio, dl, skip, n));
-                for ((s, o), v) in shift.iter_mut().zip(other).zip(at_best) {
-                    *s = s.max((o - v).abs());
-                }
-            }
-            shift
-        })
-        .collect();
     let mut shift = [0.0f64; 4];
-    for s in &shifts {
-        for (m, v) in shift.iter_mut().zip(s) {
-            *m = m.max(*v);
+    for (_, params) in fits.iter().flatten().filter(|(rss, _)| *rss <= threshold) {
+        for ((s, o), v) in shift.iter_mut().zip(params).zip(at_best) {
+            *s = s.max((o - v).abs());
         }
     }
     for (e, s) in se.iter_mut().zip(shift) {
