@@ -1,0 +1,428 @@
+//! Parameter-varying identification on a measured schedule σ (Sobhani
+//! Tehrani & Kearney's parameter-varying parallel cascade; Patel et al.,
+//! seed 001, on stiffness against the co-contraction level).
+//!
+//! Every parameter is a polynomial in σ, expanded in Chebyshev polynomials
+//! `T_0..T_p` of σ mapped to [-1, 1] over its range:
+//!
+//! `δf = Σ_i T_i(σ) (M_i δx'' + B_i δx' + K_i δx) [+ Σ_i T_i(σ) G_i r(t)]`,
+//!
+//! one least-squares problem over every sample of the record. Choices (the
+//! method leaves them open):
+//! - the deviations δ are taken from the operating point, which is what varies
+//!   slower than `slow_hz`: positions and forces minus their zero-phase
+//!   low-pass at `slow_hz`, per contiguous segment (a `trial` id, or the whole
+//!   record), so gaps between holds are never filtered across; a schedule
+//!   column that is itself a coordinate is low-passed at `slow_hz` too;
+//! - the order `p` (the same for every parameter) is the one with the least
+//!   residual predicting each of 10 contiguous blocks of the record from the
+//!   other nine, unless given;
+//! - with `reflex`, the drive of gain coefficient i is
+//!   `± LP2(T_i(σ) rect(±x'(t - d)))` (the gain acts before the unit-DC
+//!   second-order low-pass, damping ratio 0.5-1; velocity before the slow part
+//!   is removed); delay, natural frequency and polarity are chosen by the least
+//!   residual; the reflex counts as detected only if its gains differ from
+//!   zero (Wald, p < 1e-4) and it raises the cross-validated VAF;
+//! - standard errors are the delete-a-block jackknife over 1 s blocks, since
+//!   the residual of a real limb is coloured.
+
+mod design;
+mod reflex;
+mod rows;
+
+use nalgebra::DMatrix;
+
+use limpid_core::{Error, Recording, Result};
+use limpid_dsp::LowPass;
+
+use super::{
+    inverse_scaled, matrix, solve_scaled, PointReflex, PointVerdicts, ScheduleAxis,
+    VaryingEstimate, VaryingFit, VaryingMethod, VaryingParams, VaryingPoint, VaryingReflex,
+    MAX_BASIS_ORDER, REFLEX_MIN_GAIN_PERCENT,
+};
+use design::{fit, region_residuals, robust_covariances, total_ss, Design, Fitted};
+use reflex::{scan_reflex, ReflexChoice};
+use rows::{rows, Rows};
+const FILTER_ORDER: usize = 4;
+const SLOW_ORDER: usize = 2;
+const REFLEX_DAMPING: f64 = 0.7;
+const REFLEX_NATURAL_HZ: [f64; 7] = [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
+const FOLDS: usize = 10;
+/// Low-pass of the position the reflex drive's velocity is taken from (Hz).
+const REFLEX_VELOCITY_HZ: f64 = 100.0;
+/// Share of each value added in quadrature to its standard error when a
+/// reflex pathway is fitted: the fitted pathway (rectifier, delay, a
+/// second-order low-pass of scanned frequency and damping) never matches a
+/// limb's exactly, and over a long record the mismatch exceeds the
+/// jackknife's error. Measured on 200 calibration subjects (half with a
+/// reflex): without it ±2 SE covered K at 90.5 % and B at 93.5 % (88 % and
+/// 92 % with a reflex); with it 96.7 % and 96.9 % (94.5 % and 95.9 %). It
+/// was 1 % (84 % and 89 % without it) until the low-pass and delay were
+/// refined together (session 23). As `reflex::GRID_ERROR_FLOOR`.
+pub const REFLEX_MODEL_FLOOR: f64 = 0.0025;
+/// Least data near a grid point (s) for it to be identifiable.
+const MIN_SUPPORT_S: f64 = 1.0;
+/// Standard normal quantile of 1 - 1e-4 (the reflex test's level).
+const Z_1E4: f64 = 3.719;
+
+fn chi2_quantile_1e4(k: usize) -> f64 {
+    // Wilson-Hilferty
+    let k = k as f64;
+    let a = 2.0 / (9.0 * k);
+    k * (1.0 - a + Z_1E4 * a.sqrt()).powi(3)
+}
+
+pub(super) fn estimate(
+    rec: &Recording,
+    params: &VaryingParams,
+    coords: Vec<String>,
+    forces: Vec<String>,
+    cutoff: f64,
+) -> Result<VaryingEstimate> {
+    let mut warnings = Vec::new();
+    let fs = rec.sample_rate();
+    check_options(params, coords.len(), cutoff)?;
+    let slow = LowPass::butterworth(SLOW_ORDER, params.slow_hz, fs)?;
+    // one degree more than any order tried, for the offset c(σ)
+    let top = params.basis_order.unwrap_or(MAX_BASIS_ORDER) + 1;
+    let (rows, dec, trim) = rows(
+        rec,
+        params,
+        &coords,
+        &forces,
+        cutoff,
+        top,
+        &slow,
+        &mut warnings,
+    )?;
+    let (lo, span) = (rows.lo, rows.span);
+    let reflex = if params.reflex {
+        scan_reflex(
+            &rows,
+            params.basis_order.unwrap_or(2),
+            params,
+            &slow,
+            fs,
+            trim,
+        )?
+    } else {
+        None
+    };
+    let design_at = |order: usize, with_reflex: bool| Design {
+        rows: &rows,
+        order,
+        reflex: reflex
+            .as_ref()
+            .filter(|_| with_reflex)
+            .map(|c| c.columns.as_slice()),
+    };
+    let tss = total_ss(&rows);
+    let vaf = |r: f64| 100.0 * (1.0 - r / tss);
+    let (order, fitted, order_cv_vaf) =
+        choose_order(rec, params, &|p| fit(&design_at(p, reflex.is_some())), &vaf)?;
+    if params.basis_order.is_none() && order == MAX_BASIS_ORDER {
+        warnings.push(format!(
+            "the highest order tried ({MAX_BASIS_ORDER}) predicted best: the impedance may vary faster along the schedule than the basis resolves"
+        ));
+    }
+    let design = design_at(order, reflex.is_some());
+    let cov = robust_covariances(&design, &fitted).ok_or_else(|| {
+        Error::invalid(
+            "recording",
+            "too short for block-robust standard errors (fewer than two 1 s blocks)",
+        )
+    })?;
+    let p1 = order + 1;
+    let reflex_summary = reflex.as_ref().map(|c| {
+        let without = fit(&design_at(order, false));
+        let gain = without.map_or(0.0, |w| vaf(fitted.press) - vaf(w.press));
+        reflex_test(c, &design, &fitted, &cov[0], gain, fs, &mut warnings)
+    });
+    let grid: Vec<f64> = (0..params.grid_points)
+        .map(|g| lo + span * g as f64 / (params.grid_points - 1) as f64)
+        .collect();
+    let region = nearest_regions(&rows, &grid);
+    let grid_fit = GridFit {
+        design: &design,
+        fitted: &fitted,
+        cov: &cov,
+        reflex: reflex_summary.as_ref(),
+        reach: (0.5 * span / (params.grid_points - 1) as f64).max(span / (2.0 * p1 as f64)),
+        seconds_per_row: dec as f64 / fs,
+        residual_ss: region_residuals(&design, &fitted, &region, grid.len()),
+    };
+    let points: Vec<VaryingPoint> = grid
+        .iter()
+        .enumerate()
+        .map(|(g, &sigma)| grid_fit.point(g, sigma))
+        .collect();
+    let missing = points.iter().filter(|p| !p.identifiable).count();
+    if missing > 0 {
+        warnings.push(format!(
+            "{missing} of {} grid points have too little data nearby and are not identifiable",
+            points.len()
+        ));
+    }
+    Ok(VaryingEstimate {
+        method: VaryingMethod::ParameterVarying,
+        schedule: ScheduleAxis {
+            name: params.schedule.clone(),
+            unit: limpid_core::recording::magnitude_limit(&params.schedule).1.into(),
+            values: grid,
+        },
+        coordinates: coords,
+        forces,
+        sample_rate_hz: fs,
+        cutoff_hz: cutoff,
+        resolution: span / p1 as f64,
+        resolution_note: format!(
+            "every parameter is a Chebyshev polynomial of order {order} in {} over [{}, {}]: features narrower than about range / (order + 1) = {} are smoothed",
+            params.schedule,
+            short(lo),
+            short(lo + span),
+            short(span / p1 as f64)
+        ),
+        repetitions: None,
+        basis_order: Some(order),
+        order_cv_vaf,
+        points,
+        fit: VaryingFit {
+            vaf: vaf(fitted.rss),
+            cross_validated_vaf: vaf(fitted.press),
+        },
+        reflex: reflex_summary,
+        warnings,
+    })
+}
+
+/// Options that cannot be checked before the recording's coordinates and
+/// cut-off are known.
+fn check_options(params: &VaryingParams, d: usize, cutoff: f64) -> Result<()> {
+    if params.reflex && d != 1 {
+        return Err(Error::invalid(
+            "reflex",
+            format!("the reflex pathway is one joint's; the recording has {d} coordinates"),
+        ));
+    }
+    if params.slow_hz >= cutoff {
+        return Err(Error::invalid(
+            "slow_hz",
+            format!(
+                "the operating point's cut-off ({} Hz) must be below the low-pass ({cutoff} Hz)",
+                params.slow_hz
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The order with the least cross-validated residual (or the one given),
+/// its fit, and every tried order's cross-validated VAF when chosen.
+fn choose_order(
+    rec: &Recording,
+    params: &VaryingParams,
+    fit_at: &dyn Fn(usize) -> Option<Fitted>,
+    vaf: &dyn Fn(f64) -> f64,
+) -> Result<(usize, Fitted, Vec<f64>)> {
+    let orders: Vec<usize> = match params.basis_order {
+        Some(p) => vec![p],
+        None => (0..=MAX_BASIS_ORDER).collect(),
+    };
+    let tried: Vec<(usize, Option<Fitted>)> = orders.iter().map(|&p| (p, fit_at(p))).collect();
+    let order_cv_vaf: Vec<f64> = if params.basis_order.is_none() {
+        tried
+            .iter()
+            .map(|(_, f)| f.as_ref().map_or(f64::NEG_INFINITY, |f| vaf(f.press)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let Some((order, fitted)) = tried
+        .into_iter()
+        .filter_map(|(p, f)| f.map(|f| (p, f)))
+        .min_by(|a, b| a.1.press.total_cmp(&b.1.press))
+    else {
+        return Err(Error::invalid(
+            "recording",
+            format!(
+                "{}: the regressors are singular: the perturbation does not excite inertia, damping and stiffness independently",
+                rec.path().display()
+            ),
+        ));
+    };
+    Ok((order, fitted, order_cv_vaf))
+}
+
+/// The reflex test: Wald on the gains' coefficients (p < 1e-4) and the
+/// cross-validated VAF the pathway adds (`gain`, points).
+fn reflex_test(
+    choice: &ReflexChoice,
+    design: &Design<'_>,
+    fitted: &Fitted,
+    cov: &DMatrix<f64>,
+    gain: f64,
+    fs: f64,
+    warnings: &mut Vec<String>,
+) -> VaryingReflex {
+    let p1 = design.order + 1;
+    let idx: Vec<usize> = (0..p1).map(|i| design.reflex_start() + i).collect();
+    let g = DMatrix::from_fn(p1, 1, |i, _| fitted.theta[(idx[i], 0)]);
+    let v = DMatrix::from_fn(p1, p1, |a, b| cov[(idx[a], idx[b])]);
+    let wald = inverse_scaled(&v)
+        .map(|vi| (g.transpose() * vi * &g)[(0, 0)])
+        .unwrap_or(0.0);
+    let detected = wald > chi2_quantile_1e4(p1) && gain >= REFLEX_MIN_GAIN_PERCENT;
+    if !detected {
+        warnings.push(format!(
+            "no reflex detected (Wald {wald:.1} on {p1} degrees of freedom, cross-validated VAF {gain:+.1} points): the reflex gains are shown but are not evidence of a reflex"
+        ));
+    }
+    VaryingReflex {
+        delay_s: choice.delay as f64 / (4.0 * fs),
+        natural_hz: choice.natural_hz,
+        damping_ratio: choice.damping_ratio,
+        polarity: if choice.positive {
+            "positive"
+        } else {
+            "negative"
+        }
+        .into(),
+        detected,
+        cross_validated_gain: gain,
+        wald,
+        wald_dof: p1,
+    }
+}
+
+/// The fitted model read at points of the schedule's grid.
+struct GridFit<'a> {
+    design: &'a Design<'a>,
+    fitted: &'a Fitted,
+    /// Coefficient covariance per output.
+    cov: &'a [DMatrix<f64>],
+    reflex: Option<&'a VaryingReflex>,
+    /// Half-width of the schedule interval whose data support a point.
+    reach: f64,
+    seconds_per_row: f64,
+    /// Residual and total sums of squares of the rows nearest each point.
+    residual_ss: Vec<(f64, f64)>,
+}
+
+impl GridFit<'_> {
+    /// Parameter group `group` (M, B, K of each coordinate, then the reflex
+    /// gain) of output `j` at the basis values `phi`: value and standard error.
+    fn value(&self, phi: &[f64], group: usize, j: usize) -> (f64, f64) {
+        let (d, p1) = (self.design.rows.d, phi.len());
+        let base = if group == 3 * d {
+            self.design.reflex_start()
+        } else {
+            group * p1
+        };
+        let cols: Vec<usize> = (0..p1).map(|i| base + i).collect();
+        let v: f64 = (0..p1)
+            .map(|i| phi[i] * self.fitted.theta[(cols[i], j)])
+            .sum();
+        let var: f64 = (0..p1)
+            .flat_map(|a| (0..p1).map(move |b| (a, b)))
+            .map(|(a, b)| phi[a] * phi[b] * self.cov[j][(cols[a], cols[b])])
+            .sum();
+        let se = var.max(0.0).sqrt();
+        // the reflex pathway's model error, which no block of the jackknife
+        // sees (see REFLEX_MODEL_FLOOR)
+        let floor = if self.reflex.is_some() {
+            REFLEX_MODEL_FLOOR * v.abs()
+        } else {
+            0.0
+        };
+        (v, se.hypot(floor))
+    }
+
+    fn point(&self, g: usize, sigma: f64) -> VaryingPoint {
+        let rows = self.design.rows;
+        let d = rows.d;
+        let mut phi = vec![0.0; self.design.order + 1];
+        rows.basis(sigma, self.design.order, &mut phi);
+        let support = rows
+            .sigma
+            .iter()
+            .filter(|&&s| (s - sigma).abs() <= self.reach)
+            .count() as f64
+            * self.seconds_per_row;
+        let mats: Vec<(limpid_core::Matrix, limpid_core::Matrix)> = (0..3)
+            .map(|kind| {
+                (
+                    matrix(d, |j, k| self.value(&phi, kind * d + k, j).0),
+                    matrix(d, |j, k| self.value(&phi, kind * d + k, j).1),
+                )
+            })
+            .collect();
+        let point_reflex = self.reflex.map(|r| {
+            let (gain, gain_se) = self.value(&phi, 3 * d, 0);
+            PointReflex {
+                gain,
+                gain_se,
+                delay_s: r.delay_s,
+            }
+        });
+        let finite = mats
+            .iter()
+            .all(|(m, s)| m.iter().chain(s.iter()).all(|v| v.is_finite()))
+            && point_reflex
+                .as_ref()
+                .is_none_or(|r| r.gain.is_finite() && r.gain_se.is_finite());
+        let identifiable = finite && support >= MIN_SUPPORT_S;
+        let reason = (!identifiable).then(|| {
+            if finite {
+                format!(
+                    "only {support:.2} s of data within ±{} of this point (at least {MIN_SUPPORT_S} s needed)",
+                    short(self.reach)
+                )
+            } else {
+                "the estimate is not finite here".to_string()
+            }
+        });
+        let (rss_g, tss_g) = self.residual_ss[g];
+        let vaf = (identifiable && tss_g > 0.0).then(|| 100.0 * (1.0 - rss_g / tss_g));
+        let verdicts = identifiable.then(|| {
+            PointVerdicts::of(
+                [
+                    &mats[2].0, &mats[2].1, &mats[1].0, &mats[1].1, &mats[0].0, &mats[0].1,
+                ],
+                vaf,
+            )
+        });
+        let keep = |m: &limpid_core::Matrix| identifiable.then(|| m.clone());
+        VaryingPoint {
+            sigma,
+            identifiable,
+            reason,
+            inertia: keep(&mats[0].0),
+            inertia_se: keep(&mats[0].1),
+            damping: keep(&mats[1].0),
+            damping_se: keep(&mats[1].1),
+            stiffness: keep(&mats[2].0),
+            stiffness_se: keep(&mats[2].1),
+            reflex: point_reflex.filter(|_| identifiable),
+            vaf,
+            support,
+            condition_number: None,
+            verdicts,
+        }
+    }
+}
+
+fn short(v: f64) -> String {
+    format!("{:.3}", v)
+        .trim_end_matches('0')
+        .trim_end_matches('.')
+        .to_string()
+}
+
+fn nearest_regions(rows: &Rows, grid: &[f64]) -> Vec<usize> {
+    let (lo, n) = (grid[0], grid.len());
+    let spacing = (grid[n - 1] - lo) / (n - 1) as f64;
+    rows.sigma
+        .iter()
+        .map(|&s| (((s - lo) / spacing).round().max(0.0) as usize).min(n - 1))
+        .collect()
+}

@@ -1,0 +1,275 @@
+//! The design rows of the parameter-varying fit: per contiguous segment the
+//! filtered signals, then every product `T_i(σ) × regressor` detrended.
+
+use rayon::prelude::*;
+
+use limpid_core::trial::windows_from_trial_column;
+use limpid_core::{Error, Recording, Result};
+use limpid_dsp::LowPass;
+
+use super::{VaryingParams, FILTER_ORDER, REFLEX_VELOCITY_HZ};
+use crate::varying::derivatives;
+
+/// Full-rate signals of one contiguous segment.
+pub(super) struct Segment {
+    /// `[x'' (d), x' (d), x (d)]` then forces (d), low-passed, not detrended.
+    pub(super) signals: Vec<Vec<f64>>,
+    /// Velocity of the first coordinate for the reflex drive, from the position
+    /// low-passed only against noise (rectification turns what a low-pass
+    /// removes into low-frequency torque, so the drive keeps it).
+    pub(super) reflex_velocity: Vec<f64>,
+    /// The schedule.
+    pub(super) sigma: Vec<f64>,
+    /// Indices kept (trimmed, decimated).
+    pub(super) kept: Vec<usize>,
+    /// `T_i(σ)` at every sample, degrees `0..=top` (filled once the range is known).
+    pub(super) basis: Vec<Vec<f64>>,
+}
+
+/// The design at the highest order: per kept sample, every product column
+/// `T_i(σ) × regressor`, each detrended (minus its zero-phase low-pass at
+/// `slow_hz`) at the full rate; the forces likewise.
+pub(super) struct Rows {
+    pub(super) d: usize,
+    pub(super) top: usize,
+    pub(super) width: usize,
+    pub(super) x: Vec<f64>,
+    pub(super) f: Vec<f64>,
+    pub(super) sigma: Vec<f64>,
+    pub(super) block: Vec<usize>,
+    pub(super) lo: f64,
+    pub(super) span: f64,
+    pub(super) segments: Vec<Segment>,
+}
+
+impl Rows {
+    pub(super) fn len(&self) -> usize {
+        self.sigma.len()
+    }
+
+    pub(super) fn basis(&self, sigma: f64, p: usize, out: &mut [f64]) {
+        let u = (2.0 * (sigma - self.lo) / self.span - 1.0).clamp(-1.0, 1.0);
+        chebyshev(u, p, out);
+    }
+}
+
+pub(super) fn chebyshev(u: f64, p: usize, out: &mut [f64]) {
+    out[0] = 1.0;
+    if p >= 1 {
+        out[1] = u;
+    }
+    for i in 2..=p {
+        out[i] = 2.0 * u * out[i - 1] - out[i - 2];
+    }
+}
+
+pub(super) fn detrend(slow: &LowPass, x: &[f64]) -> Result<Vec<f64>> {
+    let s = slow.filtfilt(x)?;
+    Ok(x.iter().zip(&s).map(|(a, b)| a - b).collect())
+}
+
+/// The filtered segments that are long enough, the decimation and the trim
+/// (samples left out at each end of a segment).
+#[allow(clippy::too_many_arguments)]
+fn segments(
+    rec: &Recording,
+    params: &VaryingParams,
+    coords: &[String],
+    forces: &[String],
+    cutoff: f64,
+    slow: &LowPass,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<Segment>, usize, usize)> {
+    let fs = rec.sample_rate();
+    let dt = 1.0 / fs;
+    let lp = LowPass::butterworth(FILTER_ORDER, cutoff, fs)?;
+    // the reflex drive's velocity: low-passed at 0.45 x the rate only when that is above the estimation cut-off
+    let wide = (params.reflex && REFLEX_VELOCITY_HZ < 0.45 * fs)
+        .then(|| LowPass::butterworth(FILTER_ORDER, REFLEX_VELOCITY_HZ, fs))
+        .transpose()?;
+    let schedule = rec.require(&params.schedule, "the schedule (--schedule)")?;
+    let schedule_is_coordinate = coords.contains(&params.schedule);
+    let ranges: Vec<std::ops::Range<usize>> = if rec.has("trial") {
+        windows_from_trial_column(rec, "trial")?
+            .into_iter()
+            .map(|w| w.range)
+            .collect()
+    } else {
+        std::iter::once(0..rec.len()).collect()
+    };
+    let trim = [
+        (fs / (4.0 * params.slow_hz)).ceil(),
+        (params.max_delay_s * fs).ceil() + 1.0,
+        (fs / cutoff).ceil(),
+    ]
+    .into_iter()
+    .fold(0.0f64, f64::max) as usize;
+    // as close to rate_hz as the low-pass allows (cutoff at most half the decimated rate)
+    let dec = (fs / params.rate_hz)
+        .min(0.5 * fs / cutoff)
+        .floor()
+        .max(1.0) as usize;
+    let min_len = 2 * trim + slow.padlen().max(lp.padlen()) + 2;
+    let d = coords.len();
+    let (pos, frc) = (
+        crate::prepare::columns(rec, coords),
+        crate::prepare::columns(rec, forces),
+    );
+    let mut segments = Vec::new();
+    let mut skipped = 0usize;
+    for seg in ranges {
+        if seg.len() < min_len {
+            skipped += 1;
+            continue;
+        }
+        let mut signals = vec![Vec::new(); 4 * d];
+        for k in 0..d {
+            let x = lp.filtfilt(&pos[k][seg.clone()])?;
+            let (v, a) = derivatives(&x, dt);
+            signals[k] = a;
+            signals[d + k] = v;
+            signals[2 * d + k] = x;
+            signals[3 * d + k] = lp.filtfilt(&frc[k][seg.clone()])?;
+        }
+        let reflex_velocity = match &wide {
+            Some(w) => derivatives(&w.filtfilt(&pos[0][seg.clone()])?, dt).0,
+            None => derivatives(&pos[0][seg.clone()], dt).0,
+        };
+        let sigma = if schedule_is_coordinate {
+            slow.filtfilt(&schedule[seg.clone()])?
+        } else {
+            schedule[seg.clone()].to_vec()
+        };
+        let kept = (trim..seg.len() - trim).step_by(dec).collect();
+        segments.push(Segment {
+            signals,
+            reflex_velocity,
+            sigma,
+            kept,
+            basis: Vec::new(),
+        });
+    }
+    if skipped > 0 {
+        warnings.push(format!(
+            "{skipped} segment(s) left out: shorter than {min_len} samples, what filtering and the reflex delay need"
+        ));
+    }
+    Ok((segments, dec, trim))
+}
+
+/// Segments, schedule range, and the product columns at order `top`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn rows(
+    rec: &Recording,
+    params: &VaryingParams,
+    coords: &[String],
+    forces: &[String],
+    cutoff: f64,
+    top: usize,
+    slow: &LowPass,
+    warnings: &mut Vec<String>,
+) -> Result<(Rows, usize, usize)> {
+    let (mut segments, dec, trim) = segments(rec, params, coords, forces, cutoff, slow, warnings)?;
+    let fs = rec.sample_rate();
+    let d = coords.len();
+    let n: usize = segments.iter().map(|s| s.kept.len()).sum();
+    if n < 50 * (3 * d + 1) * (top + 1) {
+        return Err(Error::invalid(
+            "recording",
+            format!(
+                "{}: {n} samples remain after trimming the segments' ends; too few for a parameter-varying fit",
+                rec.path().display()
+            ),
+        ));
+    }
+    let kept_sigma = || {
+        segments
+            .iter()
+            .flat_map(|s| s.kept.iter().map(|&i| s.sigma[i]))
+    };
+    let lo = kept_sigma().fold(f64::INFINITY, f64::min);
+    let hi = kept_sigma().fold(f64::NEG_INFINITY, f64::max);
+    let span = hi - lo;
+    if span.is_nan() || span <= 1e-9 * lo.abs().max(hi.abs()).max(1e-300) {
+        return Err(Error::invalid(
+            "schedule",
+            format!(
+                "{}: column {} does not vary over the samples fitted (it stays at {lo}); nothing to schedule on",
+                rec.path().display(),
+                params.schedule
+            ),
+        ));
+    }
+    let p1 = top + 1;
+    // groups: x'' (d), x' (d), x (d), the offset c(σ) (its constant is removed by detrending)
+    let width = (3 * d + 1) * p1;
+    let mut out = Rows {
+        d,
+        top,
+        width,
+        x: vec![0.0; n * width],
+        f: vec![0.0; n * d],
+        sigma: Vec::with_capacity(n),
+        block: Vec::with_capacity(n),
+        lo,
+        span,
+        segments: Vec::new(),
+    };
+    let block_len = (fs.round() as usize).max(1);
+    let (mut row0, mut block) = (0usize, 0usize);
+    let mut phi = vec![0.0; p1];
+    for seg in &mut segments {
+        let mut b = vec![vec![0.0; seg.sigma.len()]; p1];
+        for (t, &sg) in seg.sigma.iter().enumerate() {
+            out.basis(sg, top, &mut phi);
+            for (column, &v) in b.iter_mut().zip(&phi) {
+                column[t] = v;
+            }
+        }
+        seg.basis = b;
+    }
+    for seg in &segments {
+        let len = seg.sigma.len();
+        let basis = &seg.basis;
+        let columns: Vec<(usize, Vec<f64>)> = (0..width)
+            .into_par_iter()
+            .filter_map(|c| {
+                let (g, i) = (c / p1, c % p1);
+                if g == 3 * d && i == 0 {
+                    return None; // a constant detrends to zero
+                }
+                let product: Vec<f64> = if g == 3 * d {
+                    basis[i].clone()
+                } else {
+                    seg.signals[g]
+                        .iter()
+                        .zip(&basis[i])
+                        .map(|(s, b)| s * b)
+                        .collect()
+                };
+                Some(detrend(slow, &product).map(|v| (c, v)))
+            })
+            .collect::<Result<Vec<_>>>()?
+            .into_iter()
+            .collect();
+        for (c, col) in &columns {
+            for (r, &i) in seg.kept.iter().enumerate() {
+                out.x[(row0 + r) * width + c] = col[i];
+            }
+        }
+        for k in 0..d {
+            let f = detrend(slow, &seg.signals[3 * d + k])?;
+            for (r, &i) in seg.kept.iter().enumerate() {
+                out.f[(row0 + r) * d + k] = f[i];
+            }
+        }
+        for &i in &seg.kept {
+            out.sigma.push(seg.sigma[i]);
+            out.block.push(block + (i - trim) / block_len);
+        }
+        row0 += seg.kept.len();
+        block += len / block_len + 1;
+    }
+    out.segments = segments;
+    Ok((out, dec, trim))
+}
