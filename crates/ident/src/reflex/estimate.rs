@@ -1,0 +1,484 @@
+//! The parallel-cascade estimate, step by step: check the input, decimate,
+//! run both polarities' cascades, fit the joint parametric model (and the
+//! other rectifier order), add the model-error floors to the standard
+//! errors, cross-validate, and say what cannot be trusted.
+
+use super::*;
+
+/// Lengths in decimated samples.
+struct Lengths {
+    /// Decimated samples.
+    n: usize,
+    /// Half-width of the two-sided intrinsic IRF.
+    half: usize,
+    /// Length of the reflex IRF (also the samples left out at the start).
+    n_reflex: usize,
+}
+
+/// The parallel-cascade estimate of `rec`.
+pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstimate> {
+    // one column as both would "explain" the torque perfectly (K = 1, VAF 100 %)
+    if p.position == p.torque {
+        return Err(Error::invalid(
+            "position and torque",
+            format!("column {} names both; they must be two columns", p.position),
+        ));
+    }
+    let q = rec.require(
+        &p.position,
+        "the joint angle of the parallel-cascade method",
+    )?;
+    let tq = rec.require(&p.torque, "the torque of the parallel-cascade method")?;
+    let fs = rec.sample_rate();
+    let Lengths { n, half, n_reflex } = lengths(rec, p, q.len())?;
+    let [d, other_decimation] = decimate(q, tq, fs, p)?;
+    debug_assert_eq!(d.position.len(), n);
+    for (name, raw) in [(&p.position, q), (&p.torque, tq)] {
+        check_varies(rec, name, raw)?;
+    }
+    let skip = n_reflex;
+    let cascades: Vec<Cascade> = [0, 1]
+        .par_iter()
+        .map(|&k| {
+            cascade(
+                &d.position,
+                &d.rectified[k],
+                &d.torque,
+                half,
+                n_reflex,
+                skip,
+                p,
+            )
+        })
+        .collect();
+    let best = if cascades[0].vaf_total >= cascades[1].vaf_total {
+        0
+    } else {
+        1
+    };
+    let c = &cascades[best];
+    let polarity = if best == 0 {
+        Polarity::Positive
+    } else {
+        Polarity::Negative
+    };
+    let mut warnings = Vec::new();
+
+    let dt = 1.0 / d.fs;
+    // the fully parametric model, fitted jointly (I-B-K, delay, gain, low-pass)
+    let Some(mut param) = reflex_parametric(&d, best, skip, p, fs) else {
+        return Err(Error::invalid(
+            rec.path().display().to_string(),
+            "position, velocity and acceleration are collinear: I, B and K cannot be separated",
+        ));
+    };
+    // The fit with the other rectifier order is reported. A reflex answers
+    // the limb's own velocity, so rectifying first is the physical order;
+    // with Kearney et al.'s order (after anti-aliasing) the difference is
+    // that order's error, and it goes into the standard errors and the
+    // delay interval.
+    let other_order = reflex_parametric(&other_decimation, best, skip, p, fs);
+    let order_warning = other_order
+        .as_ref()
+        .filter(|_| !p.rectify_first)
+        .and_then(|o| widen_by_other_order(&mut param, o));
+    add_error_floors(&mut param);
+    let fit = VafSplit {
+        vaf_total: c.vaf_total,
+        vaf_intrinsic: vaf(&d.torque, &c.intrinsic_torque, skip),
+        vaf_reflex: vaf(&d.torque, &c.reflex_torque, skip),
+        vaf_parametric: param.total_vaf,
+        vaf_parametric_intrinsic: vaf(&d.torque, &parametric_intrinsic(&d, &param.intrinsic), skip),
+    };
+    let cross_validated_vaf = cross_validated_vaf(&d, best, half, n_reflex, p);
+
+    // intrinsic I-B-K from the joint parametric model; for comparison, the
+    // fit of the torque the nonparametric reflex leaves, and the reflex-free fit
+    let regressors = [&d.acceleration[..], &d.velocity[..], &d.position[..]];
+    let intrinsic_target: Vec<f64> = d
+        .torque
+        .iter()
+        .zip(&c.reflex_torque)
+        .map(|(t, r)| t - r)
+        .collect();
+    let (irf_fit, _, _) = ibk_fit(&regressors, &intrinsic_target, skip);
+    let ibk = param.intrinsic;
+    let (plain, _, plain_vaf) = ibk_fit(&regressors, &d.torque, skip);
+    warnings.extend(order_warning);
+    let delay_identifiable = delay_warnings(&param, fs, &mut warnings);
+    let reflex_gain_points = param.total_vaf - param.intrinsic_only_vaf;
+    if (cascades[0].vaf_total - cascades[1].vaf_total).abs() < 1.0
+        && reflex_gain_points >= REFLEX_PRESENT_VAF
+    {
+        warnings.push(Warning::new(
+            WarningCode::NotIdentifiable,
+            format!(
+                "reflex polarity ambiguous: total VAF {:.1} % (positive) vs {:.1} % (negative)",
+                cascades[0].vaf_total, cascades[1].vaf_total
+            ),
+        ));
+    }
+    fit_warnings(&ibk, &fit, cross_validated_vaf, &mut warnings);
+
+    let other_polarity_vaf = cascades[1 - best].vaf_total;
+    let (intrinsic, reflex) = pathways(
+        c,
+        param,
+        irf_fit,
+        (polarity, other_polarity_vaf),
+        delay_identifiable,
+        half,
+        dt,
+    );
+    let est = ReflexEstimate {
+        position: p.position.clone(),
+        torque: p.torque.clone(),
+        sample_rate_hz: fs,
+        decimated_rate_hz: d.fs,
+        duration_s: rec.len() as f64 / fs,
+        intrinsic,
+        reflex,
+        fit,
+        cross_validated_vaf,
+        iterations: c.iterations,
+        reflex_free: ReflexFreeFit {
+            parameters: plain,
+            vaf: plain_vaf,
+        },
+        other_rectifier_order: other_order.as_ref().map(|o| OtherOrder {
+            rectify_first: !p.rectify_first,
+            intrinsic: o.intrinsic,
+            gain: o.gain,
+            delay_s: o.delay_s,
+        }),
+        traces: traces(&d, c, skip, n),
+        warnings,
+    };
+    if !all_finite(&est) {
+        return Err(Error::invalid(
+            rec.path().display().to_string(),
+            "the parallel-cascade fit did not give finite numbers (values too large or degenerate input)",
+        ));
+    }
+    Ok(est)
+}
+
+/// The two pathways as reported: the intrinsic I-B-K and the reflex from the
+/// joint parametric fit, the IRFs from the cascade.
+fn pathways(
+    c: &Cascade,
+    param: Parametric,
+    irf_fit: Ibk,
+    (polarity, other_polarity_vaf): (Polarity, f64),
+    delay_identifiable: bool,
+    half: usize,
+    dt: f64,
+) -> (IntrinsicPathway, ReflexPathway) {
+    let irf = |h: &[f64], first: isize, order: usize| Irf {
+        lags_s: (0..h.len())
+            .map(|i| (first + i as isize) as f64 * dt)
+            .collect(),
+        values: h.iter().map(|v| v / dt).collect(),
+        order,
+    };
+    let intrinsic = IntrinsicPathway {
+        inertia: param.intrinsic.inertia,
+        damping: param.intrinsic.damping,
+        stiffness: param.intrinsic.stiffness,
+        standard_errors: param.intrinsic_se,
+        irf_fit,
+        irf: irf(&c.intrinsic, -(half as isize), c.intrinsic_order),
+    };
+    let reflex = ReflexPathway {
+        model:
+            "half-wave rectified velocity -> delay -> gain -> second-order low-pass (unit DC gain)"
+                .into(),
+        polarity,
+        other_polarity_vaf,
+        gain: param.gain,
+        gain_se: param.gain_se,
+        delay_s: param.delay_s,
+        delay_interval_s: param.interval,
+        delay_identifiable,
+        natural_frequency_hz: param.natural_hz,
+        damping_ratio: param.damping_ratio,
+        irf: irf(&c.reflex, 0, c.reflex_order),
+        delay_scan: DelayScan {
+            delays_s: param.scan_delays_s,
+            vaf: param.scan_vaf,
+        },
+    };
+    (intrinsic, reflex)
+}
+
+/// The decimation and IRF lengths, refusing a decimated rate above the
+/// recording's and a recording too short for 5 reflex-IRF lengths. The
+/// length check comes before decimation, whose zero-phase filter would
+/// refuse a short recording without naming it.
+fn lengths(rec: &Recording, p: &ReflexParams, samples: usize) -> Result<Lengths> {
+    let fs = rec.sample_rate();
+    if p.decimated_rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE) {
+        return Err(Error::invalid(
+            "decimated rate",
+            format!(
+                "{} Hz is above the recording's {} Hz ({}); limpid decimates, it does not interpolate",
+                limpid_core::short_number(p.decimated_rate_hz),
+                limpid_core::short_number(fs),
+                rec.path().display()
+            ),
+        ));
+    }
+    let ratio = ((fs / p.decimated_rate_hz).round() as usize).max(1);
+    let fsd = fs / ratio as f64;
+    let n = samples.div_ceil(ratio);
+    let lag = |s: f64| (s * fsd).round() as usize;
+    let half = lag(p.intrinsic_half_width_s).max(1);
+    let n_reflex = lag(p.reflex_irf_s).max(2);
+    let needed = 5 * n_reflex.max(2 * half + 1);
+    if n < needed {
+        return Err(Error::TooFewSamples {
+            path: rec.path().to_path_buf(),
+            what: format!(
+                "the parallel-cascade method at {} Hz (5 reflex-IRF lengths, {:.1} s; found {:.2} s)",
+                limpid_core::short_number(fsd),
+                needed as f64 / fsd,
+                n as f64 / fsd
+            ),
+            needed: needed * ratio,
+            found: samples,
+        });
+    }
+    Ok(Lengths { n, half, n_reflex })
+}
+
+/// Refuses a column that does not vary, or varies outside the range where
+/// its squares are computed exactly.
+fn check_varies(rec: &Recording, name: &str, raw: &[f64]) -> Result<()> {
+    let scale = raw.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    // scaled first, so that tiny or huge columns do not under- or overflow here
+    let scaled: Vec<f64> = raw
+        .iter()
+        .map(|v| v / scale.max(f64::MIN_POSITIVE))
+        .collect();
+    let sd = variance(&scaled).sqrt() * scale;
+    let problem = if !(sd > 1e-9 * scale && sd > 0.0) {
+        Some("does not vary: nothing to identify".to_string())
+    } else if !(1e-150..1e150).contains(&sd) {
+        Some(format!(
+            "varies by {} (standard deviation), outside 1e-150..1e150 where its squares are computed exactly: rescale the column",
+            limpid_core::short_number(sd)
+        ))
+    } else {
+        None
+    };
+    match problem {
+        Some(problem) => Err(Error::invalid(
+            rec.path().display().to_string(),
+            format!("column {name} {problem}"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// With Kearney et al.'s rectifier order, the difference to the physical
+/// order's fit `o` is that order's error: added (in quadrature) to the
+/// standard errors of I, B, K and G, and its delay to the delay interval.
+/// A warning when K moves by more than 2 jackknife SE.
+fn widen_by_other_order(param: &mut Parametric, o: &Parametric) -> Option<Warning> {
+    let z = (param.intrinsic.stiffness - o.intrinsic.stiffness).abs()
+        / param.intrinsic_se.stiffness.max(f64::MIN_POSITIVE);
+    let warning = (z > 2.0).then(|| {
+        Warning::new(
+            WarningCode::NoisyRegressors,
+            format!(
+                "rectifying the velocity after anti-aliasing (Kearney et al.'s order) changes K by {} N m/rad ({z:.1} jackknife SE) from the physical order: the standard errors include this difference",
+                limpid_core::short_number(param.intrinsic.stiffness - o.intrinsic.stiffness)
+            ),
+        )
+    });
+    let widen = |se: &mut f64, a: f64, b: f64| *se = se.hypot(a - b);
+    widen(
+        &mut param.intrinsic_se.inertia,
+        param.intrinsic.inertia,
+        o.intrinsic.inertia,
+    );
+    widen(
+        &mut param.intrinsic_se.damping,
+        param.intrinsic.damping,
+        o.intrinsic.damping,
+    );
+    widen(
+        &mut param.intrinsic_se.stiffness,
+        param.intrinsic.stiffness,
+        o.intrinsic.stiffness,
+    );
+    widen(&mut param.gain_se, param.gain, o.gain);
+    param.interval = [
+        param.interval[0].min(o.delay_s),
+        param.interval[1].max(o.delay_s),
+    ];
+    warning
+}
+
+/// Model error the resampling cannot see ([`MODEL_ERROR_FLOOR`],
+/// [`GRID_ERROR_FLOOR`]), added in quadrature.
+fn add_error_floors(param: &mut Parametric) {
+    let floor = |se: &mut f64, v: f64, share: f64| *se = se.hypot(share * v);
+    floor(
+        &mut param.intrinsic_se.inertia,
+        param.intrinsic.inertia,
+        MODEL_ERROR_FLOOR,
+    );
+    let g = GRID_ERROR_FLOOR;
+    floor(
+        &mut param.intrinsic_se.stiffness,
+        param.intrinsic.stiffness,
+        g.stiffness,
+    );
+    floor(
+        &mut param.intrinsic_se.damping,
+        param.intrinsic.damping,
+        g.damping,
+    );
+    floor(&mut param.gain_se, param.gain, g.gain);
+}
+
+/// The cascade fitted on the first two thirds, its VAF on the last third.
+fn cross_validated_vaf(
+    d: &Decimated,
+    best: usize,
+    half: usize,
+    n_reflex: usize,
+    p: &ReflexParams,
+) -> f64 {
+    let split = 2 * d.position.len() / 3;
+    let cv = cascade(
+        &d.position[..split],
+        &d.rectified[best][..split],
+        &d.torque[..split],
+        half,
+        n_reflex,
+        n_reflex,
+        p,
+    );
+    let predicted: Vec<f64> = apply(&cv.intrinsic, -(half as isize), &d.position)
+        .iter()
+        .zip(apply(&cv.reflex, 0, &d.rectified[best]))
+        .map(|(a, b)| a + b)
+        .collect();
+    vaf(&d.torque[split..], &predicted[split..], 0)
+}
+
+/// Whether the reflex delay is identifiable; a warning says why not (too
+/// little reflex to time, or a profile interval that is wide, split or at
+/// the scan's edge).
+fn delay_warnings(param: &Parametric, fs: f64, warnings: &mut Vec<Warning>) -> bool {
+    let reflex_gain_points = param.total_vaf - param.intrinsic_only_vaf;
+    if reflex_gain_points < REFLEX_PRESENT_VAF {
+        warnings.push(Warning::new(
+            WarningCode::NotIdentifiable,
+            format!(
+                "reflex delay not identifiable: the reflex pathway explains only {reflex_gain_points:.2} VAF points (< {REFLEX_PRESENT_VAF}), no reflex to time"
+            ),
+        ));
+        return false;
+    }
+    if !param.interval_contiguous
+        || param.interval[1] - param.interval[0] > DELAY_INTERVAL_MAX_S + 0.5 / fs
+        || param.at_scan_edge
+    {
+        warnings.push(Warning::new(
+            WarningCode::NotIdentifiable,
+            format!(
+                "reflex delay not identifiable: the fit is as good for delays {:.0}-{:.0} ms{}{}",
+                param.interval[0] * 1e3,
+                param.interval[1] * 1e3,
+                if param.interval_contiguous {
+                    ""
+                } else {
+                    " and elsewhere in the scan"
+                },
+                if param.at_scan_edge {
+                    " (best at the end of the scanned range)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+        return false;
+    }
+    true
+}
+
+/// Warnings on the intrinsic parameters' signs and on the fit.
+fn fit_warnings(ibk: &Ibk, fit: &VafSplit, cross_validated_vaf: f64, warnings: &mut Vec<Warning>) {
+    if ibk.inertia < 0.0 || ibk.stiffness < 0.0 || ibk.damping < 0.0 {
+        warnings.push(Warning::new(
+            WarningCode::NotPositiveDefinite,
+            format!(
+                "intrinsic I-B-K has a negative parameter (I {:.4}, B {:.4}, K {:.4}): not a passive joint",
+                ibk.inertia, ibk.damping, ibk.stiffness
+            ),
+        ));
+    }
+    if fit.vaf_total < 50.0 {
+        warnings.push(Warning::new(
+            WarningCode::PoorFit,
+            format!(
+                "the two pathways explain only {:.1} % of the torque variance",
+                fit.vaf_total
+            ),
+        ));
+    }
+    if fit.vaf_total - cross_validated_vaf > 5.0 {
+        warnings.push(Warning::new(
+            WarningCode::PoorFit,
+            format!(
+                "over-fitting: VAF {:.1} % on the fitted data but {:.1} % on the held-out last third",
+                fit.vaf_total, cross_validated_vaf
+            ),
+        ));
+    }
+}
+
+/// A 10 s stretch after the left-out first reflex-IRF length, every
+/// decimated sample: a whole record at this scale is unreadable.
+fn traces(d: &Decimated, c: &Cascade, skip: usize, n: usize) -> ReflexTraces {
+    let dt = 1.0 / d.fs;
+    let shown = skip..(skip + (10.0 * d.fs).round() as usize).min(n);
+    ReflexTraces {
+        t_s: shown.clone().map(|i| i as f64 * dt).collect(),
+        measured: d.torque[shown.clone()].to_vec(),
+        intrinsic: c.intrinsic_torque[shown.clone()].to_vec(),
+        reflex: c.reflex_torque[shown].to_vec(),
+    }
+}
+
+fn all_finite(e: &ReflexEstimate) -> bool {
+    let i = &e.intrinsic;
+    let r = &e.reflex;
+    [
+        i.inertia,
+        i.damping,
+        i.stiffness,
+        i.standard_errors.inertia,
+        i.standard_errors.damping,
+        i.standard_errors.stiffness,
+        r.gain,
+        r.gain_se,
+        r.delay_s,
+        r.natural_frequency_hz,
+        r.damping_ratio,
+        e.fit.vaf_parametric,
+        e.fit.vaf_parametric_intrinsic,
+        e.fit.vaf_total,
+        e.fit.vaf_intrinsic,
+        e.fit.vaf_reflex,
+        e.cross_validated_vaf,
+        e.reflex_free.vaf,
+    ]
+    .iter()
+    .chain(&i.irf.values)
+    .chain(&r.irf.values)
+    .all(|v| v.is_finite())
+}
