@@ -20,6 +20,7 @@ use crate::linear::LinearResult;
 use crate::study::StudyResult;
 use limpid_ident::planar::{PlanarEstimate, Sweep};
 use limpid_ident::reflex::ReflexEstimate;
+use limpid_ident::spectra::SpectraResult;
 use limpid_ident::stochastic::StochasticEstimate;
 use limpid_ident::varying::VaryingEstimate;
 
@@ -39,6 +40,8 @@ pub enum Estimate {
     WindowSweep(Sweep),
     /// Stochastic MIMO impedance Z(f) (seed 004).
     Stochastic(StochasticEstimate),
+    /// Welch spectra and coherences of named columns (`limpid spectra`, seed 004 eq. 3-6).
+    Spectra(SpectraResult),
     /// Intrinsic and reflex joint stiffness, parallel cascade (Kearney et al. 1997).
     Reflex(ReflexEstimate),
     /// Impedance against time (ensemble) or an operating point (parameter-varying).
@@ -61,6 +64,7 @@ impl Estimate {
             Estimate::Planar(_) => "planar",
             Estimate::WindowSweep(_) => "window_sweep",
             Estimate::Stochastic(_) => "stochastic",
+            Estimate::Spectra(_) => "spectra",
             Estimate::Reflex(_) => "reflex",
             Estimate::Varying(_) => "varying",
             Estimate::Cocontraction(_) => "cocontraction",
@@ -75,6 +79,7 @@ impl Estimate {
         match self {
             Estimate::Linear(r) => Some(r.provenance.recording.as_str()),
             Estimate::Cocontraction(r) => Some(r.recording.as_str()),
+            Estimate::Spectra(r) => Some(r.recording.as_str()),
             _ => None,
         }
     }

@@ -73,6 +73,7 @@ pub fn check(e: &Estimate) -> Result<(), String> {
             }
             Ok(())
         }
+        Estimate::Spectra(s) => spectra(s),
         Estimate::Planar(p) => planar("", p),
         Estimate::WindowSweep(w) => {
             sweep_findings(w)?;
@@ -157,6 +158,55 @@ pub fn check(e: &Estimate) -> Result<(), String> {
             }
         }
     }
+}
+
+/// Every spectrum and coherence spans the frequencies, per signal, output and input.
+fn spectra(s: &limpid_ident::spectra::SpectraResult) -> Result<(), String> {
+    let (nf, ni, no) = (s.frequencies.len(), s.inputs.len(), s.outputs.len());
+    same("signals", s.signals.len(), ni + no, "inputs and outputs")?;
+    same("psd", s.psd.len(), ni + no, "signals")?;
+    for (i, p) in s.psd.iter().enumerate() {
+        same(&format!("psd[{i}]"), p.len(), nf, "frequencies")?;
+    }
+    same(
+        "multiple_coherence",
+        s.multiple_coherence.len(),
+        no,
+        "outputs",
+    )?;
+    for (o, m) in s.multiple_coherence.iter().enumerate() {
+        same(
+            &format!("multiple_coherence[{o}]"),
+            m.len(),
+            nf,
+            "frequencies",
+        )?;
+    }
+    for (name, c) in [
+        (
+            "coherence",
+            s.coherence
+                .iter()
+                .map(|o| o.iter().map(Vec::len).collect())
+                .collect::<Vec<Vec<usize>>>(),
+        ),
+        (
+            "partial_coherence",
+            s.partial_coherence
+                .iter()
+                .map(|o| o.iter().map(Vec::len).collect())
+                .collect(),
+        ),
+    ] {
+        same(name, c.len(), no, "outputs")?;
+        for (o, inputs) in c.iter().enumerate() {
+            same(&format!("{name}[{o}]"), inputs.len(), ni, "inputs")?;
+            for (i, len) in inputs.iter().enumerate() {
+                same(&format!("{name}[{o}][{i}]"), *len, nf, "frequencies")?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The counts of a set of window sweeps are parts of their wholes.

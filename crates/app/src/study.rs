@@ -12,6 +12,7 @@ use serde::Serialize;
 use limpid_analysis::cocontraction::CocontractionResult;
 use limpid_analysis::result::Estimate;
 pub use limpid_analysis::study::*;
+use limpid_core::truth::{About, CocontractionTruth, LevelTruth, Truth};
 use limpid_core::{Error, Result};
 use limpid_ident::request::{CocontractionRequest, Request};
 
@@ -294,10 +295,28 @@ pub fn simulate_study(
             if !realistic || *c == 5 {
                 limpid_io::write_recording(&mvc, dir.join(&mvc_file))?;
             }
-            let truth = serde_json::json!({
-                "levels": protocol.levels.iter().map(|l| {
-                    serde_json::json!({"level": l, "stiffness": limpid_core::Matrix::from(subject.stiffness(*l))})
-                }).collect::<Vec<_>>(),
+            let truth = Truth::Cocontraction(CocontractionTruth {
+                about: About {
+                    sample_rate: Some(protocol.sample_rate),
+                    notes: vec!["made by limpid study --simulate: K per level of a Patel, O'Neill & Artemiadis virtual subject".into()],
+                    ..About::default()
+                },
+                inertia: Some(limpid_core::Matrix::from(subject.inertia)),
+                damping: Some(limpid_core::Matrix::from(subject.damping)),
+                equilibrium: None,
+                levels: protocol
+                    .levels
+                    .iter()
+                    .map(|l| LevelTruth {
+                        level: *l,
+                        stiffness: limpid_core::Matrix::from(subject.stiffness(*l)),
+                        cocontraction_index: None,
+                        muscle_activation: None,
+                    })
+                    .collect(),
+                stiffness_level0: None,
+                stiffness_increment_per_unit_level: None,
+                other: Default::default(),
             });
             let text = serde_json::to_string_pretty(&truth).expect("truth serialises");
             limpid_core::files::write_file(&dir.join(format!("s{s}_c{c}.truth.json")), text.as_bytes())?;

@@ -74,6 +74,7 @@ fn flag(field: &str) -> Option<&'static str> {
         "basis_order" => "--order",
         "slow_hz" => "--slow",
         "reflex" => "--reflex",
+        "inputs/outputs" => "--inputs/--outputs",
         _ => return None,
     })
 }

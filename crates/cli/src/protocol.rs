@@ -248,7 +248,7 @@ fn export_stochastic(p: &StochasticDesign, output: &Path) -> CliResult {
 }
 
 /// Write `<recording>.truth.json` beside a written recording and say so.
-fn write_truth(recording: &Path, samples: usize, truth: &serde_json::Value) -> CliResult {
+fn write_truth(recording: &Path, samples: usize, truth: &limpid_core::Truth) -> CliResult {
     let path = recording.with_extension("truth.json");
     limpid_core::files::write_file(&path, serde_json::to_string_pretty(truth)?.as_bytes())?;
     println!(

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use limpid_analysis::result::Estimate;
 use limpid_app::estimate::Estimated;
-use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch};
+use limpid_dsp::spectral::Welch;
 use limpid_ident::request::{Request, SegmentWindow, StochasticRequest, DEFAULT_BAND_HZ};
 
 use crate::table::num;
@@ -100,9 +100,12 @@ pub struct SpectraArgs {
     pub outputs: Vec<String>,
     #[command(flatten)]
     pub welch: WelchArgs,
-    /// Print JSON instead of CSV.
+    /// Print one JSON object (the result document) instead of CSV.
     #[arg(long)]
     pub json: bool,
+    /// Also write the HTML report (spectra and coherence plots) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 /// `--band`'s help, its default written as the flag takes it.
@@ -233,92 +236,59 @@ pub fn stochastic_text(e: &Estimated, request: &Request, paths: &[PathBuf]) -> C
 
 pub fn run_spectra(args: SpectraArgs) -> CliResult {
     let rec = crate::read_recording(&args.recording)?;
-    // a column named twice makes the input spectral matrix singular (NaN
-    // coherences, exit 0 before); an input that never varies has no spectrum
-    let mut seen = std::collections::HashSet::new();
-    for name in args.inputs.iter().chain(&args.outputs) {
-        if !seen.insert(name) {
-            return Err(limpid_core::Error::invalid(
-                "--inputs/--outputs",
-                format!(
-                    "column {name} is named twice; each input and output must be its own column"
-                ),
-            )
-            .into());
-        }
-    }
-    let mut signals: Vec<&[f64]> = Vec::new();
-    for name in args.inputs.iter().chain(&args.outputs) {
-        signals.push(rec.require(name, "named in --inputs/--outputs")?);
-    }
-    for (name, x) in args.inputs.iter().zip(&signals) {
-        if x.iter().all(|v| *v == x[0]) {
-            return Err(limpid_core::Error::Format {
-                path: rec.path().to_path_buf(),
-                message: format!(
-                    "column {name}: the input never varies, so it has no spectrum to divide by"
-                ),
-            }
-            .into());
-        }
-    }
     let welch = args.welch.welch(rec.len(), rec.sample_rate());
-    let s = SegmentSpectra::new(&signals, &welch)?;
-    let mats = s.matrix();
-    let q = args.inputs.len();
-    let names: Vec<&String> = args.inputs.iter().chain(&args.outputs).collect();
-    let mut rows = Vec::new();
-    for (k, f) in s.frequencies.iter().enumerate() {
-        let point = mimo_point(&mats[k], q);
-        rows.push((f, &mats[k], point));
+    let result = limpid_ident::spectra::spectra(&rec, &args.inputs, &args.outputs, &welch)
+        .map_err(crate::emit::with_flag_names)?;
+    let document = limpid_analysis::result::Document::new(Estimate::Spectra(result)).with_run(
+        limpid_analysis::result::Run::of_this_process(&[args.recording.as_path()])
+            .with_channel_map(crate::channel_map().and_then(|m| m.path.as_deref())),
+    );
+    if let Some(path) = &args.report {
+        crate::report::write(&document, path)?;
     }
     if args.json {
-        let v = serde_json::json!({
-            "frequencies": s.frequencies,
-            "signals": names,
-            "psd": (0..names.len()).map(|i| mats.iter().map(|m| m[(i, i)].re).collect::<Vec<_>>()).collect::<Vec<_>>(),
-            "multiple_coherence": (0..args.outputs.len()).map(|o| rows.iter().map(|r| r.2.as_ref().map(|p| p.multiple[o])).collect::<Vec<_>>()).collect::<Vec<_>>(),
-        });
-        println!("{}", serde_json::to_string(&v)?);
+        println!("{}", document.to_json());
         return Ok(());
     }
+    let Estimate::Spectra(r) = &document.estimate else {
+        unreachable!("made above")
+    };
+    print!("{}", spectra_csv(r));
+    Ok(())
+}
+
+/// The spectra as CSV: one row per frequency; an empty cell where the
+/// multiple and partial coherences do not exist (singular input matrix).
+fn spectra_csv(r: &limpid_ident::spectra::SpectraResult) -> String {
     let mut out = String::from("frequency_hz");
-    for n in &names {
+    for n in &r.signals {
         let _ = write!(out, ",psd_{n}");
     }
-    for o in &args.outputs {
+    for o in &r.outputs {
         let _ = write!(out, ",multiple_coherence_{o}");
-        for i in &args.inputs {
+        for i in &r.inputs {
             let _ = write!(out, ",coherence_{i}_{o},partial_coherence_{i}_{o}");
         }
     }
     out.push('\n');
-    for (f, m, p) in &rows {
+    let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6}"));
+    for (k, f) in r.frequencies.iter().enumerate() {
         let _ = write!(out, "{f}");
-        for i in 0..names.len() {
-            let _ = write!(out, ",{:e}", m[(i, i)].re);
+        for p in &r.psd {
+            let _ = write!(out, ",{:e}", p[k]);
         }
-        for o in 0..args.outputs.len() {
-            let oo = q + o;
-            let mc = p
-                .as_ref()
-                .map_or(String::new(), |p| format!("{:.6}", p.multiple[o]));
-            let _ = write!(out, ",{mc}");
-            for i in 0..q {
-                let d = m[(i, i)].re * m[(oo, oo)].re;
-                let coh = if d > 0.0 {
-                    m[(i, oo)].norm_sqr() / d
-                } else {
-                    0.0
-                };
-                let pc = p
-                    .as_ref()
-                    .map_or(String::new(), |p| format!("{:.6}", p.partial[o][i]));
-                let _ = write!(out, ",{coh:.6},{pc}");
+        for o in 0..r.outputs.len() {
+            let _ = write!(out, ",{}", cell(r.multiple_coherence[o][k]));
+            for i in 0..r.inputs.len() {
+                let _ = write!(
+                    out,
+                    ",{:.6},{}",
+                    r.coherence[o][i][k],
+                    cell(r.partial_coherence[o][i][k])
+                );
             }
         }
         out.push('\n');
     }
-    print!("{out}");
-    Ok(())
+    out
 }

@@ -335,7 +335,9 @@ pub fn with_standard_error(v: f64, se: f64) -> String {
     let place = se.log10().floor() as i32 - 1;
     let unit = 10f64.powi(place);
     let (vr, sr) = ((v / unit).round() * unit, (se / unit).round() * unit);
-    if !(vr.is_finite() && sr.is_finite() && unit > 0.0) {
+    // a subnormal unit (an SE near 1e-308) is 0 or not, as powi is inlined or
+    // not: both take the significant-digits form
+    if !(vr.is_finite() && sr.is_finite() && unit.is_normal()) {
         return format!("{} ± {}", significant(v, 4), significant(se, 2));
     }
     let magnitude = vr.abs().max(sr);

@@ -17,6 +17,7 @@ pub mod matrix;
 pub mod payload;
 pub mod recording;
 pub mod trial;
+pub mod truth;
 pub mod warning;
 
 pub use error::{
@@ -27,4 +28,5 @@ pub use matrix::Matrix;
 pub use payload::PayloadCalibration;
 pub use recording::Recording;
 pub use trial::Window;
+pub use truth::Truth;
 pub use warning::{Warning, WarningCode};

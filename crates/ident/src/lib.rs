@@ -21,6 +21,7 @@ pub mod planar;
 pub mod prepare;
 pub mod reflex;
 pub mod request;
+pub mod spectra;
 pub mod stochastic;
 pub mod varying;
 

@@ -14,6 +14,10 @@
 
 use std::path::Path;
 
+use limpid_core::truth::{
+    About, CartesianTruth, PlanarTruth, PlanarVariant, StochasticTruth, Truth,
+};
+use limpid_core::Matrix;
 use limpid_core::{Error, Recording, Result};
 use nalgebra::{Matrix2, Matrix3};
 use serde::Deserialize;
@@ -66,7 +70,7 @@ pub struct Simulated {
     /// The recording.
     pub recording: Recording,
     /// Its truth (the `*.truth.json` content).
-    pub truth: Value,
+    pub truth: Truth,
 }
 
 #[derive(Deserialize)]
@@ -104,6 +108,19 @@ fn parse<T: for<'de> Deserialize<'de>>(subject: &SubjectText) -> Result<T> {
         .map_err(|e| Error::settings(subject.path, subject.text, e.span(), e.message()))
 }
 
+/// A value as JSON (the lab's types always serialise).
+fn to_value<T: serde::Serialize>(value: &T) -> Value {
+    serde_json::to_value(value).expect("lab types serialise")
+}
+
+/// The generator's other keys of a truth file.
+fn other<const N: usize>(entries: [(&str, Value); N]) -> std::collections::BTreeMap<String, Value> {
+    entries
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+}
+
 /// A matrix as its rows, the layout of the truth files.
 pub fn rows<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(
     m: &nalgebra::Matrix<f64, R, C, S>,
@@ -132,7 +149,7 @@ pub fn simulate_design(
             Ok(vec![Simulated {
                 label: None,
                 recording,
-                truth: serde_json::to_value(truth).expect("truths serialise"),
+                truth: Truth::Varying(truth),
             }])
         }
         Design::RampAndHold(p) => {
@@ -145,7 +162,7 @@ pub fn simulate_design(
             Ok(vec![Simulated {
                 label: None,
                 recording,
-                truth: serde_json::to_value(truth).expect("truths serialise"),
+                truth: Truth::Varying(truth),
             }])
         }
     }
@@ -183,17 +200,27 @@ fn centre_out(p: &Protocol, subject: Option<&SubjectText>, seed: u64) -> Result<
             &noise,
             seed.wrapping_mul(1000) + i as u64,
         )?;
-        let truth = json!({
-            "method": "cartesian",
-            "sample_rate": p.sample_rate_hz,
-            "inertia": rows(&posture.inertia),
-            "damping": rows(&posture.damping),
-            "stiffness": rows(&posture.stiffness),
-            "equilibrium": [start.x, start.y, start.z],
-            "profile": p.phases.profile,
-            "noise": noise,
-            "protocol": {"trials": protocol.directions.len(), "rest_s": protocol.rest_s, "motion_s": protocol.motion_s, "radius_m": protocol.radius_m},
-            "notes": ["f = M a + B v + K (x - S) + offset_trial + drift + white; force applied to the limb", "made by limpid simulate"],
+        let truth = Truth::Cartesian(CartesianTruth {
+            about: About {
+                sample_rate: Some(p.sample_rate_hz),
+                notes: vec![
+                    "f = M a + B v + K (x - S) + offset_trial + drift + white; force applied to the limb".into(),
+                    "made by limpid simulate".into(),
+                ],
+                ..About::default()
+            },
+            inertia: Matrix::from(posture.inertia),
+            damping: Matrix::from(posture.damping),
+            stiffness: Matrix::from(posture.stiffness),
+            equilibrium: vec![start.x, start.y, start.z],
+            profile: to_value(&p.phases.profile).as_str().map(String::from),
+            other: other([
+                ("noise", to_value(&noise)),
+                (
+                    "protocol",
+                    json!({"trials": protocol.directions.len(), "rest_s": protocol.rest_s, "motion_s": protocol.motion_s, "radius_m": protocol.radius_m}),
+                ),
+            ]),
         });
         out.push(Simulated {
             label: (starts.len() > 1).then(|| posture.name.clone()),
@@ -217,19 +244,32 @@ fn planar(p: &PlanarDesign, subject: Option<&SubjectText>, seed: u64) -> Result<
     }
     let (torque_std, angle_std) = (0.02, 1e-5);
     let recording = simulate_planar(&arm, &p.simulation(), torque_std, angle_std, seed)?;
-    let truth = json!({
-        "method": "planar",
-        "variant": "joint",
-        "sample_rate": p.sample_rate_hz,
-        "inertial_parameters": arm.xi,
-        "stiffness": rows(&arm.stiffness),
-        "damping": rows(&arm.damping),
-        "link_lengths": p.link_lengths_m,
-        "q0": arm.q0,
-        "interpolation_interval_ms": p.interpolation_s * 1e3,
-        "reflex": arm.reflex,
-        "noise": {"torque_white_std_Nm": torque_std, "baseline_torque_Nm": arm.tau0, "joint_angle_std_rad": angle_std},
-        "notes": ["tau = M(q) q'' + C(q,q') q' + D q' + K (q - q0) + tau0 + noise, Lakatos, Petit & van der Smagt (2011) eq. (9)", "made by limpid simulate"],
+    let truth = Truth::Planar(PlanarTruth {
+        about: About {
+            sample_rate: Some(p.sample_rate_hz),
+            notes: vec![
+                "tau = M(q) q'' + C(q,q') q' + D q' + K (q - q0) + tau0 + noise, Lakatos, Petit & van der Smagt (2011) eq. (9)".into(),
+                "made by limpid simulate".into(),
+            ],
+            ..About::default()
+        },
+        variant: PlanarVariant::Joint,
+        inertial_parameters: arm.xi,
+        stiffness: Matrix::from(arm.stiffness),
+        damping: Matrix::from(arm.damping),
+        link_lengths: p.link_lengths_m,
+        q0: arm.q0,
+        equilibrium: None,
+        shoulder: None,
+        interpolation_interval_ms: p.interpolation_s * 1e3,
+        observation_window_ms: None,
+        other: other([
+            ("reflex", to_value(&arm.reflex)),
+            (
+                "noise",
+                json!({"torque_white_std_Nm": torque_std, "baseline_torque_Nm": arm.tau0, "joint_angle_std_rad": angle_std}),
+            ),
+        ]),
     });
     Ok(Simulated {
         label: None,
@@ -272,18 +312,32 @@ fn stochastic(
             json!({"model": "PUMA-type vertical-plane chain with joint friction under a plain PD law", "coulomb_Nm": dynamics.coulomb, "viscous_Nms": dynamics.viscous})
         }
     };
-    let truth = json!({
-        "method": "stochastic",
-        "sample_rate": p.sample_rate_hz,
-        "coordinates": ["x (m)", "z (m)", "theta (rad, about y)"],
-        "inertia": rows(&e.inertia),
-        "damping": rows(&e.damping),
-        "stiffness": rows(&e.stiffness),
-        "equilibrium": [0.0, 0.0, 0.0],
-        "springs_N_per_m": springs,
-        "robot": robot,
-        "noise": {"position_std_m": noise[0], "angle_std_rad": noise[1]},
-        "notes": ["spring array of Park & Chang (2011) eq. (10) on the impedance-controlled robot; force on the rig", "made by limpid simulate"],
+    let truth = Truth::Stochastic(StochasticTruth {
+        about: About {
+            sample_rate: Some(p.sample_rate_hz),
+            notes: vec![
+                "spring array of Park & Chang (2011) eq. (10) on the impedance-controlled robot; force on the rig".into(),
+                "made by limpid simulate".into(),
+            ],
+            ..About::default()
+        },
+        coordinates: ["x (m)", "z (m)", "theta (rad, about y)"].map(String::from).to_vec(),
+        inertia: Matrix::from(e.inertia),
+        damping: Matrix::from(e.damping),
+        stiffness: Matrix::from(e.stiffness),
+        equilibrium: vec![0.0, 0.0, 0.0],
+        springs_n_per_m: Some(
+            ["k1a", "k1b", "k2a", "k2b", "k3a", "k3b", "k4a", "k4b"]
+                .into_iter()
+                .map(String::from)
+                .zip(springs)
+                .collect(),
+        ),
+        band_hz: None,
+        other: other([
+            ("robot", robot),
+            ("noise", json!({"position_std_m": noise[0], "angle_std_rad": noise[1]})),
+        ]),
     });
     Ok(Simulated {
         label: None,

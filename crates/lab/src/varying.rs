@@ -23,7 +23,8 @@ use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
 
 use limpid_core::arm::{coriolis, mass_matrix, Arm};
-use limpid_core::{Error, Recording, Result};
+use limpid_core::truth::{About, VaryingTruth, VaryingTruthPoint};
+use limpid_core::{Error, Matrix, Recording, Result};
 
 const SUBSTEPS: usize = 10;
 const ACTUATOR_DAMPING: f64 = 0.7;
@@ -692,45 +693,18 @@ pub fn simulate_scheduled_ankle(
     Recording::new("virtual scheduled ankle", names, columns, 2)
 }
 
-/// One point of a varying truth.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct VaryingTruthPoint {
-    /// Time (s) or operating angle (rad).
-    pub sigma: f64,
-    /// K (d x d).
-    pub stiffness: Vec<Vec<f64>>,
-    /// B (d x d).
-    pub damping: Vec<Vec<f64>>,
-    /// I (d x d).
-    pub inertia: Vec<Vec<f64>>,
-    /// Reflex gain (N m s/rad), when there is a reflex.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reflex_gain: Option<f64>,
-}
-
-/// The truth of a varying simulation (`*.truth.json`), typed.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct VaryingTruth {
-    /// `varying`.
-    pub method: String,
-    /// `time since trial start` or the schedule column.
-    pub schedule: String,
-    /// Reflex delay (s), when there is a reflex.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reflex_delay_s: Option<f64>,
-    /// The truth on a grid of the schedule.
-    pub points: Vec<VaryingTruthPoint>,
-    /// How the recording was made.
-    pub notes: String,
-}
-
 /// The ensemble subject's truth every `step_s` over one repetition.
 pub fn ensemble_truth(s: &EnsembleSubject, e: &EnsembleExperiment, step_s: f64) -> VaryingTruth {
     let steps = (e.duration_s / step_s).floor() as usize;
+    let m = |rows: Vec<Vec<f64>>| Matrix::from_rows(&rows).expect("square truth");
     VaryingTruth {
-        method: "varying".into(),
+        about: About {
+            notes: vec![format!(
+                "ensemble of {} position-perturbed repetitions of {} s; K and B change by a raised cosine {} s wide at {} s",
+                e.repetitions, e.duration_s, s.change.width_s, s.change.centre_s
+            )],
+            ..About::default()
+        },
         schedule: "time since trial start".into(),
         reflex_delay_s: None,
         points: (0..=steps)
@@ -739,17 +713,13 @@ pub fn ensemble_truth(s: &EnsembleSubject, e: &EnsembleExperiment, step_s: f64) 
                 let [inertia, damping, stiffness] = s.truth_at(t);
                 VaryingTruthPoint {
                     sigma: t,
-                    stiffness,
-                    damping,
-                    inertia,
+                    stiffness: m(stiffness),
+                    damping: m(damping),
+                    inertia: m(inertia),
                     reflex_gain: None,
                 }
             })
             .collect(),
-        notes: format!(
-            "ensemble of {} position-perturbed repetitions of {} s; K and B change by a raised cosine {} s wide at {} s",
-            e.repetitions, e.duration_s, s.change.width_s, s.change.centre_s
-        ),
     }
 }
 
@@ -762,8 +732,12 @@ pub fn scheduled_truth(s: &ScheduledAnkle, p: &RampAndHold, count: usize) -> Var
         .copied()
         .fold(f64::NEG_INFINITY, f64::max);
     let count = count.max(2);
+    let one = |v: f64| Matrix::from_rows(&[vec![v]]).expect("1 x 1");
     VaryingTruth {
-        method: "varying".into(),
+        about: About {
+            notes: vec!["ankle under a continuous random position perturbation on a ramp-and-hold schedule of operating angles (column sv)".into()],
+            ..About::default()
+        },
         schedule: "sv".into(),
         reflex_delay_s: s.reflex.map(|r| r.delay_s),
         points: (0..count)
@@ -772,14 +746,13 @@ pub fn scheduled_truth(s: &ScheduledAnkle, p: &RampAndHold, count: usize) -> Var
                 let [k, b, g] = s.at(sigma);
                 VaryingTruthPoint {
                     sigma,
-                    stiffness: vec![vec![k]],
-                    damping: vec![vec![b]],
-                    inertia: vec![vec![s.inertia]],
+                    stiffness: one(k),
+                    damping: one(b),
+                    inertia: one(s.inertia),
                     reflex_gain: s.reflex.map(|_| g),
                 }
             })
             .collect(),
-        notes: "ankle under a continuous random position perturbation on a ramp-and-hold schedule of operating angles (column sv)".into(),
     }
 }
 

@@ -714,7 +714,10 @@ fn simulate<'py>(
     })
     .map_err(err)?;
     runs.into_iter()
-        .map(|run| Ok((columns_dict(py, &run.recording)?, run.truth.to_string())))
+        .map(|run| {
+            let truth = serde_json::to_string(&run.truth).map_err(|e| value_err(e.to_string()))?;
+            Ok((columns_dict(py, &run.recording)?, truth))
+        })
         .collect()
 }
 

@@ -34,6 +34,7 @@ use sections::demo::demo_section;
 use sections::linear::{ellipsoid_view, ellipsoids_of, fit_figures, linear_section, linear_tables};
 use sections::planar::{planar_section, sweep_section};
 use sections::reflex::reflex_section;
+use sections::spectra::spectra_section;
 use sections::stochastic::stochastic_section;
 pub use sections::stochastic::unwrap_degrees;
 use sections::study::study_section;
@@ -133,6 +134,7 @@ pub fn build(inputs: &[(String, Estimate)]) -> Report {
             Estimate::Linear(r) => linear_section(name, r),
             Estimate::Demo(r) => demo_section(name, r),
             Estimate::Stochastic(r) => stochastic_section(name, r),
+            Estimate::Spectra(r) => spectra_section(name, r),
             Estimate::Reflex(r) => reflex_section(name, r),
             Estimate::WindowSweep(r) => sweep_section(name, r),
             Estimate::Planar(r) => planar_section(name, r),

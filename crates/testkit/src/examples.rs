@@ -27,6 +27,10 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use limpid_core::arm::Arm;
+use limpid_core::truth::{
+    About, CartesianTruth, CocontractionTruth, LevelTruth, PlanarTruth, PlanarVariant, ReflexTruth,
+    Truth,
+};
 use limpid_core::{Matrix, Recording};
 use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleSubject};
 use limpid_lab::cocontraction::{
@@ -129,19 +133,43 @@ fn make_family(family: &str) -> PathBuf {
     dir
 }
 
-fn write(dir: &Path, case: &str, rec: &Recording, truth: Value) {
+fn write(dir: &Path, case: &str, rec: &Recording, truth: Truth) {
     limpid_io::write_recording(rec, dir.join(format!("{case}.csv")))
         .unwrap_or_else(|e| panic!("{case}: {e}"));
     let text = serde_json::to_string_pretty(&truth).expect("truth serialises");
     std::fs::write(dir.join(format!("{case}.truth.json")), text).expect("truth written");
 }
 
-fn rows3(m: &Matrix3<f64>) -> Value {
-    serde_json::to_value(Matrix::from(*m)).expect("matrix serialises")
+/// Family, case, seed, rate, checked quantities and notes of a truth.
+fn about(
+    family: &str,
+    case: &str,
+    seed: u64,
+    rate: f64,
+    checked: &[&str],
+    notes: &[&str],
+) -> About {
+    About {
+        family: Some(family.into()),
+        case: Some(case.into()),
+        seed: Some(seed),
+        sample_rate: Some(rate),
+        source: None,
+        checked: checked.iter().map(|c| c.to_string()).collect(),
+        notes: notes.iter().map(|n| n.to_string()).collect(),
+    }
 }
 
-fn rows2(m: &Matrix2<f64>) -> Value {
-    serde_json::to_value(Matrix::from(*m)).expect("matrix serialises")
+/// The generator's other keys of a truth file.
+fn other<const N: usize>(entries: [(&str, Value); N]) -> std::collections::BTreeMap<String, Value> {
+    entries
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+}
+
+fn to_value<T: serde::Serialize>(value: &T) -> Value {
+    serde_json::to_value(value).expect("lab types serialise")
 }
 
 /// A skew-symmetric matrix whose largest entry is `max`.
@@ -166,23 +194,31 @@ fn cartesian_slow(dir: &Path) {
         let rec = simulate_centre_out(&posture, &protocol, &noise, seed)
             .unwrap_or_else(|e| panic!("{case}: {e}"));
         let s = posture.start;
-        let truth = json!({
-            "method": "cartesian",
-            "family": "cartesian_slow",
-            "case": case,
-            "seed": seed,
-            "sample_rate": protocol.sample_rate,
-            "inertia": rows3(&posture.inertia),
-            "damping": rows3(&posture.damping),
-            "stiffness": rows3(&posture.stiffness),
-            "equilibrium": [s.x, s.y, s.z],
-            "profile": profile,
-            "protocol": {"trials": protocol.directions.len(), "rest_s": protocol.rest_s,
-                         "motion_s": protocol.motion_s, "radius_m": protocol.radius_m},
-            "noise": noise,
-            "checked": ["stiffness", "damping"],
-            "notes": ["made by limpid's lab (limpid-testkit): Artemiadis et al. (2010) Table I posture with a 1.5 % antisymmetric part",
-                      "inertia is not identifiable with 3 s motions"],
+        let truth = Truth::Cartesian(CartesianTruth {
+            about: about(
+                "cartesian_slow",
+                case,
+                seed,
+                protocol.sample_rate,
+                &["stiffness", "damping"],
+                &[
+                    "made by limpid's lab (limpid-testkit): Artemiadis et al. (2010) Table I posture with a 1.5 % antisymmetric part",
+                    "inertia is not identifiable with 3 s motions",
+                ],
+            ),
+            inertia: Matrix::from(posture.inertia),
+            damping: Matrix::from(posture.damping),
+            stiffness: Matrix::from(posture.stiffness),
+            equilibrium: vec![s.x, s.y, s.z],
+            profile: to_value(&profile).as_str().map(String::from),
+            other: other([
+                (
+                    "protocol",
+                    json!({"trials": protocol.directions.len(), "rest_s": protocol.rest_s,
+                           "motion_s": protocol.motion_s, "radius_m": protocol.radius_m}),
+                ),
+                ("noise", to_value(&noise)),
+            ]),
         });
         write(dir, case, &rec, truth);
     }
@@ -240,30 +276,35 @@ fn cocontraction(dir: &Path) {
             .unwrap_or_else(|e| panic!("{case}: {e}"));
         limpid_io::write_recording(&mvc, dir.join(format!("{case}.mvc.csv")))
             .unwrap_or_else(|e| panic!("{case}: {e}"));
-        let levels: Vec<Value> = protocol
+        let levels = protocol
             .levels
             .iter()
-            .map(|l| {
-                json!({"level": l, "stiffness": rows3(&subject.stiffness(*l)),
-                            "muscle_activation": subject.activation_gain.map(|g| g * l)})
+            .map(|l| LevelTruth {
+                level: *l,
+                stiffness: Matrix::from(subject.stiffness(*l)),
+                cocontraction_index: None,
+                muscle_activation: Some(subject.activation_gain.map(|g| g * l).to_vec()),
             })
             .collect();
-        let truth = json!({
-            "method": "cocontraction",
-            "family": "cocontraction",
-            "case": case,
-            "seed": seed,
-            "sample_rate": protocol.sample_rate,
-            "inertia": rows3(&subject.inertia),
-            "damping": rows3(&subject.damping),
-            "equilibrium": start,
-            "levels": levels,
-            "stiffness_level0": rows3(&k0),
-            "stiffness_increment_per_unit_level": rows3(&dk),
-            "noise": noise,
-            "checked": ["levels[].stiffness"],
-            "notes": ["made by limpid's lab (limpid-testkit): K(level) = K0 + level dK; at level 1 the tertiary principal stiffness +90 %, the others +5 % / +3 %, axes turned 8.6 deg about the primary",
-                      "no cocontraction_index: the index of eq. (1) is normalised by the MVC's maximum envelope, which the lab does not know in advance"],
+        let truth = Truth::Cocontraction(CocontractionTruth {
+            about: about(
+                "cocontraction",
+                case,
+                seed,
+                protocol.sample_rate,
+                &["levels[].stiffness"],
+                &[
+                    "made by limpid's lab (limpid-testkit): K(level) = K0 + level dK; at level 1 the tertiary principal stiffness +90 %, the others +5 % / +3 %, axes turned 8.6 deg about the primary",
+                    "no cocontraction_index: the index of eq. (1) is normalised by the MVC's maximum envelope, which the lab does not know in advance",
+                ],
+            ),
+            inertia: Some(Matrix::from(subject.inertia)),
+            damping: Some(Matrix::from(subject.damping)),
+            equilibrium: Some(start.to_vec()),
+            levels,
+            stiffness_level0: Some(Matrix::from(k0)),
+            stiffness_increment_per_unit_level: Some(Matrix::from(dk)),
+            other: other([("noise", to_value(&noise))]),
         });
         write(dir, case, &rec, truth);
     }
@@ -299,29 +340,39 @@ fn planar(dir: &Path) {
         } else {
             joint_rec
         };
-        let truth = json!({
-            "method": "planar",
-            "family": "planar",
-            "variant": if end_point { "endpoint" } else { "joint" },
-            "case": case,
-            "seed": seed,
-            "sample_rate": protocol.sample_rate,
-            "inertial_parameters": subject.xi,
-            "stiffness": rows2(&subject.stiffness),
-            "damping": rows2(&subject.damping),
-            "link_lengths": links,
-            "q0": subject.q0,
-            "equilibrium": subject.q0,
-            "shoulder": [0.0, 0.0],
-            "interpolation_interval_ms": (interval_s * 1e3).round(),
-            "observation_window_ms": (protocol.after_s * 1e3).round(),
-            "noise": {"torque_white_std_Nm": torque_std, "baseline_torque_Nm": subject.tau0,
-                      "joint_angle_std_rad": angle_std,
-                      "position_std_m": if end_point { 2e-5 } else { 0.0 },
-                      "force_white_std_N": if end_point { 0.1 } else { 0.0 }},
-            "checked": ["stiffness", "damping", "inertial_parameters"],
-            "notes": ["made by limpid's lab (limpid-testkit): Lakatos, Petit & van der Smagt (2011) eq. (9)",
-                      "end-point variant: x = FK(q) (shoulder at the origin, q2 relative), f = J(q)^-T tau on the hand, then position and force noise"],
+        let truth = Truth::Planar(PlanarTruth {
+            about: about(
+                "planar",
+                case,
+                seed,
+                protocol.sample_rate,
+                &["stiffness", "damping", "inertial_parameters"],
+                &[
+                    "made by limpid's lab (limpid-testkit): Lakatos, Petit & van der Smagt (2011) eq. (9)",
+                    "end-point variant: x = FK(q) (shoulder at the origin, q2 relative), f = J(q)^-T tau on the hand, then position and force noise",
+                ],
+            ),
+            variant: if end_point {
+                PlanarVariant::Endpoint
+            } else {
+                PlanarVariant::Joint
+            },
+            inertial_parameters: subject.xi,
+            stiffness: Matrix::from(subject.stiffness),
+            damping: Matrix::from(subject.damping),
+            link_lengths: links,
+            q0: subject.q0,
+            equilibrium: Some(subject.q0),
+            shoulder: Some([0.0, 0.0]),
+            interpolation_interval_ms: (interval_s * 1e3).round(),
+            observation_window_ms: Some((protocol.after_s * 1e3).round()),
+            other: other([(
+                "noise",
+                json!({"torque_white_std_Nm": torque_std, "baseline_torque_Nm": subject.tau0,
+                       "joint_angle_std_rad": angle_std,
+                       "position_std_m": if end_point { 2e-5 } else { 0.0 },
+                       "force_white_std_N": if end_point { 0.1 } else { 0.0 }}),
+            )]),
         });
         write(dir, case, &rec, truth);
     }
@@ -388,13 +439,15 @@ fn stochastic(dir: &Path) {
         let mut runs = simulate_design(&design, Some(&subject), RigController::Ideal, seed)
             .unwrap_or_else(|e| panic!("{case}: {e}"));
         let run = runs.pop().expect("one recording");
-        let mut truth = run.truth;
-        truth["family"] = json!("stochastic");
-        truth["case"] = json!(case);
-        truth["seed"] = json!(seed);
-        truth["band_Hz"] = json!([0.5, 10.0]);
-        truth["checked"] = json!(["stiffness", "impedance over 0.5-10 Hz"]);
-        write(dir, case, &run.recording, truth);
+        let Truth::Stochastic(mut truth) = run.truth else {
+            panic!("{case}: a stochastic design simulates a stochastic truth")
+        };
+        truth.about.family = Some("stochastic".into());
+        truth.about.case = Some(case.into());
+        truth.about.seed = Some(seed);
+        truth.band_hz = Some([0.5, 10.0]);
+        truth.about.checked = vec!["stiffness".into(), "impedance over 0.5-10 Hz".into()];
+        write(dir, case, &run.recording, Truth::Stochastic(truth));
     }
 }
 
@@ -403,18 +456,23 @@ fn ankle(dir: &Path) {
         (AnkleSubject::default(), AnkleExperiment::default(), 2501u64);
     let rec =
         simulate_ankle(&subject, &experiment, seed).unwrap_or_else(|e| panic!("ex_ankle: {e}"));
-    let truth = json!({
-        "method": "reflex",
-        "family": "ankle",
-        "case": "ex_ankle",
-        "seed": seed,
-        "sample_rate": experiment.rate_hz,
-        "inertia": [[subject.inertia]],
-        "damping": [[subject.damping]],
-        "stiffness": [[subject.stiffness]],
-        "reflex": subject.reflex,
-        "noise": {"torque_white_std_Nm": experiment.torque_noise_nm},
-        "notes": ["made by limpid's lab (limpid-testkit): intrinsic I, B, K plus a reflex on half-wave rectified velocity, delayed and low-passed"],
+    let one = |v: f64| Matrix::from_rows(&[vec![v]]).expect("1 x 1");
+    let truth = Truth::Reflex(ReflexTruth {
+        about: about(
+            "ankle",
+            "ex_ankle",
+            seed,
+            experiment.rate_hz,
+            &[],
+            &["made by limpid's lab (limpid-testkit): intrinsic I, B, K plus a reflex on half-wave rectified velocity, delayed and low-passed"],
+        ),
+        inertia: one(subject.inertia),
+        damping: one(subject.damping),
+        stiffness: one(subject.stiffness),
+        other: other([
+            ("reflex", to_value(&subject.reflex)),
+            ("noise", json!({"torque_white_std_Nm": experiment.torque_noise_nm})),
+        ]),
     });
     write(dir, "ex_ankle", &rec, truth);
 }

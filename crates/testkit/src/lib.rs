@@ -6,6 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
+use limpid_core::truth::{
+    CartesianTruth, CocontractionTruth, PlanarTruth, StochasticTruth, Truth, VaryingTruth,
+};
 use limpid_core::Matrix;
 use nalgebra::DMatrix;
 use serde_json::Value;
@@ -67,6 +70,34 @@ pub fn read_json<P: AsRef<Path> + ?Sized>(path: &P) -> Value {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
+
+/// A truth file (`*.truth.json`), read through its type.
+pub fn read_truth<P: AsRef<Path> + ?Sized>(path: &P) -> Truth {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    Truth::from_json(&path.display().to_string(), &text).unwrap_or_else(|e| panic!("{e}"))
+}
+
+macro_rules! truth_of_kind {
+    ($name:ident, $variant:ident, $ty:ty) => {
+        #[doc = concat!("A truth file that must be a `", stringify!($variant), "` one.")]
+        pub fn $name<P: AsRef<Path> + ?Sized>(path: &P) -> $ty {
+            match read_truth(path) {
+                Truth::$variant(t) => t,
+                other => panic!(
+                    "{}: not a {} truth: {other:?}",
+                    path.as_ref().display(),
+                    stringify!($variant)
+                ),
+            }
+        }
+    };
+}
+truth_of_kind!(cartesian_truth, Cartesian, CartesianTruth);
+truth_of_kind!(cocontraction_truth, Cocontraction, CocontractionTruth);
+truth_of_kind!(planar_truth, Planar, PlanarTruth);
+truth_of_kind!(stochastic_truth, Stochastic, StochasticTruth);
+truth_of_kind!(varying_truth, Varying, VaryingTruth);
 
 /// A row-major matrix from JSON.
 pub fn mat(v: &Value) -> Matrix {

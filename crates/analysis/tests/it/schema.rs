@@ -1,8 +1,85 @@
-//! The committed JSON Schema of the result contract is the one the types
-//! generate (regenerate with `LIMPID_UPDATE_SCHEMA=1 cargo test -p
-//! limpid-analysis --test schema`), and documents round-trip through it.
+//! The committed JSON Schemas of the result contract and of the truth files
+//! are the ones the types generate (regenerate with `LIMPID_UPDATE_SCHEMA=1
+//! cargo test -p limpid-analysis --test it schema`), documents round-trip
+//! through them, and every example's truth (limpid's and the outside
+//! generator's) reads through its type.
 
 use limpid_analysis::result::{json_schema, Document};
+use limpid_core::Truth;
+
+const TRUTH_SCHEMA_FILE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../schema/limpid-truth.v1.schema.json"
+);
+
+#[test]
+fn committed_truth_schema_matches_the_types() {
+    let generated = serde_json::to_string_pretty(&Truth::json_schema()).unwrap() + "\n";
+    if std::env::var_os("LIMPID_UPDATE_SCHEMA").is_some() {
+        std::fs::write(TRUTH_SCHEMA_FILE, &generated).unwrap();
+    }
+    let committed = std::fs::read_to_string(TRUTH_SCHEMA_FILE).expect("schema file committed");
+    assert!(
+        committed == generated,
+        "{TRUTH_SCHEMA_FILE} is out of date: the truth types changed. Regenerate it with \
+         LIMPID_UPDATE_SCHEMA=1 cargo test -p limpid-analysis --test it schema"
+    );
+}
+
+/// Every number as a float, so that 220 and 220.0 compare equal.
+fn as_floats(v: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match v {
+        Value::Number(n) => serde_json::json!(n.as_f64().expect("finite")),
+        Value::Array(a) => Value::Array(a.into_iter().map(as_floats).collect()),
+        Value::Object(o) => Value::Object(o.into_iter().map(|(k, v)| (k, as_floats(v))).collect()),
+        other => other,
+    }
+}
+
+#[test]
+fn every_example_truth_reads_through_its_type_and_keeps_its_keys() {
+    for family in limpid_testkit::examples::FAMILIES {
+        let mut sets = vec![limpid_testkit::limpid_examples(family)];
+        // the outside set has no ankle family
+        if family != "ankle" {
+            sets.extend(limpid_testkit::outside_examples(family));
+        }
+        for dir in sets {
+            let mut read = 0;
+            for entry in std::fs::read_dir(&dir).unwrap() {
+                let path = entry.unwrap().path();
+                if !path.to_string_lossy().ends_with(".truth.json") {
+                    continue;
+                }
+                let truth = limpid_testkit::read_truth(&path);
+                let kind = matches!(
+                    (&truth, family),
+                    (Truth::Cartesian(_), "cartesian_slow")
+                        | (Truth::Cocontraction(_), "cocontraction")
+                        | (Truth::Planar(_), "planar")
+                        | (Truth::Stochastic(_), "stochastic")
+                        | (Truth::Reflex(_), "ankle")
+                );
+                assert!(
+                    kind,
+                    "{}: a {family} example read as {truth:?}",
+                    path.display()
+                );
+                // nothing is lost: written back, the file says the same (220 and 220.0 alike)
+                let original = limpid_testkit::read_json(&path);
+                assert_eq!(
+                    as_floats(serde_json::to_value(&truth).unwrap()),
+                    as_floats(original),
+                    "{}",
+                    path.display()
+                );
+                read += 1;
+            }
+            assert!(read >= 1, "{}: no truth files", dir.display());
+        }
+    }
+}
 
 const SCHEMA_FILE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),

@@ -30,14 +30,8 @@ fn a_method_refuses_the_wrong_number_of_recordings() {
 #[test]
 fn the_planar_window_in_ms_is_the_estimators_window_in_samples() {
     let rec = read("planar", "ex_joint_180.csv");
-    let truth: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(examples("planar").join("ex_joint_180.truth.json")).unwrap(),
-    )
-    .unwrap();
-    let l = [
-        truth["link_lengths"][0].as_f64().unwrap(),
-        truth["link_lengths"][1].as_f64().unwrap(),
-    ];
+    let l = limpid_testkit::planar_truth(&examples("planar").join("ex_joint_180.truth.json"))
+        .link_lengths;
     let request = Request::Planar(PlanarRequest {
         arm: ArmRequest::new(l),
         window_ms: Some(200.0),

@@ -4,11 +4,12 @@
 //! than 4 standard errors from it.
 
 use crate::common::*;
+use limpid_core::Matrix;
 use serde_json::Value;
 
 /// (|z|, label) for every element of `key` in `est` against `truth`.
-fn z_scores(label: &str, est: &Value, se: &Value, truth: &Value) -> Vec<(f64, String)> {
-    let (e, s, t) = (mat(est), mat(se), mat(truth));
+fn z_scores(label: &str, est: &Value, se: &Value, t: &Matrix) -> Vec<(f64, String)> {
+    let (e, s) = (mat(est), mat(se));
     let mut out = Vec::new();
     for i in 0..t.nrows() {
         for j in 0..t.ncols() {
@@ -32,7 +33,12 @@ fn z_scores(label: &str, est: &Value, se: &Value, truth: &Value) -> Vec<(f64, St
     out
 }
 
-fn linear_elements(label: &str, r: &Value, truth_k: &Value, truth_b: &Value) -> Vec<(f64, String)> {
+fn linear_elements(
+    label: &str,
+    r: &Value,
+    truth_k: &Matrix,
+    truth_b: &Matrix,
+) -> Vec<(f64, String)> {
     let se = &r["standard_errors"];
     let mut z = z_scores(
         &format!("{label} K"),
@@ -64,14 +70,14 @@ fn the_truth_lies_within_two_standard_errors_of_nine_elements_in_ten() {
         let mut z = Vec::new();
         for case in ["ex_cubic", "ex_sinusoid"] {
             let dir = ex("cartesian_slow");
-            let t = read_json(&dir.join(format!("{case}.truth.json")));
+            let t = limpid_testkit::cartesian_truth(&dir.join(format!("{case}.truth.json")));
             let rec = dir.join(format!("{case}.csv"));
             let r = json(&["estimate", "linear", rec.to_str().unwrap(), "--json"]);
-            z.extend(linear_elements(case, &r, &t["stiffness"], &t["damping"]));
+            z.extend(linear_elements(case, &r, &t.stiffness, &t.damping));
         }
         for case in ["ex_config4", "ex_config7"] {
             let dir = ex("cocontraction");
-            let t = read_json(&dir.join(format!("{case}.truth.json")));
+            let t = limpid_testkit::cocontraction_truth(&dir.join(format!("{case}.truth.json")));
             let rec = dir.join(format!("{case}.csv"));
             let mvc = dir.join(format!("{case}.mvc.csv"));
             let r = json(&[
@@ -83,28 +89,23 @@ fn the_truth_lies_within_two_standard_errors_of_nine_elements_in_ten() {
                 "--json",
             ]);
             let levels = r["levels"].as_array().unwrap();
-            let truths = t["levels"].as_array().unwrap();
+            let truths = &t.levels;
             assert_eq!(levels.len(), truths.len(), "{case}");
             for (l, tl) in levels.iter().zip(truths) {
                 let label = format!("{case}@{}", l["level"]);
                 z.extend(linear_elements(
                     &label,
                     &l["estimate"],
-                    &tl["stiffness"],
-                    &t["damping"],
+                    &tl.stiffness,
+                    t.damping.as_ref().expect("the examples give B"),
                 ));
             }
         }
         for case in ["ex_endpoint_220", "ex_joint_180"] {
             let dir = ex("planar");
-            let t = read_json(&dir.join(format!("{case}.truth.json")));
+            let t = limpid_testkit::planar_truth(&dir.join(format!("{case}.truth.json")));
             let rec = dir.join(format!("{case}.csv"));
-            let l: Vec<String> = t["link_lengths"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.to_string())
-                .collect();
+            let l: Vec<String> = t.link_lengths.iter().map(|v| v.to_string()).collect();
             let r = json(&[
                 "estimate",
                 "planar",
@@ -113,14 +114,14 @@ fn the_truth_lies_within_two_standard_errors_of_nine_elements_in_ten() {
                 &l.join(","),
                 "--json",
             ]);
-            z.extend(linear_elements(case, &r, &t["stiffness"], &t["damping"]));
+            z.extend(linear_elements(case, &r, &t.stiffness, &t.damping));
         }
         for case in ["ex_sa3", "ex_sa4"] {
             let dir = ex("stochastic");
-            let t = read_json(&dir.join(format!("{case}.truth.json")));
+            let t = limpid_testkit::stochastic_truth(&dir.join(format!("{case}.truth.json")));
             let rec = dir.join(format!("{case}.csv"));
             let r = json(&["estimate", "stochastic", rec.to_str().unwrap(), "--json"]);
-            z.extend(linear_elements(case, &r, &t["stiffness"], &t["damping"]));
+            z.extend(linear_elements(case, &r, &t.stiffness, &t.damping));
         }
         z.sort_by(|a, b| b.0.total_cmp(&a.0));
         let covered = z.iter().filter(|(v, _)| *v <= 2.0).count() as f64 / z.len() as f64;

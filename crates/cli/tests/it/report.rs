@@ -824,6 +824,17 @@ fn a_result_whose_arrays_disagree_is_refused_naming_the_field() {
             .unwrap(),
         "--json",
     ]);
+    let spectra = json(&[
+        "spectra",
+        examples("stochastic").join("ex_sa3.csv").to_str().unwrap(),
+        "--inputs",
+        "ux,uz",
+        "--outputs",
+        "x",
+        "--nfft",
+        "256",
+        "--json",
+    ]);
     // a small window-sweep document (the fuzzer's seed, made by limpid)
     let sweep: Value = serde_json::from_str(
         &std::fs::read_to_string(
@@ -835,6 +846,14 @@ fn a_result_whose_arrays_disagree_is_refused_naming_the_field() {
     .unwrap();
     type Mutation = fn(&mut Value);
     let cases: Vec<(&str, &Value, Mutation, &str)> = vec![
+        (
+            "a partial coherence one frequency short",
+            &spectra,
+            |v| {
+                v["partial_coherence"][0][1].as_array_mut().unwrap().pop();
+            },
+            "partial_coherence[0][1]: 128 entries, expected 129 (one per entry of frequencies)",
+        ),
         (
             "a sweep row's stiffness one row short (found by the fuzzer)",
             &sweep,

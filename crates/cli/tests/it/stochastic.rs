@@ -8,7 +8,7 @@ fn stochastic_examples_through_the_cli() {
         for name in ["ex_sa3", "ex_sa4"] {
             let case = &format!("{set}/{name}");
             let truth_path = dir.join(format!("{name}.truth.json"));
-            let truth = read_json(&truth_path);
+            let truth = limpid_testkit::stochastic_truth(&truth_path);
             let rec = dir.join(format!("{name}.csv"));
             let r = json(&[
                 "estimate",
@@ -20,7 +20,7 @@ fn stochastic_examples_through_the_cli() {
             ]);
             let rel = r["accuracy"]["mean_relative_error"].as_f64().unwrap();
             assert!(rel < 0.10, "{case}: mean relative impedance error {rel}");
-            let ek = rel_err(&mat(&r["stiffness"]), &mat(&truth["stiffness"]));
+            let ek = rel_err(&mat(&r["stiffness"]), &truth.stiffness);
             assert!(ek < 0.05, "{case}: stiffness error {ek}");
             let nf = r["frequencies"].as_array().unwrap().len();
             assert_eq!(r["impedance"].as_array().unwrap().len(), nf);
@@ -32,6 +32,74 @@ fn stochastic_examples_through_the_cli() {
             }
         }
     }
+}
+
+/// `spectra --json` is a result document (kind `spectra`, in the schema):
+/// the PSD integrates to the column's variance (Parseval), the spring array's
+/// outputs are explained by its inputs where they have power, the CSV says
+/// the same numbers, and the report draws it.
+#[test]
+fn spectra_json_is_a_result_document_that_integrates_to_the_variance() {
+    let rec = examples("stochastic").join("ex_sa3.csv");
+    let dir = tempfile::tempdir().unwrap();
+    let html = dir.path().join("s.html");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "spectra",
+            rec.to_str().unwrap(),
+            "--inputs",
+            "ux,uz",
+            "--outputs",
+            "x,z",
+        ];
+        a.extend_from_slice(extra);
+        a.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let with = args(&["--json", "--report", html.to_str().unwrap()]);
+    let v = json(&with.iter().map(String::as_str).collect::<Vec<_>>());
+    validate(&v);
+    assert_eq!(v["kind"], "spectra");
+    let f: Vec<f64> = serde_json::from_value(v["frequencies"].clone()).unwrap();
+    let psd: Vec<Vec<f64>> = serde_json::from_value(v["psd"].clone()).unwrap();
+    let df = f[1] - f[0];
+    let ux = limpid_io::read_recording(&rec)
+        .unwrap()
+        .column("ux")
+        .unwrap()
+        .to_vec();
+    let mean = ux.iter().sum::<f64>() / ux.len() as f64;
+    let variance = ux.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / ux.len() as f64;
+    let integral = psd[0].iter().sum::<f64>() * df;
+    assert!(
+        (integral / variance - 1.0).abs() < 0.05,
+        "{integral} vs {variance}"
+    );
+    let multiple: Vec<Vec<Option<f64>>> =
+        serde_json::from_value(v["multiple_coherence"].clone()).unwrap();
+    for (o, m) in multiple.iter().enumerate() {
+        for (k, c) in m.iter().enumerate() {
+            if (1.0..=10.0).contains(&f[k]) {
+                assert!(c.unwrap() > 0.85, "output {o} at {} Hz: {c:?}", f[k]);
+            }
+        }
+    }
+    let text = limpid(&args(&[]).iter().map(String::as_str).collect::<Vec<_>>());
+    let row: Vec<f64> = text
+        .stdout
+        .lines()
+        .nth(5)
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
+    assert_eq!(row[0], f[4]);
+    assert!((row[1] / psd[0][4] - 1.0).abs() < 1e-12);
+    assert!((row[5] - multiple[0][4].unwrap()).abs() < 1e-6);
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(
+        page.contains("Power spectral density") && page.contains("Partial and ordinary coherence")
+    );
+    assert!(!page.contains("NaN"));
 }
 
 #[test]
@@ -86,7 +154,7 @@ fn spectra_csv_and_bad_band() {
 #[test]
 fn shoulder_joint_space_before_estimation_matches_the_mapped_truth() {
     let dir = examples("stochastic");
-    let truth = read_json(&dir.join("ex_sa3.truth.json"));
+    let truth = limpid_testkit::stochastic_truth(&dir.join("ex_sa3.truth.json"));
     let rec = dir.join("ex_sa3.csv");
     let r = json(&[
         "estimate",
@@ -105,7 +173,7 @@ fn shoulder_joint_space_before_estimation_matches_the_mapped_truth() {
         angles_deg: [30.0, 45.0, 0.0],
     })
     .unwrap();
-    let k = mat(&truth["stiffness"]);
+    let k = truth.stiffness;
     let k = nalgebra::Matrix3::from_fn(|a, b| k[(a, b)]);
     let m = j.transpose() * k * j;
     let expected = nalgebra::DMatrix::from_fn(3, 3, |a, b| m[(a, b)]);

@@ -35,9 +35,7 @@ fn simulate(dir: &std::path::Path, preset: &str, extra: &str) -> std::path::Path
 fn ensemble_json_follows_the_truth_file_and_the_report_draws_it() {
     let dir = tempfile::tempdir().unwrap();
     let rec = simulate(dir.path(), "ensemble", "");
-    let truth: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(rec.with_extension("truth.json")).unwrap())
-            .unwrap();
+    let truth = limpid_testkit::varying_truth(&rec.with_extension("truth.json"));
     let html = dir.path().join("v.html");
     let v = json(&[
         "estimate",
@@ -51,9 +49,9 @@ fn ensemble_json_follows_the_truth_file_and_the_report_draws_it() {
     assert_eq!(v["kind"], "varying");
     assert_eq!(v["schedule"]["name"], "time since trial start");
     let truth_k = |t: f64| {
-        let pts = truth["points"].as_array().unwrap();
+        let pts = &truth.points;
         let i = ((t / 0.01).round() as usize).min(pts.len() - 1);
-        pts[i]["stiffness"][0][0].as_f64().unwrap()
+        pts[i].stiffness[(0, 0)]
     };
     let points = v["points"].as_array().unwrap();
     let mut good = 0;
@@ -94,46 +92,37 @@ fn ramp_and_hold_holds_only_with_gaps_recovers_k_and_the_reflex() {
         "--json",
     ]);
     validate(&v);
-    let truth: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(rec.with_extension("truth.json")).unwrap())
-            .unwrap();
+    let truth = limpid_testkit::varying_truth(&rec.with_extension("truth.json"));
     assert!(v["reflex"]["detected"].as_bool().unwrap());
     let delay = v["reflex"]["delay_s"].as_f64().unwrap();
     assert!(
-        (delay - truth["reflex_delay_s"].as_f64().unwrap()).abs() < 0.01,
+        (delay - truth.reflex_delay_s.unwrap()).abs() < 0.01,
         "{delay}"
     );
-    let tp = truth["points"].as_array().unwrap();
-    let at = |s: f64, key: &str| {
+    let at = |s: f64| {
         // the truth grid and the result's span the same schedule range
-        let i = tp
+        truth
+            .points
             .iter()
-            .enumerate()
-            .min_by(|a, b| {
-                (a.1["sigma"].as_f64().unwrap() - s)
-                    .abs()
-                    .total_cmp(&(b.1["sigma"].as_f64().unwrap() - s).abs())
-            })
+            .min_by(|a, b| (a.sigma - s).abs().total_cmp(&(b.sigma - s).abs()))
             .unwrap()
-            .0;
-        (tp[i]["sigma"].as_f64().unwrap(), tp[i][key].clone())
     };
     for p in v["points"].as_array().unwrap() {
         let s = p["sigma"].as_f64().unwrap();
         if p["identifiable"] != true {
             continue;
         }
-        let (ts, k) = at(s, "stiffness");
-        if (ts - s).abs() > 0.01 {
+        let truth_point = at(s);
+        if (truth_point.sigma - s).abs() > 0.01 {
             continue;
         }
         let (k, kt) = (
             p["stiffness"][0][0].as_f64().unwrap(),
-            k[0][0].as_f64().unwrap(),
+            truth_point.stiffness[(0, 0)],
         );
         assert!((k - kt).abs() < 0.1 * kt, "K({s}) = {k}, truth {kt}");
         let g = p["reflex"]["gain"].as_f64().unwrap();
-        let gt = at(s, "reflex_gain").1.as_f64().unwrap();
+        let gt = truth_point.reflex_gain.unwrap();
         assert!(
             (g - gt).abs() < 0.25 * gt.max(4.0),
             "G({s}) = {g}, truth {gt}"

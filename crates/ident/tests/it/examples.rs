@@ -4,7 +4,9 @@
 
 use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
 
-use crate::common::{example_sets, examples, mat, rel_err, truth};
+use limpid_testkit::cartesian_truth;
+
+use crate::common::{example_sets, examples, rel_err};
 
 #[test]
 fn cartesian_slow_examples_recover_stiffness_and_damping() {
@@ -13,7 +15,7 @@ fn cartesian_slow_examples_recover_stiffness_and_damping() {
             let case = &format!("{set}/{case}");
             let name = case.rsplit('/').next().unwrap();
             let rec = limpid_io::read_recording(dir.join(format!("{name}.csv"))).unwrap();
-            let t = truth(&dir.join(format!("{name}.truth.json")));
+            let t = cartesian_truth(&dir.join(format!("{name}.truth.json")));
             for equilibrium in [true, false] {
                 let prepared = prepare(&rec, &PrepareParams::default()).unwrap();
                 let est = fit_linear(
@@ -24,8 +26,8 @@ fn cartesian_slow_examples_recover_stiffness_and_damping() {
                     },
                 )
                 .unwrap();
-                let ek = rel_err(&est.stiffness, &mat(&t["stiffness"]));
-                let eb = rel_err(&est.damping, &mat(&t["damping"]));
+                let ek = rel_err(&est.stiffness, &t.stiffness);
+                let eb = rel_err(&est.damping, &t.damping);
                 eprintln!("{case} eq={equilibrium}: K err {:.4}, B err {:.4}, M {:?}, vaf {:?}, warnings {:?}", ek, eb, est.inertia, est.fit.vaf, est.warnings);
                 assert!(ek < 0.03, "{case}: stiffness error {ek}");
                 assert!(eb < 0.15, "{case}: damping error {eb}");

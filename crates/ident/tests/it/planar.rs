@@ -2,17 +2,17 @@
 //! generator's with `LIMPID_EXAMPLES`): stiffness within 5 %, damping within
 //! 15 %, inertial parameters within 10 % (issue 5).
 
+use limpid_core::truth::PlanarTruth;
 use limpid_ident::planar::{fit_planar, prepare_planar, Arm, PlanarPrepare};
-use serde_json::Value;
 
 use std::path::Path;
 
-fn truth(dir: &Path, case: &str) -> Value {
-    limpid_testkit::read_json(&dir.join(format!("{case}.truth.json")))
+fn truth(dir: &Path, case: &str) -> PlanarTruth {
+    limpid_testkit::planar_truth(&dir.join(format!("{case}.truth.json")))
 }
 
-fn rel(est: &limpid_core::Matrix, t: &Value) -> f64 {
-    limpid_testkit::rel_err(est, &limpid_testkit::mat(t))
+fn rel(est: &limpid_core::Matrix, t: &limpid_core::Matrix) -> f64 {
+    limpid_testkit::rel_err(est, t)
 }
 
 #[test]
@@ -21,18 +21,8 @@ fn planar_examples_recover_truth() {
         for name in ["ex_joint_180", "ex_endpoint_220"] {
             let case = &format!("{set}/{name}");
             let t = truth(&dir, name);
-            let l: Vec<f64> = t["link_lengths"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
-            let s: Vec<f64> = t["shoulder"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
+            let l = t.link_lengths;
+            let s = t.shoulder.expect("the examples state the shoulder");
             let rec = limpid_io::read_recording(dir.join(format!("{name}.csv"))).unwrap();
             let data = prepare_planar(
                 &rec,
@@ -50,14 +40,9 @@ fn planar_examples_recover_truth() {
             .unwrap();
             let all: Vec<usize> = (0..data.trials.len()).collect();
             let est = fit_planar(&data, usize::MAX, None, &all).unwrap();
-            let ek = rel(&est.stiffness, &t["stiffness"]);
-            let ed = rel(&est.damping, &t["damping"]);
-            let xi: Vec<f64> = t["inertial_parameters"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
+            let ek = rel(&est.stiffness, &t.stiffness);
+            let ed = rel(&est.damping, &t.damping);
+            let xi = t.inertial_parameters;
             let exi = (0..3)
                 .map(|i| (est.inertial_parameters[i] - xi[i]).powi(2))
                 .sum::<f64>()
@@ -182,10 +167,7 @@ fn the_sweep_trusts_precise_stable_windows_and_none_past_a_reflex() {
         let rec = limpid_io::read_recording(dir.join("ex_joint_180.csv")).unwrap();
         let data = prepare_planar(&rec, &PlanarPrepare::new(0.28, 0.35)).unwrap();
         let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None).unwrap();
-        let (k, d) = (
-            limpid_testkit::mat(&t["stiffness"]),
-            limpid_testkit::mat(&t["damping"]),
-        );
+        let (k, d) = (t.stiffness, t.damping);
         assert!(
             assert_trusted_windows_are_right(&sweep, &k, &d) >= 10,
             "{set}"

@@ -4,19 +4,19 @@
 //! stiffness within 5 % (issue 6).
 
 use limpid_ident::stochastic::{accuracy, estimate_stochastic, ExpectedModel, StochasticParams};
-use serde_json::Value;
+use limpid_testkit::stochastic_truth;
 
-use crate::common::{example_sets, mat, rel_err as rel};
+use crate::common::{example_sets, rel_err as rel};
 
 #[test]
 fn spring_array_examples() {
     for (set, dir) in example_sets("stochastic") {
         for name in ["ex_sa3", "ex_sa4"] {
             let case = &format!("{set}/{name}");
-            let t: Value = limpid_testkit::read_json(&dir.join(format!("{name}.truth.json")));
+            let t = stochastic_truth(&dir.join(format!("{name}.truth.json")));
             let rec = limpid_io::read_recording(dir.join(format!("{name}.csv"))).unwrap();
             let est = estimate_stochastic(&rec, &StochasticParams::default()).unwrap();
-            let (m, b, k) = (mat(&t["inertia"]), mat(&t["damping"]), mat(&t["stiffness"]));
+            let (m, b, k) = (t.inertia, t.damping, t.stiffness);
             let expected = ExpectedModel {
                 inertia: m,
                 damping: b,
@@ -42,18 +42,16 @@ fn eq_10_reproduces_the_examples_spring_arrays() {
     for (set, dir) in example_sets("stochastic") {
         for name in ["ex_sa3", "ex_sa4"] {
             let case = &format!("{set}/{name}");
-            let t: Value = limpid_testkit::read_json(&dir.join(format!("{name}.truth.json")));
-            let s = &t["springs_N_per_m"];
-            // limpid's truth lists the springs in order, the outside one by name
+            let t = stochastic_truth(&dir.join(format!("{name}.truth.json")));
+            let s = t.springs_n_per_m.as_ref().expect("the springs");
             let springs = ["k1a", "k1b", "k2a", "k2b", "k3a", "k3b", "k4a", "k4b"]
                 .iter()
-                .enumerate()
-                .map(|(i, k)| s.get(k).unwrap_or(&s[i]).as_f64().unwrap())
+                .map(|k| s[*k])
                 .collect::<Vec<f64>>();
             let springs: [f64; 8] = springs.try_into().unwrap();
             let k = spring_array_stiffness(&springs, &Geometry::from_k_sa1());
             let est = limpid_core::Matrix::from(k);
-            assert!(rel(&est, &mat(&t["stiffness"])) < 1e-6, "{case}: {k}");
+            assert!(rel(&est, &t.stiffness) < 1e-6, "{case}: {k}");
         }
     }
 }

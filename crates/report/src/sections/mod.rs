@@ -6,6 +6,7 @@ pub(crate) mod demo;
 pub(crate) mod linear;
 pub(crate) mod planar;
 pub(crate) mod reflex;
+pub(crate) mod spectra;
 pub(crate) mod stochastic;
 pub(crate) mod study;
 pub(crate) mod varying;

@@ -250,56 +250,15 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
         }
     }
     // coherences (seed 004 Fig. 10)
-    let outputs = &v.coherence.outputs;
-    let multiple = &v.coherence.multiple;
-    figures.push(Figure {
-        id: "coherence-multiple".into(),
-        chart: Chart {
-            title: "Multiple coherence of each output on all inputs".into(),
-            x_label: "frequency (Hz)".into(),
-            y_label: "coherence".into(),
-            x_log: true,
-            y_log: false,
-            y_range: Some((0.0, 1.0)),
-            series: outputs
-                .iter()
-                .enumerate()
-                .map(|(o, name)| Series {
-                    name: name.clone(),
-                    x: fx.clone(),
-                    y: positive.iter().map(|&f| multiple[o][f]).collect(),
-                    stroke: Stroke::Solid,
-                    color: PALETTE[o % PALETTE.len()].into(),
-                })
-                .collect(),
-        },
-    });
-    let partial = &v.coherence.partial;
-    for (o, name) in outputs.iter().enumerate() {
-        figures.push(Figure {
-            id: format!("coherence-partial-{name}"),
-            chart: Chart {
-                title: format!("Partial coherence of {name} with each input"),
-                x_label: "frequency (Hz)".into(),
-                y_label: "coherence".into(),
-                x_log: true,
-                y_log: false,
-                y_range: Some((0.0, 1.0)),
-                series: v
-                    .inputs
-                    .iter()
-                    .enumerate()
-                    .map(|(u, input)| Series {
-                        name: input.clone(),
-                        x: fx.clone(),
-                        y: positive.iter().map(|&f| partial[o][u][f]).collect(),
-                        stroke: Stroke::Solid,
-                        color: PALETTE[u % PALETTE.len()].into(),
-                    })
-                    .collect(),
-            },
-        });
-    }
+    let (multiple, partial) = (&v.coherence.multiple, &v.coherence.partial);
+    figures.extend(super::spectra::coherence_figures(
+        &fx,
+        &positive,
+        (&v.inputs, &v.coherence.outputs),
+        &|o, f| multiple[o][f],
+        &|o, u, f| partial[o][u][f],
+        None,
+    ));
     let c = &v.criteria;
     let mut verdict = format!(
         "mean multiple coherence {} (lowest {}) over {}-{} Hz; largest input coherence {}; parametric fit VAF {} %",

@@ -1,0 +1,136 @@
+//! Welch spectra and coherences of a recording's columns (Park & Chang 2011,
+//! §III, eq. 3-6): the power spectral density of every named column, and for
+//! each output its ordinary coherence with each input, its multiple coherence
+//! on all inputs and its partial coherence with each input, the others
+//! removed. What `limpid spectra` prints, typed for the result contract.
+//!
+//! Where the inputs' spectral matrix is singular to working precision (an
+//! input without power at that frequency) the multiple and partial
+//! coherences do not exist: they are `null` there, never NaN.
+
+use limpid_core::{Error, Recording, Result};
+use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// Spectra and coherences of a recording's inputs and outputs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct SpectraResult {
+    /// The recording's path.
+    pub recording: String,
+    /// Input columns.
+    pub inputs: Vec<String>,
+    /// Output columns.
+    pub outputs: Vec<String>,
+    /// Inputs then outputs: the rows of `psd`.
+    pub signals: Vec<String>,
+    /// Frequencies (Hz), 0 to Nyquist.
+    pub frequencies: Vec<f64>,
+    /// Samples per segment (= FFT length).
+    pub segment_samples: usize,
+    /// Samples shared by consecutive segments.
+    pub overlap_samples: usize,
+    /// `psd[signal][frequency]`, one-sided density (unit² / Hz).
+    pub psd: Vec<Vec<f64>>,
+    /// `coherence[output][input][frequency]`, ordinary coherence (0-1).
+    pub coherence: Vec<Vec<Vec<f64>>>,
+    /// `multiple_coherence[output][frequency]` on all inputs (0-1); `null` where the inputs' spectral matrix is singular.
+    pub multiple_coherence: Vec<Vec<Option<f64>>>,
+    /// `partial_coherence[output][input][frequency]` (0-1); `null` where the inputs' spectral matrix is singular.
+    pub partial_coherence: Vec<Vec<Vec<Option<f64>>>>,
+}
+
+/// Spectra and coherences of `inputs` and `outputs` (column names) of `rec`.
+/// Refuses a column named twice (the inputs' spectral matrix would be
+/// singular everywhere) and an input that never varies (no spectrum to divide by).
+pub fn spectra(
+    rec: &Recording,
+    inputs: &[String],
+    outputs: &[String],
+    welch: &Welch,
+) -> Result<SpectraResult> {
+    let names: Vec<String> = inputs.iter().chain(outputs).cloned().collect();
+    let mut seen = std::collections::HashSet::new();
+    for name in &names {
+        if !seen.insert(name) {
+            return Err(Error::invalid(
+                "inputs/outputs",
+                format!(
+                    "column {name} is named twice; each input and output must be its own column"
+                ),
+            ));
+        }
+    }
+    let mut signals: Vec<&[f64]> = Vec::with_capacity(names.len());
+    for name in &names {
+        signals.push(rec.require(name, "named as an input or output")?);
+    }
+    for (name, x) in inputs.iter().zip(&signals) {
+        if x.iter().all(|v| *v == x[0]) {
+            return Err(Error::Format {
+                path: rec.path().to_path_buf(),
+                message: format!(
+                    "column {name}: the input never varies, so it has no spectrum to divide by"
+                ),
+            });
+        }
+    }
+    let s = SegmentSpectra::new(&signals, welch)?;
+    let mats = s.matrix();
+    let q = inputs.len();
+    let points: Vec<_> = mats.iter().map(|m| mimo_point(m, q)).collect();
+    let psd = (0..names.len())
+        .map(|i| mats.iter().map(|m| m[(i, i)].re).collect())
+        .collect();
+    let coherence = (0..outputs.len())
+        .map(|o| {
+            (0..q)
+                .map(|i| {
+                    mats.iter()
+                        .map(|m| {
+                            let d = m[(i, i)].re * m[(q + o, q + o)].re;
+                            if d > 0.0 {
+                                m[(i, q + o)].norm_sqr() / d
+                            } else {
+                                0.0
+                            }
+                        })
+                        .collect()
+                })
+                .collect()
+        })
+        .collect();
+    let multiple_coherence = (0..outputs.len())
+        .map(|o| {
+            points
+                .iter()
+                .map(|p| p.as_ref().map(|p| p.multiple[o]))
+                .collect()
+        })
+        .collect();
+    let partial_coherence = (0..outputs.len())
+        .map(|o| {
+            (0..q)
+                .map(|i| {
+                    points
+                        .iter()
+                        .map(|p| p.as_ref().map(|p| p.partial[o][i]))
+                        .collect()
+                })
+                .collect()
+        })
+        .collect();
+    Ok(SpectraResult {
+        recording: rec.path().display().to_string(),
+        inputs: inputs.to_vec(),
+        outputs: outputs.to_vec(),
+        signals: names,
+        frequencies: s.frequencies.clone(),
+        segment_samples: welch.nperseg,
+        overlap_samples: welch.noverlap.unwrap_or(welch.nperseg / 2),
+        psd,
+        coherence,
+        multiple_coherence,
+        partial_coherence,
+    })
+}
