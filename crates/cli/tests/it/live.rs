@@ -77,16 +77,24 @@ fn replay_shows_each_phase_level_in_the_browser() {
     let started = Instant::now();
     for (k, (level, expected)) in levels.iter().enumerate() {
         let mut readings = Vec::new();
-        for q in [0.3, 0.45, 0.6] {
-            let due = (k as f64 + q) * phase_s;
-            while get_json(&live.http, "/state")["last_t"]
+        let last_t = || {
+            get_json(&live.http, "/state")["last_t"]
                 .as_f64()
                 .unwrap_or(0.0)
-                < due
-            {
+        };
+        for q in [0.3, 0.4, 0.5] {
+            let due = (k as f64 + q) * phase_s;
+            while last_t() < due {
                 std::thread::sleep(Duration::from_millis(20));
             }
             let (dom, log) = chromium_dom(&live.page, None);
+            // a browser slow to start on a loaded machine reads the page after
+            // the replay has entered the next phase: that reading is not this level's
+            let read_at = last_t();
+            if read_at > (k as f64 + 0.9) * phase_s {
+                eprintln!("level {level}: page read at {read_at:.1} s, past the phase; skipped");
+                continue;
+            }
             for line in log.lines() {
                 assert!(
                     !line.contains("CONSOLE") && !line.contains("Uncaught"),
@@ -105,8 +113,13 @@ fn replay_shows_each_phase_level_in_the_browser() {
             );
             readings.push(shown_level(&dom));
         }
+        assert!(
+            readings.len() >= 2,
+            "level {level}: the page could be read within the phase only {} times (machine too loaded?)",
+            readings.len()
+        );
         readings.sort_by(f64::total_cmp);
-        let median = readings[1];
+        let median = readings[readings.len() / 2];
         eprintln!("level {level}: page shows {readings:?}, offline index {expected:.3}");
         assert!(
             (median - expected).abs() < 0.05,

@@ -1,0 +1,333 @@
+//! One virtual recording per method for `limpid calibrate`: simulated,
+//! estimated, and its elements' z-scores and verdicts against the truth.
+
+#[allow(unused_imports)]
+use super::*;
+
+pub(super) fn centre_out(profile: Profile, seed: u64) -> std::result::Result<Outcome, String> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let inertia = Matrix3::from_diagonal(&Vector3::from_fn(|_, _| uniform(&mut rng, 0.2, 2.0)));
+    let posture = Posture {
+        name: "S".into(),
+        start: Vector3::new(0.4, 0.0, 0.0),
+        inertia,
+        damping: random_matrix3(&mut rng, 5.0, 50.0),
+        stiffness: random_matrix3(&mut rng, 100.0, 1000.0),
+    };
+    let noise = NoiseModel {
+        servo_bandwidth_hz: if rng.random::<bool>() { 30.0 } else { 0.0 },
+        ..sensors(&mut rng)
+    };
+    let rec = simulate_centre_out(&posture, &CentreOut::seed000(profile), &noise, seed)
+        .map_err(|e| e.to_string())?;
+    let data = prepare(&rec, &PrepareParams::default()).map_err(|e| e.to_string())?;
+    let est = fit_linear(&data, &LinearParams::default()).map_err(|e| e.to_string())?;
+    let mut o = Outcome::default();
+    o.add_linear(
+        &linear_result(&est, &data),
+        &Matrix::from(posture.stiffness),
+        &Matrix::from(posture.damping),
+    );
+    Ok(o)
+}
+
+pub(super) fn cocontraction(seed: u64) -> std::result::Result<Outcome, String> {
+    let subject = &cocontraction_subject(seed);
+    let mut rng = StdRng::seed_from_u64(seed ^ 0x5e45);
+    let (rec, mvc) = simulate_cocontraction(
+        subject,
+        &CocontractionProtocol::seed001(),
+        &sensors(&mut rng),
+        seed,
+    )
+    .map_err(|e| e.to_string())?;
+    let r = estimate_cocontraction(&rec, &mvc, &PrepareParams::default(), &EmgParams::default())
+        .map_err(|e| e.to_string())?;
+    let mut o = Outcome::default();
+    for l in &r.levels {
+        o.add_linear(
+            &l.estimate,
+            &Matrix::from(subject.stiffness(l.level)),
+            &Matrix::from(subject.damping),
+        );
+    }
+    Ok(o)
+}
+
+/// A random planar subject, its seed 003 session, prepared.
+pub(super) fn planar_session(
+    seed: u64,
+    reflex: bool,
+) -> std::result::Result<(PlanarSubject, limpid_ident::planar::PlanarData), String> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let subject = planar_subject(&mut rng, reflex);
+    let rec = simulate_planar(
+        &subject,
+        &PlanarProtocol::seed003(),
+        PLANAR_NOISE.0,
+        PLANAR_NOISE.1,
+        seed,
+    )
+    .map_err(|e| e.to_string())?;
+    let data = prepare_planar(&rec, &PlanarPrepare::new(0.3, 0.33)).map_err(|e| e.to_string())?;
+    Ok((subject, data))
+}
+
+pub(super) fn planar(seed: u64) -> std::result::Result<Outcome, String> {
+    let (subject, data) = planar_session(seed, false)?;
+    let all: Vec<usize> = (0..data.trials.len()).collect();
+    // the whole window; the leave-one-trial-out VAF of `estimate_planar` is not needed here
+    let est = limpid_ident::planar::fit_planar(&data, usize::MAX, None, &all)
+        .map_err(|e| e.to_string())?;
+    let mut o = Outcome::default();
+    let trusted = est.criteria.trusted;
+    o.add(
+        0,
+        &est.stiffness,
+        &est.standard_errors.stiffness,
+        &Matrix::from(subject.stiffness),
+        trusted,
+    );
+    o.add(
+        1,
+        &est.damping,
+        &est.standard_errors.damping,
+        &Matrix::from(subject.damping),
+        trusted,
+    );
+    Ok(o)
+}
+
+pub(super) fn stochastic(seed: u64) -> std::result::Result<Outcome, String> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let springs: [f64; 8] = std::array::from_fn(|_| uniform(&mut rng, 20.0, 70.0));
+    let e = RigExperiment::spring_array(&springs);
+    let rec = simulate_rig(&e, [1e-6, 1e-5], seed).map_err(|e| e.to_string())?;
+    let est = estimate_stochastic(&rec, &StochasticParams::default()).map_err(|e| e.to_string())?;
+    let mut o = Outcome::default();
+    let (v, se) = (&est.criteria.verdicts, &est.standard_errors);
+    let (k, b) = (&est.stiffness, &est.damping);
+    o.add(
+        0,
+        k,
+        &se.stiffness,
+        &Matrix::from(e.stiffness),
+        v.stiffness.trusted(),
+    );
+    o.add(
+        1,
+        b,
+        &se.damping,
+        &Matrix::from(e.damping),
+        v.damping.trusted(),
+    );
+    Ok(o)
+}
+
+/// A virtual ankle with a stretch reflex (Kearney et al. 1997): random
+/// intrinsic I-B-K, reflex delay, gain, low-pass and polarity; 30 s at 1 kHz.
+pub(super) fn reflex(seed: u64) -> std::result::Result<Outcome, String> {
+    use limpid_ident::reflex::{estimate_reflex, ReflexParams};
+    use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleReflex, AnkleSubject};
+    let mut rng = StdRng::seed_from_u64(seed);
+    let subject = AnkleSubject {
+        inertia: uniform(&mut rng, 0.01, 0.025),
+        damping: uniform(&mut rng, 0.4, 1.5),
+        stiffness: uniform(&mut rng, 40.0, 180.0),
+        reflex: Some(AnkleReflex {
+            gain: uniform(&mut rng, 5.0, 45.0),
+            delay_s: uniform(&mut rng, 0.03, 0.07),
+            natural_hz: uniform(&mut rng, 1.5, 4.0),
+            damping_ratio: uniform(&mut rng, 0.5, 1.0),
+            positive: rng.random::<bool>(),
+        }),
+    };
+    let experiment = AnkleExperiment {
+        duration_s: 30.0,
+        torque_noise_nm: uniform(&mut rng, 0.05, 0.4),
+        ..AnkleExperiment::default()
+    };
+    let rec = simulate_ankle(&subject, &experiment, seed).map_err(|e| e.to_string())?;
+    let est = estimate_reflex(&rec, &ReflexParams::default()).map_err(|e| e.to_string())?;
+    let i = &est.intrinsic;
+    let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
+    let fit_ok = est.fit.vaf_parametric >= limpid_analysis::linear::VAF_FLOOR_PERCENT;
+    let mut o = Outcome::default();
+    for (kind, k, v, se, truth) in [
+        (
+            0,
+            MatrixKind::Stiffness,
+            i.stiffness,
+            i.standard_errors.stiffness,
+            subject.stiffness,
+        ),
+        (
+            1,
+            MatrixKind::Damping,
+            i.damping,
+            i.standard_errors.damping,
+            subject.damping,
+        ),
+    ] {
+        let trusted = limpid_analysis::linear::matrix_verdict(
+            k,
+            &one(v),
+            &one(se),
+            fit_ok,
+            v.abs() >= 2.0 * se,
+            v > 0.0,
+        )
+        .trusted();
+        o.add(kind, &one(v), &one(se), &one(truth), trusted);
+    }
+    Ok(o)
+}
+
+/// The identifiable points of a varying estimate against the truth at their
+/// schedule value: K and B with their per-point verdicts.
+pub(super) fn add_varying(
+    o: &mut Outcome,
+    est: &limpid_ident::varying::VaryingEstimate,
+    truth: impl Fn(f64) -> (Matrix, Matrix),
+) {
+    for p in est.points.iter().filter(|p| p.identifiable) {
+        let (Some(k), Some(ks), Some(b), Some(bs), Some(v)) = (
+            &p.stiffness,
+            &p.stiffness_se,
+            &p.damping,
+            &p.damping_se,
+            &p.verdicts,
+        ) else {
+            continue;
+        };
+        let (tk, tb) = truth(p.sigma);
+        o.add(0, k, ks, &tk, v.stiffness.trusted());
+        o.add(1, b, bs, &tb, v.damping.trusted());
+    }
+}
+
+/// An ensemble subject drawn at random: one joint (half), or a planar arm in
+/// joint (a quarter) or end-point coordinates (a quarter); 15-120
+/// repetitions, torque and position noise.
+pub(super) fn ensemble(seed: u64) -> std::result::Result<Outcome, String> {
+    use limpid_ident::varying::{estimate_varying, VaryingParams};
+    use limpid_lab::varying::{
+        simulate_ensemble, EnsembleBody, EnsembleExperiment, EnsembleSubject, TimeChange,
+    };
+    let mut rng = StdRng::seed_from_u64(seed);
+    let change = TimeChange {
+        centre_s: uniform(&mut rng, 0.45, 0.75),
+        width_s: uniform(&mut rng, 0.12, 0.3),
+        stiffness_gain: uniform(&mut rng, 0.0, 1.2),
+        damping_gain: uniform(&mut rng, 0.0, 0.6),
+    };
+    let kind = rng.random_range(0..4);
+    let (subject, experiment) = if kind < 2 {
+        (
+            EnsembleSubject {
+                body: EnsembleBody::Joint {
+                    inertia: uniform(&mut rng, 0.008, 0.03),
+                    movement_rad: uniform(&mut rng, 0.0, 0.5),
+                },
+                stiffness: vec![vec![uniform(&mut rng, 20.0, 150.0)]],
+                damping: vec![vec![uniform(&mut rng, 0.3, 2.0)]],
+                change,
+            },
+            EnsembleExperiment {
+                repetitions: rng.random_range(15..=120),
+                torque_noise_nm: uniform(&mut rng, 0.02, 0.3),
+                position_noise: uniform(&mut rng, 0.0, 2e-5),
+                ..EnsembleExperiment::default()
+            },
+        )
+    } else {
+        let mut s = EnsembleSubject::planar(kind == 3);
+        let k = random_matrix2(&mut rng, 8.0, 40.0);
+        let b = random_matrix2(&mut rng, 0.4, 2.0);
+        s.stiffness = vec![vec![k[(0, 0)], k[(0, 1)]], vec![k[(1, 0)], k[(1, 1)]]];
+        s.damping = vec![vec![b[(0, 0)], b[(0, 1)]], vec![b[(1, 0)], b[(1, 1)]]];
+        s.change = change;
+        (
+            s,
+            EnsembleExperiment {
+                repetitions: rng.random_range(20..=120),
+                amplitude_rad: uniform(&mut rng, 0.02, 0.04),
+                switch_s: uniform(&mut rng, 0.1, 0.2),
+                actuator_hz: uniform(&mut rng, 4.0, 8.0),
+                torque_noise_nm: uniform(&mut rng, 0.01, 0.05),
+                position_noise: uniform(&mut rng, 0.0, 1e-5),
+                ..EnsembleExperiment::default()
+            },
+        )
+    };
+    let rec = simulate_ensemble(&subject, &experiment, seed).map_err(|e| e.to_string())?;
+    let est = estimate_varying(&rec, &VaryingParams::default()).map_err(|e| e.to_string())?;
+    let mut o = Outcome::default();
+    let to = |m: &Vec<Vec<f64>>| Matrix::from_rows(m).expect("square truth");
+    add_varying(&mut o, &est, |t| {
+        let [_, b, k] = subject.truth_at(t);
+        (to(&k), to(&b))
+    });
+    Ok(o)
+}
+
+/// A scheduled ankle drawn at random (K, B quadratic in the operating angle;
+/// a reflex whose gain rises with it in half of them), on a ramp-and-hold
+/// schedule with or without the ramps recorded. Returns the outcome and,
+/// for the reflex claims, (had a reflex, a reflex was detected).
+pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool), String> {
+    use limpid_ident::varying::{estimate_varying, VaryingParams};
+    use limpid_lab::varying::{
+        simulate_scheduled_ankle, RampAndHold, ScheduledAnkle, ScheduledReflex,
+    };
+    let mut rng = StdRng::seed_from_u64(seed);
+    let with_reflex = rng.random::<bool>();
+    let subject = ScheduledAnkle {
+        inertia: uniform(&mut rng, 0.01, 0.025),
+        stiffness: [
+            uniform(&mut rng, 40.0, 120.0),
+            uniform(&mut rng, 0.0, 120.0),
+            uniform(&mut rng, 0.0, 150.0),
+        ],
+        damping: [
+            uniform(&mut rng, 0.5, 1.5),
+            uniform(&mut rng, -0.5, 1.0),
+            0.0,
+        ],
+        background: [
+            uniform(&mut rng, -2.0, 2.0),
+            uniform(&mut rng, 0.0, 20.0),
+            0.0,
+        ],
+        reflex: with_reflex.then(|| {
+            let low = uniform(&mut rng, 2.0, 10.0);
+            let slope = uniform(&mut rng, 0.0, 40.0);
+            ScheduledReflex {
+                gain: [low + 0.4 * slope, slope, 0.0],
+                delay_s: uniform(&mut rng, 0.03, 0.07),
+                natural_hz: uniform(&mut rng, 1.5, 4.0),
+                damping_ratio: uniform(&mut rng, 0.6, 0.9),
+            }
+        }),
+    };
+    let protocol = RampAndHold {
+        torque_noise_nm: uniform(&mut rng, 0.05, 0.3),
+        keep_ramps: rng.random::<bool>(),
+        ..RampAndHold::default()
+    };
+    let rec = simulate_scheduled_ankle(&subject, &protocol, seed).map_err(|e| e.to_string())?;
+    let params = VaryingParams {
+        schedule: "sv".into(),
+        reflex: true,
+        ..VaryingParams::default()
+    };
+    let est = estimate_varying(&rec, &params).map_err(|e| e.to_string())?;
+    let mut o = Outcome::default();
+    let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
+    add_varying(&mut o, &est, |s| {
+        let [k, b, _] = subject.at(s);
+        (one(k), one(b))
+    });
+    let detected = est.reflex.as_ref().is_some_and(|r| r.detected);
+    Ok((o, with_reflex, detected))
+}
