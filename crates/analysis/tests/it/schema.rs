@@ -12,18 +12,25 @@ const TRUTH_SCHEMA_FILE: &str = concat!(
     "/../../schema/limpid-truth.v1.schema.json"
 );
 
-#[test]
-fn committed_truth_schema_matches_the_types() {
-    let generated = serde_json::to_string_pretty(&Truth::json_schema()).unwrap() + "\n";
+/// The committed `file` is the `schema` the types generate (rewritten first
+/// with `LIMPID_UPDATE_SCHEMA`); `what` says which types changed.
+fn assert_committed(file: &str, schema: &serde_json::Value, what: &str) {
+    let generated = serde_json::to_string_pretty(schema).unwrap() + "\n";
     if std::env::var_os("LIMPID_UPDATE_SCHEMA").is_some() {
-        std::fs::write(TRUTH_SCHEMA_FILE, &generated).unwrap();
+        std::fs::write(file, &generated).unwrap();
     }
-    let committed = std::fs::read_to_string(TRUTH_SCHEMA_FILE).expect("schema file committed");
+    let committed = std::fs::read_to_string(file).expect("schema file committed");
     assert!(
         committed == generated,
-        "{TRUTH_SCHEMA_FILE} is out of date: the truth types changed. Regenerate it with \
-         LIMPID_UPDATE_SCHEMA=1 cargo test -p limpid-analysis --test it schema"
+        "{file} is out of date: the {what} types changed. Regenerate it with \
+         LIMPID_UPDATE_SCHEMA=1 cargo test -p limpid-analysis --test it schema, and raise \
+         its version if a field changed meaning or was removed"
     );
+}
+
+#[test]
+fn committed_truth_schema_matches_the_types() {
+    assert_committed(TRUTH_SCHEMA_FILE, &Truth::json_schema(), "truth");
 }
 
 /// Every number as a float, so that 220 and 220.0 compare equal.
@@ -88,17 +95,7 @@ const SCHEMA_FILE: &str = concat!(
 
 #[test]
 fn committed_schema_matches_the_types() {
-    let generated = serde_json::to_string_pretty(&json_schema()).unwrap() + "\n";
-    if std::env::var_os("LIMPID_UPDATE_SCHEMA").is_some() {
-        std::fs::write(SCHEMA_FILE, &generated).unwrap();
-    }
-    let committed = std::fs::read_to_string(SCHEMA_FILE).expect("schema file committed");
-    assert!(
-        committed == generated,
-        "{SCHEMA_FILE} is out of date: the result types changed. Regenerate it with \
-         LIMPID_UPDATE_SCHEMA=1 cargo test -p limpid-analysis --test schema, and raise \
-         SCHEMA_VERSION if a field changed meaning or was removed"
-    );
+    assert_committed(SCHEMA_FILE, &json_schema(), "result");
 }
 
 #[test]

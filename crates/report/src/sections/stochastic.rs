@@ -120,14 +120,13 @@ pub(crate) fn model_z(
     (k[(i, j)] - w * w * m[(i, j)], w * b[(i, j)])
 }
 
-pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
-    let freqs = &v.frequencies;
+/// Bode plots of every element of Z (seed 004 Fig. 9): the estimate with its
+/// 95 % band from the coherences, the parametric fit and, with `--expected`,
+/// the expected model, over the frequencies `fx` (bins `positive`).
+fn bode_figures(v: &StochasticEstimate, positive: &[usize], fx: &[f64]) -> Vec<Figure> {
     let coords = &v.coordinates;
     let n = coords.len();
     let expected = v.accuracy.as_ref().map(|a| &a.expected);
-    let band = (v.criteria.band_hz[0], v.criteria.band_hz[1]);
-    let positive: Vec<usize> = (0..freqs.len()).filter(|&i| freqs[i] > 0.0).collect();
-    let fx: Vec<f64> = positive.iter().map(|&i| freqs[i]).collect();
     let mut figures = Vec::new();
     for i in 0..n {
         for j in 0..n {
@@ -193,7 +192,7 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
                         1,
                         Series {
                             name: "95 % band (coherence)".into(),
-                            x: fx.clone(),
+                            x: fx.to_vec(),
                             y: band,
                             stroke: Stroke::Dotted,
                             color: PALETTE[0].into(),
@@ -232,7 +231,7 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
                     ))
                     .map(|((label, _, stroke, color), y)| Series {
                         name: (*label).into(),
-                        x: fx.clone(),
+                        x: fx.to_vec(),
                         y,
                         stroke: *stroke,
                         color: (*color).into(),
@@ -249,6 +248,17 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
             });
         }
     }
+    figures
+}
+
+pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
+    let freqs = &v.frequencies;
+    let coords = &v.coordinates;
+    let expected = v.accuracy.as_ref().map(|a| &a.expected);
+    let band = (v.criteria.band_hz[0], v.criteria.band_hz[1]);
+    let positive: Vec<usize> = (0..freqs.len()).filter(|&i| freqs[i] > 0.0).collect();
+    let fx: Vec<f64> = positive.iter().map(|&i| freqs[i]).collect();
+    let mut figures = bode_figures(v, &positive, &fx);
     // coherences (seed 004 Fig. 10)
     let (multiple, partial) = (&v.coherence.multiple, &v.coherence.partial);
     figures.extend(super::spectra::coherence_figures(
