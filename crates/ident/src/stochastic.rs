@@ -266,35 +266,7 @@ pub fn estimate_stochastic_pooled(
         .welch
         .clone()
         .unwrap_or_else(|| default_welch(rec.len(), fs));
-    let mut pooled: Option<SegmentSpectra> = None;
-    for r in recs {
-        if r.sample_rate() != fs {
-            return Err(Error::invalid(
-                "recordings",
-                format!(
-                    "{}: sample rate {} Hz, the first recording's is {fs} Hz",
-                    r.path().display(),
-                    r.sample_rate()
-                ),
-            ));
-        }
-        let mut signals: Vec<&[f64]> = Vec::with_capacity(3 * n);
-        for u in &inputs {
-            signals.push(r.require(
-                u,
-                "commanded perturbation (stochastic input) of each coordinate",
-            )?);
-        }
-        for c in coords.iter().chain(&force_cols) {
-            signals.push(r.require(c, "output")?);
-        }
-        let spectra = SegmentSpectra::new(&signals, &welch)?;
-        match pooled.as_mut() {
-            None => pooled = Some(spectra),
-            Some(p) => p.append(spectra)?,
-        }
-    }
-    let spectra = pooled.expect("at least one recording");
+    let spectra = pool_spectra(recs, &inputs, &coords, &force_cols, &welch)?;
     let (lo, hi) = params.band_hz;
     if !(lo > 0.0 && hi > lo && hi < fs / 2.0) {
         let nyquist = limpid_core::display_round(fs / 2.0);
@@ -303,16 +275,6 @@ pub fn estimate_stochastic_pooled(
             format!("expected 0 < low < high < {nyquist} Hz, found {lo}-{hi} Hz"),
         ));
     }
-    let in_band_of = |freqs: &[f64]| -> Vec<usize> {
-        (0..freqs.len())
-            .filter(|&k| freqs[k] >= lo && freqs[k] <= hi)
-            .collect()
-    };
-    let weight_of = |multiple: &[Vec<f64>], len: usize| -> Vec<f64> {
-        (0..len)
-            .map(|k| (0..2 * n).map(|o| multiple[o][k]).fold(1.0, f64::min))
-            .collect()
-    };
     // nonparametric reads the bins up to the first above the band
     let bins = spectra
         .frequencies
@@ -332,7 +294,7 @@ pub fn estimate_stochastic_pooled(
         n,
         (lo, hi),
     );
-    let in_band = in_band_of(&frequencies);
+    let in_band = bins_in_band(&frequencies, (lo, hi));
     if in_band.len() < 4 {
         return Err(Error::TooFewSamples {
             path: rec.path().to_path_buf(),
@@ -344,7 +306,7 @@ pub fn estimate_stochastic_pooled(
             found: in_band.len(),
         });
     }
-    let weight = weight_of(&multiple, frequencies.len());
+    let weight = lowest_multiple_coherence(&multiple, frequencies.len());
     let enbw_bins = match welch.window {
         limpid_dsp::spectral::Window::Hann => 1.5,
         limpid_dsp::spectral::Window::Hamming => 1.36,
@@ -357,52 +319,8 @@ pub fn estimate_stochastic_pooled(
         standard_errors: se,
         fit_vaf,
     } = parametric_fit(&impedance, &frequencies, &in_band, &weight, enbw_bins);
-    // delete-a-group jackknife over the Welch segments: the least-squares SE
-    // over frequencies treats neighbouring bins as independent and the
-    // residual as noise, which `limpid calibrate` found about twice too large
-    let segments = spectra.segments();
-    let groups = JACKKNIFE_GROUPS.min(segments);
-    let se = if groups >= MIN_JACKKNIFE_GROUPS {
-        let ranges: Vec<std::ops::Range<usize>> = (0..groups)
-            .map(|g| g * segments / groups..(g + 1) * segments / groups)
-            .collect();
-        let replicates: Vec<[Matrix; 3]> = spectra
-            .matrices_deleting(bins, &ranges)
-            .into_par_iter()
-            .filter_map(|matrix| {
-                let np = nonparametric(matrix, &spectra.frequencies, n, (lo, hi));
-                let band = in_band_of(&np.frequencies);
-                (band.len() >= 4).then(|| {
-                    let w = weight_of(&np.multiple, np.frequencies.len());
-                    let f = parametric_fit(&np.impedance, &np.frequencies, &band, &w, 1.0);
-                    [f.stiffness, f.damping, f.inertia]
-                })
-            })
-            .collect();
-        if replicates.len() == groups {
-            let spread = |which: usize| {
-                let g = groups as f64;
-                Matrix(nalgebra::DMatrix::from_fn(n, n, |i, j| {
-                    let mean = replicates.iter().map(|r| r[which][(i, j)]).sum::<f64>() / g;
-                    let ss = replicates
-                        .iter()
-                        .map(|r| (r[which][(i, j)] - mean).powi(2))
-                        .sum::<f64>();
-                    ((g - 1.0) / g * ss).sqrt()
-                }))
-            };
-            ParametricErrors {
-                stiffness: spread(0),
-                damping: spread(1),
-                inertia: spread(2),
-                method: format!("jackknife over {groups} groups of Welch segments"),
-            }
-        } else {
-            se
-        }
-    } else {
-        se
-    };
+    // the least-squares SE only where the jackknife cannot be formed
+    let se = jackknife_errors(&spectra, bins, n, (lo, hi)).unwrap_or(se);
     let model = |f: f64| {
         let om = 2.0 * std::f64::consts::PI * f;
         DMatrix::from_fn(n, n, |i, j| {
@@ -416,16 +334,7 @@ pub fn estimate_stochastic_pooled(
         / in_band.len() as f64;
     let mean_coh = in_band.iter().map(|&k| weight[k]).sum::<f64>() / in_band.len() as f64;
     let min_coh = in_band.iter().map(|&k| weight[k]).fold(1.0, f64::min);
-    let mut warnings = Vec::new();
-    if min_coh < 0.8 {
-        warnings.push(Warning::new(WarningCode::LowCoherence, format!("multiple coherence falls to {min_coh:.2} in the band: the linear model does not hold everywhere there (noise, nonlinearity or unmeasured inputs)")));
-    }
-    if singular_in_band > 0 {
-        warnings.push(Warning::new(WarningCode::SingularFrequencies, format!("{singular_in_band} frequencies in the band were left out: the input spectral matrix (or R) is singular there (an input without power, or inputs fully coherent)")));
-    }
-    if max_input_coherence >= 0.6 {
-        warnings.push(Warning::new(WarningCode::CorrelatedInputs, format!("inputs are correlated (ordinary coherence up to {max_input_coherence:.2}, Park & Chang 2011 asks < 0.6): R and T are poorly separated")));
-    }
+    let warnings = quality_warnings(min_coh, singular_in_band, max_input_coherence);
     let fit_ok = fit_vaf >= VAF_FLOOR_PERCENT && mean_coh >= MIN_MEAN_COHERENCE;
     let verdicts = Verdicts {
         stiffness: judge_matrix(MatrixKind::Stiffness, &kk, &se.stiffness, fit_ok),
@@ -469,6 +378,135 @@ pub fn estimate_stochastic_pooled(
         accuracy: None,
         warnings,
     })
+}
+
+/// The Welch segment spectra of every recording, pooled: inputs `u*`, then
+/// positions, then forces. The recordings must share the sample rate.
+fn pool_spectra(
+    recs: &[Recording],
+    inputs: &[String],
+    coords: &[String],
+    force_cols: &[String],
+    welch: &Welch,
+) -> Result<SegmentSpectra> {
+    let fs = recs[0].sample_rate();
+    let n = coords.len();
+    let mut pooled: Option<SegmentSpectra> = None;
+    for r in recs {
+        if r.sample_rate() != fs {
+            return Err(Error::invalid(
+                "recordings",
+                format!(
+                    "{}: sample rate {} Hz, the first recording's is {fs} Hz",
+                    r.path().display(),
+                    r.sample_rate()
+                ),
+            ));
+        }
+        let mut signals: Vec<&[f64]> = Vec::with_capacity(3 * n);
+        for u in inputs {
+            signals.push(r.require(
+                u,
+                "commanded perturbation (stochastic input) of each coordinate",
+            )?);
+        }
+        for c in coords.iter().chain(force_cols) {
+            signals.push(r.require(c, "output")?);
+        }
+        let spectra = SegmentSpectra::new(&signals, welch)?;
+        match pooled.as_mut() {
+            None => pooled = Some(spectra),
+            Some(p) => p.append(spectra)?,
+        }
+    }
+    Ok(pooled.expect("at least one recording"))
+}
+
+/// The bins whose frequency lies in the band `[lo, hi]`.
+fn bins_in_band(freqs: &[f64], (lo, hi): (f64, f64)) -> Vec<usize> {
+    (0..freqs.len())
+        .filter(|&k| freqs[k] >= lo && freqs[k] <= hi)
+        .collect()
+}
+
+/// At each bin, the lowest multiple coherence over all outputs (the fit's weight).
+fn lowest_multiple_coherence(multiple: &[Vec<f64>], len: usize) -> Vec<f64> {
+    (0..len)
+        .map(|k| multiple.iter().map(|m| m[k]).fold(1.0, f64::min))
+        .collect()
+}
+
+/// Standard errors by a delete-a-group jackknife over the Welch segments: the
+/// least-squares SE over frequencies treats neighbouring bins as independent
+/// and the residual as noise, which `limpid calibrate` found about twice too
+/// large. `None` with too few segments or a replicate without enough band.
+fn jackknife_errors(
+    spectra: &SegmentSpectra,
+    bins: usize,
+    n: usize,
+    (lo, hi): (f64, f64),
+) -> Option<ParametricErrors> {
+    let segments = spectra.segments();
+    let groups = JACKKNIFE_GROUPS.min(segments);
+    if groups < MIN_JACKKNIFE_GROUPS {
+        return None;
+    }
+    let ranges: Vec<std::ops::Range<usize>> = (0..groups)
+        .map(|g| g * segments / groups..(g + 1) * segments / groups)
+        .collect();
+    let replicates: Vec<[Matrix; 3]> = spectra
+        .matrices_deleting(bins, &ranges)
+        .into_par_iter()
+        .filter_map(|matrix| {
+            let np = nonparametric(matrix, &spectra.frequencies, n, (lo, hi));
+            let band = bins_in_band(&np.frequencies, (lo, hi));
+            (band.len() >= 4).then(|| {
+                let w = lowest_multiple_coherence(&np.multiple, np.frequencies.len());
+                let f = parametric_fit(&np.impedance, &np.frequencies, &band, &w, 1.0);
+                [f.stiffness, f.damping, f.inertia]
+            })
+        })
+        .collect();
+    if replicates.len() == groups {
+        let spread = |which: usize| {
+            let g = groups as f64;
+            Matrix(nalgebra::DMatrix::from_fn(n, n, |i, j| {
+                let mean = replicates.iter().map(|r| r[which][(i, j)]).sum::<f64>() / g;
+                let ss = replicates
+                    .iter()
+                    .map(|r| (r[which][(i, j)] - mean).powi(2))
+                    .sum::<f64>();
+                ((g - 1.0) / g * ss).sqrt()
+            }))
+        };
+        Some(ParametricErrors {
+            stiffness: spread(0),
+            damping: spread(1),
+            inertia: spread(2),
+            method: format!("jackknife over {groups} groups of Welch segments"),
+        })
+    } else {
+        None
+    }
+}
+
+/// Warnings on the spectra's quality: low coherence, singular frequencies, correlated inputs.
+fn quality_warnings(
+    min_coh: f64,
+    singular_in_band: usize,
+    max_input_coherence: f64,
+) -> Vec<Warning> {
+    let mut warnings = Vec::new();
+    if min_coh < 0.8 {
+        warnings.push(Warning::new(WarningCode::LowCoherence, format!("multiple coherence falls to {min_coh:.2} in the band: the linear model does not hold everywhere there (noise, nonlinearity or unmeasured inputs)")));
+    }
+    if singular_in_band > 0 {
+        warnings.push(Warning::new(WarningCode::SingularFrequencies, format!("{singular_in_band} frequencies in the band were left out: the input spectral matrix (or R) is singular there (an input without power, or inputs fully coherent)")));
+    }
+    if max_input_coherence >= 0.6 {
+        warnings.push(Warning::new(WarningCode::CorrelatedInputs, format!("inputs are correlated (ordinary coherence up to {max_input_coherence:.2}, Park & Chang 2011 asks < 0.6): R and T are poorly separated")));
+    }
+    warnings
 }
 
 /// Z(f) = T R^-1 and the coherences at every frequency up to the band's
