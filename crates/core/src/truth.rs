@@ -259,15 +259,16 @@ impl Truth {
         })
     }
 
-    /// The stiffness every method has one of (co-contraction: its first level).
-    pub fn stiffness(&self) -> &Matrix {
+    /// The stiffness (co-contraction: its first level; varying: its first
+    /// point); `None` for a co-contraction or varying truth without any.
+    pub fn stiffness(&self) -> Option<&Matrix> {
         match self {
-            Truth::Cartesian(t) => &t.stiffness,
-            Truth::Cocontraction(t) => &t.levels[0].stiffness,
-            Truth::Planar(t) => &t.stiffness,
-            Truth::Stochastic(t) => &t.stiffness,
-            Truth::Reflex(t) => &t.stiffness,
-            Truth::Varying(t) => &t.points[0].stiffness,
+            Truth::Cartesian(t) => Some(&t.stiffness),
+            Truth::Cocontraction(t) => t.levels.first().map(|l| &l.stiffness),
+            Truth::Planar(t) => Some(&t.stiffness),
+            Truth::Stochastic(t) => Some(&t.stiffness),
+            Truth::Reflex(t) => Some(&t.stiffness),
+            Truth::Varying(t) => t.points.first().map(|p| &p.stiffness),
         }
     }
 
@@ -307,6 +308,9 @@ mod tests {
         assert_eq!(c.other["protocol"]["trials"], 16);
         let back = Truth::from_json("back", &serde_json::to_string(&t).unwrap()).unwrap();
         assert_eq!(back, t);
+        // a co-contraction truth without levels has no stiffness, and says so
+        let empty = Truth::from_json("e", r#"{"method": "cocontraction", "levels": []}"#).unwrap();
+        assert!(empty.stiffness().is_none());
     }
 
     #[test]

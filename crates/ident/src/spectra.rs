@@ -49,6 +49,12 @@ pub fn spectra(
     outputs: &[String],
     welch: &Welch,
 ) -> Result<SpectraResult> {
+    if inputs.is_empty() || outputs.is_empty() {
+        return Err(Error::invalid(
+            "inputs/outputs",
+            "name at least one input and one output column",
+        ));
+    }
     let names: Vec<String> = inputs.iter().chain(outputs).cloned().collect();
     let mut seen = std::collections::HashSet::new();
     for name in &names {

@@ -28,7 +28,10 @@ fn the_writer_puts_every_family_in_the_folder_it_is_given() {
             assert!(cases.contains(&truth), "{family}/{rec} has no {truth}");
             // every truth reads through its type and has a stiffness
             let t = limpid_testkit::read_truth(&dir.join(family).join(&truth));
-            assert!(t.stiffness().nrows() > 0, "{family}/{truth}");
+            let k = t
+                .stiffness()
+                .unwrap_or_else(|| panic!("{family}/{truth}: no stiffness"));
+            assert!(k.nrows() > 0, "{family}/{truth}");
             let r = limpid_io::read_recording(dir.join(family).join(rec)).unwrap();
             assert!(r.len() > 1000, "{family}/{rec}: {} samples", r.len());
         }
