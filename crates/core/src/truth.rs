@@ -249,6 +249,14 @@ pub struct VaryingTruth {
     pub points: Vec<VaryingTruthPoint>,
 }
 
+/// A generator's other keys (`protocol`, `noise`, ...) for a truth's `other`.
+pub fn other_keys<const N: usize>(entries: [(&str, Value); N]) -> BTreeMap<String, Value> {
+    entries
+        .into_iter()
+        .map(|(key, value)| (key.to_string(), value))
+        .collect()
+}
+
 impl Truth {
     /// Parse a truth file's text; `name` (its path) leads the one-line error.
     pub fn from_json(name: &str, text: &str) -> crate::Result<Truth> {

@@ -446,16 +446,20 @@ pub fn coherence(x: &[f64], y: &[f64], p: &Welch) -> Result<(Vec<f64>, Vec<f64>)
     let s = SegmentSpectra::new(&[x, y], p)?;
     let (pxx, pyy, pxy) = (s.cross(0, 0), s.cross(1, 1), s.cross(0, 1));
     let c = (0..pxy.len())
-        .map(|k| {
-            let d = pxx[k].re * pyy[k].re;
-            if d > 0.0 {
-                pxy[k].norm_sqr() / d
-            } else {
-                0.0
-            }
-        })
+        .map(|k| squared_coherence(pxx[k].re, pyy[k].re, pxy[k]))
         .collect();
     Ok((s.frequencies, c))
+}
+
+/// Magnitude-squared coherence |G_xy|² / (G_xx G_yy) of one bin from the
+/// auto spectra and the cross spectrum; 0 where either signal has no power.
+pub fn squared_coherence(gxx: f64, gyy: f64, gxy: Complex64) -> f64 {
+    let d = gxx * gyy;
+    if d > 0.0 {
+        gxy.norm_sqr() / d
+    } else {
+        0.0
+    }
 }
 
 /// Frequency response and coherences of outputs on inputs at one frequency.
@@ -516,12 +520,7 @@ pub fn mimo_point(s: &DMatrix<Complex64>, inputs: usize) -> Option<MimoPoint> {
                     |a: usize, b: usize| s[(a, b)] - (g_a_r(a) * &grr_inv * g_r_b(b))[(0, 0)];
                 (cond(i, i), cond(q + k, q + k), cond(i, q + k))
             };
-            let d = gii.re * gkk.re;
-            partial[k][i] = if d > 0.0 {
-                (gik.norm_sqr() / d).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
+            partial[k][i] = squared_coherence(gii.re, gkk.re, gik).clamp(0.0, 1.0);
         }
     }
     Some(MimoPoint {

@@ -9,7 +9,7 @@
 //! coherences do not exist: they are `null` there, never NaN.
 
 use limpid_core::{Error, Recording, Result};
-use limpid_dsp::spectral::{mimo_point, SegmentSpectra, Welch};
+use limpid_dsp::spectral::{mimo_point, squared_coherence, SegmentSpectra, Welch};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -94,12 +94,7 @@ pub fn spectra(
                 .map(|i| {
                     mats.iter()
                         .map(|m| {
-                            let d = m[(i, i)].re * m[(q + o, q + o)].re;
-                            if d > 0.0 {
-                                m[(i, q + o)].norm_sqr() / d
-                            } else {
-                                0.0
-                            }
+                            squared_coherence(m[(i, i)].re, m[(q + o, q + o)].re, m[(i, q + o)])
                         })
                         .collect()
                 })

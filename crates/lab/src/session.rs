@@ -15,7 +15,7 @@
 use std::path::Path;
 
 use limpid_core::truth::{
-    About, CartesianTruth, PlanarTruth, PlanarVariant, StochasticTruth, Truth,
+    other_keys, About, CartesianTruth, PlanarTruth, PlanarVariant, StochasticTruth, Truth,
 };
 use limpid_core::Matrix;
 use limpid_core::{Error, Recording, Result};
@@ -113,14 +113,6 @@ fn to_value<T: serde::Serialize>(value: &T) -> Value {
     serde_json::to_value(value).expect("lab types serialise")
 }
 
-/// The generator's other keys of a truth file.
-fn other<const N: usize>(entries: [(&str, Value); N]) -> std::collections::BTreeMap<String, Value> {
-    entries
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
-}
-
 /// A matrix as its rows, the layout of the truth files.
 pub fn rows<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(
     m: &nalgebra::Matrix<f64, R, C, S>,
@@ -214,7 +206,7 @@ fn centre_out(p: &Protocol, subject: Option<&SubjectText>, seed: u64) -> Result<
             stiffness: Matrix::from(posture.stiffness),
             equilibrium: vec![start.x, start.y, start.z],
             profile: to_value(&p.phases.profile).as_str().map(String::from),
-            other: other([
+            other: other_keys([
                 ("noise", to_value(&noise)),
                 (
                     "protocol",
@@ -263,7 +255,7 @@ fn planar(p: &PlanarDesign, subject: Option<&SubjectText>, seed: u64) -> Result<
         shoulder: None,
         interpolation_interval_ms: p.interpolation_s * 1e3,
         observation_window_ms: None,
-        other: other([
+        other: other_keys([
             ("reflex", to_value(&arm.reflex)),
             (
                 "noise",
@@ -334,7 +326,7 @@ fn stochastic(
                 .collect(),
         ),
         band_hz: None,
-        other: other([
+        other: other_keys([
             ("robot", robot),
             ("noise", json!({"position_std_m": noise[0], "angle_std_rad": noise[1]})),
         ]),

@@ -28,8 +28,8 @@ use std::sync::OnceLock;
 
 use limpid_core::arm::Arm;
 use limpid_core::truth::{
-    About, CartesianTruth, CocontractionTruth, LevelTruth, PlanarTruth, PlanarVariant, ReflexTruth,
-    Truth,
+    other_keys, About, CartesianTruth, CocontractionTruth, LevelTruth, PlanarTruth, PlanarVariant,
+    ReflexTruth, Truth,
 };
 use limpid_core::{Matrix, Recording};
 use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleSubject};
@@ -160,14 +160,6 @@ fn about(
     }
 }
 
-/// The generator's other keys of a truth file.
-fn other<const N: usize>(entries: [(&str, Value); N]) -> std::collections::BTreeMap<String, Value> {
-    entries
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
-}
-
 fn to_value<T: serde::Serialize>(value: &T) -> Value {
     serde_json::to_value(value).expect("lab types serialise")
 }
@@ -211,7 +203,7 @@ fn cartesian_slow(dir: &Path) {
             stiffness: Matrix::from(posture.stiffness),
             equilibrium: vec![s.x, s.y, s.z],
             profile: to_value(&profile).as_str().map(String::from),
-            other: other([
+            other: other_keys([
                 (
                     "protocol",
                     json!({"trials": protocol.directions.len(), "rest_s": protocol.rest_s,
@@ -304,7 +296,7 @@ fn cocontraction(dir: &Path) {
             levels,
             stiffness_level0: Some(Matrix::from(k0)),
             stiffness_increment_per_unit_level: Some(Matrix::from(dk)),
-            other: other([("noise", to_value(&noise))]),
+            other: other_keys([("noise", to_value(&noise))]),
         });
         write(dir, case, &rec, truth);
     }
@@ -366,7 +358,7 @@ fn planar(dir: &Path) {
             shoulder: Some([0.0, 0.0]),
             interpolation_interval_ms: (interval_s * 1e3).round(),
             observation_window_ms: Some((protocol.after_s * 1e3).round()),
-            other: other([(
+            other: other_keys([(
                 "noise",
                 json!({"torque_white_std_Nm": torque_std, "baseline_torque_Nm": subject.tau0,
                        "joint_angle_std_rad": angle_std,
@@ -469,7 +461,7 @@ fn ankle(dir: &Path) {
         inertia: one(subject.inertia),
         damping: one(subject.damping),
         stiffness: one(subject.stiffness),
-        other: other([
+        other: other_keys([
             ("reflex", to_value(&subject.reflex)),
             ("noise", json!({"torque_white_std_Nm": experiment.torque_noise_nm})),
         ]),
