@@ -136,7 +136,8 @@ impl Chart {
         }
         if log {
             if hi / lo < 10.0 {
-                let mid = (hi * lo).sqrt();
+                // sqrt(lo) sqrt(hi): lo * hi underflows to 0 below about 1e-154
+                let mid = lo.sqrt() * hi.sqrt();
                 return (mid / 3.2, mid * 3.2);
             }
             return (lo, hi);
@@ -299,6 +300,36 @@ mod tests {
         );
         assert_eq!(tick_label(1000.0), "1000");
         assert_eq!(tick_label(0.25), "0.25");
+    }
+
+    /// A log axis over one tiny (or huge) value: its geometric mean had
+    /// underflowed to 0, and the page drew "0" ticks at NaN positions.
+    #[test]
+    fn a_log_axis_over_one_extreme_value_has_finite_ticks() {
+        for v in [1e-300, 1e-160, 1e150, 1e299] {
+            let chart = Chart {
+                title: "psd".into(),
+                x_label: "f".into(),
+                y_label: "y".into(),
+                x_log: true,
+                y_log: true,
+                y_range: None,
+                series: vec![Series {
+                    name: "x".into(),
+                    x: vec![1.0, 2.0],
+                    y: vec![f64::NAN, v],
+                    stroke: Stroke::Solid,
+                    color: PALETTE[0].into(),
+                }],
+            };
+            let (lo, hi) = chart.range(|p| p.1, true);
+            assert!(
+                lo > 0.0 && lo < v && v < hi && hi.is_finite(),
+                "{v}: {lo} {hi}"
+            );
+            assert!(!ticks(lo, hi, true).is_empty(), "{v}");
+            assert!(!chart.to_svg(400.0, 300.0).contains("NaN"), "{v}");
+        }
     }
 
     #[test]
