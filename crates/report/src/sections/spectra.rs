@@ -83,6 +83,11 @@ pub(crate) fn coherence_figures(
     figures
 }
 
+/// `1 input`, `2 inputs`.
+fn count(n: usize, noun: &str) -> String {
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
 /// The spectra section: PSDs, coherences and a table of the band means.
 pub(crate) fn spectra_section(name: &str, r: &SpectraResult) -> Section {
     let positive: Vec<usize> = (0..r.frequencies.len())
@@ -171,9 +176,9 @@ pub(crate) fn spectra_section(name: &str, r: &SpectraResult) -> Section {
     Section {
         heading: format!("Spectra: {name}"),
         verdict: format!(
-            "Welch spectra of {} inputs and {} outputs, {} samples per segment (resolution {} Hz), {} overlapping",
-            r.inputs.len(),
-            r.outputs.len(),
+            "Welch spectra of {} and {}, {} samples per segment (resolution {} Hz), {} overlapping",
+            count(r.inputs.len(), "input"),
+            count(r.outputs.len(), "output"),
             r.segment_samples,
             fmt(r.frequencies.get(1).copied().unwrap_or(0.0)),
             r.overlap_samples
