@@ -81,6 +81,13 @@ pub fn run(checked: &Checked, mut recordings: Vec<Recording>) -> Result<Estimate
         Request::Varying(r) => Ok(Estimated::of(Estimate::Varying(
             limpid_ident::varying::estimate_varying(&recordings[0], &r.params())?,
         ))),
+        Request::Spectra(r) => {
+            let rec = &recordings[0];
+            let welch = r.welch(rec.len(), rec.sample_rate());
+            Ok(Estimated::of(Estimate::Spectra(
+                limpid_ident::spectra::spectra(rec, &r.inputs, &r.outputs, &welch)?,
+            )))
+        }
     }
 }
 

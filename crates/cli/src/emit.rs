@@ -140,7 +140,9 @@ pub fn estimate(
 /// the long frequency and IRF arrays.
 fn json(doc: &Document, request: &Request) -> String {
     match request {
-        Request::Stochastic(_) | Request::Reflex(_) | Request::Varying(_) => doc.to_json(),
+        Request::Stochastic(_) | Request::Reflex(_) | Request::Varying(_) | Request::Spectra(_) => {
+            doc.to_json()
+        }
         _ => doc.to_json_pretty(),
     }
 }

@@ -102,5 +102,8 @@ pub fn run(args: RerunArgs) -> CliResult {
         Request::Varying(_) => {
             crate::emit::estimate(request, &paths, out, crate::varying::varying_text)
         }
+        Request::Spectra(_) => {
+            crate::emit::estimate(request, &paths, out, crate::stochastic::spectra_text)
+        }
     }
 }

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use limpid_analysis::result::Estimate;
 use limpid_app::estimate::Estimated;
-use limpid_dsp::spectral::Welch;
-use limpid_ident::request::{Request, SegmentWindow, StochasticRequest, DEFAULT_BAND_HZ};
+use limpid_ident::request::{
+    Request, SegmentWindow, SpectraRequest, StochasticRequest, DEFAULT_BAND_HZ,
+};
 
 use crate::table::num;
 use crate::CliResult;
@@ -40,20 +41,6 @@ impl WelchArgs {
             WindowArg::Hamming => SegmentWindow::Hamming,
             WindowArg::Boxcar => SegmentWindow::Boxcar,
         }
-    }
-
-    /// Welch settings for `n` samples at `fs` Hz (the stochastic request's own rule).
-    fn welch(&self, n: usize, fs: f64) -> Welch {
-        let request = StochasticRequest {
-            nperseg: self.nfft,
-            noverlap: self.overlap,
-            window: self.window(),
-            ..StochasticRequest::default()
-        };
-        request
-            .params(n, fs)
-            .welch
-            .expect("a request's settings always name their Welch segments")
     }
 }
 
@@ -100,12 +87,8 @@ pub struct SpectraArgs {
     pub outputs: Vec<String>,
     #[command(flatten)]
     pub welch: WelchArgs,
-    /// Print one JSON object (the result document) instead of CSV.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write the HTML report (spectra and coherence plots) to this file.
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub output: crate::emit::OutputArgs,
 }
 
 /// `--band`'s help, its default written as the flag takes it.
@@ -234,26 +217,33 @@ pub fn stochastic_text(e: &Estimated, request: &Request, paths: &[PathBuf]) -> C
     Ok(())
 }
 
+impl SpectraArgs {
+    /// The request these flags make.
+    pub fn request(&self) -> Request {
+        Request::Spectra(SpectraRequest {
+            inputs: self.inputs.clone(),
+            outputs: self.outputs.clone(),
+            nperseg: self.welch.nfft,
+            noverlap: self.welch.overlap,
+            window: self.welch.window(),
+        })
+    }
+}
+
 pub fn run_spectra(args: SpectraArgs) -> CliResult {
-    let rec = crate::read_recording(&args.recording)?;
-    let welch = args.welch.welch(rec.len(), rec.sample_rate());
-    let result = limpid_ident::spectra::spectra(&rec, &args.inputs, &args.outputs, &welch)
-        .map_err(crate::emit::with_flag_names)?;
-    let document = limpid_analysis::result::Document::new(Estimate::Spectra(result)).with_run(
-        limpid_analysis::result::Run::of_this_process(&[args.recording.as_path()])
-            .with_channel_map(crate::channel_map().and_then(|m| m.path.as_deref())),
-    );
-    if let Some(path) = &args.report {
-        crate::report::write(&document, path)?;
+    crate::emit::estimate(
+        args.request(),
+        std::slice::from_ref(&args.recording),
+        args.output.output(),
+        spectra_text,
+    )
+}
+
+/// `limpid spectra`'s text: CSV.
+pub fn spectra_text(e: &Estimated, _: &Request, _: &[PathBuf]) -> CliResult {
+    if let Estimate::Spectra(r) = &e.document.estimate {
+        print!("{}", spectra_csv(r));
     }
-    if args.json {
-        println!("{}", document.to_json());
-        return Ok(());
-    }
-    let Estimate::Spectra(r) = &document.estimate else {
-        unreachable!("made above")
-    };
-    print!("{}", spectra_csv(r));
     Ok(())
 }
 

@@ -24,6 +24,7 @@ RUNS = {
     "stochastic": ["estimate", "stochastic", "stochastic.csv", "--nfft", "512", "--overlap", "256"],
     "reflex": ["estimate", "reflex", "ankle.csv"],
     "varying": ["estimate", "varying", "joint2.csv"],
+    "spectra": ["spectra", "stochastic.csv", "--inputs", "ux,uz", "--outputs", "x,z", "--nfft", "512"],
 }
 
 

@@ -175,7 +175,9 @@ fn request_recordings(request: &limpid_ident::request::Request) -> Vec<&'static 
         Request::Planar(_) | Request::WindowSweep(_) | Request::Varying(_) => {
             include_bytes!("../corpus/seeds/joint2.csv")
         }
-        Request::Stochastic(_) => include_bytes!("../corpus/seeds/stochastic.csv"),
+        Request::Stochastic(_) | Request::Spectra(_) => {
+            include_bytes!("../corpus/seeds/stochastic.csv")
+        }
         Request::Reflex(_) => include_bytes!("../corpus/seeds/ankle.csv"),
     };
     match request {

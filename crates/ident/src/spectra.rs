@@ -40,24 +40,17 @@ pub struct SpectraResult {
     pub partial_coherence: Vec<Vec<Vec<Option<f64>>>>,
 }
 
-/// Spectra and coherences of `inputs` and `outputs` (column names) of `rec`.
-/// Refuses a column named twice (the inputs' spectral matrix would be
-/// singular everywhere) and an input that never varies (no spectrum to divide by).
-pub fn spectra(
-    rec: &Recording,
-    inputs: &[String],
-    outputs: &[String],
-    welch: &Welch,
-) -> Result<SpectraResult> {
+/// Refuse no inputs or outputs, and a column named twice (the inputs'
+/// spectral matrix would be singular everywhere): checked before any data is read.
+pub fn check_columns(inputs: &[String], outputs: &[String]) -> Result<()> {
     if inputs.is_empty() || outputs.is_empty() {
         return Err(Error::invalid(
             "inputs/outputs",
             "name at least one input and one output column",
         ));
     }
-    let names: Vec<String> = inputs.iter().chain(outputs).cloned().collect();
     let mut seen = std::collections::HashSet::new();
-    for name in &names {
+    for name in inputs.iter().chain(outputs) {
         if !seen.insert(name) {
             return Err(Error::invalid(
                 "inputs/outputs",
@@ -67,6 +60,20 @@ pub fn spectra(
             ));
         }
     }
+    Ok(())
+}
+
+/// Spectra and coherences of `inputs` and `outputs` (column names) of `rec`.
+/// Refuses a column named twice (the inputs' spectral matrix would be
+/// singular everywhere) and an input that never varies (no spectrum to divide by).
+pub fn spectra(
+    rec: &Recording,
+    inputs: &[String],
+    outputs: &[String],
+    welch: &Welch,
+) -> Result<SpectraResult> {
+    check_columns(inputs, outputs)?;
+    let names: Vec<String> = inputs.iter().chain(outputs).cloned().collect();
     let mut signals: Vec<&[f64]> = Vec::with_capacity(names.len());
     for name in &names {
         signals.push(rec.require(name, "named as an input or output")?);

@@ -497,7 +497,7 @@ fn build_request(
 /// The package function of a method.
 fn python_name(method: &str) -> String {
     match method {
-        "window_sweep" => "window_sweep".into(),
+        "window_sweep" | "spectra" => method.into(),
         other => format!("estimate_{other}"),
     }
 }
@@ -517,8 +517,8 @@ fn request<'py>(
 }
 
 /// Any estimator (`method`: linear, cocontraction, planar, window_sweep,
-/// stochastic, reflex) on its recordings, with keyword options as
-/// `limpid estimate METHOD`'s flags; JSON text of the result.
+/// stochastic, reflex, varying, spectra) on its recordings, with keyword options as
+/// `limpid estimate METHOD`'s (or `limpid spectra`'s) flags; JSON text of the result.
 #[pyfunction]
 fn estimate(
     py: Python<'_>,

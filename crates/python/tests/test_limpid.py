@@ -427,3 +427,38 @@ def test_varying_ensemble_marks_instants_without_support():
     assert all(not p["identifiable"] and p["stiffness"] is None for p in est["points"])
     with pytest.raises(ValueError, match="trial"):
         limpid.estimate_varying({"t": np.arange(2000) / 1000, "q1": np.zeros(2000), "tau1": np.zeros(2000)})
+
+
+def test_spectra_of_named_columns_give_the_analytic_coherences():
+    # y = 2 u1 - u2 + e, all of unit variance: the inputs explain S/(S+N) = 5/6 of y
+    # (multiple coherence); u1 alone 4/6, u2 alone 1/6 (ordinary); u1 with u2 removed
+    # 4/5, u2 with u1 removed 1/2 (partial)
+    n = 60_000
+    u1, u2, e = (RNG.standard_normal(n) for _ in range(3))
+    cols = {"t": np.arange(n) / 100.0, "u1": u1, "u2": u2, "y": 2 * u1 - u2 + e}
+    r = limpid.spectra(cols, ["u1", "u2"], ["y"], nperseg=256)
+    d = r.to_dict()
+    assert d["kind"] == "spectra" and d["segment_samples"] == 256
+    assert d["run"]["request"] == limpid.request("spectra", inputs=["u1", "u2"], outputs=["y"], nperseg=256)
+    med = lambda v: float(np.median([x for x in v[1:] if x is not None]))  # noqa: E731
+    assert abs(med(d["multiple_coherence"][0]) - 5 / 6) < 0.03
+    assert abs(med(d["coherence"][0][0]) - 4 / 6) < 0.03
+    assert abs(med(d["coherence"][0][1]) - 1 / 6) < 0.03
+    assert abs(med(d["partial_coherence"][0][0]) - 4 / 5) < 0.03
+    assert abs(med(d["partial_coherence"][0][1]) - 1 / 2) < 0.03
+    # the PSD of u1 (unit variance, 100 Hz) is 2 / 100 per Hz one-sided
+    assert abs(med(d["psd"][0]) - 0.02) < 0.002
+    assert "inputs u1, u2; outputs y" in repr(r)
+    assert "Multiple coherence" in r._repr_html_()
+    pd = pytest.importorskip("pandas")
+    psd = r.to_pandas("psd")
+    assert len(psd) == 3 * 129 and set(psd["signal"]) == {"u1", "u2", "y"}
+    coh = r.to_pandas("coherence")
+    assert list(coh.columns[-3:]) == ["coherence", "multiple", "partial"]
+    assert isinstance(coh, pd.DataFrame) and len(coh) == 2 * 129
+    with pytest.raises(ValueError, match="'psd' and 'coherence'"):
+        r.to_pandas()
+    with pytest.raises(ValueError, match="column names"):
+        limpid.spectra(cols, "u1", ["y"])
+    with pytest.raises(ValueError, match="named twice"):
+        limpid.spectra(cols, ["u1", "u1"], ["y"])

@@ -63,7 +63,14 @@ CASES = [
       "--rate", "250", "--reflex", "--max-delay", "0.08"],
      dict(schedule="sv", cutoff_hz=20, window_ms=40, step_ms=10, min_repetitions=12, grid_points=11,
           basis_order=2, slow_hz=0.3, rate_hz=250, reflex=True, max_delay_s=0.08)),
+    ("spectra", ["spectra", "r.csv", "--inputs", "ux", "--outputs", "x"], dict(inputs=["ux"], outputs=["x"])),
+    ("spectra",
+     ["spectra", "r.csv", "--inputs", "ux,uz", "--outputs", "x,z", "--nfft", "1024", "--overlap", "256",
+      "--window", "boxcar"],
+     dict(inputs=["ux", "uz"], outputs=["x", "z"], nperseg=1024, noverlap=256, window="boxcar")),
 ]
+# what a method cannot run without (no default)
+REQUIRED = ("link_lengths", "inputs", "outputs")
 
 
 @pytest.mark.parametrize("method,args,options", CASES)
@@ -78,15 +85,15 @@ def test_cli_and_python_make_the_same_request(method, args, options):
 def test_every_option_of_every_method_is_exercised():
     # each non-default case above sets every field of its method's request
     for method, _, options in CASES:
-        if len(options) <= 1:
+        if all(k in REQUIRED for k in options):
             continue
-        defaults = limpid.request(method, **{k: v for k, v in options.items() if k == "link_lengths"})
+        defaults = limpid.request(method, **{k: v for k, v in options.items() if k in REQUIRED})
         changed = limpid.request(method, **options)
         flat_default = {**defaults, **defaults.get("prepare", {}), **defaults.get("arm", {})}
         flat_changed = {**changed, **changed.get("prepare", {}), **changed.get("arm", {})}
-        same = [k for k in flat_default if k not in ("prepare", "arm", "method", "link_lengths")
+        same = [k for k in flat_default if k not in ("prepare", "arm", "method", *REQUIRED)
                 and flat_default[k] == flat_changed[k]]
-        if method in ("linear", "planar", "stochastic", "reflex", "varying"):
+        if method in ("linear", "planar", "stochastic", "reflex", "varying", "spectra"):
             assert same == [], f"{method}: options left at their default: {same}"
 
 

@@ -56,3 +56,38 @@ fn rerun_refuses_results_without_a_request_in_one_line() {
     assert_eq!(out.code, 2);
     assert!(out.stderr.contains("missing.json"), "{}", out.stderr);
 }
+
+/// `spectra` records its request too: a rerun gives the same spectra, and
+/// its text is the same CSV.
+#[test]
+fn spectra_reruns_from_its_result() {
+    let d = tempfile::tempdir().unwrap();
+    let rec = examples("stochastic").join("ex_sa3.csv");
+    let args = [
+        "spectra",
+        rec.to_str().unwrap(),
+        "--inputs",
+        "ux,uz",
+        "--outputs",
+        "x",
+        "--nfft",
+        "1024",
+        "--window",
+        "hamming",
+    ];
+    let first = json(&[&args[..], &["--json"]].concat());
+    let request = &first["run"]["request"];
+    assert_eq!(request["method"], "spectra");
+    assert_eq!(request["outputs"], serde_json::json!(["x"]));
+    assert_eq!(request["window"], "hamming");
+    assert_eq!(first["segment_samples"], 1024);
+    let saved = d.path().join("spectra.json");
+    std::fs::write(&saved, first.to_string()).unwrap();
+    let again = json(&["rerun", saved.to_str().unwrap(), "--json"]);
+    for key in ["frequencies", "psd", "coherence", "partial_coherence"] {
+        assert_eq!(again[key], first[key], "{key}");
+    }
+    let text = limpid(&["rerun", saved.to_str().unwrap()]);
+    assert_eq!(text.stdout, limpid(&args).stdout);
+    assert!(text.stdout.starts_with("frequency_hz,psd_ux,"));
+}

@@ -2,6 +2,7 @@
 //! estimator settings they make.
 
 use limpid_core::{Error, FrameTransform, Result};
+use limpid_dsp::spectral::{Welch, Window};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -339,20 +340,70 @@ impl Default for StochasticRequest {
 impl StochasticRequest {
     /// The estimator's settings for a recording of `n` samples at `fs` Hz.
     pub fn params(&self, n: usize, fs: f64) -> StochasticParams {
-        let mut w = crate::stochastic::default_welch(n, fs);
-        if let Some(nperseg) = self.nperseg {
-            w.nperseg = nperseg;
-        }
-        w.noverlap = self.noverlap;
-        w.window = match self.window {
-            SegmentWindow::Hann => limpid_dsp::spectral::Window::Hann,
-            SegmentWindow::Hamming => limpid_dsp::spectral::Window::Hamming,
-            SegmentWindow::Boxcar => limpid_dsp::spectral::Window::Boxcar,
-        };
         StochasticParams {
-            welch: Some(w),
+            welch: Some(welch(self.nperseg, self.noverlap, self.window, n, fs)),
             band_hz: (self.band_hz[0], self.band_hz[1]),
         }
+    }
+}
+
+/// Welch segments for `n` samples at `fs` Hz: the given length and overlap,
+/// else about 4 s (a power of two) overlapping by half.
+fn welch(
+    nperseg: Option<usize>,
+    noverlap: Option<usize>,
+    window: SegmentWindow,
+    n: usize,
+    fs: f64,
+) -> Welch {
+    let mut w = crate::stochastic::default_welch(n, fs);
+    if let Some(nperseg) = nperseg {
+        w.nperseg = nperseg;
+    }
+    w.noverlap = noverlap;
+    w.window = match window {
+        SegmentWindow::Hann => Window::Hann,
+        SegmentWindow::Hamming => Window::Hamming,
+        SegmentWindow::Boxcar => Window::Boxcar,
+    };
+    w
+}
+
+/// Welch spectra, ordinary, multiple and partial coherences of named columns
+/// (Park & Chang 2011 §III, eq. 3-6), as `limpid spectra` computes them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SpectraRequest {
+    /// Input columns.
+    pub inputs: Vec<String>,
+    /// Output columns.
+    pub outputs: Vec<String>,
+    /// Samples per segment (= FFT length); none: about 4 s, a power of two.
+    #[serde(default)]
+    pub nperseg: Option<usize>,
+    /// Overlapping samples; none: half a segment.
+    #[serde(default)]
+    pub noverlap: Option<usize>,
+    /// Segment window.
+    #[serde(default)]
+    pub window: SegmentWindow,
+}
+
+impl SpectraRequest {
+    /// The spectra of these columns, every other field at its default.
+    pub fn new(inputs: Vec<String>, outputs: Vec<String>) -> Self {
+        SpectraRequest {
+            inputs,
+            outputs,
+            nperseg: None,
+            noverlap: None,
+            window: SegmentWindow::default(),
+        }
+    }
+
+    /// The Welch settings for a recording of `n` samples at `fs` Hz (the stochastic request's rule).
+    pub fn welch(&self, n: usize, fs: f64) -> Welch {
+        welch(self.nperseg, self.noverlap, self.window, n, fs)
     }
 }
 

@@ -47,6 +47,8 @@ pub enum Request {
     Reflex(ReflexRequest),
     /// `limpid estimate varying`.
     Varying(VaryingRequest),
+    /// `limpid spectra`.
+    Spectra(SpectraRequest),
 }
 
 /// A request whose settings were checked; only [`Request::check`] makes one.
@@ -117,6 +119,7 @@ impl Request {
             Request::Stochastic(_) => "estimate stochastic",
             Request::Reflex(_) => "estimate reflex",
             Request::Varying(_) => "estimate varying",
+            Request::Spectra(_) => "spectra",
         }
     }
 
@@ -162,6 +165,8 @@ impl Request {
                 }
                 r.params().check()?
             }
+            // the segments are checked against the recording's length when it is read
+            Request::Spectra(r) => crate::spectra::check_columns(&r.inputs, &r.outputs)?,
         }
         Ok(Checked(self))
     }

@@ -6,8 +6,8 @@ use schemars::JsonSchema;
 use serde::Deserialize;
 
 use super::{
-    ArmRequest, LinearRequest, PrepareRequest, ReflexRequest, Request, StochasticRequest,
-    VaryingRequest,
+    ArmRequest, LinearRequest, PrepareRequest, ReflexRequest, Request, SpectraRequest,
+    StochasticRequest, VaryingRequest,
 };
 
 /// The names of a request type's fields (its JSON Schema's properties).
@@ -48,6 +48,7 @@ pub fn boolean_options(method: &str) -> Result<Vec<String>> {
         "planar" | "window_sweep" => boolean_names::<ArmRequest>(),
         "stochastic" => boolean_names::<StochasticRequest>(),
         "varying" => boolean_names::<VaryingRequest>(),
+        "spectra" => boolean_names::<SpectraRequest>(),
         _ => boolean_names::<ReflexRequest>(),
     })
 }
@@ -59,12 +60,12 @@ pub fn nesting(method: &str) -> Result<Option<(&'static str, Vec<String>)>> {
     Ok(match method {
         "linear" | "cocontraction" => Some(("prepare", field_names::<PrepareRequest>())),
         "planar" | "window_sweep" => Some(("arm", field_names::<ArmRequest>())),
-        "stochastic" | "reflex" | "varying" => None,
+        "stochastic" | "reflex" | "varying" | "spectra" => None,
         other => {
             return Err(Error::invalid(
                 "method",
                 format!(
-                    "{other:?} is not a method: linear, cocontraction, planar, window_sweep, stochastic, reflex or varying"
+                    "{other:?} is not a method: linear, cocontraction, planar, window_sweep, stochastic, reflex, varying or spectra"
                 ),
             ))
         }
@@ -100,6 +101,7 @@ pub fn deserialize_request<'de, D: serde::Deserializer<'de>>(
         "window_sweep" => Request::WindowSweep(typed(options)?),
         "stochastic" => Request::Stochastic(typed(options)?),
         "varying" => Request::Varying(typed(options)?),
+        "spectra" => Request::Spectra(typed(options)?),
         _ => Request::Reflex(typed(options)?),
     })
 }

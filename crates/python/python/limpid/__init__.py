@@ -6,8 +6,9 @@ A thin layer over the Rust library (``limpid._limpid``):
   pandas DataFrame;
 - spectra with scipy.signal's argument names and defaults (``psd``, ``csd``,
   ``coherence``) returning ``(f, values)``;
-- the estimators (``estimate_linear``, ``estimate_planar``,
-  ``estimate_stochastic``, ``estimate_cocontraction``) returning
+- the estimators (``estimate_linear``, ``estimate_planar``, ``window_sweep``,
+  ``estimate_stochastic``, ``estimate_reflex``, ``estimate_varying``,
+  ``estimate_cocontraction``) and ``spectra`` (coherences of named columns), returning
   :class:`Result` objects whose ``to_dict()`` has the keys of the CLI's JSON;
 - the virtual lab (``protocol_preset``, ``protocol_check``, ``simulate``),
   ``ellipsoid`` and ``report``;
@@ -31,6 +32,7 @@ from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, 
 import numpy as np
 
 from . import _display, _limpid, _spectral, plot
+from ._spectral import coherence, csd, psd
 
 __all__ = [
     "Result",
@@ -50,6 +52,7 @@ __all__ = [
     "estimate_reflex",
     "estimate_cocontraction",
     "estimate_varying",
+    "spectra",
     "ellipsoid",
     "StudyOutcome",
     "study_entries",
@@ -182,8 +185,9 @@ class Result:
         configuration and level, ``*_sd`` columns). ``table="impedance"``
         (stochastic): one row per frequency and element of Z(f) (real,
         imaginary, magnitude, phase, unit); ``table="coherence"``
-        (stochastic): multiple and partial coherence per frequency, output
-        and input. ``table="rotation"`` (study): the ellipsoid rotations.
+        (stochastic, spectra): multiple and partial (spectra: also ordinary)
+        coherence per frequency, output and input; ``table="psd"`` (spectra):
+        the power spectral density per frequency and signal. ``table="rotation"`` (study): the ellipsoid rotations.
         The values are the result's own floats; absent ones are NaN."""
         try:
             import importlib
@@ -320,125 +324,6 @@ def _vector(x: Any) -> np.ndarray:
     return a
 
 
-_WELCH_PARAMETERS = """
-    fs : float, default 1.0
-        Sample rate of the signal (Hz); frequencies are returned in Hz.
-    window : str, tuple or array_like, default 'hann'
-        A name or ``(name, parameter, ...)`` tuple as accepted by
-        ``scipy.signal.get_window`` (periodic), or the window's samples (then
-        ``nperseg`` defaults to their count). Without scipy installed, the
-        names hann, hamming and boxcar are built in.
-    nperseg : int, optional
-        Samples per segment; default 256 for a named window, shortened with a
-        ``UserWarning`` to the signal length when longer.
-    noverlap : int, optional
-        Samples shared by neighbouring segments; default ``nperseg // 2``.
-    nfft : int, optional
-        FFT length (zero padding); default ``nperseg``.
-    detrend : {'constant', 'linear', False, None} or callable, default 'constant'
-        Trend removed from each segment before windowing. A callable is called
-        once per segment with the samples on the last axis.
-"""
-
-
-def psd(x: Any, fs: float = 1.0, window: _spectral.WindowLike = "hann", nperseg: Optional[int] = None,
-        noverlap: Optional[int] = None, nfft: Optional[int] = None,
-        detrend: _spectral.DetrendLike = "constant", return_onesided: bool = True,
-        scaling: str = "density", axis: int = -1, average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
-    """Welch power spectral density, as ``scipy.signal.welch``.
-
-    Parameters
-    ----------
-    x : array_like
-        Signal(s), real or complex, any number of dimensions; samples along ``axis``.
-    {params}    return_onesided : bool, default True
-        One-sided spectrum (doubled except at 0 Hz and Nyquist); complex
-        input always gives the two-sided spectrum.
-    scaling : {{'density', 'spectrum'}}, default 'density'
-        Power spectral density (unit^2/Hz) or power spectrum (unit^2).
-    axis : int, default -1
-        Axis of the samples.
-    average : {{'mean', 'median'}}, default 'mean'
-        Mean of the segments' periodograms, or their median divided by the
-        median's bias.
-
-    Returns
-    -------
-    f : ndarray
-        Frequencies (Hz).
-    Pxx : ndarray
-        Spectral density or spectrum, with the frequencies along ``axis``;
-        float32 for float32 or complex64 input, else float64.
-    """
-    return _spectral.spectra(x, None, "psd", fs, window, nperseg, noverlap, nfft, detrend, return_onesided,
-                             scaling, axis, average)
-
-
-def csd(x: Any, y: Any, fs: float = 1.0, window: _spectral.WindowLike = "hann", nperseg: Optional[int] = None,
-        noverlap: Optional[int] = None, nfft: Optional[int] = None,
-        detrend: _spectral.DetrendLike = "constant", return_onesided: bool = True,
-        scaling: str = "density", axis: int = -1, average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
-    """Welch cross spectral density ``P_xy = avg conj(X) Y``, as ``scipy.signal.csd``.
-
-    ``x`` and ``y`` broadcast against each other outside ``axis`` (so
-    ``csd(s[:, None, :], s[None, :, :])`` is the full cross-spectral matrix of
-    the channels of ``s``, each channel's FFT computed once per segment); the
-    shorter is zero-padded along ``axis`` to the longer.
-
-    Parameters
-    ----------
-    x, y : array_like
-        Signals, real or complex; samples along ``axis``.
-    {params}    return_onesided : bool, default True
-        One-sided spectrum; complex input gives the two-sided one.
-    scaling : {{'density', 'spectrum'}}, default 'density'
-        Cross spectral density (unit_x unit_y/Hz) or cross spectrum.
-    axis : int, default -1
-        Axis of the samples.
-    average : {{'mean', 'median'}}, default 'mean'
-        Mean over segments, or the bias-corrected median of the real and
-        imaginary parts.
-
-    Returns
-    -------
-    f : ndarray
-        Frequencies (Hz).
-    Pxy : ndarray
-        Complex cross-spectral density (real when ``y is x``), complex64 for
-        single-precision input.
-    """
-    return _spectral.spectra(x, y, "csd", fs, window, nperseg, noverlap, nfft, detrend, return_onesided,
-                             scaling, axis, average)
-
-
-def coherence(x: Any, y: Any, fs: float = 1.0, window: _spectral.WindowLike = "hann",
-              nperseg: Optional[int] = None, noverlap: Optional[int] = None, nfft: Optional[int] = None,
-              detrend: _spectral.DetrendLike = "constant", axis: int = -1) -> Tuple[np.ndarray, np.ndarray]:
-    """Magnitude-squared coherence ``|P_xy|^2 / (P_xx P_yy)``, as ``scipy.signal.coherence``.
-
-    Parameters
-    ----------
-    x, y : array_like
-        Signals; broadcast outside ``axis`` as in :func:`csd`.
-    {params}    axis : int, default -1
-        Axis of the samples.
-
-    Returns
-    -------
-    f : ndarray
-        Frequencies (Hz).
-    Cxy : ndarray
-        Coherence in [0, 1]; NaN (with numpy's RuntimeWarning) where a
-        signal has no power, as scipy.
-    """
-    return _spectral.spectra(x, y, "coherence", fs, window, nperseg, noverlap, nfft, detrend, True,
-                             "density", axis, "mean")
-
-
-for _f in (psd, csd, coherence):
-    _f.__doc__ = (_f.__doc__ or "").replace("{params}", _WELCH_PARAMETERS.strip() + "\n").replace("{{", "{").replace("}}", "}")
-
-
 def frequency_response(inputs: Sequence[Any], outputs: Sequence[Any], fs: float = 1.0,
                        window: str = "hann", nperseg: Optional[int] = None,
                        noverlap: Optional[int] = None, detrend: Union[str, bool] = "constant"
@@ -545,7 +430,8 @@ def request(method: str, **options: Any) -> Dict[str, Any]:
     """The request an estimator runs with these options, as a dict (what a result's run
     block records and ``limpid rerun`` runs): ``request("reflex")`` shows every default.
 
-    ``method`` is one of linear, cocontraction, planar, window_sweep, stochastic, reflex;
+    ``method`` is one of linear, cocontraction, planar, window_sweep, stochastic, reflex,
+    varying, spectra;
     options are the keyword arguments of the ``estimate_*`` functions. The same request
     is what ``limpid estimate METHOD ... --print-request`` prints for the same settings."""
     r: Dict[str, Any] = _limpid.request(str(method), {k: _plain(v) for k, v in options.items()})
@@ -653,6 +539,26 @@ def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, **optio
     ``limpid.request("cocontraction")``): ``tolerance`` and the preparation options of
     :func:`estimate_linear`."""
     return _estimate("cocontraction", [recording, mvc], options)
+
+
+def spectra(recording: RecordingLike, inputs: Sequence[str], outputs: Sequence[str], **options: Any) -> Result:
+    """Welch spectra of a recording's named columns and, per output, its ordinary
+    coherence with each input, its multiple coherence on all inputs and its partial
+    coherence with each input, the others removed (Park & Chang 2011), as
+    ``limpid spectra --json``.
+
+    Options (defaults: ``limpid.request("spectra", inputs=..., outputs=...)``):
+    ``nperseg`` (samples per segment; default about 4 s, a power of two), ``noverlap``
+    (default half a segment), ``window`` ("hann", "hamming", "boxcar").
+
+    Returns ``frequencies``, ``psd[signal][frequency]`` (signals: inputs then outputs),
+    ``coherence[output][input][frequency]``, ``multiple_coherence[output][frequency]``
+    and ``partial_coherence[output][input][frequency]``; the last two are ``None`` where
+    the inputs' spectral matrix is singular. ``to_pandas("psd")`` and
+    ``to_pandas("coherence")`` give them as tidy tables."""
+    if isinstance(inputs, str) or isinstance(outputs, str):
+        raise ValueError("inputs and outputs: expected lists of column names, e.g. inputs=['ux', 'uz']")
+    return _estimate("spectra", [recording], dict(options, inputs=list(inputs), outputs=list(outputs)))
 
 
 class StudyOutcome:

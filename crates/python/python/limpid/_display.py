@@ -80,15 +80,22 @@ def records(d: Dict[str, Any], table: str = "parameters") -> List[Record]:
             raise ValueError(f"table 'impedance' is for stochastic results, this one is {kind!r}")
         return _impedance(d)
     if table == "coherence":
+        if kind == "spectra":
+            return _spectra_coherence(d)
         if kind != "stochastic":
-            raise ValueError(f"table 'coherence' is for stochastic results, this one is {kind!r}")
+            raise ValueError(f"table 'coherence' is for stochastic and spectra results, this one is {kind!r}")
         return _coherence(d)
+    if table == "psd":
+        if kind != "spectra":
+            raise ValueError(f"table 'psd' is for spectra results, this one is {kind!r}")
+        return [dict(frequency_hz=_float(f), signal=name, psd=_float(p[k]))
+                for name, p in zip(d["signals"], d["psd"]) for k, f in enumerate(d["frequencies"])]
     if table == "rotation":
         if kind != "study":
             raise ValueError(f"table 'rotation' is for study results, this one is {kind!r}")
         return [dict(r) for r in d["rotation"]]
     if table != "parameters":
-        raise ValueError(f"table: expected 'parameters', 'impedance', 'coherence' or 'rotation', found {table!r}")
+        raise ValueError(f"table: expected 'parameters', 'impedance', 'coherence', 'psd' or 'rotation', found {table!r}")
     if kind == "linear":
         return _linear(d)
     if kind == "cocontraction":
@@ -133,6 +140,8 @@ def records(d: Dict[str, Any], table: str = "parameters") -> List[Record]:
             row.update({f"{k}_sd": v for k, v in (r.get("sd") or {}).items()})
             out.append(row)
         return out
+    if kind == "spectra":
+        raise ValueError("spectra results have the tables 'psd' and 'coherence'")
     if kind == "demo":
         out = []
         for p in d["points"]:
@@ -206,6 +215,32 @@ def _coherence(d: Dict[str, Any]) -> List[Record]:
     return out
 
 
+def _spectra_coherence(d: Dict[str, Any]) -> List[Record]:
+    out: List[Record] = []
+    for o, name in enumerate(d["outputs"]):
+        for k, f in enumerate(d["frequencies"]):
+            for j, inp in enumerate(d["inputs"]):
+                out.append(dict(frequency_hz=_float(f), output=name, input=inp,
+                                coherence=_float(d["coherence"][o][j][k]),
+                                multiple=_float(d["multiple_coherence"][o][k]),
+                                partial=_float(d["partial_coherence"][o][j][k])))
+    return out
+
+
+def _multiple_coherence_rows(d: Dict[str, Any]) -> List[List[str]]:
+    """Per output: how much of it the inputs explain, over the frequencies where that is defined."""
+    rows = []
+    for name, m in zip(d["outputs"], d["multiple_coherence"]):
+        known = [c for f, c in zip(d["frequencies"], m) if c is not None and f > 0]
+        if not known:
+            rows.append([name, "—", "—", "singular inputs at every frequency"])
+            continue
+        high = sum(1 for c in known if c >= 0.9)
+        rows.append([name, f"{sum(known) / len(known):.3f}", f"{min(known):.3f}",
+                     f"{high} of {len(known)} frequencies at 0.9 or more"])
+    return rows
+
+
 # ---------------------------------------------------------------- text
 
 
@@ -267,6 +302,9 @@ def summary(d: Dict[str, Any]) -> str:
             body = f"{len(d['points'])} start points, stiffness within {worst:.1f} % of the truth"
         elif kind == "study":
             body = f"{d.get('name')!r}: {len(d['recordings'])} recordings, {len(d['failures'])} failed"
+        elif kind == "spectra":
+            body = (f"inputs {', '.join(d['inputs'])}; outputs {', '.join(d['outputs'])}; "
+                    f"{len(d['frequencies'])} frequencies, segments of {d['segment_samples']} samples")
     except (KeyError, IndexError, TypeError, ValueError, StopIteration):
         body = ""
     warnings_ = d.get("warnings") or []
@@ -444,6 +482,11 @@ def to_html(d: Dict[str, Any]) -> str:
                 + ["" if r.get(k) is None else f"{r[k]:.4g}" for k in ("cocontraction_index", "kxx", "kyy", "kzz")]
                 for r in d["levels"]]
         parts.append(_list_table(header, rows, "Mean over subjects (stiffness in N/m)"))
+    elif kind == "spectra":
+        parts.append(f"<p>inputs {_e(', '.join(d['inputs']))}; outputs {_e(', '.join(d['outputs']))}; "
+                     f"Welch segments of {d['segment_samples']} samples overlapping by {d['overlap_samples']}</p>")
+        parts.append(_list_table(["output", "mean", "min", "note"], _multiple_coherence_rows(d),
+                                 "Multiple coherence on all inputs (above 0 Hz)"))
     elif kind == "demo":
         rows = []
         for p in d["points"]:

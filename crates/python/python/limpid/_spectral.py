@@ -249,3 +249,125 @@ def spectra(x: Any, y: Any, kind: str, fs: Any, window: WindowLike, nperseg: Any
     with np.errstate(divide="warn", invalid="warn"):
         c = np.abs(pxy) ** 2 / auto[ix] / auto[iy]
     return freqs, shaped(c, outer)
+
+
+# ---------------------------------------------------------------- the public functions
+
+
+_WELCH_PARAMETERS = """
+    fs : float, default 1.0
+        Sample rate of the signal (Hz); frequencies are returned in Hz.
+    window : str, tuple or array_like, default 'hann'
+        A name or ``(name, parameter, ...)`` tuple as accepted by
+        ``scipy.signal.get_window`` (periodic), or the window's samples (then
+        ``nperseg`` defaults to their count). Without scipy installed, the
+        names hann, hamming and boxcar are built in.
+    nperseg : int, optional
+        Samples per segment; default 256 for a named window, shortened with a
+        ``UserWarning`` to the signal length when longer.
+    noverlap : int, optional
+        Samples shared by neighbouring segments; default ``nperseg // 2``.
+    nfft : int, optional
+        FFT length (zero padding); default ``nperseg``.
+    detrend : {'constant', 'linear', False, None} or callable, default 'constant'
+        Trend removed from each segment before windowing. A callable is called
+        once per segment with the samples on the last axis.
+"""
+
+
+def psd(x: Any, fs: float = 1.0, window: WindowLike = "hann", nperseg: Optional[int] = None,
+        noverlap: Optional[int] = None, nfft: Optional[int] = None,
+        detrend: DetrendLike = "constant", return_onesided: bool = True,
+        scaling: str = "density", axis: int = -1, average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
+    """Welch power spectral density, as ``scipy.signal.welch``.
+
+    Parameters
+    ----------
+    x : array_like
+        Signal(s), real or complex, any number of dimensions; samples along ``axis``.
+    {params}    return_onesided : bool, default True
+        One-sided spectrum (doubled except at 0 Hz and Nyquist); complex
+        input always gives the two-sided spectrum.
+    scaling : {{'density', 'spectrum'}}, default 'density'
+        Power spectral density (unit^2/Hz) or power spectrum (unit^2).
+    axis : int, default -1
+        Axis of the samples.
+    average : {{'mean', 'median'}}, default 'mean'
+        Mean of the segments' periodograms, or their median divided by the
+        median's bias.
+
+    Returns
+    -------
+    f : ndarray
+        Frequencies (Hz).
+    Pxx : ndarray
+        Spectral density or spectrum, with the frequencies along ``axis``;
+        float32 for float32 or complex64 input, else float64.
+    """
+    return spectra(x, None, "psd", fs, window, nperseg, noverlap, nfft, detrend, return_onesided,
+                             scaling, axis, average)
+
+
+def csd(x: Any, y: Any, fs: float = 1.0, window: WindowLike = "hann", nperseg: Optional[int] = None,
+        noverlap: Optional[int] = None, nfft: Optional[int] = None,
+        detrend: DetrendLike = "constant", return_onesided: bool = True,
+        scaling: str = "density", axis: int = -1, average: str = "mean") -> Tuple[np.ndarray, np.ndarray]:
+    """Welch cross spectral density ``P_xy = avg conj(X) Y``, as ``scipy.signal.csd``.
+
+    ``x`` and ``y`` broadcast against each other outside ``axis`` (so
+    ``csd(s[:, None, :], s[None, :, :])`` is the full cross-spectral matrix of
+    the channels of ``s``, each channel's FFT computed once per segment); the
+    shorter is zero-padded along ``axis`` to the longer.
+
+    Parameters
+    ----------
+    x, y : array_like
+        Signals, real or complex; samples along ``axis``.
+    {params}    return_onesided : bool, default True
+        One-sided spectrum; complex input gives the two-sided one.
+    scaling : {{'density', 'spectrum'}}, default 'density'
+        Cross spectral density (unit_x unit_y/Hz) or cross spectrum.
+    axis : int, default -1
+        Axis of the samples.
+    average : {{'mean', 'median'}}, default 'mean'
+        Mean over segments, or the bias-corrected median of the real and
+        imaginary parts.
+
+    Returns
+    -------
+    f : ndarray
+        Frequencies (Hz).
+    Pxy : ndarray
+        Complex cross-spectral density (real when ``y is x``), complex64 for
+        single-precision input.
+    """
+    return spectra(x, y, "csd", fs, window, nperseg, noverlap, nfft, detrend, return_onesided,
+                             scaling, axis, average)
+
+
+def coherence(x: Any, y: Any, fs: float = 1.0, window: WindowLike = "hann",
+              nperseg: Optional[int] = None, noverlap: Optional[int] = None, nfft: Optional[int] = None,
+              detrend: DetrendLike = "constant", axis: int = -1) -> Tuple[np.ndarray, np.ndarray]:
+    """Magnitude-squared coherence ``|P_xy|^2 / (P_xx P_yy)``, as ``scipy.signal.coherence``.
+
+    Parameters
+    ----------
+    x, y : array_like
+        Signals; broadcast outside ``axis`` as in :func:`csd`.
+    {params}    axis : int, default -1
+        Axis of the samples.
+
+    Returns
+    -------
+    f : ndarray
+        Frequencies (Hz).
+    Cxy : ndarray
+        Coherence in [0, 1]; NaN (with numpy's RuntimeWarning) where a
+        signal has no power, as scipy.
+    """
+    return spectra(x, y, "coherence", fs, window, nperseg, noverlap, nfft, detrend, True,
+                             "density", axis, "mean")
+
+
+for _f in (psd, csd, coherence):
+    _f.__doc__ = (_f.__doc__ or "").replace("{params}", _WELCH_PARAMETERS.strip() + "\n").replace("{{", "{").replace("}}", "}")
