@@ -256,20 +256,22 @@ pub fn fit_linear_plan(plan: &Plan<'_>, params: &LinearParams) -> Result<LinearE
     fit_rows(Rows::Windows(plan), params)
 }
 
-fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
-    let data = rows.meta();
-    let n = data.dims();
-    let m = rows.len();
-    // a constant term: the equilibrium (seed 000), or the unknown offset of continuous data;
-    // demeaned windows already had their per-trial constants removed
+/// The columns of the regression.
+struct ModelSize {
+    /// A constant term: the equilibrium (seed 000), or the unknown offset of
+    /// continuous data; demeaned windows already had their per-trial constants removed.
+    with_const: bool,
+    /// Constants absorbed by demeaning (one per window), for the degrees of freedom.
+    absorbed: usize,
+    /// Parameters per force coordinate.
+    p: usize,
+}
+
+/// The regression's size, refusing data with fewer than two samples per parameter.
+fn model_size(data: &Prepared, params: &LinearParams, m: usize) -> Result<ModelSize> {
     let with_const = !data.demeaned && (params.equilibrium || data.continuous);
     let absorbed = if data.demeaned { data.windows.len() } else { 0 };
-    let p = 3 * n + usize::from(with_const);
-    let q = p + n;
-    let numerical = |message: String| Error::Numerical {
-        path: data.path.clone(),
-        message,
-    };
+    let p = 3 * data.dims() + usize::from(with_const);
     if m < 2 * (p + absorbed) {
         return Err(Error::TooFewSamples {
             path: data.path.clone(),
@@ -278,35 +280,84 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
             found: m,
         });
     }
+    Ok(ModelSize {
+        with_const,
+        absorbed,
+        p,
+    })
+}
+
+/// The least-squares solution with its fit and sampling errors.
+struct Sampled {
+    reg: Regression,
+    solved: Solved,
+    fit: FitQuality,
+    inflation: Vec<f64>,
+    se: DMatrix<f64>,
+    se_method: String,
+}
+
+/// Reduce the rows block by block, solve, and measure the fit and the
+/// sampling errors (jackknife over the blocks when there are enough, else
+/// analytic with the residuals' autocorrelation).
+fn regress(
+    rows: Rows<'_>,
+    data: &Prepared,
+    (n, p, absorbed): (usize, usize, usize),
+    with_const: bool,
+    numerical: impl Fn(String) -> Error + Copy,
+) -> Result<Sampled> {
+    let m = rows.len();
+    let q = p + n;
     let blocks = jackknife_blocks(&data.windows, m, q);
     let summaries = reduce_blocks(rows, &blocks, (n, p, q))?;
     let (reg, triangles) = Regression::new(data, m, with_const, &summaries, numerical)?;
     drop(summaries);
     let solved = reg.solve(triangles.iter(), m).map_err(numerical)?;
     let theta = &solved.theta;
-    let condition_number = solved.condition_number;
     let g = blocks.len();
     let use_jackknife = g >= MIN_JACKKNIFE_BLOCKS;
     let (fit, inflation) = reg.fit_quality(rows, theta, !use_jackknife)?;
-    let (mut se, mut se_method) = if use_jackknife {
-        let block_rows: Vec<usize> = blocks.iter().map(|b| b.len()).collect();
-        let unit = if g == data.windows.len() {
-            "trials"
-        } else if data.windows.len() >= MIN_JACKKNIFE_BLOCKS {
-            "groups of consecutive trials"
-        } else {
-            "contiguous pieces"
-        };
-        (
-            reg.jackknife(&triangles, &block_rows),
-            format!("jackknife over {g} blocks ({unit})"),
-        )
+    let (se, se_method) = if use_jackknife {
+        block_jackknife(&reg, &triangles, &blocks, data.windows.len())
     } else {
         (
             reg.analytic_se(&solved, (m - p - absorbed) as f64, &inflation),
             "analytic, residual variance inflated by its autocorrelation".to_string(),
         )
     };
+    Ok(Sampled {
+        reg,
+        solved,
+        fit,
+        inflation,
+        se,
+        se_method,
+    })
+}
+
+fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
+    let data = rows.meta();
+    let n = data.dims();
+    let m = rows.len();
+    let ModelSize {
+        with_const,
+        absorbed,
+        p,
+    } = model_size(data, params, m)?;
+    let numerical = |message: String| Error::Numerical {
+        path: data.path.clone(),
+        message,
+    };
+    let Sampled {
+        reg,
+        solved,
+        fit,
+        inflation,
+        mut se,
+        mut se_method,
+    } = regress(rows, data, (n, p, absorbed), with_const, numerical)?;
+    let condition_number = solved.condition_number;
     let block = |m_: &DMatrix<f64>, b: usize| {
         Matrix(DMatrix::from_fn(n, n, |row, col| m_[(b * n + col, row)]))
     };
@@ -325,80 +376,14 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
     if data.demeaned && params.equilibrium {
         warnings.push(Warning::new(WarningCode::EquilibriumAbsorbed, "equilibrium not estimated: each trial's force offset was fitted, which absorbs it; use rest offsets (Artemiadis et al. 2010) to estimate it"));
     }
-    let equilibrium = (with_const && params.equilibrium).then(|| {
-        let constant = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);
-        equilibrium_position(&stiffness, constant, &data.reference, &mut warnings)
-    });
-    let equilibrium = equilibrium.flatten();
+    let equilibrium = (with_const && params.equilibrium)
+        .then(|| {
+            let constant = DVector::from_fn(n, |i, _| theta[(3 * n, i)]);
+            equilibrium_position(&stiffness, constant, &data.reference, &mut warnings)
+        })
+        .flatten();
     // inertia first: when it is not identified, B and K carry its uncertainty too
     let inertia_se = block(&se, 0);
-    let inertia_identified = identified(
-        MatrixKind::Inertia,
-        &inertia,
-        &inertia_se,
-        &data.coordinates,
-        &reg.reliability,
-        params.identifiable_ratio,
-        &mut warnings,
-    );
-    // the share of each acceleration column's own part (not explained by
-    // velocity, displacement and constant) that is signal rather than noise
-    let partial_reliability: Vec<f64> = (0..n)
-        .map(|k| {
-            let nv = data.regressor_noise_var.get(k).map_or(0.0, |v| v[2]);
-            let noise = nv / (reg.scales[k] * reg.scales[k]);
-            (1.0 - noise / solved.partial_variance[k]).max(0.0)
-        })
-        .collect();
-    let least = partial_reliability.iter().copied().fold(1.0, f64::min);
-    if let Some(sens) = sensitivity
-        .as_ref()
-        .filter(|_| partial_reliability.iter().any(|r| *r < MIN_RELIABILITY))
-    {
-        let extra = inertia_confounding(sens, &data.coordinates);
-        se.zip_apply(&extra, |v, e| *v = (*v * *v + e).sqrt());
-        let _ = write!(
-            se_method,
-            "; B and K include an unknown inertia's effect (prior s.d. {UNIDENTIFIED_INERTIA_SD_KG} kg or {UNIDENTIFIED_INERTIA_SD_KG_M2} kg m^2): only {:.0} % of the acceleration the motion does not tie to displacement and velocity is signal",
-            100.0 * least
-        );
-    }
-    if !prior_inertia.is_empty() {
-        let _ = write!(
-            se_method,
-            "; B and K are given for the prior mean inertia ({UNIDENTIFIED_INERTIA_MEAN_KG} kg or {UNIDENTIFIED_INERTIA_MEAN_KG_M2} kg m^2 on the diagonal) along {}: the acceleration there is mostly noise",
-            prior_inertia.join(", ")
-        );
-    }
-    for j in 0..2 * n {
-        for a in 0..n {
-            let floor = DERIVATIVE_ERROR_FLOOR * theta[(j, a)].abs();
-            se[(j, a)] = se[(j, a)].hypot(floor);
-        }
-    }
-    let se_out = StandardErrors {
-        inertia: inertia_se,
-        damping: block(&se, 1),
-        stiffness: block(&se, 2),
-        constant: with_const.then(|| (0..n).map(|a| se[(3 * n, a)]).collect()),
-    };
-    let finite = |m: &Matrix| m.iter().all(|v| v.is_finite());
-    if ![
-        &inertia,
-        &damping,
-        &stiffness,
-        &se_out.inertia,
-        &se_out.damping,
-        &se_out.stiffness,
-    ]
-    .into_iter()
-    .all(finite)
-        || !condition_number.is_finite()
-    {
-        return Err(numerical(
-            "the estimate or its standard errors are not finite numbers: the data overflow double precision or do not determine the model".into(),
-        ));
-    }
     let judge = |kind: MatrixKind, value: &Matrix, se: &Matrix, warnings: &mut Vec<Warning>| {
         identified(
             kind,
@@ -410,6 +395,30 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
             warnings,
         )
     };
+    let inertia_identified = judge(MatrixKind::Inertia, &inertia, &inertia_se, &mut warnings);
+    widen_for_what_the_regression_cannot_see(
+        (&mut se, &mut se_method),
+        theta,
+        data,
+        &reg,
+        &solved,
+        sensitivity.as_ref(),
+        &prior_inertia,
+    );
+    let se_out = StandardErrors {
+        inertia: inertia_se,
+        damping: block(&se, 1),
+        stiffness: block(&se, 2),
+        constant: with_const.then(|| (0..n).map(|a| se[(3 * n, a)]).collect()),
+    };
+    let finite = |m: &Matrix| m.iter().all(|v| v.is_finite());
+    let estimates = [&inertia, &damping, &stiffness];
+    let errors = [&se_out.inertia, &se_out.damping, &se_out.stiffness];
+    if !(estimates.into_iter().chain(errors).all(finite) && condition_number.is_finite()) {
+        return Err(numerical(
+            "the estimate or its standard errors are not finite numbers: the data overflow double precision or do not determine the model".into(),
+        ));
+    }
     let identifiable = Identifiable {
         inertia: inertia_identified,
         damping: judge(

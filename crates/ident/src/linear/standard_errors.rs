@@ -149,3 +149,77 @@ pub(crate) fn autocorrelation_inflation(
     }
     tau.max(1.0)
 }
+
+/// The regression's own sampling errors by a delete-a-block jackknife, and
+/// how they were made (the block unit named for the reader).
+pub(crate) fn block_jackknife(
+    reg: &Regression,
+    triangles: &[DMatrix<f64>],
+    blocks: &[std::ops::Range<usize>],
+    windows: usize,
+) -> (DMatrix<f64>, String) {
+    let g = blocks.len();
+    let block_rows: Vec<usize> = blocks.iter().map(|b| b.len()).collect();
+    let unit = if g == windows {
+        "trials"
+    } else if windows >= MIN_JACKKNIFE_BLOCKS {
+        "groups of consecutive trials"
+    } else {
+        "contiguous pieces"
+    };
+    (
+        reg.jackknife(triangles, &block_rows),
+        format!("jackknife over {g} blocks ({unit})"),
+    )
+}
+
+/// Widen the sampling errors by what the regression cannot see: an inertia
+/// the data do not identify, whose unknown value moves B and K (its prior's
+/// effect is added when little of the acceleration the motion does not tie
+/// to displacement and velocity is signal); the prior mean inertia B and K
+/// are then given for; and the floor of numerical differentiation.
+pub(crate) fn widen_for_what_the_regression_cannot_see(
+    (se, se_method): (&mut DMatrix<f64>, &mut String),
+    theta: &DMatrix<f64>,
+    data: &Prepared,
+    reg: &Regression,
+    solved: &Solved,
+    sensitivity: Option<&DMatrix<f64>>,
+    prior_inertia: &[String],
+) {
+    let n = data.dims();
+    // the share of each acceleration column's own part (not explained by
+    // velocity, displacement and constant) that is signal rather than noise
+    let partial_reliability: Vec<f64> = (0..n)
+        .map(|k| {
+            let nv = data.regressor_noise_var.get(k).map_or(0.0, |v| v[2]);
+            let noise = nv / (reg.scales[k] * reg.scales[k]);
+            (1.0 - noise / solved.partial_variance[k]).max(0.0)
+        })
+        .collect();
+    let least = partial_reliability.iter().copied().fold(1.0, f64::min);
+    if let Some(sens) =
+        sensitivity.filter(|_| partial_reliability.iter().any(|r| *r < MIN_RELIABILITY))
+    {
+        let extra = inertia_confounding(sens, &data.coordinates);
+        se.zip_apply(&extra, |v, e| *v = (*v * *v + e).sqrt());
+        let _ = write!(
+            se_method,
+            "; B and K include an unknown inertia's effect (prior s.d. {UNIDENTIFIED_INERTIA_SD_KG} kg or {UNIDENTIFIED_INERTIA_SD_KG_M2} kg m^2): only {:.0} % of the acceleration the motion does not tie to displacement and velocity is signal",
+            100.0 * least
+        );
+    }
+    if !prior_inertia.is_empty() {
+        let _ = write!(
+            se_method,
+            "; B and K are given for the prior mean inertia ({UNIDENTIFIED_INERTIA_MEAN_KG} kg or {UNIDENTIFIED_INERTIA_MEAN_KG_M2} kg m^2 on the diagonal) along {}: the acceleration there is mostly noise",
+            prior_inertia.join(", ")
+        );
+    }
+    for j in 0..2 * n {
+        for a in 0..n {
+            let floor = DERIVATIVE_ERROR_FLOOR * theta[(j, a)].abs();
+            se[(j, a)] = se[(j, a)].hypot(floor);
+        }
+    }
+}
