@@ -366,16 +366,7 @@ fn fit_window(
     let r = reps as f64;
     let centre = (w.start + w.end - 1) / 2;
     let sigma = centre as f64 / fs;
-    // centred cross product of the window: Σ_t [Σ_r z zᵀ - s sᵀ / R]
-    let mut c = vec![0.0; m * m];
-    for i in 0..m {
-        for j in i..m {
-            let k = i * m + j;
-            let zz = pre.zz[w.end * m * m + k] - pre.zz[w.start * m * m + k];
-            let ss = pre.ss[w.end * m * m + k] - pre.ss[w.start * m * m + k];
-            c[k] = zz - ss / r;
-        }
-    }
+    let c = centred_cross_product(pre, &w, m, r);
     let (cxx, cxf, cff) = blocks(&c, d);
     let condition = scaled_condition(&cxx);
     let empty = |reason: String| GridFit {
@@ -400,88 +391,22 @@ fn fit_window(
         press: 0.0,
         press_tss: 0.0,
     };
-    if reps < min_repetitions {
-        return empty(format!(
-            "only {reps} repetitions: the ensemble's standard errors need at least {min_repetitions}"
-        ));
-    }
-    if w.start < edge || w.end + edge > e.len {
-        return empty(format!(
-            "within {} ms of the repetitions' ends, where the zero-phase filter's derivatives are not reliable",
-            crate::varying::round_ms(edge as f64 / fs)
-        ));
-    }
-    if !well_conditioned(condition) {
-        return empty(format!(
-            "the repetitions' deviations do not excite the model here (condition number {})",
-            if condition.is_finite() {
-                format!("{condition:.0}")
-            } else {
-                "infinite".into()
-            }
-        ));
+    if let Some(reason) = refusal(e, &w, (min_repetitions, edge), condition, fs) {
+        return empty(reason);
     }
     let Some(theta) = solve_scaled(&cxx, &cxf) else {
         return empty("the regressors are singular here".into());
     };
     let full_rss = rss(&cxx, &cxf, &cff, &theta);
     let tss = cff.trace();
-    // jackknife over repetitions and leave-one-out prediction
-    let sums: Vec<f64> = (0..m)
-        .flat_map(|i| (0..m).map(move |j| (i, j)))
-        .map(|(i, j)| {
-            let (a, b) = (i.min(j), i.max(j));
-            pre.zz[w.end * m * m + a * m + b] - pre.zz[w.start * m * m + a * m + b]
-        })
-        .collect();
-    let mut thetas: Vec<DMatrix<f64>> = Vec::with_capacity(reps);
-    let (mut press, mut press_tss) = (0.0, 0.0);
-    let mut q = vec![0.0; m * m];
-    let mut dd = vec![0.0; m * m];
-    let (mut u, mut dv) = (vec![0.0; m], vec![0.0; m]);
-    for rep in &e.z {
-        q.iter_mut().for_each(|v| *v = 0.0);
-        dd.iter_mut().for_each(|v| *v = 0.0);
-        for t in w.clone() {
-            let z = &rep[t * m..(t + 1) * m];
-            let s = &pre.s[(t + 1) * m..(t + 2) * m];
-            let s0 = &pre.s[t * m..(t + 1) * m];
-            for i in 0..m {
-                u[i] = (s[i] - s0[i]) - z[i];
-                dv[i] = z[i] - u[i] / (r - 1.0);
-            }
-            for i in 0..m {
-                for j in i..m {
-                    q[i * m + j] += z[i] * z[j] + u[i] * u[j] / (r - 1.0);
-                    dd[i * m + j] += dv[i] * dv[j];
-                }
-            }
-        }
-        let loo: Vec<f64> = (0..m * m)
-            .map(|k| {
-                let (i, j) = (k / m, k % m);
-                if i <= j {
-                    sums[k] - q[k]
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let (lxx, lxf, _) = blocks(&loo, d);
-        let Some(th) = solve_scaled(&lxx, &lxf) else {
-            return empty("leaving one repetition out makes the regressors singular".into());
-        };
-        let (dxx, dxf, dff) = blocks(&dd, d);
-        press += rss(&dxx, &dxf, &dff, &th);
-        press_tss += dff.trace();
-        thetas.push(th);
-    }
-    let p = 3 * d;
-    let mean = thetas.iter().fold(DMatrix::zeros(p, d), |acc, t| acc + t) / r;
-    let var = thetas.iter().fold(DMatrix::zeros(p, d), |acc, t| {
-        acc + (t - &mean).map(|v| v * v)
-    }) * ((r - 1.0) / r);
-    let se = var.map(f64::sqrt);
+    let Some(LeaveOneOut {
+        se,
+        press,
+        press_tss,
+    }) = leave_one_out(e, pre, &w)
+    else {
+        return empty("leaving one repetition out makes the regressors singular".into());
+    };
     if theta.iter().chain(se.iter()).any(|v| !v.is_finite()) {
         return empty("the estimate is not finite here".into());
     }
@@ -519,4 +444,127 @@ fn fit_window(
         press,
         press_tss,
     }
+}
+
+/// The window's centred cross product `Σ_t [Σ_r z zᵀ - s sᵀ / R]` (upper
+/// triangle, row-major `m x m`) from the prefix sums.
+fn centred_cross_product(pre: &Prefix, w: &std::ops::Range<usize>, m: usize, r: f64) -> Vec<f64> {
+    let mut c = vec![0.0; m * m];
+    for i in 0..m {
+        for j in i..m {
+            let k = i * m + j;
+            let zz = pre.zz[w.end * m * m + k] - pre.zz[w.start * m * m + k];
+            let ss = pre.ss[w.end * m * m + k] - pre.ss[w.start * m * m + k];
+            c[k] = zz - ss / r;
+        }
+    }
+    c
+}
+
+/// Why a grid point cannot be identified before any fit: too few
+/// repetitions, the filter's unreliable ends, or regressors not excited.
+fn refusal(
+    e: &Ensemble,
+    w: &std::ops::Range<usize>,
+    (min_repetitions, edge): (usize, usize),
+    condition: f64,
+    fs: f64,
+) -> Option<String> {
+    let reps = e.z.len();
+    if reps < min_repetitions {
+        return Some(format!(
+            "only {reps} repetitions: the ensemble's standard errors need at least {min_repetitions}"
+        ));
+    }
+    if w.start < edge || w.end + edge > e.len {
+        return Some(format!(
+            "within {} ms of the repetitions' ends, where the zero-phase filter's derivatives are not reliable",
+            crate::varying::round_ms(edge as f64 / fs)
+        ));
+    }
+    if !well_conditioned(condition) {
+        return Some(format!(
+            "the repetitions' deviations do not excite the model here (condition number {})",
+            if condition.is_finite() {
+                format!("{condition:.0}")
+            } else {
+                "infinite".into()
+            }
+        ));
+    }
+    None
+}
+
+/// A window's jackknife over repetitions and its leave-one-out prediction.
+struct LeaveOneOut {
+    /// Jackknife standard errors of Θ.
+    se: DMatrix<f64>,
+    /// Squared error of predicting each left-out repetition's deviations.
+    press: f64,
+    /// Their total sum of squares.
+    press_tss: f64,
+}
+
+/// Refit the window without each repetition in turn (from the prefix sums:
+/// the left-out repetition's own cross products are subtracted); None when
+/// one leaves the regressors singular.
+fn leave_one_out(e: &Ensemble, pre: &Prefix, w: &std::ops::Range<usize>) -> Option<LeaveOneOut> {
+    let (d, m, r) = (e.d, 4 * e.d, e.z.len() as f64);
+    let sums: Vec<f64> = (0..m)
+        .flat_map(|i| (0..m).map(move |j| (i, j)))
+        .map(|(i, j)| {
+            let (a, b) = (i.min(j), i.max(j));
+            pre.zz[w.end * m * m + a * m + b] - pre.zz[w.start * m * m + a * m + b]
+        })
+        .collect();
+    let mut thetas: Vec<DMatrix<f64>> = Vec::with_capacity(e.z.len());
+    let (mut press, mut press_tss) = (0.0, 0.0);
+    let mut q = vec![0.0; m * m];
+    let mut dd = vec![0.0; m * m];
+    let (mut u, mut dv) = (vec![0.0; m], vec![0.0; m]);
+    for rep in &e.z {
+        q.iter_mut().for_each(|v| *v = 0.0);
+        dd.iter_mut().for_each(|v| *v = 0.0);
+        for t in w.clone() {
+            let z = &rep[t * m..(t + 1) * m];
+            let s = &pre.s[(t + 1) * m..(t + 2) * m];
+            let s0 = &pre.s[t * m..(t + 1) * m];
+            for i in 0..m {
+                u[i] = (s[i] - s0[i]) - z[i];
+                dv[i] = z[i] - u[i] / (r - 1.0);
+            }
+            for i in 0..m {
+                for j in i..m {
+                    q[i * m + j] += z[i] * z[j] + u[i] * u[j] / (r - 1.0);
+                    dd[i * m + j] += dv[i] * dv[j];
+                }
+            }
+        }
+        let loo: Vec<f64> = (0..m * m)
+            .map(|k| {
+                let (i, j) = (k / m, k % m);
+                if i <= j {
+                    sums[k] - q[k]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let (lxx, lxf, _) = blocks(&loo, d);
+        let th = solve_scaled(&lxx, &lxf)?;
+        let (dxx, dxf, dff) = blocks(&dd, d);
+        press += rss(&dxx, &dxf, &dff, &th);
+        press_tss += dff.trace();
+        thetas.push(th);
+    }
+    let p = 3 * d;
+    let mean = thetas.iter().fold(DMatrix::zeros(p, d), |acc, t| acc + t) / r;
+    let var = thetas.iter().fold(DMatrix::zeros(p, d), |acc, t| {
+        acc + (t - &mean).map(|v| v * v)
+    }) * ((r - 1.0) / r);
+    Some(LeaveOneOut {
+        se: var.map(f64::sqrt),
+        press,
+        press_tss,
+    })
 }
