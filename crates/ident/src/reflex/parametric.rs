@@ -252,69 +252,7 @@ pub(crate) fn reflex_parametric(
     let full = &d.rectified_full[polarity];
     let max_delay = (p.max_delay_s * fs).round() as usize;
     let delays = max_delay + 1;
-    let nyquist = d.fs / 2.0;
-    // RSS and [I, B, K, G] per low-pass and delay; delays outside `near` are
-    // not fitted (infinite RSS)
-    let scan_near = |combos: &[(f64, f64)], near: std::ops::RangeInclusive<usize>| {
-        combos
-            .par_iter()
-            .map(|&(w, z)| {
-                let ph = phases(&low_pass(full, w, z, fs), d.ratio, n);
-                (0..delays)
-                    .map(|dl| {
-                        if near.contains(&dl) {
-                            joint_fit(&f, delayed(&ph, d.ratio, dl, skip, n))
-                        } else {
-                            (f64::INFINITY, [0.0; 4])
-                        }
-                    })
-                    .collect::<Vec<_>>()
-            })
-            .collect::<Vec<_>>()
-    };
-    let scan = |combos: &[(f64, f64)]| scan_near(combos, 0..=max_delay);
-    let mut combos: Vec<(f64, f64)> = (0..10)
-        .map(|i| 0.8 * 25f64.powf(i as f64 / 9.0))
-        .filter(|w| *w < 0.45 * nyquist)
-        .flat_map(|w| [0.3, 0.5, 0.75, 1.1, 1.6].map(|z| (w, z)))
-        .collect();
-    if combos.is_empty() {
-        // no low-pass of the grid lies below the decimated Nyquist frequency
-        return None;
-    }
-    let mut fits = scan(&combos);
-    let best = |fits: &[Vec<(f64, [f64; 4])>]| {
-        let mut b = (f64::INFINITY, 0, 0);
-        for (ci, row) in fits.iter().enumerate() {
-            for (dl, &(rss, _)) in row.iter().enumerate() {
-                if rss < b.0 {
-                    b = (rss, ci, dl);
-                }
-            }
-        }
-        b
-    };
-    let (_, c0, _) = best(&fits);
-    let (w0, z0) = combos[c0];
-    let local: Vec<(f64, f64)> = (-2..=2)
-        .flat_map(|i| (-2..=2).map(move |j| (w0 * 1.08f64.powi(i), z0 * 1.1f64.powi(j))))
-        .filter(|(w, _)| *w < 0.45 * nyquist)
-        .collect();
-    fits.extend(scan(&local));
-    combos.extend(local);
-    // and once more at 1 % steps: the 8-10 % steps left an error in the
-    // low-pass that leaked into B (1 % median) and K (0.3 %), several times
-    // their jackknife standard errors
-    let (_, c1, d1) = best(&fits);
-    let (w1, z1) = combos[c1];
-    // (the delays within 10 samples of the best: the low-pass moves little)
-    let near = d1.saturating_sub(10)..=(d1 + 10).min(max_delay);
-    let fine: Vec<(f64, f64)> = (-4..=4)
-        .flat_map(|i| (-4..=4).map(move |j| (w1 * 1.01f64.powi(i), z1 * 1.012f64.powi(j))))
-        .filter(|(w, _)| *w < 0.45 * nyquist)
-        .collect();
-    fits.extend(scan_near(&fine, near));
-    combos.extend(fine);
+    let Scan { combos, fits } = scan_low_pass_and_delay(d, &f, full, max_delay, (skip, fs))?;
     let (rss_min, ci, delay) = best(&fits);
     let (w, z) = combos[ci];
     let profile: Vec<f64> = (0..delays)
@@ -346,30 +284,10 @@ pub(crate) fn reflex_parametric(
     let m = x.len() as f64;
     let n_eff = (m / inflation).max(5.0);
     let threshold = rss_min * (1.0 + 3.84 / n_eff);
-    let inside: Vec<bool> = profile.iter().map(|r| *r <= threshold).collect();
-    let (mut lo, mut hi) = (delay, delay);
-    while lo > 0 && inside[lo - 1] {
-        lo -= 1;
-    }
-    while hi < max_delay && inside[hi + 1] {
-        hi += 1;
-    }
-    let contiguous = inside
-        .iter()
-        .enumerate()
-        .all(|(i, &v)| !v || (lo..=hi).contains(&i));
+    let (lo, hi, contiguous) = delay_interval(&profile, threshold, delay);
     let mut se = joint_jackknife(&f, x);
-    // the jackknife holds the delay and the low-pass fixed; B, K, I and G
-    // move with them (the rectified velocity's linear half is collinear with
-    // the velocity), so the largest change over their joint 95 % profile
-    // region (every scanned delay and low-pass with an RSS under the
-    // threshold) is added in quadrature
-    let mut shift = [0.0f64; 4];
-    for (_, params) in fits.iter().flatten().filter(|(rss, _)| *rss <= threshold) {
-        for ((s, o), v) in shift.iter_mut().zip(params).zip(at_best) {
-            *s = s.max((o - v).abs());
-        }
-    }
+    // the jackknife holds the delay and low-pass fixed: add what they move
+    let shift = profile_region_shift(&fits, threshold, at_best);
     for (e, s) in se.iter_mut().zip(shift) {
         *e = e.hypot(s);
     }
@@ -400,6 +318,130 @@ pub(crate) fn reflex_parametric(
             .map(|r| 100.0 * (1.0 - r / f.total_ss))
             .collect(),
     })
+}
+
+/// RSS and `[I, B, K, G]` per low-pass (row) and delay (column); delays a
+/// stage did not fit have an infinite RSS.
+type ScanFits = Vec<Vec<(f64, [f64; 4])>>;
+
+/// The low-passes `(natural frequency Hz, damping ratio)` scanned and their fits.
+struct Scan {
+    combos: Vec<(f64, f64)>,
+    fits: ScanFits,
+}
+
+/// The lowest RSS of a scan: (RSS, low-pass index, delay).
+fn best(fits: &[Vec<(f64, [f64; 4])>]) -> (f64, usize, usize) {
+    let mut b = (f64::INFINITY, 0, 0);
+    for (ci, row) in fits.iter().enumerate() {
+        for (dl, &(rss, _)) in row.iter().enumerate() {
+            if rss < b.0 {
+                b = (rss, ci, dl);
+            }
+        }
+    }
+    b
+}
+
+/// Scan the reflex low-pass and delay in three stages: a coarse grid of 10
+/// natural frequencies x 5 damping ratios at every delay, 8-10 % steps around
+/// its best, then 1 % steps at the delays within 10 samples of the best.
+/// None when no low-pass of the grid lies below the decimated Nyquist frequency.
+fn scan_low_pass_and_delay(
+    d: &Decimated,
+    f: &Fixed,
+    full: &[f64],
+    max_delay: usize,
+    (skip, fs): (usize, f64),
+) -> Option<Scan> {
+    let n = d.torque.len();
+    let delays = max_delay + 1;
+    let nyquist = d.fs / 2.0;
+    // RSS and [I, B, K, G] per low-pass and delay; delays outside `near` are
+    // not fitted (infinite RSS)
+    let scan_near = |combos: &[(f64, f64)], near: std::ops::RangeInclusive<usize>| {
+        combos
+            .par_iter()
+            .map(|&(w, z)| {
+                let ph = phases(&low_pass(full, w, z, fs), d.ratio, n);
+                (0..delays)
+                    .map(|dl| {
+                        if near.contains(&dl) {
+                            joint_fit(f, delayed(&ph, d.ratio, dl, skip, n))
+                        } else {
+                            (f64::INFINITY, [0.0; 4])
+                        }
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect::<Vec<_>>()
+    };
+    let scan = |combos: &[(f64, f64)]| scan_near(combos, 0..=max_delay);
+    let mut combos: Vec<(f64, f64)> = (0..10)
+        .map(|i| 0.8 * 25f64.powf(i as f64 / 9.0))
+        .filter(|w| *w < 0.45 * nyquist)
+        .flat_map(|w| [0.3, 0.5, 0.75, 1.1, 1.6].map(|z| (w, z)))
+        .collect();
+    if combos.is_empty() {
+        return None;
+    }
+    let mut fits = scan(&combos);
+    let (_, c0, _) = best(&fits);
+    let (w0, z0) = combos[c0];
+    let local: Vec<(f64, f64)> = (-2..=2)
+        .flat_map(|i| (-2..=2).map(move |j| (w0 * 1.08f64.powi(i), z0 * 1.1f64.powi(j))))
+        .filter(|(w, _)| *w < 0.45 * nyquist)
+        .collect();
+    fits.extend(scan(&local));
+    combos.extend(local);
+    // and once more at 1 % steps: the 8-10 % steps left an error in the
+    // low-pass that leaked into B (1 % median) and K (0.3 %), several times
+    // their jackknife standard errors
+    let (_, c1, d1) = best(&fits);
+    let (w1, z1) = combos[c1];
+    // (the delays within 10 samples of the best: the low-pass moves little)
+    let near = d1.saturating_sub(10)..=(d1 + 10).min(max_delay);
+    let fine: Vec<(f64, f64)> = (-4..=4)
+        .flat_map(|i| (-4..=4).map(move |j| (w1 * 1.01f64.powi(i), z1 * 1.012f64.powi(j))))
+        .filter(|(w, _)| *w < 0.45 * nyquist)
+        .collect();
+    fits.extend(scan_near(&fine, near));
+    combos.extend(fine);
+    Some(Scan { combos, fits })
+}
+
+/// The delays whose profile RSS is under the threshold, grown from the best
+/// delay: (first, last, whether no delay outside them is under it too).
+fn delay_interval(profile: &[f64], threshold: f64, delay: usize) -> (usize, usize, bool) {
+    let max_delay = profile.len() - 1;
+    let inside: Vec<bool> = profile.iter().map(|r| *r <= threshold).collect();
+    let (mut lo, mut hi) = (delay, delay);
+    while lo > 0 && inside[lo - 1] {
+        lo -= 1;
+    }
+    while hi < max_delay && inside[hi + 1] {
+        hi += 1;
+    }
+    let contiguous = inside
+        .iter()
+        .enumerate()
+        .all(|(i, &v)| !v || (lo..=hi).contains(&i));
+    (lo, hi, contiguous)
+}
+
+/// The jackknife holds the delay and the low-pass fixed; B, K, I and G move
+/// with them (the rectified velocity's linear half is collinear with the
+/// velocity), so the largest change over their joint 95 % profile region
+/// (every scanned delay and low-pass with an RSS under the threshold) is
+/// added to the standard errors in quadrature.
+fn profile_region_shift(fits: &ScanFits, threshold: f64, at_best: [f64; 4]) -> [f64; 4] {
+    let mut shift = [0.0f64; 4];
+    for (_, params) in fits.iter().flatten().filter(|(rss, _)| *rss <= threshold) {
+        for ((s, o), v) in shift.iter_mut().zip(params).zip(at_best) {
+            *s = s.max((o - v).abs());
+        }
+    }
+    shift
 }
 
 /// 10-block delete-one jackknife standard errors of (I, B, K, G) of the joint model.
