@@ -55,8 +55,62 @@ pub const ONSET_LEAD_S: f64 = 0.03;
 pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> {
     let fs = rec.sample_rate();
     let arm = p.arm;
-    // a human arm's segments: a 4.9e-324 m forearm made every end-point
-    // stiffness null (issue 36)
+    check_arm(&arm)?;
+    let from_endpoint = !rec.has("q1");
+    if from_endpoint {
+        refuse_out_of_plane(rec)?;
+    }
+    let (q, tau) = joint_signals(rec, p, from_endpoint)?;
+    let cutoff = p
+        .cutoff_hz
+        .unwrap_or_else(|| crate::prepare::default_cutoff(fs));
+    let lp = LowPass::butterworth(p.order, cutoff, fs)?;
+    let signals: Vec<&[f64]> = vec![&q[0], &q[1], &tau[0], &tau[1]];
+    let sigmas: Vec<f64> = signals.iter().map(|c| noise_sigma(c)).collect();
+    let floors = change_floors(&signals);
+    let windows = windows_from_trial_column(rec, "trial")?;
+    let dt = 1.0 / fs;
+    let gains = crate::prepare::noise_gains(crate::prepare::Derivative::Central, &lp, 0, dt)?;
+    let angle_noise = AngleNoise::estimate(&q, gains);
+    let min_rest = ((0.02 * fs).round() as usize).max(3);
+    let cutter = TrialCutter {
+        rec,
+        q: &q,
+        tau: &tau,
+        signals: &signals,
+        sigmas: &sigmas,
+        floors: &floors,
+        lp: &lp,
+        cutoff,
+        min_rest,
+    };
+    let trials = windows
+        .iter()
+        .map(|w| cutter.trial(w))
+        .collect::<Result<Vec<_>>>()?;
+    if trials.len() < 2 {
+        return Err(Error::TooFewSamples {
+            path: rec.path().to_path_buf(),
+            what: "a planar estimate (trials)".into(),
+            needed: 2,
+            found: trials.len(),
+        });
+    }
+    Ok(PlanarData {
+        path: rec.path().to_path_buf(),
+        fs,
+        arm,
+        trials,
+        from_endpoint,
+        cutoff_hz: cutoff,
+        angle_noise,
+    })
+}
+
+/// Refuse an arm no human has: segments outside the plausible lengths (a
+/// 4.9e-324 m forearm made every end-point stiffness null, issue 36) or a
+/// shoulder beyond the recordings' own position limit.
+fn check_arm(arm: &Arm) -> Result<()> {
     if ![arm.l1, arm.l2]
         .iter()
         .all(|l| (MIN_LINK_M..=MAX_LINK_M).contains(l))
@@ -69,7 +123,6 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
             ),
         ));
     }
-    // the recordings' own position limit
     let (limit, _) = limpid_core::recording::magnitude_limit("x");
     if !arm
         .shoulder
@@ -84,29 +137,46 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
             ),
         ));
     }
-    let from_endpoint = !rec.has("q1");
-    if from_endpoint {
-        if let (Some(x), Some(y), Some(z)) = (rec.column("x"), rec.column("y"), rec.column("z")) {
-            let range = |c: &[f64]| {
-                let (lo, hi) = c
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-                        (l.min(*v), h.max(*v))
-                    });
-                hi - lo
-            };
-            let (rz, rxy) = (range(z), range(x).max(range(y)));
-            if rz > 0.1 * rxy {
-                return Err(Error::Format {
-                    path: rec.path().to_path_buf(),
-                    message: format!(
-                        "the end point moves in z (range {rz:.4} m against {rxy:.4} m in x, y): a planar estimate would ignore that motion; use estimate linear for 3-D data"
-                    ),
+    Ok(())
+}
+
+/// Refuse end-point data whose hand moves out of the plane (z) by more than
+/// a tenth of its in-plane range: a planar estimate would ignore that motion.
+fn refuse_out_of_plane(rec: &Recording) -> Result<()> {
+    if let (Some(x), Some(y), Some(z)) = (rec.column("x"), rec.column("y"), rec.column("z")) {
+        let range = |c: &[f64]| {
+            let (lo, hi) = c
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                    (l.min(*v), h.max(*v))
                 });
-            }
+            hi - lo
+        };
+        let (rz, rxy) = (range(z), range(x).max(range(y)));
+        if rz > 0.1 * rxy {
+            return Err(Error::Format {
+                path: rec.path().to_path_buf(),
+                message: format!(
+                    "the end point moves in z (range {rz:.4} m against {rxy:.4} m in x, y): a planar estimate would ignore that motion; use estimate linear for 3-D data"
+                ),
+            });
         }
     }
-    let (q, tau): ([Vec<f64>; 2], [Vec<f64>; 2]) = if from_endpoint {
+    Ok(())
+}
+
+/// Shoulder and elbow samples of one quantity.
+type JointPair = [Vec<f64>; 2];
+
+/// The joint angles and torques: the `q1,q2,tau1,tau2` columns, or the
+/// end-point `x,y,fx,fy` through inverse kinematics and τ = J^T F.
+fn joint_signals(
+    rec: &Recording,
+    p: &PlanarPrepare,
+    from_endpoint: bool,
+) -> Result<(JointPair, JointPair)> {
+    let arm = p.arm;
+    Ok(if from_endpoint {
         let x = rec.require("x", "end-point position (or give q1,q2 joint angles)")?;
         let y = rec.require("y", "end-point position")?;
         let fx = rec.require("fx", "end-point force")?;
@@ -140,101 +210,94 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
                 get("tau2", "elbow torque")?,
             ],
         )
-    };
-    let cutoff = p
-        .cutoff_hz
-        .unwrap_or_else(|| crate::prepare::default_cutoff(fs));
-    let lp = LowPass::butterworth(p.order, cutoff, fs)?;
-    let signals: Vec<&[f64]> = vec![&q[0], &q[1], &tau[0], &tau[1]];
-    let sigmas: Vec<f64> = signals.iter().map(|c| noise_sigma(c)).collect();
-    let floors = change_floors(&signals);
-    let windows = windows_from_trial_column(rec, "trial")?;
-    let dt = 1.0 / fs;
-    let gains = crate::prepare::noise_gains(crate::prepare::Derivative::Central, &lp, 0, dt)?;
-    let angle_noise = AngleNoise::estimate(&q, gains);
-    let min_rest = ((0.02 * fs).round() as usize).max(3);
-    let qs: Vec<&[f64]> = vec![&q[0], &q[1]];
-    let trials = windows
-        .iter()
-        .map(|w| {
-            let r = w.range.clone();
-            // Onset: the first of the angles and torques to leave rest, as
-            // long as the torque leads the motion by at most ONSET_LEAD_S
-            let lead_max = (ONSET_LEAD_S * fs).round() as usize;
-            let onset = perturbation_onset(
-                &signals,
-                2,
-                r.clone(),
-                &sigmas,
-                &floors,
-                (lead_max, min_rest),
-            )
-            .unwrap_or(r.end);
-            if onset - r.start < min_rest {
-                return Err(Error::NoRestBeforeOnset {
-                    path: rec.path().to_path_buf(),
-                    row: rec.row_of(r.start),
-                    column: "trial".into(),
-                    trial: w.id,
-                    rest_samples: onset - r.start,
-                    needed: min_rest,
-                });
-            }
-            if r.len() <= lp.padlen() + 1 {
-                return Err(Error::TooFewSamples {
-                    path: rec.path().to_path_buf(),
-                    what: format!("trial {} with zero-phase filtering", w.id),
-                    needed: lp.padlen() + 2,
-                    found: r.len(),
-                });
-            }
-            let rest_end = onset.saturating_sub(2).max(r.start + 1);
-            let span = ((fs / cutoff).round() as usize).max(3);
-            let (left, right) = edge_kinds(&qs, r.clone(), span, dt);
-            let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
-            let mut t = PlanarTrial {
-                id: w.id,
-                q: Default::default(),
-                qd: Default::default(),
-                qdd: Default::default(),
-                dq: Default::default(),
-                dtau: Default::default(),
-                q0: [0.0; 2],
-                tau0: [0.0; 2],
-            };
-            let start = onset - r.start;
-            for k in 0..2 {
-                let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-                t.q0[k] = mean(&q[k][r.start..rest_end]);
-                t.tau0[k] = mean(&tau[k][r.start..rest_end]);
-                let qf = lp.filtfilt_edges(&q[k][r.clone()], left, right, extra)?;
-                let tf = lp.filtfilt_edges(&tau[k][r.clone()], left, right, extra)?;
-                let qd = central_first(&qf, dt);
-                let qdd = central_second(&qf, dt);
-                t.dq[k] = qf[start..].iter().map(|v| v - t.q0[k]).collect();
-                t.dtau[k] = tf[start..].iter().map(|v| v - t.tau0[k]).collect();
-                t.q[k] = qf[start..].to_vec();
-                t.qd[k] = qd[start..].to_vec();
-                t.qdd[k] = qdd[start..].to_vec();
-            }
-            Ok(t)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    if trials.len() < 2 {
-        return Err(Error::TooFewSamples {
-            path: rec.path().to_path_buf(),
-            what: "a planar estimate (trials)".into(),
-            needed: 2,
-            found: trials.len(),
-        });
-    }
-    Ok(PlanarData {
-        path: rec.path().to_path_buf(),
-        fs,
-        arm,
-        trials,
-        from_endpoint,
-        cutoff_hz: cutoff,
-        angle_noise,
     })
+}
+
+/// What cutting one trial out of the recording needs.
+struct TrialCutter<'a> {
+    rec: &'a Recording,
+    q: &'a [Vec<f64>; 2],
+    tau: &'a [Vec<f64>; 2],
+    /// The angles then the torques, for the onset.
+    signals: &'a [&'a [f64]],
+    sigmas: &'a [f64],
+    floors: &'a [f64],
+    lp: &'a LowPass,
+    cutoff: f64,
+    /// Fewest rest samples before the onset.
+    min_rest: usize,
+}
+
+impl TrialCutter<'_> {
+    /// One trial from its onset on: rest offsets removed, filtered, differentiated.
+    fn trial(&self, w: &limpid_core::trial::Window) -> Result<PlanarTrial> {
+        let TrialCutter {
+            rec,
+            q,
+            tau,
+            signals,
+            sigmas,
+            floors,
+            lp,
+            cutoff,
+            min_rest,
+        } = *self;
+        let fs = rec.sample_rate();
+        let dt = 1.0 / fs;
+        let qs: Vec<&[f64]> = vec![&q[0], &q[1]];
+        let r = w.range.clone();
+        // Onset: the first of the angles and torques to leave rest, as
+        // long as the torque leads the motion by at most ONSET_LEAD_S
+        let lead_max = (ONSET_LEAD_S * fs).round() as usize;
+        let onset = perturbation_onset(signals, 2, r.clone(), sigmas, floors, (lead_max, min_rest))
+            .unwrap_or(r.end);
+        if onset - r.start < min_rest {
+            return Err(Error::NoRestBeforeOnset {
+                path: rec.path().to_path_buf(),
+                row: rec.row_of(r.start),
+                column: "trial".into(),
+                trial: w.id,
+                rest_samples: onset - r.start,
+                needed: min_rest,
+            });
+        }
+        if r.len() <= lp.padlen() + 1 {
+            return Err(Error::TooFewSamples {
+                path: rec.path().to_path_buf(),
+                what: format!("trial {} with zero-phase filtering", w.id),
+                needed: lp.padlen() + 2,
+                found: r.len(),
+            });
+        }
+        let rest_end = onset.saturating_sub(2).max(r.start + 1);
+        let span = ((fs / cutoff).round() as usize).max(3);
+        let (left, right) = edge_kinds(&qs, r.clone(), span, dt);
+        let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
+        let mut t = PlanarTrial {
+            id: w.id,
+            q: Default::default(),
+            qd: Default::default(),
+            qdd: Default::default(),
+            dq: Default::default(),
+            dtau: Default::default(),
+            q0: [0.0; 2],
+            tau0: [0.0; 2],
+        };
+        let start = onset - r.start;
+        for k in 0..2 {
+            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+            t.q0[k] = mean(&q[k][r.start..rest_end]);
+            t.tau0[k] = mean(&tau[k][r.start..rest_end]);
+            let qf = lp.filtfilt_edges(&q[k][r.clone()], left, right, extra)?;
+            let tf = lp.filtfilt_edges(&tau[k][r.clone()], left, right, extra)?;
+            let qd = central_first(&qf, dt);
+            let qdd = central_second(&qf, dt);
+            t.dq[k] = qf[start..].iter().map(|v| v - t.q0[k]).collect();
+            t.dtau[k] = tf[start..].iter().map(|v| v - t.tau0[k]).collect();
+            t.q[k] = qf[start..].to_vec();
+            t.qd[k] = qd[start..].to_vec();
+            t.qdd[k] = qdd[start..].to_vec();
+        }
+        Ok(t)
+    }
 }
