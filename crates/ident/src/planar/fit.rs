@@ -178,21 +178,8 @@ pub fn fit_planar(
         replicates: reps,
         ..
     } = solve_blocks(&blocks, &noise).map_err(numerical)?;
-    let gn = reps.len() as f64;
-    let mean = reps.iter().fold(DVector::zeros(p), |a, t| a + t) / gn.max(1.0);
-    let se = (reps
-        .iter()
-        .fold(DVector::zeros(p), |a, t| a + (t - &mean).map(|v| v * v))
-        * ((gn - 1.0) / gn.max(1.0)))
-    .map(f64::sqrt);
-    // unscaled condition number of W (eq. (19))
-    let raw_tris: Vec<DMatrix<f64>> = blocks
-        .iter()
-        .map(|b| triangle(b.columns(0, p).into_owned(), p))
-        .collect();
-    let raw = limpid_core::linalg::singular_values(merge(raw_tris.iter(), p))
-        .unwrap_or_else(|| DVector::from_element(p, f64::NAN));
-    let condition_number = raw.max() / raw.min();
+    let se = jackknife_se(&reps, p);
+    let condition_number = unscaled_condition_number(&blocks, p);
     let off = if xi.is_some() { 0 } else { 3 };
     let (xi_hat, xi_se) = match xi {
         Some(x) => (x, [0.0; 3]),
@@ -202,36 +189,7 @@ pub fn fit_planar(
         |v: &DVector<f64>, s: usize| Matrix::from(Matrix2::new(v[s], v[s + 1], v[s + 2], v[s + 3]));
     let damping = m2(&theta, off);
     let stiffness = m2(&theta, off + 4);
-    // fit
-    let mut fit = PlanarFit {
-        vaf: [0.0; 2],
-        r: [0.0; 2],
-    };
-    // every k-th sample of the concatenated windows goes to the traces
-    let stride = (rows / 2).div_ceil(crate::linear::TRACE_POINTS).max(1);
-    let mut traces = crate::linear::FitTraces {
-        time: (0..rows / 2)
-            .step_by(stride)
-            .map(|i| i as f64 / data.fs)
-            .collect(),
-        measured: vec![Vec::new(), Vec::new()],
-        predicted: vec![Vec::new(), Vec::new()],
-    };
-    for r in 0..2 {
-        let (mut y, mut yh) = (Vec::with_capacity(rows / 2), Vec::with_capacity(rows / 2));
-        for b in &blocks {
-            for i in (r..b.nrows()).step_by(2) {
-                let pred: f64 = (0..p).map(|j| b[(i, j)] * theta[j]).sum();
-                y.push(b[(i, p)]);
-                yh.push(pred);
-            }
-        }
-        let (rr, vaf, _) = fit_stats(&y, &yh);
-        fit.vaf[r] = vaf;
-        fit.r[r] = rr;
-        traces.measured[r] = y.iter().step_by(stride).copied().collect();
-        traces.predicted[r] = yh.iter().step_by(stride).copied().collect();
-    }
+    let (fit, traces) = fit_and_traces(&blocks, &theta, rows, data.fs);
     let (stiffness_se, damping_se) = (m2(&se, off + 4), m2(&se, off));
     let fit_ok = fit.vaf.iter().all(|v| *v >= VAF_FLOOR_PERCENT);
     let mut criteria = criteria(
@@ -250,25 +208,7 @@ pub fn fit_planar(
             xi_hat[0], xi_hat[1], xi_hat[2]
         ));
     }
-    let q0 = {
-        let n = data.trials.len() as f64;
-        [
-            data.trials.iter().map(|t| t.q0[0]).sum::<f64>() / n,
-            data.trials.iter().map(|t| t.q0[1]).sum::<f64>() / n,
-        ]
-    };
-    let j = data.arm.jacobian(q0);
-    let kx = match j.try_inverse() {
-        Some(ji) => {
-            let k = stiffness.to_matrix2().unwrap_or_else(Matrix2::zeros);
-            Matrix::from(ji.transpose() * k * ji)
-        }
-        None => {
-            return Err(numerical(
-                "the arm is singular (stretched) at q0: no end-point stiffness".into(),
-            ))
-        }
-    };
+    let kx = endpoint_stiffness(data, &stiffness).map_err(numerical)?;
     Ok(PlanarEstimate {
         inertial_parameters: xi_hat,
         inertial_parameters_fixed: xi.is_some(),
@@ -292,6 +232,91 @@ pub fn fit_planar(
         leave_one_out_vaf: None,
         traces: Some(traces),
     })
+}
+
+/// Delete-a-trial jackknife standard errors from the replicates.
+fn jackknife_se(reps: &[DVector<f64>], p: usize) -> DVector<f64> {
+    let gn = reps.len() as f64;
+    let mean = reps.iter().fold(DVector::zeros(p), |a, t| a + t) / gn.max(1.0);
+    (reps
+        .iter()
+        .fold(DVector::zeros(p), |a, t| a + (t - &mean).map(|v| v * v))
+        * ((gn - 1.0) / gn.max(1.0)))
+    .map(f64::sqrt)
+}
+
+/// The unscaled condition number of W (seed 003 eq. (19)).
+fn unscaled_condition_number(blocks: &[DMatrix<f64>], p: usize) -> f64 {
+    let raw_tris: Vec<DMatrix<f64>> = blocks
+        .iter()
+        .map(|b| triangle(b.columns(0, p).into_owned(), p))
+        .collect();
+    let raw = limpid_core::linalg::singular_values(merge(raw_tris.iter(), p))
+        .unwrap_or_else(|| DVector::from_element(p, f64::NAN));
+    raw.max() / raw.min()
+}
+
+/// VAF and correlation per torque, and the traces of measured and predicted
+/// torque (every k-th sample of the concatenated windows).
+fn fit_and_traces(
+    blocks: &[DMatrix<f64>],
+    theta: &DVector<f64>,
+    rows: usize,
+    fs: f64,
+) -> (PlanarFit, crate::linear::FitTraces) {
+    let p = theta.len();
+    let mut fit = PlanarFit {
+        vaf: [0.0; 2],
+        r: [0.0; 2],
+    };
+    // every k-th sample of the concatenated windows goes to the traces
+    let stride = (rows / 2).div_ceil(crate::linear::TRACE_POINTS).max(1);
+    let mut traces = crate::linear::FitTraces {
+        time: (0..rows / 2)
+            .step_by(stride)
+            .map(|i| i as f64 / fs)
+            .collect(),
+        measured: vec![Vec::new(), Vec::new()],
+        predicted: vec![Vec::new(), Vec::new()],
+    };
+    for r in 0..2 {
+        let (mut y, mut yh) = (Vec::with_capacity(rows / 2), Vec::with_capacity(rows / 2));
+        for b in blocks {
+            for i in (r..b.nrows()).step_by(2) {
+                let pred: f64 = (0..p).map(|j| b[(i, j)] * theta[j]).sum();
+                y.push(b[(i, p)]);
+                yh.push(pred);
+            }
+        }
+        let (rr, vaf, _) = fit_stats(&y, &yh);
+        fit.vaf[r] = vaf;
+        fit.r[r] = rr;
+        traces.measured[r] = y.iter().step_by(stride).copied().collect();
+        traces.predicted[r] = yh.iter().step_by(stride).copied().collect();
+    }
+    (fit, traces)
+}
+
+/// The end-point stiffness `J^-T K J^-1` at the trials' mean rest posture.
+fn endpoint_stiffness(
+    data: &PlanarData,
+    stiffness: &Matrix,
+) -> std::result::Result<Matrix, String> {
+    let q0 = {
+        let n = data.trials.len() as f64;
+        [
+            data.trials.iter().map(|t| t.q0[0]).sum::<f64>() / n,
+            data.trials.iter().map(|t| t.q0[1]).sum::<f64>() / n,
+        ]
+    };
+    let j = data.arm.jacobian(q0);
+    match j.try_inverse() {
+        Some(ji) => {
+            let k = stiffness.to_matrix2().unwrap_or_else(Matrix2::zeros);
+            Ok(Matrix::from(ji.transpose() * k * ji))
+        }
+        None => Err("the arm is singular (stretched) at q0: no end-point stiffness".into()),
+    }
 }
 
 /// Fewest samples of each trial in an observation window: the derivatives
