@@ -30,6 +30,15 @@ use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+mod filter;
+mod windows;
+
+use filter::filter_and_differentiate;
+pub use filter::savgol_window;
+pub(crate) use filter::{edge_kinds, noise_gains};
+pub use windows::FORCE_LEAD_S;
+use windows::{fits_offsets, keep_level, make_windows, resolved_windowing};
+
 /// How velocity and acceleration are obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
@@ -363,71 +372,24 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
     }
     let continuous = windows.iter().all(|w| w.onset.is_none());
 
-    let (trim, sg_window) = match params.derivative {
-        Derivative::Central => (((TRIM_PERIODS * fs / cutoff).ceil() as usize).max(2), 0),
-        Derivative::Savgol => {
-            let w = savgol_window(fs, cutoff);
-            (w / 2, w)
-        }
-    };
+    let Trims {
+        trim,
+        end_trim,
+        sg_window,
+    } = trims(params.derivative, fs, cutoff, continuous);
     let dt = 1.0 / fs;
     let n = coords.len();
-    let end_trim_extra = if continuous || params.derivative == Derivative::Savgol {
-        0
-    } else {
-        ((END_TRIM_PERIODS * fs / cutoff).round() as usize).max(1)
-    };
-    // the end of a perturbation window is trimmed by one cut-off period more (see END_TRIM_PERIODS)
-    let end_trim = trim + end_trim_extra;
     let need = (trim + end_trim + 1)
         .max(lowpass.padlen() + 1)
         .max(sg_window);
-    if let Some(w) = windows.iter().find(|w| w.range.len() < need) {
-        return Err(Error::TooFewSamples {
-            path: rec.path().to_path_buf(),
-            what: format!(
-                "trial {} (rows {}-{}) with zero-phase filtering and differences",
-                w.id,
-                rec.row_of(w.range.start),
-                rec.row_of(w.range.end - 1)
-            ),
-            needed: need,
-            found: w.range.len(),
-        });
-    }
+    refuse_short_windows(&rec, &windows, need)?;
     let gains = noise_gains(params.derivative, &lowpass, sg_window, dt)?;
     let regressor_noise_var = position_noise
         .iter()
         .map(|s| std::array::from_fn(|i| s * s * gains[i]))
         .collect();
-    let mut start = 0;
-    let prepared_windows: Vec<PreparedWindow> = windows
-        .iter()
-        .map(|w| {
-            let r = &w.range;
-            let rest = match w.onset {
-                Some(onset) => r.start..onset,
-                None => r.clone(),
-            };
-            let len = r.len() - trim - end_trim;
-            let out = PreparedWindow {
-                id: w.id,
-                samples: start..start + len,
-                rows: r.start + trim..r.end - end_trim,
-                rest_samples: w.rest_len(),
-                force_offset: frc
-                    .iter()
-                    .map(|f| match w.onset {
-                        Some(_) => sign * mean(&f[rest.clone()]),
-                        None => 0.0,
-                    })
-                    .collect(),
-                reference: pos.iter().map(|p| mean(&p[rest.clone()])).collect(),
-            };
-            start += len;
-            out
-        })
-        .collect();
+    let (prepared_windows, samples) =
+        prepared_windows(&windows, (&pos, &frc), sign, (trim, end_trim));
     let reference = (0..n)
         .map(|k| {
             prepared_windows.iter().map(|w| w.reference[k]).sum::<f64>()
@@ -468,8 +430,95 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
         sign,
         end_trim,
         sg_window,
-        samples: start,
+        samples,
     })
+}
+
+/// Samples cut from each window's ends: the filter's and differences' edge
+/// effects (`trim`), one cut-off period more at a perturbation window's end
+/// (see END_TRIM_PERIODS), and the Savitzky-Golay window (0 for central differences).
+struct Trims {
+    trim: usize,
+    end_trim: usize,
+    sg_window: usize,
+}
+
+fn trims(derivative: Derivative, fs: f64, cutoff: f64, continuous: bool) -> Trims {
+    let (trim, sg_window) = match derivative {
+        Derivative::Central => (((TRIM_PERIODS * fs / cutoff).ceil() as usize).max(2), 0),
+        Derivative::Savgol => {
+            let w = savgol_window(fs, cutoff);
+            (w / 2, w)
+        }
+    };
+    let end_trim_extra = if continuous || derivative == Derivative::Savgol {
+        0
+    } else {
+        ((END_TRIM_PERIODS * fs / cutoff).round() as usize).max(1)
+    };
+    Trims {
+        trim,
+        end_trim: trim + end_trim_extra,
+        sg_window,
+    }
+}
+
+/// Refuse a window shorter than filtering and differences need, naming its rows.
+fn refuse_short_windows(rec: &Recording, windows: &[Window], need: usize) -> Result<()> {
+    match windows.iter().find(|w| w.range.len() < need) {
+        Some(w) => Err(Error::TooFewSamples {
+            path: rec.path().to_path_buf(),
+            what: format!(
+                "trial {} (rows {}-{}) with zero-phase filtering and differences",
+                w.id,
+                rec.row_of(w.range.start),
+                rec.row_of(w.range.end - 1)
+            ),
+            needed: need,
+            found: w.range.len(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Each window's place in the concatenated samples, its rows after trimming,
+/// and its rest offsets (force, sign applied) and reference position; with
+/// the total number of samples.
+fn prepared_windows(
+    windows: &[Window],
+    (pos, frc): (&[&[f64]], &[&[f64]]),
+    sign: f64,
+    (trim, end_trim): (usize, usize),
+) -> (Vec<PreparedWindow>, usize) {
+    let mut start = 0;
+    let prepared = windows
+        .iter()
+        .map(|w| {
+            let r = &w.range;
+            let rest = match w.onset {
+                Some(onset) => r.start..onset,
+                None => r.clone(),
+            };
+            let len = r.len() - trim - end_trim;
+            let out = PreparedWindow {
+                id: w.id,
+                samples: start..start + len,
+                rows: r.start + trim..r.end - end_trim,
+                rest_samples: w.rest_len(),
+                force_offset: frc
+                    .iter()
+                    .map(|f| match w.onset {
+                        Some(_) => sign * mean(&f[rest.clone()]),
+                        None => 0.0,
+                    })
+                    .collect(),
+                reference: pos.iter().map(|p| mean(&p[rest.clone()])).collect(),
+            };
+            start += len;
+            out
+        })
+        .collect();
+    (prepared, start)
 }
 
 /// The named columns of `rec` (chosen before: an absent one reads as empty).
@@ -565,256 +614,6 @@ impl Plan<'_> {
     }
 }
 
-/// Keep only the windows whose samples all carry `level` (seed 001's
-/// condition label); an error listing the levels present when none does.
-fn keep_level(rec: &Recording, windows: &mut Vec<Window>, level: f64) -> Result<()> {
-    let levels = rec.require("level", "selecting windows by --level")?;
-    windows.retain(|w| {
-        levels[w.range.clone()]
-            .iter()
-            .all(|l| (l - level).abs() < 1e-9)
-    });
-    if windows.is_empty() {
-        let mut found: Vec<f64> = levels.to_vec();
-        found.sort_by(f64::total_cmp);
-        found.dedup();
-        return Err(Error::invalid(
-            "level",
-            format!("no window has level {level} throughout; levels present: {found:?}"),
-        ));
-    }
-    Ok(())
-}
-
-/// Whether each window's force offset is fitted (demeaned) rather than
-/// taken from its rest: `auto` fits when the median window lasts over
-/// [`AUTO_FIT_ABOVE_S`] (slow drift then dominates the rest mean).
-fn fits_offsets(offsets: Offsets, windows: &[Window], fs: f64) -> bool {
-    match offsets {
-        Offsets::Fit => true,
-        Offsets::Rest => false,
-        Offsets::Auto => {
-            let mut lengths: Vec<usize> = windows.iter().map(|w| w.range.len()).collect();
-            lengths.sort_unstable();
-            lengths[lengths.len() / 2] as f64 / fs > AUTO_FIT_ABOVE_S
-        }
-    }
-}
-
-/// One window's displacement, velocity, acceleration and force per
-/// coordinate (`signals`: the n displacements, then the n forces): zero-phase
-/// low-pass with extended edges (all 2n signals filtered together) and
-/// central differences, or Savitzky-Golay (cubic) smoothing and derivatives.
-fn filter_and_differentiate(
-    signals: &[Vec<f64>],
-    derivative: Derivative,
-    lowpass: &LowPass,
-    (left, right, extra): (Edge, Edge, usize),
-    sg_window: usize,
-    dt: f64,
-) -> Result<Vec<[Vec<f64>; 4]>> {
-    let n = signals.len() / 2;
-    match derivative {
-        Derivative::Central => {
-            let refs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
-            let mut filtered = lowpass.filtfilt_edges_many(&refs, left, right, extra)?;
-            let forces = filtered.split_off(n);
-            Ok(filtered
-                .into_iter()
-                .zip(forces)
-                .map(|(xs, f)| {
-                    let v = central_first(&xs, dt);
-                    let a = central_second(&xs, dt);
-                    [xs, v, a, f]
-                })
-                .collect())
-        }
-        Derivative::Savgol => (0..n)
-            .map(|k| {
-                let (x, f) = (&signals[k], &signals[n + k]);
-                Ok([
-                    savgol(x, sg_window, 3, 0, dt)?,
-                    savgol(x, sg_window, 3, 1, dt)?,
-                    savgol(x, sg_window, 3, 2, dt)?,
-                    savgol(f, sg_window, 3, 0, dt)?,
-                ])
-            })
-            .collect(),
-    }
-}
-
-/// Extension for each window end (start, end): a mirror where the limb is
-/// (nearly) still there, a point reflection where it still moves. The speed at
-/// an end is the slope of a least-squares line through its `span` samples,
-/// compared with the window's largest such slope (one scan for both ends).
-pub(crate) fn edge_kinds(
-    pos: &[&[f64]],
-    window: Range<usize>,
-    span: usize,
-    dt: f64,
-) -> (Edge, Edge) {
-    let span = span.min(window.len() / 4).max(2);
-    let tm = (span as f64 - 1.0) / 2.0;
-    let weights: Vec<f64> = (0..span).map(|k| k as f64 - tm).collect();
-    let den: f64 = weights.iter().map(|w| w.powi(2)).sum();
-    // Σ (k - tm)(v - xm) = Σ (k - tm) v, the weights summing to zero
-    let slope = |c: &[f64], s: usize| {
-        let num: f64 = c[s..s + span]
-            .iter()
-            .zip(&weights)
-            .map(|(v, w)| w * v)
-            .sum();
-        num / den / dt
-    };
-    let (mut left_moving, mut right_moving) = (false, false);
-    for c in pos {
-        let mut peak = 0.0f64;
-        let mut s = window.start;
-        while s + span <= window.end {
-            peak = peak.max(slope(c, s).abs());
-            s += span / 2;
-        }
-        if peak > 0.0 {
-            left_moving |= slope(c, window.start).abs() > 0.2 * peak;
-            right_moving |= slope(c, window.end - span).abs() > 0.2 * peak;
-        }
-    }
-    let kind = |moving: bool| if moving { Edge::Odd } else { Edge::Even };
-    (kind(left_moving), kind(right_moving))
-}
-
-/// Savitzky-Golay window (odd, samples) whose cubic smoother has about the given cut-off.
-///
-/// Uses the approximation f_c / f_s ≈ (N + 1) / (6.4 M - 9.2) for polynomial
-/// order N = 3 and window 2M + 1 (Schafer, "What is a Savitzky-Golay filter?", 2011).
-pub fn savgol_window(fs: f64, cutoff: f64) -> usize {
-    let m = ((4.0 * fs / cutoff + 9.2) / 6.4).round().max(3.0) as usize;
-    2 * m + 1
-}
-
-/// Sum of squared impulse responses of the displacement, velocity and
-/// acceleration operators: white noise of variance σ² in a position comes out
-/// with variance σ² × gain.
-pub(crate) fn noise_gains(
-    derivative: Derivative,
-    lowpass: &LowPass,
-    sg_window: usize,
-    dt: f64,
-) -> Result<[f64; 4]> {
-    let n = 4001;
-    let mut impulse = vec![0.0; n];
-    impulse[n / 2] = 1.0;
-    let (x, v, a) = match derivative {
-        Derivative::Central => {
-            let x = lowpass.filtfilt(&impulse)?;
-            let v = central_first(&x, dt);
-            let a = central_second(&x, dt);
-            (x, v, a)
-        }
-        Derivative::Savgol => (
-            savgol(&impulse, sg_window, 3, 0, dt)?,
-            savgol(&impulse, sg_window, 3, 1, dt)?,
-            savgol(&impulse, sg_window, 3, 2, dt)?,
-        ),
-    };
-    let ss = |y: &[f64]| y.iter().map(|v| v * v).sum::<f64>();
-    let cross = x.iter().zip(&a).map(|(p, q)| p * q).sum::<f64>();
-    Ok([ss(&x), ss(&v), ss(&a), cross])
-}
-
 fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
-}
-
-/// `params.windowing` with `Auto` decided: trial windows when the recording
-/// has the trial column, else one continuous window.
-fn resolved_windowing(rec: &Recording, params: &PrepareParams) -> Windowing {
-    match params.windowing {
-        Windowing::Auto if rec.has(&params.trial_column) => Windowing::Trials,
-        Windowing::Auto => Windowing::Continuous,
-        other => other,
-    }
-}
-
-/// The longest a force may lead the motion and still mark a trial's onset
-/// (s): slow ramps (Artemiadis et al.'s cubic) move the force well before the
-/// displacement leaves its noise band; a force that leaves rest earlier than
-/// this is a drifting or coarse sensor (issue 37: 1-2 of 200 calibration
-/// recordings refused, "no rest before its perturbation onset").
-pub const FORCE_LEAD_S: f64 = 0.2;
-
-/// Windows of a [`resolved_windowing`] `mode`; `force_noise` is needed (and
-/// given) only for trial windows.
-fn make_windows(
-    rec: &Recording,
-    mode: Windowing,
-    trial_column: &str,
-    (pos, frc): (&[&[f64]], &[&[f64]]),
-    (position_noise, force_noise): (&[f64], &[f64]),
-    min_rest: usize,
-) -> Result<Vec<Window>> {
-    let continuous = || {
-        vec![Window {
-            id: 1,
-            range: 0..rec.len(),
-            onset: None,
-        }]
-    };
-    match mode {
-        Windowing::Continuous => Ok(continuous()),
-        Windowing::ContinuousTrials => windows_from_trial_column(rec, trial_column),
-        Windowing::Trials => {
-            // onset: the earlier of motion and force change (a step in acceleration
-            // moves the force before the displacement rises above the noise),
-            // unless the force leads by more than FORCE_LEAD_S (a drifting or
-            // coarse force sensor at rest: the motion decides)
-            let lead_max = (FORCE_LEAD_S * rec.sample_rate()).round() as usize;
-            let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
-            let sigmas: Vec<f64> = position_noise.iter().chain(force_noise).copied().collect();
-            let floors: Vec<f64> = signals.par_iter().map(|c| change_floors(&[c])[0]).collect();
-            let mut windows = windows_from_trial_column(rec, trial_column)?;
-            // trials in parallel; the first trial without rest (in order) is the error
-            let onsets: Vec<usize> = windows
-                .par_iter()
-                .map(|w| {
-                    perturbation_onset(
-                        &signals,
-                        pos.len(),
-                        w.range.clone(),
-                        &sigmas,
-                        &floors,
-                        (lead_max, min_rest),
-                    )
-                    .unwrap_or(w.range.end)
-                })
-                .collect();
-            for (w, onset) in windows.iter_mut().zip(onsets) {
-                let rest = onset - w.range.start;
-                if rest < min_rest {
-                    return Err(Error::NoRestBeforeOnset {
-                        path: rec.path().to_path_buf(),
-                        row: rec.row_of(w.range.start),
-                        column: trial_column.to_string(),
-                        trial: w.id,
-                        rest_samples: rest,
-                        needed: min_rest,
-                    });
-                }
-                // leave a guard of 2 samples between rest and detected motion
-                w.onset = Some(onset.saturating_sub(2).max(w.range.start + 1));
-            }
-            Ok(windows)
-        }
-        // Auto is resolved before; it cannot reach here
-        Windowing::Onsets | Windowing::Auto => {
-            let found = detect_windows(pos, min_rest);
-            if found.is_empty() {
-                return Err(Error::Format {
-                    path: rec.path().to_path_buf(),
-                    message: "no perturbation onsets found (need at least two rests at the start position followed by motion); use continuous windowing".into(),
-                });
-            }
-            Ok(found)
-        }
-    }
 }

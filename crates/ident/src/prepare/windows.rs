@@ -1,0 +1,134 @@
+//! Cutting a recording into windows: trial columns, onsets found from the
+//! motion, or continuous holds; condition levels; fitted or rest offsets.
+
+#[allow(unused_imports)]
+use super::*;
+
+/// Keep only the windows whose samples all carry `level` (seed 001's
+/// condition label); an error listing the levels present when none does.
+pub(super) fn keep_level(rec: &Recording, windows: &mut Vec<Window>, level: f64) -> Result<()> {
+    let levels = rec.require("level", "selecting windows by --level")?;
+    windows.retain(|w| {
+        levels[w.range.clone()]
+            .iter()
+            .all(|l| (l - level).abs() < 1e-9)
+    });
+    if windows.is_empty() {
+        let mut found: Vec<f64> = levels.to_vec();
+        found.sort_by(f64::total_cmp);
+        found.dedup();
+        return Err(Error::invalid(
+            "level",
+            format!("no window has level {level} throughout; levels present: {found:?}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Whether each window's force offset is fitted (demeaned) rather than
+/// taken from its rest: `auto` fits when the median window lasts over
+/// [`AUTO_FIT_ABOVE_S`] (slow drift then dominates the rest mean).
+pub(super) fn fits_offsets(offsets: Offsets, windows: &[Window], fs: f64) -> bool {
+    match offsets {
+        Offsets::Fit => true,
+        Offsets::Rest => false,
+        Offsets::Auto => {
+            let mut lengths: Vec<usize> = windows.iter().map(|w| w.range.len()).collect();
+            lengths.sort_unstable();
+            lengths[lengths.len() / 2] as f64 / fs > AUTO_FIT_ABOVE_S
+        }
+    }
+}
+
+/// `params.windowing` with `Auto` decided: trial windows when the recording
+/// has the trial column, else one continuous window.
+pub(super) fn resolved_windowing(rec: &Recording, params: &PrepareParams) -> Windowing {
+    match params.windowing {
+        Windowing::Auto if rec.has(&params.trial_column) => Windowing::Trials,
+        Windowing::Auto => Windowing::Continuous,
+        other => other,
+    }
+}
+
+/// The longest a force may lead the motion and still mark a trial's onset
+/// (s): slow ramps (Artemiadis et al.'s cubic) move the force well before the
+/// displacement leaves its noise band; a force that leaves rest earlier than
+/// this is a drifting or coarse sensor (issue 37: 1-2 of 200 calibration
+/// recordings refused, "no rest before its perturbation onset").
+pub const FORCE_LEAD_S: f64 = 0.2;
+
+/// Windows of a [`resolved_windowing`] `mode`; `force_noise` is needed (and
+/// given) only for trial windows.
+pub(super) fn make_windows(
+    rec: &Recording,
+    mode: Windowing,
+    trial_column: &str,
+    (pos, frc): (&[&[f64]], &[&[f64]]),
+    (position_noise, force_noise): (&[f64], &[f64]),
+    min_rest: usize,
+) -> Result<Vec<Window>> {
+    let continuous = || {
+        vec![Window {
+            id: 1,
+            range: 0..rec.len(),
+            onset: None,
+        }]
+    };
+    match mode {
+        Windowing::Continuous => Ok(continuous()),
+        Windowing::ContinuousTrials => windows_from_trial_column(rec, trial_column),
+        Windowing::Trials => {
+            // onset: the earlier of motion and force change (a step in acceleration
+            // moves the force before the displacement rises above the noise),
+            // unless the force leads by more than FORCE_LEAD_S (a drifting or
+            // coarse force sensor at rest: the motion decides)
+            let lead_max = (FORCE_LEAD_S * rec.sample_rate()).round() as usize;
+            let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
+            let sigmas: Vec<f64> = position_noise.iter().chain(force_noise).copied().collect();
+            let floors: Vec<f64> = signals.par_iter().map(|c| change_floors(&[c])[0]).collect();
+            let mut windows = windows_from_trial_column(rec, trial_column)?;
+            // trials in parallel; the first trial without rest (in order) is the error
+            let onsets: Vec<usize> = windows
+                .par_iter()
+                .map(|w| {
+                    perturbation_onset(
+                        &signals,
+                        pos.len(),
+                        w.range.clone(),
+                        &sigmas,
+                        &floors,
+                        (lead_max, min_rest),
+                    )
+                    .unwrap_or(w.range.end)
+                })
+                .collect();
+            for (w, onset) in windows.iter_mut().zip(onsets) {
+                let rest = onset - w.range.start;
+                if rest < min_rest {
+                    return Err(Error::NoRestBeforeOnset {
+                        path: rec.path().to_path_buf(),
+                        row: rec.row_of(w.range.start),
+                        column: trial_column.to_string(),
+                        trial: w.id,
+                        rest_samples: rest,
+                        needed: min_rest,
+                    });
+                }
+                // leave a guard of 2 samples between rest and detected motion
+                w.onset = Some(onset.saturating_sub(2).max(w.range.start + 1));
+            }
+            Ok(windows)
+        }
+        // Auto is resolved before; it cannot reach here
+        Windowing::Onsets | Windowing::Auto => {
+            let found = detect_windows(pos, min_rest);
+            if found.is_empty() {
+                return Err(Error::Format {
+                    path: rec.path().to_path_buf(),
+                    message: "no perturbation onsets found (need at least two rests at the start position followed by motion); use continuous windowing".into(),
+                });
+            }
+            Ok(found)
+        }
+    }
+}
