@@ -434,34 +434,7 @@ pub fn window_sweep(
     if let Some(xi) = &xi {
         check_inertial_parameters(xi)?;
     }
-    if !(from_ms > 0.0 && step_ms > 0.0 && to_ms >= from_ms) {
-        return Err(Error::invalid(
-            "window range",
-            format!(
-                "expected 0 < from <= to and step > 0, found {from_ms}..{to_ms} step {step_ms} ms"
-            ),
-        ));
-    }
-    let max_ms = 1000.0 * data.max_window_s();
-    let count = (to_ms.min(max_ms) - from_ms) / step_ms;
-    if count > MAX_SWEEP_WINDOWS as f64 {
-        return Err(Error::invalid(
-            "window range",
-            format!("{from_ms}..{to_ms} ms in steps of {step_ms} ms makes {count:.3e} windows; at most {MAX_SWEEP_WINDOWS}"),
-        ));
-    }
-    let mut windows = Vec::new();
-    let mut t = from_ms;
-    while t <= to_ms.min(max_ms) + 1e-9 {
-        windows.push(t);
-        t += step_ms;
-    }
-    if windows.is_empty() {
-        return Err(Error::invalid(
-            "window range",
-            format!("the trials hold only {max_ms:.0} ms after the onset, less than {from_ms} ms"),
-        ));
-    }
+    let windows = sweep_windows(data, from_ms, to_ms, step_ms)?;
     let all: Vec<usize> = (0..data.trials.len()).collect();
     let rows: Vec<SweepRow> = windows
         .par_iter()
@@ -498,37 +471,9 @@ pub fn window_sweep(
             r.reasons.push(why.clone());
         }
     }
-    let from_which = |ok: &dyn Fn(&PlanarEstimate) -> bool| -> Option<f64> {
-        let mut first = None;
-        for r in rows.iter().rev() {
-            if ok(&r.estimate) {
-                first = Some(r.observation_window_ms);
-            } else {
-                break;
-            }
-        }
-        first
-    };
+    let from_which = |ok: &dyn Fn(&PlanarEstimate) -> bool| shortest_from(&rows, ok);
     let last = rows.last().map(|r| r.estimate.clone());
-    let rel = |a: &Matrix, b: &Matrix| (&a.0 - &b.0).norm() / b.norm().max(1e-300);
-    let constant = |e: &PlanarEstimate| match &last {
-        Some(l) => {
-            let xi_change = (0..3)
-                .map(|i| (e.inertial_parameters[i] - l.inertial_parameters[i]).powi(2))
-                .sum::<f64>()
-                .sqrt()
-                / l.inertial_parameters
-                    .iter()
-                    .map(|v| v * v)
-                    .sum::<f64>()
-                    .sqrt()
-                    .max(1e-300);
-            rel(&e.stiffness, &l.stiffness) < QUASI_CONSTANT
-                && rel(&e.damping, &l.damping) < QUASI_CONSTANT
-                && xi_change < QUASI_CONSTANT
-        }
-        None => false,
-    };
+    let constant = |e: &PlanarEstimate| last.as_ref().is_some_and(|l| quasi_constant(e, l));
     let intervals = interval_sweep(data, xi, step);
     Ok(Sweep {
         intervals,
@@ -555,6 +500,66 @@ pub fn window_sweep(
         leave_one_out_vaf: leave_one_out_vaf(data, longest, xi)?,
         rows,
     })
+}
+
+/// The observation windows of a sweep (ms): from..=to in steps, up to the
+/// longest every trial holds; refused when empty or over MAX_SWEEP_WINDOWS.
+fn sweep_windows(data: &PlanarData, from_ms: f64, to_ms: f64, step_ms: f64) -> Result<Vec<f64>> {
+    if !(from_ms > 0.0 && step_ms > 0.0 && to_ms >= from_ms) {
+        return Err(Error::invalid(
+            "window range",
+            format!(
+                "expected 0 < from <= to and step > 0, found {from_ms}..{to_ms} step {step_ms} ms"
+            ),
+        ));
+    }
+    let max_ms = 1000.0 * data.max_window_s();
+    let count = (to_ms.min(max_ms) - from_ms) / step_ms;
+    if count > MAX_SWEEP_WINDOWS as f64 {
+        return Err(Error::invalid(
+            "window range",
+            format!("{from_ms}..{to_ms} ms in steps of {step_ms} ms makes {count:.3e} windows; at most {MAX_SWEEP_WINDOWS}"),
+        ));
+    }
+    let mut windows = Vec::new();
+    let mut t = from_ms;
+    while t <= to_ms.min(max_ms) + 1e-9 {
+        windows.push(t);
+        t += step_ms;
+    }
+    if windows.is_empty() {
+        return Err(Error::invalid(
+            "window range",
+            format!("the trials hold only {max_ms:.0} ms after the onset, less than {from_ms} ms"),
+        ));
+    }
+    Ok(windows)
+}
+
+/// The shortest window from which on every longer one satisfies `ok` (ms).
+fn shortest_from(rows: &[SweepRow], ok: &dyn Fn(&PlanarEstimate) -> bool) -> Option<f64> {
+    let mut first = None;
+    for r in rows.iter().rev() {
+        if ok(&r.estimate) {
+            first = Some(r.observation_window_ms);
+        } else {
+            break;
+        }
+    }
+    first
+}
+
+/// K, D and the inertial parameters each within QUASI_CONSTANT (relative
+/// Frobenius norm) of the longest window's estimate `last`.
+fn quasi_constant(e: &PlanarEstimate, last: &PlanarEstimate) -> bool {
+    let rel = |a: &Matrix, b: &Matrix| (&a.0 - &b.0).norm() / b.norm().max(1e-300);
+    let norm = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let difference: [f64; 3] =
+        std::array::from_fn(|i| e.inertial_parameters[i] - last.inertial_parameters[i]);
+    let xi_change = norm(&difference) / norm(&last.inertial_parameters).max(1e-300);
+    rel(&e.stiffness, &last.stiffness) < QUASI_CONSTANT
+        && rel(&e.damping, &last.damping) < QUASI_CONSTANT
+        && xi_change < QUASI_CONSTANT
 }
 
 /// Mark each window trusted or not, with the reasons.
