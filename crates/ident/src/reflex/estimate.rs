@@ -17,18 +17,7 @@ struct Lengths {
 
 /// The parallel-cascade estimate of `rec`.
 pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstimate> {
-    // one column as both would "explain" the torque perfectly (K = 1, VAF 100 %)
-    if p.position == p.torque {
-        return Err(Error::invalid(
-            "position and torque",
-            format!("column {} names both; they must be two columns", p.position),
-        ));
-    }
-    let q = rec.require(
-        &p.position,
-        "the joint angle of the parallel-cascade method",
-    )?;
-    let tq = rec.require(&p.torque, "the torque of the parallel-cascade method")?;
+    let (q, tq) = position_and_torque(rec, p)?;
     let fs = rec.sample_rate();
     let Lengths { n, half, n_reflex } = lengths(rec, p, q.len())?;
     let [d, other_decimation] = decimate(q, tq, fs, p)?;
@@ -37,31 +26,13 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         check_varies(rec, name, raw)?;
     }
     let skip = n_reflex;
-    let cascades: Vec<Cascade> = [0, 1]
-        .par_iter()
-        .map(|&k| {
-            cascade(
-                &d.position,
-                &d.rectified[k],
-                &d.torque,
-                half,
-                n_reflex,
-                skip,
-                p,
-            )
-        })
-        .collect();
-    let best = if cascades[0].vaf_total >= cascades[1].vaf_total {
-        0
+    let cascades = both_polarities(&d, (half, n_reflex, skip), p);
+    let (best, polarity) = if cascades[0].vaf_total >= cascades[1].vaf_total {
+        (0, Polarity::Positive)
     } else {
-        1
+        (1, Polarity::Negative)
     };
     let c = &cascades[best];
-    let polarity = if best == 0 {
-        Polarity::Positive
-    } else {
-        Polarity::Negative
-    };
     let mut warnings = Vec::new();
 
     let dt = 1.0 / d.fs;
@@ -107,17 +78,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     warnings.extend(order_warning);
     let delay_identifiable = delay_warnings(&param, fs, &mut warnings);
     let reflex_gain_points = param.total_vaf - param.intrinsic_only_vaf;
-    if (cascades[0].vaf_total - cascades[1].vaf_total).abs() < 1.0
-        && reflex_gain_points >= REFLEX_PRESENT_VAF
-    {
-        warnings.push(Warning::new(
-            WarningCode::NotIdentifiable,
-            format!(
-                "reflex polarity ambiguous: total VAF {:.1} % (positive) vs {:.1} % (negative)",
-                cascades[0].vaf_total, cascades[1].vaf_total
-            ),
-        ));
-    }
+    warnings.extend(ambiguous_polarity(&cascades, reflex_gain_points));
     fit_warnings(&ibk, &fit, cross_validated_vaf, &mut warnings);
 
     let other_polarity_vaf = cascades[1 - best].vaf_total;
@@ -481,4 +442,60 @@ fn all_finite(e: &ReflexEstimate) -> bool {
     .chain(&i.irf.values)
     .chain(&r.irf.values)
     .all(|v| v.is_finite())
+}
+
+/// The position and torque columns; one column as both would "explain" the
+/// torque perfectly (K = 1, VAF 100 %).
+fn position_and_torque<'r>(rec: &'r Recording, p: &ReflexParams) -> Result<(&'r [f64], &'r [f64])> {
+    if p.position == p.torque {
+        return Err(Error::invalid(
+            "position and torque",
+            format!("column {} names both; they must be two columns", p.position),
+        ));
+    }
+    let q = rec.require(
+        &p.position,
+        "the joint angle of the parallel-cascade method",
+    )?;
+    let tq = rec.require(&p.torque, "the torque of the parallel-cascade method")?;
+    Ok((q, tq))
+}
+
+/// The parallel cascade with the reflex answering positive (0) and negative
+/// (1) velocities, in parallel.
+fn both_polarities(
+    d: &Decimated,
+    (half, n_reflex, skip): (usize, usize, usize),
+    p: &ReflexParams,
+) -> Vec<Cascade> {
+    [0, 1]
+        .par_iter()
+        .map(|&k| {
+            cascade(
+                &d.position,
+                &d.rectified[k],
+                &d.torque,
+                half,
+                n_reflex,
+                skip,
+                p,
+            )
+        })
+        .collect()
+}
+
+/// A warning when both polarities explain the torque within 1 VAF point
+/// although a reflex is present.
+fn ambiguous_polarity(cascades: &[Cascade], reflex_gain_points: f64) -> Option<Warning> {
+    ((cascades[0].vaf_total - cascades[1].vaf_total).abs() < 1.0
+        && reflex_gain_points >= REFLEX_PRESENT_VAF)
+        .then(|| {
+            Warning::new(
+                WarningCode::NotIdentifiable,
+                format!(
+                    "reflex polarity ambiguous: total VAF {:.1} % (positive) vs {:.1} % (negative)",
+                    cascades[0].vaf_total, cascades[1].vaf_total
+                ),
+            )
+        })
 }
