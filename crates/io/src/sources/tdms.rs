@@ -160,13 +160,233 @@ fn split_path(path: &str) -> Vec<String> {
     parts
 }
 
+/// The objects read so far, in file order, and those the current segment holds.
+#[derive(Default)]
+struct Segments {
+    objects: HashMap<String, Object>,
+    order: Vec<String>,
+    active: Vec<String>,
+}
+
+impl Segments {
+    /// A segment's metadata: its objects with their raw-data index and properties.
+    fn metadata(
+        &mut self,
+        m: &mut Cursor<'_>,
+        where_: &dyn Fn(&str) -> String,
+    ) -> std::result::Result<(), String> {
+        let count = m.u32("object count")?;
+        if count as usize > (m.bytes.len() - m.at) / 8 {
+            return Err(where_(&format!(
+                "{count} objects declared in a metadata block too small for them"
+            )));
+        }
+        for _ in 0..count {
+            let name = m.string("object path")?;
+            let index_len = m.u32("raw data index")?;
+            let entry = self.objects.entry(name.clone()).or_default();
+            if !self.order.contains(&name) {
+                self.order.push(name.clone());
+            }
+            match index_len {
+                0xFFFF_FFFF => self.active.retain(|a| a != &name),
+                0 => {
+                    if entry.index.is_none() {
+                        return Err(where_(&format!(
+                            "object {name} reuses a raw-data index it never had"
+                        )));
+                    }
+                    if !self.active.contains(&name) {
+                        self.active.push(name.clone());
+                    }
+                }
+                0x6912_0000 | 0x6913_0000 => {
+                    return Err(where_(&format!(
+                        "object {name}: DAQmx raw data is not read"
+                    )));
+                }
+                _ => {
+                    let data_type = m.u32("data type")?;
+                    let dimension = m.u32("array dimension")?;
+                    let values = m.u64("number of values")?;
+                    if data_type == 0x20 {
+                        m.u64("string total size")?;
+                    }
+                    if dimension != 1 {
+                        return Err(where_(&format!(
+                            "object {name}: array dimension {dimension} (TDMS allows 1)"
+                        )));
+                    }
+                    if type_size(data_type).is_none() && values > 0 {
+                        return Err(where_(&format!(
+                            "channel {name}: {} values are not read (limpid reads numbers, booleans and time stamps)",
+                            type_name(data_type)
+                        )));
+                    }
+                    entry.index = Some(Index { data_type, values });
+                    if !self.active.contains(&name) {
+                        self.active.push(name.clone());
+                    }
+                }
+            }
+            let props = m.u32("property count")?;
+            if props as usize > (m.bytes.len() - m.at) / 8 {
+                return Err(where_(&format!("object {name}: {props} properties declared in a metadata block too small for them")));
+            }
+            for _ in 0..props {
+                let key = m.string("property name")?;
+                let t = m.u32("property type")?;
+                let value = property(m, t)?;
+                match (key.as_str(), value) {
+                    ("unit_string", Property::Text(u)) if !u.trim().is_empty() => {
+                        entry.unit = Some(u.trim().to_string())
+                    }
+                    ("wf_increment", Property::Number(v)) => entry.increment = Some(v),
+                    ("wf_start_offset", Property::Number(v)) => entry.start_offset = Some(v),
+                    _ => {}
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A segment's raw data: each chunk's values appended to the active objects.
+    fn raw_data(
+        &mut self,
+        raw: &[u8],
+        interleaved: bool,
+        where_: &dyn Fn(&str) -> String,
+    ) -> std::result::Result<(), String> {
+        let layout: Vec<(String, Index, usize)> = self
+            .active
+            .iter()
+            .filter_map(|n| {
+                let idx = self.objects[n].index?;
+                (idx.values > 0).then(|| (n.clone(), idx, type_size(idx.data_type).unwrap_or(0)))
+            })
+            .collect();
+        let chunk: u64 = layout
+            .iter()
+            .map(|(_, i, s)| i.values.saturating_mul(*s as u64))
+            .fold(0u64, u64::saturating_add);
+        if let Some(chunks) = (raw.len() as u64).checked_div(chunk) {
+            if chunks == 0 {
+                return Err(where_(&format!(
+                    "raw data of {} bytes, but one chunk of its channels needs {chunk}",
+                    raw.len()
+                )));
+            }
+            for k in 0..chunks as usize {
+                let base = k * chunk as usize;
+                if interleaved {
+                    let n = layout[0].1.values as usize;
+                    let stride: usize = layout.iter().map(|l| l.2).sum();
+                    if layout.iter().any(|l| l.1.values as usize != n) {
+                        return Err(where_("interleaved channels with different value counts"));
+                    }
+                    let mut offset = 0;
+                    for (name, idx, size) in &layout {
+                        let o = self.objects.get_mut(name).expect("active object");
+                        o.values.reserve(n);
+                        for i in 0..n {
+                            let p = base + i * stride + offset;
+                            o.values.push(number(idx.data_type, &raw[p..p + size]));
+                        }
+                        offset += size;
+                    }
+                } else {
+                    let mut p = base;
+                    for (name, idx, size) in &layout {
+                        let o = self.objects.get_mut(name).expect("active object");
+                        let n = idx.values as usize;
+                        o.values.reserve(n);
+                        for i in 0..n {
+                            let q = p + i * size;
+                            o.values.push(number(idx.data_type, &raw[q..q + size]));
+                        }
+                        p += n * size;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Groups become streams, in file order.
+    fn streams(&self) -> std::result::Result<Vec<Stream>, String> {
+        let mut streams: Vec<Stream> = Vec::new();
+        for name in &self.order {
+            let parts = split_path(name);
+            if parts.len() != 2 {
+                continue;
+            }
+            let o = &self.objects[name];
+            if o.index.is_none() {
+                continue;
+            }
+            let (group, channel) = (&parts[0], &parts[1]);
+            let timestamps = o.index.is_some_and(|i| i.data_type == 0x44);
+            let mut values = o.values.clone();
+            if timestamps {
+                let first = values.first().copied().unwrap_or(0.0);
+                values.iter_mut().for_each(|v| *v -= first);
+            }
+            let pos = match streams.iter().position(|s| &s.name == group) {
+                Some(p) => p,
+                None => {
+                    streams.push(Stream {
+                        name: group.clone(),
+                        ..Stream::default()
+                    });
+                    streams.len() - 1
+                }
+            };
+            let s = &mut streams[pos];
+            if let Some(first) = s.channels.first() {
+                if first.values.len() != values.len() {
+                    return Err(format!(
+                        "group {group:?}: channel {channel:?} has {} values, channel {:?} has {}; limpid reads a group as one stream (save channels of other lengths in another group)",
+                        values.len(),
+                        first.name,
+                        first.values.len()
+                    ));
+                }
+            }
+            let rate = o
+                .increment
+                .filter(|i| i.is_finite() && *i > 0.0)
+                .map(|i| 1.0 / i);
+            if !s.channels.is_empty() && s.nominal_rate != rate {
+                return Err(format!(
+                    "group {group:?}: channel {channel:?} has another wf_increment than the group's first channel; limpid reads a group as one stream"
+                ));
+            }
+            if s.channels.is_empty() {
+                s.nominal_rate = rate;
+                if let Some(inc) = o.increment.filter(|i| i.is_finite() && *i > 0.0) {
+                    let start = o.start_offset.filter(|v| v.is_finite()).unwrap_or(0.0);
+                    s.stamps = Some((0..values.len()).map(|i| start + i as f64 * inc).collect());
+                }
+            }
+            s.channels.push(Channel {
+                name: channel.clone(),
+                unit: if timestamps {
+                    Some("s".into())
+                } else {
+                    o.unit.clone()
+                },
+                values,
+            });
+        }
+        Ok(streams)
+    }
+}
+
 /// Read TDMS bytes; `path` names the file in errors.
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     let fail = super::format_error(path);
     super::check_start(path, bytes, b"TDSm", "a TDMS")?;
-    let mut objects: HashMap<String, Object> = HashMap::new();
-    let mut order: Vec<String> = Vec::new();
-    let mut active: Vec<String> = Vec::new();
+    let mut segments = Segments::default();
     let mut at = 0usize;
     let mut segment = 0usize;
     while at < bytes.len() {
@@ -203,7 +423,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
             ))));
         }
         if toc & TOC_NEW_OBJ_LIST != 0 {
-            active.clear();
+            segments.active.clear();
         }
         if toc & TOC_META_DATA != 0 {
             let mut m = Cursor {
@@ -211,205 +431,18 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
                 at: lead_end,
                 base: 0,
             };
-            let count = m.u32("object count").map_err(&fail)?;
-            if count as usize > (m.bytes.len() - m.at) / 8 {
-                return Err(fail(where_(&format!(
-                    "{count} objects declared in a metadata block too small for them"
-                ))));
-            }
-            for _ in 0..count {
-                let name = m.string("object path").map_err(&fail)?;
-                let index_len = m.u32("raw data index").map_err(&fail)?;
-                let entry = objects.entry(name.clone()).or_default();
-                if !order.contains(&name) {
-                    order.push(name.clone());
-                }
-                match index_len {
-                    0xFFFF_FFFF => active.retain(|a| a != &name),
-                    0 => {
-                        if entry.index.is_none() {
-                            return Err(fail(where_(&format!(
-                                "object {name} reuses a raw-data index it never had"
-                            ))));
-                        }
-                        if !active.contains(&name) {
-                            active.push(name.clone());
-                        }
-                    }
-                    0x6912_0000 | 0x6913_0000 => {
-                        return Err(fail(where_(&format!(
-                            "object {name}: DAQmx raw data is not read"
-                        ))));
-                    }
-                    _ => {
-                        let data_type = m.u32("data type").map_err(&fail)?;
-                        let dimension = m.u32("array dimension").map_err(&fail)?;
-                        let values = m.u64("number of values").map_err(&fail)?;
-                        if data_type == 0x20 {
-                            m.u64("string total size").map_err(&fail)?;
-                        }
-                        if dimension != 1 {
-                            return Err(fail(where_(&format!(
-                                "object {name}: array dimension {dimension} (TDMS allows 1)"
-                            ))));
-                        }
-                        if type_size(data_type).is_none() && values > 0 {
-                            return Err(fail(where_(&format!(
-                                "channel {name}: {} values are not read (limpid reads numbers, booleans and time stamps)",
-                                type_name(data_type)
-                            ))));
-                        }
-                        entry.index = Some(Index { data_type, values });
-                        if !active.contains(&name) {
-                            active.push(name.clone());
-                        }
-                    }
-                }
-                let props = m.u32("property count").map_err(&fail)?;
-                if props as usize > (m.bytes.len() - m.at) / 8 {
-                    return Err(fail(where_(&format!("object {name}: {props} properties declared in a metadata block too small for them"))));
-                }
-                for _ in 0..props {
-                    let key = m.string("property name").map_err(&fail)?;
-                    let t = m.u32("property type").map_err(&fail)?;
-                    let value = property(&mut m, t).map_err(&fail)?;
-                    match (key.as_str(), value) {
-                        ("unit_string", Property::Text(u)) if !u.trim().is_empty() => {
-                            entry.unit = Some(u.trim().to_string())
-                        }
-                        ("wf_increment", Property::Number(v)) => entry.increment = Some(v),
-                        ("wf_start_offset", Property::Number(v)) => entry.start_offset = Some(v),
-                        _ => {}
-                    }
-                }
-            }
+            segments.metadata(&mut m, &where_).map_err(&fail)?;
         }
         if toc & TOC_RAW_DATA != 0 {
             let raw = &bytes[lead_end + raw_offset as usize..lead_end + segment_len as usize];
-            let layout: Vec<(String, Index, usize)> = active
-                .iter()
-                .filter_map(|n| {
-                    let idx = objects[n].index?;
-                    (idx.values > 0)
-                        .then(|| (n.clone(), idx, type_size(idx.data_type).unwrap_or(0)))
-                })
-                .collect();
-            let chunk: u64 = layout
-                .iter()
-                .map(|(_, i, s)| i.values.saturating_mul(*s as u64))
-                .fold(0u64, u64::saturating_add);
-            if let Some(chunks) = (raw.len() as u64).checked_div(chunk) {
-                if chunks == 0 {
-                    return Err(fail(where_(&format!(
-                        "raw data of {} bytes, but one chunk of its channels needs {chunk}",
-                        raw.len()
-                    ))));
-                }
-                let interleaved = toc & TOC_INTERLEAVED != 0;
-                for k in 0..chunks as usize {
-                    let base = k * chunk as usize;
-                    if interleaved {
-                        let n = layout[0].1.values as usize;
-                        let stride: usize = layout.iter().map(|l| l.2).sum();
-                        if layout.iter().any(|l| l.1.values as usize != n) {
-                            return Err(fail(where_(
-                                "interleaved channels with different value counts",
-                            )));
-                        }
-                        let mut offset = 0;
-                        for (name, idx, size) in &layout {
-                            let o = objects.get_mut(name).expect("active object");
-                            o.values.reserve(n);
-                            for i in 0..n {
-                                let p = base + i * stride + offset;
-                                o.values.push(number(idx.data_type, &raw[p..p + size]));
-                            }
-                            offset += size;
-                        }
-                    } else {
-                        let mut p = base;
-                        for (name, idx, size) in &layout {
-                            let o = objects.get_mut(name).expect("active object");
-                            let n = idx.values as usize;
-                            o.values.reserve(n);
-                            for i in 0..n {
-                                let q = p + i * size;
-                                o.values.push(number(idx.data_type, &raw[q..q + size]));
-                            }
-                            p += n * size;
-                        }
-                    }
-                }
-            }
+            segments
+                .raw_data(raw, toc & TOC_INTERLEAVED != 0, &where_)
+                .map_err(&fail)?;
         }
         let step = 28usize.saturating_add(segment_len as usize);
         at = at.saturating_add(step);
     }
-    // groups become streams, in file order
-    let mut streams: Vec<Stream> = Vec::new();
-    for name in &order {
-        let parts = split_path(name);
-        if parts.len() != 2 {
-            continue;
-        }
-        let o = &objects[name];
-        if o.index.is_none() {
-            continue;
-        }
-        let (group, channel) = (&parts[0], &parts[1]);
-        let timestamps = o.index.is_some_and(|i| i.data_type == 0x44);
-        let mut values = o.values.clone();
-        if timestamps {
-            let first = values.first().copied().unwrap_or(0.0);
-            values.iter_mut().for_each(|v| *v -= first);
-        }
-        let pos = match streams.iter().position(|s| &s.name == group) {
-            Some(p) => p,
-            None => {
-                streams.push(Stream {
-                    name: group.clone(),
-                    ..Stream::default()
-                });
-                streams.len() - 1
-            }
-        };
-        let s = &mut streams[pos];
-        if let Some(first) = s.channels.first() {
-            if first.values.len() != values.len() {
-                return Err(fail(format!(
-                    "group {group:?}: channel {channel:?} has {} values, channel {:?} has {}; limpid reads a group as one stream (save channels of other lengths in another group)",
-                    values.len(),
-                    first.name,
-                    first.values.len()
-                )));
-            }
-        }
-        let rate = o
-            .increment
-            .filter(|i| i.is_finite() && *i > 0.0)
-            .map(|i| 1.0 / i);
-        if !s.channels.is_empty() && s.nominal_rate != rate {
-            return Err(fail(format!(
-                "group {group:?}: channel {channel:?} has another wf_increment than the group's first channel; limpid reads a group as one stream"
-            )));
-        }
-        if s.channels.is_empty() {
-            s.nominal_rate = rate;
-            if let Some(inc) = o.increment.filter(|i| i.is_finite() && *i > 0.0) {
-                let start = o.start_offset.filter(|v| v.is_finite()).unwrap_or(0.0);
-                s.stamps = Some((0..values.len()).map(|i| start + i as f64 * inc).collect());
-            }
-        }
-        s.channels.push(Channel {
-            name: channel.clone(),
-            unit: if timestamps {
-                Some("s".into())
-            } else {
-                o.unit.clone()
-            },
-            values,
-        });
-    }
+    let mut streams = segments.streams().map_err(&fail)?;
     streams.retain(|s| !s.channels.is_empty());
     if streams.is_empty() {
         return Err(fail("the TDMS file holds no channel with values".into()));
