@@ -187,6 +187,80 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     // the time base
     let rules: Vec<(&String, ColumnRule)> =
         map.columns.iter().map(|(c, s)| (c, s.rule())).collect();
+    let (base, base_time) = time_base(source, map, &rules, &map_name)?;
+    let n = base.len();
+    let (first, last, used) = common_span(source, &rules, base, &base_time, &map_name)?;
+    if first > 0 || last < n {
+        notes.push(format!(
+            "{} samples of {} outside the span of the other streams were left out ({} at the start, {} at the end)",
+            first + (n - last),
+            base.label(),
+            first,
+            n - last
+        ));
+    }
+    let t_span = &base_time[first..last];
+    notes.extend(used.iter().filter_map(|s| gap_note(s)));
+    // columns
+    let mut names = Vec::new();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    let mut before_markers = 0usize;
+    for (column, r) in &rules {
+        let values: Vec<f64> = if let Some(ch) = &r.channel {
+            let base_span = (&base_time[..], first..last);
+            channel_column(source, (column, ch, r), base, base_span, &mut notes)?
+        } else {
+            let markers = markers_for(source, column, r)?;
+            let (vals, before) =
+                marker_column(column, r, &markers, t_span).map_err(|m| source.error(m))?;
+            before_markers = before_markers.max(before);
+            vals
+        };
+        names.push(column.to_string());
+        columns.push(values);
+    }
+    if before_markers >= t_span.len() {
+        return Err(source.error(format!("{map_name}: no sample follows the first marker")));
+    }
+    if before_markers > 0 {
+        notes.push(format!(
+            "{before_markers} samples before the first marker were left out"
+        ));
+        for c in &mut columns {
+            c.drain(..before_markers);
+        }
+    }
+    let names_had_t = names.iter().any(|n| n == "t");
+    if !names_had_t {
+        names.insert(0, "t".into());
+        let t0 = t_span[before_markers];
+        columns.insert(0, t_span[before_markers..].iter().map(|t| t - t0).collect());
+    }
+    let origin = t_span[before_markers];
+    let (names, columns) = in_format_order(names, columns);
+    gap_in_base(source, base, &names, &columns)?;
+    let mut recording = Recording::new(&source.path, names, columns, 1)?;
+    for note in source.notes.iter().chain(&notes) {
+        // the reader of the warnings names the file (CLI, Python)
+        recording.warn(note.clone());
+    }
+    // where t starts is worth saying in a conversion, not a warning on every read
+    if !names_had_t && origin != 0.0 {
+        notes.push(format!(
+            "t counts from the first sample kept ({origin} s on the file's clock)"
+        ));
+    }
+    Ok(Converted { recording, notes })
+}
+
+/// The stream that sets the time base, and its times: a mapped `t`
+/// channel, the stream's stamps, or samples at `[time] rate`.
+fn time_base<'s>(
+    source: &'s Source,
+    map: &ChannelMap,
+    rules: &[(&String, ColumnRule)],
+    map_name: &str,
+) -> Result<(&'s Stream, Vec<f64>)> {
     let time_rule = rules.iter().find(|(c, _)| c.as_str() == "t");
     let base: &Stream = if let Some((_, r)) = time_rule {
         find_channel(
@@ -218,7 +292,6 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
             base.label()
         )));
     }
-    let n = base.len();
     let base_time: Vec<f64> = if let Some((_, r)) = time_rule {
         let found = find_channel(
             source,
@@ -230,17 +303,28 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     } else if let Some(stamps) = &base.stamps {
         stamps.clone()
     } else if let Some(rate) = map.time.rate {
-        (0..n).map(|i| i as f64 / rate).collect()
+        (0..base.len()).map(|i| i as f64 / rate).collect()
     } else {
         return Err(source.error(format!(
             "{map_name}: {} has no time stamps; map a t column (t = {{ channel = \"...\", unit = \"s\" }}) or give [time] rate = <Hz>",
             base.label()
         )));
     };
-    // the span every used stream covers
+    Ok((base, base_time))
+}
+
+/// The rows of the time base `first..last` that every other used stream
+/// covers, and those streams (each once).
+fn common_span<'s>(
+    source: &'s Source,
+    rules: &[(&String, ColumnRule)],
+    base: &Stream,
+    base_time: &[f64],
+    map_name: &str,
+) -> Result<(usize, usize, Vec<&'s Stream>)> {
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     let mut used: Vec<&Stream> = Vec::new();
-    for (column, r) in &rules {
+    for (column, r) in rules {
         if let Some(ch) = &r.channel {
             let found = find_channel(source, column, ch, r.stream.as_deref())?;
             if !std::ptr::eq(found.stream, base) {
@@ -277,106 +361,82 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
             hi
         )));
     }
-    if first > 0 || last < n {
-        notes.push(format!(
-            "{} samples of {} outside the span of the other streams were left out ({} at the start, {} at the end)",
-            first + (n - last),
-            base.label(),
-            first,
-            n - last
-        ));
+    Ok((first, last, used))
+}
+
+/// A note on a stream's drop-outs (its longest gap), when it has any.
+fn gap_note(s: &Stream) -> Option<String> {
+    let gaps = s.gaps();
+    if gaps.is_empty() {
+        return None;
     }
-    let mut keep: Vec<bool> = vec![false; n];
-    keep[first..last].iter_mut().for_each(|k| *k = true);
+    let stamps = s.stamps.as_ref().expect("used streams have stamps");
+    let longest = gaps.iter().map(|g| g.1).fold(0.0, f64::max);
+    let (i, _) = gaps
+        .iter()
+        .copied()
+        .find(|g| g.1 == longest)
+        .expect("a gap");
+    Some(format!(
+        "{} has {} gap(s) (drop-outs), the longest {:.4} s before sample {} (t = {:.4} s); the time base is interpolated across them",
+        s.label(),
+        gaps.len(),
+        longest,
+        i + 1,
+        stamps[i]
+    ))
+}
+
+/// A mapped channel's values on the time base's rows `first..last`:
+/// converted to SI, made an envelope (`env_*`), and interpolated from its
+/// own stream's stamps when it is not the time base's.
+fn channel_column(
+    source: &Source,
+    (column, ch, r): (&str, &str, &ColumnRule),
+    base: &Stream,
+    (base_time, span): (&[f64], std::ops::Range<usize>),
+    notes: &mut Vec<String>,
+) -> Result<Vec<f64>> {
+    let (first, last) = (span.start, span.end);
     let t_span = &base_time[first..last];
-    for s in &used {
-        let gaps = s.gaps();
-        if !gaps.is_empty() {
-            let stamps = s.stamps.as_ref().expect("used streams have stamps");
-            let longest = gaps.iter().map(|g| g.1).fold(0.0, f64::max);
-            let (i, _) = gaps
-                .iter()
-                .copied()
-                .find(|g| g.1 == longest)
-                .expect("a gap");
-            notes.push(format!(
-                "{} has {} gap(s) (drop-outs), the longest {:.4} s before sample {} (t = {:.4} s); the time base is interpolated across them",
-                s.label(),
-                gaps.len(),
-                longest,
-                i + 1,
-                stamps[i]
-            ));
-        }
+    let found = find_channel(source, column, ch, r.stream.as_deref())?;
+    if found.values.len() != found.stream.len() {
+        return Err(source.error(format!(
+            "{} channel {ch:?}: {} values for {} samples",
+            found.stream.label(),
+            found.values.len(),
+            found.stream.len()
+        )));
     }
-    // columns
-    let mut names = Vec::new();
-    let mut columns: Vec<Vec<f64>> = Vec::new();
-    let mut before_markers = 0usize;
-    for (column, r) in &rules {
-        let values: Vec<f64> = if let Some(ch) = &r.channel {
-            let found = find_channel(source, column, ch, r.stream.as_deref())?;
-            if found.values.len() != found.stream.len() {
-                return Err(source.error(format!(
-                    "{} channel {ch:?}: {} values for {} samples",
-                    found.stream.label(),
-                    found.values.len(),
-                    found.stream.len()
-                )));
-            }
-            if column.as_str() == "t" {
-                base_time[first..last].to_vec()
-            } else {
-                let mut v = convert(source, column, r, &found)?;
-                if column.starts_with("env_") {
-                    v = envelope(source, column, r, &found, v)?;
-                }
-                if std::ptr::eq(found.stream, base) {
-                    v[first..last].to_vec()
-                } else {
-                    let stamps = found.stream.stamps.as_ref().expect("checked above");
-                    let (native, target) = (found.stream.interval(), base.interval());
-                    if let (Some(native), Some(target)) = (native, target) {
-                        if column.starts_with("emg_") && native * 1.5 < target {
-                            notes.push(format!(
-                                "{column}: raw EMG at {} Hz picked at the time base's {} Hz (aliased); map it as env_{} to make the envelope at the native rate",
-                                limpid_core::error::significant(1.0 / native, 6),
-                                limpid_core::error::significant(1.0 / target, 6),
-                                &column[4..]
-                            ));
-                        }
-                    }
-                    interpolate(stamps, &v, t_span)
-                }
-            }
+    if column == "t" {
+        Ok(base_time[first..last].to_vec())
+    } else {
+        let mut v = convert(source, column, r, &found)?;
+        if column.starts_with("env_") {
+            v = envelope(source, column, r, &found, v)?;
+        }
+        if std::ptr::eq(found.stream, base) {
+            Ok(v[first..last].to_vec())
         } else {
-            let markers = markers_for(source, column, r)?;
-            let (vals, before) =
-                marker_column(column, r, &markers, t_span).map_err(|m| source.error(m))?;
-            before_markers = before_markers.max(before);
-            vals
-        };
-        names.push(column.to_string());
-        columns.push(values);
-    }
-    if before_markers >= t_span.len() {
-        return Err(source.error(format!("{map_name}: no sample follows the first marker")));
-    }
-    if before_markers > 0 {
-        notes.push(format!(
-            "{before_markers} samples before the first marker were left out"
-        ));
-        for c in &mut columns {
-            c.drain(..before_markers);
+            let stamps = found.stream.stamps.as_ref().expect("checked above");
+            let (native, target) = (found.stream.interval(), base.interval());
+            if let (Some(native), Some(target)) = (native, target) {
+                if column.starts_with("emg_") && native * 1.5 < target {
+                    notes.push(format!(
+                            "{column}: raw EMG at {} Hz picked at the time base's {} Hz (aliased); map it as env_{} to make the envelope at the native rate",
+                            limpid_core::error::significant(1.0 / native, 6),
+                            limpid_core::error::significant(1.0 / target, 6),
+                            &column[4..]
+                        ));
+                }
+            }
+            Ok(interpolate(stamps, &v, t_span))
         }
     }
-    let names_had_t = names.iter().any(|n| n == "t");
-    if !names_had_t {
-        names.insert(0, "t".into());
-        let t0 = t_span[before_markers];
-        columns.insert(0, t_span[before_markers..].iter().map(|t| t - t0).collect());
-    }
-    let origin = t_span[before_markers];
+}
+
+/// Columns sorted as FORMAT.md lists them (then by name).
+fn in_format_order(names: Vec<String>, columns: Vec<Vec<f64>>) -> (Vec<String>, Vec<Vec<f64>>) {
     let mut order: Vec<usize> = (0..names.len()).collect();
     order.sort_by_key(|&i| (column_rank(&names[i]), names[i].clone()));
     let names: Vec<String> = order.iter().map(|&i| names[i].clone()).collect();
@@ -385,19 +445,7 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
         .iter()
         .map(|&i| slots[i].take().expect("each once"))
         .collect();
-    gap_in_base(source, base, &names, &columns)?;
-    let mut recording = Recording::new(&source.path, names, columns, 1)?;
-    for note in source.notes.iter().chain(&notes) {
-        // the reader of the warnings names the file (CLI, Python)
-        recording.warn(note.clone());
-    }
-    // where t starts is worth saying in a conversion, not a warning on every read
-    if !names_had_t && origin != 0.0 {
-        notes.push(format!(
-            "t counts from the first sample kept ({origin} s on the file's clock)"
-        ));
-    }
-    Ok(Converted { recording, notes })
+    (names, columns)
 }
 
 /// Where a column goes in a converted table: FORMAT.md's order (time,
