@@ -8,7 +8,21 @@
 #[allow(unused_imports)]
 use super::*;
 
+use limpid_analysis::cocontraction::CocontractionResult;
+
 pub(super) fn seed001(seed: u64) -> Result<Reproduction> {
+    let results = simulate_and_estimate(seed)?;
+    let tables = Tables::of(&results);
+    let mut out = Reproduction::default();
+    table_rows(&mut out, &tables);
+    findings(&mut out, &tables);
+    Ok(out)
+}
+
+/// Four realistic subjects in the seven configurations, each estimated with
+/// the one MVC recording of its configuration 5 (as seed 001 records it):
+/// (configuration, result).
+fn simulate_and_estimate(seed: u64) -> Result<Vec<(usize, CocontractionResult)>> {
     use limpid_lab::cocontraction::{
         seed001_realistic_population, simulate_cocontraction, CocontractionProtocol,
     };
@@ -31,7 +45,7 @@ pub(super) fn seed001(seed: u64) -> Result<Reproduction> {
             .map(|(_, _, (_, mvc))| mvc)
             .ok_or_else(|| Error::invalid("reproduce", "configuration 5 missing"))
     };
-    let results = simulated
+    simulated
         .par_iter()
         .map(|(s, c, (rec, _))| {
             let r = estimate_cocontraction(
@@ -42,48 +56,71 @@ pub(super) fn seed001(seed: u64) -> Result<Reproduction> {
             )?;
             Ok((*c, r))
         })
-        .collect::<Result<Vec<_>>>()?;
-    let mut out = Reproduction::default();
-    let names = ["K_xx", "K_yy", "K_zz", "K_maxA", "K_1", "K_2", "K_3"];
-    // [config][level] -> the 7 table values, mean over subjects
-    let mut measured = [[[0.0f64; 7]; 4]; 7];
-    let mut index = [[0.0f64; 4]; 7];
-    let mut rotation = [[0.0f64; 3]; 7];
-    for c in 1..=7 {
-        let of_config: Vec<_> = results
-            .iter()
-            .filter(|(ci, _)| *ci == c)
-            .map(|(_, r)| r)
-            .collect();
-        for (l, level) in SEED001_LEVELS.iter().enumerate() {
-            let values: Vec<[f64; 7]> = of_config
+        .collect::<Result<Vec<_>>>()
+}
+
+/// Seed 001's tables from limpid's results, means over subjects.
+struct Tables {
+    /// `[configuration][level]`: K_xx, K_yy, K_zz, K_maxA, K_1, K_2, K_3.
+    measured: [[[f64; 7]; 4]; 7],
+    /// `[configuration][level]`: the co-contraction index.
+    index: [[f64; 4]; 7],
+    /// `[configuration][axis]`: the rotation at 100 % (deg).
+    rotation: [[f64; 3]; 7],
+}
+
+impl Tables {
+    fn of(results: &[(usize, CocontractionResult)]) -> Self {
+        let mut measured = [[[0.0f64; 7]; 4]; 7];
+        let mut index = [[0.0f64; 4]; 7];
+        let mut rotation = [[0.0f64; 3]; 7];
+        for c in 1..=7 {
+            let of_config: Vec<_> = results
                 .iter()
-                .filter_map(|r| r.levels.iter().find(|x| (x.level - level).abs() < 1e-9))
-                .map(|x| {
-                    let k = &x.stiffness;
-                    let (p, max_a) = principal_and_max_a(k);
-                    [k[(0, 0)], k[(1, 1)], k[(2, 2)], max_a, p[0], p[1], p[2]]
-                })
+                .filter(|(ci, _)| *ci == c)
+                .map(|(_, r)| r)
                 .collect();
-            for v in 0..7 {
-                measured[c - 1][l][v] = mean(values.iter().map(|x| x[v]));
-            }
-            index[c - 1][l] = mean(
-                of_config
+            for (l, level) in SEED001_LEVELS.iter().enumerate() {
+                let values: Vec<[f64; 7]> = of_config
                     .iter()
                     .filter_map(|r| r.levels.iter().find(|x| (x.level - level).abs() < 1e-9))
-                    .map(|x| x.cocontraction_index),
-            );
+                    .map(|x| {
+                        let k = &x.stiffness;
+                        let (p, max_a) = principal_and_max_a(k);
+                        [k[(0, 0)], k[(1, 1)], k[(2, 2)], max_a, p[0], p[1], p[2]]
+                    })
+                    .collect();
+                for v in 0..7 {
+                    measured[c - 1][l][v] = mean(values.iter().map(|x| x[v]));
+                }
+                index[c - 1][l] = mean(
+                    of_config
+                        .iter()
+                        .filter_map(|r| r.levels.iter().find(|x| (x.level - level).abs() < 1e-9))
+                        .map(|x| x.cocontraction_index),
+                );
+            }
+            for axis in 0..3 {
+                rotation[c - 1][axis] = mean(of_config.iter().filter_map(|r| {
+                    r.comparisons
+                        .iter()
+                        .find(|x| (x.level - 1.0).abs() < 1e-9)
+                        .map(|x| x.rotation_deg[axis])
+                }));
+            }
         }
-        for axis in 0..3 {
-            rotation[c - 1][axis] = mean(of_config.iter().filter_map(|r| {
-                r.comparisons
-                    .iter()
-                    .find(|x| (x.level - 1.0).abs() < 1e-9)
-                    .map(|x| x.rotation_deg[axis])
-            }));
+        Tables {
+            measured,
+            index,
+            rotation,
         }
     }
+}
+
+/// Tables 1-5 and the index per level, beside the paper's.
+fn table_rows(out: &mut Reproduction, t: &Tables) {
+    let (measured, index, rotation) = (&t.measured, &t.index, &t.rotation);
+    let names = ["K_xx", "K_yy", "K_zz", "K_maxA", "K_1", "K_2", "K_3"];
     for (l, level) in SEED001_LEVELS.iter().enumerate() {
         for c in 0..7 {
             for v in 0..7 {
@@ -133,7 +170,11 @@ pub(super) fn seed001(seed: u64) -> Result<Reproduction> {
             .with_note("Fig. 4 only: the subjects held each level; MVC from configuration 5"),
         );
     }
-    // findings
+}
+
+/// Seed 001's claims, checked, and the departure from linearity in the level.
+fn findings(out: &mut Reproduction, t: &Tables) {
+    let (measured, rotation) = (&t.measured, &t.rotation);
     let ratio = |v: usize| {
         mean(
             (0..7)
@@ -196,5 +237,4 @@ pub(super) fn seed001(seed: u64) -> Result<Reproduction> {
             "mean departure from linear: paper {paper_departure:.1} %, limpid {limpid_departure:.1} %"
         ),
     });
-    Ok(out)
 }
