@@ -56,8 +56,58 @@ const PLANAR_TORQUE_NOISE_NM: f64 = 0.15;
 pub(super) fn seed003(seed: u64) -> Result<Reproduction> {
     use limpid_ident::planar::{prepare_planar, window_sweep, PlanarPrepare};
     use limpid_lab::design::PlanarDesign;
-    use limpid_lab::planar::{simulate_planar, Cuff, Reflex};
     let design = PlanarDesign::seed003();
+    let (arm, rec) = simulate_subject(&design, seed)?;
+    let data = prepare_planar(
+        &rec,
+        &PlanarPrepare::new(design.link_lengths_m[0], design.link_lengths_m[1]),
+    )?;
+    let longest = (data.max_window_s() * 1e3).floor().min(450.0);
+    let full = window_sweep(&data, SHORTEST_MS, longest, 10.0, None)?;
+    let known = window_sweep(&data, SHORTEST_MS, longest, 10.0, Some(arm.xi))?;
+    let mut out = Reproduction::default();
+    let both = paper_required_window;
+    window_rows(&mut out, (&full, &known), longest);
+    table_i(&mut out, &design);
+    let order = |v: Option<f64>| v.unwrap_or(f64::INFINITY);
+    let shown = |v: Option<f64>| v.map_or("none".into(), |v| format!("{v} ms"));
+    out.findings.push(Finding {
+        seed: "003".into(),
+        claim: "the full model needs an observation window of a few hundred ms (~370 ms) to meet the paper's criteria (K positive definite, K and D quasi-symmetric); known inertia shortens it".into(),
+        holds: both(&full).is_some_and(|v| v >= 150.0)
+            && order(both(&known)) <= order(both(&full)),
+        evidence: format!(
+            "from {} (full model), {} (inertia known), with a cuff of {} N/m, {} N s/m between robot and arm; limpid's stricter trust (precision, no change of K or D within the window): full model {}, inertia known {}",
+            shown(both(&full)),
+            shown(both(&known)),
+            limpid_lab::planar::SEED003_CUFF.0,
+            limpid_lab::planar::SEED003_CUFF.1,
+            shown(full.shortest_trusted_ms),
+            shown(known.shortest_trusted_ms)
+        ),
+    });
+    Ok(out)
+}
+
+/// The shortest observation window of the sweeps (ms).
+const SHORTEST_MS: f64 = 50.0;
+
+/// Seed 003 §V's "required" window: K positive definite and K, D
+/// quasi-symmetric from here on.
+fn paper_required_window(s: &limpid_ident::planar::Sweep) -> Option<f64> {
+    match (s.min_positive_definite_ms, s.min_quasi_symmetric_ms) {
+        (Some(a), Some(b)) => Some(a.max(b)),
+        _ => None,
+    }
+}
+
+/// The nominal subject in the robot's cuff, with a spinal reflex, holding
+/// 5 N distal: its recording of the design's perturbations.
+fn simulate_subject(
+    design: &limpid_lab::design::PlanarDesign,
+    seed: u64,
+) -> Result<(limpid_lab::planar::PlanarSubject, limpid_core::Recording)> {
+    use limpid_lab::planar::{simulate_planar, Cuff, Reflex};
     let mut arm = design.nominal_subject();
     // seed 003 §IV-A: the robot holds the forearm in a plastic cuff; the soft
     // tissue in between is a spring and damper in series (values: ours)
@@ -91,24 +141,18 @@ pub(super) fn seed003(seed: u64) -> Result<Reproduction> {
         3.0,
         seed ^ 0x5eed,
     )?;
-    let data = prepare_planar(
-        &rec,
-        &PlanarPrepare::new(design.link_lengths_m[0], design.link_lengths_m[1]),
-    )?;
-    let longest = (data.max_window_s() * 1e3).floor().min(450.0);
-    const SHORTEST_MS: f64 = 50.0;
-    let full = window_sweep(&data, SHORTEST_MS, longest, 10.0, None)?;
-    let known = window_sweep(&data, SHORTEST_MS, longest, 10.0, Some(arm.xi))?;
-    let mut out = Reproduction::default();
+    Ok((arm, rec))
+}
+
+/// The shortest observation windows by each criterion, the paper's beside
+/// limpid's, and where the sweep found a change within the trials.
+fn window_rows(
+    out: &mut Reproduction,
+    (full, known): (&limpid_ident::planar::Sweep, &limpid_ident::planar::Sweep),
+    longest: f64,
+) {
     let ms = "ms";
-    // seed 003 §V's "required" window: K positive definite and K, D quasi-symmetric from here on
-    let both = |s: &limpid_ident::planar::Sweep| match (
-        s.min_positive_definite_ms,
-        s.min_quasi_symmetric_ms,
-    ) {
-        (Some(a), Some(b)) => Some(a.max(b)),
-        _ => None,
-    };
+    let both = paper_required_window;
     for (item, paper, value) in [
         (
             "shortest T_obs with K positive definite",
@@ -128,12 +172,12 @@ pub(super) fn seed003(seed: u64) -> Result<Reproduction> {
         (
             "shortest T_obs with K positive definite and K, D quasi-symmetric, full model",
             Some(370.0),
-            both(&full),
+            both(full),
         ),
         (
             "shortest T_obs with K positive definite and K, D quasi-symmetric, inertia known (reduced model eq. 23)",
             Some(300.0),
-            both(&known),
+            both(known),
         ),
         (
             "shortest trusted T_obs (limpid's criterion), full model",
@@ -167,7 +211,11 @@ pub(super) fn seed003(seed: u64) -> Result<Reproduction> {
         full.impedance_change.as_ref().map(|c| c.onset_ms),
         ms,
     ).with_note("the cuff's fast dynamics in the first tens of ms and the virtual subject's reflex (K and D +30 % after 90 ms) are changes the rigid model does not hold through; Lakatos, Petit & van der Smagt (2011) §I: reflexes act after 25-110 ms, the paper's windows include them"));
-    // Table I: quintic against the sixth-order polynomial
+}
+
+/// Table I: the C_ij ratios of the fifth-order (minimum-jerk) and the
+/// sixth-order polynomials, and the claim that the quintic's are nearer 1.
+fn table_i(out: &mut Reproduction, design: &limpid_lab::design::PlanarDesign) {
     let q = polynomial_ratios(&[(3, 10.0), (4, -15.0), (5, 6.0)], design.interpolation_s);
     let c6 = sextic_coefficients();
     let s = polynomial_ratios(
@@ -208,24 +256,6 @@ pub(super) fn seed003(seed: u64) -> Result<Reproduction> {
             s.map(sig).join(" / ")
         ),
     });
-    let order = |v: Option<f64>| v.unwrap_or(f64::INFINITY);
-    let shown = |v: Option<f64>| v.map_or("none".into(), |v| format!("{v} ms"));
-    out.findings.push(Finding {
-        seed: "003".into(),
-        claim: "the full model needs an observation window of a few hundred ms (~370 ms) to meet the paper's criteria (K positive definite, K and D quasi-symmetric); known inertia shortens it".into(),
-        holds: both(&full).is_some_and(|v| v >= 150.0)
-            && order(both(&known)) <= order(both(&full)),
-        evidence: format!(
-            "from {} (full model), {} (inertia known), with a cuff of {} N/m, {} N s/m between robot and arm; limpid's stricter trust (precision, no change of K or D within the window): full model {}, inertia known {}",
-            shown(both(&full)),
-            shown(both(&known)),
-            limpid_lab::planar::SEED003_CUFF.0,
-            limpid_lab::planar::SEED003_CUFF.1,
-            shown(full.shortest_trusted_ms),
-            shown(known.shortest_trusted_ms)
-        ),
-    });
-    Ok(out)
 }
 
 #[cfg(test)]
