@@ -5,7 +5,6 @@ use crate::*;
 
 pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimate) -> Section {
     let r = &v.reflex;
-    let i = &v.intrinsic;
     let verdict = if r.delay_identifiable {
         format!(
             "reflex identified: delay {} ms (95 % interval {}-{} ms), gain {} ± {} N m s/rad; total VAF {} % (cross-validated {} %)",
@@ -19,6 +18,22 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
             fmt(v.cross_validated_vaf)
         )
     };
+    let tables = parameter_tables(v);
+    let figures = figures(v);
+    Section {
+        heading: format!("Intrinsic and reflex stiffness: {name}"),
+        verdict,
+        warnings: v.warnings.iter().map(|w| w.message.clone()).collect(),
+        tables: tables.into(),
+        figures,
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}
+
+/// The pathway parameters with their standard errors, and the VAF of each model.
+fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
+    let (r, i) = (&v.reflex, &v.intrinsic);
     let row = |what: &str, value: f64, se: Option<f64>, unit: &str| {
         vec![
             what.to_string(),
@@ -87,6 +102,12 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
             vec!["reflex-free I-B-K fit".into(), fmt(v.reflex_free.vaf)],
         ],
     };
+    [parameters, vafs]
+}
+
+/// The IRFs, the rectifier, the delay scan and the torque traces.
+fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
+    let (r, i) = (&v.reflex, &v.intrinsic);
     let line = |id: &str, title: &str, x_label: &str, y_label: &str, series: Vec<Series>| Figure {
         id: id.into(),
         chart: Chart {
@@ -118,7 +139,7 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
         })
         .unzip();
     let t = &v.traces.t_s;
-    let figures = vec![
+    vec![
         line(
             "reflex-intrinsic-irf",
             "Intrinsic IRF (position to torque)",
@@ -179,14 +200,5 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
                 s("reflex", t, v.traces.reflex.clone(), 3),
             ],
         ),
-    ];
-    Section {
-        heading: format!("Intrinsic and reflex stiffness: {name}"),
-        verdict,
-        warnings: v.warnings.iter().map(|w| w.message.clone()).collect(),
-        tables: vec![parameters, vafs],
-        figures,
-        ellipsoids: vec![],
-        drawings: vec![],
-    }
+    ]
 }
