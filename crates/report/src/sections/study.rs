@@ -6,6 +6,38 @@ use crate::*;
 /// A whole seed 001 study: means over subjects per configuration and level,
 /// ellipsoid rotation from level 0 to 1, and the stiffness against the index.
 pub(crate) fn study_section(name: &str, v: &StudyResult) -> Section {
+    let mut configs: Vec<&String> = v.levels.iter().map(|r| &r.configuration).collect();
+    configs.dedup();
+    let (ellipsoids, drawings) = ellipsoid_views(v, &configs);
+    let figures = vec![k1_against_index(v, &configs)];
+    let failures: Vec<String> = v
+        .failures
+        .iter()
+        .map(|f| {
+            format!(
+                "subject {}, configuration {}: {}",
+                f.subject, f.configuration, f.error
+            )
+        })
+        .collect();
+    Section {
+        heading: format!("Study {}: {name}", v.name),
+        verdict: format!(
+            "{} recordings analysed, {} failed; {} configurations",
+            v.recordings.len(),
+            failures.len(),
+            configs.len()
+        ),
+        warnings: failures,
+        tables: tables(v).into(),
+        figures,
+        ellipsoids,
+        drawings,
+    }
+}
+
+/// The means ± sd per configuration and level, and the ellipsoid rotations.
+fn tables(v: &StudyResult) -> [Table; 2] {
     let levels = Table {
         caption: "Mean ± sd over subjects per configuration and level (Patel et al. 2013, Tables 1-5): co-contraction index (fraction of MVC), diagonal stiffness, largest antisymmetric element, principal stiffnesses (N/m)".into(),
         header: [
@@ -63,9 +95,13 @@ pub(crate) fn study_section(name: &str, v: &StudyResult) -> Section {
             })
             .collect(),
     };
-    let mut configs: Vec<&String> = v.levels.iter().map(|r| &r.configuration).collect();
-    configs.dedup();
-    // mean stiffness ellipsoids: levels side by side along x, configurations down z (seed 001 Fig. 5)
+    [levels, rotation]
+}
+
+/// The mean stiffness ellipsoids (3-D views: levels side by side along x,
+/// configurations down z) and the small multiples (configurations down,
+/// levels across), as seed 001 Fig. 5.
+fn ellipsoid_views(v: &StudyResult, configs: &[&String]) -> (Vec<EllipsoidView>, Vec<Drawing>) {
     let mut ellipsoids = Vec::new();
     for (i, c) in configs.iter().enumerate() {
         let at = v.levels.iter().filter(|r| &r.configuration == *c);
@@ -77,7 +113,6 @@ pub(crate) fn study_section(name: &str, v: &StudyResult) -> Section {
             }
         }
     }
-    // small multiples: configurations down, levels across (seed 001 Fig. 5)
     let mut level_values: Vec<f64> = v.levels.iter().map(|r| r.level).collect();
     level_values.sort_by(f64::total_cmp);
     level_values.dedup();
@@ -109,6 +144,11 @@ pub(crate) fn study_section(name: &str, v: &StudyResult) -> Section {
             ellipse::View::DEFAULT,
         ),
     }];
+    (ellipsoids, drawings)
+}
+
+/// The largest principal stiffness against the co-contraction index, one line per configuration.
+fn k1_against_index(v: &StudyResult, configs: &[&String]) -> Figure {
     let series: Vec<Series> = configs
         .iter()
         .enumerate()
@@ -126,7 +166,7 @@ pub(crate) fn study_section(name: &str, v: &StudyResult) -> Section {
             }
         })
         .collect();
-    let figures = vec![Figure {
+    Figure {
         id: "study-k1".into(),
         chart: Chart {
             title: "Largest principal stiffness against the co-contraction index".into(),
@@ -137,29 +177,5 @@ pub(crate) fn study_section(name: &str, v: &StudyResult) -> Section {
             y_range: None,
             series,
         },
-    }];
-    let failures: Vec<String> = v
-        .failures
-        .iter()
-        .map(|f| {
-            format!(
-                "subject {}, configuration {}: {}",
-                f.subject, f.configuration, f.error
-            )
-        })
-        .collect();
-    Section {
-        heading: format!("Study {}: {name}", v.name),
-        verdict: format!(
-            "{} recordings analysed, {} failed; {} configurations",
-            v.recordings.len(),
-            failures.len(),
-            configs.len()
-        ),
-        warnings: failures,
-        tables: vec![levels, rotation],
-        figures,
-        ellipsoids,
-        drawings,
     }
 }
