@@ -219,20 +219,36 @@ pub(crate) fn planar_quality_tables(v: &PlanarEstimate) -> Vec<Table> {
 }
 
 pub(crate) fn sweep_section(name: &str, v: &Sweep) -> Section {
-    let t: Vec<f64> = v.rows.iter().map(|r| r.observation_window_ms).collect();
-    let crit = |f: &dyn Fn(&limpid_ident::planar::PlanarCriteria) -> f64| -> Vec<f64> {
-        v.rows.iter().map(|r| f(&r.estimate.criteria)).collect()
-    };
-    let series = |name: &str, y: Vec<f64>, k: usize| Series {
+    let mut figures = matrix_figures(v);
+    figures.extend(criteria_figures(v));
+    Section {
+        heading: format!("Observation-window sweep: {name}"),
+        verdict: sweep_verdict(v),
+        warnings: vec![],
+        tables: vec![],
+        figures,
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}
+
+/// A sweep's line of the criterion (seed 003 §V) against the observation window.
+fn window_series(v: &Sweep, name: &str, y: Vec<f64>, k: usize) -> Series {
+    Series {
         name: name.into(),
-        x: t.clone(),
+        x: v.rows.iter().map(|r| r.observation_window_ms).collect(),
         y,
         stroke: Stroke::Solid,
         color: PALETTE[k].into(),
-    };
+    }
+}
+
+/// Seed 003 Fig. 4-5: the joint K and D entries against T_obs, ± 1 SE
+/// dashed, the shortest trusted window as a vertical line.
+fn matrix_figures(v: &Sweep) -> Vec<Figure> {
+    let t: Vec<f64> = v.rows.iter().map(|r| r.observation_window_ms).collect();
+    let series = |name: &str, y: Vec<f64>, k: usize| window_series(v, name, y, k);
     let mut figures = Vec::new();
-    // seed 003 Fig. 4-5: the joint K and D entries against T_obs, ± 1 SE
-    // dashed, the shortest trusted window as a vertical line
     for (kind, unit, pick) in [
         (
             "K",
@@ -290,7 +306,16 @@ pub(crate) fn sweep_section(name: &str, v: &Sweep) -> Section {
             },
         });
     }
-    figures.extend([
+    figures
+}
+
+/// The conditioning, positive definiteness and symmetry against T_obs.
+fn criteria_figures(v: &Sweep) -> [Figure; 3] {
+    let crit = |f: &dyn Fn(&limpid_ident::planar::PlanarCriteria) -> f64| -> Vec<f64> {
+        v.rows.iter().map(|r| f(&r.estimate.criteria)).collect()
+    };
+    let series = |name: &str, y: Vec<f64>, k: usize| window_series(v, name, y, k);
+    [
         Figure {
             id: "sweep-condition".into(),
             chart: Chart {
@@ -340,7 +365,11 @@ pub(crate) fn sweep_section(name: &str, v: &Sweep) -> Section {
                 ],
             },
         },
-    ]);
+    ]
+}
+
+/// The shortest windows by each criterion, and any change within the trials.
+fn sweep_verdict(v: &Sweep) -> String {
     let never = |x: Option<f64>| x.map_or_else(|| "never".into(), fmt);
     let mut verdict = format!(
         "shortest trusted window: {} ms (precise, stable across neighbouring windows, before any change of the impedance within the trials); positive definite from {} ms, quasi-symmetric from {} ms, quasi-constant from {} ms",
@@ -365,13 +394,5 @@ pub(crate) fn sweep_section(name: &str, v: &Sweep) -> Section {
             );
         }
     }
-    Section {
-        heading: format!("Observation-window sweep: {name}"),
-        verdict,
-        warnings: vec![],
-        tables: vec![],
-        figures,
-        ellipsoids: vec![],
-        drawings: vec![],
-    }
+    verdict
 }
