@@ -91,7 +91,31 @@ fn cell(m: Option<&Matrix>, se: Option<&Matrix>, i: usize, j: usize) -> String {
 /// The varying section: verdict, figures, per-point table.
 pub(crate) fn section(name: &str, v: &VaryingEstimate) -> Section {
     let (mu, bu, ku) = limpid_ident::linear::units(&v.coordinates);
-    let d = v.coordinates.len();
+    let mut figures = vec![
+        element_figure(v, "varying-stiffness", ("K", "Stiffness"), ku, |p| {
+            (p.stiffness.as_ref(), p.stiffness_se.as_ref())
+        }),
+        element_figure(v, "varying-damping", ("B", "Damping"), bu, |p| {
+            (p.damping.as_ref(), p.damping_se.as_ref())
+        }),
+        element_figure(v, "varying-inertia", ("M", "Inertia"), mu, |p| {
+            (p.inertia.as_ref(), p.inertia_se.as_ref())
+        }),
+    ];
+    figures.extend(reflex_gain_figure(v));
+    Section {
+        heading: format!("Varying impedance: {name}"),
+        verdict: verdict(v),
+        warnings: v.warnings.clone(),
+        tables: vec![points_table(v)],
+        figures,
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}
+
+/// The method, how many points are identifiable, the fit and the reflex.
+fn verdict(v: &VaryingEstimate) -> String {
     let identifiable = v.points.iter().filter(|p| p.identifiable).count();
     let method = match v.method {
         VaryingMethod::Ensemble => format!(
@@ -124,60 +148,59 @@ pub(crate) fn section(name: &str, v: &VaryingEstimate) -> Section {
             "; no reflex detected".to_string()
         });
     }
-    let mut figures = vec![
-        element_figure(v, "varying-stiffness", ("K", "Stiffness"), ku, |p| {
-            (p.stiffness.as_ref(), p.stiffness_se.as_ref())
-        }),
-        element_figure(v, "varying-damping", ("B", "Damping"), bu, |p| {
-            (p.damping.as_ref(), p.damping_se.as_ref())
-        }),
-        element_figure(v, "varying-inertia", ("M", "Inertia"), mu, |p| {
-            (p.inertia.as_ref(), p.inertia_se.as_ref())
-        }),
-    ];
-    if v.reflex.is_some() {
-        let x: Vec<f64> = v.points.iter().map(|p| p.sigma).collect();
-        let g: Vec<(f64, f64)> = v
-            .points
-            .iter()
-            .map(|p| {
-                p.reflex
-                    .as_ref()
-                    .map_or((f64::NAN, f64::NAN), |r| (r.gain, r.gain_se))
-            })
-            .collect();
-        let line = |name: &str, y: Vec<f64>, stroke| Series {
-            name: name.into(),
-            x: x.clone(),
-            y,
-            stroke,
-            color: PALETTE[0].into(),
-        };
-        figures.push(Figure {
-            id: "varying-reflex".into(),
-            chart: Chart {
-                title: format!("Reflex gain against {} (± 2 SE dashed)", v.schedule.name),
-                x_label: schedule_label(v),
-                y_label: "G (N m s/rad)".into(),
-                x_log: false,
-                y_log: false,
-                y_range: None,
-                series: vec![
-                    line(
-                        "± 2 SE",
-                        g.iter().map(|(a, s)| a + 2.0 * s).collect(),
-                        Stroke::Dashed,
-                    ),
-                    line(
-                        "± 2 SE",
-                        g.iter().map(|(a, s)| a - 2.0 * s).collect(),
-                        Stroke::Dashed,
-                    ),
-                    line("G", g.iter().map(|(a, _)| *a).collect(), Stroke::Solid),
-                ],
-            },
-        });
-    }
+    verdict
+}
+
+/// The reflex gain against the schedule (± 2 SE dashed), when a reflex was fitted.
+fn reflex_gain_figure(v: &VaryingEstimate) -> Option<Figure> {
+    v.reflex.as_ref()?;
+    let x: Vec<f64> = v.points.iter().map(|p| p.sigma).collect();
+    let g: Vec<(f64, f64)> = v
+        .points
+        .iter()
+        .map(|p| {
+            p.reflex
+                .as_ref()
+                .map_or((f64::NAN, f64::NAN), |r| (r.gain, r.gain_se))
+        })
+        .collect();
+    let line = |name: &str, y: Vec<f64>, stroke| Series {
+        name: name.into(),
+        x: x.clone(),
+        y,
+        stroke,
+        color: PALETTE[0].into(),
+    };
+    Some(Figure {
+        id: "varying-reflex".into(),
+        chart: Chart {
+            title: format!("Reflex gain against {} (± 2 SE dashed)", v.schedule.name),
+            x_label: schedule_label(v),
+            y_label: "G (N m s/rad)".into(),
+            x_log: false,
+            y_log: false,
+            y_range: None,
+            series: vec![
+                line(
+                    "± 2 SE",
+                    g.iter().map(|(a, s)| a + 2.0 * s).collect(),
+                    Stroke::Dashed,
+                ),
+                line(
+                    "± 2 SE",
+                    g.iter().map(|(a, s)| a - 2.0 * s).collect(),
+                    Stroke::Dashed,
+                ),
+                line("G", g.iter().map(|(a, _)| *a).collect(), Stroke::Solid),
+            ],
+        },
+    })
+}
+
+/// The impedance at each point: diagonal elements, value ± standard error.
+fn points_table(v: &VaryingEstimate) -> Table {
+    let (mu, bu, ku) = limpid_ident::linear::units(&v.coordinates);
+    let d = v.coordinates.len();
     let mut header = vec![schedule_label(v)];
     let diag: Vec<(usize, usize)> = (0..d).map(|i| (i, i)).collect();
     for (q, unit) in [("K", ku), ("B", bu), ("M", mu)] {
@@ -221,24 +244,16 @@ pub(crate) fn section(name: &str, v: &VaryingEstimate) -> Section {
             row
         })
         .collect();
-    Section {
-        heading: format!("Varying impedance: {name}"),
-        verdict,
-        warnings: v.warnings.clone(),
-        tables: vec![Table {
-            caption: format!(
-                "Impedance at each point (value ± standard error{}; — : not identifiable)",
-                if d > 1 {
-                    ", diagonal elements; the JSON has every element"
-                } else {
-                    ""
-                }
-            ),
-            header,
-            rows,
-        }],
-        figures,
-        ellipsoids: vec![],
-        drawings: vec![],
+    Table {
+        caption: format!(
+            "Impedance at each point (value ± standard error{}; — : not identifiable)",
+            if d > 1 {
+                ", diagonal elements; the JSON has every element"
+            } else {
+                ""
+            }
+        ),
+        header,
+        rows,
     }
 }
