@@ -97,62 +97,76 @@ pub fn linear_text(r: &LinearResult) -> String {
     }
     out.push('\n');
     if coords.len() >= 2 {
-        let _ = writeln!(
-            out,
-            "Symmetric parts (Artemiadis et al. 2010, Table I layout): K(s) | B(s) | M(s)"
-        );
-        for i in 0..coords.len() {
-            let row = |m: &Matrix| {
-                (0..m.ncols())
-                    .map(|j| format!("{:>9}", num(m[(i, j)])))
-                    .collect::<String>()
-            };
-            let _ = writeln!(
-                out,
-                "  {:<4}{}  |{}  |{}",
-                coords[i],
-                row(&r.symmetric.stiffness),
-                row(&r.symmetric.damping),
-                row(&r.symmetric.inertia)
-            );
-        }
-        let t = &r.table_ii;
-        let _ = writeln!(
-            out,
-            "Table II: K max/min/maxA {} / {} / {} | B {} / {} / {} | M {} / {} / {}",
-            num(t.stiffness.max_symmetric),
-            num(t.stiffness.min_symmetric),
-            num(t.stiffness.max_antisymmetric),
-            num(t.damping.max_symmetric),
-            num(t.damping.min_symmetric),
-            num(t.damping.max_antisymmetric),
-            num(t.inertia.max_symmetric),
-            num(t.inertia.min_symmetric),
-            num(t.inertia.max_antisymmetric),
-        );
-        if let Some(e) = &r.ellipsoids.stiffness {
-            let _ = writeln!(
-                out,
-                "Stiffness ellipsoid: principal stiffnesses {} {ku}; orientation {} deg ({})",
-                e.eigenvalues
-                    .iter()
-                    .map(|v| num(*v))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                e.angles_deg
-                    .iter()
-                    .map(|v| format!("{v:.1}"))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                if e.angles_deg.len() == 3 {
-                    "yaw, pitch, roll"
-                } else {
-                    "major axis from the first coordinate"
-                }
-            );
-        }
-        out.push('\n');
+        symmetric_parts(&mut out, r);
     }
+    quality(&mut out, r);
+    out
+}
+
+/// Artemiadis et al. (2010)'s Table I layout (symmetric parts), Table II and the stiffness ellipsoid.
+fn symmetric_parts(out: &mut String, r: &LinearResult) {
+    let coords = &r.provenance.coordinates;
+    let ku = &r.provenance.units[2];
+    let _ = writeln!(
+        out,
+        "Symmetric parts (Artemiadis et al. 2010, Table I layout): K(s) | B(s) | M(s)"
+    );
+    for i in 0..coords.len() {
+        let row = |m: &Matrix| {
+            (0..m.ncols())
+                .map(|j| format!("{:>9}", num(m[(i, j)])))
+                .collect::<String>()
+        };
+        let _ = writeln!(
+            out,
+            "  {:<4}{}  |{}  |{}",
+            coords[i],
+            row(&r.symmetric.stiffness),
+            row(&r.symmetric.damping),
+            row(&r.symmetric.inertia)
+        );
+    }
+    let t = &r.table_ii;
+    let _ = writeln!(
+        out,
+        "Table II: K max/min/maxA {} / {} / {} | B {} / {} / {} | M {} / {} / {}",
+        num(t.stiffness.max_symmetric),
+        num(t.stiffness.min_symmetric),
+        num(t.stiffness.max_antisymmetric),
+        num(t.damping.max_symmetric),
+        num(t.damping.min_symmetric),
+        num(t.damping.max_antisymmetric),
+        num(t.inertia.max_symmetric),
+        num(t.inertia.min_symmetric),
+        num(t.inertia.max_antisymmetric),
+    );
+    if let Some(e) = &r.ellipsoids.stiffness {
+        let _ = writeln!(
+            out,
+            "Stiffness ellipsoid: principal stiffnesses {} {ku}; orientation {} deg ({})",
+            e.eigenvalues
+                .iter()
+                .map(|v| num(*v))
+                .collect::<Vec<_>>()
+                .join(", "),
+            e.angles_deg
+                .iter()
+                .map(|v| format!("{v:.1}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            if e.angles_deg.len() == 3 {
+                "yaw, pitch, roll"
+            } else {
+                "major axis from the first coordinate"
+            }
+        );
+    }
+    out.push('\n');
+}
+
+/// The fit, the criteria, the standard errors' method and the warnings.
+fn quality(out: &mut String, r: &LinearResult) {
+    let coords = &r.provenance.coordinates;
     let _ = writeln!(out, "Quality");
     let per_axis = |v: &[f64], digits: usize| {
         coords
@@ -192,7 +206,6 @@ pub fn linear_text(r: &LinearResult) -> String {
     for w in &r.warnings {
         let _ = writeln!(out, "warning: {w}");
     }
-    out
 }
 
 fn yes(b: bool) -> &'static str {
