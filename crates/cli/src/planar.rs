@@ -245,23 +245,8 @@ pub fn sweep_text(e: &Estimated, _: &Request, paths: &[PathBuf], csv: bool) -> C
     let Estimate::WindowSweep(sweep) = &e.document.estimate else {
         return Ok(());
     };
-    let mut s = String::from("t_obs_ms,cond_w,cond_w_scaled,xi1,xi2,xi3,k11,k12,k21,k22,d11,d12,d21,d22,k_eig_min,d_eig_min,k_sym_ratio,d_sym_ratio,vaf1,vaf2,trusted\n");
-    for r in &sweep.rows {
-        let e = &r.estimate;
-        let c = &e.criteria;
-        let _ = writeln!(
-            s,
-            "{},{:.4e},{:.4e},{:.5},{:.5},{:.5},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.5},{:.4},{:.5},{:.4},{:.4},{:.2},{:.2},{}",
-            r.observation_window_ms, c.condition_number, c.condition_number_scaled,
-            e.inertial_parameters[0], e.inertial_parameters[1], e.inertial_parameters[2],
-            e.stiffness[(0, 0)], e.stiffness[(0, 1)], e.stiffness[(1, 0)], e.stiffness[(1, 1)],
-            e.damping[(0, 0)], e.damping[(0, 1)], e.damping[(1, 0)], e.damping[(1, 1)],
-            c.stiffness_eigenvalues[1], c.damping_eigenvalues[1], c.stiffness_symmetry_ratio, c.damping_symmetry_ratio,
-            e.fit.vaf[0], e.fit.vaf[1], c.trusted
-        );
-    }
     if csv {
-        print!("{s}");
+        print!("{}", sweep_csv(sweep));
         return Ok(());
     }
     println!(
@@ -294,6 +279,33 @@ pub fn sweep_text(e: &Estimated, _: &Request, paths: &[PathBuf], csv: bool) -> C
             }
         );
     }
+    print_sweep_summary(sweep);
+    print_intervals(&sweep.intervals);
+    Ok(())
+}
+
+/// The sweep as CSV, one row per window.
+fn sweep_csv(sweep: &limpid_ident::planar::Sweep) -> String {
+    let mut s = String::from("t_obs_ms,cond_w,cond_w_scaled,xi1,xi2,xi3,k11,k12,k21,k22,d11,d12,d21,d22,k_eig_min,d_eig_min,k_sym_ratio,d_sym_ratio,vaf1,vaf2,trusted\n");
+    for r in &sweep.rows {
+        let e = &r.estimate;
+        let c = &e.criteria;
+        let _ = writeln!(
+            s,
+            "{},{:.4e},{:.4e},{:.5},{:.5},{:.5},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.5},{:.4},{:.5},{:.4},{:.4},{:.2},{:.2},{}",
+            r.observation_window_ms, c.condition_number, c.condition_number_scaled,
+            e.inertial_parameters[0], e.inertial_parameters[1], e.inertial_parameters[2],
+            e.stiffness[(0, 0)], e.stiffness[(0, 1)], e.stiffness[(1, 0)], e.stiffness[(1, 1)],
+            e.damping[(0, 0)], e.damping[(0, 1)], e.damping[(1, 0)], e.damping[(1, 1)],
+            c.stiffness_eigenvalues[1], c.damping_eigenvalues[1], c.stiffness_symmetry_ratio, c.damping_symmetry_ratio,
+            e.fit.vaf[0], e.fit.vaf[1], c.trusted
+        );
+    }
+    s
+}
+
+/// The shortest trusted window, any change within the trials, and the paper's criteria.
+fn print_sweep_summary(sweep: &limpid_ident::planar::Sweep) {
     let show = |v: Option<f64>| {
         v.map_or("not reached in the sweep".to_string(), |t| {
             format!("{} ms", num(t))
@@ -339,34 +351,38 @@ pub fn sweep_text(e: &Estimated, _: &Request, paths: &[PathBuf], csv: bool) -> C
         "leave-one-trial-out VAF at the longest window: {:.1} / {:.1} %",
         sweep.leave_one_out_vaf[0], sweep.leave_one_out_vaf[1]
     );
-    if !sweep.intervals.is_empty() {
-        println!(
-            "\ninterpolation-interval study (Lakatos et al. 2011, §IV: the trials of each T_k, observed over T_obs = T_k + 70 ms)"
-        );
-        println!(
-            "{:>6} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8}  verdict",
-            "T_k", "T_obs", "trials", "cond(W)s", "K11", "K22", "D11", "D22", "Kmin"
-        );
-        for r in &sweep.intervals {
-            let (e, c) = (&r.estimate, &r.estimate.criteria);
-            println!(
-                "{:>6} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8}  {}",
-                num(r.interpolation_ms),
-                num(r.observation_window_ms),
-                r.trials,
-                num(c.condition_number_scaled),
-                num(e.stiffness[(0, 0)]),
-                num(e.stiffness[(1, 1)]),
-                num(e.damping[(0, 0)]),
-                num(e.damping[(1, 1)]),
-                num(c.stiffness_eigenvalues[1]),
-                if r.trusted {
-                    "trusted".to_string()
-                } else {
-                    format!("not trusted: {}", r.reasons.join("; "))
-                }
-            );
-        }
+}
+
+/// Lakatos et al. (2011) §IV's interpolation-interval study, when it was made.
+fn print_intervals(intervals: &[limpid_ident::planar::IntervalRow]) {
+    if intervals.is_empty() {
+        return;
     }
-    Ok(())
+    println!(
+        "\ninterpolation-interval study (Lakatos et al. 2011, §IV: the trials of each T_k, observed over T_obs = T_k + 70 ms)"
+    );
+    println!(
+        "{:>6} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8}  verdict",
+        "T_k", "T_obs", "trials", "cond(W)s", "K11", "K22", "D11", "D22", "Kmin"
+    );
+    for r in intervals {
+        let (e, c) = (&r.estimate, &r.estimate.criteria);
+        println!(
+            "{:>6} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8}  {}",
+            num(r.interpolation_ms),
+            num(r.observation_window_ms),
+            r.trials,
+            num(c.condition_number_scaled),
+            num(e.stiffness[(0, 0)]),
+            num(e.stiffness[(1, 1)]),
+            num(e.damping[(0, 0)]),
+            num(e.damping[(1, 1)]),
+            num(c.stiffness_eigenvalues[1]),
+            if r.trusted {
+                "trusted".to_string()
+            } else {
+                format!("not trusted: {}", r.reasons.join("; "))
+            }
+        );
+    }
 }
