@@ -43,7 +43,6 @@ pub(crate) fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static
     path: &Path,
     file: R,
 ) -> Result<Table> {
-    use parquet::basic::{LogicalType, TimeUnit};
     let pq_err = |e: parquet::errors::ParquetError| Error::Format {
         path: path.to_path_buf(),
         message: format!("not a readable Parquet file: {e}"),
@@ -55,11 +54,72 @@ pub(crate) fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static
     let reader = SerializedFileReader::new(file).map_err(pq_err)?;
     let meta = reader.metadata();
     let schema = meta.file_metadata().schema_descr();
+    let Readable {
+        names,
+        unit_s,
+        kept,
+        skipped,
+    } = readable_columns(schema);
+    if names.is_empty() {
+        if let Some(first) = skipped.first() {
+            return Err(fail(format!("{first}, and no other column to read")));
+        }
+    }
+    let total = meta.file_metadata().num_rows();
+    if !(0..=MAX_PARQUET_ROWS).contains(&total) {
+        return Err(fail(format!(
+            "the footer claims {total} rows; limpid reads at most {MAX_PARQUET_ROWS}"
+        )));
+    }
+    let reserve = (total as usize).min(1 << 24);
+    // columns are independent: each decoded (over all row groups) on its own task
+    let groups: Vec<_> = (0..reader.num_row_groups())
+        .map(|g| reader.get_row_group(g).map_err(pq_err))
+        .collect::<Result<_>>()?;
+    let decoder = ColumnDecoder {
+        path,
+        schema,
+        groups: &groups,
+        reserve,
+    };
+    let columns: Vec<Vec<f64>> = (0..names.len())
+        .into_par_iter()
+        .map(|k| decoder.decode(kept[k], &names[k], unit_s[k]))
+        .collect::<Result<_>>()?;
+    let mut warnings: Vec<String> = skipped.iter().map(|r| format!("{r}: not read")).collect();
+    for (name, per_s) in names.iter().zip(&unit_s) {
+        if per_s.is_some() {
+            warnings.push(format!(
+                "column {name}: a Parquet timestamp, converted to seconds since the first sample"
+            ));
+        }
+    }
+    Ok(Table {
+        names,
+        columns,
+        first_row: 1,
+        warnings,
+    })
+}
+
+/// The columns of a Parquet schema a recording can hold, and why the others are left out.
+struct Readable {
+    names: Vec<String>,
+    /// Stored ticks per second, for timestamp columns.
+    unit_s: Vec<Option<f64>>,
+    /// The schema's index of each column read.
+    kept: Vec<usize>,
+    /// "column NAME: reason" of each column left out.
+    skipped: Vec<String>,
+}
+
+/// Columns that cannot be a recording's (nested, text, dates...) are left
+/// out, as unknown columns are; timestamps are read as seconds.
+fn readable_columns(schema: &parquet::schema::types::SchemaDescriptor) -> Readable {
+    use parquet::basic::{LogicalType, TimeUnit};
     let mut names = Vec::with_capacity(schema.num_columns());
     // stored ticks per second, for timestamp columns
     let mut unit_s: Vec<Option<f64>> = Vec::with_capacity(schema.num_columns());
-    // the schema's index of each column read: columns that cannot be a
-    // recording's (nested, text, dates...) are left out, as unknown columns are
     let mut kept: Vec<usize> = Vec::with_capacity(schema.num_columns());
     let mut skipped: Vec<String> = Vec::new();
     for (index, c) in schema.columns().iter().enumerate() {
@@ -109,28 +169,43 @@ pub(crate) fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static
         unit_s.push(scale);
         kept.push(index);
     }
-    if names.is_empty() {
-        if let Some(first) = skipped.first() {
-            return Err(fail(format!("{first}, and no other column to read")));
-        }
+    Readable {
+        names,
+        unit_s,
+        kept,
+        skipped,
     }
-    let total = meta.file_metadata().num_rows();
-    if !(0..=MAX_PARQUET_ROWS).contains(&total) {
-        return Err(fail(format!(
-            "the footer claims {total} rows; limpid reads at most {MAX_PARQUET_ROWS}"
-        )));
-    }
-    const BATCH: usize = 1 << 16;
-    let reserve = (total as usize).min(1 << 24);
-    // columns are independent: each decoded (over all row groups) on its own task
-    let groups: Vec<_> = (0..reader.num_row_groups())
-        .map(|g| reader.get_row_group(g).map_err(pq_err))
-        .collect::<Result<_>>()?;
-    let decode_column = |k: usize| -> Result<Vec<f64>> {
-        let index = kept[k];
+}
+
+/// Values decoded per batch.
+const BATCH: usize = 1 << 16;
+
+/// What decoding one column over every row group needs.
+struct ColumnDecoder<'a> {
+    path: &'a Path,
+    schema: &'a parquet::schema::types::SchemaDescriptor,
+    groups: &'a [Box<dyn parquet::file::reader::RowGroupReader + 'a>],
+    /// Samples to reserve room for.
+    reserve: usize,
+}
+
+impl ColumnDecoder<'_> {
+    /// The schema's column `index` (named `name`; timestamps at `per_s` ticks
+    /// per second) as numbers: a null is refused by row, and more than
+    /// MAX_PARQUET_ROWS values by name.
+    fn decode(&self, index: usize, name: &str, per_s: Option<f64>) -> Result<Vec<f64>> {
+        let (path, schema, groups, reserve) = (self.path, self.schema, self.groups, self.reserve);
+        let pq_err = |e: parquet::errors::ParquetError| Error::Format {
+            path: path.to_path_buf(),
+            message: format!("not a readable Parquet file: {e}"),
+        };
+        let fail = |message: String| Error::Format {
+            path: path.to_path_buf(),
+            message,
+        };
         let mut out = column_buffer(reserve);
         let mut origin: Option<i64> = None;
-        for group in &groups {
+        for group in groups {
             let mut defs: Vec<i16> = Vec::new();
             // pages pass a size check before the decoder sees them: a corrupt
             // dictionary page claiming 2^31 values made it reserve 6 GB (fuzzer)
@@ -163,11 +238,11 @@ pub(crate) fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static
                             return Err(Error::NotANumber {
                                 path: path.to_path_buf(),
                                 row: out.len() + missing + 1,
-                                column: names[k].clone(),
+                                column: name.to_string(),
                                 found: "null".into(),
                             });
                         }
-                        match unit_s[k] {
+                        match per_s {
                             // timestamps: integer ticks since the first sample, then
                             // seconds (epoch seconds in f64 would lose the sampling interval)
                             Some(per_s) => {
@@ -182,7 +257,7 @@ pub(crate) fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static
                         if out.len() as i64 > MAX_PARQUET_ROWS {
                             return Err(fail(format!(
                                 "column {}: more than {MAX_PARQUET_ROWS} rows",
-                                names[k]
+                                name
                             )));
                         }
                     }
@@ -196,31 +271,13 @@ pub(crate) fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static
                 _ => {
                     return Err(Error::Format {
                         path: path.to_path_buf(),
-                        message: format!("column {}: expected a numeric column", names[k]),
+                        message: format!("column {}: expected a numeric column", name),
                     })
                 }
             }
         }
         Ok(out)
-    };
-    let columns: Vec<Vec<f64>> = (0..names.len())
-        .into_par_iter()
-        .map(decode_column)
-        .collect::<Result<_>>()?;
-    let mut warnings: Vec<String> = skipped.iter().map(|r| format!("{r}: not read")).collect();
-    for (name, per_s) in names.iter().zip(&unit_s) {
-        if per_s.is_some() {
-            warnings.push(format!(
-                "column {name}: a Parquet timestamp, converted to seconds since the first sample"
-            ));
-        }
     }
-    Ok(Table {
-        names,
-        columns,
-        first_row: 1,
-        warnings,
-    })
 }
 
 /// An empty column with room for `capacity` samples. On Linux the kernel is
