@@ -82,10 +82,13 @@ pub(crate) fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static
         groups: &groups,
         reserve,
     };
-    let columns: Vec<Vec<f64>> = (0..names.len())
+    // every column decoded, then the first error in column order: a
+    // short-circuiting collect named whichever failing column finished first
+    let decoded: Vec<Result<Vec<f64>>> = (0..names.len())
         .into_par_iter()
         .map(|k| decoder.decode(kept[k], &names[k], unit_s[k]))
-        .collect::<Result<_>>()?;
+        .collect();
+    let columns = decoded.into_iter().collect::<Result<Vec<_>>>()?;
     let mut warnings: Vec<String> = skipped.iter().map(|r| format!("{r}: not read")).collect();
     for (name, per_s) in names.iter().zip(&unit_s) {
         if per_s.is_some() {

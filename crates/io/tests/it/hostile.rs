@@ -281,6 +281,21 @@ fn corrupt_parquet_is_an_error_not_a_panic() {
     err(&cut);
 }
 
+/// Columns are decoded in parallel; a file whose columns fail differently
+/// gets one message, the first failing column's, on every read (it was
+/// whichever column's task failed first: 1 read in 20 named another error).
+#[test]
+fn a_corrupt_parquet_file_gets_the_same_message_on_every_read() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fuzz/corpus/regressions/dictionary-page-claims-2e9-values.parquet");
+    let messages: std::collections::BTreeSet<String> = (0..40)
+        .map(|_| limpid_io::read_recording(&p).unwrap_err().to_string())
+        .collect();
+    assert_eq!(messages.len(), 1, "{messages:?}");
+    let m = messages.first().unwrap();
+    assert!(m.contains("dictionary page claims"), "{m}");
+}
+
 #[test]
 fn one_huge_sample_is_refused_with_row_and_column_in_every_format() {
     let d = tmp();
