@@ -185,7 +185,6 @@ pub fn grid(
             escape(c)
         );
     }
-    let palette = crate::svg::PALETTE;
     for (i, r) in rows.iter().enumerate() {
         let cy = top + cell * (i as f64 + 0.5);
         let _ = write!(
@@ -210,40 +209,65 @@ pub fn grid(
                 );
                 continue;
             };
-            let values = e
-                .eigenvalues
-                .iter()
-                .filter(|v| **v != 0.0)
-                .map(|v| crate::fmt(*v))
-                .collect::<Vec<_>>()
-                .join(", ");
-            let _ = write!(
-                s,
-                r#"<g class="ellipsoid" data-point="{}"><title>{}: principal values {values} {unit}</title>"#,
-                escape(&e.point),
-                escape(&e.point)
-            );
-            let _ = write!(
-                s,
-                r#"<path class="outline" d="{}" fill="{}" fill-opacity="0.12" stroke="{}" stroke-width="1.6"/>"#,
-                path(&outline(e, view, 72), cx, cy, scale),
-                palette[0],
-                palette[0]
-            );
-            if view != View::Top {
-                for (a, b, w) in [(0, 1, 1.1), (1, 2, 0.8), (0, 2, 0.8)] {
-                    let _ = write!(
-                        s,
-                        r#"<path class="section" d="{}" fill="none" stroke="{}" stroke-width="{w}" stroke-opacity="0.7"/>"#,
-                        path(&section(e, view, a, b, 60), cx, cy, scale),
-                        palette[0]
-                    );
-                }
-            }
-            s.push_str("</g>");
+            draw_ellipsoid(&mut s, e, (cx, cy, scale), unit, view);
         }
     }
-    // scale bar and the lab axes' directions
+    scale_and_axes(&mut s, (width, height, left), (largest, scale), unit, view);
+    s.push_str("</svg>");
+    s
+}
+
+/// One ellipsoid at the centre `(cx, cy)` of its cell, `scale` pixels per
+/// unit: its outline and, in the oblique views, its three principal sections.
+fn draw_ellipsoid(
+    s: &mut String,
+    e: &EllipsoidView,
+    (cx, cy, scale): (f64, f64, f64),
+    unit: &str,
+    view: View,
+) {
+    let palette = crate::svg::PALETTE;
+    let values = e
+        .eigenvalues
+        .iter()
+        .filter(|v| **v != 0.0)
+        .map(|v| crate::fmt(*v))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let _ = write!(
+        s,
+        r#"<g class="ellipsoid" data-point="{}"><title>{}: principal values {values} {unit}</title>"#,
+        escape(&e.point),
+        escape(&e.point)
+    );
+    let _ = write!(
+        s,
+        r#"<path class="outline" d="{}" fill="{}" fill-opacity="0.12" stroke="{}" stroke-width="1.6"/>"#,
+        path(&outline(e, view, 72), cx, cy, scale),
+        palette[0],
+        palette[0]
+    );
+    if view != View::Top {
+        for (a, b, w) in [(0, 1, 1.1), (1, 2, 0.8), (0, 2, 0.8)] {
+            let _ = write!(
+                s,
+                r#"<path class="section" d="{}" fill="none" stroke="{}" stroke-width="{w}" stroke-opacity="0.7"/>"#,
+                path(&section(e, view, a, b, 60), cx, cy, scale),
+                palette[0]
+            );
+        }
+    }
+    s.push_str("</g>");
+}
+
+/// The scale bar (the largest semi-axis rounded down) and the lab axes' directions.
+fn scale_and_axes(
+    s: &mut String,
+    (width, height, left): (f64, f64, f64),
+    (largest, scale): (f64, f64),
+    unit: &str,
+    view: View,
+) {
     let bar_value = round_down(largest);
     let bar = bar_value * scale;
     let by = height - 22.0;
@@ -280,8 +304,6 @@ pub fn grid(
             ey - 3.0 * p[1].signum() + 4.0
         );
     }
-    s.push_str("</svg>");
-    s
 }
 
 #[cfg(test)]
