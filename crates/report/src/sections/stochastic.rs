@@ -155,100 +155,114 @@ fn bode_figures(v: &StochasticEstimate, positive: &[usize], fx: &[f64]) -> Vec<F
                     PALETTE[6],
                 ));
             }
-            // random error of Z[i][j] from the coherences (Bendat & Piersol's
-            // gain-factor error sqrt(1 - g^2) / (|g| sqrt(2 n_d)) of the force
-            // i and position j outputs, added in quadrature); band = +- 2 errors
-            let nd = v.criteria.segments.max(1) as f64;
-            let error = |o: usize, f: usize| {
-                let g2 = v.coherence.multiple.get(o).and_then(|m| m.get(f)).copied();
-                g2.filter(|g| *g > 0.0 && *g <= 1.0)
-                    .map_or(f64::INFINITY, |g| ((1.0 - g) / (2.0 * nd * g)).sqrt())
-            };
-            let eps: Vec<f64> = positive
-                .iter()
-                .map(|&f| error(n + i, f).hypot(error(j, f)))
-                .collect();
+            let eps = coherence_errors(v, positive, i, j);
             let element = format!("Z[{},{}]", coords[i], coords[j]);
-            let with_band = |mut chart: Chart, phase: bool| {
-                let y = chart.series[0].y.clone();
-                for sign in [1.0, -1.0] {
-                    let band: Vec<f64> = y
-                        .iter()
-                        .zip(&eps)
-                        .map(|(v, e)| {
-                            if phase {
-                                v + sign * (2.0 * e).min(std::f64::consts::FRAC_PI_2).to_degrees()
-                            } else {
-                                let r = v * (1.0 + sign * 2.0 * e);
-                                if r > 0.0 {
-                                    r
-                                } else {
-                                    f64::NAN
-                                }
-                            }
-                        })
-                        .collect();
-                    chart.series.insert(
-                        1,
-                        Series {
-                            name: "95 % band (coherence)".into(),
-                            x: fx.to_vec(),
-                            y: band,
-                            stroke: Stroke::Dotted,
-                            color: PALETTE[0].into(),
-                        },
-                    );
-                }
-                chart
-            };
-            let mk = |phase: bool| Chart {
-                title: format!("{element} {}", if phase { "phase" } else { "magnitude" }),
-                x_label: "frequency (Hz)".into(),
-                y_label: if phase {
-                    "phase (deg)".into()
-                } else {
-                    format!("|Z| ({})", element_unit(&coords[i], &coords[j]))
-                },
-                x_log: true,
-                y_log: !phase,
-                y_range: None,
-                series: curves
-                    .iter()
-                    .zip(align_turns(
-                        curves
-                            .iter()
-                            .map(|(_, c, _, _)| {
-                                if phase {
-                                    unwrap_degrees(
-                                        c.iter().map(|(re, im)| im.atan2(*re).to_degrees()),
-                                    )
-                                } else {
-                                    c.iter().map(|(re, im)| re.hypot(*im)).collect()
-                                }
-                            })
-                            .collect(),
-                        phase,
-                    ))
-                    .map(|((label, _, stroke, color), y)| Series {
-                        name: (*label).into(),
-                        x: fx.to_vec(),
-                        y,
-                        stroke: *stroke,
-                        color: (*color).into(),
-                    })
-                    .collect(),
-            };
+            let unit = element_unit(&coords[i], &coords[j]);
+            let mk = |phase: bool| bode_chart(&element, unit, &curves, fx, phase);
             figures.push(Figure {
                 id: format!("bode-mag-{}{}", coords[i], coords[j]),
-                chart: with_band(mk(false), false),
+                chart: with_band(mk(false), &eps, fx, false),
             });
             figures.push(Figure {
                 id: format!("bode-phase-{}{}", coords[i], coords[j]),
-                chart: with_band(mk(true), true),
+                chart: with_band(mk(true), &eps, fx, true),
             });
         }
     }
     figures
+}
+
+/// The random error of Z[i][j] per frequency from the coherences (Bendat &
+/// Piersol's gain-factor error sqrt(1 - g^2) / (|g| sqrt(2 n_d)) of the force
+/// i and position j outputs, added in quadrature); the band is ± 2 errors.
+fn coherence_errors(v: &StochasticEstimate, positive: &[usize], i: usize, j: usize) -> Vec<f64> {
+    let n = v.coordinates.len();
+    let nd = v.criteria.segments.max(1) as f64;
+    let error = |o: usize, f: usize| {
+        let g2 = v.coherence.multiple.get(o).and_then(|m| m.get(f)).copied();
+        g2.filter(|g| *g > 0.0 && *g <= 1.0)
+            .map_or(f64::INFINITY, |g| ((1.0 - g) / (2.0 * nd * g)).sqrt())
+    };
+    positive
+        .iter()
+        .map(|&f| error(n + i, f).hypot(error(j, f)))
+        .collect()
+}
+
+/// The chart with its 95 % band (± 2 errors `eps`) around the estimate.
+fn with_band(mut chart: Chart, eps: &[f64], fx: &[f64], phase: bool) -> Chart {
+    let y = chart.series[0].y.clone();
+    for sign in [1.0, -1.0] {
+        let band: Vec<f64> = y
+            .iter()
+            .zip(eps)
+            .map(|(v, e)| {
+                if phase {
+                    v + sign * (2.0 * e).min(std::f64::consts::FRAC_PI_2).to_degrees()
+                } else {
+                    let r = v * (1.0 + sign * 2.0 * e);
+                    if r > 0.0 {
+                        r
+                    } else {
+                        f64::NAN
+                    }
+                }
+            })
+            .collect();
+        chart.series.insert(
+            1,
+            Series {
+                name: "95 % band (coherence)".into(),
+                x: fx.to_vec(),
+                y: band,
+                stroke: Stroke::Dotted,
+                color: PALETTE[0].into(),
+            },
+        );
+    }
+    chart
+}
+
+/// A curve of Z: label, `(re, im)` per frequency, stroke, colour.
+type Curve<'a> = (&'a str, Vec<(f64, f64)>, Stroke, &'a str);
+
+/// The magnitude (log) or unwrapped phase of each curve `(label, Z, stroke, colour)`.
+fn bode_chart(element: &str, unit: &str, curves: &[Curve<'_>], fx: &[f64], phase: bool) -> Chart {
+    Chart {
+        title: format!("{element} {}", if phase { "phase" } else { "magnitude" }),
+        x_label: "frequency (Hz)".into(),
+        y_label: if phase {
+            "phase (deg)".into()
+        } else {
+            format!("|Z| ({unit})")
+        },
+        x_log: true,
+        y_log: !phase,
+        y_range: None,
+        series: curves
+            .iter()
+            .zip(align_turns(
+                curves
+                    .iter()
+                    .map(|(_, c, _, _)| {
+                        if phase {
+                            unwrap_degrees(c.iter().map(|(re, im)| im.atan2(*re).to_degrees()))
+                        } else {
+                            c.iter().map(|(re, im)| re.hypot(*im)).collect()
+                        }
+                    })
+                    .collect(),
+                phase,
+            ))
+            .map(|((label, _, stroke, color), y)| Series {
+                name: (*label).into(),
+                x: fx.to_vec(),
+                y,
+                stroke: *stroke,
+                color: (*color).into(),
+            })
+            .collect(),
+    }
 }
 
 pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section {
