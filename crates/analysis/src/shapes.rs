@@ -20,143 +20,164 @@ pub fn check(e: &Estimate) -> Result<(), String> {
     match e {
         Estimate::Linear(r) => linear("", r),
         Estimate::Cocontraction(c) => cocontraction("", c),
-        Estimate::Stochastic(s) => {
-            let (nf, no, ni) = (s.frequencies.len(), s.coordinates.len(), s.inputs.len());
-            same("impedance", s.impedance.len(), nf, "frequencies")?;
-            for (f, rows) in s.impedance.iter().enumerate() {
-                same(&format!("impedance[{f}]"), rows.len(), no, "coordinates")?;
-                for (o, row) in rows.iter().enumerate() {
-                    same(&format!("impedance[{f}][{o}]"), row.len(), ni, "inputs")?;
-                }
-            }
-            let c = &s.coherence;
-            same(
-                "coherence.multiple",
-                c.multiple.len(),
-                c.outputs.len(),
-                "coherence.outputs",
-            )?;
-            same(
-                "coherence.partial",
-                c.partial.len(),
-                c.outputs.len(),
-                "coherence.outputs",
-            )?;
-            for (o, m) in c.multiple.iter().enumerate() {
-                same(
-                    &format!("coherence.multiple[{o}]"),
-                    m.len(),
-                    nf,
-                    "frequencies",
-                )?;
-            }
-            for (o, p) in c.partial.iter().enumerate() {
-                same(&format!("coherence.partial[{o}]"), p.len(), ni, "inputs")?;
-                for (i, q) in p.iter().enumerate() {
-                    same(
-                        &format!("coherence.partial[{o}][{i}]"),
-                        q.len(),
-                        nf,
-                        "frequencies",
-                    )?;
-                }
-            }
-            for (name, m) in [
-                ("inertia", &s.inertia),
-                ("damping", &s.damping),
-                ("stiffness", &s.stiffness),
-                ("standard_errors.inertia", &s.standard_errors.inertia),
-                ("standard_errors.damping", &s.standard_errors.damping),
-                ("standard_errors.stiffness", &s.standard_errors.stiffness),
-            ] {
-                square(name, m, no)?;
-            }
-            Ok(())
-        }
+        Estimate::Stochastic(s) => stochastic(s),
         Estimate::Spectra(s) => spectra(s),
         Estimate::Planar(p) => planar("", p),
-        Estimate::WindowSweep(w) => {
-            sweep_findings(w)?;
-            for (i, row) in w.rows.iter().enumerate() {
-                planar(&format!("rows[{i}].estimate."), &row.estimate)?;
-            }
-            for (i, row) in w.intervals.iter().enumerate() {
-                planar(&format!("intervals[{i}].estimate."), &row.estimate)?;
-            }
-            Ok(())
+        Estimate::WindowSweep(w) => window_sweep(w),
+        Estimate::Study(st) => study(st),
+        Estimate::Demo(d) => demo(d),
+        Estimate::Reflex(r) => reflex(r),
+        Estimate::Varying(v) => varying(v),
+        Estimate::Calibration(c) => calibration(c),
+    }
+}
+
+/// Every spectrum, coherence and matrix agrees with the frequencies, coordinates and inputs.
+fn stochastic(s: &limpid_ident::stochastic::StochasticEstimate) -> Result<(), String> {
+    let (nf, no, ni) = (s.frequencies.len(), s.coordinates.len(), s.inputs.len());
+    same("impedance", s.impedance.len(), nf, "frequencies")?;
+    for (f, rows) in s.impedance.iter().enumerate() {
+        same(&format!("impedance[{f}]"), rows.len(), no, "coordinates")?;
+        for (o, row) in rows.iter().enumerate() {
+            same(&format!("impedance[{f}][{o}]"), row.len(), ni, "inputs")?;
         }
-        Estimate::Study(st) => {
-            for (i, l) in st.levels.iter().enumerate() {
-                let d = l.stiffness.0.nrows();
-                square(&format!("levels[{i}].stiffness"), &l.stiffness, d)?;
-                if let Some(e) = &l.ellipsoid {
-                    ellipsoid(&format!("levels[{i}].ellipsoid"), e, d)?;
-                }
-            }
-            for (i, r) in st.recordings.iter().enumerate() {
-                cocontraction(&format!("recordings[{i}].result."), &r.result)?;
-            }
-            Ok(())
-        }
-        Estimate::Demo(d) => {
-            for (i, p) in d.points.iter().enumerate() {
-                linear(&format!("points[{i}].estimate."), &p.estimate)?;
-                let n = p.estimate.stiffness.0.nrows();
-                for (name, m) in [
-                    ("true_stiffness", &p.true_stiffness),
-                    ("true_damping", &p.true_damping),
-                    ("true_inertia", &p.true_inertia),
-                ] {
-                    square(&format!("points[{i}].{name}"), m, n)?;
-                }
-            }
-            Ok(())
-        }
-        Estimate::Reflex(r) => {
-            for (name, irf) in [
-                ("intrinsic.irf", &r.intrinsic.irf),
-                ("reflex.irf", &r.reflex.irf),
-            ] {
-                same(
-                    &format!("{name}.values"),
-                    irf.values.len(),
-                    irf.lags_s.len(),
-                    &format!("{name}.lags_s"),
-                )?;
-            }
-            Ok(())
-        }
-        Estimate::Varying(v) => {
+    }
+    let c = &s.coherence;
+    same(
+        "coherence.multiple",
+        c.multiple.len(),
+        c.outputs.len(),
+        "coherence.outputs",
+    )?;
+    same(
+        "coherence.partial",
+        c.partial.len(),
+        c.outputs.len(),
+        "coherence.outputs",
+    )?;
+    for (o, m) in c.multiple.iter().enumerate() {
+        same(
+            &format!("coherence.multiple[{o}]"),
+            m.len(),
+            nf,
+            "frequencies",
+        )?;
+    }
+    for (o, p) in c.partial.iter().enumerate() {
+        same(&format!("coherence.partial[{o}]"), p.len(), ni, "inputs")?;
+        for (i, q) in p.iter().enumerate() {
             same(
-                "schedule.values",
-                v.schedule.values.len(),
-                v.points.len(),
-                "points",
+                &format!("coherence.partial[{o}][{i}]"),
+                q.len(),
+                nf,
+                "frequencies",
             )?;
-            let d = v.coordinates.len();
-            for (i, p) in v.points.iter().enumerate() {
-                for (name, m) in [
-                    ("stiffness", &p.stiffness),
-                    ("stiffness_se", &p.stiffness_se),
-                    ("damping", &p.damping),
-                    ("damping_se", &p.damping_se),
-                    ("inertia", &p.inertia),
-                    ("inertia_se", &p.inertia_se),
-                ] {
-                    if let Some(m) = m {
-                        square(&format!("points[{i}].{name}"), m, d)?;
-                    }
-                }
-            }
-            Ok(())
         }
-        Estimate::Calibration(c) => {
-            sweep_counts("window_sweep", &c.window_sweep)?;
-            match &c.window_sweep_varied {
-                Some(w) => sweep_counts("window_sweep_varied", w),
-                None => Ok(()),
+    }
+    for (name, m) in [
+        ("inertia", &s.inertia),
+        ("damping", &s.damping),
+        ("stiffness", &s.stiffness),
+        ("standard_errors.inertia", &s.standard_errors.inertia),
+        ("standard_errors.damping", &s.standard_errors.damping),
+        ("standard_errors.stiffness", &s.standard_errors.stiffness),
+    ] {
+        square(name, m, no)?;
+    }
+    Ok(())
+}
+
+/// The findings, and every window's and interval's planar estimate.
+fn window_sweep(w: &limpid_ident::planar::Sweep) -> Result<(), String> {
+    sweep_findings(w)?;
+    for (i, row) in w.rows.iter().enumerate() {
+        planar(&format!("rows[{i}].estimate."), &row.estimate)?;
+    }
+    for (i, row) in w.intervals.iter().enumerate() {
+        planar(&format!("intervals[{i}].estimate."), &row.estimate)?;
+    }
+    Ok(())
+}
+
+/// Every level's stiffness and ellipsoid, and every recording's result.
+fn study(st: &crate::study::StudyResult) -> Result<(), String> {
+    for (i, l) in st.levels.iter().enumerate() {
+        let d = l.stiffness.0.nrows();
+        square(&format!("levels[{i}].stiffness"), &l.stiffness, d)?;
+        if let Some(e) = &l.ellipsoid {
+            ellipsoid(&format!("levels[{i}].ellipsoid"), e, d)?;
+        }
+    }
+    for (i, r) in st.recordings.iter().enumerate() {
+        cocontraction(&format!("recordings[{i}].result."), &r.result)?;
+    }
+    Ok(())
+}
+
+/// Every point's estimate and its truths.
+fn demo(d: &crate::demo::DemoResult) -> Result<(), String> {
+    for (i, p) in d.points.iter().enumerate() {
+        linear(&format!("points[{i}].estimate."), &p.estimate)?;
+        let n = p.estimate.stiffness.0.nrows();
+        for (name, m) in [
+            ("true_stiffness", &p.true_stiffness),
+            ("true_damping", &p.true_damping),
+            ("true_inertia", &p.true_inertia),
+        ] {
+            square(&format!("points[{i}].{name}"), m, n)?;
+        }
+    }
+    Ok(())
+}
+
+/// Each IRF's values span its lags.
+fn reflex(r: &limpid_ident::reflex::ReflexEstimate) -> Result<(), String> {
+    for (name, irf) in [
+        ("intrinsic.irf", &r.intrinsic.irf),
+        ("reflex.irf", &r.reflex.irf),
+    ] {
+        same(
+            &format!("{name}.values"),
+            irf.values.len(),
+            irf.lags_s.len(),
+            &format!("{name}.lags_s"),
+        )?;
+    }
+    Ok(())
+}
+
+/// A point per schedule value, and every point's matrices square in the coordinates.
+fn varying(v: &limpid_ident::varying::VaryingEstimate) -> Result<(), String> {
+    same(
+        "schedule.values",
+        v.schedule.values.len(),
+        v.points.len(),
+        "points",
+    )?;
+    let d = v.coordinates.len();
+    for (i, p) in v.points.iter().enumerate() {
+        for (name, m) in [
+            ("stiffness", &p.stiffness),
+            ("stiffness_se", &p.stiffness_se),
+            ("damping", &p.damping),
+            ("damping_se", &p.damping_se),
+            ("inertia", &p.inertia),
+            ("inertia_se", &p.inertia_se),
+        ] {
+            if let Some(m) = m {
+                square(&format!("points[{i}].{name}"), m, d)?;
             }
         }
+    }
+    Ok(())
+}
+
+/// The window-sweep counts agree.
+fn calibration(c: &crate::calibrate::Calibration) -> Result<(), String> {
+    sweep_counts("window_sweep", &c.window_sweep)?;
+    match &c.window_sweep_varied {
+        Some(w) => sweep_counts("window_sweep_varied", w),
+        None => Ok(()),
     }
 }
 
