@@ -222,75 +222,13 @@ impl Robot {
                     .to_string(),
             )
         })?;
-        let parents: std::collections::HashSet<&str> =
-            urdf.joints.iter().map(|j| j.parent.link.as_str()).collect();
-        let tip = match tip_link {
-            Some(t) => t.to_string(),
-            None => {
-                let leaves: Vec<&str> = urdf
-                    .joints
-                    .iter()
-                    .map(|j| j.child.link.as_str())
-                    .filter(|c| !parents.contains(c))
-                    .collect();
-                match leaves.as_slice() {
-                    [one] => one.to_string(),
-                    _ => {
-                        return Err(fail(format!(
-                            "the tree has {} leaf links ({}); name the end effector",
-                            leaves.len(),
-                            leaves.join(", ")
-                        )))
-                    }
-                }
-            }
-        };
-        // walk from the tip to the root
-        let mut chain = Vec::new();
-        let mut link = tip.clone();
-        while let Some(j) = urdf.joints.iter().find(|j| j.child.link == link) {
-            chain.push(j);
-            link = j.parent.link.clone();
-            if chain.len() > urdf.joints.len() {
-                return Err(fail("the joints form a loop".into()));
-            }
-        }
-        if chain.is_empty() {
-            return Err(fail(format!("no joint leads to link {tip:?}")));
-        }
-        chain.reverse();
+        let tip = end_effector(&urdf, tip_link).map_err(fail)?;
+        let chain = chain_to(&urdf, &tip).map_err(fail)?;
         let mut joints = Vec::new();
         let mut pending = Matrix4::identity();
         for j in chain {
-            // a limb-sized robot: every offset within the recordings' 100 m
-            // plausibility limit, every number finite (a 1e9 m link asked the
-            // exporter for terabytes)
-            let xyz = *j.origin.xyz;
-            let rpy = *j.origin.rpy;
-            if xyz.iter().chain(&rpy).any(|v| !v.is_finite())
-                || xyz.iter().any(|v| v.abs() > MAX_URDF_OFFSET_M)
-            {
-                return Err(fail(format!(
-                    "joint {:?}: origin xyz {xyz:?} m, rpy {rpy:?} rad; limpid accepts finite values and offsets up to {MAX_URDF_OFFSET_M} m",
-                    j.name
-                )));
-            }
-            if [
-                j.limit.lower,
-                j.limit.upper,
-                j.limit.velocity,
-                j.axis.xyz[0],
-                j.axis.xyz[1],
-                j.axis.xyz[2],
-            ]
-            .iter()
-            .any(|v| !v.is_finite())
-            {
-                return Err(fail(format!(
-                    "joint {:?}: a limit or axis is not a finite number",
-                    j.name
-                )));
-            }
+            check_joint_numbers(j).map_err(fail)?;
+            let (xyz, rpy) = (*j.origin.xyz, *j.origin.rpy);
             let origin = pose(xyz, rpy);
             match j.joint_type {
                 urdf_rs::JointType::Fixed => pending *= origin,
@@ -617,6 +555,88 @@ impl Robot {
         }
         Ok(out)
     }
+}
+
+/// The end effector: the named link, else the tree's one leaf.
+fn end_effector(
+    urdf: &urdf_rs::Robot,
+    tip_link: Option<&str>,
+) -> std::result::Result<String, String> {
+    let parents: std::collections::HashSet<&str> =
+        urdf.joints.iter().map(|j| j.parent.link.as_str()).collect();
+    match tip_link {
+        Some(t) => Ok(t.to_string()),
+        None => {
+            let leaves: Vec<&str> = urdf
+                .joints
+                .iter()
+                .map(|j| j.child.link.as_str())
+                .filter(|c| !parents.contains(c))
+                .collect();
+            match leaves.as_slice() {
+                [one] => Ok(one.to_string()),
+                _ => Err(format!(
+                    "the tree has {} leaf links ({}); name the end effector",
+                    leaves.len(),
+                    leaves.join(", ")
+                )),
+            }
+        }
+    }
+}
+
+/// The joints from the root to `tip`, in order.
+fn chain_to<'u>(
+    urdf: &'u urdf_rs::Robot,
+    tip: &str,
+) -> std::result::Result<Vec<&'u urdf_rs::Joint>, String> {
+    let mut chain = Vec::new();
+    let mut link = tip.to_string();
+    while let Some(j) = urdf.joints.iter().find(|j| j.child.link == link) {
+        chain.push(j);
+        link = j.parent.link.clone();
+        if chain.len() > urdf.joints.len() {
+            return Err("the joints form a loop".into());
+        }
+    }
+    if chain.is_empty() {
+        return Err(format!("no joint leads to link {tip:?}"));
+    }
+    chain.reverse();
+    Ok(chain)
+}
+
+/// A limb-sized robot: every offset within the recordings' 100 m
+/// plausibility limit, every number finite (a 1e9 m link asked the exporter
+/// for terabytes).
+fn check_joint_numbers(j: &urdf_rs::Joint) -> std::result::Result<(), String> {
+    let xyz = *j.origin.xyz;
+    let rpy = *j.origin.rpy;
+    if xyz.iter().chain(&rpy).any(|v| !v.is_finite())
+        || xyz.iter().any(|v| v.abs() > MAX_URDF_OFFSET_M)
+    {
+        return Err(format!(
+        "joint {:?}: origin xyz {xyz:?} m, rpy {rpy:?} rad; limpid accepts finite values and offsets up to {MAX_URDF_OFFSET_M} m",
+        j.name
+    ));
+    }
+    if [
+        j.limit.lower,
+        j.limit.upper,
+        j.limit.velocity,
+        j.axis.xyz[0],
+        j.axis.xyz[1],
+        j.axis.xyz[2],
+    ]
+    .iter()
+    .any(|v| !v.is_finite())
+    {
+        return Err(format!(
+            "joint {:?}: a limit or axis is not a finite number",
+            j.name
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
