@@ -575,6 +575,7 @@ fn end_effector(
                 .collect();
             match leaves.as_slice() {
                 [one] => Ok(one.to_string()),
+            [] => Err("no leaf link: the joints form a loop".into()),
                 _ => Err(format!(
                     "the tree has {} leaf links ({}); name the end effector",
                     leaves.len(),
@@ -729,6 +730,15 @@ mod tests {
                    <origin xyz="0 0 0" rpy="NaN 0 0"/><axis xyz="0 0 1"/>
                    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#,
                 "limpid accepts finite values",
+            ),
+            (
+                "loop.urdf",
+                r#"<robot name="l"><link name="a"/><link name="b"/>
+                   <joint name="j1" type="revolute"><parent link="a"/><child link="b"/>
+                   <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+                   <joint name="j2" type="revolute"><parent link="b"/><child link="a"/>
+                   <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#,
+                "no leaf link: the joints form a loop",
             ),
         ];
         for (name, text, expect) in cases {
