@@ -189,10 +189,7 @@ pub fn simulate_robot_rig(
 
     let mut q = Vector3::from_column_slice(&dynamics.posture);
     let mut qd = Vector3::zeros();
-    // controller memory: samples t-1, t-2 of the measured pose, and u, v, F_u at t-1
-    let mut x_hist = [Vector3::zeros(); 2];
-    let mut v_prev = Vector3::zeros();
-    let mut fu_prev = Vector3::zeros();
+    let mut memory = ControllerMemory::default();
     let mut rng = StdRng::seed_from_u64(seed.wrapping_add(1));
     let unit = Normal::new(0.0, 1.0).expect("unit normal is valid");
     let mut cols: Vec<Vec<f64>> = (0..10).map(|_| Vec::with_capacity(n)).collect();
@@ -204,62 +201,20 @@ pub fn simulate_robot_rig(
     for (k, f_delta) in perturbations.enumerate() {
         let (pose, j) = dynamics.task(q.as_slice(), &r0);
         let x = pose - x_eq;
-        // the controller's numerical derivatives (one-sample backward differences)
-        let xd = (x - x_hist[0]) / dt;
-        let xd_prev = (x_hist[0] - x_hist[1]) / dt;
-        let xdd_prev = (x - 2.0 * x_hist[0] + x_hist[1]) / (dt * dt);
-        let f_u = match *controller {
-            Controller::Imbic {
-                m_rd,
-                b_rd,
-                k_rd,
-                gamma,
-            } => {
-                let m_rd_inv = m_rd.map(|m| 1.0 / m);
-                let desired = |xd: &Vector3<f64>, x: &Vector3<f64>| {
-                    m_rd_inv.component_mul(&(b_rd.component_mul(xd) + k_rd.component_mul(x)))
-                };
-                // eq. (13) with x_rd = 0
-                let v = m_rd_inv.component_mul(&(f_delta - f_sa_left))
-                    + gamma.component_mul(&(-(xdd_prev + desired(&xd_prev, &x_hist[0])) + v_prev));
-                // eq. (12)
-                let u = v - desired(&xd, &x);
-                // eq. (14): M̄_x = J^-T M̄_φ J^-1
-                let j_inv = j.try_inverse().ok_or_else(|| {
-                    Error::invalid("robot", "singular Jacobian at the test location")
-                })?;
-                let m_bar_x = j_inv.transpose() * m_bar_phi * j_inv;
-                // eq. (11): TDE of everything but M̄_x ẍ
-                let f_u = m_bar_x * u + fu_prev - m_bar_x * xdd_prev;
-                v_prev = v;
-                f_u
-            }
-            Controller::Pd { b, k: kk } => f_delta - b.component_mul(&xd) - kk.component_mul(&x),
-        };
-        fu_prev = f_u;
-        x_hist = [x, x_hist[0]];
+        let f_u = memory.force(controller, (x, j), (f_delta, f_sa_left), m_bar_phi, dt)?;
         // the plant between two samples, input held
-        let mut f_sa_right = None;
-        for _ in 0..SUBSTEPS {
-            let (pose, j) = dynamics.task(q.as_slice(), &r0);
-            let xs = pose - x_eq;
-            let xsd = j * qd;
-            let spring = rig.damping * xsd + rig.stiffness * xs;
-            let m_total = m_phi + j.transpose() * rig.inertia * j;
-            let rhs = j.transpose() * (f_u - spring) - dynamics.friction(&qd);
-            let qdd = m_total
-                .lu()
-                .solve(&rhs)
-                .ok_or_else(|| Error::invalid("robot", "singular inertia"))?;
-            let f_sa = rig.inertia * (j * qdd) + spring;
-            f_sa_right.get_or_insert(f_sa);
-            f_sa_left = f_sa;
-            qd += qdd * h;
-            q += qd * h;
-        }
+        let (f_sa_right, f_sa_end) = plant_between_samples(
+            rig,
+            dynamics,
+            (&mut q, &mut qd),
+            (x_eq, &r0, m_phi),
+            f_u,
+            (h, SUBSTEPS),
+        )?;
+        f_sa_left = f_sa_end;
         // the force jumps with the held input at the sample instant: record
         // the mean of its limits before and after it (as crate::rig does)
-        let f_sample = (f_sa_right.unwrap_or(f_sa_left) + f_left_before) * 0.5;
+        let f_sample = (f_sa_right + f_left_before) * 0.5;
         f_left_before = f_sa_left;
         if k >= pre {
             let i = k - pre;
@@ -288,4 +243,97 @@ pub fn simulate_robot_rig(
     .map(String::from)
     .to_vec();
     Recording::new("virtual:robot-spring-array", names, cols, 2)
+}
+
+/// The controller's memory: samples t-1, t-2 of the measured pose, and v, F_u at t-1.
+#[derive(Default)]
+struct ControllerMemory {
+    x_hist: [Vector3<f64>; 2],
+    v_prev: Vector3<f64>,
+    fu_prev: Vector3<f64>,
+}
+
+impl ControllerMemory {
+    /// The controller's force at this sample from the pose deviation `x`
+    /// (Jacobian `j`), the perturbation `f_delta` and the rig's force
+    /// `f_sa_left` measured just before (seed 004 eq. (11)-(14) for IMBIC).
+    fn force(
+        &mut self,
+        controller: &Controller,
+        (x, j): (Vector3<f64>, Matrix3<f64>),
+        (f_delta, f_sa_left): (Vector3<f64>, Vector3<f64>),
+        m_bar_phi: Matrix3<f64>,
+        dt: f64,
+    ) -> Result<Vector3<f64>> {
+        // the controller's numerical derivatives (one-sample backward differences)
+        let xd = (x - self.x_hist[0]) / dt;
+        let xd_prev = (self.x_hist[0] - self.x_hist[1]) / dt;
+        let xdd_prev = (x - 2.0 * self.x_hist[0] + self.x_hist[1]) / (dt * dt);
+        let f_u = match *controller {
+            Controller::Imbic {
+                m_rd,
+                b_rd,
+                k_rd,
+                gamma,
+            } => {
+                let m_rd_inv = m_rd.map(|m| 1.0 / m);
+                let desired = |xd: &Vector3<f64>, x: &Vector3<f64>| {
+                    m_rd_inv.component_mul(&(b_rd.component_mul(xd) + k_rd.component_mul(x)))
+                };
+                // eq. (13) with x_rd = 0
+                let v = m_rd_inv.component_mul(&(f_delta - f_sa_left))
+                    + gamma.component_mul(
+                        &(-(xdd_prev + desired(&xd_prev, &self.x_hist[0])) + self.v_prev),
+                    );
+                // eq. (12)
+                let u = v - desired(&xd, &x);
+                // eq. (14): M̄_x = J^-T M̄_φ J^-1
+                let j_inv = j.try_inverse().ok_or_else(|| {
+                    Error::invalid("robot", "singular Jacobian at the test location")
+                })?;
+                let m_bar_x = j_inv.transpose() * m_bar_phi * j_inv;
+                // eq. (11): TDE of everything but M̄_x ẍ
+                let f_u = m_bar_x * u + self.fu_prev - m_bar_x * xdd_prev;
+                self.v_prev = v;
+                f_u
+            }
+            Controller::Pd { b, k: kk } => f_delta - b.component_mul(&xd) - kk.component_mul(&x),
+        };
+        self.fu_prev = f_u;
+        self.x_hist = [x, self.x_hist[0]];
+        Ok(f_u)
+    }
+}
+
+/// Integrate the robot holding the rig over one sample period in `substeps`
+/// steps of `h`, the input `f_u` held: the rig's force after the first
+/// substep (just after the sample instant) and after the last (just before the next).
+fn plant_between_samples(
+    rig: &RigExperiment,
+    dynamics: &RobotDynamics,
+    (q, qd): (&mut Vector3<f64>, &mut Vector3<f64>),
+    (x_eq, r0, m_phi): (Vector3<f64>, &Matrix3<f64>, Matrix3<f64>),
+    f_u: Vector3<f64>,
+    (h, substeps): (f64, usize),
+) -> Result<(Vector3<f64>, Vector3<f64>)> {
+    let mut f_sa_right = None;
+    let mut f_sa_left = Vector3::zeros();
+    for _ in 0..substeps {
+        let (pose, j) = dynamics.task(q.as_slice(), r0);
+        let xs = pose - x_eq;
+        let xsd = j * *qd;
+        let spring = rig.damping * xsd + rig.stiffness * xs;
+        let m_total = m_phi + j.transpose() * rig.inertia * j;
+        let rhs = j.transpose() * (f_u - spring) - dynamics.friction(qd);
+        let qdd = m_total
+            .lu()
+            .solve(&rhs)
+            .ok_or_else(|| Error::invalid("robot", "singular inertia"))?;
+        let f_sa = rig.inertia * (j * qdd) + spring;
+        f_sa_right.get_or_insert(f_sa);
+        f_sa_left = f_sa;
+        *qd += qdd * h;
+        *q += *qd * h;
+    }
+    Ok((f_sa_right.unwrap_or(f_sa_left), f_sa_left))
 }

@@ -575,7 +575,7 @@ fn end_effector(
                 .collect();
             match leaves.as_slice() {
                 [one] => Ok(one.to_string()),
-            [] => Err("no leaf link: the joints form a loop".into()),
+                [] => Err("no leaf link: the joints form a loop".into()),
                 _ => Err(format!(
                     "the tree has {} leaf links ({}); name the end effector",
                     leaves.len(),
