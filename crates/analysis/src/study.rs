@@ -256,94 +256,9 @@ pub fn summarise(
         levels.sort_by(f64::total_cmp);
         levels.dedup();
         for level in &levels {
-            let at: Vec<&crate::cocontraction::LevelResult> = group
-                .iter()
-                .filter_map(|p| p.result.levels.iter().find(|l| l.level == *level))
-                .collect();
-            // mean over the recordings that have the value (a matrix without an
-            // ellipsoid has no eigenvalues); NaN only when none has it, which
-            // the tables write as an empty cell
-            let mean = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| {
-                let v: Vec<f64> = at.iter().map(|l| f(l)).filter(|v| v.is_finite()).collect();
-                (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
-            };
-            let sd = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| {
-                let v: Vec<f64> = at.iter().map(|l| f(l)).filter(|v| v.is_finite()).collect();
-                (v.len() >= 2).then(|| {
-                    let m = v.iter().sum::<f64>() / v.len() as f64;
-                    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
-                })
-            };
-            let eig = |l: &crate::cocontraction::LevelResult, i: usize| {
-                l.ellipsoid
-                    .as_ref()
-                    .and_then(|e| e.eigenvalues.get(i).copied())
-                    .unwrap_or(f64::NAN)
-            };
-            let k = |l: &crate::cocontraction::LevelResult, i: usize| {
-                l.stiffness.get((i, i)).copied().unwrap_or(f64::NAN)
-            };
-            // every recording has x, y, z (checked above): 3 x 3 matrices
-            let n = at.first().map_or(0, |l| l.stiffness.nrows());
-            let same_shape = at.iter().all(|l| l.stiffness.shape() == (n, n));
-            let n = if same_shape { n } else { 0 };
-            let mean_k = crate::Matrix(nalgebra::DMatrix::from_fn(n, n, |r, c| {
-                mean(&|l| l.stiffness[(r, c)]).unwrap_or(f64::NAN)
-            }));
-            levels_out.push(LevelRow {
-                configuration: c.clone(),
-                level: *level,
-                subjects: at.len(),
-                cocontraction_index: mean(&|l| l.cocontraction_index),
-                kxx: mean(&|l| k(l, 0)),
-                kyy: mean(&|l| k(l, 1)),
-                kzz: mean(&|l| k(l, 2)),
-                k_max_a: mean(&|l| l.estimate.table_ii.stiffness.max_antisymmetric),
-                k1: mean(&|l| eig(l, 0)),
-                k2: mean(&|l| eig(l, 1)),
-                k3: mean(&|l| eig(l, 2)),
-                sd: LevelSpread {
-                    cocontraction_index: sd(&|l| l.cocontraction_index),
-                    kxx: sd(&|l| k(l, 0)),
-                    kyy: sd(&|l| k(l, 1)),
-                    kzz: sd(&|l| k(l, 2)),
-                    k_max_a: sd(&|l| l.estimate.table_ii.stiffness.max_antisymmetric),
-                    k1: sd(&|l| eig(l, 0)),
-                    k2: sd(&|l| eig(l, 1)),
-                    k3: sd(&|l| eig(l, 2)),
-                },
-                ellipsoid: crate::ellipsoid(&mean_k),
-                stiffness: mean_k,
-            });
+            levels_out.push(level_row(c, *level, &group));
         }
-        if let (Some(lo), Some(hi)) = (levels.first(), levels.last()) {
-            let changes: Vec<_> = group
-                .iter()
-                .filter_map(|p| {
-                    let a = p.result.levels.iter().find(|l| l.level == *lo)?;
-                    let b = p.result.levels.iter().find(|l| l.level == *hi)?;
-                    compare(&a.stiffness, &b.stiffness)
-                })
-                .collect();
-            if lo != hi && !changes.is_empty() {
-                let n = changes[0].rotation_deg.len();
-                let avg = |f: &dyn Fn(&crate::cocontraction::EllipsoidChange) -> &Vec<f64>| {
-                    (0..n)
-                        .map(|i| {
-                            changes.iter().map(|c| f(c)[i]).sum::<f64>() / changes.len() as f64
-                        })
-                        .collect()
-                };
-                rotation.push(RotationRow {
-                    configuration: c.clone(),
-                    from_level: *lo,
-                    to_level: *hi,
-                    subjects: changes.len(),
-                    rotation_deg: avg(&|c| &c.rotation_deg),
-                    principal_change_percent: avg(&|c| &c.change_percent),
-                });
-            }
-        }
+        rotation.extend(rotation_row(c, &levels, &group));
     }
     StudyResult {
         name,
@@ -352,6 +267,100 @@ pub fn summarise(
         failures,
         recordings,
     }
+}
+
+/// The means and spreads over subjects of one configuration at one level.
+fn level_row(c: &str, level: f64, group: &[&Processed]) -> LevelRow {
+    let at: Vec<&crate::cocontraction::LevelResult> = group
+        .iter()
+        .filter_map(|p| p.result.levels.iter().find(|l| l.level == level))
+        .collect();
+    // mean over the recordings that have the value (a matrix without an
+    // ellipsoid has no eigenvalues); NaN only when none has it, which
+    // the tables write as an empty cell
+    let mean = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| {
+        let v: Vec<f64> = at.iter().map(|l| f(l)).filter(|v| v.is_finite()).collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let sd = |f: &dyn Fn(&crate::cocontraction::LevelResult) -> f64| {
+        let v: Vec<f64> = at.iter().map(|l| f(l)).filter(|v| v.is_finite()).collect();
+        (v.len() >= 2).then(|| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+        })
+    };
+    let eig = |l: &crate::cocontraction::LevelResult, i: usize| {
+        l.ellipsoid
+            .as_ref()
+            .and_then(|e| e.eigenvalues.get(i).copied())
+            .unwrap_or(f64::NAN)
+    };
+    let k = |l: &crate::cocontraction::LevelResult, i: usize| {
+        l.stiffness.get((i, i)).copied().unwrap_or(f64::NAN)
+    };
+    // every recording has x, y, z (checked above): 3 x 3 matrices
+    let n = at.first().map_or(0, |l| l.stiffness.nrows());
+    let same_shape = at.iter().all(|l| l.stiffness.shape() == (n, n));
+    let n = if same_shape { n } else { 0 };
+    let mean_k = crate::Matrix(nalgebra::DMatrix::from_fn(n, n, |r, c| {
+        mean(&|l| l.stiffness[(r, c)]).unwrap_or(f64::NAN)
+    }));
+    LevelRow {
+        configuration: c.to_string(),
+        level,
+        subjects: at.len(),
+        cocontraction_index: mean(&|l| l.cocontraction_index),
+        kxx: mean(&|l| k(l, 0)),
+        kyy: mean(&|l| k(l, 1)),
+        kzz: mean(&|l| k(l, 2)),
+        k_max_a: mean(&|l| l.estimate.table_ii.stiffness.max_antisymmetric),
+        k1: mean(&|l| eig(l, 0)),
+        k2: mean(&|l| eig(l, 1)),
+        k3: mean(&|l| eig(l, 2)),
+        sd: LevelSpread {
+            cocontraction_index: sd(&|l| l.cocontraction_index),
+            kxx: sd(&|l| k(l, 0)),
+            kyy: sd(&|l| k(l, 1)),
+            kzz: sd(&|l| k(l, 2)),
+            k_max_a: sd(&|l| l.estimate.table_ii.stiffness.max_antisymmetric),
+            k1: sd(&|l| eig(l, 0)),
+            k2: sd(&|l| eig(l, 1)),
+            k3: sd(&|l| eig(l, 2)),
+        },
+        ellipsoid: crate::ellipsoid(&mean_k),
+        stiffness: mean_k,
+    }
+}
+
+/// The ellipsoid's mean rotation and principal changes from the lowest to
+/// the highest level of one configuration, over the subjects that have both.
+fn rotation_row(c: &str, levels: &[f64], group: &[&Processed]) -> Option<RotationRow> {
+    let (lo, hi) = (levels.first()?, levels.last()?);
+    let changes: Vec<_> = group
+        .iter()
+        .filter_map(|p| {
+            let a = p.result.levels.iter().find(|l| l.level == *lo)?;
+            let b = p.result.levels.iter().find(|l| l.level == *hi)?;
+            compare(&a.stiffness, &b.stiffness)
+        })
+        .collect();
+    if lo == hi || changes.is_empty() {
+        return None;
+    }
+    let n = changes[0].rotation_deg.len();
+    let avg = |f: &dyn Fn(&crate::cocontraction::EllipsoidChange) -> &Vec<f64>| {
+        (0..n)
+            .map(|i| changes.iter().map(|c| f(c)[i]).sum::<f64>() / changes.len() as f64)
+            .collect()
+    };
+    Some(RotationRow {
+        configuration: c.to_string(),
+        from_level: *lo,
+        to_level: *hi,
+        subjects: changes.len(),
+        rotation_deg: avg(&|c| &c.rotation_deg),
+        principal_change_percent: avg(&|c| &c.change_percent),
+    })
 }
 
 /// Numbers in numeric order, then text.
