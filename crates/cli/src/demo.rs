@@ -101,6 +101,18 @@ pub fn run(args: DemoArgs) -> CliResult {
         println!("{}", doc.to_json_pretty());
         return Ok(());
     }
+    print_demo(result);
+    println!(
+        "results: {} and {}",
+        json_path.display(),
+        csv_path.display()
+    );
+    Ok(())
+}
+
+/// The demo's table: per start point the true and estimated diagonals, the
+/// errors where the data identify the matrix, and the worst errors.
+fn print_demo(result: &limpid_analysis::demo::DemoResult) {
     println!(
         "limpid demo: Artemiadis et al. (2010) protocol on a virtual subject (Table I, subject 1): 6 start points x {} {} perturbations of {} cm, {} s, {} Hz",
         result.directions,
@@ -172,10 +184,4 @@ pub fn run(args: DemoArgs) -> CliResult {
         worst(MatrixKind::Stiffness, "stiffness", 2),
         worst(MatrixKind::Damping, "damping", 1)
     );
-    println!(
-        "results: {} and {}",
-        json_path.display(),
-        csv_path.display()
-    );
-    Ok(())
 }
