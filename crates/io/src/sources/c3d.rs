@@ -91,15 +91,44 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         c3dio::C3d::from_bytes(bytes).map_err(|e| fail(format!("not a readable C3D file: {e}")))
     })?;
     let mut streams = Vec::new();
-    let points = &c3d.points;
+    let (point_stream, start_s) = point_stream(&c3d.points).map_err(fail)?;
+    streams.extend(point_stream);
+    streams.extend(analog_stream(&c3d.analog, start_s).map_err(fail)?);
+    if streams.is_empty() {
+        return Err(fail(
+            "the C3D file holds no point and no analog sample".into(),
+        ));
+    }
+    Ok(Source {
+        path: path.to_path_buf(),
+        format: "C3D",
+        streams,
+        notes: Vec::new(),
+    })
+}
+
+/// The markers' X, Y, Z (a negative residual: not seen, NaN) at POINT:RATE
+/// from the first frame, when there are any; and the time of the first
+/// frame (s), where the analog stream starts too.
+fn point_stream(
+    points: &c3dio::points::Points,
+) -> std::result::Result<(Option<Stream>, f64), String> {
     let (frames, markers) = (points.rows(), points.cols());
     let point_rate = f64::from(points.frame_rate);
     let first_frame = f64::from(points.first_frame.max(1)) - 1.0;
-    if markers > 0 && frames > 0 {
+    let start_s = if point_rate > 0.0 {
+        first_frame / point_rate
+    } else {
+        0.0
+    };
+    if markers == 0 || frames == 0 {
+        return Ok((None, start_s));
+    }
+    {
         if !(point_rate.is_finite() && point_rate > 0.0) {
-            return Err(fail(format!(
+            return Err(format!(
                 "POINT:RATE is {point_rate}: the point stream has no sample rate"
-            )));
+            ));
         }
         let unit: String = points
             .units
@@ -134,27 +163,39 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
                 });
             }
         }
-        streams.push(Stream {
-            name: "points".into(),
-            kind: Some("Points".into()),
-            nominal_rate: Some(point_rate),
-            stamps: Some(
-                (0..frames)
-                    .map(|f| (first_frame + f as f64) / point_rate)
-                    .collect(),
-            ),
-            channels,
-            ..Stream::default()
-        });
+        Ok((
+            Some(Stream {
+                name: "points".into(),
+                kind: Some("Points".into()),
+                nominal_rate: Some(point_rate),
+                stamps: Some(
+                    (0..frames)
+                        .map(|f| (first_frame + f as f64) / point_rate)
+                        .collect(),
+                ),
+                channels,
+                ..Stream::default()
+            }),
+            start_s,
+        ))
     }
-    let analog = &c3d.analog;
+}
+
+/// The analog channels at ANALOG:RATE from `start_s`, when there are any.
+fn analog_stream(
+    analog: &c3dio::Analog,
+    start_s: f64,
+) -> std::result::Result<Option<Stream>, String> {
     let (samples, used) = (analog.analog.rows(), analog.analog.cols());
-    if used > 0 && samples > 0 {
+    if used == 0 || samples == 0 {
+        return Ok(None);
+    }
+    {
         let rate = f64::from(analog.rate);
         if !(rate.is_finite() && rate > 0.0) {
-            return Err(fail(format!(
+            return Err(format!(
                 "ANALOG:RATE is {rate}: the analog stream has no sample rate"
-            )));
+            ));
         }
         let channels = (0..used)
             .map(|k| Channel {
@@ -172,29 +213,13 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
                 values: (0..samples).map(|i| analog.analog[(i, k)]).collect(),
             })
             .collect();
-        let start = if point_rate > 0.0 {
-            first_frame / point_rate
-        } else {
-            0.0
-        };
-        streams.push(Stream {
+        Ok(Some(Stream {
             name: "analog".into(),
             kind: Some("Analog".into()),
             nominal_rate: Some(rate),
-            stamps: Some((0..samples).map(|i| start + i as f64 / rate).collect()),
+            stamps: Some((0..samples).map(|i| start_s + i as f64 / rate).collect()),
             channels,
             ..Stream::default()
-        });
+        }))
     }
-    if streams.is_empty() {
-        return Err(fail(
-            "the C3D file holds no point and no analog sample".into(),
-        ));
-    }
-    Ok(Source {
-        path: path.to_path_buf(),
-        format: "C3D",
-        streams,
-        notes: Vec::new(),
-    })
 }
