@@ -69,29 +69,7 @@ fn main() {
             })
             .collect(),
     );
-    // watchdog: an execution over HANG is written out and ends the run
-    {
-        let running = Arc::clone(&running);
-        let dir = findings_dir.clone();
-        std::thread::spawn(move || loop {
-            std::thread::sleep(Duration::from_millis(500));
-            let now = clock.elapsed().as_millis() as u64;
-            for r in running.iter() {
-                let s = r.started_ms.load(Ordering::Relaxed);
-                if s > 0 && now.saturating_sub(s) > HANG.as_millis() as u64 {
-                    let (name, bytes) = r.input.lock().map(|g| g.clone()).unwrap_or_default();
-                    let _ = std::fs::create_dir_all(&dir);
-                    let path = dir.join(format!("hang-{name}"));
-                    let _ = std::fs::write(&path, &bytes);
-                    eprintln!(
-                        "HANG: an execution ran over {HANG:?}; input written to {}",
-                        path.display()
-                    );
-                    std::process::exit(3);
-                }
-            }
-        });
-    }
+    spawn_watchdog(Arc::clone(&running), findings_dir.clone(), clock);
     let per_thread = executions.div_ceil(threads);
     let stats: Vec<WorkerStats> = std::thread::scope(|scope| {
         let handles: Vec<_> = (0..threads)
@@ -101,38 +79,8 @@ fn main() {
                 let done = Arc::clone(&done);
                 scope.spawn(move || {
                     let mut rng = StdRng::seed_from_u64(seed.wrapping_mul(1_000_003) + w as u64);
-                    let mut counts: BTreeMap<String, [usize; 3]> = BTreeMap::new();
-                    let mut found = Vec::new();
-                    for _ in 0..per_thread {
-                        let (name, base) = &inputs[rng.random_range(0..inputs.len())];
-                        let input = mutate(&mut rng, base, is_text(name));
-                        let me = &running[w];
-                        if let Ok(mut g) = me.input.lock() {
-                            g.0.clone_from(name);
-                            g.1.clone_from(&input);
-                        }
-                        me.started_ms
-                            .store(clock.elapsed().as_millis() as u64 + 1, Ordering::Relaxed);
-                        let outcome = execute(name, &input);
-                        me.started_ms.store(0, Ordering::Relaxed);
-                        let ext = name.rsplit('.').next().unwrap_or("").to_string();
-                        let c = counts.entry(ext).or_default();
-                        match outcome {
-                            Outcome::Refused => c[0] += 1,
-                            Outcome::Accepted => c[1] += 1,
-                            Outcome::Finding(what) => {
-                                c[2] += 1;
-                                if found.len() < 20 {
-                                    found.push((name.clone(), what, input));
-                                }
-                            }
-                        }
-                        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                        if n.is_multiple_of(1_000_000) {
-                            eprintln!("{n} executions, {:.0} s", clock.elapsed().as_secs_f64());
-                        }
-                    }
-                    (counts, found)
+                    let me = &running[w];
+                    work(&mut rng, &inputs, me, &done, (per_thread, clock))
                 })
             })
             .collect();
@@ -177,4 +125,68 @@ fn main() {
         }
         std::process::exit(1);
     }
+}
+
+/// The watchdog: an execution over HANG is written out and ends the run.
+fn spawn_watchdog(running: Arc<Vec<Running>>, dir: std::path::PathBuf, clock: Instant) {
+    std::thread::spawn(move || loop {
+        std::thread::sleep(Duration::from_millis(500));
+        let now = clock.elapsed().as_millis() as u64;
+        for r in running.iter() {
+            let s = r.started_ms.load(Ordering::Relaxed);
+            if s > 0 && now.saturating_sub(s) > HANG.as_millis() as u64 {
+                let (name, bytes) = r.input.lock().map(|g| g.clone()).unwrap_or_default();
+                let _ = std::fs::create_dir_all(&dir);
+                let path = dir.join(format!("hang-{name}"));
+                let _ = std::fs::write(&path, &bytes);
+                eprintln!(
+                    "HANG: an execution ran over {HANG:?}; input written to {}",
+                    path.display()
+                );
+                std::process::exit(3);
+            }
+        }
+    });
+}
+
+/// One worker's executions: random corpus inputs, mutated and executed, the
+/// outcomes counted by file extension, the first 20 findings kept.
+fn work(
+    rng: &mut StdRng,
+    inputs: &[(String, Vec<u8>)],
+    me: &Running,
+    done: &AtomicUsize,
+    (executions, clock): (usize, Instant),
+) -> WorkerStats {
+    let mut counts: BTreeMap<String, [usize; 3]> = BTreeMap::new();
+    let mut found = Vec::new();
+    for _ in 0..executions {
+        let (name, base) = &inputs[rng.random_range(0..inputs.len())];
+        let input = mutate(rng, base, is_text(name));
+        if let Ok(mut g) = me.input.lock() {
+            g.0.clone_from(name);
+            g.1.clone_from(&input);
+        }
+        me.started_ms
+            .store(clock.elapsed().as_millis() as u64 + 1, Ordering::Relaxed);
+        let outcome = execute(name, &input);
+        me.started_ms.store(0, Ordering::Relaxed);
+        let ext = name.rsplit('.').next().unwrap_or("").to_string();
+        let c = counts.entry(ext).or_default();
+        match outcome {
+            Outcome::Refused => c[0] += 1,
+            Outcome::Accepted => c[1] += 1,
+            Outcome::Finding(what) => {
+                c[2] += 1;
+                if found.len() < 20 {
+                    found.push((name.clone(), what, input));
+                }
+            }
+        }
+        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+        if n.is_multiple_of(1_000_000) {
+            eprintln!("{n} executions, {:.0} s", clock.elapsed().as_secs_f64());
+        }
+    }
+    (counts, found)
 }
