@@ -267,14 +267,7 @@ pub fn estimate_stochastic_pooled(
         .clone()
         .unwrap_or_else(|| default_welch(rec.len(), fs));
     let spectra = pool_spectra(recs, &inputs, &coords, &force_cols, &welch)?;
-    let (lo, hi) = params.band_hz;
-    if !(lo > 0.0 && hi > lo && hi < fs / 2.0) {
-        let nyquist = limpid_core::display_round(fs / 2.0);
-        return Err(Error::invalid(
-            "band",
-            format!("expected 0 < low < high < {nyquist} Hz, found {lo}-{hi} Hz"),
-        ));
-    }
+    let (lo, hi) = band_below_nyquist(params.band_hz, fs)?;
     // nonparametric reads the bins up to the first above the band
     let bins = spectra
         .frequencies
@@ -321,17 +314,7 @@ pub fn estimate_stochastic_pooled(
     } = parametric_fit(&impedance, &frequencies, &in_band, &weight, enbw_bins);
     // the least-squares SE only where the jackknife cannot be formed
     let se = jackknife_errors(&spectra, bins, n, (lo, hi)).unwrap_or(se);
-    let model = |f: f64| {
-        let om = 2.0 * std::f64::consts::PI * f;
-        DMatrix::from_fn(n, n, |i, j| {
-            Complex64::new(kk[(i, j)] - om * om * m[(i, j)], om * b[(i, j)])
-        })
-    };
-    let phi_t_vs_fit = in_band
-        .iter()
-        .map(|&k| max_singular(&(&impedance[k] - model(frequencies[k]))))
-        .sum::<f64>()
-        / in_band.len() as f64;
+    let phi_t_vs_fit = distance_to_fit(&impedance, &frequencies, &in_band, [&m, &b, &kk]);
     let mean_coh = in_band.iter().map(|&k| weight[k]).sum::<f64>() / in_band.len() as f64;
     let min_coh = in_band.iter().map(|&k| weight[k]).fold(1.0, f64::min);
     let warnings = quality_warnings(min_coh, singular_in_band, max_input_coherence);
@@ -345,14 +328,7 @@ pub fn estimate_stochastic_pooled(
     Ok(StochasticEstimate {
         coordinates: coords,
         inputs,
-        impedance: impedance
-            .iter()
-            .map(|z| {
-                (0..n)
-                    .map(|i| (0..n).map(|j| [z[(i, j)].re, z[(i, j)].im]).collect())
-                    .collect()
-            })
-            .collect(),
+        impedance: impedance.iter().map(re_im).collect(),
         frequencies,
         coherence: Coherences {
             outputs,
@@ -378,6 +354,51 @@ pub fn estimate_stochastic_pooled(
         accuracy: None,
         warnings,
     })
+}
+
+/// The band of the fit, refused unless 0 < low < high < Nyquist.
+fn band_below_nyquist((lo, hi): (f64, f64), fs: f64) -> Result<(f64, f64)> {
+    if !(lo > 0.0 && hi > lo && hi < fs / 2.0) {
+        let nyquist = limpid_core::display_round(fs / 2.0);
+        return Err(Error::invalid(
+            "band",
+            format!("expected 0 < low < high < {nyquist} Hz, found {lo}-{hi} Hz"),
+        ));
+    }
+    Ok((lo, hi))
+}
+
+/// phi_T of the non-parametric Z against the parametric fit `[M, B, K]`:
+/// the mean over the band of the largest singular value of their difference.
+fn distance_to_fit(
+    impedance: &[DMatrix<Complex64>],
+    frequencies: &[f64],
+    in_band: &[usize],
+    [m, b, kk]: [&Matrix; 3],
+) -> f64 {
+    let n = m.nrows();
+    let model = |f: f64| {
+        let om = 2.0 * std::f64::consts::PI * f;
+        DMatrix::from_fn(n, n, |i, j| {
+            Complex64::new(kk[(i, j)] - om * om * m[(i, j)], om * b[(i, j)])
+        })
+    };
+    in_band
+        .iter()
+        .map(|&k| max_singular(&(&impedance[k] - model(frequencies[k]))))
+        .sum::<f64>()
+        / in_band.len() as f64
+}
+
+/// A complex matrix as rows of `[re, im]` (the result's JSON form).
+fn re_im(z: &DMatrix<Complex64>) -> Vec<Vec<[f64; 2]>> {
+    (0..z.nrows())
+        .map(|i| {
+            (0..z.ncols())
+                .map(|j| [z[(i, j)].re, z[(i, j)].im])
+                .collect()
+        })
+        .collect()
 }
 
 /// The Welch segment spectra of every recording, pooled: inputs `u*`, then
