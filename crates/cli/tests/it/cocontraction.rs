@@ -76,6 +76,10 @@ fn examples_index_within_0_03_and_stiffness_within_5_percent_per_level() {
     }
 }
 
+/// A virtual study's tables show Patel et al. (2013)'s findings: the
+/// anisotropic increase of stiffness with co-contraction, per configuration.
+/// (Long: one simulated study, its CSV, Markdown and JSON tables checked in
+/// turn; simulating it once keeps the test fast.)
 #[test]
 fn virtual_study_tables_show_the_anisotropic_increase() {
     let dir = tempfile::tempdir().unwrap();

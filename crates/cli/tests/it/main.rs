@@ -16,6 +16,7 @@ mod planar;
 mod protocol;
 mod reflex;
 mod report;
+mod report_documents;
 mod reproduce;
 mod rerun;
 mod stochastic;
