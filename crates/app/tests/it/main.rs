@@ -1,5 +1,6 @@
 //! limpid-app's integration tests: one binary (see docs/src/contributing.md).
 
+mod accuracy;
 mod demo;
 mod live_coverage;
 mod requests;
