@@ -66,6 +66,31 @@ pub fn check_columns(inputs: &[String], outputs: &[String]) -> Result<()> {
 /// Spectra and coherences of `inputs` and `outputs` (column names) of `rec`.
 /// Refuses a column named twice (the inputs' spectral matrix would be
 /// singular everywhere) and an input that never varies (no spectrum to divide by).
+///
+/// # Example
+///
+/// An output that is twice its input plus independent noise of the same
+/// power as the input is 4/5 explained by it (coherence S / (S + N)):
+///
+/// ```
+/// use limpid_core::Recording;
+/// use limpid_dsp::spectral::Welch;
+/// use rand::{rngs::StdRng, Rng, SeedableRng};
+///
+/// let mut rng = StdRng::seed_from_u64(1);
+/// let mut noise = || rng.random::<f64>() - 0.5;
+/// let n = 40_000;
+/// let u: Vec<f64> = (0..n).map(|_| noise()).collect();
+/// let y: Vec<f64> = u.iter().map(|u| 2.0 * u + noise()).collect();
+/// let t: Vec<f64> = (0..n).map(|i| i as f64 / 100.0).collect();
+/// let rec = Recording::new("<arrays>", vec!["t".into(), "u".into(), "y".into()], vec![t, u, y], 1)?;
+/// let welch = Welch { nperseg: 256, ..Welch::new(100.0) };
+/// let s = limpid_ident::spectra::spectra(&rec, &["u".into()], &["y".into()], &welch)?;
+/// let coherence = &s.coherence[0][0]; // output y, input u
+/// let mean = coherence.iter().sum::<f64>() / coherence.len() as f64;
+/// assert!((mean - 0.8).abs() < 0.02, "{mean}");
+/// # Ok::<(), limpid_core::Error>(())
+/// ```
 pub fn spectra(
     rec: &Recording,
     inputs: &[String],

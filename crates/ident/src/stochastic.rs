@@ -251,6 +251,26 @@ pub fn estimate_stochastic(
 /// which keeps Z = T R^-1 unbiased where averaging the trials' Z would
 /// average ratios of noisy spectra. The recordings must share coordinates,
 /// sample rate and Welch settings (default settings from the first).
+///
+/// # Example
+///
+/// Park & Chang (2011)'s spring array held by an ideal impedance-controlled
+/// rig in the virtual lab (its sensors' noise included):
+///
+/// ```
+/// use limpid_core::truth::Truth;
+/// use limpid_ident::stochastic::{estimate_stochastic_pooled, StochasticParams};
+/// use limpid_lab::design::Design;
+/// use limpid_lab::session::{simulate_design, RigController};
+///
+/// let design = Design::preset("park-stochastic")?;
+/// let run = simulate_design(&design, None, RigController::Ideal, 1)?.remove(0);
+/// let Truth::Stochastic(truth) = &run.truth else { unreachable!() };
+/// let est = estimate_stochastic_pooled(&[run.recording], &StochasticParams::default())?;
+/// let (k, k_true) = (est.stiffness[(0, 0)], truth.stiffness[(0, 0)]);
+/// assert!((k - k_true).abs() < 0.02 * k_true, "{k} vs {k_true}");
+/// # Ok::<(), limpid_core::Error>(())
+/// ```
 pub fn estimate_stochastic_pooled(
     recs: &[Recording],
     params: &StochasticParams,

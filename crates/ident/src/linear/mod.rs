@@ -249,6 +249,25 @@ pub fn fit_linear(data: &Prepared, params: &LinearParams) -> Result<LinearEstima
 /// (to rounding). With fewer than 8 windows (the fewest jackknife blocks) the
 /// blocks are contiguous pieces that cut through windows: the plan is then
 /// materialised first.
+///
+/// # Example
+///
+/// Artemiadis et al. (2010)'s centre-out protocol on their subject 1 in the
+/// virtual lab, without sensor noise:
+///
+/// ```
+/// use limpid_ident::{fit_linear_plan, plan, LinearParams, PrepareParams};
+/// use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Profile};
+///
+/// let posture = seed000_subject1()[1].clone();
+/// let protocol = CentreOut::seed000(Profile::Cubic);
+/// let rec = simulate_centre_out(&posture, &protocol, &NoiseModel::none(), 1)?;
+/// let windows = plan(&rec, &PrepareParams::default())?;
+/// let est = fit_linear_plan(&windows, &LinearParams::default())?;
+/// let truth = posture.stiffness[(0, 0)];
+/// assert!((est.stiffness[(0, 0)] - truth).abs() < 1e-3 * truth);
+/// # Ok::<(), limpid_core::Error>(())
+/// ```
 pub fn fit_linear_plan(plan: &Plan<'_>, params: &LinearParams) -> Result<LinearEstimate> {
     if plan.meta.windows.len() < MIN_JACKKNIFE_BLOCKS {
         return fit_linear(&plan.materialise()?, params);

@@ -325,6 +325,24 @@ pub const MIN_WINDOW_SAMPLES: usize = 10;
 
 /// Seed 003's estimate from every trial's first `window` samples, with its
 /// leave-one-trial-out validation.
+///
+/// # Example
+///
+/// Lakatos et al. (2011)'s arm in the virtual lab, without noise, every
+/// sample of every trial (`usize::MAX`):
+///
+/// ```
+/// use limpid_ident::planar::{estimate_planar, prepare_planar, PlanarPrepare};
+/// use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject};
+///
+/// let subject = PlanarSubject::seed003(); // K11 = 37.95 N m/rad
+/// let rec = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.0, 0.0, 1)?;
+/// let data = prepare_planar(&rec, &PlanarPrepare::new(0.32, 0.31))?;
+/// let est = estimate_planar(&data, usize::MAX, None)?;
+/// assert!((est.stiffness[(0, 0)] - 37.95).abs() < 0.01);
+/// assert!(est.criteria.trusted);
+/// # Ok::<(), limpid_core::Error>(())
+/// ```
 pub fn estimate_planar(
     data: &PlanarData,
     window: usize,

@@ -424,6 +424,26 @@ pub(crate) fn normal_deviate(p: f64) -> f64 {
 pub const QUASI_CONSTANT: f64 = 0.05;
 
 /// Estimates over T_obs = from..=to in steps (ms), each with its criteria.
+///
+/// # Example
+///
+/// The shortest trustworthy observation window of Lakatos et al. (2011)'s
+/// arm in the virtual lab, with torque noise of 0.02 N m and angle noise of
+/// 1e-5 rad: a few hundred ms at most.
+///
+/// ```
+/// use limpid_ident::planar::{prepare_planar, window_sweep, PlanarPrepare};
+/// use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject};
+///
+/// let (subject, protocol) = (PlanarSubject::seed003(), PlanarProtocol::seed003());
+/// let rec = simulate_planar(&subject, &protocol, 0.02, 1e-5, 1)?;
+/// let data = prepare_planar(&rec, &PlanarPrepare::new(0.32, 0.31))?;
+/// let sweep = window_sweep(&data, 50.0, 400.0, 10.0, None)?;
+/// let shortest = sweep.shortest_trusted_ms.expect("a trusted window");
+/// println!("{shortest} ms");
+/// assert!((50.0..=400.0).contains(&shortest));
+/// # Ok::<(), limpid_core::Error>(())
+/// ```
 pub fn window_sweep(
     data: &PlanarData,
     from_ms: f64,

@@ -16,6 +16,24 @@ struct Lengths {
 }
 
 /// The parallel-cascade estimate of `rec`.
+///
+/// # Example
+///
+/// A virtual ankle with a stretch reflex under a random position
+/// perturbation (Kearney et al. 1997), without torque noise:
+///
+/// ```
+/// use limpid_ident::reflex::{estimate_reflex, ReflexParams};
+/// use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleSubject};
+///
+/// let ankle = AnkleSubject::default();
+/// let experiment = AnkleExperiment { torque_noise_nm: 0.0, ..AnkleExperiment::default() };
+/// let rec = simulate_ankle(&ankle, &experiment, 1)?;
+/// let est = estimate_reflex(&rec, &ReflexParams::default())?;
+/// assert!((est.intrinsic.stiffness - ankle.stiffness).abs() < 0.01 * ankle.stiffness);
+/// assert!(est.reflex.delay_identifiable);
+/// # Ok::<(), limpid_core::Error>(())
+/// ```
 pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstimate> {
     let (q, tq) = position_and_torque(rec, p)?;
     let fs = rec.sample_rate();

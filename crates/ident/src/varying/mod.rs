@@ -328,6 +328,26 @@ pub struct VaryingEstimate {
 /// Impedance that varies: `params.schedule == "time"` runs the ensemble
 /// method on the recording's repetitions (`trial`), any other value the
 /// parameter-varying method on that column.
+///
+/// # Example
+///
+/// A joint whose stiffness doubles for 150 ms in the middle of each of 100
+/// repetitions, in the virtual lab without noise (the ensemble method):
+///
+/// ```
+/// use limpid_ident::varying::{estimate_varying, VaryingParams};
+/// use limpid_lab::varying::{simulate_ensemble, EnsembleExperiment, EnsembleSubject};
+///
+/// let joint = EnsembleSubject::joint();
+/// let experiment = EnsembleExperiment { torque_noise_nm: 0.0, ..EnsembleExperiment::default() };
+/// let rec = simulate_ensemble(&joint, &experiment, 1)?;
+/// let est = estimate_varying(&rec, &VaryingParams::default())?;
+/// let middle = est.points.iter().find(|p| p.identifiable && p.sigma >= 0.6).unwrap();
+/// let k_true = joint.truth_at(middle.sigma)[2][0][0];
+/// let k = middle.stiffness.as_ref().unwrap()[(0, 0)];
+/// assert!((k - k_true).abs() < 0.03 * k_true, "{k} vs {k_true}");
+/// # Ok::<(), limpid_core::Error>(())
+/// ```
 pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<VaryingEstimate> {
     params.check()?;
     let (coords, forces) = crate::prepare::choose_coordinates(rec)?;
