@@ -38,19 +38,28 @@ pub(crate) fn read_parquet_source<R: parquet::file::reader::ChunkReader + 'stati
     read_parquet_table(path, file)?.into_recording(path)
 }
 
+/// A Parquet decoder's error, and any other message, as a format error naming `path`.
+fn errors(
+    path: &Path,
+) -> (
+    impl Fn(parquet::errors::ParquetError) -> Error + Copy + '_,
+    impl Fn(String) -> Error + Copy + '_,
+) {
+    (
+        move |e| Error::Format {
+            path: path.to_path_buf(),
+            message: format!("not a readable Parquet file: {e}"),
+        },
+        crate::sources::format_error(path),
+    )
+}
+
 /// The flat numeric columns of a Parquet file as a table.
 pub(crate) fn read_parquet_table<R: parquet::file::reader::ChunkReader + 'static>(
     path: &Path,
     file: R,
 ) -> Result<Table> {
-    let pq_err = |e: parquet::errors::ParquetError| Error::Format {
-        path: path.to_path_buf(),
-        message: format!("not a readable Parquet file: {e}"),
-    };
-    let fail = |message: String| Error::Format {
-        path: path.to_path_buf(),
-        message,
-    };
+    let (pq_err, fail) = errors(path);
     let reader = SerializedFileReader::new(file).map_err(pq_err)?;
     let meta = reader.metadata();
     let schema = meta.file_metadata().schema_descr();
@@ -198,14 +207,7 @@ impl ColumnDecoder<'_> {
     /// MAX_PARQUET_ROWS values by name.
     fn decode(&self, index: usize, name: &str, per_s: Option<f64>) -> Result<Vec<f64>> {
         let (path, schema, groups, reserve) = (self.path, self.schema, self.groups, self.reserve);
-        let pq_err = |e: parquet::errors::ParquetError| Error::Format {
-            path: path.to_path_buf(),
-            message: format!("not a readable Parquet file: {e}"),
-        };
-        let fail = |message: String| Error::Format {
-            path: path.to_path_buf(),
-            message,
-        };
+        let (pq_err, fail) = errors(path);
         let mut out = column_buffer(reserve);
         let mut origin: Option<i64> = None;
         for group in groups {
