@@ -272,11 +272,7 @@ pub fn sweep_text(e: &Estimated, _: &Request, paths: &[PathBuf], csv: bool) -> C
             num(e.inertial_parameters[0]),
             num(c.stiffness_eigenvalues[1]),
             c.stiffness_symmetry_ratio,
-            if r.trusted {
-                "trusted".to_string()
-            } else {
-                format!("not trusted: {}", r.reasons.join("; "))
-            }
+            trust_cell(r.trusted, &r.reasons)
         );
     }
     print_sweep_summary(sweep);
@@ -378,11 +374,16 @@ fn print_intervals(intervals: &[limpid_ident::planar::IntervalRow]) {
             num(e.damping[(0, 0)]),
             num(e.damping[(1, 1)]),
             num(c.stiffness_eigenvalues[1]),
-            if r.trusted {
-                "trusted".to_string()
-            } else {
-                format!("not trusted: {}", r.reasons.join("; "))
-            }
+            trust_cell(r.trusted, &r.reasons)
         );
+    }
+}
+
+/// A window's verdict in the sweep's tables: "trusted", or why not.
+fn trust_cell(trusted: bool, reasons: &[String]) -> String {
+    if trusted {
+        "trusted".to_string()
+    } else {
+        format!("not trusted: {}", reasons.join("; "))
     }
 }
