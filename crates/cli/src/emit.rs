@@ -75,6 +75,7 @@ fn flag(field: &str) -> Option<&'static str> {
         "slow_hz" => "--slow",
         "reflex" => "--reflex",
         "inputs/outputs" => "--inputs/--outputs",
+        "lsl" => "--lsl",
         _ => return None,
     })
 }

@@ -93,7 +93,7 @@ pub fn run(args: LiveArgs) -> CliResult {
         replay: replay.map(|r| (r, args.speed)),
         lsl: args.lsl.clone(),
     };
-    let session = Arc::new(Session::start(&config)?);
+    let session = Arc::new(Session::start(&config).map_err(crate::emit::with_flag_names)?);
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .enable_all()

@@ -552,7 +552,7 @@ fn receive_lsl(
     ready: std::sync::mpsc::Sender<Result<()>>,
 ) {
     use lsl::Pullable;
-    let fail = |message: String| Error::invalid("--lsl", message);
+    let fail = |message: String| Error::invalid("lsl", message);
     let open = || -> Result<lsl::StreamInlet> {
         let found = lsl::resolve_byprop("name", name, 1, 5.0)
             .map_err(|e| fail(format!("resolving {name:?}: {e:?}")))?;
@@ -632,13 +632,13 @@ fn start_lsl(
         let (name, shared, stop) = (name.to_string(), shared.clone(), stop.clone());
         std::thread::spawn(move || receive_lsl(&name, channels, &shared, &stop, tx));
         rx.recv()
-            .unwrap_or_else(|_| Err(Error::invalid("--lsl", "the inlet thread ended")))
+            .unwrap_or_else(|_| Err(Error::invalid("lsl", "the inlet thread ended")))
     }
     #[cfg(not(feature = "lsl"))]
     {
         let _ = (name, channels, shared, stop);
         Err(Error::invalid(
-            "--lsl",
+            "lsl",
             "this limpid was built without Lab Streaming Layer support; rebuild with `--features lsl` (needs cmake, a C++ compiler and, with glibc >= 2.34, CXXFLAGS=-DPTHREAD_STACK_MIN=16384)",
         ))
     }
