@@ -36,7 +36,7 @@ use crate::lsq::{merge, triangle};
 use crate::prepare::edge_kinds;
 pub use limpid_core::arm::{coriolis, mass_matrix, Arm};
 use limpid_core::trial::{
-    change_floors, noise_sigma, perturbation_onset, windows_from_trial_column,
+    change_floors, detect_onset, noise_sigma, perturbation_onset, windows_from_trial_column,
 };
 use limpid_core::{Error, Recording, Result};
 use limpid_dsp::{central_first, central_second, LowPass};

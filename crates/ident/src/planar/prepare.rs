@@ -48,8 +48,40 @@ impl PlanarData {
 
 /// The longest a torque may lead the motion and still mark the onset (s);
 /// physically the torque leads by the few ms the quintic needs to move the
-/// angles out of their noise band.
+/// angles out of their noise band. Noisy angles (end-point positions through
+/// the inverse kinematics) leave that band later: the lead allowed grows by
+/// how long the filtered angles had been moving before the raw ones left it
+/// ([`motion_lag`]), up to [`MAX_ONSET_LEAD_S`].
 pub const ONSET_LEAD_S: f64 = 0.03;
+
+/// The longest lead a torque may have over the raw angles' onset when the
+/// filtered angles show the motion under way (s).
+pub const MAX_ONSET_LEAD_S: f64 = 0.1;
+
+/// How many samples before the raw angles' onset `moved` (trial-relative) the
+/// filtered angles `qf` were already moving: traced back from `moved` while
+/// some angle stays beyond `threshold[k]` of its rest level, the mean of `qf`
+/// before the lead window. Only a motion contiguous with the detected one
+/// counts, so a drift at rest does not move the onset.
+pub(crate) fn motion_lag(
+    qf: &[Vec<f64>; 2],
+    moved: usize,
+    lead: usize,
+    threshold: [f64; 2],
+) -> usize {
+    let rest_end = moved.saturating_sub(lead);
+    if rest_end < 3 || moved >= qf[0].len() {
+        return 0;
+    }
+    let rest: [f64; 2] =
+        std::array::from_fn(|k| qf[k][..rest_end].iter().sum::<f64>() / rest_end as f64);
+    let moving = |i: usize| (0..2).any(|k| (qf[k][i] - rest[k]).abs() > threshold[k]);
+    let mut i = moved;
+    while i > 0 && moving(i - 1) {
+        i -= 1;
+    }
+    moved - i
+}
 
 /// Convert, cut into trials, take baselines, filter and differentiate.
 pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> {
@@ -72,6 +104,8 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
     let dt = 1.0 / fs;
     let gains = crate::prepare::noise_gains(crate::prepare::Derivative::Central, &lp, 0, dt)?;
     let angle_noise = AngleNoise::estimate(&q, gains);
+    // the filtered angles' white-noise s.d., for the onset's motion lag
+    let filtered_sigma = [sigmas[0] * gains[0].sqrt(), sigmas[1] * gains[0].sqrt()];
     let min_rest = ((0.02 * fs).round() as usize).max(3);
     let cutter = TrialCutter {
         rec,
@@ -83,6 +117,7 @@ pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> 
         lp: &lp,
         cutoff,
         min_rest,
+        filtered_sigma,
     };
     let trials = windows
         .iter()
@@ -226,6 +261,8 @@ struct TrialCutter<'a> {
     cutoff: f64,
     /// Fewest rest samples before the onset.
     min_rest: usize,
+    /// White-noise s.d. of the filtered angles.
+    filtered_sigma: [f64; 2],
 }
 
 impl TrialCutter<'_> {
@@ -241,15 +278,37 @@ impl TrialCutter<'_> {
             lp,
             cutoff,
             min_rest,
+            filtered_sigma,
         } = *self;
         let fs = rec.sample_rate();
         let dt = 1.0 / fs;
         let qs: Vec<&[f64]> = vec![&q[0], &q[1]];
         let r = w.range.clone();
+        let span = ((fs / cutoff).round() as usize).max(3);
+        let (left, right) = edge_kinds(&qs, r.clone(), span, dt);
+        if r.len() <= lp.padlen() + 1 {
+            return Err(Error::TooFewSamples {
+                path: rec.path().to_path_buf(),
+                what: format!("trial {} with zero-phase filtering", w.id),
+                needed: lp.padlen() + 2,
+                found: r.len(),
+            });
+        }
+        let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
+        let qf = [
+            lp.filtfilt_edges(&q[0][r.clone()], left, right, extra)?,
+            lp.filtfilt_edges(&q[1][r.clone()], left, right, extra)?,
+        ];
         // Onset: the first of the angles and torques to leave rest, as
-        // long as the torque leads the motion by at most ONSET_LEAD_S
+        // long as the torque leads the motion by at most ONSET_LEAD_S plus
+        // the time the filtered angles were moving before the raw ones left
+        // their noise band
         let lead_max = (ONSET_LEAD_S * fs).round() as usize;
-        let onset = perturbation_onset(signals, 2, r.clone(), sigmas, floors, (lead_max, min_rest))
+        let moved = detect_onset(&signals[..2], r.clone(), &sigmas[..2], &floors[..2]);
+        let threshold = std::array::from_fn(|k| (3.0 * filtered_sigma[k]).max(floors[k]));
+        let lag = moved.map_or(0, |m| motion_lag(&qf, m - r.start, lead_max, threshold));
+        let lead = (lead_max + lag).min((MAX_ONSET_LEAD_S * fs).round() as usize);
+        let onset = perturbation_onset(signals, 2, r.clone(), sigmas, floors, (lead, min_rest))
             .unwrap_or(r.end);
         if onset - r.start < min_rest {
             return Err(Error::NoRestBeforeOnset {
@@ -261,18 +320,7 @@ impl TrialCutter<'_> {
                 needed: min_rest,
             });
         }
-        if r.len() <= lp.padlen() + 1 {
-            return Err(Error::TooFewSamples {
-                path: rec.path().to_path_buf(),
-                what: format!("trial {} with zero-phase filtering", w.id),
-                needed: lp.padlen() + 2,
-                found: r.len(),
-            });
-        }
         let rest_end = onset.saturating_sub(2).max(r.start + 1);
-        let span = ((fs / cutoff).round() as usize).max(3);
-        let (left, right) = edge_kinds(&qs, r.clone(), span, dt);
-        let extra = ((3.0 * fs / cutoff).round() as usize).min(r.len() - 1);
         let mut t = PlanarTrial {
             id: w.id,
             q: Default::default(),
@@ -288,10 +336,10 @@ impl TrialCutter<'_> {
             let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
             t.q0[k] = mean(&q[k][r.start..rest_end]);
             t.tau0[k] = mean(&tau[k][r.start..rest_end]);
-            let qf = lp.filtfilt_edges(&q[k][r.clone()], left, right, extra)?;
+            let qf = &qf[k];
             let tf = lp.filtfilt_edges(&tau[k][r.clone()], left, right, extra)?;
-            let qd = central_first(&qf, dt);
-            let qdd = central_second(&qf, dt);
+            let qd = central_first(qf, dt);
+            let qdd = central_second(qf, dt);
             t.dq[k] = qf[start..].iter().map(|v| v - t.q0[k]).collect();
             t.dtau[k] = tf[start..].iter().map(|v| v - t.tau0[k]).collect();
             t.q[k] = qf[start..].to_vec();
