@@ -219,7 +219,11 @@ pub fn calibrate(
             &cocontraction,
             4,
         ),
-        run("planar arm, whole window (Lakatos et al. 2011)", &planar, 5),
+        run(
+            "planar arm, whole window (Lakatos et al. 2011; half end-point, varied sensors)",
+            &planar,
+            5,
+        ),
         run(
             "stochastic spring array (Park & Chang 2011)",
             &stochastic,

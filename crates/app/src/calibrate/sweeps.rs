@@ -23,11 +23,13 @@ pub(super) struct SweepOutcome {
 /// scan cried "reflex" on another generator's reflex-free arms): joint or
 /// end-point data (positions through inverse kinematics, white position and
 /// force noise), 20-60 trials, T_k 150-250 ms observed for T_k + 70 ms (the
-/// held-out generator) or 450 ms (limpid's), a cuff in a quarter, random
-/// link lengths, rest torques and sensor noise.
+/// held-out generator) or 450 ms (limpid's), a cuff in a quarter (when
+/// `cuff_allowed`; the draw is made either way), random link lengths, rest
+/// torques and sensor noise.
 pub(super) fn sweep_session(
     seed: u64,
     reflex: bool,
+    cuff_allowed: bool,
 ) -> std::result::Result<(PlanarSubject, limpid_ident::planar::PlanarData, bool), String> {
     let mut rng = StdRng::seed_from_u64(seed);
     let mut subject = planar_subject(&mut rng, reflex);
@@ -37,7 +39,7 @@ pub(super) fn sweep_session(
         shoulder: [0.0, 0.0],
     };
     subject.tau0 = [uniform(&mut rng, -0.5, 0.5), uniform(&mut rng, -0.5, 0.5)];
-    if rng.random::<f64>() < 0.25 {
+    if rng.random::<f64>() < 0.25 && cuff_allowed {
         subject.cuff = Some(Cuff::seed003(&arm, subject.q0));
     }
     let mut protocol = PlanarProtocol::seed003();
@@ -69,7 +71,7 @@ pub(super) fn sweep_session(
 
 pub(super) fn sweep(seed: u64, reflex: bool, varied: bool) -> Option<SweepOutcome> {
     let (subject, data, endpoint) = if varied {
-        sweep_session(seed, reflex).ok()?
+        sweep_session(seed, reflex, true).ok()?
     } else {
         let (subject, data) = planar_session(seed, reflex).ok()?;
         (subject, data, false)
