@@ -27,7 +27,7 @@ use limpid_dsp::LowPass;
 /// | `drift_std_n` | 0.05 N | slow force drift, continuous over the recording |
 /// | `drift_lowpass_hz` | 0.5 Hz | bandwidth of the drift |
 /// | `force_quantum_n` | 1/160 N | F/T sensor resolution (ATI-type 16-bit count; forces are rounded to it) |
-/// | `servo_bandwidth_hz` | 30 Hz | the position-controlled robot follows its command through a critically damped 2nd-order servo of this natural frequency (tracking error ≈ velocity x 2/ω); 0: ideal tracking |
+/// | `servo_bandwidth_hz` | 30 Hz | the position-controlled robot follows its command through a critically damped 2nd-order servo of this natural frequency (tracking error ≈ velocity x 2/ω); 0: ideal tracking, the inertial force averaged over each sample period (a velocity step shows as M Δv / dt) |
 /// | `force_noise_fraction` | 0 | signal-dependent force noise: s.d. this fraction of the subject's own force |K (x - S) + B x'|, per axis (motor noise grows with force, Harris & Wolpert 1998) |
 /// | `force_noise_hz` | 2 Hz | bandwidth of that noise (motor-unit and voluntary fluctuations, low-passed) |
 /// | `posture_drift_std_m` | 0 | the subject's equilibrium wanders by this s.d. (m), adding -K δ(t) to the force |
@@ -254,7 +254,14 @@ pub fn simulate_centre_out(
             let idx = trial * per + i;
             let t_in = i as f64 * dt - protocol.rest_s;
             let (mut s, mut sd, mut sdd) = command_at(t_in);
-            if omega > 0.0 {
+            if omega == 0.0 {
+                // ideal tracking: the force sensor averages over its sample
+                // period, so a velocity step (the sinusoid starts and stops
+                // moving at full speed) shows as the impulse M Δv / dt, not as
+                // nothing (issue 37: without it M came out 0 and K off by -ω² M)
+                let rate = |t: f64| command_at(t).1;
+                sdd = (rate(t_in + dt / 2.0) - rate(t_in - dt / 2.0)) / dt;
+            } else {
                 // actual motion: s'' = ω² (s_cmd - s) - 2 ω s' with the command
                 // continuous in time, 20 semi-implicit Euler steps per sample
                 let h = dt / 20.0;

@@ -54,3 +54,40 @@ fn slow_ramps_report_stiffness_for_a_plausible_inertia() {
         assert!(method.contains("prior mean inertia"), "{method}");
     }
 }
+
+/// Seed 000's sinusoid starts and stops at full speed. With an ideal position
+/// servo the force sensor sees that velocity step as the impulse `M Δv / dt`
+/// in its sample period; the virtual lab had left it out, so the acceleration
+/// the filter makes of the step had no force, the fit put M near 0 and K
+/// absorbed `-ω² M` (11.7 SE in `limpid calibrate`, issue 37). With little
+/// position noise the inertia is identified and K lies within its SEs.
+#[test]
+fn an_ideal_servo_sinusoid_identifies_the_inertia() {
+    let posture = Posture {
+        name: "S".into(),
+        start: Vector3::new(0.4, 0.0, 0.0),
+        inertia: Matrix3::from_diagonal(&Vector3::new(1.2, 2.0, 0.7)),
+        damping: Matrix3::new(20.0, 2.0, 1.0, 2.0, 15.0, 0.5, 1.0, 0.5, 10.0),
+        stiffness: Matrix3::new(600.0, 50.0, 20.0, 50.0, 800.0, 30.0, 20.0, 30.0, 700.0),
+    };
+    let noise = NoiseModel {
+        servo_bandwidth_hz: 0.0,
+        position_std_m: 1e-5,
+        ..NoiseModel::default()
+    };
+    let rec =
+        simulate_centre_out(&posture, &CentreOut::seed000(Profile::Sinusoid), &noise, 3).unwrap();
+    let data = prepare(&rec, &PrepareParams::default()).unwrap();
+    let est = fit_linear(&data, &LinearParams::default()).unwrap();
+    for i in 0..3 {
+        let m = est.inertia[(i, i)];
+        let truth = posture.inertia[(i, i)];
+        assert!(
+            (m - truth).abs() < 0.15 * truth,
+            "M[{i}] = {m}, truth {truth}"
+        );
+        let z = (est.stiffness[(i, i)] - posture.stiffness[(i, i)])
+            / est.standard_errors.stiffness[(i, i)];
+        assert!(z.abs() < 3.0, "K[{i}] is {z:.1} SE off");
+    }
+}
