@@ -253,26 +253,28 @@ pub fn simulate_centre_out(
         for i in 0..per {
             let idx = trial * per + i;
             let t_in = i as f64 * dt - protocol.rest_s;
-            let (mut s, mut sd, mut sdd) = command_at(t_in);
-            if omega == 0.0 {
+            let (command, command_rate, _) = command_at(t_in);
+            let (s, sd, sdd) = if omega == 0.0 {
                 // ideal tracking: the force sensor averages over its sample
                 // period, so a velocity step (the sinusoid starts and stops
                 // moving at full speed) shows as the impulse M Δv / dt, not as
                 // nothing (issue 37: without it M came out 0 and K off by -ω² M)
                 let rate = |t: f64| command_at(t).1;
-                sdd = (rate(t_in + dt / 2.0) - rate(t_in - dt / 2.0)) / dt;
+                let mean_acceleration = (rate(t_in + dt / 2.0) - rate(t_in - dt / 2.0)) / dt;
+                (command, command_rate, mean_acceleration)
             } else {
                 // actual motion: s'' = ω² (s_cmd - s) - 2 ω s' with the command
                 // continuous in time, 20 semi-implicit Euler steps per sample
                 let h = dt / 20.0;
                 let accel = |c: f64, p: f64, v: f64| omega * omega * (c - p) - 2.0 * omega * v;
-                (s, sd, sdd) = (servo_s, servo_v, accel(s, servo_s, servo_v));
+                let now = (servo_s, servo_v, accel(command, servo_s, servo_v));
                 for j in 0..20 {
                     let c = command_at(t_in + j as f64 * h).0;
                     servo_v += accel(c, servo_s, servo_v) * h;
                     servo_s += servo_v * h;
                 }
-            }
+                now
+            };
             let disp = dir * (protocol.radius_m * s);
             let vel = dir * (protocol.radius_m * sd);
             let acc = dir * (protocol.radius_m * sdd);
