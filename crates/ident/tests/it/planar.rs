@@ -366,6 +366,41 @@ fn noisy_end_point_angles_do_not_delay_the_onset() {
     );
 }
 
+/// Noise-free data: the jackknife over trials is zero, so a scan without a
+/// floor for the misfit every trial shares read the few per cent by which
+/// filtering and differences bias K in the first 30 ms (and D in the hold)
+/// as a change, and trusted no window (issue 37). A reflex is still found.
+#[test]
+fn noise_free_trials_show_no_change_but_a_reflex_does() {
+    use limpid_ident::planar::window_sweep;
+    use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject, Reflex};
+    let mut subject = PlanarSubject::seed003();
+    let rec = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.0, 0.0, 1).unwrap();
+    let sweep = window_sweep(&prepare_seed003(&rec), 50.0, 400.0, 10.0, None).unwrap();
+    assert!(
+        sweep.impedance_change.is_none(),
+        "{:?}",
+        sweep.impedance_change
+    );
+    let truth = limpid_core::Matrix::from(subject.stiffness);
+    let trusted: Vec<&limpid_ident::planar::SweepRow> =
+        sweep.rows.iter().filter(|r| r.trusted).collect();
+    assert!(trusted.len() > 20, "{} windows trusted", trusted.len());
+    for r in trusted {
+        let ek = limpid_testkit::rel_err(&r.estimate.stiffness, &truth);
+        assert!(ek < 0.1, "{} ms: K error {ek}", r.observation_window_ms);
+    }
+    subject.reflex = Some(Reflex {
+        latency_s: 0.06,
+        stiffness_gain: 0.3,
+        damping_gain: 0.3,
+    });
+    let rec = simulate_planar(&subject, &PlanarProtocol::seed003(), 0.0, 0.0, 1).unwrap();
+    let sweep = window_sweep(&prepare_seed003(&rec), 50.0, 400.0, 10.0, None).unwrap();
+    let change = sweep.impedance_change.expect("the reflex is found");
+    assert!((40.0..=110.0).contains(&change.onset_ms), "{change:?}");
+}
+
 /// Seed 003 §IV-A's cuff: soft tissue in series between robot and arm. A
 /// very stiff cuff gives back the rigid arm; the seed's cuff delays the
 /// criteria to windows of a few hundred ms, as seed 003 Fig. 4 shows, where
