@@ -38,6 +38,8 @@ pub enum WarningCode {
     /// The EMG envelopes came with the recording (`env_` columns made at the
     /// EMG's native rate by a channel map), not from raw EMG.
     EnvelopesGiven,
+    /// Too few trials for the standard errors to be taken at ±2 SE = 95 %.
+    FewTrials,
 }
 
 /// A warning attached to a result.

@@ -3,6 +3,7 @@
 
 mod common;
 mod examples;
+mod few_trials;
 mod noiseless;
 mod planar;
 mod reflex;
