@@ -18,8 +18,13 @@ pub(super) fn centre_out(profile: Profile, seed: u64) -> std::result::Result<Out
         servo_bandwidth_hz: if rng.random::<bool>() { 30.0 } else { 0.0 },
         ..sensors(&mut rng)
     };
-    let rec = simulate_centre_out(&posture, &CentreOut::seed000(profile), &noise, seed)
-        .map_err(|e| e.to_string())?;
+    // half with seed 000's 16 directions, half with 10-32 (issue 37: fewer
+    // and more trials; below 10 the estimate warns, see `few_trials_warning`)
+    let mut protocol = CentreOut::seed000(profile);
+    if rng.random::<bool>() {
+        protocol.directions = limpid_lab::sphere::even_directions(rng.random_range(10..=32));
+    }
+    let rec = simulate_centre_out(&posture, &protocol, &noise, seed).map_err(|e| e.to_string())?;
     let data = prepare(&rec, &PrepareParams::default()).map_err(|e| e.to_string())?;
     let est = fit_linear(&data, &LinearParams::default()).map_err(|e| e.to_string())?;
     let mut o = Outcome::default();
