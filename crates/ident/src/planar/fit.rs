@@ -427,6 +427,9 @@ pub(crate) struct BlockSolution {
     /// Per parameter, the share of its regressor's mean square that is
     /// signal rather than angle noise (1 without noise).
     pub(crate) reliability: Vec<f64>,
+    /// `(Σ_i A_iᵀ A_i)⁻¹` of the regressors (unscaled), from the merged
+    /// triangle; None when it is singular.
+    pub(crate) gram_inverse: Option<DMatrix<f64>>,
 }
 
 pub(crate) fn solve_blocks(
@@ -517,11 +520,17 @@ pub(crate) fn solve_blocks(
             solve(t, noise).ok().map(|s| s.0)
         })
         .collect();
+    let r = merged.view((0, 0), (p, p));
+    let gram_inverse = (r.transpose() * r)
+        .cholesky()
+        .map(|c| c.inverse())
+        .map(|inv| DMatrix::from_fn(p, p, |i, j| inv[(i, j)] / (scales[i] * scales[j])));
     Ok(BlockSolution {
         theta,
         condition_number_scaled,
         replicates,
         reliability,
+        gram_inverse,
     })
 }
 

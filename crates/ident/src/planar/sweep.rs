@@ -329,13 +329,14 @@ pub const SYSTEMATIC_TORQUE_ERROR: f64 = 0.01;
 /// processing error: filtering, differences, the rigid-body model), which a
 /// jackknife over trials cannot see: the per-sample variance of the mean
 /// residual beyond what the trials' own scatter explains, `ε²`, through one
-/// mean trial's normal matrix, `ε² (Σ_i A_iᵀ A_i / g)⁻¹`. None when the
-/// trials differ in length.
+/// mean trial's normal matrix, `ε² (Σ_i A_iᵀ A_i / g)⁻¹` (the solution's
+/// `gram_inverse` times g). None when the trials differ in length.
 pub(crate) fn systematic_covariance(
     blocks: &[DMatrix<f64>],
-    theta: &DVector<f64>,
+    sol: &BlockSolution,
 ) -> Option<DMatrix<f64>> {
     let rows = blocks.first()?.nrows();
+    let theta = &sol.theta;
     let p = theta.len();
     if blocks.len() < 2
         || blocks
@@ -362,12 +363,8 @@ pub(crate) fn systematic_covariance(
         .sum::<f64>()
         / (g * rows as f64);
     let eps2 = measured + (SYSTEMATIC_TORQUE_ERROR.powi(2) * torque_ms);
-    let gram = blocks.iter().fold(DMatrix::<f64>::zeros(p, p), |a, b| {
-        let x = b.columns(0, p);
-        a + x.transpose() * x
-    }) / g;
-    let inverse = gram.cholesky()?.inverse();
-    Some(inverse * eps2).filter(|c| c.iter().all(|v| v.is_finite()))
+    let inverse = sol.gram_inverse.as_ref()?;
+    Some(inverse * (g * eps2)).filter(|c| c.iter().all(|v| v.is_finite()))
 }
 
 /// Scan the split time over the longest window: where K or D before and
@@ -411,7 +408,7 @@ pub fn impedance_change(
                 .map(|&i| split_noise(&model, &data.trials[i], longest, split, xi))
                 .collect();
             let sol = solve_blocks(&blocks, &noise).ok()?;
-            let systematic = systematic_covariance(&blocks, &sol.theta);
+            let systematic = systematic_covariance(&blocks, &sol);
             let sys_var = |j: usize| systematic.as_ref().map_or(0.0, |c| c[(j, j)]);
             // relative jackknife SE of the 4 parameters from `at` (||SE|| / ||value||)
             let rel_se = |at: usize| {
