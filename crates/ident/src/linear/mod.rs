@@ -391,7 +391,9 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
     let inertia = block(&solved.theta, 0);
     let damping = block(theta, 1);
     let stiffness = block(theta, 2);
-    let mut warnings: Vec<Warning> = few_trials_warning(data.windows.len()).into_iter().collect();
+    let mut warnings: Vec<Warning> = few_trials_warning(data.windows.len(), &se_method)
+        .into_iter()
+        .collect();
     if data.demeaned && params.equilibrium {
         warnings.push(Warning::new(WarningCode::EquilibriumAbsorbed, "equilibrium not estimated: each trial's force offset was fitted, which absorbs it; use rest offsets (Artemiadis et al. 2010) to estimate it"));
     }

@@ -234,9 +234,10 @@ pub const FEW_TRIALS: usize = 10;
 /// The warning for an estimate from fewer than [`FEW_TRIALS`] trials: with
 /// a jackknife over g trials the SE itself has g - 1 degrees of freedom, so a
 /// 95 % interval is ±t SE, t from Student's t; with fewer trials than a
-/// jackknife needs the SEs come from contiguous pieces (or the residuals),
-/// which share each trial's offsets and drifts and may be too small.
-pub(crate) fn few_trials_warning(trials: usize) -> Option<Warning> {
+/// jackknife needs the SEs come from contiguous pieces or the residuals
+/// (`se_method` names which), which share each trial's offsets and drifts and
+/// may be too small.
+pub(crate) fn few_trials_warning(trials: usize, se_method: &str) -> Option<Warning> {
     use statrs::distribution::{ContinuousCDF, StudentsT};
     // one window is a continuous recording: its pieces are its samples' blocks
     if !(2..FEW_TRIALS).contains(&trials) {
@@ -250,7 +251,7 @@ pub(crate) fn few_trials_warning(trials: usize) -> Option<Warning> {
         )
     } else {
         format!(
-            "only {trials} trials, fewer than the {MIN_JACKKNIFE_BLOCKS} a jackknife over trials needs: the standard errors come from pieces of the data, which share each trial's offsets and drifts, and may be too small (on virtual subjects with 6 trials ±2 SE held the true K in 85 % of cases); record at least {FEW_TRIALS} trials"
+            "only {trials} trials, fewer than the {MIN_JACKKNIFE_BLOCKS} a jackknife over trials needs: the standard errors ({se_method}) share each trial's offsets and drifts, and may be too small (on virtual subjects with 6 trials ±2 SE held the true K in 85 % of cases); record at least {FEW_TRIALS} trials"
         )
     };
     Some(Warning::new(WarningCode::FewTrials, message))

@@ -31,7 +31,7 @@ fn warning_with(trials: usize) -> Option<String> {
 fn few_trials_are_named_with_the_interval_to_use() {
     let six = warning_with(6).expect("6 trials are too few");
     assert!(
-        six.contains("only 6 trials") && six.contains("pieces"),
+        six.contains("only 6 trials") && six.contains("(contiguous pieces)"),
         "{six}"
     );
     // Student's t with 7 degrees of freedom: 2.36
