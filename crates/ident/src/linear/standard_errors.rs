@@ -251,7 +251,7 @@ pub(crate) fn few_trials_warning(trials: usize, se_method: &str) -> Option<Warni
         )
     } else {
         format!(
-            "only {trials} trials, fewer than the {MIN_JACKKNIFE_BLOCKS} a jackknife over trials needs: the standard errors ({se_method}) share each trial's offsets and drifts, and may be too small (on virtual subjects with 6 trials ±2 SE held the true K in 85 % of cases); record at least {FEW_TRIALS} trials"
+            "only {trials} trials, fewer than the {MIN_JACKKNIFE_BLOCKS} a jackknife over trials needs: the standard errors, {se_method}, share each trial's offsets and drifts, and may be too small (on virtual subjects with 6 trials ±2 SE held the true K in 85 % of cases); record at least {FEW_TRIALS} trials"
         )
     };
     Some(Warning::new(WarningCode::FewTrials, message))
