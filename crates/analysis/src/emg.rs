@@ -121,6 +121,17 @@ pub fn cocontraction_index(
     maxima: &[f64],
     params: &EmgParams,
 ) -> Result<Vec<f64>> {
+    cocontraction_index_and_peaks(rec, muscles, maxima, params).map(|(index, _)| index)
+}
+
+/// [`cocontraction_index`] and each muscle's peak envelope as a fraction of
+/// its MVC maximum (above 1: the MVC was not maximal, or the files are swapped).
+pub fn cocontraction_index_and_peaks(
+    rec: &Recording,
+    muscles: &[String],
+    maxima: &[f64],
+    params: &EmgParams,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     if muscles.is_empty() {
         return Err(Error::MissingColumn {
             path: rec.path().to_path_buf(),
@@ -130,16 +141,18 @@ pub fn cocontraction_index(
         });
     }
     let mut index = vec![0.0; rec.len()];
+    let mut peaks = Vec::with_capacity(muscles.len());
     for (m, max) in muscles.iter().zip(maxima) {
         let raw = rec.require(m, "EMG channel")?;
         let env = column_envelope(m, raw, rec.sample_rate(), params)?;
         for (c, e) in index.iter_mut().zip(&env) {
             *c += e / max;
         }
+        peaks.push(env.iter().fold(0.0f64, |a, v| a.max(*v)) / max);
     }
     let k = muscles.len() as f64;
     index.iter_mut().for_each(|c| *c /= k);
-    Ok(index)
+    Ok((index, peaks))
 }
 
 /// Statistics of the index over the samples of one level.

@@ -369,8 +369,26 @@ fn linear(at: &str, r: &LinearResult) -> Result<(), String> {
         ("standard_errors.stiffness", &r.standard_errors.stiffness),
         ("standard_errors.damping", &r.standard_errors.damping),
         ("standard_errors.inertia", &r.standard_errors.inertia),
+        ("symmetric.stiffness", &r.symmetric.stiffness),
+        ("symmetric.damping", &r.symmetric.damping),
+        ("symmetric.inertia", &r.symmetric.inertia),
+        ("antisymmetric.stiffness", &r.antisymmetric.stiffness),
+        ("antisymmetric.damping", &r.antisymmetric.damping),
+        ("antisymmetric.inertia", &r.antisymmetric.inertia),
     ] {
         square(&format!("{at}{name}"), m, d)?;
+    }
+    // the tables label rows and columns from the provenance (issue 56: a
+    // 3x3 result naming 1 coordinate crashed the report)
+    for (name, len) in [
+        ("provenance.coordinates", r.provenance.coordinates.len()),
+        ("provenance.force_columns", r.provenance.force_columns.len()),
+        (
+            "criteria.regressor_reliability",
+            r.criteria.regressor_reliability.len(),
+        ),
+    ] {
+        same(&format!("{at}{name}"), len, d, "the matrices' rows")?;
     }
     if let Some(eq) = &r.equilibrium {
         same(&format!("{at}equilibrium"), eq.len(), d, "coordinates")?;

@@ -76,6 +76,8 @@ fn flag(field: &str) -> Option<&'static str> {
         "reflex" => "--reflex",
         "inputs/outputs" => "--inputs/--outputs",
         "lsl" => "--lsl",
+        "position" => "--position",
+        "torque" => "--torque",
         _ => return None,
     })
 }
@@ -99,14 +101,19 @@ pub fn estimate(
     out: Output<'_>,
     text: impl FnOnce(&Estimated, &Request, &[PathBuf]) -> CliResult,
 ) -> CliResult {
+    // checked before it is printed too: a request limpid would refuse to run is not printed
+    let checked = request.check().map_err(with_flag_names)?;
     if out.print_request {
         println!(
             "{}",
-            serde_json::to_string_pretty(&request).expect("requests serialise")
+            serde_json::to_string_pretty(checked.request()).expect("requests serialise")
         );
         return Ok(());
     }
-    let checked = request.check().map_err(with_flag_names)?;
+    if let Some(report) = out.report {
+        let inputs: Vec<(&Path, &str)> = paths.iter().map(|p| (p.as_path(), "an input")).collect();
+        crate::refuse_overwriting_inputs(&[(report, "the report (--report)")], &inputs)?;
+    }
     // the MVC recording beside a co-contraction session records less (EMG only)
     let supporting = |i: usize| matches!(checked.request(), Request::Cocontraction(_)) && i > 0;
     let recordings = paths

@@ -123,6 +123,10 @@ pub fn run_inspect(args: InspectArgs) -> CliResult {
 
 /// Convert a file to a FORMAT.md recording.
 pub fn run_convert(args: ConvertArgs) -> CliResult {
+    crate::refuse_overwriting_inputs(
+        &[(&args.output, "the output (-o)")],
+        &[(&args.file, "the file to convert")],
+    )?;
     let converted = limpid_io::convert(&args.file, crate::channel_map())?;
     let rec = &converted.recording;
     limpid_io::write_recording(rec, &args.output)?;

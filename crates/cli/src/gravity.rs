@@ -41,6 +41,18 @@ pub struct GravityArgs {
 
 /// The three sensor columns `prefix` x, y, z (forces `sensor_f`, torques `sensor_t`).
 pub fn run(args: GravityArgs) -> CliResult {
+    let mut inputs = vec![(args.recording.as_path(), "the recording")];
+    inputs.extend(
+        args.bias
+            .as_deref()
+            .map(|p| (p, "the bias recording (--bias)")),
+    );
+    inputs.extend(
+        args.calibration
+            .as_deref()
+            .map(|p| (p, "the calibration (--calibration)")),
+    );
+    crate::refuse_overwriting_inputs(&[(&args.output, "the output (-o)")], &inputs)?;
     let mut rec = crate::read_recording(&args.recording)?;
     let robot = args.robot.robot()?;
     let summary = match (&args.calibration, &args.bias) {

@@ -71,6 +71,17 @@ pub fn run(args: LiveArgs) -> CliResult {
     if channels.is_empty() {
         return Err("no EMG channels (emg_* columns) to show".into());
     }
+    // `--channels ""` or `a,,b`, and one name twice (issue 56)
+    if let Some(i) = channels.iter().position(|c| c.trim().is_empty()) {
+        return Err(format!("invalid --channels: channel {} has no name", i + 1).into());
+    }
+    if let Some((i, c)) = channels
+        .iter()
+        .enumerate()
+        .find(|(i, c)| channels[..*i].contains(c))
+    {
+        return Err(format!("invalid --channels: {c} is named twice (channel {})", i + 1).into());
+    }
     let rate = args
         .rate
         .or(replay.as_ref().map(|r| r.sample_rate()))

@@ -109,6 +109,19 @@ pub fn channel_map() -> Option<&'static limpid_io::map::ChannelMap> {
     CHANNEL_MAP.get()
 }
 
+/// Refuse, before any work, an output that is one of the command's inputs
+/// (the channel map of `--map` counted among them; issue 56).
+pub fn refuse_overwriting_inputs(
+    outputs: &[(&std::path::Path, &str)],
+    inputs: &[(&std::path::Path, &str)],
+) -> limpid_core::Result<()> {
+    let mut all = inputs.to_vec();
+    if let Some(map) = channel_map().and_then(|m| m.path.as_deref()) {
+        all.push((map, "the channel map (--map)"));
+    }
+    limpid_core::files::refuse_overwriting_inputs(outputs, &all)
+}
+
 /// Read a file beside the main recording (an MVC recording, calibration
 /// poses) through the map, leaving out the columns it does not record.
 pub fn read_supporting_recording(
@@ -138,12 +151,21 @@ fn parse_arguments() -> Result<Cli, ExitCode> {
         .and_then(|m| Cli::from_arg_matches(&m));
     parsed.map_err(|e| {
         use clap::error::ErrorKind;
-        if matches!(
-            e.kind(),
-            ErrorKind::DisplayHelp
-                | ErrorKind::DisplayVersion
-                | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-        ) {
+        if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+            // written and flushed here: clap's own exit ignores a full or
+            // closed standard output and exits 0 having printed nothing (issue 56)
+            use std::io::Write;
+            let text = e.render().to_string();
+            let mut out = std::io::stdout().lock();
+            return match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(io) => {
+                    eprintln!("limpid: cannot write to standard output: {io}");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
             e.exit()
         }
         eprintln!("limpid: {}", usage_error_line(&e.to_string()));
@@ -187,18 +209,19 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    let cli = match parse_arguments() {
-        Ok(cli) => cli,
-        Err(code) => return code,
-    };
     // A command started with its standard output closed would exit 0 having
     // printed nothing: Rust's runtime reopens a closed descriptor 1 on
-    // /dev/null (read-write, which a shell's `> /dev/null` never is). Say so.
+    // /dev/null (read-write, which a shell's `> /dev/null` never is). Say so,
+    // before `--help` or `--version` too (issue 56).
     #[cfg(unix)]
     if stdout_was_closed() {
         eprintln!("limpid: standard output is closed: nothing could be printed");
         return ExitCode::from(2);
     }
+    let cli = match parse_arguments() {
+        Ok(cli) => cli,
+        Err(code) => return code,
+    };
     // a panic is a bug or an unwritable output: one line and exit 2, never a backtrace
     std::panic::set_hook(Box::new(|info| {
         let message = limpid_core::error::panic_message(info.payload());
@@ -242,7 +265,7 @@ fn main() -> ExitCode {
                 }
                 source = s.source();
             }
-            eprintln!("limpid: {msg}");
+            eprintln!("limpid: {}", limpid_core::error::tidy_numbers(&msg));
             ExitCode::from(2)
         }
     }
@@ -283,7 +306,12 @@ fn run(cli: Cli) -> CliResult {
                 | Command::Convert(_)
         );
         if !reads_recordings {
-            return Err("--map applies to the commands that read recordings (estimate, window-sweep, spectra, gravity-compensate, live, convert); this one reads none".into());
+            let why = match cli.command {
+                Command::Study { .. } => "`study` reads the maps its manifest names ([study] map, or a recording's own map), not --map",
+                Command::Rerun(_) => "`rerun` reads the map its result was made with (the run block's channel_map), not --map",
+                _ => "it applies to the commands that read recordings (estimate, window-sweep, spectra, gravity-compensate, live, convert); this one reads none",
+            };
+            return Err(format!("--map: {why}").into());
         }
         set_channel_map(path)?;
     }

@@ -101,7 +101,12 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             protocol,
             robot,
             output,
-        } => match (read_design(&protocol)?.0, robot) {
+        } => {
+            limpid_core::files::refuse_overwriting_inputs(
+                &[(&output, "the output (-o)")],
+                &[(&protocol, "the protocol")],
+            )?;
+            match (read_design(&protocol)?.0, robot) {
             (Design::CentreOut(p), Some(robot)) => export(&p, &robot, &protocol, &output),
             (Design::CentreOut(_), None) => {
                 Err("a centre-out protocol is exported for a robot: add --robot kuka-lwr4|puma3|FILE.urdf".into())
@@ -111,7 +116,8 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             (Design::Ensemble(_) | Design::RampAndHold(_), _) => Err(
                 "ensemble and ramp-and-hold protocols are for `limpid simulate`; exporting them to a robot is not supported yet".into(),
             ),
-        },
+            }
+        }
         ProtocolCommand::Check { protocol, json } => {
             let (d, report) = read_design(&protocol)?;
             let predicted = limpid_app::protocol::predicted_condition(&d)?;
@@ -260,6 +266,13 @@ fn write_truth(recording: &Path, samples: usize, truth: &limpid_core::Truth) -> 
 }
 
 pub fn run_simulate(args: SimulateArgs) -> CliResult {
+    let mut inputs = vec![(args.protocol.as_path(), "the protocol")];
+    inputs.extend(
+        args.subject
+            .as_deref()
+            .map(|p| (p, "the subject (--subject)")),
+    );
+    limpid_core::files::refuse_overwriting_inputs(&[(&args.output, "the output (-o)")], &inputs)?;
     if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         limpid_core::files::create_dir(dir)?;
     }

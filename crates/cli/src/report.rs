@@ -70,6 +70,16 @@ pub fn write(doc: &Document, path: &Path) -> CliResult {
 }
 
 pub fn run(args: ReportArgs) -> CliResult {
+    let mut outputs = vec![(args.output.as_path(), "the report (-o)")];
+    if let Some(dir) = &args.figures {
+        outputs.push((dir.as_path(), "the figures folder (--figures)"));
+    }
+    let inputs: Vec<(&Path, &str)> = args
+        .results
+        .iter()
+        .map(|p| (p.as_path(), "a result to report"))
+        .collect();
+    limpid_core::files::refuse_overwriting_inputs(&outputs, &inputs)?;
     let mut docs = Vec::new();
     for p in &args.results {
         let text = limpid_core::files::read_text(p)?;

@@ -24,6 +24,12 @@ pub struct RerunArgs {
 }
 
 pub fn run(args: RerunArgs) -> CliResult {
+    if let Some(report) = &args.report {
+        crate::refuse_overwriting_inputs(
+            &[(report, "the report (--report)")],
+            &[(&args.result, "the result to rerun")],
+        )?;
+    }
     let name = args.result.display().to_string();
     let text = limpid_core::files::read_text(&args.result)?;
     let doc = Document::from_json(&name, &text)?;
@@ -63,6 +69,13 @@ pub fn run(args: RerunArgs) -> CliResult {
             }
         })
         .collect();
+    if let Some(p) = paths.iter().find(|p| !limpid_io::named_like_a_recording(p)) {
+        return Err(format!(
+            "{name}: its run block names {} as an input, which is not named like a recording (.csv, .parquet, .mat, .xdf, .c3d, .tdms); not read",
+            p.display()
+        )
+        .into());
+    }
     for (file, path) in run.inputs.iter().zip(&paths) {
         let meta = std::fs::metadata(path).ok();
         let bytes = meta.as_ref().map(|m| m.len());

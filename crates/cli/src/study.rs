@@ -63,6 +63,13 @@ fn bar(len: usize, msg: &'static str) -> CliResult<ProgressBar> {
 pub fn run(cmd: StudyCommand) -> CliResult {
     match cmd {
         StudyCommand::Run(args) => {
+            limpid_core::files::check_output_folder(&args.out)?;
+            if let Some(path) = &args.report {
+                limpid_core::files::refuse_overwriting_inputs(
+                    &[(path, "the report (--report)")],
+                    &[(&args.manifest, "the study manifest")],
+                )?;
+            }
             let manifest = load_manifest(&args.manifest)?;
             if let Some(path) = &args.report {
                 limpid_core::files::check_output_path(path)?;

@@ -273,6 +273,108 @@ pub fn short_number(v: f64) -> String {
     }
 }
 
+/// A number in a message (an error, a warning, a note): six significant
+/// digits, trailing zeros dropped, an exponent outside 1e-3..1e6 (`1e308`,
+/// not 309 digits; `1000 Hz`, not `1000.0000000001102 Hz`); NaN and
+/// infinities as `NaN`, `inf`, `-inf` (issue 56: one formatter for every message).
+#[derive(Debug, Clone, Copy)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v.is_nan() {
+            return f.write_str("NaN");
+        }
+        if v.is_infinite() {
+            return f.write_str(if v > 0.0 { "inf" } else { "-inf" });
+        }
+        if v == 0.0 {
+            return f.write_str("0");
+        }
+        let e = v.abs().log10().floor() as i32;
+        if (-3..6).contains(&e) {
+            let text = significant(v, 6);
+            // rounding may carry to 1e6 (999999.7): that is the exponent form
+            if !text.trim_start_matches('-').starts_with("1000000") {
+                return f.write_str(&text);
+            }
+        }
+        let text = format!("{v:.5e}");
+        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        write!(f, "{mantissa}e{exponent}")
+    }
+}
+
+/// A message with every long decimal number in it written as [`Num`]
+/// writes numbers (`1e308` for 309 digits, `1000` for
+/// `1000.0000000001102`): the last step before a message reaches a person,
+/// for numbers formatted without [`Num`] on the way. A number is a run of
+/// digits with a point or an exponent, or of more than 15 digits, that is
+/// not part of a word or a path (file names keep their digits).
+pub fn tidy_numbers(message: &str) -> String {
+    let bytes = message.as_bytes();
+    let mut out = String::with_capacity(message.len());
+    let mut i = 0;
+    let mut copied = 0;
+    while i < bytes.len() {
+        let starts_number = bytes[i].is_ascii_digit()
+            && (i == 0 || !is_word_byte(bytes[i - 1]) && bytes[i - 1] != b'.');
+        if !starts_number {
+            i += 1;
+            continue;
+        }
+        let start = if i > 0 && bytes[i - 1] == b'-' {
+            i - 1
+        } else {
+            i
+        };
+        let mut end = i;
+        while end < bytes.len() && bytes[end].is_ascii_digit() {
+            end += 1;
+        }
+        let mut decimal = false;
+        if end + 1 < bytes.len() && bytes[end] == b'.' && bytes[end + 1].is_ascii_digit() {
+            decimal = true;
+            end += 1;
+            while end < bytes.len() && bytes[end].is_ascii_digit() {
+                end += 1;
+            }
+        }
+        if end < bytes.len() && (bytes[end] == b'e' || bytes[end] == b'E') {
+            let mut e = end + 1;
+            if e < bytes.len() && (bytes[e] == b'-' || bytes[e] == b'+') {
+                e += 1;
+            }
+            if e < bytes.len() && bytes[e].is_ascii_digit() {
+                while e < bytes.len() && bytes[e].is_ascii_digit() {
+                    e += 1;
+                }
+                decimal = true;
+                end = e;
+            }
+        }
+        let in_word = end < bytes.len() && (is_word_byte(bytes[end]) || bytes[end] == b'/');
+        let digits = message[i..end].bytes().filter(u8::is_ascii_digit).count();
+        let long = (decimal && digits > 10) || digits > 15;
+        if !in_word && long {
+            if let Ok(v) = message[start..end].parse::<f64>() {
+                out.push_str(&message[copied..start]);
+                out.push_str(&Num(v).to_string());
+                copied = end;
+            }
+        }
+        i = end;
+    }
+    out.push_str(&message[copied..]);
+    out
+}
+
+fn is_word_byte(b: u8) -> bool {
+    b.is_ascii_alphanumeric() || b == b'_' || b == b'/' || b == b'\\'
+}
+
 /// A number for CSV output: the shortest text that reads back to the same
 /// double, with an exponent below 1e-4 and from 1e15 in magnitude
 /// (`1.2895775544584347e-16`, not 32 zeros and digits).
@@ -354,6 +456,47 @@ pub fn with_standard_error(v: f64, se: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_numbers_in_messages_are_tidied_and_names_kept() {
+        let long = format!("found 3, {}", 4.9e-324f64);
+        assert_eq!(tidy_numbers(&long), "found 3, 4.94066e-324");
+        let huge = format!("cut-off ({} Hz)", 1e308f64);
+        assert_eq!(tidy_numbers(&huge), "cut-off (1e308 Hz)");
+        assert_eq!(
+            tidy_numbers(
+                "rate 1000.0000000001102 Hz and 9.999999999998899 ms, -0.30000000000000004"
+            ),
+            "rate 1000 Hz and 10 ms, -0.3"
+        );
+        for kept in [
+            "rec_20260101123456789.csv: row 2",
+            "/data/1234567890123456789/x.csv",
+            "found 0.25 and 25600 samples",
+            "v1.2.3",
+        ] {
+            assert_eq!(tidy_numbers(kept), kept);
+        }
+    }
+
+    #[test]
+    fn message_numbers_are_short() {
+        for (v, text) in [
+            (1e308, "1e308"),
+            (4.9e-324, "4.94066e-324"),
+            (1000.0000000001102, "1000"),
+            (9.999999999998899, "10"),
+            (999999.7, "1e6"),
+            (-0.25, "-0.25"),
+            (1e-300, "1e-300"),
+            (123456.789, "123457"),
+            (0.0, "0"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+        ] {
+            assert_eq!(Num(v).to_string(), text, "{v:e}");
+        }
+    }
 
     #[test]
     fn csv_numbers_are_short_and_read_back_exactly() {

@@ -147,31 +147,150 @@ fn write_through<T>(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<T>,
 ) -> Result<T> {
-    let file = std::fs::OpenOptions::new()
-        .write(true)
-        .create(true)
-        .truncate(true)
-        .open(path)
-        .map_err(|e| io_error(path, e))?;
+    let file = open_through(path)?;
     let mut w = BufWriter::new(file);
     let v = write(&mut w)?;
     w.flush().map_err(|e| io_error(path, e))?;
     Ok(v)
 }
 
+/// How long an output FIFO may wait for its reader to open it.
+const FIFO_READER_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Open `path` for writing in place. A FIFO is opened without blocking: one
+/// that nothing reads would block the command for ever (issue 56), so it is
+/// refused after [`FIFO_READER_WAIT`].
+fn open_through(path: &Path) -> Result<File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true).create(true).truncate(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+        let is_fifo = std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo());
+        if is_fifo {
+            options.custom_flags(libc::O_NONBLOCK);
+            let started = std::time::Instant::now();
+            let file = loop {
+                match options.open(path) {
+                    Ok(file) => break file,
+                    // ENXIO: no process has the FIFO open for reading
+                    Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+                        if started.elapsed() >= FIFO_READER_WAIT {
+                            return Err(Error::Format {
+                                path: path.to_path_buf(),
+                                message: "is a FIFO that nothing reads: start its reader first, or name a file".into(),
+                            });
+                        }
+                        std::thread::sleep(std::time::Duration::from_millis(20));
+                    }
+                    Err(e) => return Err(io_error(path, e)),
+                }
+            };
+            // writes block again (as to any pipe) once the reader is there
+            use std::os::unix::io::AsRawFd;
+            // SAFETY: fcntl on a descriptor this function owns, clearing one flag.
+            unsafe {
+                let fd = file.as_raw_fd();
+                let flags = libc::fcntl(fd, libc::F_GETFL);
+                if flags != -1 {
+                    libc::fcntl(fd, libc::F_SETFL, flags & !libc::O_NONBLOCK);
+                }
+            }
+            return Ok(file);
+        }
+    }
+    options.open(path).map_err(|e| io_error(path, e))
+}
+
+/// The same file on disk: one inode (a hard link, a symbolic link, `./x`
+/// and `x`), or, for paths not yet created, the same absolute path.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            return ma.dev() == mb.dev() && ma.ino() == mb.ino();
+        }
+    }
+    match (absolute_path(a), absolute_path(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// `path` made absolute through its existing part (links resolved), the
+/// missing rest appended as written.
+fn absolute_path(path: &Path) -> Option<PathBuf> {
+    if let Ok(p) = std::fs::canonicalize(path) {
+        return Some(p);
+    }
+    let name = path.file_name()?;
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+    let parent = match parent {
+        Some(p) => absolute_path(p)?,
+        None => std::env::current_dir().ok()?,
+    };
+    Some(parent.join(name))
+}
+
+/// Refuse, before any work, an output that is one of the command's inputs:
+/// writing it would replace the file being read (`convert X -o X`,
+/// `--map M --report M`; issue 56). `outputs` and `inputs` pair a path with
+/// the flag or role that named it, for the message.
+pub fn refuse_overwriting_inputs(
+    outputs: &[(&Path, &str)],
+    inputs: &[(&Path, &str)],
+) -> Result<()> {
+    for (out, out_role) in outputs {
+        if let Some((_, in_role)) = inputs.iter().find(|(input, _)| same_file(out, input)) {
+            return Err(Error::Format {
+                path: out.to_path_buf(),
+                message: format!(
+                    "is both {out_role} and {in_role}; writing it would replace the input: name another output file"
+                ),
+            });
+        }
+    }
+    for (i, (a, a_role)) in outputs.iter().enumerate() {
+        if let Some((_, b_role)) = outputs[i + 1..].iter().find(|(b, _)| same_file(a, b)) {
+            return Err(Error::Format {
+                path: a.to_path_buf(),
+                message: format!(
+                    "named both as {a_role} and as {b_role}: name two different paths"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Make the output folder `dir` (and its parents). A path that exists but is
 /// not a folder is one clear error, not "File exists (os error 17)".
 pub fn create_dir(dir: &Path) -> Result<()> {
-    if let Ok(meta) = std::fs::metadata(dir) {
-        if !meta.is_dir() {
-            return Err(Error::Format {
-                path: dir.to_path_buf(),
-                message: "exists and is not a folder; name a folder for the outputs".into(),
-            });
-        }
+    check_output_folder(dir)?;
+    if dir.is_dir() {
         return Ok(());
     }
     std::fs::create_dir_all(dir).map_err(|e| io_error(dir, e))
+}
+
+/// Before a long computation: `dir` is a folder or can be made as one (it,
+/// or its nearest existing ancestor, is not a file).
+pub fn check_output_folder(dir: &Path) -> Result<()> {
+    let mut d = Some(dir);
+    while let Some(p) = d.filter(|p| !p.as_os_str().is_empty()) {
+        if let Ok(meta) = std::fs::metadata(p) {
+            if !meta.is_dir() {
+                return Err(Error::Format {
+                    path: p.to_path_buf(),
+                    message: "exists and is not a folder; name a folder for the outputs".into(),
+                });
+            }
+            return Ok(());
+        }
+        d = p.parent();
+    }
+    Ok(())
 }
 
 /// Write bytes to `path` atomically.
@@ -256,6 +375,14 @@ impl OutputSet {
     /// Make an output folder (and its parents) as [`create_dir`] does; the
     /// folders it made are removed again if the set is not committed.
     pub fn create_dir(&mut self, dir: &Path) -> Result<()> {
+        if self.staged.iter().any(|(_, file)| same_file(file, dir)) {
+            return Err(Error::Format {
+                path: dir.to_path_buf(),
+                message:
+                    "named both as an output file and as an output folder: name two different paths"
+                        .into(),
+            });
+        }
         let mut missing = Vec::new();
         let mut d = Some(dir);
         while let Some(p) = d.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {
@@ -269,19 +396,19 @@ impl OutputSet {
     }
 
     /// Rename every staged file into place and write the others through.
+    /// A failure part-way removes every temporary still staged (issue 56).
     pub fn commit(mut self) -> Result<()> {
-        self.folders.clear();
-        for (tmp, target) in std::mem::take(&mut self.staged) {
-            std::fs::rename(&tmp, &target).map_err(|e| {
-                let _ = std::fs::remove_file(&tmp);
-                io_error(&target, e)
-            })?;
+        while let Some((tmp, target)) = self.staged.first().cloned() {
+            // on an error `self` is dropped, removing this temporary and the rest
+            std::fs::rename(&tmp, &target).map_err(|e| io_error(&target, e))?;
+            self.staged.remove(0);
         }
         for (path, bytes) in std::mem::take(&mut self.through) {
             write_through(&path, |w| {
                 w.write_all(&bytes).map_err(|e| io_error(&path, e))
             })?;
         }
+        self.folders.clear();
         Ok(())
     }
 }
@@ -405,6 +532,109 @@ mod tests {
         // a directory is refused in one line
         let e = write_file(&dir, b"x").unwrap_err().to_string();
         assert!(e.contains("is a directory"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 56: a FIFO nobody reads is refused instead of blocking for ever.
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_without_a_reader_is_refused_not_waited_on() {
+        let dir = std::env::temp_dir().join(format!("limpid-fifo-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let fifo = dir.join("pipe");
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: mkfifo on a fresh path in our own temporary folder.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        let started = std::time::Instant::now();
+        let e = write_file(&fifo, b"x").unwrap_err().to_string();
+        assert!(e.contains("FIFO that nothing reads"), "{e}");
+        assert!(started.elapsed() < std::time::Duration::from_secs(10));
+        // the same through an output set
+        let mut set = OutputSet::new();
+        set.add(&fifo, b"x").unwrap();
+        assert!(set
+            .commit()
+            .unwrap_err()
+            .to_string()
+            .contains("nothing reads"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 56: an output that is an input, by any name, is refused; so is
+    /// one path named as two outputs, or as a file and a folder of one set.
+    #[test]
+    fn outputs_never_replace_inputs() {
+        let dir = std::env::temp_dir().join(format!("limpid-same-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        let input = dir.join("rec.csv");
+        std::fs::write(&input, b"t\n0\n").unwrap();
+        let dotted = dir.join("sub/../rec.csv");
+        assert!(same_file(&input, &dotted));
+        #[cfg(unix)]
+        {
+            let link = dir.join("link.csv");
+            std::os::unix::fs::symlink(&input, &link).unwrap();
+            assert!(same_file(&link, &input));
+            let hard = dir.join("hard.csv");
+            std::fs::hard_link(&input, &hard).unwrap();
+            assert!(same_file(&hard, &input));
+        }
+        assert!(!same_file(&input, &dir.join("other.csv")));
+        assert!(same_file(&dir.join("new.csv"), &dir.join("sub/../new.csv")));
+        let e = refuse_overwriting_inputs(&[(&dotted, "-o")], &[(&input, "the recording")])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is both -o and the recording"), "{e}");
+        refuse_overwriting_inputs(
+            &[(&dir.join("out.csv"), "-o")],
+            &[(&input, "the recording")],
+        )
+        .unwrap();
+        let e = refuse_overwriting_inputs(
+            &[
+                (&dir.join("r.html"), "-o"),
+                (&dir.join("r.html"), "--figures"),
+            ],
+            &[],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("named both as -o and as --figures"), "{e}");
+        let mut set = OutputSet::new();
+        set.add(&dir.join("r.html"), b"page").unwrap();
+        let e = set.create_dir(&dir.join("r.html")).unwrap_err().to_string();
+        assert!(e.contains("output file and as an output folder"), "{e}");
+        drop(set);
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains("limpid-tmp") || n == "r.html")
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 56: a commit that fails part-way leaves no temporary behind.
+    #[test]
+    fn a_failed_commit_removes_its_temporaries() {
+        let dir = std::env::temp_dir().join(format!("limpid-commit-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut set = OutputSet::new();
+        set.add(&dir.join("a.html"), b"a").unwrap();
+        set.add(&dir.join("b.svg"), b"b").unwrap();
+        // a folder appears where the first file goes, after staging
+        std::fs::create_dir(dir.join("a.html")).unwrap();
+        std::fs::write(dir.join("a.html/keep"), b"k").unwrap();
+        assert!(set.commit().is_err());
+        let mut left: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["a.html"], "temporaries left");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

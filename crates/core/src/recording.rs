@@ -295,6 +295,9 @@ impl Recording {
     }
 }
 
+/// Fastest sample rate accepted (Hz): beyond any force or motion sensor.
+pub const MAX_SAMPLE_RATE_HZ: f64 = 1e6;
+
 /// Check that `t` is strictly increasing and uniform inside each trial;
 /// return the sample rate (Hz). Intervals where the `trial` id changes may be
 /// longer (FORMAT.md: recordings may keep only the perturbation windows).
@@ -345,12 +348,17 @@ fn check_time(path: &Path, t: &[f64], trial: Option<&[f64]>, first_row: usize) -
         }
     }
     let rate = 1.0 / median;
-    if !rate.is_finite() {
-        return Err(Error::NonUniformSampling {
+    // a step of 1 ns or 1e-300 s is a unit or scale mistake; downstream it
+    // read as a filter with an infinite Nyquist frequency (issue 56)
+    if !(rate.is_finite() && rate <= MAX_SAMPLE_RATE_HZ) {
+        return Err(Error::Format {
             path: path.to_path_buf(),
-            row: first_row + 1,
-            found_s: median,
-            median_s: median,
+            message: format!(
+                "column t: implausible sample rate {} Hz (median interval {} s); limpid reads recordings sampled at up to {} Hz: is t in seconds?",
+                crate::error::Num(rate),
+                crate::error::Num(median),
+                crate::error::Num(MAX_SAMPLE_RATE_HZ)
+            ),
         });
     }
     Ok(rate)

@@ -50,6 +50,108 @@ pub fn noise_sigma(x: &[f64]) -> f64 {
     med / (0.6745 * 6f64.sqrt())
 }
 
+/// A signal logged faster than it was measured: each value held for
+/// `factor` samples (a 250 Hz encoder logged at 1 kHz), or interpolated
+/// linearly between values `factor` samples apart (a stream put on a faster
+/// clock).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Resampled {
+    /// Samples per measured value.
+    pub factor: usize,
+    /// Held (repeated) rather than linearly interpolated.
+    pub held: bool,
+    /// Index of the first sample of a new measured value (0..factor).
+    pub phase: usize,
+}
+
+impl Resampled {
+    /// "held for 4 samples" or "linearly interpolated over 4 samples".
+    pub fn describe(&self) -> String {
+        if self.held {
+            format!("each value held for {} samples", self.factor)
+        } else {
+            format!(
+                "linearly interpolated between values {} samples apart",
+                self.factor
+            )
+        }
+    }
+}
+
+/// Largest resampling factor looked for.
+const MAX_RESAMPLING: usize = 32;
+
+/// Whether `x` was held or linearly interpolated from a slower signal
+/// (issue 56): its first differences (held) or second differences
+/// (interpolated) are zero, to rounding, except on one sample in every
+/// `factor`, always at the same phase. A quantised signal at its native
+/// rate also has many zero differences, but where its value changes falls
+/// anywhere, not on a grid; so at least 20 changes are needed, 99 % of
+/// them on one residue.
+pub fn resampling(x: &[f64]) -> Option<Resampled> {
+    // a logging rate holds for the whole signal: its start is enough (and
+    // bounds the cost on long recordings)
+    let x = &x[..x.len().min(1 << 16)];
+    let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if x.len() < 8 * MAX_RESAMPLING || !(scale.is_finite() && scale > 0.0) {
+        return None;
+    }
+    let tolerance = 1e-9 * scale;
+    // held: first differences; interpolated: second differences
+    for held in [true, false] {
+        let changes: Vec<usize> = if held {
+            (1..x.len())
+                .filter(|&i| (x[i] - x[i - 1]).abs() > tolerance)
+                .collect()
+        } else {
+            (2..x.len())
+                .filter(|&i| (x[i] - 2.0 * x[i - 1] + x[i - 2]).abs() > tolerance)
+                // the knot sits one sample before the second difference that sees it
+                .map(|i| i - 1)
+                .collect()
+        };
+        if changes.len() < 20 {
+            continue;
+        }
+        let on_grid = |k: usize| -> Option<usize> {
+            let mut count = vec![0usize; k];
+            for &i in &changes {
+                count[i % k] += 1;
+            }
+            let (phase, most) = count
+                .iter()
+                .enumerate()
+                .max_by_key(|(_, c)| **c)
+                .map(|(p, c)| (p, *c))?;
+            (most as f64 >= 0.99 * changes.len() as f64).then_some(phase)
+        };
+        if let Some((factor, phase)) = (2..=MAX_RESAMPLING)
+            .rev()
+            .find_map(|k| on_grid(k).map(|p| (k, p)))
+        {
+            return Some(Resampled {
+                factor,
+                held,
+                phase,
+            });
+        }
+    }
+    None
+}
+
+/// Noise standard deviation of `x` at the rate it was measured: from the
+/// measured values only when it was held or interpolated ([`resampling`]),
+/// whose zero differences would otherwise read as no noise at all.
+pub fn native_noise_sigma(x: &[f64]) -> (f64, Option<Resampled>) {
+    match resampling(x) {
+        Some(r) => {
+            let measured: Vec<f64> = x.iter().skip(r.phase).step_by(r.factor).copied().collect();
+            (noise_sigma(&measured), Some(r))
+        }
+        None => (noise_sigma(x), None),
+    }
+}
+
 /// The element of rank `count / 2` of `count` non-negative floats given as
 /// bits (which sort as the floats do), by radix selection: a histogram of
 /// the top 16 bits, then a selection among the values of the median's
@@ -100,11 +202,13 @@ pub fn windows_from_trial_column(rec: &Recording, column: &str) -> Result<Vec<Wi
     let mut start = 0;
     for i in 0..=ids.len() {
         if i < ids.len() && ids[i].fract() != 0.0 {
-            return Err(Error::NotANumber {
+            return Err(Error::Format {
                 path: rec.path().to_path_buf(),
-                row: rec.row_of(i),
-                column: column.into(),
-                found: format!("{} (trial ids must be integers)", ids[i]),
+                message: format!(
+                    "row {}, column {column}: expected an integer trial id, found {}",
+                    rec.row_of(i),
+                    crate::error::Num(ids[i])
+                ),
             });
         }
         if i == ids.len() || ids[i] != ids[start] {
@@ -352,5 +456,48 @@ mod tests {
         }
         assert_eq!(noise_sigma(&[2.5; 1000]), 0.0);
         assert!(noise_sigma(&[1.0, 3.0, 2.0]) > 0.0);
+    }
+
+    /// Issue 56: held and interpolated signals are found with their factor,
+    /// and their noise is read at the measured rate; a quantised signal at
+    /// its own rate is not mistaken for one.
+    #[test]
+    fn held_and_interpolated_signals_are_found() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let sigma = 1e-4;
+        // white noise of σ: uniform on ±√3 σ
+        let native: Vec<f64> = (0..2000)
+            .map(|i| 0.01 * (i as f64 * 4e-3).sin() + sigma * 12f64.sqrt() * uniform())
+            .collect();
+        assert_eq!(resampling(&native), None);
+        let held: Vec<f64> = (0..8000).map(|i| native[i / 4]).collect();
+        let (s, r) = native_noise_sigma(&held);
+        assert_eq!(r.map(|r| (r.factor, r.held)), Some((4, true)));
+        assert!((s / sigma - 1.0).abs() < 0.2, "{s}");
+        assert!(
+            noise_sigma(&held) < 0.1 * sigma,
+            "the full-rate estimate is ~0"
+        );
+        let interpolated: Vec<f64> = (0..7997)
+            .map(|i| {
+                let (k, f) = (i / 4, (i % 4) as f64 / 4.0);
+                native[k] * (1.0 - f) + native[k + 1] * f
+            })
+            .collect();
+        let (s, r) = native_noise_sigma(&interpolated);
+        assert_eq!(r.map(|r| (r.factor, r.held)), Some((4, false)));
+        assert!((s / sigma - 1.0).abs() < 0.2, "{s}");
+        // quantised to 1e-4 at the native rate: many zero differences, no grid
+        let quantised: Vec<f64> = native.iter().map(|v| (v * 1e4).round() / 1e4).collect();
+        assert_eq!(resampling(&quantised), None);
+        // a constant or short signal: nothing to say
+        assert_eq!(resampling(&[1.0; 1000]), None);
+        assert_eq!(resampling(&held[..100]), None);
     }
 }

@@ -40,6 +40,12 @@ pub enum WarningCode {
     EnvelopesGiven,
     /// Too few trials for the standard errors to be taken at ±2 SE = 95 %.
     FewTrials,
+    /// A signal was logged faster than it was measured (held or linearly
+    /// interpolated samples): its derivatives are the logging's, not the limb's.
+    ResampledSignal,
+    /// EMG envelopes peak well above the MVC maxima (the MVC was not
+    /// maximal, or the recording and the MVC file are swapped).
+    EmgAboveMvc,
 }
 
 /// A warning attached to a result.

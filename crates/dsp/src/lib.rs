@@ -17,6 +17,7 @@
 pub mod cross_spectra;
 pub mod spectral;
 
+use limpid_core::error::Num;
 use limpid_core::{Error, Result};
 use sci_rs::signal::filter::design::{
     butter_dyn, DigitalFilter, FilterBandType, FilterOutputType, Sos,
@@ -65,21 +66,32 @@ impl LowPass {
         if !(fs_hz.is_finite() && fs_hz > 0.0) {
             return Err(Error::invalid(
                 "sample rate",
-                format!("expected a finite positive rate in Hz, found {fs_hz}"),
+                format!(
+                    "expected a finite positive rate in Hz, found {}",
+                    Num(fs_hz)
+                ),
             ));
         }
         let nyquist = limpid_core::display_round(fs_hz / 2.0);
         if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
             return Err(Error::invalid(
                 "cut-off",
-                format!("expected 0 < cut-off < {nyquist} Hz (Nyquist), found {cutoff_hz} Hz"),
+                format!(
+                    "expected 0 < cut-off < {} Hz (Nyquist), found {} Hz",
+                    Num(nyquist),
+                    Num(cutoff_hz)
+                ),
             ));
         }
         // sci-rs asserts (panics) on cut-offs that underflow its pole placement
         if cutoff_hz / nyquist < 1e-6 {
             return Err(Error::invalid(
                 "cut-off",
-                format!("{cutoff_hz:.3e} Hz is below 1e-6 of the Nyquist frequency {nyquist} Hz: no usable filter"),
+                format!(
+                    "{} Hz is below 1e-6 of the Nyquist frequency {} Hz: no usable filter",
+                    Num(cutoff_hz),
+                    Num(nyquist)
+                ),
             ));
         }
         let design = std::panic::catch_unwind(|| {
@@ -95,7 +107,11 @@ impl LowPass {
         let Ok(DigitalFilter::Sos(sos)) = design else {
             return Err(Error::invalid(
                 "filter",
-                format!("no Butterworth design for order {order}, {cutoff_hz} Hz at {fs_hz} Hz (sci-rs returned no second-order sections)"),
+                format!(
+                    "no Butterworth design for order {order}, {} Hz at {} Hz (sci-rs returned no second-order sections)",
+                    Num(cutoff_hz),
+                    Num(fs_hz)
+                ),
             ));
         };
         let finite = sos
@@ -105,7 +121,11 @@ impl LowPass {
         if !finite {
             return Err(Error::invalid(
                 "cut-off",
-                format!("{cutoff_hz} Hz at {fs_hz} Hz sampling gives no usable filter (too close to 0 or to Nyquist)"),
+                format!(
+                    "{} Hz at {} Hz sampling gives no usable filter (too close to 0 or to Nyquist)",
+                    Num(cutoff_hz),
+                    Num(fs_hz)
+                ),
             ));
         }
         Ok(LowPass {

@@ -44,7 +44,10 @@ pub(crate) fn positive(name: &str, v: f64) -> Result<()> {
     } else {
         Err(Error::invalid(
             name,
-            format!("expected a positive number, found {v}"),
+            format!(
+                "expected a positive number, found {}",
+                limpid_core::error::Num(v)
+            ),
         ))
     }
 }

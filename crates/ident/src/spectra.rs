@@ -63,6 +63,35 @@ pub fn check_columns(inputs: &[String], outputs: &[String]) -> Result<()> {
     Ok(())
 }
 
+/// Fewest Welch segments for coherences of `inputs` inputs: an estimate
+/// averaged over n segments reads about q/n for signals that share nothing,
+/// and exactly 1 from one segment (issue 56: `--nfft` as long as the
+/// recording printed a coherence of 1 everywhere). Twice the inputs plus
+/// one, doubled, keeps that floor at or below 1/4.
+pub fn min_coherence_segments(inputs: usize) -> usize {
+    2 * (inputs + 1)
+}
+
+/// Refuse coherences from too few Welch segments ([`min_coherence_segments`]).
+pub fn check_segments(
+    rec: &Recording,
+    segments: usize,
+    inputs: usize,
+    nperseg: usize,
+) -> Result<()> {
+    let needed = min_coherence_segments(inputs);
+    if segments < needed {
+        return Err(Error::Format {
+            path: rec.path().to_path_buf(),
+            message: format!(
+                "{segments} Welch segment(s) of {nperseg} samples in {} samples: coherences from fewer than {needed} segments (for {inputs} input(s)) are biased towards 1 and would read as a perfect fit; use a shorter segment (--nfft) or a longer recording",
+                rec.len()
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// Spectra and coherences of `inputs` and `outputs` (column names) of `rec`.
 /// Refuses a column named twice (the inputs' spectral matrix would be
 /// singular everywhere) and an input that never varies (no spectrum to divide by).
@@ -114,8 +143,9 @@ pub fn spectra(
         }
     }
     let s = SegmentSpectra::new(&signals, welch)?;
-    let mats = s.matrix();
     let q = inputs.len();
+    check_segments(rec, s.segments(), q, welch.nperseg)?;
+    let mats = s.matrix();
     let points: Vec<_> = mats.iter().map(|m| mimo_point(m, q)).collect();
     let psd = (0..names.len())
         .map(|i| mats.iter().map(|m| m[(i, i)].re).collect())

@@ -66,6 +66,21 @@ pub fn is_mat(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("mat"))
 }
 
+/// Whether `path` is named like a file limpid reads as a recording
+/// (CSV/TSV/text, Parquet, MAT, XDF, C3D, TDMS). `limpid rerun` reads only
+/// such files from a result's run block: a hand-edited result naming
+/// `/etc/passwd` had its first line echoed in the error (issue 56).
+pub fn named_like_a_recording(path: &Path) -> bool {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    matches!(
+        ext.as_deref(),
+        Some("csv" | "tsv" | "txt" | "parquet" | "pq" | "mat" | "xdf" | "c3d" | "tdms")
+    )
+}
+
 /// Read a recording, choosing the format by extension.
 pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     let path = path.as_ref();
@@ -217,6 +232,18 @@ pub fn write_recording(rec: &Recording, path: impl AsRef<Path>) -> Result<()> {
             path: path.to_path_buf(),
             message: "limpid reads MAT-files but does not write them; write .csv or .parquet (MATLAB reads both: readtable, parquetread)".into(),
         })
+    } else if let Some(ext) = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .filter(|e| !matches!(e.as_str(), "csv" | "txt"))
+    {
+        // issue 56: `-o x.xdf` wrote CSV under an XDF name
+        Err(Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "limpid writes recordings as .csv or .parquet, not .{ext}; name the output with one of those"
+            ),
+        })
     } else {
         write_csv(rec, path)
     }
@@ -243,9 +270,7 @@ fn read_mat_bytes(path: &Path, bytes: &[u8]) -> Result<Recording> {
 /// A level-5 MAT-file as a source: numeric vectors by dotted struct path.
 pub(crate) fn read_mat_source(path: &Path, bytes: &[u8]) -> Result<sources::Source> {
     if bytes.is_empty() {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-        });
+        return Err(sources::empty_lab_file(path, "MAT"));
     }
     if !bytes.starts_with(b"MATLAB 5.0 MAT-file") {
         return Err(Error::Format {

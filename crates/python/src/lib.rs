@@ -19,9 +19,10 @@ mod spectral;
 use spectral::{cross_spectra, frequency_response, lowpass_filtfilt};
 
 fn err(e: Error) -> PyErr {
+    let text = limpid_core::error::tidy_numbers(&e.to_string());
     match e {
-        Error::Io { .. } => PyOSError::new_err(e.to_string()),
-        other => PyValueError::new_err(other.to_string()),
+        Error::Io { .. } => PyOSError::new_err(text),
+        _ => PyValueError::new_err(text),
     }
 }
 
@@ -63,7 +64,7 @@ fn detached<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> T {
 }
 
 fn value_err(e: impl std::fmt::Display) -> PyErr {
-    PyValueError::new_err(e.to_string())
+    PyValueError::new_err(limpid_core::error::tidy_numbers(&e.to_string()))
 }
 
 /// A recording from a path (CSV or Parquet) or a dict of 1-D arrays.
@@ -119,6 +120,35 @@ fn columns_dict<'py>(py: Python<'py>, rec: &Recording) -> PyResult<Bound<'py, Py
     Ok(d)
 }
 
+/// Deepest nesting of dicts and lists taken from Python (a channel map is
+/// four levels deep, a request three).
+const MAX_PYTHON_NESTING: usize = 16;
+
+/// Refuse a Python value nested deeper than [`MAX_PYTHON_NESTING`] or
+/// containing itself, before serde walks it: the walk recurses on the
+/// native stack and a dict that contains itself crashed the interpreter
+/// (issue 56). `what` names the value in the error.
+fn check_nesting(value: &Bound<'_, PyAny>, what: &str) -> PyResult<()> {
+    fn walk(value: &Bound<'_, PyAny>, depth: usize, what: &str) -> PyResult<()> {
+        let children: Vec<Bound<'_, PyAny>> = if let Ok(d) = value.cast::<PyDict>() {
+            d.values().iter().collect()
+        } else if let Ok(l) = value.cast::<pyo3::types::PyList>() {
+            l.iter().collect()
+        } else if let Ok(t) = value.cast::<pyo3::types::PyTuple>() {
+            t.iter().collect()
+        } else {
+            return Ok(());
+        };
+        if depth >= MAX_PYTHON_NESTING {
+            return Err(value_err(format!(
+                "{what}: nested deeper than {MAX_PYTHON_NESTING} levels (or it contains itself)"
+            )));
+        }
+        children.iter().try_for_each(|c| walk(c, depth + 1, what))
+    }
+    walk(value, 0, what)
+}
+
 /// A channel map from a TOML file's path or from a dict of the same shape
 /// (through serde, as requests are).
 fn channel_map(map: &Bound<'_, PyAny>) -> PyResult<limpid_io::map::ChannelMap> {
@@ -130,6 +160,7 @@ fn channel_map(map: &Bound<'_, PyAny>) -> PyResult<limpid_io::map::ChannelMap> {
             "map is the path of a channel map (TOML) or a dict like {'time': {...}, 'columns': {...}}",
         ));
     }
+    check_nesting(map, "channel map")?;
     let mut de = pythonize::Depythonizer::from_object(map);
     let parsed: limpid_io::map::ChannelMap = serde::Deserialize::deserialize(&mut de)
         .map_err(|e| PyValueError::new_err(format!("channel map: {e}")))?;
@@ -221,6 +252,7 @@ fn build_request(
     if let Some((name, _)) = nested {
         top.set_item(name, inner)?;
     }
+    check_nesting(top.as_any(), "options")?;
     let mut de = pythonize::Depythonizer::from_object(top.as_any());
     deserialize_request(method, &mut de).map_err(|e| {
         let text = e.to_string();
@@ -249,9 +281,12 @@ fn request<'py>(
     method: &str,
     options: &Bound<'py, PyDict>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let r = build_request(method, options)?;
+    // checked as an estimate checks it: `window_ms=inf` made a request that
+    // serialised the value as null (issue 56)
+    let checked = build_request(method, options)?.check().map_err(err)?;
+    let r = checked.request();
     // through JSON's data model: lists, not tuples, as a result's run block reads back
-    let value = serde_json::to_value(&r).map_err(value_err)?;
+    let value = serde_json::to_value(r).map_err(value_err)?;
     pythonize::pythonize(py, &value).map_err(value_err)
 }
 
@@ -405,8 +440,23 @@ fn matrix_element_unit(kind: &str, row: &str, column: &str) -> PyResult<String> 
 fn ellipsoid(matrix: Vec<Vec<f64>>) -> PyResult<String> {
     let matrix = limpid_core::Matrix::from_rows(&matrix)
         .ok_or_else(|| value_err("the matrix's rows differ in length"))?;
-    let e = limpid_analysis::ellipsoid(&matrix)
-        .ok_or_else(|| value_err("ellipsoids are for 2 x 2 and 3 x 3 matrices"))?;
+    let n = matrix.0.nrows();
+    if !(matrix.0.is_square() && (n == 2 || n == 3)) {
+        return Err(value_err(format!(
+            "ellipsoids are for 2 x 2 and 3 x 3 matrices, found {} x {}",
+            n,
+            matrix.0.ncols()
+        )));
+    }
+    // issue 56: a NaN matrix was told it was not 2 x 2 or 3 x 3
+    if matrix.0.iter().any(|v| !v.is_finite()) {
+        return Err(value_err(
+            "the matrix holds NaN or infinite values: no ellipsoid",
+        ));
+    }
+    let e = limpid_analysis::ellipsoid(&matrix).ok_or_else(|| {
+        value_err("no ellipsoid: the matrix's symmetric part has no real eigen-decomposition")
+    })?;
     serde_json::to_string(&e).map_err(value_err)
 }
 
@@ -515,6 +565,17 @@ fn report(py: Python<'_>, results: Vec<String>, path: std::path::PathBuf) -> PyR
             Ok((name, doc.estimate))
         })
         .collect::<PyResult<_>>()?;
+    // the recordings the results were made from are inputs: never replaced (issue 56)
+    let recordings: Vec<std::path::PathBuf> = inputs
+        .iter()
+        .filter_map(|(_, e)| e.recording().map(std::path::PathBuf::from))
+        .collect();
+    let named: Vec<(&Path, &str)> = recordings
+        .iter()
+        .map(|p| (p.as_path(), "the recording of a result"))
+        .collect();
+    limpid_core::files::refuse_overwriting_inputs(&[(&path, "the report path")], &named)
+        .map_err(value_err)?;
     let r = detached(py, || limpid_report::build(&inputs));
     limpid_core::files::write_file(&path, limpid_report::to_html(&r).as_bytes())
         .map_err(|e| PyOSError::new_err(e.to_string()))

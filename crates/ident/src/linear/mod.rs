@@ -440,7 +440,7 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
             "the estimate or its standard errors are not finite numbers: the data overflow double precision or do not determine the model".into(),
         ));
     }
-    let identifiable = Identifiable {
+    let mut identifiable = Identifiable {
         inertia: inertia_identified,
         damping: judge(
             MatrixKind::Damping,
@@ -455,6 +455,7 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
             &mut warnings,
         ),
     };
+    distrust_derivatives_of_resampled_positions(data, &mut identifiable, &mut warnings);
     quality_warnings(
         &identifiable,
         condition_number,
@@ -512,4 +513,42 @@ pub fn units(coords: &[String]) -> (&'static str, &'static str, &'static str) {
     } else {
         ("SI", "SI", "SI")
     }
+}
+
+/// Positions logged faster than they were measured (held or interpolated
+/// samples, issue 56): their velocity and acceleration are steps and spikes
+/// of the logging, not the limb's, and B and M came out 13-55 % low at tens
+/// of standard errors while "trusted". Damping and inertia are then not
+/// identifiable, and a warning says why; the noise was read at the measured rate.
+fn distrust_derivatives_of_resampled_positions(
+    data: &Prepared,
+    identifiable: &mut Identifiable,
+    warnings: &mut Vec<Warning>,
+) {
+    // coordinates resampled alike are named together: "x, y, z (each value held for 4 samples)"
+    let mut groups: Vec<(String, Vec<&str>)> = Vec::new();
+    for (c, r) in data.coordinates.iter().zip(&data.resampled) {
+        let Some(r) = r else { continue };
+        let how = r.describe();
+        match groups.iter_mut().find(|(h, _)| *h == how) {
+            Some((_, names)) => names.push(c),
+            None => groups.push((how, vec![c])),
+        }
+    }
+    if groups.is_empty() {
+        return;
+    }
+    let found: Vec<String> = groups
+        .iter()
+        .map(|(how, names)| format!("{} ({how})", names.join(", ")))
+        .collect();
+    identifiable.damping = false;
+    identifiable.inertia = false;
+    warnings.push(Warning::new(
+        WarningCode::ResampledSignal,
+        format!(
+            "positions logged faster than they were measured: {}; their velocity and acceleration are the logging's steps, so damping and inertia are not identifiable (position noise read at the measured rate); record at the sensor's own rate",
+            found.join(", ")
+        ),
+    ));
 }

@@ -154,7 +154,8 @@ fn check_arm(arm: &Arm) -> Result<()> {
             "link lengths",
             format!(
                 "expected two lengths from {MIN_LINK_M} to {MAX_LINK_M} m, found {}, {}",
-                arm.l1, arm.l2
+                limpid_core::error::Num(arm.l1),
+                limpid_core::error::Num(arm.l2)
             ),
         ));
     }

@@ -606,7 +606,13 @@ fn sweep_windows(data: &PlanarData, from_ms: f64, to_ms: f64, step_ms: f64) -> R
     if count > MAX_SWEEP_WINDOWS as f64 {
         return Err(Error::invalid(
             "window range",
-            format!("{from_ms}..{to_ms} ms in steps of {step_ms} ms makes {count:.3e} windows; at most {MAX_SWEEP_WINDOWS}"),
+            format!(
+                "{}..{} ms in steps of {} ms makes {} windows; at most {MAX_SWEEP_WINDOWS}",
+                limpid_core::error::Num(from_ms),
+                limpid_core::error::Num(to_ms),
+                limpid_core::error::Num(step_ms),
+                limpid_core::error::Num(count as f64)
+            ),
         ));
     }
     let mut windows = Vec::new();

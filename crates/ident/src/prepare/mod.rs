@@ -23,7 +23,8 @@ use std::ops::Range;
 use std::path::PathBuf;
 
 use limpid_core::trial::{
-    change_floors, detect_windows, noise_sigma, perturbation_onset, windows_from_trial_column,
+    change_floors, detect_windows, native_noise_sigma, noise_sigma, perturbation_onset,
+    windows_from_trial_column,
 };
 use limpid_core::{Error, FrameTransform, Recording, Result, Window};
 use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
@@ -225,8 +226,13 @@ pub struct Prepared {
     pub trim: usize,
     /// Mean reference position over windows (absolute coordinates).
     pub reference: Vec<f64>,
-    /// Position noise σ per coordinate, estimated from second differences of the raw data.
+    /// Position noise σ per coordinate, estimated from second differences of
+    /// the raw data at the rate they were measured (see `resampled`).
     pub position_noise: Vec<f64>,
+    /// Per coordinate: the position was logged faster than measured (held
+    /// or interpolated samples, issue 56); its velocity and acceleration are
+    /// then steps and spikes, so damping and inertia cannot be trusted.
+    pub resampled: Vec<Option<limpid_core::trial::Resampled>>,
     /// Variance that the position noise contributes to the prepared
     /// displacement, velocity and acceleration of each coordinate, and the
     /// displacement-acceleration noise covariance (`[disp, vel, acc, disp_acc]`;
@@ -346,19 +352,36 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
     let (coords, force_cols) = choose_coordinates(&rec)?;
     let pos = columns(&rec, &coords);
     let frc = columns(&rec, &force_cols);
+    // a coordinate that never moves: its filtered copy varies by rounding
+    // alone, which once gave K 4.6e22 ± 3.6e22 (issue 56)
+    if let Some((c, x)) = coords
+        .iter()
+        .zip(&pos)
+        .find(|(_, x)| x.iter().all(|v| *v == x[0]))
+    {
+        return Err(Error::Format {
+            path: rec.path().to_path_buf(),
+            message: format!(
+                "column {c} holds {} in every sample: that coordinate never moves, so its impedance cannot be estimated; leave the column out (1-, 2- and 3-D recordings are read)",
+                limpid_core::error::Num(x[0])
+            ),
+        });
+    }
     let sign = if params.negate_force { -1.0 } else { 1.0 };
     let min_rest = ((params.min_rest_s * fs).round() as usize).max(3);
 
     let mode = resolved_windowing(&rec, params);
-    // the noise of every signal onset detection needs, signals in parallel
+    // the noise of every signal onset detection needs, signals in parallel;
+    // positions at their measured rate: a held or interpolated stream has
+    // zero second differences, which would read as no noise at all (issue 56)
     let trials = matches!(mode, Windowing::Trials);
-    let noisy: Vec<&[f64]> = pos
-        .iter()
-        .chain(frc.iter().filter(|_| trials))
-        .copied()
+    let (position_noise, resampled): (Vec<f64>, Vec<_>) =
+        pos.par_iter().map(|c| native_noise_sigma(c)).unzip();
+    let forces_for_onsets: Vec<&[f64]> = frc.iter().filter(|_| trials).copied().collect();
+    let force_noise: Vec<f64> = forces_for_onsets
+        .par_iter()
+        .map(|c| noise_sigma(c))
         .collect();
-    let mut position_noise: Vec<f64> = noisy.par_iter().map(|c| noise_sigma(c)).collect();
-    let force_noise = position_noise.split_off(pos.len());
     let mut windows = make_windows(
         &rec,
         mode,
@@ -419,6 +442,7 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
         trim,
         reference,
         position_noise,
+        resampled,
         regressor_noise_var,
     };
     Ok(Plan {

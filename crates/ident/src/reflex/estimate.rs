@@ -471,6 +471,15 @@ fn position_and_torque<'r>(rec: &'r Recording, p: &ReflexParams) -> Result<(&'r 
             format!("column {} names both; they must be two columns", p.position),
         ));
     }
+    // time, trial ids and markers are not signals of the joint (issue 56: `--position t`)
+    for (what, name) in [("position", &p.position), ("torque", &p.torque)] {
+        if matches!(name.as_str(), "t" | "trial" | "level") {
+            return Err(Error::invalid(
+                what,
+                format!("column {name} is the recording's time or bookkeeping, not a joint signal"),
+            ));
+        }
+    }
     let q = rec.require(
         &p.position,
         "the joint angle of the parallel-cascade method",

@@ -68,7 +68,10 @@ fn finite(name: &str, v: f64) -> Result<()> {
     } else {
         Err(Error::invalid(
             name,
-            format!("expected a finite number, found {v}"),
+            format!(
+                "expected a finite number, found {}",
+                limpid_core::error::Num(v)
+            ),
         ))
     }
 }
@@ -132,25 +135,39 @@ impl Request {
             }
             Request::Cocontraction(r) => {
                 check_prepare(&r.prepare)?;
-                if r.tolerance.is_nan() || r.tolerance <= 0.0 {
+                // finite too: an infinite band counts every sample "on target" (issue 56)
+                if !(r.tolerance.is_finite() && r.tolerance > 0.0) {
                     return Err(Error::invalid(
                         "tolerance",
-                        format!("expected a positive band half-width, found {}", r.tolerance),
+                        format!(
+                            "expected a positive, finite band half-width, found {}",
+                            limpid_core::error::Num(r.tolerance)
+                        ),
                     ));
                 }
             }
             Request::Planar(r) => {
                 check_arm(&r.arm)?;
                 if let Some(ms) = r.window_ms {
-                    if ms.is_nan() || ms <= 0.0 {
+                    // finite too: an infinite window was stored as null and
+                    // refused by `rerun` (issue 56)
+                    if !(ms.is_finite() && ms > 0.0) {
                         return Err(Error::invalid(
-                            "observation window",
-                            format!("expected a positive duration in ms, found {ms}"),
+                            "window_ms",
+                            format!(
+                                "expected a positive, finite duration in ms, found {}",
+                                limpid_core::error::Num(ms)
+                            ),
                         ));
                     }
                 }
             }
-            Request::WindowSweep(r) => check_arm(&r.arm)?,
+            Request::WindowSweep(r) => {
+                check_arm(&r.arm)?;
+                positive("from_ms", r.from_ms)?;
+                positive("to_ms", r.to_ms)?;
+                positive("step_ms", r.step_ms)?;
+            }
             Request::Stochastic(r) => {
                 crate::Estimator::check(&StochasticParams {
                     welch: None,

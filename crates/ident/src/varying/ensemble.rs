@@ -394,6 +394,10 @@ fn fit_window(
     if let Some(reason) = refusal(e, &w, (min_repetitions, edge), condition, fs) {
         return empty(reason);
     }
+    if !repetitions_differ(pre, &w, m, &c) {
+        // issue 56: 40 identical repetitions gave K = -1.85 ± 2e-15 "identifiable"
+        return empty("the repetitions do not differ here (their deviations from the mean are at rounding level): the ensemble method needs perturbations that vary from one repetition to the next".into());
+    }
     let Some(theta) = solve_scaled(&cxx, &cxf) else {
         return empty("the regressors are singular here".into());
     };
@@ -459,6 +463,19 @@ fn centred_cross_product(pre: &Prefix, w: &std::ops::Range<usize>, m: usize, r: 
         }
     }
     c
+}
+
+/// Whether the repetitions' deviations from their mean carry more than
+/// rounding: the centred power of the regressors against their raw power.
+fn repetitions_differ(pre: &Prefix, w: &std::ops::Range<usize>, m: usize, centred: &[f64]) -> bool {
+    let regressors = 3 * m / 4;
+    let (mut raw, mut dev) = (0.0, 0.0);
+    for i in 0..regressors {
+        let k = i * m + i;
+        raw += pre.zz[w.end * m * m + k] - pre.zz[w.start * m * m + k];
+        dev += centred[k];
+    }
+    raw > 0.0 && dev > 1e-10 * raw
 }
 
 /// Why a grid point cannot be identified before any fit: too few

@@ -351,6 +351,17 @@ pub struct VaryingEstimate {
 pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<VaryingEstimate> {
     params.check()?;
     let (coords, forces) = crate::prepare::choose_coordinates(rec)?;
+    // the force fitted cannot schedule itself: its perturbation response
+    // moves the schedule with it (issue 56: K(tau1) came out "trusted")
+    if forces.contains(&params.schedule) {
+        return Err(Error::invalid(
+            "schedule",
+            format!(
+                "{} is the force or torque being fitted; it cannot be its own schedule (its response to the perturbation moves the schedule too): schedule on an operating point recorded apart, e.g. a slowly varying angle or a background-torque column",
+                params.schedule
+            ),
+        ));
+    }
     if coords.len() > 3 {
         return Err(Error::invalid(
             "coordinates",
@@ -364,8 +375,9 @@ pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<Varyi
         return Err(Error::invalid(
             "cutoff_hz",
             format!(
-                "{cutoff} Hz is not below half the sample rate ({} Hz)",
-                rec.sample_rate()
+                "{} Hz is not below half the sample rate ({} Hz, the Nyquist frequency)",
+                limpid_core::error::Num(cutoff),
+                limpid_core::error::Num(0.5 * rec.sample_rate())
             ),
         ));
     }

@@ -108,6 +108,7 @@ proptest! {
             trim: 0,
             reference: vec![0.0; n],
             position_noise: vec![0.0; n],
+            resampled: vec![None; n],
             regressor_noise_var: vec![[0.0; 4]; n],
         };
         let est = fit_linear(&data, &LinearParams::default()).unwrap();

@@ -187,6 +187,7 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     // the time base
     let rules: Vec<(&String, ColumnRule)> =
         map.columns.iter().map(|(c, s)| (c, s.rule())).collect();
+    refuse_shared_channels(source, &rules, &map_name)?;
     let (base, base_time) = time_base(source, map, &rules, &map_name)?;
     let n = base.len();
     let (first, last, used) = common_span(source, &rules, base, &base_time, &map_name)?;
@@ -253,6 +254,43 @@ pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     Ok(Converted { recording, notes })
 }
 
+/// Two columns read from one channel (issue 56: `q1` and `tau1` from the
+/// same channel fitted with a VAF of 100 % and a "trusted" inertia; the same
+/// columns named by flag are refused). An EMG envelope (`env_...`) may share
+/// its raw channel with the EMG column.
+fn refuse_shared_channels(
+    source: &Source,
+    rules: &[(&String, ColumnRule)],
+    map_name: &str,
+) -> Result<()> {
+    let mut read: Vec<(&str, *const f64)> = Vec::new();
+    for (column, r) in rules {
+        let Some(ch) = &r.channel else { continue };
+        if column.starts_with("env_") {
+            continue;
+        }
+        // a channel the file lacks is reported where it is read
+        let Ok(found) = find_channel(source, column, ch, r.stream.as_deref()) else {
+            continue;
+        };
+        if found.values.is_empty() {
+            // said as it is, not as streams that "do not overlap" from -inf to inf (issue 56)
+            return Err(source.error(format!(
+                "map column {column}: channel {ch:?} of {} holds no samples",
+                found.stream.label()
+            )));
+        }
+        let id = found.values.as_ptr();
+        if let Some((other, _)) = read.iter().find(|(_, p)| *p == id) {
+            return Err(source.error(format!(
+                "{map_name}: columns {other} and {column} both read channel {ch:?}; each column needs its own channel"
+            )));
+        }
+        read.push((column.as_str(), id));
+    }
+    Ok(())
+}
+
 /// The stream that sets the time base, and its times: a mapped `t`
 /// channel, the stream's stamps, or samples at `[time] rate`.
 fn time_base<'s>(
@@ -291,6 +329,14 @@ fn time_base<'s>(
             "{map_name}: {} holds text markers, not samples; the time base is a numeric stream",
             base.label()
         )));
+    }
+    if time_rule.is_some() {
+        if let Some(rate) = map.time.rate {
+            return Err(source.error(format!(
+                "{map_name}: both a t column and [time] rate = {} Hz give the time; keep one",
+                limpid_core::error::Num(rate)
+            )));
+        }
     }
     let base_time: Vec<f64> = if let Some((_, r)) = time_rule {
         let found = find_channel(

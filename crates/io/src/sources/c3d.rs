@@ -9,14 +9,16 @@
 //! format's "invalid") is NaN, so a map that uses it is refused at that
 //! sample rather than fed the zeros the file holds there.
 //!
-//! Bounds: the file is read whole up to [`MAX_C3D_BYTES`]; the crate's
-//! frame count is capped by the data present; a panic inside the crate (a
-//! header that disagrees with its data) is an error naming the file.
+//! Bounds: the file is read whole up to [`MAX_C3D_BYTES`]; before the crate
+//! sees it, limpid reads the header and parameter sizes itself (points,
+//! ANALOG:USED, samples per frame, frames) and refuses a file whose declared
+//! data is not all there (cut short, or a corrupt size the crate would
+//! allocate from); a panic inside the crate is an error naming the file.
 
 use std::path::Path;
 
 use super::{Channel, Source, Stream};
-use limpid_core::{Error, Result};
+use limpid_core::Result;
 
 /// Largest C3D file read (bytes).
 pub const MAX_C3D_BYTES: u64 = 2 << 30;
@@ -27,48 +29,238 @@ pub fn read(path: &Path) -> Result<Source> {
     read_bytes(path, &bytes)
 }
 
-/// The header's frame layout against the data the file holds, before the
-/// crate allocates its grids from the declared sizes (a corrupt header once
-/// made it fault in gigabytes): points x 4 values + analog samples per frame,
-/// 2 bytes each (integer format) or 4 (float, negative scale).
-fn check_frame_size(bytes: &[u8]) -> std::result::Result<(), String> {
+/// How the file's numbers are stored (C3D processor types 84, 85, 86).
+#[derive(Clone, Copy, PartialEq)]
+enum Processor {
+    Intel,
+    Dec,
+    Mips,
+}
+
+impl Processor {
+    fn u16(self, b: [u8; 2]) -> u16 {
+        match self {
+            Processor::Mips => u16::from_be_bytes(b),
+            _ => u16::from_le_bytes(b),
+        }
+    }
+
+    /// A 4-byte float: IEEE in either byte order, or DEC's VAX F (words
+    /// swapped, exponent biased by 2 more).
+    fn f32(self, b: [u8; 4]) -> f32 {
+        match self {
+            Processor::Intel => f32::from_le_bytes(b),
+            Processor::Mips => f32::from_be_bytes(b),
+            Processor::Dec => f32::from_le_bytes([b[2], b[3], b[0], b[1]]) / 4.0,
+        }
+    }
+}
+
+/// The sizes a C3D file declares, read from its header and parameter
+/// section by limpid itself: the decoder sizes its grids from them before
+/// comparing them with the data (issue 56: ANALOG:USED = 32767 asked for
+/// 6.7 GB, a header's analog samples per channel of 65535 for 18.8 GB).
+#[derive(Debug, Default)]
+struct Layout {
+    /// POINT:USED (the header's count when absent).
+    points: usize,
+    /// ANALOG:USED.
+    analog_used: usize,
+    /// The header's analog samples per frame, all channels together.
+    analog_per_frame: usize,
+    /// The header's analog samples per channel per frame.
+    analog_per_channel: usize,
+    /// Frames, by the decoder's own rule (POINT:FRAMES, TRIAL:ACTUAL_*_FIELD, POINT:LONG_FRAMES).
+    frames: usize,
+    /// Bytes per value: 4 (float, negative scale) or 2 (integer).
+    value_bytes: usize,
+    /// Bytes of data after the data start.
+    data_bytes: usize,
+    /// POINT:RATE, when the file has it.
+    point_rate: Option<f64>,
+}
+
+/// One parameter's values: integers (as read, 16-bit), floats, or bytes.
+enum ParameterValues {
+    Integers(Vec<u16>),
+    Floats(Vec<f32>),
+    Other,
+}
+
+/// The parameters limpid needs, `GROUP:NAME` -> values; every length and
+/// offset checked against the section.
+fn read_parameters(
+    bytes: &[u8],
+    processor: Processor,
+) -> std::result::Result<std::collections::HashMap<String, ParameterValues>, String> {
+    let start = (usize::from(bytes[0]).max(1) - 1) * 512;
+    let mut groups: std::collections::HashMap<i8, String> = std::collections::HashMap::new();
+    let mut records: Vec<(i8, String, ParameterValues)> = Vec::new();
+    let mut at = start + 4;
+    // a record is at least 5 bytes: the walk ends within the file
+    while at + 2 <= bytes.len() {
+        let name_len = usize::from((bytes[at] as i8).unsigned_abs());
+        let id = bytes[at + 1] as i8;
+        if name_len == 0 || id == 0 {
+            break;
+        }
+        let name_end = at + 2 + name_len;
+        let Some(name) = bytes.get(at + 2..name_end) else {
+            break;
+        };
+        let name = String::from_utf8_lossy(name).trim().to_uppercase();
+        let Some(next) = bytes.get(name_end..name_end + 2) else {
+            break;
+        };
+        let next = usize::from(processor.u16([next[0], next[1]]));
+        if id < 0 {
+            groups.insert(-id, name);
+        } else if let Some(values) = parameter_values(bytes, name_end + 2, processor) {
+            records.push((id, name, values));
+        }
+        if next == 0 {
+            break;
+        }
+        at = name_end + next;
+    }
+    Ok(records
+        .into_iter()
+        .filter_map(|(id, name, v)| groups.get(&id).map(|g| (format!("{g}:{name}"), v)))
+        .collect())
+}
+
+/// A parameter's values at `at` (its type byte), or None when they run past the file.
+fn parameter_values(bytes: &[u8], at: usize, processor: Processor) -> Option<ParameterValues> {
+    let kind = *bytes.get(at)? as i8;
+    let dims = usize::from(*bytes.get(at + 1)?);
+    let shape = bytes.get(at + 2..at + 2 + dims)?;
+    let count: usize = shape.iter().map(|&d| usize::from(d)).product();
+    let data = at + 2 + dims;
+    Some(match kind {
+        2 => {
+            let raw = bytes.get(data..data + 2 * count)?;
+            ParameterValues::Integers(
+                raw.chunks_exact(2)
+                    .map(|c| processor.u16([c[0], c[1]]))
+                    .collect(),
+            )
+        }
+        4 => {
+            let raw = bytes.get(data..data + 4 * count)?;
+            ParameterValues::Floats(
+                raw.chunks_exact(4)
+                    .map(|c| processor.f32([c[0], c[1], c[2], c[3]]))
+                    .collect(),
+            )
+        }
+        _ => ParameterValues::Other,
+    })
+}
+
+impl ParameterValues {
+    /// The first value as a count (a float truncated as the decoder does).
+    fn first(&self) -> Option<usize> {
+        match self {
+            ParameterValues::Integers(v) => v.first().map(|&x| usize::from(x)),
+            ParameterValues::Floats(v) => v
+                .first()
+                .filter(|x| x.is_finite() && **x >= 0.0)
+                .map(|&x| x as usize),
+            ParameterValues::Other => None,
+        }
+    }
+}
+
+/// The header's and parameters' sizes (see [`Layout`]).
+fn layout(bytes: &[u8]) -> std::result::Result<Layout, String> {
     let param_block = usize::from(bytes[0]).max(1);
-    // processor type: byte 3 of the parameter section, 83 + (1 Intel, 2 DEC, 3 MIPS)
-    let big_endian = bytes.get((param_block - 1) * 512 + 3) == Some(&86);
-    let word = |i: usize| {
-        let b = [bytes[2 * i], bytes[2 * i + 1]];
-        usize::from(if big_endian {
-            u16::from_be_bytes(b)
-        } else {
-            u16::from_le_bytes(b)
-        })
+    let processor = match bytes.get((param_block - 1) * 512 + 3) {
+        Some(85) => Processor::Dec,
+        Some(86) => Processor::Mips,
+        _ => Processor::Intel,
     };
-    let (points, analog) = (word(1), word(2));
-    let (first, last) = (word(3), word(4));
-    let scale_bytes: [u8; 4] = bytes[12..16].try_into().expect("4 bytes");
-    let scale = if big_endian {
-        f32::from_be_bytes(scale_bytes)
-    } else {
-        f32::from_le_bytes(scale_bytes)
+    let word = |i: usize| usize::from(processor.u16([bytes[2 * i], bytes[2 * i + 1]]));
+    let scale = processor.f32(bytes[12..16].try_into().expect("4 bytes"));
+    let parameters = read_parameters(bytes, processor)?;
+    let count = |key: &str| parameters.get(key).and_then(ParameterValues::first);
+    // the decoder's rule: the header's range, replaced by POINT:FRAMES
+    // (0 when absent), by TRIAL:ACTUAL_START/END_FIELD, by a larger POINT:LONG_FRAMES
+    let header_frames = (word(4) + 1).saturating_sub(word(3));
+    let mut frames = header_frames;
+    let point_frames = count("POINT:FRAMES").unwrap_or(0);
+    if frames != point_frames {
+        frames = point_frames;
+    }
+    let field = |key: &str| match parameters.get(key) {
+        Some(ParameterValues::Integers(v)) if v.len() == 2 => {
+            Some(usize::from(v[0]) + usize::from(v[1]) * 65536)
+        }
+        _ => None,
     };
-    let value_bytes = if scale < 0.0 { 4 } else { 2 };
+    if let (Some(a), Some(b)) = (
+        field("TRIAL:ACTUAL_START_FIELD"),
+        field("TRIAL:ACTUAL_END_FIELD"),
+    ) {
+        if b >= a {
+            frames = b - a + 1;
+        }
+    }
+    if let Some(long) = count("POINT:LONG_FRAMES") {
+        frames = frames.max(long);
+    }
     let data_start = word(8).max(1);
-    let data_bytes = bytes.len().saturating_sub((data_start - 1) * 512);
-    let frame = (points * 4 + analog) * value_bytes;
-    if frame > data_bytes {
+    let point_rate = match parameters.get("POINT:RATE") {
+        Some(ParameterValues::Floats(v)) => v.first().map(|&r| f64::from(r)),
+        _ => None,
+    };
+    Ok(Layout {
+        points: count("POINT:USED").unwrap_or(word(1)),
+        analog_used: count("ANALOG:USED").unwrap_or(0),
+        analog_per_frame: word(2),
+        analog_per_channel: word(9),
+        frames,
+        value_bytes: if scale < 0.0 { 4 } else { 2 },
+        data_bytes: bytes.len().saturating_sub((data_start - 1) * 512),
+        point_rate,
+    })
+}
+
+/// Every size the file declares against the data it holds, before the
+/// decoder allocates from them; a file cut short is refused, naming how
+/// much of it is there (the decoder would read the frames present in silence).
+fn check_layout(bytes: &[u8]) -> std::result::Result<(), String> {
+    let l = layout(bytes)?;
+    let channel_samples = l.analog_used.saturating_mul(l.analog_per_channel);
+    if l.analog_used > 0 && channel_samples != l.analog_per_frame {
         return Err(format!(
-            "the header declares frames of {frame} bytes ({points} points, {analog} analog samples each), more than the {data_bytes} bytes of data in the file (corrupt header?)"
+            "ANALOG:USED ({}) x the header's analog samples per channel per frame ({}) disagrees with its analog samples per frame ({}) (corrupt header or parameters?)",
+            l.analog_used, l.analog_per_channel, l.analog_per_frame
         ));
     }
-    if last >= first && frame > 0 {
-        let frames = last - first + 1;
-        if frames.saturating_mul(frame) > data_bytes.saturating_mul(2) + (1 << 20) {
-            // a long recording keeps its frame count in POINT:FRAMES; the crate caps
-            // the count by the data, but not before an analog grid is sized from it
-            return Err(format!(
-                "the header declares {frames} frames of {frame} bytes, far more than the {data_bytes} bytes of data in the file (corrupt header?)"
-            ));
-        }
+    let frame = (l
+        .points
+        .saturating_mul(4)
+        .saturating_add(l.analog_per_frame))
+    .saturating_mul(l.value_bytes);
+    if frame > l.data_bytes {
+        return Err(format!(
+            "the header declares frames of {frame} bytes ({} points, {} analog samples each), more than the {} bytes of data in the file (corrupt header?)",
+            l.points, l.analog_per_frame, l.data_bytes
+        ));
+    }
+    let declared = l.frames.saturating_mul(frame);
+    if declared > l.data_bytes {
+        let present = if frame > 0 { l.data_bytes / frame } else { 0 };
+        let seconds = |n: usize| match l.point_rate.filter(|r| r.is_finite() && *r > 0.0) {
+            Some(r) => format!(" ({} s)", limpid_core::error::significant(n as f64 / r, 4)),
+            None => String::new(),
+        };
+        return Err(format!(
+            "cut short: it declares {} frames{} but holds data for {present}{}; the file is incomplete",
+            l.frames,
+            seconds(l.frames),
+            seconds(present)
+        ));
     }
     Ok(())
 }
@@ -77,16 +269,14 @@ fn check_frame_size(bytes: &[u8]) -> std::result::Result<(), String> {
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     let fail = super::format_error(path);
     if bytes.is_empty() {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-        });
+        return Err(super::empty_lab_file(path, "C3D"));
     }
     if bytes.len() < 512 || bytes[1] != 0x50 {
         return Err(fail(
             "not a C3D file: the header's second byte is not 0x50 (the C3D key)".into(),
         ));
     }
-    check_frame_size(bytes).map_err(fail)?;
+    check_layout(bytes).map_err(fail)?;
     let c3d = limpid_core::error::catch_panic(path, "C3D decoder (corrupt file)", || {
         c3dio::C3d::from_bytes(bytes).map_err(|e| fail(format!("not a readable C3D file: {e}")))
     })?;

@@ -25,6 +25,65 @@ use limpid_core::{Error, Result};
 const MAX_DEPTH: usize = 32;
 /// Most datasets listed.
 const MAX_OBJECTS: usize = 100_000;
+/// Most bytes decoded from one file's numeric vectors, all together.
+const MAX_DECODED_BYTES: u64 = 512 << 20;
+/// Most bytes decoded per byte of the file: deflate expands at most about
+/// 1032 times; more is a dataset declared larger than what it stores (HDF5
+/// fills unstored chunks), which the decoder would allocate whole (issue 56).
+const MAX_EXPANSION: u64 = 1100;
+
+/// What is left of the bytes one file may decode to.
+struct Budget {
+    left: u64,
+    limit: u64,
+    file_bytes: u64,
+}
+
+impl Budget {
+    fn new(file_bytes: usize) -> Self {
+        let file_bytes = file_bytes as u64;
+        let limit = MAX_DECODED_BYTES.min(file_bytes.saturating_mul(MAX_EXPANSION));
+        Budget {
+            left: limit,
+            limit,
+            file_bytes,
+        }
+    }
+
+    /// Take `bytes` for `what`, or say why not before anything is allocated.
+    fn take(&mut self, what: &str, bytes: u64) -> std::result::Result<(), String> {
+        if bytes > self.left {
+            let mb = |b: u64| limpid_core::error::significant(b as f64 / 1048576.0, 3);
+            let why = if self.limit < MAX_DECODED_BYTES {
+                format!(
+                    "more than {MAX_EXPANSION} times the file's {} bytes: it declares data it does not store",
+                    self.file_bytes
+                )
+            } else {
+                format!(
+                    "more than the {} MB limpid decodes from one MAT-file",
+                    mb(MAX_DECODED_BYTES)
+                )
+            };
+            return Err(format!(
+                "{what}: {} MB decoded with the fields before it, {why}",
+                mb(self.limit - self.left + bytes)
+            ));
+        }
+        self.left -= bytes;
+        Ok(())
+    }
+}
+
+/// Bytes of one element of a numeric dataset.
+fn element_bytes(d: &Dataset) -> u64 {
+    match d.dtype() {
+        Datatype::FloatingPoint { size, .. } | Datatype::FixedPoint { size, .. } => {
+            u64::from(*size).max(1)
+        }
+        _ => 8,
+    }
+}
 
 use super::Found;
 
@@ -133,6 +192,7 @@ fn walk(
     prefix: &str,
     depth: usize,
     seen: &mut std::collections::HashSet<u64>,
+    budget: &mut Budget,
     out: &mut Vec<Found>,
 ) -> std::result::Result<(), String> {
     // a group linked from two places (or from inside itself: a cycle) is read once
@@ -164,7 +224,7 @@ fn walk(
         let shape: Vec<u64> = d.shape().to_vec();
         let dims: Vec<String> = shape.iter().rev().map(u64::to_string).collect();
         let described = format!("{path} ({}, {class})", dims.join(" x "));
-        let elements: u64 = shape.iter().product();
+        let elements: u64 = shape.iter().fold(1u64, |a, &b| a.saturating_mul(b));
         let vector =
             shape.len() <= 2 && elements > 1 && shape.iter().filter(|s| **s > 1).count() == 1;
         let empty = d.attribute("MATLAB_empty").is_ok();
@@ -190,7 +250,12 @@ fn walk(
             None
         };
         let values = match why_not {
-            None => Some(read_f64(&d).map_err(|m| format!("{described}: {m}"))?),
+            None => {
+                // decoded size, as f64 and as stored, checked before the decoder allocates
+                let bytes = elements.saturating_mul(8 + element_bytes(&d));
+                budget.take(&described, bytes)?;
+                Some(read_f64(&d).map_err(|m| format!("{described}: {m}"))?)
+            }
             Some(_) => None,
         };
         out.push(Found {
@@ -210,7 +275,7 @@ fn walk(
             format!("{prefix}.{name}")
         };
         match class_of_group(&g).as_deref() {
-            Some("struct") | None => walk(&g, &path, depth + 1, seen, out)?,
+            Some("struct") | None => walk(&g, &path, depth + 1, seen, budget, out)?,
             Some(class) => out.push(Found {
                 why_not: Some(format!(
                     "{path} ({class}): a MATLAB object, not a struct{}",
@@ -246,8 +311,16 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         let root = file
             .root_group()
             .map_err(|e| fail(format!("HDF5 root group: {e}")))?;
-        walk(&root, "", 0, &mut Default::default(), &mut found)
-            .map_err(|m| fail(format!("variable {m}")))
+        let mut budget = Budget::new(bytes.len());
+        walk(
+            &root,
+            "",
+            0,
+            &mut Default::default(),
+            &mut budget,
+            &mut found,
+        )
+        .map_err(|m| fail(format!("variable {m}")))
     })?;
     super::vectors_source(path, "MAT v7.3", found)
 }

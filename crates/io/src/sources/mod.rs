@@ -256,13 +256,20 @@ pub fn read_source_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     }
 }
 
+/// A lab file of 0 bytes, named by its format (a CSV's "expected a header
+/// row" would mislead; issue 56).
+pub(crate) fn empty_lab_file(path: &Path, format: &str) -> Error {
+    Error::Format {
+        path: path.to_path_buf(),
+        message: format!("the file is empty (0 bytes); expected a {format} file with samples"),
+    }
+}
+
 /// The start every reader shares: an empty file and a file without the
 /// format's `magic` bytes are refused, naming the format.
 pub(crate) fn check_start(path: &Path, bytes: &[u8], magic: &[u8], format: &str) -> Result<()> {
     if bytes.is_empty() {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-        });
+        return Err(empty_lab_file(path, format));
     }
     if !bytes.starts_with(magic) {
         return Err(Error::Format {

@@ -168,12 +168,22 @@ class Result:
         return Result(copy.deepcopy(self._data, memo))
 
     def __repr__(self) -> str:
-        return _display.summary(self._data)
+        try:
+            return _display.summary(self._data)
+        except (IndexError, KeyError, TypeError, ValueError, AttributeError) as e:
+            return f"limpid.Result(kind={self._data.get('kind', '?')!r}; cannot be summarised: {_display.why(e)})"
 
     def _repr_html_(self) -> str:
         """A notebook's view: value ± SE per matrix element with units,
-        rounded to the SE, the verdict per matrix, fit quality, warnings."""
-        return _display.to_html(self._data)
+        rounded to the SE, the verdict per matrix, fit quality, warnings.
+        A hand-made result whose fields disagree says so instead of raising."""
+        try:
+            return _display.to_html(self._data)
+        except (IndexError, KeyError, TypeError, ValueError, AttributeError) as e:
+            import html
+
+            return (f"<p><b>limpid {html.escape(str(self._data.get('kind', '?')))} result</b>: "
+                    f"cannot be shown: {html.escape(_display.why(e))}</p>")
 
     def to_pandas(self, table: str = "parameters") -> Any:
         """A tidy ``pandas.DataFrame`` of the result (pandas must be installed).
@@ -249,9 +259,22 @@ def _choice(name: str, value: Any, choices: Sequence[str]) -> str:
     return value
 
 
+def _unmasked(name: str, values: Any) -> Any:
+    """A numpy masked array's data when nothing is masked; refused when
+    something is (its mask would otherwise be ignored: issue 56)."""
+    if np.ma.isMaskedArray(values):
+        masked = int(np.ma.count_masked(values))
+        if masked:
+            raise ValueError(f"{name}: a masked array with {masked} masked value(s); "
+                             "limpid does not guess them: fill them or drop those samples first")
+        return np.ma.getdata(values)
+    return values
+
+
 def _column(name: str, values: Any) -> np.ndarray:
     """One column as a contiguous float array; text or objects are refused by
     name, with the first value that is not a number (rows count from 1)."""
+    values = _unmasked(f"column {name}", values)
     try:
         a = np.asarray(values, dtype=float)
     except (TypeError, ValueError):
@@ -318,7 +341,7 @@ def _welch_args(n: int, nperseg: Optional[int], noverlap: Optional[int], nfft: O
 
 
 def _vector(x: Any) -> np.ndarray:
-    a = np.ascontiguousarray(np.asarray(x, dtype=float))
+    a = np.ascontiguousarray(np.asarray(_unmasked("signal", x), dtype=float))
     if a.ndim != 1:
         raise ValueError(f"expected a 1-D signal, found {a.ndim} dimensions")
     return a
@@ -386,7 +409,7 @@ def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4, axis: 
     ndarray
         The filtered signal, float64 (complex128 for complex input), in the shape of ``x``.
     """
-    a = np.asarray(x)
+    a = np.asarray(_unmasked("x", x))
     if a.dtype.kind not in "biufc":
         raise ValueError(f"x: expected numbers, found dtype {a.dtype}")
     if a.ndim == 0:

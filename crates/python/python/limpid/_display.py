@@ -399,6 +399,13 @@ def _matrices(recs: List[Record], kinds: Sequence[str] = MATRICES, symbols: Opti
     return "".join(_matrix_table(recs, k, f"{k.capitalize()} {(symbols or SYMBOL)[k]}") for k in kinds)
 
 
+def why(e: BaseException) -> str:
+    """Why a result could not be displayed, in one line (issue 56: a ragged
+    hand-made result raised IndexError from ``_repr_html_``)."""
+    return (f"its fields do not agree in shape or type ({type(e).__name__}: {e}); "
+            "a result made by limpid always does")
+
+
 def to_html(d: Dict[str, Any]) -> str:
     """The result as HTML tables (``Result._repr_html_``)."""
     kind = d.get("kind", "?")

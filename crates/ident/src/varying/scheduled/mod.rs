@@ -151,11 +151,14 @@ pub(super) fn estimate(
         seconds_per_row: dec as f64 / fs,
         residual_ss: region_residuals(&design, &fitted, &region, grid.len()),
     };
-    let points: Vec<VaryingPoint> = grid
+    let mut points: Vec<VaryingPoint> = grid
         .iter()
         .enumerate()
         .map(|(g, &sigma)| grid_fit.point(g, sigma))
         .collect();
+    if let (Some(choice), Some(summary)) = (&reflex, &reflex_summary) {
+        distrust_a_delay_at_the_scan_end(choice, summary, params, &mut points, &mut warnings);
+    }
     let missing = points.iter().filter(|p| !p.identifiable).count();
     if missing > 0 {
         warnings.push(format!(
@@ -208,8 +211,9 @@ fn check_options(params: &VaryingParams, d: usize, cutoff: f64) -> Result<()> {
         return Err(Error::invalid(
             "slow_hz",
             format!(
-                "the operating point's cut-off ({} Hz) must be below the low-pass ({cutoff} Hz)",
-                params.slow_hz
+                "the operating point's cut-off ({} Hz) must be below the low-pass ({} Hz)",
+                limpid_core::error::Num(params.slow_hz),
+                limpid_core::error::Num(cutoff)
             ),
         ));
     }
@@ -425,4 +429,46 @@ fn nearest_regions(rows: &Rows, grid: &[f64]) -> Vec<usize> {
         .iter()
         .map(|&s| (((s - lo) / spacing).round().max(0.0) as usize).min(n - 1))
         .collect()
+}
+
+/// A reflex delay at the end of the scanned range (issue 56: `--max-delay
+/// 0.02` with a true delay of 45 ms put it there, and K came out 22 % low at
+/// more than 3 SE at points still shown as identifiable, without a word).
+/// The true delay may lie beyond the scan, and the part of the reflex the
+/// pathway cannot reach is taken up by the intrinsic parameters: with a
+/// detected reflex no point is identifiable; without one, a warning.
+fn distrust_a_delay_at_the_scan_end(
+    choice: &ReflexChoice,
+    summary: &VaryingReflex,
+    params: &VaryingParams,
+    points: &mut [VaryingPoint],
+    warnings: &mut Vec<String>,
+) {
+    if !choice.at_scan_end {
+        return;
+    }
+    let ms = |s: f64| limpid_core::error::Num(1e3 * s);
+    let said = format!(
+        "the reflex delay chosen ({} ms) is the longest scanned (max_delay_s {} ms): the true delay may be longer; raise max_delay_s",
+        ms(summary.delay_s),
+        ms(params.max_delay_s)
+    );
+    if !summary.detected {
+        warnings.push(said);
+        return;
+    }
+    warnings.push(format!(
+        "{said}. A reflex is detected, and what the pathway cannot reach is taken up by the intrinsic stiffness and damping: no point is identifiable"
+    ));
+    for p in points.iter_mut().filter(|p| p.identifiable) {
+        p.identifiable = false;
+        p.reason = Some("reflex delay at the end of the scanned range".into());
+        p.stiffness = None;
+        p.stiffness_se = None;
+        p.damping = None;
+        p.damping_se = None;
+        p.inertia = None;
+        p.inertia_se = None;
+        p.reflex = None;
+    }
 }

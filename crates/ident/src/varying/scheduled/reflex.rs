@@ -91,6 +91,8 @@ pub(super) struct ReflexChoice {
     pub(super) positive: bool,
     /// Delay in quarter samples.
     pub(super) delay: usize,
+    /// The delay chosen is the longest scanned: the true one may lie beyond.
+    pub(super) at_scan_end: bool,
     pub(super) columns: Vec<f64>,
 }
 
@@ -263,6 +265,8 @@ pub(super) fn scan_reflex(
         damping_ratio: zeta,
         positive,
         delay,
+        // within the last sample of the scan
+        at_scan_end: delay + 4 > max_delay,
         columns: reflex_columns(
             rows,
             &reflex_drives(rows, (natural_hz, zeta, positive), rows.top, delay, fs),

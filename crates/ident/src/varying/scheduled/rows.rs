@@ -109,6 +109,19 @@ fn segments(
         .min(0.5 * fs / cutoff)
         .floor()
         .max(1.0) as usize;
+    let achieved = fs / dec as f64;
+    let wanted = fs / params.rate_hz;
+    if wanted < 1.0 || wanted > (0.5 * fs / cutoff).floor().max(1.0) + 1.0 {
+        // said, not done silently (issue 56: --rate 1e-9 ran at 60 Hz without a word)
+        warnings.push(format!(
+            "rate_hz {} Hz: decimated to {} Hz instead ({} at {} Hz sampling, and at least twice the {} Hz low-pass)",
+            limpid_core::error::Num(params.rate_hz),
+            limpid_core::error::Num(achieved),
+            if dec == 1 { "no decimation".to_string() } else { format!("every {dec}th sample") },
+            limpid_core::error::Num(fs),
+            limpid_core::error::Num(cutoff)
+        ));
+    }
     let min_len = 2 * trim + slow.padlen().max(lp.padlen()) + 2;
     let d = coords.len();
     let (pos, frc) = (
