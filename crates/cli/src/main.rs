@@ -160,7 +160,7 @@ fn parse_arguments() -> Result<Cli, ExitCode> {
             return match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(io) => {
-                    eprintln!("limpid: cannot write to standard output: {io}");
+                    eprintln!("limpid: cannot write the output to standard output: {io}");
                     ExitCode::from(2)
                 }
             };

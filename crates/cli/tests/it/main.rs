@@ -19,5 +19,6 @@ mod report;
 mod report_documents;
 mod reproduce;
 mod rerun;
+mod robustness;
 mod stochastic;
 mod varying;

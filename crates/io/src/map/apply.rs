@@ -52,6 +52,17 @@ pub(crate) fn find_channel<'a>(
             values: &c.values,
             declared_unit: c.unit.as_deref(),
         }),
+        [] if source.unread.iter().any(|(p, _)| p == channel) => {
+            // present but not a vector: say what it is (issue 56)
+            let why = source
+                .unread
+                .iter()
+                .find(|(p, _)| p == channel)
+                .map_or("", |(_, w)| w.as_str());
+            Err(source.error(format!(
+                "map column {column}: {why}; a column needs a numeric vector"
+            )))
+        }
         [] => {
             let all: Vec<&str> = candidates
                 .iter()

@@ -294,6 +294,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         format: "C3D",
         streams,
         notes: Vec::new(),
+        unread: Vec::new(),
     })
 }
 

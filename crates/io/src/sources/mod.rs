@@ -28,6 +28,9 @@ pub struct Source {
     pub streams: Vec<Stream>,
     /// What the reader noticed and the user should know (one line each).
     pub notes: Vec<String>,
+    /// Variables present but not read as channels (a matrix, a cell, an
+    /// empty array), each with why: a map that names one is told its shape.
+    pub unread: Vec<(String, String)>,
 }
 
 /// One stream: channels sampled together on one clock.
@@ -205,6 +208,7 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
         });
     };
     let mut skipped = Vec::new();
+    let mut unread = Vec::new();
     let mut channels = Vec::new();
     for f in found {
         match f.values {
@@ -213,12 +217,16 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
                 unit: None,
                 values,
             }),
-            Some(values) => skipped.push(format!(
-                "{} ({} samples, not {length})",
-                f.path,
-                values.len()
-            )),
-            None => skipped.push(f.why_not.unwrap_or(f.path)),
+            Some(values) => {
+                let why = format!("{} ({} samples, not {length})", f.path, values.len());
+                unread.push((f.path, why.clone()));
+                skipped.push(why);
+            }
+            None => {
+                let why = f.why_not.unwrap_or_else(|| f.path.clone());
+                unread.push((f.path, why.clone()));
+                skipped.push(why);
+            }
         }
     }
     let notes = if skipped.is_empty() {
@@ -237,6 +245,7 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
             ..Stream::default()
         }],
         notes,
+        unread,
     })
 }
 
@@ -319,6 +328,7 @@ impl Source {
                 ..Stream::default()
             }],
             notes: table.warnings,
+            unread: Vec::new(),
         }
     }
 

@@ -452,5 +452,6 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         format: "TDMS",
         streams,
         notes: Vec::new(),
+        unread: Vec::new(),
     })
 }

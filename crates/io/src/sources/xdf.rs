@@ -208,6 +208,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         format: "XDF",
         streams: out,
         notes,
+        unread: Vec::new(),
     })
 }
 

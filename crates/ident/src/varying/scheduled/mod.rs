@@ -156,15 +156,15 @@ pub(super) fn estimate(
         .enumerate()
         .map(|(g, &sigma)| grid_fit.point(g, sigma))
         .collect();
-    if let (Some(choice), Some(summary)) = (&reflex, &reflex_summary) {
-        distrust_a_delay_at_the_scan_end(choice, summary, params, &mut points, &mut warnings);
-    }
     let missing = points.iter().filter(|p| !p.identifiable).count();
     if missing > 0 {
         warnings.push(format!(
             "{missing} of {} grid points have too little data nearby and are not identifiable",
             points.len()
         ));
+    }
+    if let (Some(choice), Some(summary)) = (&reflex, &reflex_summary) {
+        distrust_a_delay_at_the_scan_end(choice, summary, params, &mut points, &mut warnings);
     }
     Ok(VaryingEstimate {
         method: VaryingMethod::ParameterVarying,
@@ -449,7 +449,7 @@ fn distrust_a_delay_at_the_scan_end(
     }
     let ms = |s: f64| limpid_core::error::Num(1e3 * s);
     let said = format!(
-        "the reflex delay chosen ({} ms) is the longest scanned (max_delay_s {} ms): the true delay may be longer; raise max_delay_s",
+        "the reflex delay chosen ({} ms) is the longest scanned (max_delay_s {} ms): the true delay may be longer: scan further (max_delay_s)",
         ms(summary.delay_s),
         ms(params.max_delay_s)
     );
