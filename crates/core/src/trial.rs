@@ -484,7 +484,7 @@ mod tests {
             noise_sigma(&held) < 0.1 * sigma,
             "the full-rate estimate is ~0"
         );
-        let interpolated: Vec<f64> = (0..7997)
+        let interpolated: Vec<f64> = (0..7996)
             .map(|i| {
                 let (k, f) = (i / 4, (i % 4) as f64 / 4.0);
                 native[k] * (1.0 - f) + native[k + 1] * f

@@ -11,7 +11,10 @@
 //! decoder and the live processor; a request (`request-*.json`, what flags
 //! and Python keywords become) is checked and run on its method's seed
 //! recording; a result document (`result-*.json`) is read back and rendered
-//! as the HTML report and its figures (issue 36: flags and result documents). A *finding* is a panic, a non-finite or
+//! as the HTML report and its figures (issue 36: flags and result documents);
+//! a channel map (`map-*.toml`) is applied to the XDF seed, and a list of
+//! input and output paths (`*.paths`) is checked and written in a fresh
+//! folder, where an input overwritten is a finding (issue 56). A *finding* is a panic, a non-finite or
 //! null number in a result, or (in the binary) an execution over 10 s; an
 //! input refused with an error is the right answer, not a finding.
 
@@ -68,7 +71,9 @@ fn kind(name: &str) -> &str {
 /// Run one input, catching panics.
 pub fn execute(name: &str, bytes: &[u8]) -> Outcome {
     let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match kind(name) {
+        "toml" if name.starts_with("map-") => channel_map(bytes),
         "toml" => protocol(name, bytes),
+        "paths" => output_paths(bytes),
         "wire" => datagrams(bytes),
         "xdf" | "c3d" | "tdms" => lab_file(name, bytes),
         "mat" if name.starts_with("rig") => lab_file(name, bytes),
@@ -164,6 +169,95 @@ fn lab_file(name: &str, bytes: &[u8]) -> Outcome {
         },
         Err(_) => Outcome::Refused,
     }
+}
+
+/// A channel map (`map-*.toml`, issue 56): parsed, then applied to the XDF
+/// seed and its recording estimated. Accepted when the conversion succeeds.
+fn channel_map(bytes: &[u8]) -> Outcome {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return Outcome::Refused;
+    };
+    let Ok(map) = limpid_io::map::ChannelMap::parse(text) else {
+        return Outcome::Refused;
+    };
+    let xdf: &[u8] = include_bytes!("../corpus/seeds/rig.xdf");
+    let source = limpid_io::sources::read_source_bytes(Path::new("rig.xdf"), xdf)
+        .expect("the XDF seed reads");
+    match limpid_io::map::apply(&source, &map) {
+        Ok(converted) => match estimate_all(&converted.recording).0.into_iter().next() {
+            Some(f) => Outcome::Finding(f),
+            None => Outcome::Accepted,
+        },
+        Err(_) => Outcome::Refused,
+    }
+}
+
+/// Output paths against input paths (`*.paths`, issue 56): each line is
+/// `in NAME` or `out NAME`, a path inside a fresh folder (`..`, links and
+/// absolute paths are taken as written after the folder). Inputs are made
+/// as files; when [`limpid_core::files::refuse_overwriting_inputs`] lets the
+/// outputs through, each is written, and an input whose bytes then changed
+/// is a finding.
+fn output_paths(bytes: &[u8]) -> Outcome {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return Outcome::Refused;
+    };
+    let Ok(dir) = tempfile::tempdir() else {
+        return Outcome::Refused;
+    };
+    let root = dir.path();
+    let (mut inputs, mut outputs) = (Vec::new(), Vec::new());
+    // a name inside the folder, or none: never absolute, never leaving it
+    // through `..` (the fuzzer runs as root: nothing outside may be written)
+    let inside = |name: &str| -> Option<PathBuf> {
+        let name = name.trim_start_matches('/');
+        let ok = !name.is_empty()
+            && name.len() <= 200
+            && !name.contains('\0')
+            && !name.contains('\\')
+            && name.split('/').all(|part| part != "..");
+        ok.then(|| root.join(name))
+    };
+    for line in text.lines().take(16) {
+        let Some((role, name)) = line.split_once(' ') else {
+            continue;
+        };
+        match role {
+            "in" => inputs.extend(inside(name)),
+            "out" => outputs.extend(inside(name)),
+            "link" => {
+                // `link A=B`: A is a symbolic link to B, both inside the folder
+                #[cfg(unix)]
+                if let Some((a, b)) = name.split_once('=') {
+                    if let (Some(a), Some(b)) = (inside(a), inside(b)) {
+                        let _ = std::os::unix::fs::symlink(b, a);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    for (i, p) in inputs.iter().enumerate() {
+        if let Some(parent) = p.parent() {
+            let _ = std::fs::create_dir_all(parent);
+        }
+        let _ = std::fs::write(p, format!("input {i}"));
+    }
+    let before: Vec<Option<Vec<u8>>> = inputs.iter().map(|p| std::fs::read(p).ok()).collect();
+    let ins: Vec<(&Path, &str)> = inputs.iter().map(|p| (p.as_path(), "an input")).collect();
+    let outs: Vec<(&Path, &str)> = outputs.iter().map(|p| (p.as_path(), "an output")).collect();
+    if limpid_core::files::refuse_overwriting_inputs(&outs, &ins).is_err() {
+        return Outcome::Refused;
+    }
+    for p in &outputs {
+        let _ = limpid_core::files::write_file(p, b"output");
+    }
+    for (p, was) in inputs.iter().zip(&before) {
+        if was.is_some() && std::fs::read(p).ok() != *was {
+            return Outcome::Finding(format!("input {} was overwritten", p.display()));
+        }
+    }
+    Outcome::Accepted
 }
 
 /// The seed recording a method's requests run on (co-contraction: also its MVC).

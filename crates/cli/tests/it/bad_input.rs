@@ -227,7 +227,7 @@ fn motionless_coordinate_is_explained() {
         s.push_str(&format!("{},0.1,2.0\n", i as f64 * 0.001));
     }
     let p = write(&d, "r.csv", &s);
-    fails_with(&p, &[], "regressor column acceleration q1 is zero in every sample: that coordinate never moves, so its parameters cannot be estimated");
+    fails_with(&p, &[], "column q1 holds 0.1 in every sample: that coordinate never moves, so its impedance cannot be estimated; leave the column out (1-, 2- and 3-D recordings are read)");
 }
 
 #[test]

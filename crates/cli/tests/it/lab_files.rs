@@ -161,7 +161,7 @@ fn map_is_refused_where_no_recording_is_read() {
     assert_eq!(out.code, 2);
     assert!(
         out.stderr
-            .contains("--map applies to the commands that read recordings"),
+            .contains("--map: it applies to the commands that read recordings"),
         "{}",
         out.stderr
     );

@@ -270,7 +270,7 @@ pub fn read_source_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
 pub(crate) fn empty_lab_file(path: &Path, format: &str) -> Error {
     Error::Format {
         path: path.to_path_buf(),
-        message: format!("the file is empty (0 bytes); expected a {format} file with samples"),
+        message: format!("the file is empty (0 bytes): no {format} content"),
     }
 }
 
@@ -278,7 +278,10 @@ pub(crate) fn empty_lab_file(path: &Path, format: &str) -> Error {
 /// format's `magic` bytes are refused, naming the format.
 pub(crate) fn check_start(path: &Path, bytes: &[u8], magic: &[u8], format: &str) -> Result<()> {
     if bytes.is_empty() {
-        return Err(empty_lab_file(path, format));
+        return Err(empty_lab_file(
+            path,
+            format.trim_start_matches("an ").trim_start_matches("a "),
+        ));
     }
     if !bytes.starts_with(magic) {
         return Err(Error::Format {

@@ -425,3 +425,131 @@ fn a_mat_v73_file_converts_by_dotted_struct_paths() {
         "{e}"
     );
 }
+
+/// The C3D parameter `GROUP:NAME`'s first value's offset in `bytes`
+/// (an integer parameter), found by walking the parameter section.
+fn c3d_parameter_offset(bytes: &[u8], group: &str, name: &str) -> usize {
+    let start = (usize::from(bytes[0]) - 1) * 512 + 4;
+    let mut groups = std::collections::HashMap::new();
+    let mut at = start;
+    let mut wanted = None;
+    loop {
+        let len = usize::from((bytes[at] as i8).unsigned_abs());
+        let id = bytes[at + 1] as i8;
+        if len == 0 {
+            break;
+        }
+        let text = std::str::from_utf8(&bytes[at + 2..at + 2 + len])
+            .unwrap()
+            .to_string();
+        let next = usize::from(u16::from_le_bytes([
+            bytes[at + 2 + len],
+            bytes[at + 3 + len],
+        ]));
+        if id < 0 {
+            groups.insert(-id, text);
+        } else if text == name {
+            // type byte, dimension count, dimensions, then the data
+            let dims = usize::from(bytes[at + 5 + len]);
+            wanted
+                .get_or_insert_with(Vec::new)
+                .push((id, at + 6 + len + dims));
+        }
+        if next == 0 {
+            break;
+        }
+        at += 2 + len + next;
+    }
+    wanted
+        .unwrap()
+        .into_iter()
+        .find(|(id, _)| groups.get(id).map(String::as_str) == Some(group))
+        .unwrap()
+        .1
+}
+
+/// Issue 56: sizes a C3D file declares are checked before the decoder
+/// allocates from them (ANALOG:USED = 32767 asked for 6.7 GB, analog
+/// samples per channel of 65535 for 18.8 GB), and a file cut short is
+/// refused instead of read in part.
+#[test]
+fn c3d_sizes_are_checked_before_anything_is_allocated() {
+    let whole = std::fs::read(fixture("rig.c3d")).unwrap();
+    let used = c3d_parameter_offset(&whole, "ANALOG", "USED");
+    assert_eq!(u16::from_le_bytes([whole[used], whole[used + 1]]), 3);
+    let (_d, p) = patched("rig.c3d", used, &32767u16.to_le_bytes());
+    let e = limpid_io::sources::read_source(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("ANALOG:USED (32767)") && e.lines().count() == 1,
+        "{e}"
+    );
+    // the header's analog samples per channel per frame (word 10)
+    let (_d, p) = patched("rig.c3d", 18, &65535u16.to_le_bytes());
+    let e = limpid_io::sources::read_source(&p).unwrap_err().to_string();
+    assert!(e.contains("(65535)") && e.contains("disagrees"), "{e}");
+    // POINT:FRAMES far beyond the data
+    let frames = c3d_parameter_offset(&whole, "POINT", "FRAMES");
+    let (_d, p) = patched("rig.c3d", frames, &60000u16.to_le_bytes());
+    let e = limpid_io::sources::read_source(&p).unwrap_err().to_string();
+    assert!(e.contains("cut short") && e.contains("60000 frames"), "{e}");
+    // cut at half its data: refused, saying how much is there
+    let dir = tempfile::tempdir().unwrap();
+    let half = dir.path().join("half.c3d");
+    let data_start = 512 * (usize::from(u16::from_le_bytes([whole[16], whole[17]])) - 1);
+    std::fs::write(&half, &whole[..data_start + (whole.len() - data_start) / 2]).unwrap();
+    let e = limpid_io::sources::read_source(&half)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("half.c3d") && e.contains("cut short") && e.contains("declares 50 frames"),
+        "{e}"
+    );
+    // the file itself reads whole
+    assert_eq!(
+        limpid_io::sources::read_source(&fixture("rig.c3d"))
+            .unwrap()
+            .streams
+            .len(),
+        2
+    );
+}
+
+/// Issue 56: a map naming a variable that is there but is not a vector is
+/// told what it is, not "no channel; nearest ...".
+#[test]
+fn a_map_naming_a_matrix_is_told_its_shape() {
+    let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/small_v5.mat");
+    let dir = tempfile::tempdir().unwrap();
+    let map = dir.path().join("m.toml");
+    std::fs::write(&map, "[columns]\nt = \"t\"\nx = \"note\"\nfx = \"fx\"\n").unwrap();
+    let map = ChannelMap::read(&map).unwrap();
+    let e = limpid_io::read_recording_mapped(&small, Some(&map))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("map column x: note (3 x 2, double): not a vector"),
+        "{e}"
+    );
+}
+
+/// Issue 56: an empty lab file names its format, not a CSV's header row.
+#[test]
+fn empty_lab_files_name_their_format() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, format) in [
+        ("e.xdf", "XDF"),
+        ("e.c3d", "C3D"),
+        ("e.tdms", "TDMS"),
+        ("e.mat", "MAT"),
+    ] {
+        let p = dir.path().join(name);
+        std::fs::write(&p, b"").unwrap();
+        let e = limpid_io::sources::read_source(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(name)
+                && e.contains(&format!("is empty (0 bytes): no {format} content"))
+                && !e.contains("header row"),
+            "{e}"
+        );
+    }
+}

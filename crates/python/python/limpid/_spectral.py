@@ -83,6 +83,13 @@ def _rate(fs: Any) -> float:
 
 
 def _signal(a: Any, name: str) -> np.ndarray:
+    # a masked array's mask would be ignored by asarray (issue 56): refused when it masks anything
+    if np.ma.isMaskedArray(a):
+        masked = int(np.ma.count_masked(a))
+        if masked:
+            raise ValueError(f"{name}: a masked array with {masked} masked value(s); "
+                             "limpid does not guess them: fill them or drop those samples first")
+        a = np.ma.getdata(a)
     arr = np.asarray(a)
     if arr.dtype.kind not in "biufc":
         try:

@@ -1,0 +1,103 @@
+"""Issue 56 through the Python package: values that crashed the interpreter,
+were silently misread, or overwrote an input are refused with a ValueError
+naming what is wrong."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+import limpid
+from conftest import examples
+
+CUBIC = examples("cartesian_slow") / "ex_cubic.csv"
+
+
+def test_a_map_dict_that_contains_itself_or_nests_deeply_is_refused():
+    cyclic = {"columns": {"t": "t"}}
+    cyclic["columns"]["x"] = cyclic
+    with pytest.raises(ValueError, match="nested deeper than"):
+        limpid.read_recording(CUBIC, map=cyclic)
+    deep = {"columns": {"t": "t"}}
+    inner = deep
+    for _ in range(200_000):
+        inner["x"] = {}
+        inner = inner["x"]
+    with pytest.raises(ValueError, match="nested deeper than"):
+        limpid.read_recording(CUBIC, map=deep)
+    # a list that contains itself, inside options
+    loop = []
+    loop.append(loop)
+    with pytest.raises(ValueError, match="nested deeper than"):
+        limpid.estimate_linear(CUBIC, level=loop)
+
+
+def test_non_finite_options_are_refused_by_request_as_by_the_estimators():
+    with pytest.raises(ValueError, match="window_ms"):
+        limpid.request("planar", link_lengths=(0.32, 0.31), window_ms=math.inf)
+    with pytest.raises(ValueError, match="step_ms"):
+        limpid.request("window_sweep", link_lengths=(0.32, 0.31), step_ms=math.inf)
+    with pytest.raises(ValueError, match="tolerance"):
+        limpid.request("cocontraction", tolerance=math.inf)
+    assert limpid.request("planar", link_lengths=(0.32, 0.31), window_ms=200.0)["window_ms"] == 200.0
+
+
+def test_masked_arrays_are_refused_unless_nothing_is_masked():
+    rec = limpid.read_recording(CUBIC)
+    data = {k: np.asarray(v) for k, v in rec.items()}
+    masked = dict(data)
+    masked["x"] = np.ma.masked_array(data["x"], mask=np.arange(len(data["x"])) == 10)
+    with pytest.raises(ValueError, match="masked array with 1 masked value"):
+        limpid.estimate_linear(masked)
+    unmasked = dict(data)
+    unmasked["x"] = np.ma.masked_array(data["x"], mask=False)
+    a = limpid.estimate_linear(unmasked).to_dict()
+    b = limpid.estimate_linear(data).to_dict()
+    assert a["stiffness"] == b["stiffness"]
+    with pytest.raises(ValueError, match="masked"):
+        limpid.psd(np.ma.masked_invalid([1.0, np.nan, 2.0] * 100), fs=100.0)
+
+
+def test_a_ragged_result_displays_why_instead_of_raising():
+    r = limpid.estimate_linear(CUBIC).to_dict()
+    r["stiffness"] = [[1.0]]
+    ragged = limpid.Result(r)
+    html = ragged._repr_html_()
+    assert "cannot be shown" in html and "do not agree" in html
+    assert "cannot be summarised" in repr(ragged)
+
+
+def test_an_ellipsoid_of_nan_says_so():
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        limpid.ellipsoid([[math.nan] * 3] * 3)
+    with pytest.raises(ValueError, match="found 4 x 4"):
+        limpid.ellipsoid(np.eye(4))
+
+
+def test_a_report_over_its_own_recording_is_refused(tmp_path):
+    rec = tmp_path / "rec.csv"
+    rec.write_bytes(CUBIC.read_bytes())
+    r = limpid.estimate_linear(rec)
+    with pytest.raises(ValueError, match="would replace the input"):
+        limpid.report([r], rec)
+    assert rec.read_bytes() == CUBIC.read_bytes()
+    limpid.report([r], tmp_path / "r.html")
+    assert (tmp_path / "r.html").stat().st_size > 1000
+
+
+def test_a_mat_v73_field_declared_larger_than_stored_is_refused_before_decoding(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    path = tmp_path / "huge.mat"
+    with h5py.File(path, "w", userblock_size=512) as f:
+        rec = f.create_group("rec")
+        rec.attrs["MATLAB_class"] = np.bytes_("struct")
+        # 2^28 doubles (2 GiB) declared, no chunk ever written: HDF5 fills them
+        d = rec.create_dataset("x", shape=(1, 2**28), dtype="f8", chunks=(1, 2**16))
+        d.attrs["MATLAB_class"] = np.bytes_("double")
+        t = rec.create_dataset("t", data=np.arange(100.0).reshape(1, -1))
+        t.attrs["MATLAB_class"] = np.bytes_("double")
+    with open(path, "r+b") as f:
+        f.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2026 HDF5 schema 1.00 .".ljust(116))
+    assert path.stat().st_size < 100_000
+    with pytest.raises(ValueError, match="does not store|decodes from one MAT-file"):
+        limpid.inspect(path)
