@@ -255,6 +255,61 @@ pub fn axis_rotation(axis: Vector3<f64>, angle: f64) -> Matrix3<f64> {
     nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle).into_inner()
 }
 
+/// Most muscles' envelopes peak well above their MVC maximum: the MVC was
+/// not maximal, or the recording and the MVC file were given the wrong way
+/// round (issue 56: swapped, the estimate ran without a word about it).
+fn above_mvc_warning(muscles: &[String], peaks: &[f64], warnings: &mut Vec<Warning>) {
+    let above: Vec<String> = muscles
+        .iter()
+        .zip(peaks)
+        .filter(|(_, p)| **p > 1.5)
+        .map(|(m, p)| format!("{m} {:.1}x", p))
+        .collect();
+    if 2 * above.len() >= muscles.len() && !above.is_empty() {
+        warnings.push(Warning::new(
+            WarningCode::EmgAboveMvc,
+            format!(
+                "the recording's EMG peaks well above its MVC maximum ({}): the MVC was not maximal, or the recording and the MVC file are swapped (the MVC recording is the one given with --mvc); the co-contraction index is not a fraction of MVC",
+                above.join(", ")
+            ),
+        ));
+    }
+}
+
+/// The recording and the MVC file given the wrong way round (issue 56): the
+/// perturbed recording moves, the MVC's still contraction does not. Refused
+/// when the MVC file's positions span more than ten times the recording's.
+fn refuse_swapped_files(rec: &Recording, mvc: &Recording) -> Result<()> {
+    let span = |r: &Recording| -> Option<f64> {
+        ["x", "y", "z"]
+            .iter()
+            .filter_map(|c| r.column(c))
+            .map(|v| {
+                let (lo, hi) = v
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                        (a.min(*x), b.max(*x))
+                    });
+                hi - lo
+            })
+            .reduce(f64::max)
+    };
+    if let (Some(moving), Some(still)) = (span(mvc), span(rec)) {
+        if moving > 10.0 * still && moving > 1e-3 {
+            return Err(Error::Format {
+                path: rec.path().to_path_buf(),
+                message: format!(
+                    "its positions span {} mm but those of the MVC file {} span {} mm: are the two swapped? The perturbed recording comes first, the MVC recording after --mvc",
+                    limpid_core::error::significant(1e3 * still, 3),
+                    mvc.path().display(),
+                    limpid_core::error::significant(1e3 * moving, 3)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -320,59 +375,4 @@ mod tests {
         assert!((c.change_percent[1] - 100.0 * (720.0 / 700.0 - 1.0)).abs() < 1e-9);
         assert!(c.rotation_deg.iter().all(|a| (a - 5.0).abs() < 5.0 + 1e-9));
     }
-}
-
-/// Most muscles' envelopes peak well above their MVC maximum: the MVC was
-/// not maximal, or the recording and the MVC file were given the wrong way
-/// round (issue 56: swapped, the estimate ran without a word about it).
-fn above_mvc_warning(muscles: &[String], peaks: &[f64], warnings: &mut Vec<Warning>) {
-    let above: Vec<String> = muscles
-        .iter()
-        .zip(peaks)
-        .filter(|(_, p)| **p > 1.5)
-        .map(|(m, p)| format!("{m} {:.1}x", p))
-        .collect();
-    if 2 * above.len() >= muscles.len() && !above.is_empty() {
-        warnings.push(Warning::new(
-            WarningCode::EmgAboveMvc,
-            format!(
-                "the recording's EMG peaks well above its MVC maximum ({}): the MVC was not maximal, or the recording and the MVC file are swapped (the MVC recording is the one given with --mvc); the co-contraction index is not a fraction of MVC",
-                above.join(", ")
-            ),
-        ));
-    }
-}
-
-/// The recording and the MVC file given the wrong way round (issue 56): the
-/// perturbed recording moves, the MVC's still contraction does not. Refused
-/// when the MVC file's positions span more than ten times the recording's.
-fn refuse_swapped_files(rec: &Recording, mvc: &Recording) -> Result<()> {
-    let span = |r: &Recording| -> Option<f64> {
-        ["x", "y", "z"]
-            .iter()
-            .filter_map(|c| r.column(c))
-            .map(|v| {
-                let (lo, hi) = v
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-                        (a.min(*x), b.max(*x))
-                    });
-                hi - lo
-            })
-            .reduce(f64::max)
-    };
-    if let (Some(moving), Some(still)) = (span(mvc), span(rec)) {
-        if moving > 10.0 * still && moving > 1e-3 {
-            return Err(Error::Format {
-                path: rec.path().to_path_buf(),
-                message: format!(
-                    "its positions span {} mm but those of the MVC file {} span {} mm: are the two swapped? The perturbed recording comes first, the MVC recording after --mvc",
-                    limpid_core::error::significant(1e3 * still, 3),
-                    mvc.path().display(),
-                    limpid_core::error::significant(1e3 * moving, 3)
-                ),
-            });
-        }
-    }
-    Ok(())
 }

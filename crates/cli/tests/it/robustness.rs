@@ -295,8 +295,8 @@ fn resample_positions(from: &Path, to: &Path, factor: usize, held: bool) {
     let n = rows.len();
     let value = |i: usize, c: usize| rows[i][c].parse::<f64>().unwrap();
     let mut out = header.join(",") + "\n";
-    for i in 0..n {
-        let mut row = rows[i].clone();
+    for (i, original) in rows.iter().enumerate() {
+        let mut row = original.clone();
         let k = factor * (i / factor);
         for &c in &cols {
             let v = if held {
@@ -708,4 +708,84 @@ fn swapped_recording_and_mvc_are_named() {
         s(&co.join("ex_config4.csv")),
     ]));
     assert!(line.contains("are the two swapped"), "{line}");
+}
+
+#[test]
+fn an_ensemble_of_identical_repetitions_identifies_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    let protocol = d.path().join("e.toml");
+    let out = limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        "ensemble",
+        "-o",
+        s(&protocol),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let text = std::fs::read_to_string(&protocol)
+        .unwrap()
+        .replace("repetitions = 100", "repetitions = 40");
+    std::fs::write(&protocol, text).unwrap();
+    let rec = d.path().join("e.csv");
+    let out = limpid(&["simulate", s(&protocol), "-o", s(&rec)]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    // every repetition replaced by the first (times and trial ids kept)
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let trial = header.iter().position(|h| *h == "trial").unwrap();
+    let t = header.iter().position(|h| *h == "t").unwrap();
+    let first: Vec<&Vec<String>> = rows.iter().filter(|r| r[trial] == rows[0][trial]).collect();
+    let mut out = header.join(",") + "\n";
+    let mut k = 0;
+    for (i, r) in rows.iter().enumerate() {
+        if i > 0 && r[trial] != rows[i - 1][trial] {
+            k = 0;
+        }
+        let mut row = first[k.min(first.len() - 1)].clone();
+        row[t] = r[t].clone();
+        row[trial] = r[trial].clone();
+        out.push_str(&row.join(","));
+        out.push('\n');
+        k += 1;
+    }
+    let same = d.path().join("same.csv");
+    std::fs::write(&same, out).unwrap();
+    let v = json(&["estimate", "varying", s(&same), "--json"]);
+    let points = v["points"].as_array().unwrap();
+    assert!(points.iter().all(|p| p["identifiable"] == false), "{v}");
+    assert!(
+        points
+            .iter()
+            .any(|p| p["reason"].as_str().unwrap_or("").contains("do not differ")),
+        "{v}"
+    );
+    // the real ensemble still identifies its middle
+    let v = json(&["estimate", "varying", s(&rec), "--json"]);
+    assert!(v["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|p| p["identifiable"] == true));
+}
+
+#[test]
+fn a_map_whose_time_scale_makes_nanoseconds_is_named_as_an_implausible_rate() {
+    let d = tempfile::tempdir().unwrap();
+    let rec = examples("ankle").join("ex_ankle.csv");
+    let map = d.path().join("ns.toml");
+    std::fs::write(
+        &map,
+        "[columns]\nt = { channel = \"t\", scale = 1e-6 }\nq1 = \"q1\"\ntau1 = \"tau1\"\n",
+    )
+    .unwrap();
+    let line = one_line_error(&limpid(&["--map", s(&map), "estimate", "reflex", s(&rec)]));
+    assert!(
+        line.contains("column t: implausible sample rate 1e9 Hz"),
+        "{line}"
+    );
 }

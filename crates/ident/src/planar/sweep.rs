@@ -611,7 +611,7 @@ fn sweep_windows(data: &PlanarData, from_ms: f64, to_ms: f64, step_ms: f64) -> R
                 limpid_core::error::Num(from_ms),
                 limpid_core::error::Num(to_ms),
                 limpid_core::error::Num(step_ms),
-                limpid_core::error::Num(count as f64)
+                limpid_core::error::Num(count)
             ),
         ));
     }

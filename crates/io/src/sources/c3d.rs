@@ -250,7 +250,7 @@ fn check_layout(bytes: &[u8]) -> std::result::Result<(), String> {
     }
     let declared = l.frames.saturating_mul(frame);
     if declared > l.data_bytes {
-        let present = if frame > 0 { l.data_bytes / frame } else { 0 };
+        let present = l.data_bytes.checked_div(frame).unwrap_or(0);
         let seconds = |n: usize| match l.point_rate.filter(|r| r.is_finite() && *r > 0.0) {
             Some(r) => format!(" ({} s)", limpid_core::error::significant(n as f64 / r, 4)),
             None => String::new(),

@@ -553,3 +553,32 @@ fn empty_lab_files_name_their_format() {
         );
     }
 }
+
+/// Issue 56: a stream without samples is said to hold none, not to span
+/// "-inf to inf".
+#[test]
+fn a_stream_without_samples_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("empty-stream.xdf");
+    std::fs::write(&path, xdf_with_stamps(&[])).unwrap();
+    let map = dir.path().join("m.toml");
+    std::fs::write(
+        &map,
+        "[columns]\nx = { channel = \"ch1\", stream = \"robot\" }\n",
+    )
+    .unwrap();
+    let map = ChannelMap::read(&map).unwrap();
+    let e = match limpid_io::sources::read_source(&path) {
+        Err(e) => e.to_string(),
+        Ok(source) => match limpid_io::map::apply(&source, &map) {
+            Ok(_) => panic!("a stream without samples converted"),
+            Err(e) => e.to_string(),
+        },
+    };
+    assert!(
+        e.contains("empty-stream.xdf")
+            && (e.contains("holds no samples") || e.contains("no sample")),
+        "{e}"
+    );
+    assert!(!e.contains("inf"), "{e}");
+}
