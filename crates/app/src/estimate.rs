@@ -83,10 +83,16 @@ pub fn run(checked: &Checked, mut recordings: Vec<Recording>) -> Result<Estimate
         ))),
         Request::Spectra(r) => {
             let rec = &recordings[0];
-            let welch = r.welch(rec.len(), rec.sample_rate());
-            Ok(Estimated::of(Estimate::Spectra(
-                limpid_ident::spectra::spectra(rec, &r.inputs, &r.outputs, &welch)?,
-            )))
+            let result = match r.period_s {
+                Some(period_s) => {
+                    limpid_ident::spectra::periodic_spectra(rec, &r.inputs, &r.outputs, period_s)?
+                }
+                None => {
+                    let welch = r.welch(rec.len(), rec.sample_rate());
+                    limpid_ident::spectra::spectra(rec, &r.inputs, &r.outputs, &welch)?
+                }
+            };
+            Ok(Estimated::of(Estimate::Spectra(result)))
         }
     }
 }

@@ -77,6 +77,7 @@ fn flag(field: &str) -> Option<&'static str> {
         "inputs/outputs" => "--inputs/--outputs",
         "lsl" => "--lsl",
         "position" => "--position",
+        "period_s" => "--period",
         "torque" => "--torque",
         _ => return None,
     })

@@ -87,6 +87,12 @@ pub struct SpectraArgs {
     pub outputs: Vec<String>,
     #[command(flatten)]
     pub welch: WelchArgs,
+    /// Period (s) of a periodic excitation (multisine, PRBS): spectra over whole periods without
+    /// window or leakage, the response at the excited lines with standard errors from the
+    /// period-to-period scatter, and the nonlinear distortion at the detection lines. A `period`
+    /// column numbers the periods (-1: transient, left out); without it the first period is left out.
+    #[arg(long, value_name = "S")]
+    pub period: Option<f64>,
     #[command(flatten)]
     pub output: crate::emit::OutputArgs,
 }
@@ -226,6 +232,7 @@ impl SpectraArgs {
             nperseg: self.welch.nfft,
             noverlap: self.welch.overlap,
             window: self.welch.window(),
+            period_s: self.period,
         })
     }
 }
@@ -242,9 +249,76 @@ pub fn run_spectra(args: SpectraArgs) -> CliResult {
 /// `limpid spectra`'s text: CSV.
 pub fn spectra_text(e: &Estimated, _: &Request, _: &[PathBuf]) -> CliResult {
     if let Estimate::Spectra(r) = &e.document.estimate {
-        print!("{}", spectra_csv(r));
+        match &r.periodic {
+            Some(p) => {
+                print!("{}", periodic_csv(p));
+                eprintln!("limpid: {}", periodic_summary(p));
+            }
+            None => print!("{}", spectra_csv(r)),
+        }
     }
     Ok(())
+}
+
+/// A periodic analysis in one line: periods, and the distortion verdict.
+fn periodic_summary(p: &limpid_ident::spectra::PeriodicResult) -> String {
+    let db = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1} dB"));
+    let verdict = match &p.distortion {
+        Some(d) => format!(
+            "odd detection lines {}, even {}, noise {:.1} dB re the excited lines: {}",
+            db(d.odd_db),
+            db(d.even_db),
+            d.noise_db,
+            d.verdict
+        ),
+        None => "every line in the band is excited: no detection line for nonlinear distortion (use an odd or random-odd multisine)".into(),
+    };
+    format!(
+        "periodic analysis of {} periods of {} s ({}); {verdict}",
+        p.periods,
+        limpid_core::error::Num(p.period_s),
+        p.transient
+    )
+}
+
+/// The periodic analysis as CSV: one row per line from the lowest to the
+/// highest excited one; the response columns are empty where an input does
+/// not excite the line.
+fn periodic_csv(p: &limpid_ident::spectra::PeriodicResult) -> String {
+    let mut out = String::from("frequency_hz,kind,output_level_db,noise_level_db");
+    for f in &p.frf {
+        let pair = format!("{}_{}", f.input, f.output);
+        let _ = write!(
+            out,
+            ",magnitude_{pair},magnitude_se_{pair},phase_deg_{pair},phase_se_deg_{pair}"
+        );
+    }
+    out.push('\n');
+    for line in &p.lines {
+        let _ = write!(
+            out,
+            "{},{},{:.2},{:.2}",
+            line.frequency_hz, line.kind, line.output_level, line.noise_level
+        );
+        for f in &p.frf {
+            match f
+                .frequency_hz
+                .iter()
+                .position(|h| (h - line.frequency_hz).abs() < 1e-9 * h.max(1.0))
+            {
+                Some(k) => {
+                    let _ = write!(
+                        out,
+                        ",{:e},{:e},{:.3},{:.3}",
+                        f.magnitude[k], f.magnitude_se[k], f.phase_deg[k], f.phase_se_deg[k]
+                    );
+                }
+                None => out.push_str(",,,,"),
+            }
+        }
+        out.push('\n');
+    }
+    out
 }
 
 /// The spectra as CSV: one row per frequency; an empty cell where the

@@ -1,5 +1,6 @@
-//! limpid-dsp: zero-phase low-pass filtering, numerical derivatives, and
-//! Welch spectral analysis ([`spectral`]).
+//! limpid-dsp: zero-phase low-pass filtering, numerical derivatives, Welch
+//! spectral analysis ([`spectral`]), periodic perturbation signals
+//! ([`excitation`]: PRBS, multisines) and their analysis ([`periodic`]).
 //!
 //! Seed 000 §II-C and seed 001 "Data Processing" low-pass and differentiate
 //! positions; seed 001 eq. (1) low-passes rectified EMG with a 2nd-order
@@ -15,6 +16,8 @@
 #![warn(missing_docs)]
 
 pub mod cross_spectra;
+pub mod excitation;
+pub mod periodic;
 pub mod spectral;
 
 use limpid_core::error::Num;

@@ -38,6 +38,77 @@ pub struct SpectraResult {
     pub multiple_coherence: Vec<Vec<Option<f64>>>,
     /// `partial_coherence[output][input][frequency]` (0-1); `null` where the inputs' spectral matrix is singular.
     pub partial_coherence: Vec<Vec<Vec<Option<f64>>>>,
+    /// With a period (`--period`): the analysis of the periodic excitation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic: Option<PeriodicResult>,
+}
+
+/// The analysis of a periodic excitation (issue 59; `limpid_dsp::periodic`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PeriodicResult {
+    /// The period (s).
+    pub period_s: f64,
+    /// Whole periods averaged.
+    pub periods: usize,
+    /// How the transient was left out.
+    pub transient: String,
+    /// Every line from the lowest to the highest excited one.
+    pub lines: Vec<PeriodicLine>,
+    /// Detection-line levels and the verdict; absent when every line in the band is excited.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distortion: Option<PeriodicDistortion>,
+    /// The frequency response at each input's excited lines, per input-output pair.
+    pub frf: Vec<LineFrf>,
+}
+
+/// One line of a periodic analysis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PeriodicLine {
+    /// Frequency (Hz).
+    pub frequency_hz: f64,
+    /// `excited`, `odd_detection` or `even_detection`.
+    pub kind: String,
+    /// The input that excites it (excited lines).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input: Option<String>,
+    /// Output power summed over outputs (dB relative to the mean over excited lines).
+    pub output_level: f64,
+    /// The noise of the period average at this line (same reference, dB).
+    pub noise_level: f64,
+}
+
+/// Nonlinear distortion at the detection lines against the noise.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PeriodicDistortion {
+    /// Mean output power at the odd detection lines (dB re excited); absent without such lines (odd multisines).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub odd_db: Option<f64>,
+    /// Mean output power at the even detection lines (dB re excited).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub even_db: Option<f64>,
+    /// Mean noise of the period average over the analysed lines (dB re excited).
+    pub noise_db: f64,
+    /// `linear` or `nonlinear` (detection lines above the noise; `limpid_dsp::periodic`).
+    pub verdict: String,
+}
+
+/// The frequency response of one input-output pair at the input's excited lines.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct LineFrf {
+    /// Input column.
+    pub input: String,
+    /// Output column.
+    pub output: String,
+    /// Excited lines (Hz).
+    pub frequency_hz: Vec<f64>,
+    /// |G| (output unit per input unit).
+    pub magnitude: Vec<f64>,
+    /// Its standard error.
+    pub magnitude_se: Vec<f64>,
+    /// Phase (deg), unwrapped along frequency.
+    pub phase_deg: Vec<f64>,
+    /// Its standard error (deg).
+    pub phase_se_deg: Vec<f64>,
 }
 
 /// Refuse no inputs or outputs, and a column named twice (the inputs'
@@ -132,7 +203,19 @@ pub fn spectra(
     for name in &names {
         signals.push(rec.require(name, "named as an input or output")?);
     }
-    for (name, x) in inputs.iter().zip(&signals) {
+    spectra_of(rec, inputs, outputs, &signals, welch)
+}
+
+/// [`spectra`] of the named signals (inputs first), which may be part of the recording.
+fn spectra_of(
+    rec: &Recording,
+    inputs: &[String],
+    outputs: &[String],
+    signals: &[&[f64]],
+    welch: &Welch,
+) -> Result<SpectraResult> {
+    let names: Vec<String> = inputs.iter().chain(outputs).cloned().collect();
+    for (name, x) in inputs.iter().zip(signals) {
         if x.iter().all(|v| *v == x[0]) {
             return Err(Error::Format {
                 path: rec.path().to_path_buf(),
@@ -142,7 +225,7 @@ pub fn spectra(
             });
         }
     }
-    let s = SegmentSpectra::new(&signals, welch)?;
+    let s = SegmentSpectra::new(signals, welch)?;
     let q = inputs.len();
     check_segments(rec, s.segments(), q, welch.nperseg)?;
     let mats = s.matrix();
@@ -195,5 +278,174 @@ pub fn spectra(
         coherence,
         multiple_coherence,
         partial_coherence,
+        periodic: None,
     })
+}
+
+/// Spectra of a periodic excitation with period `period_s` (issue 59):
+/// Welch over whole periods (boxcar, no overlap, one segment a period),
+/// and the periodic analysis (`limpid_dsp::periodic`): the response at the
+/// excited lines with standard errors from the period-to-period scatter,
+/// and the output at the detection lines against the noise. A `period`
+/// column numbers the periods (-1 the transient, left out); without it the
+/// first period is left out.
+pub fn periodic_spectra(
+    rec: &Recording,
+    inputs: &[String],
+    outputs: &[String],
+    period_s: f64,
+) -> Result<SpectraResult> {
+    check_columns(inputs, outputs)?;
+    let fs = rec.sample_rate();
+    let exact = period_s * fs;
+    let n = exact.round() as usize;
+    if !(n >= 4 && (exact - n as f64).abs() < 1e-3) {
+        return Err(Error::invalid(
+            "period_s",
+            format!(
+                "{} s at {} Hz is {} samples: a period must be a whole number of samples (at least 4)",
+                limpid_core::error::Num(period_s),
+                limpid_core::error::Num(fs),
+                limpid_core::error::Num(exact)
+            ),
+        ));
+    }
+    let (start, transient) = match rec.column("period") {
+        Some(index) => {
+            let first = index
+                .iter()
+                .position(|p| *p >= 0.0)
+                .ok_or_else(|| Error::Format {
+                    path: rec.path().to_path_buf(),
+                    message:
+                        "column period: no sample of a period (every value is -1, the transient)"
+                            .into(),
+                })?;
+            if let Some(back) = index[first..].iter().position(|p| *p < 0.0) {
+                return Err(Error::Format {
+                    path: rec.path().to_path_buf(),
+                    message: format!(
+                        "row {}, column period: a transient (-1) after the periods began; the periods must be contiguous",
+                        rec.row_of(first + back)
+                    ),
+                });
+            }
+            (
+                first,
+                format!("{first} samples numbered -1 in the period column left out"),
+            )
+        }
+        None => (
+            n,
+            format!("the first period ({n} samples) left out as the transient"),
+        ),
+    };
+    let names: Vec<String> = inputs.iter().chain(outputs).cloned().collect();
+    let mut signals: Vec<&[f64]> = Vec::with_capacity(names.len());
+    for name in &names {
+        let x = rec.require(name, "named as an input or output")?;
+        signals.push(&x[start.min(x.len())..]);
+    }
+    let available = signals.iter().map(|s| s.len()).min().unwrap_or(0);
+    let periods = available / n;
+    let used: Vec<&[f64]> = signals.iter().map(|s| &s[..periods * n]).collect();
+    let analysed =
+        limpid_dsp::periodic::PeriodSpectra::new(&used, n).map_err(|e| Error::Format {
+            path: rec.path().to_path_buf(),
+            message: e.to_string(),
+        })?;
+    let analysis = limpid_dsp::periodic::analyse(&analysed, inputs.len())?;
+    let welch = Welch {
+        nperseg: n,
+        noverlap: Some(0),
+        window: limpid_dsp::spectral::Window::Boxcar,
+        ..Welch::new(fs)
+    };
+    let mut result = spectra_of(rec, inputs, outputs, &used, &welch)?;
+    result.periodic = Some(periodic_result(
+        &analysis, inputs, outputs, period_s, periods, transient,
+    ));
+    Ok(result)
+}
+
+/// The typed result of a periodic analysis.
+fn periodic_result(
+    a: &limpid_dsp::periodic::PeriodicAnalysis,
+    inputs: &[String],
+    outputs: &[String],
+    period_s: f64,
+    periods: usize,
+    transient: String,
+) -> PeriodicResult {
+    let hz = |line: usize| line as f64 / period_s;
+    let lines = a
+        .lines
+        .iter()
+        .map(|l| PeriodicLine {
+            frequency_hz: hz(l.line),
+            kind: l.kind.name().into(),
+            input: l.input.map(|i| inputs[i].clone()),
+            output_level: l.output_db,
+            noise_level: l.noise_db,
+        })
+        .collect();
+    let mut frf = Vec::new();
+    for (i, input) in inputs.iter().enumerate() {
+        let at: Vec<&limpid_dsp::periodic::LineResponse> =
+            a.responses.iter().filter(|r| r.input == i).collect();
+        for (o, output) in outputs.iter().enumerate() {
+            let g: Vec<num_complex::Complex64> = at.iter().map(|r| r.response[o]).collect();
+            let var: Vec<f64> = at.iter().map(|r| r.variance[o]).collect();
+            let magnitude: Vec<f64> = g.iter().map(|g| g.norm()).collect();
+            // complex noise of variance v: |G| and arg G each carry about v / 2
+            let magnitude_se = var.iter().map(|v| (v / 2.0).sqrt()).collect();
+            let phase_se_deg = var
+                .iter()
+                .zip(&magnitude)
+                .map(|(v, m)| {
+                    (v / (2.0 * m * m))
+                        .sqrt()
+                        .min(180.0)
+                        .to_degrees()
+                        .min(180.0)
+                })
+                .collect();
+            frf.push(LineFrf {
+                input: input.clone(),
+                output: output.clone(),
+                frequency_hz: at.iter().map(|r| hz(r.line)).collect(),
+                magnitude,
+                magnitude_se,
+                phase_deg: unwrapped_degrees(&g),
+                phase_se_deg,
+            });
+        }
+    }
+    PeriodicResult {
+        period_s,
+        periods,
+        transient,
+        lines,
+        distortion: a.distortion.as_ref().map(|d| PeriodicDistortion {
+            odd_db: d.odd_db,
+            even_db: d.even_db,
+            noise_db: d.noise_db,
+            verdict: if d.nonlinear { "nonlinear" } else { "linear" }.into(),
+        }),
+        frf,
+    }
+}
+
+/// Phases in degrees on one branch along frequency: each differs from the
+/// one before by less than 180 degrees, the first in (-180, 180].
+fn unwrapped_degrees(g: &[num_complex::Complex64]) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::with_capacity(g.len());
+    for z in g {
+        let mut p = z.arg().to_degrees();
+        if let Some(&before) = out.last() {
+            p += 360.0 * ((before - p) / 360.0).round();
+        }
+        out.push(p);
+    }
+    out
 }

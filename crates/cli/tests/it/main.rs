@@ -12,6 +12,7 @@ mod lab_files;
 mod live;
 mod live_common;
 mod live_load;
+mod periodic;
 mod planar;
 mod protocol;
 mod reflex;

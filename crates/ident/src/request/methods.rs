@@ -387,6 +387,11 @@ pub struct SpectraRequest {
     /// Segment window.
     #[serde(default)]
     pub window: SegmentWindow,
+    /// Period of a periodic excitation (s): spectra over whole periods
+    /// (no window, no overlap), the response at the excited lines and the
+    /// nonlinear distortion at the detection lines (issue 59).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period_s: Option<f64>,
 }
 
 impl SpectraRequest {
@@ -398,6 +403,7 @@ impl SpectraRequest {
             nperseg: None,
             noverlap: None,
             window: SegmentWindow::default(),
+            period_s: None,
         }
     }
 

@@ -183,7 +183,18 @@ impl Request {
                 r.params().check()?
             }
             // the segments are checked against the recording's length when it is read
-            Request::Spectra(r) => crate::spectra::check_columns(&r.inputs, &r.outputs)?,
+            Request::Spectra(r) => {
+                crate::spectra::check_columns(&r.inputs, &r.outputs)?;
+                if let Some(p) = r.period_s {
+                    positive("period_s", p)?;
+                    if r.nperseg.is_some() || r.noverlap.is_some() {
+                        return Err(Error::invalid(
+                            "period_s",
+                            "a periodic analysis takes whole periods as its segments: leave out the segment length and overlap",
+                        ));
+                    }
+                }
+            }
         }
         Ok(Checked(self))
     }

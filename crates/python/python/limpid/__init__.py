@@ -572,7 +572,10 @@ def spectra(recording: RecordingLike, inputs: Sequence[str], outputs: Sequence[s
 
     Options (defaults: ``limpid.request("spectra", inputs=..., outputs=...)``):
     ``nperseg`` (samples per segment; default about 4 s, a power of two), ``noverlap``
-    (default half a segment), ``window`` ("hann", "hamming", "boxcar").
+    (default half a segment), ``window`` ("hann", "hamming", "boxcar"), ``period_s``
+    (the period of a periodic excitation, s: spectra over whole periods, and under
+    ``periodic`` the response at the excited lines with standard errors and the
+    nonlinear distortion at the detection lines, as ``limpid spectra --period``).
 
     Returns ``frequencies``, ``psd[signal][frequency]`` (signals: inputs then outputs),
     ``coherence[output][input][frequency]``, ``multiple_coherence[output][frequency]``

@@ -1,0 +1,285 @@
+//! Issue 59: `limpid spectra --period` on periodic recordings: the response
+//! at the excited lines against the analytic one, within its standard
+//! errors; the distortion verdict of linear, quadratic and cubic systems;
+//! each input's response from zippered multi-input multisines.
+
+use crate::common::*;
+
+use limpid_dsp::excitation::{multisine, multisine_lines, optimise_phases, LineSet};
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// A Gaussian-like deviate (sum of 12 uniforms), reproducible.
+fn noise(seed: &mut u64) -> f64 {
+    (0..12)
+        .map(|_| {
+            *seed ^= *seed << 13;
+            *seed ^= *seed >> 7;
+            *seed ^= *seed << 17;
+            (*seed >> 11) as f64 / (1u64 << 53) as f64
+        })
+        .sum::<f64>()
+        - 6.0
+}
+
+const FS: f64 = 500.0;
+const PERIOD_S: f64 = 4.0;
+
+/// A joint (I, B, K) driven through a torque multisine, integrated exactly
+/// enough at 50 x the sample rate; the angle has `c` x angle² (quadratic)
+/// or `d` x angle³ (cubic) stiffness added, and noise of `sigma` rad.
+fn joint_recording(
+    path: &Path,
+    periods: usize,
+    (c, d): (f64, f64),
+    sigma: f64,
+    with_period_column: bool,
+) -> (f64, f64, f64) {
+    let (inertia, damping, stiffness) = (0.02, 0.5, 40.0);
+    let n = (FS * PERIOD_S) as usize;
+    let lines = multisine_lines(PERIOD_S, [0.5, 20.0], LineSet::RandomOdd, 5).unwrap();
+    let amplitudes = vec![1.0; lines.len()];
+    let phases = optimise_phases(n, &lines, &amplitudes);
+    let one = multisine(n, &lines, &amplitudes, &phases);
+    let rms = (one.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+    let total = n * (periods + 1);
+    let (mut q, mut v) = (0.0f64, 0.0f64);
+    let sub = 50;
+    let h = 1.0 / (FS * sub as f64);
+    let mut seed = 11u64;
+    let mut text = String::from(if with_period_column {
+        "t,tau1,q1,period\n"
+    } else {
+        "t,tau1,q1\n"
+    });
+    for i in 0..total {
+        let torque = 2.0 * one[i % n] / rms;
+        let next = 2.0 * one[(i + 1) % n] / rms;
+        // the angle at this sample's time, then the torque interpolated to the next
+        let period = if i < n { -1 } else { (i / n - 1) as i64 };
+        let measured = q + sigma * noise(&mut seed);
+        for s in 0..sub {
+            let f = (s as f64 + 0.5) / sub as f64;
+            let applied = torque * (1.0 - f) + next * f;
+            let spring = stiffness * q + c * q * q + d * q * q * q;
+            let a = (applied - damping * v - spring) / inertia;
+            v += h * a;
+            q += h * v;
+        }
+        if with_period_column {
+            text.push_str(&format!(
+                "{},{torque:e},{measured:e},{period}\n",
+                i as f64 / FS
+            ));
+        } else {
+            text.push_str(&format!("{},{torque:e},{measured:e}\n", i as f64 / FS));
+        }
+    }
+    std::fs::write(path, text).unwrap();
+    (inertia, damping, stiffness)
+}
+
+fn spectra(path: &Path, inputs: &str, outputs: &str) -> serde_json::Value {
+    json(&[
+        "spectra",
+        path.to_str().unwrap(),
+        "--inputs",
+        inputs,
+        "--outputs",
+        outputs,
+        "--period",
+        &PERIOD_S.to_string(),
+        "--json",
+    ])
+}
+
+#[test]
+fn the_response_of_a_linear_joint_is_found_at_its_excited_lines() {
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("joint.csv");
+    // noise well above the simulation's own error, so that the SEs are tested
+    let (i, b, k) = joint_recording(&path, 8, (0.0, 0.0), 2e-3, true);
+    let v = spectra(&path, "tau1", "q1");
+    validate(&v);
+    let p = &v["periodic"];
+    assert_eq!(p["periods"], 8);
+    assert!(
+        p["transient"].as_str().unwrap().contains("numbered -1"),
+        "{}",
+        p["transient"]
+    );
+    let frf = &p["frf"][0];
+    let f: Vec<f64> = serde_json::from_value(frf["frequency_hz"].clone()).unwrap();
+    let mag: Vec<f64> = serde_json::from_value(frf["magnitude"].clone()).unwrap();
+    let se: Vec<f64> = serde_json::from_value(frf["magnitude_se"].clone()).unwrap();
+    let phase: Vec<f64> = serde_json::from_value(frf["phase_deg"].clone()).unwrap();
+    assert!(f.len() > 20, "{} excited lines", f.len());
+    let mut covered = 0;
+    for j in 0..f.len() {
+        let w = 2.0 * PI * f[j];
+        // angle over torque: 1 / (K - I w² + j B w)
+        let (re, im) = (k - i * w * w, b * w);
+        let truth = 1.0 / (re * re + im * im).sqrt();
+        let truth_phase = -im.atan2(re).to_degrees();
+        let err = (mag[j] - truth).abs();
+        // the issue's criterion: 3 %, or 4 SE where the noise rules 3 % out
+        let allowed = (0.03 * truth).max(4.0 * se[j]);
+        assert!(
+            err < allowed,
+            "{} Hz: |G| {} ± {} vs {truth}",
+            f[j],
+            mag[j],
+            se[j]
+        );
+        assert!(
+            (phase[j] - truth_phase).abs() < 3.0f64.max((allowed / truth).to_degrees()),
+            "{} Hz: phase {} vs {truth_phase}",
+            f[j],
+            phase[j]
+        );
+        covered += usize::from(err < 2.0 * se[j]);
+    }
+    assert!(
+        covered * 10 >= 8 * f.len(),
+        "±2 SE covered {covered} of {}",
+        f.len()
+    );
+    let distortion = &p["distortion"];
+    assert_eq!(distortion["verdict"], "linear", "{distortion}");
+    // lines and kinds as the contract names them
+    let kinds: std::collections::BTreeSet<&str> = p["lines"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        kinds.into_iter().collect::<Vec<_>>(),
+        ["even_detection", "excited", "odd_detection"]
+    );
+}
+
+#[test]
+fn quadratic_and_cubic_stiffness_show_at_their_detection_lines() {
+    let d = tempfile::tempdir().unwrap();
+    let quadratic = d.path().join("quadratic.csv");
+    joint_recording(&quadratic, 8, (100.0, 0.0), 2e-5, false);
+    let v = spectra(&quadratic, "tau1", "q1");
+    let dist = &v["periodic"]["distortion"];
+    assert_eq!(dist["verdict"], "nonlinear", "{dist}");
+    let (even, noise) = (
+        dist["even_db"].as_f64().unwrap(),
+        dist["noise_db"].as_f64().unwrap(),
+    );
+    assert!(even > noise + 6.0, "{dist}");
+    assert!(v["periodic"]["transient"]
+        .as_str()
+        .unwrap()
+        .contains("first period"));
+    let cubic = d.path().join("cubic.csv");
+    joint_recording(&cubic, 8, (0.0, 40.0 * 400.0), 2e-5, false);
+    let v = spectra(&cubic, "tau1", "q1");
+    let dist = &v["periodic"]["distortion"];
+    assert_eq!(dist["verdict"], "nonlinear", "{dist}");
+    assert!(
+        dist["odd_db"].as_f64().unwrap() > dist["even_db"].as_f64().unwrap() + 6.0,
+        "{dist}"
+    );
+    // the text: CSV on stdout, the verdict on stderr
+    let out = limpid(&[
+        "spectra",
+        cubic.to_str().unwrap(),
+        "--inputs",
+        "tau1",
+        "--outputs",
+        "q1",
+        "--period",
+        "4",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out
+        .stdout
+        .starts_with("frequency_hz,kind,output_level_db,noise_level_db,magnitude_tau1_q1"));
+    assert!(out.stderr.contains(": nonlinear"), "{}", out.stderr);
+}
+
+#[test]
+fn a_period_that_is_not_whole_samples_or_given_with_segments_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("joint.csv");
+    joint_recording(&path, 4, (0.0, 0.0), 0.0, false);
+    let p = path.to_str().unwrap();
+    for (extra, says) in [
+        (vec!["--period", "4.0007"], "whole number of samples"),
+        (vec!["--period", "4", "--nfft", "512"], "whole periods"),
+        (vec!["--period", "-4"], "--period"),
+    ] {
+        let mut args = vec!["spectra", p, "--inputs", "tau1", "--outputs", "q1"];
+        args.extend(extra);
+        let out = limpid(&args);
+        assert_eq!(out.code, 2, "{args:?}: {}", out.stdout);
+        assert!(out.stderr.contains(says), "{args:?}: {}", out.stderr);
+    }
+}
+
+#[test]
+fn zippered_multisines_give_each_inputs_response() {
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("mimo.csv");
+    let n = (FS * PERIOD_S) as usize;
+    let lines = multisine_lines(PERIOD_S, [0.5, 20.0], LineSet::Full, 1).unwrap();
+    // input j takes every third line from the j-th
+    let inputs: Vec<Vec<f64>> = (0..3)
+        .map(|j| {
+            let own: Vec<usize> = lines.iter().copied().skip(j).step_by(3).collect();
+            let amplitudes = vec![1.0; own.len()];
+            let phases = optimise_phases(n, &own, &amplitudes);
+            multisine(n, &own, &amplitudes, &phases)
+        })
+        .collect();
+    // outputs: y_o = gain_oj * u_j (static mixing), plus noise
+    let gains = [[1.0, 0.5, 0.0], [0.0, 2.0, -1.0], [0.3, 0.0, 1.5]];
+    let mut seed = 3u64;
+    let mut text = String::from("t,u1,u2,u3,y1,y2,y3\n");
+    for i in 0..n * 9 {
+        let u: Vec<f64> = inputs.iter().map(|s| s[i % n]).collect();
+        let y: Vec<f64> = gains
+            .iter()
+            .map(|g| g.iter().zip(&u).map(|(g, u)| g * u).sum::<f64>() + 0.01 * noise(&mut seed))
+            .collect();
+        text.push_str(&format!(
+            "{},{},{},{},{},{},{}\n",
+            i as f64 / FS,
+            u[0],
+            u[1],
+            u[2],
+            y[0],
+            y[1],
+            y[2]
+        ));
+    }
+    std::fs::write(&path, text).unwrap();
+    let v = spectra(&path, "u1,u2,u3", "y1,y2,y3");
+    let frf = v["periodic"]["frf"].as_array().unwrap();
+    assert_eq!(frf.len(), 9);
+    for pair in frf {
+        let (i, o) = (
+            pair["input"].as_str().unwrap()[1..]
+                .parse::<usize>()
+                .unwrap()
+                - 1,
+            pair["output"].as_str().unwrap()[1..]
+                .parse::<usize>()
+                .unwrap()
+                - 1,
+        );
+        let mag: Vec<f64> = serde_json::from_value(pair["magnitude"].clone()).unwrap();
+        let truth = (gains[o][i] as f64).abs();
+        for m in &mag {
+            assert!(
+                (m - truth).abs() < 0.03 * truth.max(0.05),
+                "G{o}{i}: {m} vs {truth}"
+            );
+        }
+    }
+}
