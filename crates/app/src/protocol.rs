@@ -33,6 +33,9 @@ pub fn predicted_condition(d: &Design) -> Result<Option<f64>> {
             let est = fit_planar(&data, usize::MAX, Some(subject.xi), &all)?;
             Ok(Some(est.criteria.condition_number_scaled))
         }
-        Design::Stochastic(_) | Design::Ensemble(_) | Design::RampAndHold(_) => Ok(None),
+        Design::Stochastic(_)
+        | Design::Ensemble(_)
+        | Design::RampAndHold(_)
+        | Design::Periodic(_) => Ok(None),
     }
 }

@@ -112,6 +112,10 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
                 Err("a centre-out protocol is exported for a robot: add --robot kuka-lwr4|puma3|FILE.urdf".into())
             }
             (Design::Planar(p), _) => export_planar(&p, &output),
+            (Design::Periodic(p), None) => export_periodic(&p, &output),
+            (Design::Periodic(_), Some(_)) => Err(
+                "a multisine or PRBS is exported in its own coordinates (t, the channels, period): leave out --robot".into(),
+            ),
             (Design::Stochastic(p), _) => export_stochastic(&p, &output),
             (Design::Ensemble(_) | Design::RampAndHold(_), _) => Err(
                 "ensemble and ramp-and-hold protocols are for `limpid simulate`; exporting them to a robot is not supported yet".into(),
@@ -182,6 +186,30 @@ fn print_report(d: &Design, report: &DesignReport) {
         (_, DesignReport::Varying(r)) => {
             println!("  {} samples, {:.1} s recorded", r.samples, r.duration_s);
         }
+        (Design::Periodic(p), DesignReport::Periodic(r)) => {
+            println!(
+                "  {} samples ({:.1} s): a fade-in period, {} periods of {} s, a fade-out period",
+                r.samples,
+                r.duration_s,
+                p.periods,
+                num(r.period_s)
+            );
+            for (i, name) in p.channel_names().iter().enumerate() {
+                println!(
+                    "  {name}: peaks displacement {}, velocity {}, acceleration {}, force or torque {} (nominal stiffness); crest factor {:.2}; {} excited lines",
+                    num(r.peak_displacement[i]),
+                    num(r.peak_velocity[i]),
+                    num(r.peak_acceleration[i]),
+                    num(r.peak_force[i]),
+                    r.crest_factor[i],
+                    r.excited_lines[i]
+                );
+            }
+            println!(
+                "  {} detection lines between the excited ones (for nonlinear distortion); largest input coherence at a shared line {:.3}",
+                r.detection_lines, r.max_input_coherence
+            );
+        }
         _ => {}
     }
 }
@@ -193,6 +221,29 @@ fn print_ratios(c: &[f64; 3]) {
         num(c[1]),
         num(c[2])
     );
+}
+
+/// Write a periodic protocol's command in its own coordinates: `t`, the
+/// channels (displacement from the posture) and `period` (-1: fade-in and
+/// fade-out), any rig or simulator can play it.
+fn export_periodic(p: &limpid_lab::periodic::PeriodicDesign, output: &Path) -> CliResult {
+    let c = p.command()?;
+    let mut names = vec!["t".to_string()];
+    names.extend(c.channels.iter().cloned());
+    names.push("period".into());
+    let mut columns = vec![c.t.clone()];
+    columns.extend(c.values.iter().cloned());
+    columns.push(c.period.iter().map(|&i| i as f64).collect());
+    let rec = limpid_core::Recording::new(output, names, columns, 2)?;
+    limpid_io::write_recording(&rec, output)?;
+    println!(
+        "wrote {}: {} samples of {} with a period column ({} samples a period)",
+        output.display(),
+        rec.len(),
+        c.channels.join(", "),
+        c.period_samples
+    );
+    Ok(())
 }
 
 /// Write a centre-out schedule (`limpid_lab::export`) and say so.

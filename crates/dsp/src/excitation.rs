@@ -219,6 +219,16 @@ fn inverse(n: usize, mut spectrum: Vec<Complex64>) -> Vec<f64> {
     out
 }
 
+/// The DFT of one period (unscaled: a cosine of amplitude a reads a n / 2 at its line).
+pub fn period_spectrum(x: &[f64]) -> Vec<Complex64> {
+    let plan = RealFftPlanner::<f64>::new().plan_fft_forward(x.len());
+    let mut input = x.to_vec();
+    let mut out = plan.make_output_vec();
+    plan.process(&mut input, &mut out)
+        .expect("lengths agree with the plan");
+    out
+}
+
 /// Peak over root mean square.
 pub fn crest_factor(x: &[f64]) -> f64 {
     let peak = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));

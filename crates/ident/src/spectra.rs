@@ -310,6 +310,7 @@ pub fn periodic_spectra(
             ),
         ));
     }
+    let mut end_of_periods = None;
     let (start, transient) = match rec.column("period") {
         Some(index) => {
             let first = index
@@ -321,18 +322,25 @@ pub fn periodic_spectra(
                         "column period: no sample of a period (every value is -1, the transient)"
                             .into(),
                 })?;
-            if let Some(back) = index[first..].iter().position(|p| *p < 0.0) {
+            // a fade-out after the last period (-1 to the end) is left out too
+            let end = index[first..]
+                .iter()
+                .position(|p| *p < 0.0)
+                .map_or(index.len(), |back| first + back);
+            if let Some(again) = index[end..].iter().position(|p| *p >= 0.0) {
                 return Err(Error::Format {
                     path: rec.path().to_path_buf(),
                     message: format!(
-                        "row {}, column period: a transient (-1) after the periods began; the periods must be contiguous",
-                        rec.row_of(first + back)
+                        "row {}, column period: a period after a transient (-1) that followed the periods; the periods must be contiguous",
+                        rec.row_of(end + again)
                     ),
                 });
             }
+            let left_out = index.len() - (end - first);
+            end_of_periods = Some(end);
             (
                 first,
-                format!("{first} samples numbered -1 in the period column left out"),
+                format!("{left_out} samples numbered -1 in the period column (fade-in, fade-out) left out"),
             )
         }
         None => (
@@ -344,7 +352,8 @@ pub fn periodic_spectra(
     let mut signals: Vec<&[f64]> = Vec::with_capacity(names.len());
     for name in &names {
         let x = rec.require(name, "named as an input or output")?;
-        signals.push(&x[start.min(x.len())..]);
+        let end = end_of_periods.unwrap_or(x.len()).min(x.len());
+        signals.push(&x[start.min(end)..end]);
     }
     let available = signals.iter().map(|s| s.len()).min().unwrap_or(0);
     let periods = available / n;

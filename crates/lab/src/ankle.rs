@@ -123,14 +123,59 @@ pub fn simulate_ankle(s: &AnkleSubject, e: &AnkleExperiment, seed: u64) -> Resul
     }
     crate::validate::check_size(e.duration_s * e.rate_hz, "ankle recording")?;
     let n = (e.duration_s * e.rate_hz).round() as usize;
-    let sub = 10usize;
+    let h = 1.0 / (e.rate_hz * SUBSTEPS as f64);
+    let switch_every = (e.switch_s / h).round().max(1.0) as usize;
+    let mut u = e.amplitude_rad;
+    // the PRBS switches with probability 1/2 on its grid (the draw comes
+    // first in each step, as the torque noise's come after it)
+    integrate(s, e, n, seed, |k, rng| {
+        if k % switch_every == 0 && rng.random::<bool>() {
+            u = -u;
+        }
+        u
+    })
+}
+
+/// Simulate the ankle following a position `command` (rad, one value per
+/// sample at `e.rate_hz`, linearly interpolated between samples) through
+/// the same actuator and with the same reflex and noise as [`simulate_ankle`]
+/// (whose PRBS fields are not used): a periodic protocol's command (issue 59).
+pub fn simulate_ankle_following(
+    s: &AnkleSubject,
+    e: &AnkleExperiment,
+    command: &[f64],
+    seed: u64,
+) -> Result<Recording> {
+    if command.iter().any(|v| !v.is_finite()) || command.is_empty() {
+        return Err(Error::invalid("command", "expected finite angles"));
+    }
+    let n = command.len();
+    integrate(s, e, n, seed, |k, _| {
+        let (i, f) = (k / SUBSTEPS, (k % SUBSTEPS) as f64 / SUBSTEPS as f64);
+        let next = command[(i + 1).min(n - 1)];
+        command[i] * (1.0 - f) + next * f
+    })
+}
+
+/// Integration steps per sample.
+const SUBSTEPS: usize = 10;
+
+/// The ankle under the actuator following `command(step, rng)` for `n` samples.
+fn integrate(
+    s: &AnkleSubject,
+    e: &AnkleExperiment,
+    n: usize,
+    seed: u64,
+    mut command: impl FnMut(usize, &mut StdRng) -> f64,
+) -> Result<Recording> {
+    let sub = SUBSTEPS;
     let h = 1.0 / (e.rate_hz * sub as f64);
     let mut rng = StdRng::seed_from_u64(seed);
     let noise = Normal::new(0.0, e.torque_noise_nm.max(f64::MIN_POSITIVE))
         .map_err(|err| Error::invalid("torque noise", err.to_string()))?;
     let wa = 2.0 * std::f64::consts::PI * e.actuator_hz;
-    let (za, switch_every) = (0.7, (e.switch_s / h).round().max(1.0) as usize);
-    let (mut q, mut qd, mut u) = (0.0f64, 0.0f64, e.amplitude_rad);
+    let za = 0.7;
+    let (mut q, mut qd) = (0.0f64, 0.0f64);
     let delay = s.reflex.map_or(0, |r| (r.delay_s / h).round() as usize);
     let mut history = vec![0.0f64; delay + 1];
     let (mut z, mut zd) = (0.0f64, 0.0f64);
@@ -141,9 +186,7 @@ pub fn simulate_ankle(s: &AnkleSubject, e: &AnkleExperiment, seed: u64) -> Resul
         Vec::with_capacity(n),
     );
     for k in 0..n * sub {
-        if k % switch_every == 0 && rng.random::<bool>() {
-            u = -u;
-        }
+        let u = command(k, &mut rng);
         let qdd = wa * wa * (u - q) - 2.0 * za * wa * qd;
         let reflex = if s.reflex.is_some() { z } else { 0.0 };
         q_sum += q;

@@ -35,10 +35,12 @@ pub enum Design {
     Ensemble(crate::varying::EnsembleExperiment),
     /// Operating angles on a ramp-and-hold schedule under a continuous perturbation (parameter-varying impedance).
     RampAndHold(crate::varying::RampAndHold),
+    /// A multisine or PRBS repeated for whole periods (`kind = "multisine"` or `"prbs"`).
+    Periodic(crate::periodic::PeriodicDesign),
 }
 
 /// The preset names, by kind.
-pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold)";
+pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold), ankle-multisine (multisine), ankle-prbs (prbs)";
 
 impl Design {
     /// A preset: seed 000 (`artemiadis-3d`), seed 001 (`patel-cocontraction`),
@@ -52,6 +54,12 @@ impl Design {
             "park-stochastic" => Ok(Design::Stochastic(StochasticDesign::seed004())),
             "ensemble" => Ok(Design::Ensemble(Default::default())),
             "ankle-ramp-and-hold" => Ok(Design::RampAndHold(Default::default())),
+            "ankle-multisine" => Ok(Design::Periodic(
+                crate::periodic::PeriodicDesign::multisine_joint(),
+            )),
+            "ankle-prbs" => Ok(Design::Periodic(
+                crate::periodic::PeriodicDesign::prbs_joint(),
+            )),
             other => Err(Error::invalid(
                 "preset",
                 format!("unknown preset {other:?}; presets: {PRESETS}"),
@@ -82,7 +90,7 @@ impl Design {
                         path,
                         text,
                         Some(span),
-                        "kind must be a string: centre-out, planar, stochastic, ensemble or ramp-and-hold",
+                        "kind must be a string: centre-out, planar, stochastic, ensemble, ramp-and-hold, multisine or prbs",
                     ));
                 };
                 // blank the `kind = ...` line so that every other byte keeps its place
@@ -124,9 +132,24 @@ impl Design {
                 d.validate().map_err(|e| fail(e.to_string()))?;
                 Design::RampAndHold(d)
             }
+            "multisine" | "prbs" => {
+                let d: crate::periodic::PeriodicDesign = toml::from_str(&body).map_err(|e| {
+                    let hint = "; a multisine needs period_s, band_hz and rms, a prbs order, switch_interval_s and amplitude, both coordinates, sample_rate_hz, periods and [limits]";
+                    Error::settings(path, &body, e.span(), &format!("{}{hint}", e.message()))
+                })?;
+                let is_prbs = matches!(d.signal, crate::periodic::Signal::Prbs(_));
+                if is_prbs != (kind == "prbs") {
+                    return Err(fail(format!(
+                        "kind = \"{kind}\" but the fields are a {}'s",
+                        if is_prbs { "prbs" } else { "multisine" }
+                    )));
+                }
+                d.validate().map_err(fail)?;
+                Design::Periodic(d)
+            }
             other => {
                 return Err(fail(format!(
-                    "unknown kind {other:?}; kinds: centre-out, planar, stochastic, ensemble, ramp-and-hold"
+                    "unknown kind {other:?}; kinds: centre-out, planar, stochastic, ensemble, ramp-and-hold, multisine, prbs"
                 )))
             }
         };
@@ -183,6 +206,7 @@ impl Design {
             ),
             Design::Ensemble(p) => p.validate(),
             Design::RampAndHold(p) => p.validate(),
+            Design::Periodic(p) => p.validate().map_err(|m| Error::invalid("protocol", m)),
         }
     }
 
@@ -194,6 +218,13 @@ impl Design {
             Design::Stochastic(p) => ("stochastic", toml::to_string(p).unwrap_or_default()),
             Design::Ensemble(p) => ("ensemble", toml::to_string(p).unwrap_or_default()),
             Design::RampAndHold(p) => ("ramp-and-hold", toml::to_string(p).unwrap_or_default()),
+            Design::Periodic(p) => (
+                match p.signal {
+                    crate::periodic::Signal::Prbs(_) => "prbs",
+                    crate::periodic::Signal::Multisine(_) => "multisine",
+                },
+                toml::to_string(p).unwrap_or_default(),
+            ),
         };
         format!("kind = \"{kind}\"\n{body}")
     }
@@ -469,6 +500,8 @@ pub enum DesignReport {
     Stochastic(StochasticReport),
     /// Ensemble or ramp-and-hold report.
     Varying(VaryingReport),
+    /// Multisine or PRBS report.
+    Periodic(crate::periodic::PeriodicReport),
 }
 
 /// What `check` found in an ensemble or ramp-and-hold protocol.
@@ -538,6 +571,7 @@ pub fn check(d: &Design) -> Result<DesignReport> {
                 duration_s,
             }))
         }
+        Design::Periodic(p) => p.check().map(DesignReport::Periodic),
     }
 }
 

@@ -14,6 +14,7 @@ pub mod design;
 pub mod export;
 pub mod gravity;
 pub mod imbic;
+pub mod periodic;
 pub mod planar;
 pub mod profile;
 pub mod protocol;

@@ -144,6 +144,7 @@ pub fn simulate_design(
                 truth: Truth::Varying(truth),
             }])
         }
+        Design::Periodic(p) => periodic(p, subject, seed).map(|s| vec![s]),
         Design::RampAndHold(p) => {
             let s: crate::varying::ScheduledAnkle = match subject {
                 Some(text) => parse(text)?,
@@ -158,6 +159,85 @@ pub fn simulate_design(
             }])
         }
     }
+}
+
+/// A periodic protocol (issue 59) on the virtual ankle ([`crate::ankle`]):
+/// the command played through its actuator, the `period` column kept. Its
+/// subject (TOML) is an [`AnkleSubject`](crate::ankle::AnkleSubject)
+/// (`inertia`, `damping`, `stiffness`, optional `[reflex]`; default the
+/// ankle with a reflex); joint protocols of one channel only so far.
+fn periodic(
+    p: &crate::periodic::PeriodicDesign,
+    subject: Option<&SubjectText>,
+    seed: u64,
+) -> Result<Simulated> {
+    use crate::ankle::{simulate_ankle_following, AnkleExperiment, AnkleSubject};
+    let channels = p.channel_names();
+    if p.coordinates != crate::periodic::Coordinates::Joint || channels.len() != 1 {
+        return Err(Error::invalid(
+            "protocol",
+            format!(
+                "periodic protocols are simulated on the virtual ankle (one joint channel); this one commands {}: export it with `limpid protocol export` and play it on your rig or simulator",
+                channels.join(", ")
+            ),
+        ));
+    }
+    let s: AnkleSubject = match subject {
+        Some(text) => parse(text)?,
+        None => AnkleSubject::default(),
+    };
+    let command = p.command()?;
+    let experiment = AnkleExperiment {
+        rate_hz: p.sample_rate_hz,
+        duration_s: command.t.len() as f64 / p.sample_rate_hz,
+        ..AnkleExperiment::default()
+    };
+    let ankle = simulate_ankle_following(&s, &experiment, &command.values[0], seed)?;
+    let q = ankle.column("q1").expect("the ankle records q1").to_vec();
+    let tau = ankle
+        .column("tau1")
+        .expect("the ankle records tau1")
+        .to_vec();
+    let period: Vec<f64> = command.period.iter().map(|&i| i as f64).collect();
+    let recording = Recording::new(
+        "virtual ankle",
+        vec!["t".into(), "q1".into(), "tau1".into(), "period".into()],
+        vec![command.t.clone(), q, tau, period],
+        2,
+    )?;
+    let one = |v: f64| Matrix::from_rows(&[vec![v]]).expect("1 x 1");
+    let truth = Truth::Reflex(limpid_core::truth::ReflexTruth {
+        about: About {
+            sample_rate: Some(p.sample_rate_hz),
+            seed: Some(seed),
+            notes: vec![format!(
+                "the virtual ankle (intrinsic I, B, K{}) following {}",
+                if s.reflex.is_some() {
+                    " and a stretch reflex"
+                } else {
+                    ""
+                },
+                p.name
+            )],
+            ..About::default()
+        },
+        inertia: one(s.inertia),
+        damping: one(s.damping),
+        stiffness: one(s.stiffness),
+        other: other_keys([
+            ("reflex", to_value(&s.reflex)),
+            (
+                "noise",
+                json!({"torque_white_std_Nm": experiment.torque_noise_nm}),
+            ),
+            ("actuator_hz", json!(experiment.actuator_hz)),
+        ]),
+    });
+    Ok(Simulated {
+        label: None,
+        recording,
+        truth,
+    })
 }
 
 fn centre_out(p: &Protocol, subject: Option<&SubjectText>, seed: u64) -> Result<Vec<Simulated>> {

@@ -283,3 +283,145 @@ fn zippered_multisines_give_each_inputs_response() {
         }
     }
 }
+
+/// A preset's protocol from `protocol new`, written to `dir`.
+fn preset(dir: &Path, name: &str) -> std::path::PathBuf {
+    let path = dir.join(format!("{name}.toml"));
+    let out = limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        name,
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    path
+}
+
+#[test]
+fn multisine_and_prbs_protocols_check_export_and_simulate() {
+    let d = tempfile::tempdir().unwrap();
+    let multisine = preset(d.path(), "ankle-multisine");
+    let v = json(&["protocol", "check", multisine.to_str().unwrap(), "--json"]);
+    let cf = v["crest_factor"][0].as_f64().unwrap();
+    assert!(cf < 1.6, "crest factor {cf}");
+    assert!(v["detection_lines"].as_u64().unwrap() > 50);
+    // the command in its own coordinates, faded in and out, period-numbered
+    let command = d.path().join("cmd.csv");
+    let out = limpid(&[
+        "protocol",
+        "export",
+        multisine.to_str().unwrap(),
+        "-o",
+        command.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let text = std::fs::read_to_string(&command).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "t,q1,period");
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 80_000);
+    assert_eq!((rows[0][1], rows[0][2]), (0.0, -1.0));
+    assert_eq!(rows[10_000][2], 0.0);
+    assert!(rows.last().unwrap()[1].abs() < 1e-6);
+    let peak = rows.iter().map(|r| r[1].abs()).fold(0.0, f64::max);
+    assert!(peak <= 0.1, "{peak}");
+    // a robot is refused: the command is in its own coordinates
+    let out = limpid(&[
+        "protocol",
+        "export",
+        multisine.to_str().unwrap(),
+        "--robot",
+        "puma3",
+        "-o",
+        command.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("leave out --robot"), "{}", out.stderr);
+    // simulated on the reflex-free ankle: linear, K within 3 % at low frequency
+    let subject = d.path().join("ankle.toml");
+    std::fs::write(
+        &subject,
+        "inertia = 0.015\ndamping = 0.8\nstiffness = 80.0\n",
+    )
+    .unwrap();
+    let rec = d.path().join("rec.csv");
+    let out = limpid(&[
+        "simulate",
+        multisine.to_str().unwrap(),
+        "--subject",
+        subject.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v = json(&[
+        "spectra",
+        rec.to_str().unwrap(),
+        "--inputs",
+        "q1",
+        "--outputs",
+        "tau1",
+        "--period",
+        "10",
+        "--json",
+    ]);
+    let p = &v["periodic"];
+    assert_eq!(p["periods"], 6);
+    assert_eq!(p["distortion"]["verdict"], "linear", "{}", p["distortion"]);
+    let f: Vec<f64> = serde_json::from_value(p["frf"][0]["frequency_hz"].clone()).unwrap();
+    let mag: Vec<f64> = serde_json::from_value(p["frf"][0]["magnitude"].clone()).unwrap();
+    for (f, m) in f.iter().zip(&mag) {
+        let w = 2.0 * PI * f;
+        let truth = ((80.0 - 0.015 * w * w).powi(2) + (0.8 * w).powi(2)).sqrt();
+        assert!((m - truth).abs() < 0.03 * truth, "{f} Hz: {m} vs {truth}");
+    }
+    // with the default ankle's half-wave rectified reflex: nonlinear, at the even lines
+    let out = limpid(&[
+        "simulate",
+        multisine.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v = json(&[
+        "spectra",
+        rec.to_str().unwrap(),
+        "--inputs",
+        "q1",
+        "--outputs",
+        "tau1",
+        "--period",
+        "10",
+        "--json",
+    ]);
+    let dist = &v["periodic"]["distortion"];
+    assert_eq!(dist["verdict"], "nonlinear", "{dist}");
+    assert!(
+        dist["even_db"].as_f64().unwrap() > dist["noise_db"].as_f64().unwrap() + 20.0,
+        "{dist}"
+    );
+    // the PRBS preset: a maximum-length sequence of order 7 at 150 ms
+    let prbs = preset(d.path(), "ankle-prbs");
+    let out = limpid(&[
+        "protocol",
+        "export",
+        prbs.to_str().unwrap(),
+        "-o",
+        command.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let text = std::fs::read_to_string(&command).unwrap();
+    let q: Vec<f64> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let n = 127 * 150;
+    let levels: Vec<f64> = (0..127).map(|j| q[n + j * 150 + 75].signum()).collect();
+    assert_eq!(levels, limpid_dsp::excitation::mls(7).unwrap());
+    assert!(q[n..2 * n].iter().all(|v| v.abs() <= 0.03 + 1e-12));
+}
