@@ -101,3 +101,23 @@ def test_a_mat_v73_field_declared_larger_than_stored_is_refused_before_decoding(
     assert path.stat().st_size < 100_000
     with pytest.raises(ValueError, match="does not store|decodes from one MAT-file"):
         limpid.inspect(path)
+
+
+def test_spectra_over_whole_periods_finds_a_static_gain_and_no_distortion(tmp_path):
+    # a random-odd-like excitation: odd lines of a 2 s period at 200 Hz, every third left out
+    fs, period, periods = 200.0, 2.0, 8
+    n = int(fs * period)
+    lines = [k for k in range(1, 80, 2) if (k // 2) % 3 != 2]
+    t = np.arange(n * (periods + 1)) / fs
+    rng = np.random.default_rng(4)
+    phases = rng.uniform(0, 2 * np.pi, len(lines))
+    u = sum(np.cos(2 * np.pi * k * t / period + p) for k, p in zip(lines, phases))
+    y = 3.0 * u + 0.01 * rng.standard_normal(len(t))
+    r = limpid.spectra({"t": t, "u": u, "y": y}, ["u"], ["y"], period_s=period)
+    p = r.to_dict()["periodic"]
+    assert p["periods"] == periods
+    assert p["distortion"]["verdict"] == "linear"
+    assert np.allclose(p["frf"][0]["magnitude"], 3.0, rtol=0.01)
+    assert limpid.request("spectra", inputs=["u"], outputs=["y"], period_s=2.0)["period_s"] == 2.0
+    with pytest.raises(ValueError, match="period_s"):
+        limpid.spectra({"t": t, "u": u, "y": y}, ["u"], ["y"], period_s=2.0001)
