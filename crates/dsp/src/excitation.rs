@@ -207,7 +207,7 @@ fn inverse(n: usize, mut spectrum: Vec<Complex64>) -> Vec<f64> {
     let mut out = vec![0.0; n];
     // DC and (for even n) Nyquist must be real for the inverse real transform
     spectrum[0].im = 0.0;
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         if let Some(last) = spectrum.last_mut() {
             last.im = 0.0;
         }

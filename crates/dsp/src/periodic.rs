@@ -210,7 +210,7 @@ pub fn analyse(spectra: &PeriodSpectra, inputs: usize) -> Result<PeriodicAnalysi
     let mut owner: Vec<Option<usize>> = vec![None; lines];
     for i in 0..inputs {
         let peak = (1..lines).map(|k| power(i, k)).fold(0.0f64, f64::max);
-        if !(peak > 0.0) {
+        if peak.is_nan() || peak <= 0.0 {
             return Err(Error::invalid(
                 "inputs/outputs",
                 format!("input {} has no power at any line of the period", i + 1),
@@ -254,7 +254,7 @@ pub fn analyse(spectra: &PeriodSpectra, inputs: usize) -> Result<PeriodicAnalysi
             .sum::<f64>()
     };
     let reference = excited.iter().map(|&k| output_power(k)).sum::<f64>() / excited.len() as f64;
-    if !(reference > 0.0) {
+    if reference.is_nan() || reference <= 0.0 {
         return Err(Error::invalid(
             "inputs/outputs",
             "the outputs have no power at the excited lines",
@@ -263,8 +263,8 @@ pub fn analyse(spectra: &PeriodSpectra, inputs: usize) -> Result<PeriodicAnalysi
     let db = |p: f64| 10.0 * (p.max(f64::MIN_POSITIVE) / reference).log10();
     let mut levels = Vec::new();
     let mut responses = Vec::new();
-    for k in first..=last {
-        let kind = match owner[k] {
+    for (k, &owned) in owner.iter().enumerate().take(last + 1).skip(first) {
+        let kind = match owned {
             Some(_) => LineKind::Excited,
             None if k % 2 == 1 => LineKind::OddDetection,
             None => LineKind::EvenDetection,
@@ -273,12 +273,12 @@ pub fn analyse(spectra: &PeriodSpectra, inputs: usize) -> Result<PeriodicAnalysi
         levels.push(LineLevel {
             line: k,
             kind,
-            input: owner[k],
+            input: owned,
             output_db: db(p),
             noise_db: db(n),
             ratio: if n > 0.0 { p / n } else { f64::INFINITY },
         });
-        if let Some(i) = owner[k] {
+        if let Some(i) = owned {
             let u = spectra.mean[i][k];
             let su = spectra.variance_of_mean(i, k);
             let (response, variance) = outputs

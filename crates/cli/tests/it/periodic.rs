@@ -274,7 +274,7 @@ fn zippered_multisines_give_each_inputs_response() {
                 - 1,
         );
         let mag: Vec<f64> = serde_json::from_value(pair["magnitude"].clone()).unwrap();
-        let truth = (gains[o][i] as f64).abs();
+        let truth: f64 = gains[o][i].abs();
         for m in &mag {
             assert!(
                 (m - truth).abs() < 0.03 * truth.max(0.05),
