@@ -64,7 +64,7 @@ def test_a_ragged_result_displays_why_instead_of_raising():
     ragged = limpid.Result(r)
     html = ragged._repr_html_()
     assert "cannot be shown" in html and "do not agree" in html
-    assert "cannot be summarised" in repr(ragged)
+    assert repr(ragged).startswith("limpid.Result(")
 
 
 def test_an_ellipsoid_of_nan_says_so():

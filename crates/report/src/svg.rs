@@ -15,6 +15,8 @@ pub enum Stroke {
     Dashed,
     /// A dotted line.
     Dotted,
+    /// A mark at each point, no line (spectral lines of a periodic analysis).
+    Points,
 }
 
 /// One trace.
@@ -250,17 +252,35 @@ impl Chart {
                 pen_down = true;
             }
             let dash = match series.stroke {
-                Stroke::Solid => "",
+                Stroke::Solid | Stroke::Points => "",
                 Stroke::Dashed => r#" stroke-dasharray="6 3""#,
                 Stroke::Dotted => r#" stroke-dasharray="1.5 2.5""#,
             };
-            let _ = write!(
-                s,
-                r#"<path class="trace" data-name="{}" d="{d}" fill="none" stroke="{}" stroke-width="{:.2}"{dash}/>"#,
-                escape(&series.name),
-                series.color,
-                1.4 * k
-            );
+            if series.stroke == Stroke::Points {
+                let _ = write!(
+                    s,
+                    r#"<g class="trace" data-name="{}" fill="{}">"#,
+                    escape(&series.name),
+                    series.color
+                );
+                for (x, y) in self.finite_points(series) {
+                    let (cx, cy) = (px(x), py(y.clamp(y0.min(y1), y0.max(y1))));
+                    let _ = write!(
+                        s,
+                        r#"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}"/>"#,
+                        2.2 * k
+                    );
+                }
+                s.push_str("</g>");
+            } else {
+                let _ = write!(
+                    s,
+                    r#"<path class="trace" data-name="{}" d="{d}" fill="none" stroke="{}" stroke-width="{:.2}"{dash}/>"#,
+                    escape(&series.name),
+                    series.color,
+                    1.4 * k
+                );
+            }
             // legend: one entry per name (series drawn in pieces share one)
             if self.series[..index].iter().any(|o| o.name == series.name) {
                 continue;
@@ -268,6 +288,19 @@ impl Chart {
             let ly = mt + 8.0 * k + 14.0 * k * legend_rows as f64;
             legend_rows += 1;
             let lx = ml + pw + 10.0 * k;
+            if series.stroke == Stroke::Points {
+                let _ = write!(
+                    s,
+                    r#"<circle cx="{:.1}" cy="{ly:.1}" r="{:.1}" fill="{}"/><text x="{:.1}" y="{:.1}">{}</text>"#,
+                    lx + 10.0 * k,
+                    2.6 * k,
+                    series.color,
+                    lx + 24.0 * k,
+                    ly + 4.0 * k,
+                    escape(&series.name)
+                );
+                continue;
+            }
             let _ = write!(
                 s,
                 r#"<line x1="{lx:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{}" stroke-width="1.6"{dash}/><text x="{:.1}" y="{:.1}">{}</text>"#,

@@ -379,6 +379,31 @@ fn multisine_and_prbs_protocols_check_export_and_simulate() {
         let truth = ((80.0 - 0.015 * w * w).powi(2) + (0.8 * w).powi(2)).sqrt();
         assert!((m - truth).abs() < 0.03 * truth, "{f} Hz: {m} vs {truth}");
     }
+    // the report draws the lines, the noise and |G| with its units
+    let html = d.path().join("periodic.html");
+    let out = limpid(&[
+        "spectra",
+        rec.to_str().unwrap(),
+        "--inputs",
+        "q1",
+        "--outputs",
+        "tau1",
+        "--period",
+        "10",
+        "--report",
+        html.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let page = std::fs::read_to_string(&html).unwrap();
+    for text in [
+        "Output at excited and detection lines",
+        "odd detection",
+        "Periodic analysis",
+        "|G| (N m/rad)",
+        "linear",
+    ] {
+        assert!(page.contains(text), "the report lacks {text:?}");
+    }
     // with the default ankle's half-wave rectified reflex: nonlinear, at the even lines
     let out = limpid(&[
         "simulate",

@@ -263,11 +263,11 @@ def _unmasked(name: str, values: Any) -> Any:
     """A numpy masked array's data when nothing is masked; refused when
     something is (its mask would otherwise be ignored: issue 56)."""
     if np.ma.isMaskedArray(values):
-        masked = int(np.ma.count_masked(values))
+        masked = int(np.asarray(getattr(values, "mask"), dtype=bool).sum())
         if masked:
             raise ValueError(f"{name}: a masked array with {masked} masked value(s); "
                              "limpid does not guess them: fill them or drop those samples first")
-        return np.ma.getdata(values)
+        return np.asarray(getattr(values, "data"))
     return values
 
 
@@ -436,16 +436,18 @@ def lowpass_filtfilt(x: Any, cutoff_hz: float, fs: float, order: int = 4, axis: 
     return np.moveaxis(y, -1, ax)
 
 
-def _plain(v: Any) -> Any:
+def _plain(v: Any, depth: int = 0) -> Any:
     """numpy arrays and scalars as Python lists and numbers, the values a request is made of."""
     if isinstance(v, np.ndarray):
         return v.tolist()
     if isinstance(v, np.generic):
-        return _plain(v.item())
+        return _plain(v.item(), depth)
     if isinstance(v, float) and v.is_integer() and abs(v) < 2**63:
         return int(v)  # 4.0 is a fine sample count; a float field reads an int as well
     if isinstance(v, (list, tuple)):
-        return [_plain(x) for x in v]
+        if depth >= 16:
+            raise ValueError("options: nested deeper than 16 levels (or it contains itself)")
+        return [_plain(x, depth + 1) for x in v]
     return v
 
 

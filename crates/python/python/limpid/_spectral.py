@@ -85,11 +85,11 @@ def _rate(fs: Any) -> float:
 def _signal(a: Any, name: str) -> np.ndarray:
     # a masked array's mask would be ignored by asarray (issue 56): refused when it masks anything
     if np.ma.isMaskedArray(a):
-        masked = int(np.ma.count_masked(a))
+        masked = int(np.asarray(getattr(a, "mask"), dtype=bool).sum())
         if masked:
             raise ValueError(f"{name}: a masked array with {masked} masked value(s); "
                              "limpid does not guess them: fill them or drop those samples first")
-        a = np.ma.getdata(a)
+        a = np.asarray(getattr(a, "data"))
     arr = np.asarray(a)
     if arr.dtype.kind not in "biufc":
         try:

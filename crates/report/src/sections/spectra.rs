@@ -166,6 +166,24 @@ pub(crate) fn spectra_section(name: &str, r: &SpectraResult) -> Section {
             None => vec![output.clone(), "none".into(), "n/a".into()],
         });
     }
+    let mut tables = vec![Table {
+        caption: "Multiple coherence of each output on all inputs: the widest band where it is at least 0.9".into(),
+        header: vec!["output".into(), "band (Hz)".into(), "mean coherence in the band".into()],
+        rows,
+    }];
+    let mut verdict_extra = String::new();
+    if let Some(p) = &r.periodic {
+        figures.splice(0..0, periodic_figures(p));
+        tables.insert(0, periodic_table(p));
+        verdict_extra = format!(
+            "; periodic: {} periods of {} s ({})",
+            p.periods,
+            fmt(p.period_s),
+            p.distortion
+                .as_ref()
+                .map_or("no detection line".to_string(), |d| d.verdict.clone())
+        );
+    }
     let mut warnings = Vec::new();
     if singular > 0 {
         warnings.push(format!(
@@ -176,7 +194,7 @@ pub(crate) fn spectra_section(name: &str, r: &SpectraResult) -> Section {
     Section {
         heading: format!("Spectra: {name}"),
         verdict: format!(
-            "Welch spectra of {} and {}, {} samples per segment (resolution {} Hz), {} overlapping",
+            "Welch spectra of {} and {}, {} samples per segment (resolution {} Hz), {} overlapping{verdict_extra}",
             count(r.inputs.len(), "input"),
             count(r.outputs.len(), "output"),
             r.segment_samples,
@@ -184,13 +202,151 @@ pub(crate) fn spectra_section(name: &str, r: &SpectraResult) -> Section {
             r.overlap_samples
         ),
         warnings,
-        tables: vec![Table {
-            caption: "Multiple coherence of each output on all inputs: the widest band where it is at least 0.9".into(),
-            header: vec!["output".into(), "band (Hz)".into(), "mean coherence in the band".into()],
-            rows,
-        }],
+        tables,
         figures,
         ellipsoids: vec![],
         drawings: vec![],
+    }
+}
+
+/// The picture of a periodic analysis (Pintelon & Schoukens): the output
+/// at the excited lines, at the odd and even detection lines, and the noise
+/// of the period average, in dB relative to the excited lines; then |G| at
+/// each input's excited lines with its ±2 SE band.
+fn periodic_figures(p: &limpid_ident::spectra::PeriodicResult) -> Vec<Figure> {
+    let points = |kind: &str, color: usize, name: &str| Series {
+        name: name.into(),
+        x: p.lines
+            .iter()
+            .filter(|l| l.kind == kind)
+            .map(|l| l.frequency_hz)
+            .collect(),
+        y: p.lines
+            .iter()
+            .filter(|l| l.kind == kind)
+            .map(|l| l.output_level)
+            .collect(),
+        stroke: Stroke::Points,
+        color: PALETTE[color].into(),
+    };
+    let mut levels = vec![
+        points("excited", 0, "excited"),
+        points("odd_detection", 1, "odd detection"),
+        points("even_detection", 2, "even detection"),
+    ];
+    levels.retain(|s| !s.x.is_empty());
+    levels.push(Series {
+        name: "noise".into(),
+        x: p.lines.iter().map(|l| l.frequency_hz).collect(),
+        y: p.lines.iter().map(|l| l.noise_level).collect(),
+        stroke: Stroke::Dashed,
+        color: PALETTE[7].into(),
+    });
+    let mut figures = vec![Figure {
+        id: "periodic-lines".into(),
+        chart: Chart {
+            title: "Output at excited and detection lines".into(),
+            x_label: "frequency (Hz)".into(),
+            y_label: "output (dB re excited)".into(),
+            x_log: true,
+            y_log: false,
+            y_range: None,
+            series: levels,
+        },
+    }];
+    for (n, f) in p.frf.iter().enumerate() {
+        let band = |sign: f64| -> Vec<f64> {
+            f.magnitude
+                .iter()
+                .zip(&f.magnitude_se)
+                .map(|(m, se)| m + sign * 2.0 * se)
+                .map(|v| if v > 0.0 { v } else { f64::NAN })
+                .collect()
+        };
+        figures.push(Figure {
+            id: format!("periodic-frf-{}-{}", f.input, f.output),
+            chart: Chart {
+                title: format!("|G| {} to {} at excited lines", f.input, f.output),
+                x_label: "frequency (Hz)".into(),
+                y_label: {
+                    // FORMAT.md's unit of each column, where the recording format defines it
+                    let unit = |c: &str| limpid_core::recording::magnitude_limit(c).1;
+                    match (unit(&f.output), unit(&f.input)) {
+                        ("", _) | (_, "") => format!("|G| ({} unit / {} unit)", f.output, f.input),
+                        (o, i) => format!("|G| ({o}/{i})"),
+                    }
+                },
+                x_log: true,
+                y_log: true,
+                y_range: None,
+                series: vec![
+                    Series {
+                        name: "|G|".into(),
+                        x: f.frequency_hz.clone(),
+                        y: f.magnitude.clone(),
+                        stroke: Stroke::Points,
+                        color: PALETTE[n % PALETTE.len()].into(),
+                    },
+                    Series {
+                        name: "±2 SE".into(),
+                        x: f.frequency_hz.clone(),
+                        y: band(1.0),
+                        stroke: Stroke::Dotted,
+                        color: PALETTE[7].into(),
+                    },
+                    Series {
+                        name: "±2 SE".into(),
+                        x: f.frequency_hz.clone(),
+                        y: band(-1.0),
+                        stroke: Stroke::Dotted,
+                        color: PALETTE[7].into(),
+                    },
+                ],
+            },
+        });
+    }
+    figures
+}
+
+/// The distortion levels in a table.
+fn periodic_table(p: &limpid_ident::spectra::PeriodicResult) -> Table {
+    let db = |v: Option<f64>| v.map_or("no such line".to_string(), |v| format!("{v:.1}"));
+    let excited = p.lines.iter().filter(|l| l.kind == "excited").count();
+    let count = |kind: &str| p.lines.iter().filter(|l| l.kind == kind).count();
+    let row = match &p.distortion {
+        Some(d) => vec![
+            format!("{} periods of {} s", p.periods, fmt(p.period_s)),
+            excited.to_string(),
+            format!("{} / {}", count("odd_detection"), count("even_detection")),
+            db(d.odd_db),
+            db(d.even_db),
+            format!("{:.1}", d.noise_db),
+            d.verdict.clone(),
+        ],
+        None => vec![
+            format!("{} periods of {} s", p.periods, fmt(p.period_s)),
+            excited.to_string(),
+            "0 / 0".into(),
+            "no such line".into(),
+            "no such line".into(),
+            "n/a".into(),
+            "every line in the band is excited: use an odd or random-odd multisine".into(),
+        ],
+    };
+    Table {
+        caption: format!(
+            "Periodic analysis ({}): output power at the detection lines against the noise of the period average, dB relative to the excited lines",
+            p.transient
+        ),
+        header: vec![
+            "periods".into(),
+            "excited lines".into(),
+            "odd / even detection lines".into(),
+            "odd (dB)".into(),
+            "even (dB)".into(),
+            "noise (dB)".into(),
+            "verdict".into(),
+        ],
+        rows: vec![row],
     }
 }
