@@ -115,18 +115,55 @@ fn read_parameters(
         let next = usize::from(processor.u16([next[0], next[1]]));
         if id < 0 {
             groups.insert(-id, name);
-        } else if let Some(values) = parameter_values(bytes, name_end + 2, processor) {
-            records.push((id, name, values));
+        } else {
+            // a parameter's values lie inside its record: one that claims more
+            // is corrupt, and the decoder's own parser ran for minutes and
+            // gigabytes on such records (fuzzer, issue 56)
+            let name = groups
+                .get(&id)
+                .map_or_else(|| name.clone(), |g| format!("{g}:{name}"));
+            let values_end = parameter_end(bytes, name_end + 2)
+                .ok_or_else(|| format!("parameter {name} runs past the end of the file"))?;
+            if next != 0 && values_end > name_end + next {
+                return Err(format!(
+                    "parameter {name} declares {} bytes of values, more than its record holds ({} bytes): corrupt parameter section",
+                    values_end - (name_end + 2),
+                    next.saturating_sub(2)
+                ));
+            }
+            if let Some(values) = parameter_values(bytes, name_end + 2, processor) {
+                records.push((id, name, values));
+            }
         }
         if next == 0 {
             break;
         }
         at = name_end + next;
     }
+    // names carry their group where it came first (as it does in every writer's files)
     Ok(records
         .into_iter()
-        .filter_map(|(id, name, v)| groups.get(&id).map(|g| (format!("{g}:{name}"), v)))
+        .filter_map(|(id, name, v)| {
+            if name.contains(':') {
+                Some((name, v))
+            } else {
+                groups.get(&id).map(|g| (format!("{g}:{name}"), v))
+            }
+        })
         .collect())
+}
+
+/// Where a parameter's values and description end, from its type byte at
+/// `at`, or None when they run past the file.
+fn parameter_end(bytes: &[u8], at: usize) -> Option<usize> {
+    let kind = (*bytes.get(at)? as i8).unsigned_abs() as usize;
+    let dims = usize::from(*bytes.get(at + 1)?);
+    let shape = bytes.get(at + 2..at + 2 + dims)?;
+    let count: usize = shape.iter().map(|&d| usize::from(d)).product();
+    let description = at + 2 + dims + count * kind;
+    let length = usize::from(*bytes.get(description)?);
+    let end = description + 1 + length;
+    (end <= bytes.len()).then_some(end)
 }
 
 /// A parameter's values at `at` (its type byte), or None when they run past the file.

@@ -381,10 +381,11 @@ fn sweep_verdict(v: &Sweep) -> String {
     if let Some(c) = &v.impedance_change {
         let _ = write!(
             verdict,
-            "; the impedance changes from about {} ms after the onset (a reflex, or soft tissue in series with the handle?): K by {:.0} %, D by {:.0} %",
+            "; the impedance changes from about {} ms after the onset (a reflex, or soft tissue in series with the handle?): K by {} %, D by {} %",
             fmt(c.onset_ms),
-            100.0 * c.stiffness_change,
-            100.0 * c.damping_change
+            // significant digits: a change beyond f64 as a percentage reads n/a, not inf (fuzzer, issue 56)
+            limpid_core::error::significant(100.0 * c.stiffness_change, 2),
+            limpid_core::error::significant(100.0 * c.damping_change, 2)
         );
         if let Some(t) = &v.series_compliance {
             let _ = write!(
