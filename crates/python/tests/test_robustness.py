@@ -121,3 +121,27 @@ def test_spectra_over_whole_periods_finds_a_static_gain_and_no_distortion(tmp_pa
     assert limpid.request("spectra", inputs=["u"], outputs=["y"], period_s=2.0)["period_s"] == 2.0
     with pytest.raises(ValueError, match="period_s"):
         limpid.spectra({"t": t, "u": u, "y": y}, ["u"], ["y"], period_s=2.0001)
+
+
+def test_plot_periodic_draws_the_lines_and_each_pair(tmp_path):
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from limpid import plot
+
+    fs, period, periods = 200.0, 2.0, 8
+    n = int(fs * period)
+    lines = [k for k in range(1, 80, 2) if (k // 2) % 3 != 2]
+    t = np.arange(n * (periods + 1)) / fs
+    u = sum(np.cos(2 * np.pi * k * t / period + 0.3 * k) for k in lines)
+    y = 3.0 * u + 0.2 * u**2 + 0.01 * np.random.default_rng(1).standard_normal(len(t))
+    # columns named outside the recording format: no unit limit applies
+    r = limpid.spectra({"t": t, "drive": u, "response": y}, ["drive"], ["response"], period_s=period)
+    fig = plot.periodic(r)
+    assert len(fig.axes) == 2
+    labels = [h.get_label() for h in fig.axes[0].get_lines()]
+    assert {"excited", "even detection", "noise"} <= set(labels)
+    assert "nonlinear" in fig.axes[0].get_title()
+    with pytest.raises(ValueError, match="no periodic analysis"):
+        plot.periodic(limpid.spectra({"t": t, "drive": u, "response": y}, ["drive"], ["response"]))

@@ -29,7 +29,7 @@ import numpy as np
 
 from . import _display
 
-__all__ = ["ellipsoids", "ellipses", "fit", "bode", "coherence", "sweep", "reflex"]
+__all__ = ["ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex"]
 
 
 def _plt() -> Any:
@@ -273,6 +273,47 @@ def coherence(result: Any, axes: Any = None) -> Any:
         ax.set_ylabel(f"coherence of {outs[i]} (1)")
     a[-1, 0].set_xlabel("frequency (Hz)")
     a[0, 0].legend(fontsize="small", ncol=2)
+    fig.tight_layout()
+    return fig
+
+
+def periodic(result: Any, axes: Any = None) -> Any:
+    """A periodic analysis (``limpid.spectra(..., period_s=...)``): the output
+    at the excited, odd-detection and even-detection lines as distinct marks
+    and the noise of the period average (dB relative to the excited lines),
+    then |G| of each input-output pair at its excited lines with ±2 SE."""
+    d = _data(result)
+    _kind(d, "spectra")
+    p = d.get("periodic")
+    if not p:
+        raise ValueError("this spectra result has no periodic analysis: use period_s=")
+    frf = p["frf"]
+    fig, a = _grid(axes, 1 + len(frf), 1, figsize=(6, 2.6 * (1 + len(frf))))
+    ax = a[0, 0]
+    lines = p["lines"]
+    for kind, color, marker, label in (("excited", "#0072B2", "o", "excited"),
+                                       ("odd_detection", "#D55E00", "^", "odd detection"),
+                                       ("even_detection", "#009E73", "s", "even detection")):
+        at = [ln["frequency_hz"] for ln in lines if ln["kind"] == kind]
+        level = [ln["output_level"] for ln in lines if ln["kind"] == kind]
+        if at:
+            ax.semilogx(at, level, linestyle="none", marker=marker, markersize=3.5, color=color, label=label)
+    ax.semilogx([ln["frequency_hz"] for ln in lines], [ln["noise_level"] for ln in lines],
+                color="#999999", linestyle="--", linewidth=1.0, label="noise")
+    ax.set_ylabel("output (dB re excited)")
+    verdict = (p.get("distortion") or {}).get("verdict", "no detection line")
+    ax.set_title(f"{p['periods']} periods of {p['period_s']:g} s: {verdict}", fontsize="medium")
+    ax.legend(fontsize="small", ncol=2)
+    for n, pair in enumerate(frf, start=1):
+        ax = a[n, 0]
+        f = np.asarray(pair["frequency_hz"], dtype=float)
+        m = np.asarray(pair["magnitude"], dtype=float)
+        se = np.asarray(pair["magnitude_se"], dtype=float)
+        ax.loglog(f, m, linestyle="none", marker="o", markersize=3, color="#0072B2", label="|G|")
+        ax.fill_between(f, np.clip(m - 2 * se, m * 1e-3, None), m + 2 * se, color="#0072B2", alpha=0.2, label="±2 SE")
+        ax.set_ylabel(f"|{pair['output']} / {pair['input']}|")
+        ax.legend(fontsize="small")
+    a[-1, 0].set_xlabel("frequency (Hz)")
     fig.tight_layout()
     return fig
 
