@@ -248,6 +248,19 @@ pub fn schroeder_phases(count: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Phases drawn uniformly in [0, 2π) from `seed` (xorshift: reproducible, no dependency).
+pub fn random_phases(count: usize, seed: u64) -> Vec<f64> {
+    let mut state = seed ^ 0x5851_f42d_4c95_7f2d;
+    (0..count)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            2.0 * PI * (state >> 11) as f64 / (1u64 << 53) as f64
+        })
+        .collect()
+}
+
 /// Phases of the lines that make the period's crest factor low: descent on
 /// the Lp norm of the signal (normalised by its RMS) for p doubling from 4
 /// to 512, from Schroeder's phases; each step along the gradient, computed

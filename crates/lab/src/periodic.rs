@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 
 use limpid_core::{Error, Result};
 use limpid_dsp::excitation::{
-    crest_factor, mls, multisine, multisine_lines, optimise_phases, period_spectrum,
+    crest_factor, mls, multisine, multisine_lines, optimise_phases, period_spectrum, random_phases,
     schroeder_phases, LineSet,
 };
 
@@ -423,18 +423,7 @@ impl PeriodicDesign {
                         let amplitudes = vec![1.0; own.len()];
                         let phases = match m.phases.as_str() {
                             "schroeder" => schroeder_phases(own.len()),
-                            "random" => {
-                                let mut state =
-                                    self.seed.wrapping_add(c as u64) ^ 0x5851_f42d_4c95_7f2d;
-                                (0..own.len())
-                                    .map(|_| {
-                                        state ^= state << 13;
-                                        state ^= state >> 7;
-                                        state ^= state << 17;
-                                        2.0 * PI * (state >> 11) as f64 / (1u64 << 53) as f64
-                                    })
-                                    .collect()
-                            }
+                            "random" => random_phases(own.len(), self.seed.wrapping_add(c as u64)),
                             _ => optimise_phases(n, &own, &amplitudes),
                         };
                         let x = multisine(n, &own, &amplitudes, &phases);
@@ -456,28 +445,25 @@ impl PeriodicDesign {
                         (0..n)
                             .map(|i| {
                                 let j = i / chip;
-                                let into = i % chip;
-                                // a raised-cosine ramp centred on each switching instant
-                                let half = edge as f64 / 2.0;
-                                let offset = into as f64;
-                                let (from, to, s) = if offset < half {
-                                    (
-                                        level((j + chips.len() - 1) % chips.len()),
-                                        level(j),
-                                        (offset + half) / edge.max(1) as f64,
-                                    )
-                                } else if (chip as f64 - offset) <= half {
-                                    (
-                                        level(j),
-                                        level((j + 1) % chips.len()),
-                                        (offset - (chip as f64 - half)) / edge.max(1) as f64,
-                                    )
-                                } else {
-                                    (level(j), level(j), 0.0)
-                                };
                                 if edge == 0 {
                                     return level(j);
                                 }
+                                // a raised-cosine ramp centred on each switching instant:
+                                // the chip whose end this sample's ramp starts at, and
+                                // the sample's place in that ramp (0 to 1)
+                                let half = edge as f64 / 2.0;
+                                let offset = (i % chip) as f64;
+                                let (before, s) = if offset < half {
+                                    (j + chips.len() - 1, (offset + half) / edge as f64)
+                                } else if (chip as f64 - offset) <= half {
+                                    (j, (offset - (chip as f64 - half)) / edge as f64)
+                                } else {
+                                    return level(j);
+                                };
+                                let (from, to) = (
+                                    level(before % chips.len()),
+                                    level((before + 1) % chips.len()),
+                                );
                                 let w = 0.5 - 0.5 * (PI * s.clamp(0.0, 1.0)).cos();
                                 from + (to - from) * w
                             })
