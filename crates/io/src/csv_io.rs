@@ -1,7 +1,10 @@
 //! CSV recordings: the header, numbers by row and column with one-line errors, and the writer (shortest round-trip digits).
 
-#[allow(unused_imports)]
-use super::*;
+use super::{io_err, Table};
+use limpid_core::{Error, Recording, Result};
+use std::fmt::Write as _;
+use std::io::Write;
+use std::path::Path;
 
 /// Read a CSV recording: header row, then one sample per row.
 pub fn read_csv(path: &Path) -> Result<Recording> {

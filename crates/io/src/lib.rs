@@ -22,10 +22,7 @@
 
 #![warn(missing_docs)]
 
-use std::fmt::Write as _;
-use std::io::Write;
 use std::path::Path;
-use std::sync::Arc;
 
 pub mod inspect;
 pub mod map;
@@ -33,20 +30,14 @@ mod mat;
 pub mod sources;
 
 use limpid_core::{Error, Recording, Result};
-use parquet::basic::{Repetition, Type as PhysicalType};
-use parquet::column::reader::ColumnReader;
-use parquet::data_type::DoubleType;
-use parquet::file::properties::WriterProperties;
-use parquet::file::reader::{FileReader, SerializedFileReader};
-use parquet::file::writer::SerializedFileWriter;
-use parquet::schema::types::Type;
-use rayon::prelude::*;
 
 mod csv_io;
 mod parquet_io;
 
-pub use csv_io::*;
-pub use parquet_io::*;
+pub use csv_io::{read_csv, write_csv};
+use csv_io::{read_csv_from, read_csv_table};
+pub use parquet_io::{read_parquet, write_parquet, MAX_PARQUET_BYTES, MAX_PARQUET_ROWS};
+use parquet_io::{read_parquet_source, read_parquet_table, StrictBytes, StrictFile};
 
 /// True when the path names a Parquet file.
 pub fn is_parquet(path: &Path) -> bool {

@@ -1,7 +1,19 @@
 //! Parquet recordings: batched reads with a row cap, every compression the format allows, columns that cannot be a recording's left out with a warning, pages checked before they are decoded (issue 13), and the writer.
 
-#[allow(unused_imports)]
-use super::*;
+use super::Table;
+use limpid_core::{Error, Recording, Result};
+use parquet::basic::Repetition;
+use parquet::basic::Type as PhysicalType;
+use parquet::column::reader::ColumnReader;
+use parquet::data_type::DoubleType;
+use parquet::file::properties::WriterProperties;
+use parquet::file::reader::FileReader;
+use parquet::file::reader::SerializedFileReader;
+use parquet::file::writer::SerializedFileWriter;
+use parquet::schema::types::Type;
+use rayon::prelude::*;
+use std::path::Path;
+use std::sync::Arc;
 
 /// Most rows read from one Parquet file (the footer could claim any number).
 pub const MAX_PARQUET_ROWS: i64 = 1 << 32;

@@ -1,9 +1,25 @@
 //! One virtual recording per method for `limpid calibrate`: simulated,
 //! estimated, and its elements' z-scores and verdicts against the truth.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::{
+    cocontraction_subject, planar_subject, random_matrix2, random_matrix3, sensors, sweep_session,
+    uniform, Outcome, PLANAR_NOISE,
+};
+use limpid_analysis::cocontraction::estimate_cocontraction;
+use limpid_analysis::emg::EmgParams;
+use limpid_analysis::linear::{linear_result, MatrixKind};
+use limpid_core::Matrix;
+use limpid_ident::planar::{prepare_planar, PlanarPrepare};
+use limpid_ident::stochastic::{estimate_stochastic, StochasticParams};
+use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
+use limpid_lab::cocontraction::{simulate_cocontraction, CocontractionProtocol};
+use limpid_lab::planar::{simulate_planar, PlanarProtocol, PlanarSubject};
+use limpid_lab::rig::{simulate_rig, RigExperiment};
+use limpid_lab::{simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
+use nalgebra::{Matrix3, Vector3};
+use rand::rngs::StdRng;
+use rand::Rng;
+use rand::SeedableRng;
 pub(super) fn centre_out(profile: Profile, seed: u64) -> std::result::Result<Outcome, String> {
     let mut rng = StdRng::seed_from_u64(seed);
     let inertia = Matrix3::from_diagonal(&Vector3::from_fn(|_, _| uniform(&mut rng, 0.2, 2.0)));

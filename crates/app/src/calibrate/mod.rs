@@ -20,30 +20,21 @@
 //! Half the centre-out recordings use an ideal position servo (velocity steps
 //! at the onset, as in the outside examples), half a 30 Hz servo.
 
-use nalgebra::{Matrix2, Matrix3, Rotation3, Unit, Vector3};
-use rand::{rngs::StdRng, Rng, SeedableRng};
 use rayon::prelude::*;
 
-use limpid_analysis::cocontraction::estimate_cocontraction;
-use limpid_analysis::emg::EmgParams;
-use limpid_analysis::linear::{linear_result, tolerance, LinearResult, MatrixKind};
+use limpid_analysis::linear::{tolerance, LinearResult, MatrixKind};
 use limpid_core::{Matrix, Result};
-use limpid_ident::planar::{prepare_planar, window_sweep, PlanarPrepare};
-use limpid_ident::stochastic::{estimate_stochastic, StochasticParams};
-use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
-use limpid_lab::cocontraction::{
-    seed001_population, simulate_cocontraction, CocontractionProtocol, CocontractionSubject,
-};
-use limpid_lab::planar::{simulate_planar, Cuff, PlanarProtocol, PlanarSubject, Reflex};
-use limpid_lab::rig::{simulate_rig, RigExperiment};
-use limpid_lab::{simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
+use limpid_lab::cocontraction::{seed001_population, CocontractionSubject};
+use limpid_lab::Profile;
 
 mod methods;
 mod subjects;
 mod sweeps;
-use methods::*;
-use subjects::*;
-use sweeps::*;
+use methods::{
+    centre_out, cocontraction, ensemble, planar, planar_session, reflex, scheduled, stochastic,
+};
+use subjects::{planar_subject, random_matrix2, random_matrix3, sensors, uniform, PLANAR_NOISE};
+use sweeps::{sweep, sweep_session, SweepOutcome};
 
 pub use limpid_analysis::calibrate::*;
 

@@ -1,9 +1,11 @@
 //! Random subjects and sensors of `limpid calibrate`: realistic ranges of
 //! stiffness, damping and inertia with random orientations, and sensor noise.
 
-#[allow(unused_imports)]
-use super::*;
-
+use limpid_lab::planar::{PlanarSubject, Reflex};
+use limpid_lab::NoiseModel;
+use nalgebra::{Matrix2, Matrix3, Rotation3, Unit, Vector3};
+use rand::rngs::StdRng;
+use rand::Rng;
 pub(super) fn uniform(rng: &mut StdRng, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
 }

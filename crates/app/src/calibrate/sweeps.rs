@@ -2,9 +2,13 @@
 //! session and varied ones (end-point data, 20-60 trials, cuffs), and what
 //! each sweep contributes to the false-alarm and detection rates.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::{planar_session, planar_subject, uniform};
+use limpid_core::Matrix;
+use limpid_ident::planar::{prepare_planar, window_sweep, PlanarPrepare};
+use limpid_lab::planar::{simulate_planar, Cuff, PlanarProtocol, PlanarSubject};
+use rand::rngs::StdRng;
+use rand::Rng;
+use rand::SeedableRng;
 /// What one sweep contributes.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct SweepOutcome {

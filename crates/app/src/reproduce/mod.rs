@@ -24,22 +24,13 @@
 // the paper's tables and limpid's are indexed in step ([configuration][level][value])
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::{Matrix3, Matrix4, Vector4};
-use rayon::prelude::*;
+use nalgebra::Matrix3;
 
 use limpid_core::criteria::MatrixVerdict;
-use limpid_core::{Error, Matrix, Result};
-use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
-use limpid_lab::realistic::{
-    antisymmetric_part, SEED000_K_MAX_A, SEED001_LEVELS, SEED001_ROTATION_DEG, SEED001_TABLES,
-};
-use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Profile};
+use limpid_core::{Matrix, Result};
 
-use limpid_analysis::cocontraction::estimate_cocontraction;
-use limpid_analysis::emg::EmgParams;
-use limpid_analysis::linear::{linear_result, MatrixKind};
 pub use limpid_analysis::reproduce::*;
-use limpid_analysis::{antisymmetric, symmetric, table_ii};
+use limpid_analysis::{antisymmetric, symmetric};
 
 mod seed000;
 mod seed001;

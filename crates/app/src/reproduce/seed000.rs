@@ -2,11 +2,20 @@
 //! Table I, cubic perturbations: Table II per start point and the fit
 //! correlation per axis.
 
-// the paper's tables and limpid's are indexed in step
 #![allow(clippy::needless_range_loop)]
 
-#[allow(unused_imports)]
-use super::*;
+use super::{mean, row, verdict_words, Finding, Reproduction};
+use limpid_analysis::linear::{linear_result, MatrixKind};
+use limpid_analysis::table_ii;
+use limpid_core::criteria::MatrixVerdict;
+use limpid_core::Result;
+use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
+use limpid_lab::realistic::{antisymmetric_part, SEED000_K_MAX_A};
+use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Profile};
+use rayon::iter::IndexedParallelIterator;
+use rayon::iter::IntoParallelIterator;
+use rayon::iter::ParallelIterator;
+// the paper's tables and limpid's are indexed in step
 
 /// Seed 000 Table II, subject 1: K_max, K_min, K_maxA, B_max, B_min, B_maxA,
 /// M_max, M_min, M_maxA per start point S1-S6.

@@ -2,11 +2,18 @@
 //! 4 levels on 4 subjects built from its Tables 1-5: Tables 1-4 (diagonal,
 //! K_maxA, principal stiffnesses), Table 5 (axis rotations), the index per level.
 
-// the paper's tables and limpid's are indexed in step ([configuration][level][value])
 #![allow(clippy::needless_range_loop)]
 
-#[allow(unused_imports)]
-use super::*;
+use super::{mean, principal_and_max_a, row, Finding, Reproduction};
+use limpid_analysis::cocontraction::estimate_cocontraction;
+use limpid_analysis::emg::EmgParams;
+use limpid_core::{Error, Result};
+use limpid_ident::PrepareParams;
+use limpid_lab::realistic::{SEED001_LEVELS, SEED001_ROTATION_DEG, SEED001_TABLES};
+use limpid_lab::NoiseModel;
+use rayon::iter::IntoParallelRefIterator;
+use rayon::iter::ParallelIterator;
+// the paper's tables and limpid's are indexed in step ([configuration][level][value])
 
 use limpid_analysis::cocontraction::CocontractionResult;
 

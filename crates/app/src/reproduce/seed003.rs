@@ -3,11 +3,12 @@
 //! and unknown inertia, and Table I's conditioning ratios (quintic against a
 //! sixth-order polynomial).
 
-// the paper's tables and limpid's are indexed in step
 #![allow(clippy::needless_range_loop)]
 
-#[allow(unused_imports)]
-use super::*;
+use super::{row, sig, Finding, Reproduction};
+use limpid_core::Result;
+use nalgebra::{Matrix4, Vector4};
+// the paper's tables and limpid's are indexed in step
 
 /// s(τ) = a3 τ³ + a4 τ⁴ + a5 τ⁵ + a6 τ⁶ with s(0) = s'(0) = s''(0) = 0,
 /// s(1) = 1, s'(1) = s''(1) = s'''(1) = 0 (seed 003 §III-B's sixth-order
@@ -261,6 +262,7 @@ fn table_i(out: &mut Reproduction, design: &limpid_lab::design::PlanarDesign) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use limpid_lab::profile::Profile;
 
     #[test]
     fn sextic_meets_its_boundary_conditions() {

@@ -2,11 +2,16 @@
 //! the robot under IMBIC and under PD with Table III's Welch settings: K_sa,
 //! phi_T and the multiple coherence.
 
-// the paper's tables and limpid's are indexed in step
 #![allow(clippy::needless_range_loop)]
 
-#[allow(unused_imports)]
-use super::*;
+use super::{row, Finding, Reproduction};
+use limpid_core::{Matrix, Result};
+use rayon::iter::IndexedParallelIterator;
+use rayon::iter::IntoParallelIterator;
+use rayon::iter::IntoParallelRefIterator;
+use rayon::iter::ParallelIterator;
+use rayon::prelude::ParallelSlice;
+// the paper's tables and limpid's are indexed in step
 
 use limpid_dsp::spectral::{Welch, Window};
 use limpid_lab::rig::RigExperiment;

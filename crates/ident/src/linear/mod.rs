@@ -22,14 +22,10 @@
 //! filtered residuals are not white. This inflation is exact when the
 //! regressors change slowly over that length, and conservative otherwise.
 
-use std::fmt::Write as _;
-
 use nalgebra::{DMatrix, DVector};
-use rayon::prelude::*;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::lsq::{householder_in_place, merge};
 use crate::prepare::{Plan, Prepared};
 use limpid_core::criteria::MatrixKind;
 use limpid_core::{Error, Result, Warning, WarningCode};
@@ -38,9 +34,12 @@ mod regression;
 mod standard_errors;
 mod verdict;
 
-pub(crate) use regression::*;
-pub(crate) use standard_errors::*;
-pub(crate) use verdict::*;
+pub(crate) use regression::{reduce_blocks, solve_triangle, Regression, Rows};
+pub(crate) use standard_errors::{
+    block_jackknife, condition_on_prior_inertia, few_trials_warning, inertia_sensitivity,
+    jackknife_blocks, widen_for_what_the_regression_cannot_see,
+};
+pub(crate) use verdict::{fit_stats, identified, quality_warnings};
 
 /// Settings of the linear estimator.
 ///

@@ -1,8 +1,12 @@
 //! Seed 000 eq. (9)-(12) as one least-squares problem: the rows of [L | F] read window by window, reduced to triangles in blocks (QR), scaled, and solved; the errors-in-variables noise model of the regressors.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::standard_errors::autocorrelation_inflation;
+use super::{column_names, FitQuality, FitTraces, Solved, CHUNK, MIN_CORRECTABLE, TRACE_POINTS};
+use crate::lsq::{householder_in_place, merge};
+use crate::prepare::{Plan, Prepared};
+use limpid_core::{Error, Result};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 /// Solve the least-squares problem held in the augmented triangle `[R z; 0 s]`.
 ///
 /// With a non-zero `noise` (per-sample noise covariance of the scaled

@@ -1,8 +1,16 @@
 //! Standard errors of the linear fit: block jackknife over contiguous blocks, inflation for autocorrelated residuals, and the inertia prior when the data cannot identify M.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::regression::Regression;
+use super::{
+    Solved, CONTIGUOUS_BLOCKS, DERIVATIVE_ERROR_FLOOR, MAX_JACKKNIFE_GROUPS, MIN_CORRECTABLE,
+    MIN_JACKKNIFE_BLOCKS, MIN_RELIABILITY, OFF_DIAGONAL_INERTIA_SHARE,
+    UNIDENTIFIED_INERTIA_MEAN_KG, UNIDENTIFIED_INERTIA_MEAN_KG_M2, UNIDENTIFIED_INERTIA_SD_KG,
+    UNIDENTIFIED_INERTIA_SD_KG_M2,
+};
+use crate::prepare::Prepared;
+use limpid_core::{Warning, WarningCode};
+use nalgebra::DMatrix;
+use std::fmt::Write;
 /// Sensitivity of every parameter row to the inertia columns, unscaled:
 /// `dθ_j/dM_k = C_jM (C_MM)^-1` with `C` the unit covariance `(L^T L)^-1`
 /// (partitioned inverse: minus the regression of the acceleration columns on

@@ -1,8 +1,9 @@
 //! What the linear fit can claim: identifiability per matrix element (|value| against 2 SE), fit statistics (r, VAF, RMSE) and the warnings they call for.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::{sub, units, FitQuality, Identifiable, MIN_RELIABILITY};
+use limpid_core::criteria::MatrixKind;
+use limpid_core::{Matrix, Warning, WarningCode};
+use rayon::prelude::*;
 /// The column of a matrix kind's regressors in the per-coordinate
 /// reliabilities `[acceleration, velocity, displacement]`.
 pub(crate) fn regressor_column(kind: MatrixKind) -> usize {

@@ -15,10 +15,15 @@
 //! tissue in series, not as a reflex. The choice of model (proportional
 //! damping, massless tissue) is ours; the paper does not model the cuff.
 
-#[allow(unused_imports)]
-use super::*;
+use super::fit::trial_rows;
+use super::prepare::PlanarData;
+use crate::lsq::{merge, triangle};
 use argmin::core::{CostFunction, Executor};
 use argmin::solver::neldermead::NelderMead;
+use limpid_dsp::central_first;
+use nalgebra::{DMatrix, Matrix2};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// A compliance in series with the arm, from [`fit_series_compliance`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]

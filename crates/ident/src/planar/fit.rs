@@ -1,8 +1,20 @@
 //! Seed 003 eq. (13)-(25): the least-squares fit of ξ, D and K over the observation windows, its standard errors, criteria (eq. (19), (20), (22)) and verdicts.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::noise::{compensated_solve, RegressorNoise};
+use super::prepare::PlanarData;
+use super::{regressor, PlanarTrial};
+use crate::linear::{fit_stats, solve_triangle};
+use crate::lsq::{merge, triangle};
+use limpid_core::arm::{coriolis, mass_matrix};
+use limpid_core::criteria::{
+    judge_matrix, tolerance, MatrixKind, MatrixVerdict, Verdicts, MAX_CONDITION, QUASI_SYMMETRIC,
+    VAF_FLOOR_PERCENT,
+};
+use limpid_core::{Error, Matrix, Result};
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use rayon::prelude::*;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 /// Confidence criteria of seed 003 §III-C.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarCriteria {

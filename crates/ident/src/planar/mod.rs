@@ -22,24 +22,7 @@
 //! below 1000, K_s and D_s are positive definite and both ratios are below 0.1
 //! ("quasi-symmetric", our threshold).
 
-use limpid_core::criteria::{
-    judge_matrix, tolerance, MatrixKind, MatrixVerdict, Verdicts, VAF_FLOOR_PERCENT,
-};
-use limpid_core::Matrix;
-use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
-use rayon::prelude::*;
-use schemars::JsonSchema;
-use serde::{Deserialize, Serialize};
-
-use crate::linear::{fit_stats, solve_triangle};
-use crate::lsq::{merge, triangle};
-use crate::prepare::edge_kinds;
 pub use limpid_core::arm::{coriolis, mass_matrix, Arm};
-use limpid_core::trial::{
-    change_floors, detect_onset, noise_sigma, perturbation_onset, windows_from_trial_column,
-};
-use limpid_core::{Error, Recording, Result};
-use limpid_dsp::{central_first, central_second, LowPass};
 
 mod compliance;
 mod fit;
@@ -48,11 +31,19 @@ mod prepare;
 mod sweep;
 
 pub use compliance::{fit_series_compliance, SeriesCompliance, SERIES_COMPLIANCE_RATIO};
-pub use fit::*;
+pub use fit::{
+    check_inertial_parameters, criteria, estimate_planar, fit_planar, leave_one_out_vaf,
+    PlanarCriteria, PlanarErrors, PlanarEstimate, PlanarFit, MAX_INERTIAL_PARAMETER, MAX_LINK_M,
+    MIN_LINK_M, MIN_WINDOW_SAMPLES,
+};
 pub use noise::AngleNoise;
-pub(crate) use noise::{compensated_solve, RegressorNoise};
-pub use prepare::*;
-pub use sweep::*;
+pub use prepare::{prepare_planar, PlanarData, MAX_ONSET_LEAD_S, ONSET_LEAD_S};
+pub use sweep::{
+    impedance_change, interpolation_interval_s, interval_sweep, window_sweep, ImpedanceChange,
+    IntervalRow, Sweep, SweepRow, CHANGE_P, MAX_SWEEP_WINDOWS, MIN_TRIALS_FOR_CHANGE_TEST,
+    MIN_TRIALS_PER_INTERVAL, NEIGHBOURHOOD_MS, OBSERVATION_AFTER_INTERPOLATION_MS, QUASI_CONSTANT,
+    SWEEP_TOLERANCE_D, SWEEP_TOLERANCE_K, SYSTEMATIC_TORQUE_ERROR,
+};
 
 /// Regressor rows X (2 x 11) of eq. (13) at one sample.
 pub fn regressor(q2: f64, qd: [f64; 2], qdd: [f64; 2], dq: [f64; 2]) -> [[f64; 11]; 2] {
@@ -120,6 +111,8 @@ pub use limpid_core::criteria::{MAX_CONDITION, QUASI_SYMMETRIC};
 #[cfg(test)]
 mod tests {
     use super::*;
+    use limpid_core::Matrix;
+    use nalgebra::{Matrix2, Vector2};
 
     fn crit(k: [[f64; 2]; 2], d: [[f64; 2]; 2], cond: f64, scaled: f64) -> PlanarCriteria {
         let zero = Matrix::zeros(2, 2);

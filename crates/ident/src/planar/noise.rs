@@ -16,9 +16,9 @@
 //! q''2)` with coefficients `L0 + cos(q2) L1`, so a trial's sum over rows
 //! needs only the count, `Σ cos q2` and `Σ cos² q2` of its samples.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::PlanarTrial;
+use limpid_core::trial::noise_sigma;
+use nalgebra::{DMatrix, DVector};
 /// White noise of the two recorded joint angles and what the preparation
 /// makes of it.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

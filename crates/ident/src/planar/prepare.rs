@@ -1,8 +1,16 @@
 //! Seed 003 §IV: trials from a recording (joint space, or end-point data through inverse kinematics and τ = J^T F), rest offsets, onsets, zero-phase filtering and derivatives.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::fit::{MAX_LINK_M, MIN_LINK_M};
+use super::noise::AngleNoise;
+use super::{PlanarPrepare, PlanarTrial};
+use crate::prepare::edge_kinds;
+use limpid_core::arm::Arm;
+use limpid_core::trial::{
+    change_floors, detect_onset, noise_sigma, perturbation_onset, windows_from_trial_column,
+};
+use limpid_core::{Error, Recording, Result};
+use limpid_dsp::{central_first, central_second, LowPass};
+use nalgebra::Vector2;
 impl PlanarPrepare {
     /// Link lengths (m), shoulder at the origin, the elbow flexed (q2 > 0),
     /// the default low-pass and a 4th-order Butterworth.

@@ -1,8 +1,19 @@
 //! Seed 003 §IV (Fig. 4-5): estimates against the observation window T_obs, the interpolation-interval study, and the scan for a change of K or D within the trials (a reflex).
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::compliance::{fit_series_compliance, SeriesCompliance, SERIES_COMPLIANCE_RATIO};
+use super::fit::{
+    check_inertial_parameters, fit_planar, leave_one_out_vaf, solve_blocks, trial_rows,
+    BlockSolution, PlanarEstimate,
+};
+use super::noise::RegressorNoise;
+use super::prepare::PlanarData;
+use super::PlanarTrial;
+use limpid_core::criteria::QUASI_SYMMETRIC;
+use limpid_core::{Error, Matrix, Result};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 /// One observation window of the sweep.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct SweepRow {

@@ -1,9 +1,10 @@
 //! Zero-phase filtering and derivatives of a window (seed 000 §II-C), and
 //! the noise they pass to the regressors.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::Derivative;
+use limpid_core::Result;
+use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
+use std::ops::Range;
 /// One window's displacement, velocity, acceleration and force per
 /// coordinate (`signals`: the n displacements, then the n forces): zero-phase
 /// low-pass with extended edges (all 2n signals filtered together) and

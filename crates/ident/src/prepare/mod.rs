@@ -22,12 +22,9 @@ use std::borrow::Cow;
 use std::ops::Range;
 use std::path::PathBuf;
 
-use limpid_core::trial::{
-    change_floors, detect_windows, native_noise_sigma, noise_sigma, perturbation_onset,
-    windows_from_trial_column,
-};
+use limpid_core::trial::{native_noise_sigma, noise_sigma};
 use limpid_core::{Error, FrameTransform, Recording, Result, Window};
-use limpid_dsp::{central_first, central_second, savgol, Edge, LowPass};
+use limpid_dsp::LowPass;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 

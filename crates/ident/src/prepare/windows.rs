@@ -1,9 +1,12 @@
 //! Cutting a recording into windows: trial columns, onsets found from the
 //! motion, or continuous holds; condition levels; fitted or rest offsets.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::{Offsets, PrepareParams, Windowing, AUTO_FIT_ABOVE_S};
+use limpid_core::trial::{
+    change_floors, detect_windows, perturbation_onset, windows_from_trial_column,
+};
+use limpid_core::{Error, Recording, Result, Window};
+use rayon::prelude::*;
 /// Keep only the windows whose samples all carry `level` (seed 001's
 /// condition label); an error listing the levels present when none does.
 pub(super) fn keep_level(rec: &Recording, windows: &mut Vec<Window>, level: f64) -> Result<()> {

@@ -1,8 +1,10 @@
 //! Kearney et al. (1997)'s parallel cascade, non-parametric part: decimation with anti-aliasing, the intrinsic and reflex impulse responses by pseudo-inverse, the iteration between the pathways, VAF.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::{Decimated, ReflexParams};
+use limpid_core::Result;
+use limpid_dsp::LowPass;
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 pub(crate) fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }

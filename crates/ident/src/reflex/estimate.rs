@@ -3,8 +3,15 @@
 //! other rectifier order), add the model-error floors to the standard
 //! errors, cross-validate, and say what cannot be trusted.
 
-use super::*;
-
+use super::cascade::{apply, cascade, decimate, vaf, variance, Cascade};
+use super::parametric::{ibk_fit, parametric_intrinsic, reflex_parametric, Parametric};
+use super::{
+    Decimated, DelayScan, Ibk, IntrinsicPathway, Irf, OtherOrder, Polarity, ReflexEstimate,
+    ReflexFreeFit, ReflexParams, ReflexPathway, ReflexTraces, VafSplit, DELAY_INTERVAL_MAX_S,
+    GRID_ERROR_FLOOR, MODEL_ERROR_FLOOR, REFLEX_PRESENT_VAF,
+};
+use limpid_core::{Error, Recording, Result, Warning, WarningCode};
+use rayon::prelude::*;
 /// Lengths in decimated samples.
 struct Lengths {
     /// Decimated samples.

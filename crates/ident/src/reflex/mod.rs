@@ -44,10 +44,7 @@
 //!   95 % profile-likelihood interval, with the residual's autocorrelation
 //!   reducing the effective sample count.
 
-use limpid_core::{Error, Recording, Result, Warning, WarningCode};
-use limpid_dsp::LowPass;
-use nalgebra::{DMatrix, DVector};
-use rayon::prelude::*;
+use limpid_core::Warning;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -55,9 +52,9 @@ mod cascade;
 mod estimate;
 mod parametric;
 
-pub use cascade::*;
+pub use cascade::vaf;
 pub use estimate::estimate_reflex;
-pub(crate) use parametric::*;
+pub(crate) use parametric::low_pass;
 
 /// Settings of the parallel-cascade estimator.
 #[derive(Debug, Clone)]
@@ -322,6 +319,7 @@ pub struct GridErrorFloor {
 
 #[cfg(test)]
 mod tests {
+    use super::cascade::{apply, irf_pinv};
     use super::*;
 
     #[test]

@@ -1,8 +1,9 @@
 //! The parametric models of the pathways: intrinsic I, B, K by least squares, the reflex (rectified velocity, delay, gain, second-order low-pass) fitted jointly over delays, with jackknife standard errors inflated for autocorrelated residuals.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::cascade::{centre, correlation, mean, vaf, variance};
+use super::{Decimated, Ibk, ReflexParams};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 /// The torque of the intrinsic I-B-K model (centred).
 pub(crate) fn parametric_intrinsic(d: &Decimated, p: &Ibk) -> Vec<f64> {
     (0..d.torque.len())

@@ -19,8 +19,11 @@ use crate::stochastic::StochasticParams;
 mod methods;
 mod options;
 
-pub use methods::*;
-pub use options::*;
+pub use methods::{
+    ArmRequest, Axis, CocontractionRequest, Frame, LinearRequest, PlanarRequest, PrepareRequest,
+    ReflexRequest, SegmentWindow, SpectraRequest, StochasticRequest, SweepRequest, VaryingRequest,
+};
+pub use options::{boolean_options, deserialize_request, field_names, from_options, nesting};
 
 /// Band of the stochastic parametric fit and accuracy measures (Hz).
 pub const DEFAULT_BAND_HZ: [f64; 2] = [0.5, 10.0];

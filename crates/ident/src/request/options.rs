@@ -5,10 +5,11 @@ use limpid_core::{Error, Result};
 use schemars::JsonSchema;
 use serde::Deserialize;
 
-use super::{
-    ArmRequest, LinearRequest, PrepareRequest, ReflexRequest, Request, SpectraRequest,
-    StochasticRequest, VaryingRequest,
+use super::methods::{
+    ArmRequest, LinearRequest, PrepareRequest, ReflexRequest, SpectraRequest, StochasticRequest,
+    VaryingRequest,
 };
+use super::Request;
 
 /// The names of a request type's fields (its JSON Schema's properties).
 pub fn field_names<T: JsonSchema>() -> Vec<String> {

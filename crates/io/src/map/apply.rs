@@ -1,7 +1,9 @@
 //! A channel map applied to a lab file: channels found by stream and name, converted to SI, interpolated onto the time-base stream, cut to the common span, markers turned into trial and level columns, EMG envelopes made at their native rate.
 
-#[allow(unused_imports)]
-use super::*;
+use super::{nearest_hint, ChannelMap, ColumnRule, Quantity, TimeSpec, ENVELOPE_HZ};
+use crate::sources::{Marker, Source, Stream};
+use limpid_core::{Recording, Result};
+use std::collections::BTreeMap;
 
 /// The stream called `name`, or an error naming the nearest streams.
 pub(crate) fn named_stream<'a>(source: &'a Source, name: &str, what: &str) -> Result<&'a Stream> {

@@ -27,17 +27,17 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use limpid_core::error::significant;
-use limpid_core::recording::magnitude_limit;
-use limpid_core::{Error, Recording, Result};
+use limpid_core::{Error, Result};
 use serde::Deserialize;
 
-use crate::sources::{Marker, Source, Stream};
+use crate::sources::{Source, Stream};
 
 mod apply;
 mod units;
 
-pub use apply::*;
-pub use units::*;
+pub use apply::{apply, apply_partial, Converted};
+use units::Quantity;
+pub use units::{nearest_hint, unit_factor};
 
 /// A parsed, checked channel map.
 #[derive(Debug, Clone, Deserialize)]

@@ -1,7 +1,6 @@
 //! Units per physical quantity of a FORMAT.md column (time, length, angle, force, torque, voltage): the factor to SI of a unit a lab file declares, and the nearest names for a mistyped one.
 
-#[allow(unused_imports)]
-use super::*;
+use limpid_core::recording::magnitude_limit;
 
 /// The physical quantity of a FORMAT.md column, from its unit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

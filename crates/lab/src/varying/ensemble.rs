@@ -1,9 +1,17 @@
 //! The ensemble subject: impedance that changes in time within a repeated
 //! task (Kearney & MacNeil's ensembles), and its truth.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::{ACTUATOR_DAMPING, SUBSTEPS};
+use limpid_core::arm::{coriolis, mass_matrix, Arm};
+use limpid_core::truth::{About, VaryingTruth, VaryingTruthPoint};
+use limpid_core::{Error, Matrix, Recording, Result};
+use nalgebra::{Matrix2, Vector2};
+use rand::rngs::StdRng;
+use rand::Rng;
+use rand::SeedableRng;
+use rand_distr::Distribution;
+use rand_distr::Normal;
+use serde::{Deserialize, Serialize};
 /// A raised-cosine change of impedance in time: `1 + gain × bump(t)`, the
 /// bump 1 at `centre_s` and 0 beyond `± width_s` (so `width_s` is its full
 /// width at half height).

@@ -17,15 +17,6 @@
 //! is second order (damping ratio 0.7) and integrated on a 10x finer grid, so
 //! the recorded `q`, `q'`, `q''` are exact to the sample.
 
-use nalgebra::{Matrix2, Vector2};
-use rand::{rngs::StdRng, Rng, SeedableRng};
-use rand_distr::{Distribution, Normal};
-use serde::{Deserialize, Serialize};
-
-use limpid_core::arm::{coriolis, mass_matrix, Arm};
-use limpid_core::truth::{About, VaryingTruth, VaryingTruthPoint};
-use limpid_core::{Error, Matrix, Recording, Result};
-
 /// Integration steps of the actuator per sample.
 const SUBSTEPS: usize = 10;
 /// Damping ratio of the second-order actuator.
@@ -34,8 +25,14 @@ const ACTUATOR_DAMPING: f64 = 0.7;
 mod ensemble;
 mod scheduled;
 
-pub use ensemble::*;
-pub use scheduled::*;
+pub use ensemble::{
+    ensemble_truth, simulate_ensemble, EnsembleBody, EnsembleExperiment, EnsembleSubject,
+    TimeChange,
+};
+pub use scheduled::{
+    scheduled_truth, simulate_scheduled_ankle, Quadratic, RampAndHold, ScheduledAnkle,
+    ScheduledReflex,
+};
 
 #[cfg(test)]
 mod tests {

@@ -2,9 +2,15 @@
 //! operating angle on a ramp-and-hold schedule (Sobhani Tehrani & Kearney's
 //! parameter-varying ankle), and its truth.
 
-#[allow(unused_imports)]
-use super::*;
-
+use super::{ACTUATOR_DAMPING, SUBSTEPS};
+use limpid_core::truth::{About, VaryingTruth, VaryingTruthPoint};
+use limpid_core::{Error, Matrix, Recording, Result};
+use rand::rngs::StdRng;
+use rand::Rng;
+use rand::SeedableRng;
+use rand_distr::Distribution;
+use rand_distr::Normal;
+use serde::{Deserialize, Serialize};
 /// A coefficient triple `c0 + c1 s + c2 s^2` of the operating angle `s` (rad).
 pub type Quadratic = [f64; 3];
 

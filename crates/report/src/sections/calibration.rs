@@ -1,7 +1,6 @@
 //! The section of `limpid calibrate`: coverage and verdict rates per method.
 
-#[allow(unused_imports)]
-use crate::*;
+use crate::{Section, Table};
 
 pub(crate) fn calibration_section(
     name: &str,

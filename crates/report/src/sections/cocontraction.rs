@@ -1,7 +1,8 @@
 //! The section of a co-contraction estimate (seed 001): one linear estimate per level, the index and the ellipsoid changes.
 
-#[allow(unused_imports)]
-use crate::*;
+use super::linear::{ellipsoid_view, ellipsoids_of};
+use crate::{ellipse, fmt, matrix_table, mean_sd, messages, Drawing, Section, Table};
+use limpid_analysis::cocontraction::CocontractionResult;
 
 /// Seed 001: index and stiffness per co-contraction level, ellipsoids side by side (Fig. 5).
 pub(crate) fn cocontraction_section(name: &str, v: &CocontractionResult) -> Section {

@@ -1,7 +1,9 @@
 //! The section of `limpid demo`: seed 000's study on a virtual subject beside its truth.
 
-#[allow(unused_imports)]
-use crate::*;
+use super::linear::{ellipsoids_of, fit_figures, linear_tables};
+use crate::{fmt, group_warnings, Section, Table};
+use limpid_analysis::demo::DemoResult;
+use limpid_analysis::linear::{MatrixKind, MatrixVerdict};
 
 pub(crate) fn demo_section(name: &str, v: &DemoResult) -> Section {
     let mut section = Section {

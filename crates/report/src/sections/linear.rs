@@ -1,7 +1,12 @@
 //! The section of a linear estimate (seeds 000, 001): Tables I-II layout, ellipsoids, measured against predicted force.
 
-#[allow(unused_imports)]
-use crate::*;
+use crate::{
+    fmt, force_unit, kind_unit, matrix_table, messages, Chart, EllipsoidView, Figure, Section,
+    Series, Stroke, Table, PALETTE,
+};
+use limpid_analysis::demo::DemoPoint;
+use limpid_analysis::linear::{LinearResult, MatrixKind};
+use limpid_analysis::Ellipsoid;
 
 pub(crate) fn ellipsoids_of(
     point: &str,

@@ -1,7 +1,12 @@
 //! The sections of the planar arm (seed 003): one estimate (joint and end-point stiffness, criteria) and the window sweep (criteria against T_obs, Fig. 4-5).
 
-#[allow(unused_imports)]
-use crate::*;
+use crate::{
+    ellipse, fmt, matrix_table, Chart, Drawing, EllipsoidView, Figure, Section, Series, Stroke,
+    Table, PALETTE,
+};
+use limpid_core::Matrix;
+use limpid_ident::planar::{PlanarEstimate, Sweep};
+use std::fmt::Write;
 
 pub(crate) fn planar_section(name: &str, v: &PlanarEstimate) -> Section {
     let c = &v.criteria;

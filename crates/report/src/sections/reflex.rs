@@ -1,7 +1,6 @@
 //! The section of a parallel-cascade estimate (Kearney et al. 1997): intrinsic and reflex pathways, IRFs, the delay scan, the fit.
 
-#[allow(unused_imports)]
-use crate::*;
+use crate::{fmt, Chart, Figure, Section, Series, Stroke, Table, PALETTE};
 
 pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimate) -> Section {
     let r = &v.reflex;

@@ -3,8 +3,7 @@
 //! all inputs and its ordinary and partial coherence with each input (as the
 //! stochastic estimate draws them, Fig. 10).
 
-#[allow(unused_imports)]
-use crate::*;
+use crate::{fmt, Chart, Figure, Section, Series, Stroke, Table, PALETTE};
 use limpid_ident::spectra::SpectraResult;
 
 /// Coherence charts over the frequencies `fx` (bins `positive`): the

@@ -1,7 +1,13 @@
 //! The section of a stochastic MIMO estimate (seed 004): Bode plots of Z(f) with the parametric fit (Fig. 9), multiple and partial coherences (Fig. 10), criteria and verdicts.
 
-#[allow(unused_imports)]
-use crate::*;
+use crate::{
+    element_unit, fmt, kind_unit, matrix_element_unit, matrix_table, messages, Chart, Figure,
+    Section, Series, Stroke, Table, PALETTE,
+};
+use limpid_analysis::linear::{MatrixKind, MatrixVerdict};
+use limpid_core::Matrix;
+use limpid_ident::stochastic::StochasticEstimate;
+use std::fmt::Write;
 
 /// The stochastic estimate's verdicts and the criteria behind them (seed 004
 /// §III: coherences, input coherence, fit of the parametric model).

@@ -1,7 +1,11 @@
 //! The section of a co-contraction study (seed 001 Tables 1-5): means and SDs over subjects, stiffness and index against level.
 
-#[allow(unused_imports)]
-use crate::*;
+use super::linear::ellipsoid_view;
+use crate::{
+    ellipse, fmt, mean_sd, Chart, Drawing, EllipsoidView, Figure, Section, Series, Stroke, Table,
+    PALETTE,
+};
+use limpid_analysis::study::StudyResult;
 
 /// A whole seed 001 study: means over subjects per configuration and level,
 /// ellipsoid rotation from level 0 to 1, and the stiffness against the index.
