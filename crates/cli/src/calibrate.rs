@@ -6,7 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use limpid_analysis::result::{Document, Estimate};
 use limpid_app::calibrate::{calibrate, sweeps_for, METHODS, SWEEP_SETS};
 
-use crate::CliResult;
+use crate::context::CliResult;
 
 #[derive(Args)]
 pub struct CalibrateArgs {

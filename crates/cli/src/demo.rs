@@ -12,8 +12,8 @@ use limpid_core::criteria::MatrixVerdict;
 use limpid_core::Matrix;
 use limpid_lab::Profile;
 
+use crate::context::CliResult;
 use crate::table::num;
-use crate::CliResult;
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ProfileArg {

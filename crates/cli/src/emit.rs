@@ -9,7 +9,7 @@ use limpid_app::estimate::Estimated;
 use limpid_core::Error;
 use limpid_ident::request::Request;
 
-use crate::CliResult;
+use crate::context::{CliResult, Context};
 
 /// Where an estimate goes.
 pub struct Output<'a> {
@@ -97,6 +97,7 @@ pub fn with_flag_names(e: Error) -> Error {
 /// Run `request` on the recordings at `paths` and emit the result; `text`
 /// prints it for people.
 pub fn estimate(
+    cx: &Context,
     request: Request,
     paths: &[PathBuf],
     out: Output<'_>,
@@ -113,7 +114,7 @@ pub fn estimate(
     }
     if let Some(report) = out.report {
         let inputs: Vec<(&Path, &str)> = paths.iter().map(|p| (p.as_path(), "an input")).collect();
-        crate::refuse_overwriting_inputs(&[(report, "the report (--report)")], &inputs)?;
+        cx.refuse_overwriting_inputs(&[(report, "the report (--report)")], &inputs)?;
     }
     // the MVC recording beside a co-contraction session records less (EMG only)
     let supporting = |i: usize| matches!(checked.request(), Request::Cocontraction(_)) && i > 0;
@@ -122,9 +123,9 @@ pub fn estimate(
         .enumerate()
         .map(|(i, p)| {
             if supporting(i) {
-                crate::read_supporting_recording(p)
+                cx.read_supporting_recording(p)
             } else {
-                crate::read_recording(p)
+                cx.read_recording(p)
             }
         })
         .collect::<limpid_core::Result<Vec<_>>>()?;
@@ -133,7 +134,7 @@ pub fn estimate(
     estimated.document.run = Some(
         Run::of_this_process(&inputs)
             .with_request(checked.request())
-            .with_channel_map(crate::channel_map().and_then(|m| m.path.as_deref())),
+            .with_channel_map(cx.map_path()),
     );
     if let Some(path) = out.report {
         crate::report::write(&estimated.document, path)?;

@@ -10,7 +10,8 @@ use limpid_ident::request::{
 };
 use limpid_ident::{Derivative, Offsets, Windowing};
 
-use crate::{table, CliResult};
+use crate::context::{CliResult, Context};
+use crate::table;
 
 #[derive(Subcommand)]
 pub enum Method {
@@ -266,19 +267,21 @@ impl CocontractionArgs {
     }
 }
 
-pub fn run(method: Method) -> CliResult {
+pub fn run(method: Method, cx: &Context) -> CliResult {
     match method {
         Method::Linear(args) => crate::emit::estimate(
+            cx,
             args.request()?,
             std::slice::from_ref(&args.recording),
             args.output.output(),
             linear_text,
         ),
-        Method::Planar(args) => crate::planar::run_estimate(args),
-        Method::Stochastic(args) => crate::stochastic::run_estimate(args),
-        Method::Reflex(args) => crate::reflex::run(args),
-        Method::Varying(args) => crate::varying::run(args),
+        Method::Planar(args) => crate::planar::run_estimate(args, cx),
+        Method::Stochastic(args) => crate::stochastic::run_estimate(args, cx),
+        Method::Reflex(args) => crate::reflex::run(args, cx),
+        Method::Varying(args) => crate::varying::run(args, cx),
         Method::Cocontraction(args) => crate::emit::estimate(
+            cx,
             args.request(),
             &[args.recording.clone(), args.mvc.clone()],
             args.output.output(),

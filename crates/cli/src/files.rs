@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::CliResult;
+use crate::context::{CliResult, Context};
 
 /// `limpid inspect`.
 #[derive(Args)]
@@ -122,12 +122,12 @@ pub fn run_inspect(args: InspectArgs) -> CliResult {
 }
 
 /// Convert a file to a FORMAT.md recording.
-pub fn run_convert(args: ConvertArgs) -> CliResult {
-    crate::refuse_overwriting_inputs(
+pub fn run_convert(args: ConvertArgs, cx: &Context) -> CliResult {
+    cx.refuse_overwriting_inputs(
         &[(&args.output, "the output (-o)")],
         &[(&args.file, "the file to convert")],
     )?;
-    let converted = limpid_io::convert(&args.file, crate::channel_map())?;
+    let converted = limpid_io::convert(&args.file, cx.channel_map())?;
     let rec = &converted.recording;
     limpid_io::write_recording(rec, &args.output)?;
     if args.json {

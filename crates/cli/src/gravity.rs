@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use clap::Args;
 use limpid_lab::gravity::{compensate, LoadSource};
 
+use crate::context::{CliResult, Context};
 use crate::estimate::RobotArgs;
-use crate::CliResult;
 
 #[derive(Args)]
 #[command(group(clap::ArgGroup::new("load").required(true).args(["bias", "calibration"])))]
@@ -40,7 +40,7 @@ pub struct GravityArgs {
 }
 
 /// The three sensor columns `prefix` x, y, z (forces `sensor_f`, torques `sensor_t`).
-pub fn run(args: GravityArgs) -> CliResult {
+pub fn run(args: GravityArgs, cx: &Context) -> CliResult {
     let mut inputs = vec![(args.recording.as_path(), "the recording")];
     inputs.extend(
         args.bias
@@ -52,16 +52,16 @@ pub fn run(args: GravityArgs) -> CliResult {
             .as_deref()
             .map(|p| (p, "the calibration (--calibration)")),
     );
-    crate::refuse_overwriting_inputs(&[(&args.output, "the output (-o)")], &inputs)?;
-    let mut rec = crate::read_recording(&args.recording)?;
+    cx.refuse_overwriting_inputs(&[(&args.output, "the output (-o)")], &inputs)?;
+    let mut rec = cx.read_recording(&args.recording)?;
     let robot = args.robot.robot()?;
     let summary = match (&args.calibration, &args.bias) {
         (Some(path), _) => {
-            let cal = crate::read_supporting_recording(path)?;
+            let cal = cx.read_supporting_recording(path)?;
             compensate(&mut rec, LoadSource::Calibration(&cal), robot.as_ref())?
         }
         (None, Some(path)) => {
-            let bias = crate::read_supporting_recording(path)?;
+            let bias = cx.read_supporting_recording(path)?;
             let source = LoadSource::TwoSteps {
                 bias: &bias,
                 initial_s: args.initial_s,

@@ -9,7 +9,7 @@ use clap::Args;
 use limpid_analysis::emg::{emg_columns, mvc_maxima, EmgParams};
 use limpid_live::server::{Config, Session};
 
-use crate::CliResult;
+use crate::context::{CliResult, Context};
 
 #[derive(Args)]
 pub struct LiveArgs {
@@ -47,16 +47,16 @@ pub struct LiveArgs {
     pub lsl: Option<String>,
 }
 
-pub fn run(args: LiveArgs) -> CliResult {
+pub fn run(args: LiveArgs, cx: &Context) -> CliResult {
     let mvc = args
         .mvc
         .as_ref()
-        .map(crate::read_supporting_recording)
+        .map(|p| cx.read_supporting_recording(p))
         .transpose()?;
     let replay = args
         .replay
         .as_ref()
-        .map(crate::read_recording)
+        .map(|p| cx.read_recording(p))
         .transpose()?;
     let channels =
         match (&args.channels, &mvc, &replay) {

@@ -3,6 +3,7 @@
 //! and exit with status 2.
 
 mod calibrate;
+mod context;
 mod demo;
 mod emit;
 mod estimate;
@@ -23,6 +24,7 @@ mod varying;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use context::{CliResult, Context};
 
 /// limpid — limb impedance identification.
 #[derive(Parser)]
@@ -81,57 +83,6 @@ enum Command {
         #[command(subcommand)]
         command: study::StudyCommand,
     },
-}
-
-/// Read a recording and say on stderr what was accepted but looks wrong.
-pub fn read_recording(
-    path: impl AsRef<std::path::Path>,
-) -> limpid_core::Result<limpid_core::Recording> {
-    let rec = limpid_io::read_recording_mapped(path, channel_map())?;
-    for w in rec.warnings() {
-        eprintln!("limpid: warning: {}: {w}", rec.path().display());
-    }
-    Ok(rec)
-}
-
-static CHANNEL_MAP: std::sync::OnceLock<limpid_io::map::ChannelMap> = std::sync::OnceLock::new();
-
-/// Read the channel map at `path` for every recording this process reads
-/// (`--map`, or the map a result was made with, for `limpid rerun`).
-pub fn set_channel_map(path: &std::path::Path) -> limpid_core::Result<()> {
-    let map = limpid_io::map::ChannelMap::read(path)?;
-    let _ = CHANNEL_MAP.set(map);
-    Ok(())
-}
-
-/// The channel map given with `--map`, if any.
-pub fn channel_map() -> Option<&'static limpid_io::map::ChannelMap> {
-    CHANNEL_MAP.get()
-}
-
-/// Refuse, before any work, an output that is one of the command's inputs
-/// (the channel map of `--map` counted among them; issue 56).
-pub fn refuse_overwriting_inputs(
-    outputs: &[(&std::path::Path, &str)],
-    inputs: &[(&std::path::Path, &str)],
-) -> limpid_core::Result<()> {
-    let mut all = inputs.to_vec();
-    if let Some(map) = channel_map().and_then(|m| m.path.as_deref()) {
-        all.push((map, "the channel map (--map)"));
-    }
-    limpid_core::files::refuse_overwriting_inputs(outputs, &all)
-}
-
-/// Read a file beside the main recording (an MVC recording, calibration
-/// poses) through the map, leaving out the columns it does not record.
-pub fn read_supporting_recording(
-    path: impl AsRef<std::path::Path>,
-) -> limpid_core::Result<limpid_core::Recording> {
-    let rec = limpid_io::read_supporting_recording(path, channel_map())?;
-    for w in rec.warnings() {
-        eprintln!("limpid: warning: {}: {w}", rec.path().display());
-    }
-    Ok(rec)
 }
 
 /// Every command, with negative numbers taken as values (`--cutoff -5` is
@@ -295,7 +246,7 @@ fn stdout_was_closed() -> bool {
 }
 
 fn run(cli: Cli) -> CliResult {
-    if let Some(path) = &cli.map {
+    if cli.map.is_some() {
         let reads_recordings = matches!(
             cli.command,
             Command::Estimate { .. }
@@ -313,26 +264,26 @@ fn run(cli: Cli) -> CliResult {
             };
             return Err(format!("--map: {why}").into());
         }
-        set_channel_map(path)?;
     }
+    let cx = match &cli.map {
+        Some(path) => Context::with_map(path)?,
+        None => Context::default(),
+    };
     match cli.command {
         Command::Inspect(args) => files::run_inspect(args),
-        Command::Convert(args) => files::run_convert(args),
-        Command::Estimate { method } => estimate::run(method),
+        Command::Convert(args) => files::run_convert(args, &cx),
+        Command::Estimate { method } => estimate::run(method, &cx),
         Command::Demo(args) => demo::run(args),
         Command::Calibrate(args) => calibrate::run(args),
         Command::Study { command } => study::run(command),
-        Command::WindowSweep(args) => planar::run_sweep(args),
-        Command::Spectra(args) => stochastic::run_spectra(args),
+        Command::WindowSweep(args) => planar::run_sweep(args, &cx),
+        Command::Spectra(args) => stochastic::run_spectra(args, &cx),
         Command::Protocol { command } => protocol::run(command),
         Command::Simulate(args) => protocol::run_simulate(args),
-        Command::GravityCompensate(args) => gravity::run(args),
+        Command::GravityCompensate(args) => gravity::run(args, &cx),
         Command::Report(args) => report::run(args),
         Command::Reproduce(args) => reproduce::run(args),
-        Command::Live(args) => live::run(args),
+        Command::Live(args) => live::run(args, &cx),
         Command::Rerun(args) => rerun::run(args),
     }
 }
-
-/// Errors of any crate, boxed for the CLI.
-pub type CliResult<T = ()> = Result<T, Box<dyn std::error::Error + Send + Sync>>;

@@ -10,8 +10,8 @@ use limpid_core::Matrix;
 use limpid_ident::planar::PlanarEstimate;
 use limpid_ident::request::{ArmRequest, PlanarRequest, Request, SweepRequest, DEFAULT_SWEEP_MS};
 
+use crate::context::{CliResult, Context};
 use crate::table::num;
-use crate::CliResult;
 
 /// Arm geometry and preparation flags shared by both commands.
 #[derive(Args)]
@@ -200,12 +200,13 @@ fn text(e: &PlanarEstimate, path: &std::path::Path, from_endpoint: bool) -> Stri
     s
 }
 
-pub fn run_estimate(args: PlanarArgs) -> CliResult {
+pub fn run_estimate(args: PlanarArgs, cx: &Context) -> CliResult {
     let request = Request::Planar(PlanarRequest {
         arm: args.arm.request()?,
         window_ms: args.window_ms,
     });
     crate::emit::estimate(
+        cx,
         request,
         std::slice::from_ref(&args.arm.recording),
         args.output.output(),
@@ -224,7 +225,7 @@ pub fn planar_text(e: &Estimated, _: &Request, paths: &[PathBuf]) -> CliResult {
     Ok(())
 }
 
-pub fn run_sweep(args: SweepArgs) -> CliResult {
+pub fn run_sweep(args: SweepArgs, cx: &Context) -> CliResult {
     let request = Request::WindowSweep(SweepRequest {
         arm: args.arm.request()?,
         from_ms: args.from,
@@ -233,6 +234,7 @@ pub fn run_sweep(args: SweepArgs) -> CliResult {
     });
     let csv = args.csv;
     crate::emit::estimate(
+        cx,
         request,
         std::slice::from_ref(&args.arm.recording),
         args.output.output(),

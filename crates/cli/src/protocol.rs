@@ -8,8 +8,8 @@ use limpid_lab::export::placed_robot;
 use limpid_lab::protocol::Protocol;
 use limpid_lab::session::{simulate_design, RigController, SubjectText};
 
+use crate::context::CliResult;
 use crate::table::num;
-use crate::CliResult;
 
 #[derive(Subcommand)]
 pub enum ProtocolCommand {

@@ -8,8 +8,8 @@ use limpid_analysis::result::Estimate;
 use limpid_app::estimate::Estimated;
 use limpid_ident::request::{ReflexRequest, Request};
 
+use crate::context::{CliResult, Context};
 use crate::table::num;
-use crate::CliResult;
 
 #[derive(Args)]
 pub struct ReflexArgs {
@@ -55,8 +55,9 @@ impl ReflexArgs {
     }
 }
 
-pub fn run(args: ReflexArgs) -> CliResult {
+pub fn run(args: ReflexArgs, cx: &Context) -> CliResult {
     crate::emit::estimate(
+        cx,
         args.request(),
         std::slice::from_ref(&args.recording),
         args.output.output(),

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use limpid_analysis::result::{Document, Estimate, Run};
 
-use crate::CliResult;
+use crate::context::CliResult;
 
 #[derive(Args)]
 pub struct ReportArgs {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use limpid_app::reproduce::{reproduce, text, Seed};
 
-use crate::CliResult;
+use crate::context::CliResult;
 
 #[derive(Args)]
 pub struct ReproduceArgs {

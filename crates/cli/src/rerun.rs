@@ -8,8 +8,8 @@ use clap::Args;
 use limpid_analysis::result::Document;
 use limpid_ident::request::Request;
 
+use crate::context::{CliResult, Context};
 use crate::emit::Output;
-use crate::CliResult;
 
 #[derive(Args)]
 pub struct RerunArgs {
@@ -25,7 +25,7 @@ pub struct RerunArgs {
 
 pub fn run(args: RerunArgs) -> CliResult {
     if let Some(report) = &args.report {
-        crate::refuse_overwriting_inputs(
+        limpid_core::files::refuse_overwriting_inputs(
             &[(report, "the report (--report)")],
             &[(&args.result, "the result to rerun")],
         )?;
@@ -48,15 +48,19 @@ pub fn run(args: RerunArgs) -> CliResult {
     };
     // a relative path is taken from here, else from the result's folder
     let folder = args.result.parent().unwrap_or(std::path::Path::new(""));
-    if let Some(map) = &run.channel_map {
-        let p = PathBuf::from(&map.path);
-        let p = if p.is_relative() && !p.exists() && folder.join(&p).exists() {
-            folder.join(p)
-        } else {
-            p
-        };
-        crate::set_channel_map(&p)?;
-    }
+    // the recordings are read through the map the result was made with
+    let cx = match &run.channel_map {
+        Some(map) => {
+            let p = PathBuf::from(&map.path);
+            let p = if p.is_relative() && !p.exists() && folder.join(&p).exists() {
+                folder.join(p)
+            } else {
+                p
+            };
+            Context::with_map(&p)?
+        }
+        None => Context::default(),
+    };
     let paths: Vec<PathBuf> = run
         .inputs
         .iter()
@@ -95,28 +99,36 @@ pub fn run(args: RerunArgs) -> CliResult {
     };
     match request {
         Request::Linear(_) => {
-            crate::emit::estimate(request, &paths, out, crate::estimate::linear_text)
+            crate::emit::estimate(&cx, request, &paths, out, crate::estimate::linear_text)
         }
-        Request::Cocontraction(_) => {
-            crate::emit::estimate(request, &paths, out, crate::estimate::cocontraction_text)
-        }
+        Request::Cocontraction(_) => crate::emit::estimate(
+            &cx,
+            request,
+            &paths,
+            out,
+            crate::estimate::cocontraction_text,
+        ),
         Request::Planar(_) => {
-            crate::emit::estimate(request, &paths, out, crate::planar::planar_text)
+            crate::emit::estimate(&cx, request, &paths, out, crate::planar::planar_text)
         }
-        Request::WindowSweep(_) => crate::emit::estimate(request, &paths, out, |e, r, p| {
+        Request::WindowSweep(_) => crate::emit::estimate(&cx, request, &paths, out, |e, r, p| {
             crate::planar::sweep_text(e, r, p, false)
         }),
-        Request::Stochastic(_) => {
-            crate::emit::estimate(request, &paths, out, crate::stochastic::stochastic_text)
-        }
+        Request::Stochastic(_) => crate::emit::estimate(
+            &cx,
+            request,
+            &paths,
+            out,
+            crate::stochastic::stochastic_text,
+        ),
         Request::Reflex(_) => {
-            crate::emit::estimate(request, &paths, out, crate::reflex::reflex_text)
+            crate::emit::estimate(&cx, request, &paths, out, crate::reflex::reflex_text)
         }
         Request::Varying(_) => {
-            crate::emit::estimate(request, &paths, out, crate::varying::varying_text)
+            crate::emit::estimate(&cx, request, &paths, out, crate::varying::varying_text)
         }
         Request::Spectra(_) => {
-            crate::emit::estimate(request, &paths, out, crate::stochastic::spectra_text)
+            crate::emit::estimate(&cx, request, &paths, out, crate::stochastic::spectra_text)
         }
     }
 }

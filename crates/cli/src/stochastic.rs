@@ -10,8 +10,8 @@ use limpid_ident::request::{
     Request, SegmentWindow, SpectraRequest, StochasticRequest, DEFAULT_BAND_HZ,
 };
 
+use crate::context::{CliResult, Context};
 use crate::table::num;
-use crate::CliResult;
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum WindowArg {
@@ -124,8 +124,9 @@ impl StochasticArgs {
     }
 }
 
-pub fn run_estimate(args: StochasticArgs) -> CliResult {
+pub fn run_estimate(args: StochasticArgs, cx: &Context) -> CliResult {
     crate::emit::estimate(
+        cx,
         args.request()?,
         &args.recordings,
         args.output.output(),
@@ -237,8 +238,9 @@ impl SpectraArgs {
     }
 }
 
-pub fn run_spectra(args: SpectraArgs) -> CliResult {
+pub fn run_spectra(args: SpectraArgs, cx: &Context) -> CliResult {
     crate::emit::estimate(
+        cx,
         args.request(),
         std::slice::from_ref(&args.recording),
         args.output.output(),

@@ -6,7 +6,7 @@ use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use limpid_app::study::{load_manifest, run_study_staged, simulate_study, stage_tables};
 
-use crate::CliResult;
+use crate::context::CliResult;
 
 #[derive(Subcommand)]
 pub enum StudyCommand {

@@ -10,7 +10,7 @@ use limpid_core::{significant, with_standard_error};
 use limpid_ident::request::{Request, VaryingRequest};
 use limpid_ident::varying::VaryingMethod;
 
-use crate::CliResult;
+use crate::context::{CliResult, Context};
 
 #[derive(Args)]
 pub struct VaryingArgs {
@@ -72,8 +72,9 @@ impl VaryingArgs {
     }
 }
 
-pub fn run(args: VaryingArgs) -> CliResult {
+pub fn run(args: VaryingArgs, cx: &Context) -> CliResult {
     crate::emit::estimate(
+        cx,
         args.request(),
         std::slice::from_ref(&args.recording),
         args.output.output(),

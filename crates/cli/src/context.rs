@@ -1,0 +1,72 @@
+//! What every subcommand is handed: the channel map its recordings are read
+//! through (`--map`, or for `limpid rerun` the map its result was made with)
+//! and the error type. A value passed down, not process-wide state, so a
+//! command that switches maps (rerun) says so where it does.
+
+use std::path::Path;
+
+use limpid_core::{Recording, Result};
+use limpid_io::map::ChannelMap;
+
+/// Errors of any crate, boxed for the CLI.
+pub type CliResult<T = ()> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
+/// How this command reads its recordings.
+#[derive(Debug, Default)]
+pub struct Context {
+    map: Option<ChannelMap>,
+}
+
+impl Context {
+    /// Read recordings through the channel map at `path` (read and checked now).
+    pub fn with_map(path: &Path) -> Result<Self> {
+        Ok(Context {
+            map: Some(ChannelMap::read(path)?),
+        })
+    }
+
+    /// The channel map recordings are read through, if any.
+    pub fn channel_map(&self) -> Option<&ChannelMap> {
+        self.map.as_ref()
+    }
+
+    /// The file the channel map was read from, if any.
+    pub fn map_path(&self) -> Option<&Path> {
+        self.map.as_ref().and_then(|m| m.path.as_deref())
+    }
+
+    /// Read a recording and say on stderr what was accepted but looks wrong.
+    pub fn read_recording(&self, path: impl AsRef<Path>) -> Result<Recording> {
+        let rec = limpid_io::read_recording_mapped(path, self.channel_map())?;
+        warn_about(&rec);
+        Ok(rec)
+    }
+
+    /// Read a file beside the main recording (an MVC recording, calibration
+    /// poses) through the map, leaving out the columns it does not record.
+    pub fn read_supporting_recording(&self, path: impl AsRef<Path>) -> Result<Recording> {
+        let rec = limpid_io::read_supporting_recording(path, self.channel_map())?;
+        warn_about(&rec);
+        Ok(rec)
+    }
+
+    /// Refuse, before any work, an output that is one of the command's inputs
+    /// (the channel map counted among them; issue 56).
+    pub fn refuse_overwriting_inputs(
+        &self,
+        outputs: &[(&Path, &str)],
+        inputs: &[(&Path, &str)],
+    ) -> Result<()> {
+        let mut all = inputs.to_vec();
+        if let Some(map) = self.map_path() {
+            all.push((map, "the channel map (--map)"));
+        }
+        limpid_core::files::refuse_overwriting_inputs(outputs, &all)
+    }
+}
+
+fn warn_about(rec: &Recording) {
+    for w in rec.warnings() {
+        eprintln!("limpid: warning: {}: {w}", rec.path().display());
+    }
+}
