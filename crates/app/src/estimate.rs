@@ -5,7 +5,7 @@ use limpid_analysis::result::{Document, Estimate};
 use limpid_core::{Error, Recording, Result};
 use limpid_ident::request::{
     Axis, Checked, CocontractionRequest, LinearRequest, PlanarRequest, PrepareRequest, Request,
-    StochasticRequest, SweepRequest,
+    Settings, StochasticRequest, SweepRequest,
 };
 use limpid_ident::Estimator;
 
@@ -62,26 +62,26 @@ pub fn run(checked: &Checked, mut recordings: Vec<Recording>) -> Result<Estimate
             ),
         ));
     }
-    match request {
-        Request::Linear(r) => {
+    match checked.settings() {
+        Settings::Linear(r) => {
             let rec = with_robot(recordings.swap_remove(0), &r.prepare)?;
             linear(r, &rec)
         }
-        Request::Cocontraction(r) => {
+        Settings::Cocontraction(r) => {
             let mvc = recordings.pop().expect("two recordings counted above");
             let rec = with_robot(recordings.pop().expect("counted"), &r.prepare)?;
             cocontraction(r, &rec, &mvc)
         }
-        Request::Planar(r) => planar(r, &recordings[0]),
-        Request::WindowSweep(r) => sweep(r, &recordings[0]),
-        Request::Stochastic(r) => stochastic(r, recordings),
-        Request::Reflex(r) => Ok(Estimated::of(Estimate::Reflex(
-            r.params().fit(&recordings[0])?,
+        Settings::Planar(r) => planar(r, &recordings[0]),
+        Settings::WindowSweep(r) => sweep(r, &recordings[0]),
+        Settings::Stochastic(r) => stochastic(r, recordings),
+        Settings::Reflex(p) => Ok(Estimated::of(Estimate::Reflex(
+            limpid_ident::reflex::estimate_reflex(&recordings[0], p)?,
         ))),
-        Request::Varying(r) => Ok(Estimated::of(Estimate::Varying(
-            limpid_ident::varying::estimate_varying(&recordings[0], &r.params())?,
+        Settings::Varying(p) => Ok(Estimated::of(Estimate::Varying(
+            limpid_ident::varying::estimate_varying(&recordings[0], p)?,
         ))),
-        Request::Spectra(r) => {
+        Settings::Spectra(r) => {
             let rec = &recordings[0];
             let result = match r.period_s {
                 Some(period_s) => {

@@ -4,7 +4,7 @@
 //! reflex scan. Both recordings come from limpid's virtual lab.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use limpid_ident::varying::{estimate_varying, VaryingParams};
+use limpid_ident::varying::{estimate_varying, VaryingParams, VaryingRequest};
 use limpid_lab::varying::{
     simulate_ensemble, simulate_scheduled_ankle, EnsembleExperiment, EnsembleSubject, RampAndHold,
     ScheduledAnkle,
@@ -38,11 +38,13 @@ fn bench(c: &mut Criterion) {
     group.bench_function("ensemble_200x2s_1kHz", |b| {
         b.iter(|| estimate_varying(&ensemble, &VaryingParams::default()).expect("estimate"))
     });
-    let pv = VaryingParams {
+    let pv = VaryingRequest {
         schedule: "sv".into(),
         reflex: true,
-        ..VaryingParams::default()
-    };
+        ..VaryingRequest::default()
+    }
+    .check()
+    .expect("valid settings");
     group.bench_function("parameter_varying_reflex_180s_1kHz", |b| {
         b.iter(|| estimate_varying(&ankle, &pv).expect("estimate"))
     });

@@ -5,24 +5,65 @@
 
 use std::path::Path;
 
-use limpid_core::{Recording, Result};
+use limpid_core::{Error, Recording, Result};
 use limpid_io::map::ChannelMap;
 
 /// Errors of any crate, boxed for the CLI.
 pub type CliResult<T = ()> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
 
-/// How this command reads its recordings.
-#[derive(Debug, Default)]
+/// How this command reads its recordings and names its settings.
+#[derive(Debug)]
 pub struct Context {
     map: Option<ChannelMap>,
+    /// The command line's definition: errors name a setting by its flag.
+    commands: clap::Command,
 }
 
 impl Context {
-    /// Read recordings through the channel map at `path` (read and checked now).
-    pub fn with_map(path: &Path) -> Result<Self> {
+    /// Recordings read as they are; `commands` defines the flags.
+    pub fn new(commands: clap::Command) -> Self {
+        Context {
+            map: None,
+            commands,
+        }
+    }
+
+    /// The same, reading recordings through the channel map at `path` (read and checked now).
+    pub fn with_map(&self, path: &Path) -> Result<Self> {
         Ok(Context {
             map: Some(ChannelMap::read(path)?),
+            commands: self.commands.clone(),
         })
+    }
+
+    /// The same, reading recordings as they are.
+    pub fn with_map_none(&self) -> Self {
+        Context::new(self.commands.clone())
+    }
+
+    /// A library error about a setting, the setting named by the flag that
+    /// sets it in `command` (e.g. `estimate varying`): one rule for every
+    /// method, since each flag's id is the field it sets.
+    pub fn with_flag_names(&self, command: &str, e: Error) -> Error {
+        let Error::InvalidParameter { name, message } = e else {
+            return e;
+        };
+        let mut cmd = &self.commands;
+        for word in command.split_whitespace() {
+            match cmd.find_subcommand(word) {
+                Some(sub) => cmd = sub,
+                None => return Error::InvalidParameter { name, message },
+            }
+        }
+        let flag = |field: &str| {
+            cmd.get_arguments()
+                .find(|a| a.get_id().as_str() == field)
+                .and_then(|a| a.get_long())
+                .map_or_else(|| field.to_string(), |long| format!("--{long}"))
+        };
+        // a rule about two fields names both ("inputs/outputs")
+        let name = name.split('/').map(flag).collect::<Vec<_>>().join("/");
+        Error::InvalidParameter { name, message }
     }
 
     /// The channel map recordings are read through, if any.

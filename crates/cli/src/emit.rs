@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 
 use limpid_analysis::result::{Document, Run};
 use limpid_app::estimate::Estimated;
-use limpid_core::Error;
 use limpid_ident::request::Request;
 
 use crate::context::{CliResult, Context};
@@ -46,54 +45,6 @@ impl OutputArgs {
     }
 }
 
-/// The flag a request field is set by (errors name what the user typed).
-fn flag(field: &str) -> Option<&'static str> {
-    Some(match field {
-        "cutoff_hz" => "--cutoff",
-        "order" => "--order",
-        "robot_base" => "--robot-base",
-        "level" => "--level",
-        "shoulder" => "--shoulder",
-        "tolerance" => "--tolerance",
-        "link_lengths" => "--link-lengths",
-        "inertial_parameters" => "--inertial-parameters",
-        "window_ms" => "--window-ms",
-        "from_ms" => "--from",
-        "to_ms" => "--to",
-        "step_ms" => "--step",
-        "nperseg" => "--nfft",
-        "noverlap" => "--overlap",
-        "band_hz" => "--band",
-        "rate_hz" => "--rate",
-        "intrinsic_lags_s" => "--intrinsic-lags",
-        "reflex_lags_s" => "--reflex-lags",
-        "max_delay_s" => "--max-delay",
-        "schedule" => "--schedule",
-        "min_repetitions" => "--min-repetitions",
-        "grid_points" => "--grid",
-        "basis_order" => "--order",
-        "slow_hz" => "--slow",
-        "reflex" => "--reflex",
-        "inputs/outputs" => "--inputs/--outputs",
-        "lsl" => "--lsl",
-        "position" => "--position",
-        "period_s" => "--period",
-        "torque" => "--torque",
-        _ => return None,
-    })
-}
-
-/// A library error, its request field renamed to the CLI's flag.
-pub fn with_flag_names(e: Error) -> Error {
-    match e {
-        Error::InvalidParameter { name, message } => Error::InvalidParameter {
-            name: flag(&name).map_or(name, str::to_string),
-            message,
-        },
-        other => other,
-    }
-}
-
 /// Run `request` on the recordings at `paths` and emit the result; `text`
 /// prints it for people.
 pub fn estimate(
@@ -103,8 +54,11 @@ pub fn estimate(
     out: Output<'_>,
     text: impl FnOnce(&Estimated, &Request, &[PathBuf]) -> CliResult,
 ) -> CliResult {
+    let request_command = request.command();
     // checked before it is printed too: a request limpid would refuse to run is not printed
-    let checked = request.check().map_err(with_flag_names)?;
+    let checked = request
+        .check()
+        .map_err(|e| cx.with_flag_names(request_command, e))?;
     if out.print_request {
         println!(
             "{}",
@@ -129,7 +83,8 @@ pub fn estimate(
             }
         })
         .collect::<limpid_core::Result<Vec<_>>>()?;
-    let mut estimated = limpid_app::estimate::run(&checked, recordings).map_err(with_flag_names)?;
+    let mut estimated = limpid_app::estimate::run(&checked, recordings)
+        .map_err(|e| cx.with_flag_names(request_command, e))?;
     let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
     estimated.document.run = Some(
         Run::of_this_process(&inputs)

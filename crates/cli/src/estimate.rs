@@ -73,8 +73,8 @@ pub enum FrameArg {
 #[derive(Args)]
 pub struct PrepareArgs {
     /// Low-pass cut-off in Hz (default: 30, at most 0.4 x sample rate).
-    #[arg(long, value_name = "HZ")]
-    pub cutoff: Option<f64>,
+    #[arg(long = "cutoff", value_name = "HZ")]
+    pub cutoff_hz: Option<f64>,
     /// Butterworth order per pass.
     #[arg(long, default_value_t = PrepareRequest::default().order)]
     pub order: usize,
@@ -195,7 +195,7 @@ impl PrepareArgs {
     /// The preparation part of a request.
     pub fn request(&self, level: Option<f64>) -> PrepareRequest {
         PrepareRequest {
-            cutoff_hz: self.cutoff,
+            cutoff_hz: self.cutoff_hz,
             order: self.order,
             derivative: match self.derivative {
                 DerivativeArg::Central => Derivative::Central,

@@ -104,7 +104,7 @@ pub fn run(args: LiveArgs, cx: &Context) -> CliResult {
         replay: replay.map(|r| (r, args.speed)),
         lsl: args.lsl.clone(),
     };
-    let session = Arc::new(Session::start(&config).map_err(crate::emit::with_flag_names)?);
+    let session = Arc::new(Session::start(&config).map_err(|e| cx.with_flag_names("live", e))?);
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .enable_all()

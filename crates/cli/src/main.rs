@@ -23,7 +23,7 @@ mod varying;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 use context::{CliResult, Context};
 
 /// limpid — limb impedance identification.
@@ -95,7 +95,7 @@ fn command_accepting_negative_numbers(cmd: clap::Command) -> clap::Command {
 /// The parsed command line; a usage error is one line on stderr and exit 2
 /// (clap's own text is several lines with the usage), help and version as clap prints them.
 fn parse_arguments() -> Result<Cli, ExitCode> {
-    use clap::{CommandFactory, FromArgMatches};
+    use clap::FromArgMatches;
     let cmd = command_accepting_negative_numbers(Cli::command());
     let parsed = cmd
         .try_get_matches()
@@ -265,9 +265,10 @@ fn run(cli: Cli) -> CliResult {
             return Err(format!("--map: {why}").into());
         }
     }
+    let cx = Context::new(command_accepting_negative_numbers(Cli::command()));
     let cx = match &cli.map {
-        Some(path) => Context::with_map(path)?,
-        None => Context::default(),
+        Some(path) => cx.with_map(path)?,
+        None => cx,
     };
     match cli.command {
         Command::Inspect(args) => files::run_inspect(args),
@@ -284,6 +285,6 @@ fn run(cli: Cli) -> CliResult {
         Command::Report(args) => report::run(args),
         Command::Reproduce(args) => reproduce::run(args),
         Command::Live(args) => live::run(args, &cx),
-        Command::Rerun(args) => rerun::run(args),
+        Command::Rerun(args) => rerun::run(args, &cx),
     }
 }

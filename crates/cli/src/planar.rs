@@ -43,8 +43,8 @@ pub struct ArmArgs {
     #[arg(long)]
     pub elbow_negative: bool,
     /// Low-pass cut-off in Hz (default: 30, at most 0.4 x sample rate).
-    #[arg(long, value_name = "HZ")]
-    pub cutoff: Option<f64>,
+    #[arg(long = "cutoff", value_name = "HZ")]
+    pub cutoff_hz: Option<f64>,
 }
 
 impl ArmArgs {
@@ -75,7 +75,7 @@ impl ArmArgs {
             link_lengths: pair(&self.link_lengths, "link lengths")?,
             shoulder: pair(&self.shoulder, "shoulder")?,
             elbow_negative: self.elbow_negative,
-            cutoff_hz: self.cutoff,
+            cutoff_hz: self.cutoff_hz,
             inertial_parameters,
         })
     }
@@ -97,14 +97,14 @@ pub struct SweepArgs {
     #[command(flatten)]
     pub arm: ArmArgs,
     /// Shortest observation window (ms).
-    #[arg(long, default_value_t = DEFAULT_SWEEP_MS[0])]
-    pub from: f64,
+    #[arg(long = "from", default_value_t = DEFAULT_SWEEP_MS[0])]
+    pub from_ms: f64,
     /// Longest observation window (ms).
-    #[arg(long, default_value_t = DEFAULT_SWEEP_MS[1])]
-    pub to: f64,
+    #[arg(long = "to", default_value_t = DEFAULT_SWEEP_MS[1])]
+    pub to_ms: f64,
     /// Step (ms).
-    #[arg(long, default_value_t = DEFAULT_SWEEP_MS[2])]
-    pub step: f64,
+    #[arg(long = "step", default_value_t = DEFAULT_SWEEP_MS[2])]
+    pub step_ms: f64,
     /// Print the table as CSV.
     #[arg(long, conflicts_with = "json")]
     pub csv: bool,
@@ -228,9 +228,9 @@ pub fn planar_text(e: &Estimated, _: &Request, paths: &[PathBuf]) -> CliResult {
 pub fn run_sweep(args: SweepArgs, cx: &Context) -> CliResult {
     let request = Request::WindowSweep(SweepRequest {
         arm: args.arm.request()?,
-        from_ms: args.from,
-        to_ms: args.to,
-        step_ms: args.step,
+        from_ms: args.from_ms,
+        to_ms: args.to_ms,
+        step_ms: args.step_ms,
     });
     let csv = args.csv;
     crate::emit::estimate(

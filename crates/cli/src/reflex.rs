@@ -15,27 +15,8 @@ use crate::table::num;
 pub struct ReflexArgs {
     /// Recording under a stochastic position perturbation (joint angle and torque).
     pub recording: PathBuf,
-    /// Position column (rad, or m for end-point data).
-    #[arg(long, default_value_t = ReflexRequest::default().position)]
-    pub position: String,
-    /// Torque column applied to the limb (N m, or N).
-    #[arg(long, default_value_t = ReflexRequest::default().torque)]
-    pub torque: String,
-    /// Decimate to this rate (Hz) before identification.
-    #[arg(long, default_value_t = ReflexRequest::default().rate_hz, value_name = "HZ")]
-    pub rate: f64,
-    /// Intrinsic IRF half-width (s).
-    #[arg(long, default_value_t = ReflexRequest::default().intrinsic_lags_s, value_name = "S")]
-    pub intrinsic_lags: f64,
-    /// Reflex IRF length (s); also left out of every VAF.
-    #[arg(long, default_value_t = ReflexRequest::default().reflex_lags_s, value_name = "S")]
-    pub reflex_lags: f64,
-    /// Largest reflex delay scanned (s).
-    #[arg(long, default_value_t = ReflexRequest::default().max_delay_s, value_name = "S")]
-    pub max_delay: f64,
-    /// Rectify the velocity after anti-aliasing (Kearney et al.'s order) instead of before it (the physical order, default); the difference goes into the standard errors.
-    #[arg(long)]
-    pub rectify_after: bool,
+    #[command(flatten)]
+    pub settings: ReflexRequest,
     #[command(flatten)]
     pub output: crate::emit::OutputArgs,
 }
@@ -43,15 +24,7 @@ pub struct ReflexArgs {
 impl ReflexArgs {
     /// The request these flags make.
     pub fn request(&self) -> Request {
-        Request::Reflex(ReflexRequest {
-            position: self.position.clone(),
-            torque: self.torque.clone(),
-            rate_hz: self.rate,
-            intrinsic_lags_s: self.intrinsic_lags,
-            reflex_lags_s: self.reflex_lags,
-            max_delay_s: self.max_delay,
-            rectify_first: !self.rectify_after,
-        })
+        Request::Reflex(self.settings.clone())
     }
 }
 

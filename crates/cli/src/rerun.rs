@@ -23,7 +23,7 @@ pub struct RerunArgs {
     pub report: Option<PathBuf>,
 }
 
-pub fn run(args: RerunArgs) -> CliResult {
+pub fn run(args: RerunArgs, cx: &Context) -> CliResult {
     if let Some(report) = &args.report {
         limpid_core::files::refuse_overwriting_inputs(
             &[(report, "the report (--report)")],
@@ -57,9 +57,9 @@ pub fn run(args: RerunArgs) -> CliResult {
             } else {
                 p
             };
-            Context::with_map(&p)?
+            cx.with_map(&p)?
         }
-        None => Context::default(),
+        None => cx.with_map_none(),
     };
     let paths: Vec<PathBuf> = run
         .inputs

@@ -24,11 +24,11 @@ pub enum WindowArg {
 #[derive(Args)]
 pub struct WelchArgs {
     /// Samples per segment (= FFT length); default about 4 s, a power of two.
-    #[arg(long, value_name = "N")]
-    pub nfft: Option<usize>,
+    #[arg(long = "nfft", value_name = "N")]
+    pub nperseg: Option<usize>,
     /// Overlapping samples; default half a segment.
-    #[arg(long, value_name = "N")]
-    pub overlap: Option<usize>,
+    #[arg(long = "overlap", value_name = "N")]
+    pub noverlap: Option<usize>,
     /// Segment window.
     #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
     pub window: WindowArg,
@@ -53,8 +53,8 @@ pub struct StochasticArgs {
     pub recordings: Vec<PathBuf>,
     #[command(flatten)]
     pub welch: WelchArgs,
-    #[arg(long, value_delimiter = ',', value_name = "LO,HI", help = band_help())]
-    pub band: Option<Vec<f64>>,
+    #[arg(long = "band", value_delimiter = ',', value_name = "LO,HI", help = band_help())]
+    pub band_hz: Option<Vec<f64>>,
     /// Truth or expected model (JSON with inertia, damping, stiffness): prints phi_T and phi_ij (eq. 15-16).
     #[arg(long, value_name = "FILE")]
     pub expected: Option<PathBuf>,
@@ -91,8 +91,8 @@ pub struct SpectraArgs {
     /// window or leakage, the response at the excited lines with standard errors from the
     /// period-to-period scatter, and the nonlinear distortion at the detection lines. A `period`
     /// column numbers the periods (-1: transient, left out); without it the first period is left out.
-    #[arg(long, value_name = "S")]
-    pub period: Option<f64>,
+    #[arg(long = "period", value_name = "S")]
+    pub period_s: Option<f64>,
     #[command(flatten)]
     pub output: crate::emit::OutputArgs,
 }
@@ -106,13 +106,13 @@ fn band_help() -> String {
 impl StochasticArgs {
     /// The request these flags make.
     pub fn request(&self) -> CliResult<Request> {
-        let band = self.band.as_deref().unwrap_or(&DEFAULT_BAND_HZ);
+        let band = self.band_hz.as_deref().unwrap_or(&DEFAULT_BAND_HZ);
         let band_hz = <[f64; 2]>::try_from(band).map_err(|_| {
             limpid_core::Error::invalid("band", "expected two frequencies LO,HI in Hz")
         })?;
         Ok(Request::Stochastic(StochasticRequest {
-            nperseg: self.welch.nfft,
-            noverlap: self.welch.overlap,
+            nperseg: self.welch.nperseg,
+            noverlap: self.welch.noverlap,
             window: self.welch.window(),
             band_hz,
             shoulder: crate::estimate::shoulder_numbers(self.shoulder.as_deref())?,
@@ -230,10 +230,10 @@ impl SpectraArgs {
         Request::Spectra(SpectraRequest {
             inputs: self.inputs.clone(),
             outputs: self.outputs.clone(),
-            nperseg: self.welch.nfft,
-            noverlap: self.welch.overlap,
+            nperseg: self.welch.nperseg,
+            noverlap: self.welch.noverlap,
             window: self.welch.window(),
-            period_s: self.period,
+            period_s: self.period_s,
         })
     }
 }

@@ -16,39 +16,8 @@ use crate::context::{CliResult, Context};
 pub struct VaryingArgs {
     /// Recording: repetitions of a task with a `trial` column (--schedule time), or a record with the schedule column.
     pub recording: PathBuf,
-    /// `time` (ensemble over the trials) or the column the impedance varies with (e.g. sv, level, q1).
-    #[arg(long, default_value_t = VaryingRequest::default().schedule, value_name = "time|COLUMN")]
-    pub schedule: String,
-    /// Zero-phase low-pass before differentiation (Hz) [default: 30, or 0.4 x the rate].
-    #[arg(long, value_name = "HZ")]
-    pub cutoff: Option<f64>,
-    /// Ensemble: the window pooled around each instant (ms), the time resolution.
-    #[arg(long, default_value_t = VaryingRequest::default().window_ms, value_name = "MS")]
-    pub window_ms: f64,
-    /// Ensemble: grid step (ms) [default: half the window].
-    #[arg(long = "step", value_name = "MS")]
-    pub step_ms: Option<f64>,
-    /// Ensemble: fewest repetitions for an identifiable instant.
-    #[arg(long, default_value_t = VaryingRequest::default().min_repetitions, value_name = "N")]
-    pub min_repetitions: usize,
-    /// Parameter-varying: points on the schedule's grid.
-    #[arg(long, default_value_t = VaryingRequest::default().grid_points, value_name = "N")]
-    pub grid: usize,
-    /// Parameter-varying: Chebyshev order of every parameter [default: chosen by 10-fold blocked cross-validation, 0-6].
-    #[arg(long, value_name = "P")]
-    pub order: Option<usize>,
-    /// Parameter-varying: the operating point is what varies slower than this (Hz).
-    #[arg(long, default_value_t = VaryingRequest::default().slow_hz, value_name = "HZ")]
-    pub slow: f64,
-    /// Parameter-varying: decimate to about this rate (Hz) after filtering.
-    #[arg(long, default_value_t = VaryingRequest::default().rate_hz, value_name = "HZ")]
-    pub rate: f64,
-    /// Parameter-varying: add a stretch-reflex pathway (rectified velocity, delay, low-pass) whose gain varies with the schedule.
-    #[arg(long)]
-    pub reflex: bool,
-    /// Largest reflex delay scanned (s).
-    #[arg(long, default_value_t = VaryingRequest::default().max_delay_s, value_name = "S")]
-    pub max_delay: f64,
+    #[command(flatten)]
+    pub settings: VaryingRequest,
     #[command(flatten)]
     pub output: crate::emit::OutputArgs,
 }
@@ -56,19 +25,7 @@ pub struct VaryingArgs {
 impl VaryingArgs {
     /// The request these flags make.
     pub fn request(&self) -> Request {
-        Request::Varying(VaryingRequest {
-            schedule: self.schedule.clone(),
-            cutoff_hz: self.cutoff,
-            window_ms: self.window_ms,
-            step_ms: self.step_ms,
-            min_repetitions: self.min_repetitions,
-            grid_points: self.grid,
-            basis_order: self.order,
-            slow_hz: self.slow,
-            rate_hz: self.rate,
-            reflex: self.reflex,
-            max_delay_s: self.max_delay,
-        })
+        Request::Varying(self.settings.clone())
     }
 }
 

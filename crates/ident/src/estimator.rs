@@ -7,14 +7,12 @@
 //! | [`LinearParams`] | [`Prepared`] windows | [`LinearEstimate`] (seed 000 eq. (3)-(8)) |
 //! | [`PlanarParams`] | [`PlanarData`] trials | [`PlanarEstimate`] (seed 003) |
 //! | [`StochasticParams`] | a [`Recording`] with `u*` inputs | [`StochasticEstimate`] (seed 004) |
-//! | [`ReflexParams`] | a [`Recording`] with joint angle and torque | [`ReflexEstimate`] (Kearney et al. 1997) |
 
 use limpid_core::{Error, Recording, Result};
 
 use crate::linear::{fit_linear, LinearEstimate, LinearParams};
 use crate::planar::{estimate_planar, PlanarData, PlanarEstimate};
 use crate::prepare::Prepared;
-use crate::reflex::{estimate_reflex, ReflexEstimate, ReflexParams};
 use crate::stochastic::{estimate_stochastic, StochasticEstimate, StochasticParams};
 
 /// Settings that fit data to a result.
@@ -120,57 +118,6 @@ impl Estimator for StochasticParams {
 
     fn fit_checked(&self, rec: &Recording) -> Result<StochasticEstimate> {
         estimate_stochastic(rec, self)
-    }
-}
-
-impl Estimator for ReflexParams {
-    type Data = Recording;
-    type Fitted = ReflexEstimate;
-
-    fn check(&self) -> Result<()> {
-        positive("decimated rate", self.decimated_rate_hz)?;
-        positive("intrinsic IRF half-width", self.intrinsic_half_width_s)?;
-        positive("reflex IRF length", self.reflex_irf_s)?;
-        positive("largest reflex delay", self.max_delay_s)?;
-        if self.tolerance_vaf.is_nan() || self.tolerance_vaf < 0.0 {
-            return Err(Error::invalid(
-                "VAF tolerance",
-                format!(
-                    "expected a non-negative number of VAF points, found {}",
-                    self.tolerance_vaf
-                ),
-            ));
-        }
-        if self.max_iterations == 0 {
-            return Err(Error::invalid("iterations", "expected at least 1"));
-        }
-        // the intrinsic IRF needs lags on each side of zero: below two per
-        // side its ±half-width would silently become ±1 sample of a slower rate
-        if self.decimated_rate_hz * self.intrinsic_half_width_s < 2.0 {
-            return Err(Error::invalid(
-                "decimated rate",
-                format!(
-                    "at {} Hz the intrinsic IRF (±{} ms) holds fewer than 2 lags each side; use at least {} Hz",
-                    limpid_core::short_number(self.decimated_rate_hz),
-                    limpid_core::short_number(self.intrinsic_half_width_s * 1e3),
-                    limpid_core::short_number((2.0 / self.intrinsic_half_width_s).ceil())
-                ),
-            ));
-        }
-        if self.max_delay_s >= self.reflex_irf_s {
-            return Err(Error::invalid(
-                "largest reflex delay",
-                format!(
-                    "the delay scan ({} s) must be shorter than the reflex IRF ({} s), which is left out of every VAF",
-                    self.max_delay_s, self.reflex_irf_s
-                ),
-            ));
-        }
-        Ok(())
-    }
-
-    fn fit_checked(&self, data: &Recording) -> Result<ReflexEstimate> {
-        estimate_reflex(data, self)
     }
 }
 

@@ -306,7 +306,7 @@ pub(super) fn ensemble(seed: u64) -> std::result::Result<Outcome, String> {
 /// schedule with or without the ramps recorded. Returns the outcome and,
 /// for the reflex claims, (had a reflex, a reflex was detected).
 pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool), String> {
-    use limpid_ident::varying::{estimate_varying, VaryingParams};
+    use limpid_ident::varying::{estimate_varying, VaryingRequest};
     use limpid_lab::varying::{
         simulate_scheduled_ankle, RampAndHold, ScheduledAnkle, ScheduledReflex,
     };
@@ -346,11 +346,13 @@ pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool),
         ..RampAndHold::default()
     };
     let rec = simulate_scheduled_ankle(&subject, &protocol, seed).map_err(|e| e.to_string())?;
-    let params = VaryingParams {
+    let params = VaryingRequest {
         schedule: "sv".into(),
         reflex: true,
-        ..VaryingParams::default()
-    };
+        ..VaryingRequest::default()
+    }
+    .check()
+    .map_err(|e| e.to_string())?;
     let est = estimate_varying(&rec, &params).map_err(|e| e.to_string())?;
     let mut o = Outcome::default();
     let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));

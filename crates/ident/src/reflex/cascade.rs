@@ -36,7 +36,7 @@ pub fn vaf(y: &[f64], yhat: &[f64], skip: usize) -> f64 {
 /// rectified velocity in both orders: `[p.rectify_first's order, the other]`
 /// (the two share every filtered column but the rectified ones).
 pub(crate) fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Result<[Decimated; 2]> {
-    let ratio = ((fs / p.decimated_rate_hz).round() as usize).max(1);
+    let ratio = ((fs / p.rate_hz).round() as usize).max(1);
     let fsd = fs / ratio as f64;
     let velocity = limpid_dsp::central_first(q, 1.0 / fs);
     let acceleration = limpid_dsp::central_second(q, 1.0 / fs);
@@ -185,11 +185,10 @@ pub(crate) fn cascade(
     half: usize,
     n_reflex: usize,
     skip: usize,
-    p: &ReflexParams,
 ) -> Cascade {
     let mut reflex_torque = vec![0.0; torque.len()];
     let mut best: Option<Cascade> = None;
-    for iteration in 1..=p.max_iterations.max(1) {
+    for iteration in 1..=super::MAX_ITERATIONS {
         let target: Vec<f64> = torque
             .iter()
             .zip(&reflex_torque)
@@ -211,7 +210,7 @@ pub(crate) fn cascade(
             .collect();
         let v = vaf(torque, &total, skip);
         let previous = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.vaf_total);
-        let done = v - previous < p.tolerance_vaf;
+        let done = v - previous < super::TOLERANCE_VAF;
         if v >= previous {
             best = Some(Cascade {
                 intrinsic: hi,

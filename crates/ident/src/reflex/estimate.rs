@@ -51,7 +51,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         check_varies(rec, name, raw)?;
     }
     let skip = n_reflex;
-    let cascades = both_polarities(&d, (half, n_reflex, skip), p);
+    let cascades = both_polarities(&d, (half, n_reflex, skip));
     let (best, polarity) = if cascades[0].vaf_total >= cascades[1].vaf_total {
         (0, Polarity::Positive)
     } else {
@@ -86,7 +86,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         vaf_parametric: param.total_vaf,
         vaf_parametric_intrinsic: vaf(&d.torque, &parametric_intrinsic(&d, &param.intrinsic), skip),
     };
-    let cross_validated_vaf = cross_validated_vaf(&d, best, half, n_reflex, p);
+    let cross_validated_vaf = cross_validated_vaf(&d, best, half, n_reflex);
 
     // intrinsic I-B-K from the joint parametric model; for comparison, the
     // fit of the torque the nonparametric reflex leaves, and the reflex-free fit
@@ -203,23 +203,23 @@ fn pathways(
 /// refuse a short recording without naming it.
 fn lengths(rec: &Recording, p: &ReflexParams, samples: usize) -> Result<Lengths> {
     let fs = rec.sample_rate();
-    if p.decimated_rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE) {
+    if p.rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE) {
         return Err(Error::invalid(
             "decimated rate",
             format!(
                 "{} Hz is above the recording's {} Hz ({}); limpid decimates, it does not interpolate",
-                limpid_core::short_number(p.decimated_rate_hz),
+                limpid_core::short_number(p.rate_hz),
                 limpid_core::short_number(fs),
                 rec.path().display()
             ),
         ));
     }
-    let ratio = ((fs / p.decimated_rate_hz).round() as usize).max(1);
+    let ratio = ((fs / p.rate_hz).round() as usize).max(1);
     let fsd = fs / ratio as f64;
     let n = samples.div_ceil(ratio);
     let lag = |s: f64| (s * fsd).round() as usize;
-    let half = lag(p.intrinsic_half_width_s).max(1);
-    let n_reflex = lag(p.reflex_irf_s).max(2);
+    let half = lag(p.intrinsic_lags_s).max(1);
+    let n_reflex = lag(p.reflex_lags_s).max(2);
     let needed = 5 * n_reflex.max(2 * half + 1);
     if n < needed {
         return Err(Error::TooFewSamples {
@@ -330,13 +330,7 @@ fn add_error_floors(param: &mut Parametric) {
 }
 
 /// The cascade fitted on the first two thirds, its VAF on the last third.
-fn cross_validated_vaf(
-    d: &Decimated,
-    best: usize,
-    half: usize,
-    n_reflex: usize,
-    p: &ReflexParams,
-) -> f64 {
+fn cross_validated_vaf(d: &Decimated, best: usize, half: usize, n_reflex: usize) -> f64 {
     let split = 2 * d.position.len() / 3;
     let cv = cascade(
         &d.position[..split],
@@ -345,7 +339,6 @@ fn cross_validated_vaf(
         half,
         n_reflex,
         n_reflex,
-        p,
     );
     let predicted: Vec<f64> = apply(&cv.intrinsic, -(half as isize), &d.position)
         .iter()
@@ -497,11 +490,7 @@ fn position_and_torque<'r>(rec: &'r Recording, p: &ReflexParams) -> Result<(&'r 
 
 /// The parallel cascade with the reflex answering positive (0) and negative
 /// (1) velocities, in parallel.
-fn both_polarities(
-    d: &Decimated,
-    (half, n_reflex, skip): (usize, usize, usize),
-    p: &ReflexParams,
-) -> Vec<Cascade> {
+fn both_polarities(d: &Decimated, (half, n_reflex, skip): (usize, usize, usize)) -> Vec<Cascade> {
     [0, 1]
         .par_iter()
         .map(|&k| {
@@ -512,7 +501,6 @@ fn both_polarities(
                 half,
                 n_reflex,
                 skip,
-                p,
             )
         })
         .collect()

@@ -51,50 +51,12 @@ use serde::{Deserialize, Serialize};
 mod cascade;
 mod estimate;
 mod parametric;
+mod settings;
 
 pub use cascade::vaf;
 pub use estimate::estimate_reflex;
 pub(crate) use parametric::low_pass;
-
-/// Settings of the parallel-cascade estimator.
-#[derive(Debug, Clone)]
-pub struct ReflexParams {
-    /// Joint angle column (rad), e.g. `q1`; end-point `x` (m) works the same way.
-    pub position: String,
-    /// Torque (N m) or force (N) applied to the limb, e.g. `tau1`.
-    pub torque: String,
-    /// Rate the data are decimated to (Hz).
-    pub decimated_rate_hz: f64,
-    /// Intrinsic IRF spans +- this (s).
-    pub intrinsic_half_width_s: f64,
-    /// Reflex IRF length (s); also the span left out of every VAF.
-    pub reflex_irf_s: f64,
-    /// Largest reflex delay scanned by the parametric fit (s).
-    pub max_delay_s: f64,
-    /// Stop when the total VAF rises by less than this (percentage points).
-    pub tolerance_vaf: f64,
-    /// At most this many alternations.
-    pub max_iterations: usize,
-    /// Rectify the velocity at the recorded rate, before anti-aliasing (the
-    /// physical order, default), instead of after (Kearney et al.'s order).
-    pub rectify_first: bool,
-}
-
-impl Default for ReflexParams {
-    fn default() -> Self {
-        ReflexParams {
-            position: "q1".into(),
-            torque: "tau1".into(),
-            decimated_rate_hz: 100.0,
-            intrinsic_half_width_s: 0.04,
-            reflex_irf_s: 1.0,
-            max_delay_s: 0.15,
-            tolerance_vaf: 0.05,
-            max_iterations: 10,
-            rectify_first: true,
-        }
-    }
-}
+pub use settings::{ReflexParams, ReflexRequest, MAX_ITERATIONS, TOLERANCE_VAF};
 
 /// A discrete impulse response: `torque(t) = sum values[i] * input(t - lags_s[i]) * dt`.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]

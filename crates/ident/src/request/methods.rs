@@ -9,9 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::{DEFAULT_BAND_HZ, DEFAULT_SWEEP_MS, DEFAULT_TOLERANCE};
 use crate::planar::{Arm, PlanarPrepare};
 use crate::prepare::{Derivative, Offsets, PrepareParams, Windowing};
-use crate::reflex::ReflexParams;
 use crate::stochastic::StochasticParams;
-use crate::varying::VaryingParams;
 
 /// Fixed-length lists of numbers read with a message people understand
 /// ("expected 6 numbers, found 5") from any front-end.
@@ -410,123 +408,5 @@ impl SpectraRequest {
     /// The Welch settings for a recording of `n` samples at `fs` Hz (the stochastic request's rule).
     pub fn welch(&self, n: usize, fs: f64) -> Welch {
         welch(self.nperseg, self.noverlap, self.window, n, fs)
-    }
-}
-
-/// Intrinsic and reflex stiffness by the parallel cascade (Kearney et al. 1997).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(default, deny_unknown_fields)]
-pub struct ReflexRequest {
-    /// Position column (rad, or m for end-point data).
-    pub position: String,
-    /// Torque column applied to the limb (N m, or N).
-    pub torque: String,
-    /// Decimate to this rate (Hz) before identification.
-    pub rate_hz: f64,
-    /// Intrinsic IRF half-width (s).
-    pub intrinsic_lags_s: f64,
-    /// Reflex IRF length (s); also left out of every VAF.
-    pub reflex_lags_s: f64,
-    /// Largest reflex delay scanned (s).
-    pub max_delay_s: f64,
-    /// Rectify the velocity before anti-aliasing (the physical order, default) instead of after (Kearney et al.'s order).
-    pub rectify_first: bool,
-}
-
-impl Default for ReflexRequest {
-    fn default() -> Self {
-        let p = ReflexParams::default();
-        ReflexRequest {
-            position: p.position,
-            torque: p.torque,
-            rate_hz: p.decimated_rate_hz,
-            intrinsic_lags_s: p.intrinsic_half_width_s,
-            reflex_lags_s: p.reflex_irf_s,
-            max_delay_s: p.max_delay_s,
-            rectify_first: p.rectify_first,
-        }
-    }
-}
-
-impl ReflexRequest {
-    /// The estimator's settings.
-    pub fn params(&self) -> ReflexParams {
-        ReflexParams {
-            position: self.position.clone(),
-            torque: self.torque.clone(),
-            decimated_rate_hz: self.rate_hz,
-            intrinsic_half_width_s: self.intrinsic_lags_s,
-            reflex_irf_s: self.reflex_lags_s,
-            max_delay_s: self.max_delay_s,
-            rectify_first: self.rectify_first,
-            ..ReflexParams::default()
-        }
-    }
-}
-
-/// Impedance that varies with time (`schedule = "time"`, an ensemble of
-/// repetitions) or with a measured operating point (a column: parameter-varying).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(default, deny_unknown_fields)]
-pub struct VaryingRequest {
-    /// `time` (ensemble over the `trial` repetitions) or the column the impedance varies with.
-    pub schedule: String,
-    /// Zero-phase low-pass before differentiation (Hz); absent: 30 Hz or 0.4 x the rate.
-    pub cutoff_hz: Option<f64>,
-    /// Ensemble: the window pooled around each instant (ms), the time resolution.
-    pub window_ms: f64,
-    /// Ensemble: the grid step (ms); absent: half the window.
-    pub step_ms: Option<f64>,
-    /// Ensemble: fewest repetitions for an identifiable instant.
-    pub min_repetitions: usize,
-    /// Parameter-varying: points on the schedule's grid.
-    pub grid_points: usize,
-    /// Parameter-varying: Chebyshev order of every parameter; absent: chosen by cross-validation.
-    pub basis_order: Option<usize>,
-    /// Parameter-varying: the operating point is what varies slower than this (Hz).
-    pub slow_hz: f64,
-    /// Parameter-varying: decimate to about this rate (Hz) after filtering.
-    pub rate_hz: f64,
-    /// Parameter-varying: add a stretch-reflex pathway whose gain varies with the schedule.
-    pub reflex: bool,
-    /// Largest reflex delay scanned (s).
-    pub max_delay_s: f64,
-}
-
-impl Default for VaryingRequest {
-    fn default() -> Self {
-        let p = VaryingParams::default();
-        VaryingRequest {
-            schedule: p.schedule,
-            cutoff_hz: p.cutoff_hz,
-            window_ms: p.window_s * 1e3,
-            step_ms: p.step_s.map(|s| s * 1e3),
-            min_repetitions: p.min_repetitions,
-            grid_points: p.grid_points,
-            basis_order: p.basis_order,
-            slow_hz: p.slow_hz,
-            rate_hz: p.rate_hz,
-            reflex: p.reflex,
-            max_delay_s: p.max_delay_s,
-        }
-    }
-}
-
-impl VaryingRequest {
-    /// The estimator's settings.
-    pub fn params(&self) -> VaryingParams {
-        VaryingParams {
-            schedule: self.schedule.clone(),
-            cutoff_hz: self.cutoff_hz,
-            window_s: self.window_ms / 1e3,
-            step_s: self.step_ms.map(|ms| ms / 1e3),
-            min_repetitions: self.min_repetitions,
-            grid_points: self.grid_points,
-            basis_order: self.basis_order,
-            slow_hz: self.slow_hz,
-            rate_hz: self.rate_hz,
-            reflex: self.reflex,
-            max_delay_s: self.max_delay_s,
-        }
     }
 }

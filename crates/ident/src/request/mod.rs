@@ -14,14 +14,18 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::estimator::positive;
+use crate::reflex::ReflexParams;
+pub use crate::reflex::ReflexRequest;
 use crate::stochastic::StochasticParams;
+use crate::varying::VaryingParams;
+pub use crate::varying::VaryingRequest;
 
 mod methods;
 mod options;
 
 pub use methods::{
     ArmRequest, Axis, CocontractionRequest, Frame, LinearRequest, PlanarRequest, PrepareRequest,
-    ReflexRequest, SegmentWindow, SpectraRequest, StochasticRequest, SweepRequest, VaryingRequest,
+    SegmentWindow, SpectraRequest, StochasticRequest, SweepRequest,
 };
 pub use options::{boolean_options, deserialize_request, field_names, from_options, nesting};
 
@@ -56,12 +60,44 @@ pub enum Request {
 
 /// A request whose settings were checked; only [`Request::check`] makes one.
 #[derive(Debug, Clone)]
-pub struct Checked(Request);
+pub struct Checked {
+    request: Request,
+    settings: Settings,
+}
+
+/// The settings a checked request runs with: the estimator's checked
+/// settings where the method has them (the request is not checked again),
+/// else the request itself.
+#[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)]
+pub enum Settings {
+    /// `limpid estimate linear`.
+    Linear(LinearRequest),
+    /// `limpid estimate cocontraction`.
+    Cocontraction(CocontractionRequest),
+    /// `limpid estimate planar`.
+    Planar(PlanarRequest),
+    /// `limpid window-sweep`.
+    WindowSweep(SweepRequest),
+    /// `limpid estimate stochastic`.
+    Stochastic(StochasticRequest),
+    /// `limpid estimate reflex`.
+    Reflex(ReflexParams),
+    /// `limpid estimate varying`.
+    Varying(VaryingParams),
+    /// `limpid spectra`.
+    Spectra(SpectraRequest),
+}
 
 impl Checked {
     /// The request as it was checked.
     pub fn request(&self) -> &Request {
-        &self.0
+        &self.request
+    }
+
+    /// The settings it runs with.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
     }
 }
 
@@ -131,10 +167,11 @@ impl Request {
 
     /// Refuse settings that cannot give an honest result, before any data is read.
     pub fn check(self) -> Result<Checked> {
-        match &self {
+        let settings = match &self {
             Request::Linear(r) => {
                 // the posture itself is checked where it is used, with reasons
                 check_prepare(&r.prepare)?;
+                Settings::Linear(r.clone())
             }
             Request::Cocontraction(r) => {
                 check_prepare(&r.prepare)?;
@@ -148,6 +185,7 @@ impl Request {
                         ),
                     ));
                 }
+                Settings::Cocontraction(r.clone())
             }
             Request::Planar(r) => {
                 check_arm(&r.arm)?;
@@ -164,27 +202,24 @@ impl Request {
                         ));
                     }
                 }
+                Settings::Planar(r.clone())
             }
             Request::WindowSweep(r) => {
                 check_arm(&r.arm)?;
                 positive("from_ms", r.from_ms)?;
                 positive("to_ms", r.to_ms)?;
                 positive("step_ms", r.step_ms)?;
+                Settings::WindowSweep(r.clone())
             }
             Request::Stochastic(r) => {
                 crate::Estimator::check(&StochasticParams {
                     welch: None,
                     band_hz: (r.band_hz[0], r.band_hz[1]),
                 })?;
+                Settings::Stochastic(r.clone())
             }
-            Request::Reflex(r) => crate::Estimator::check(&r.params())?,
-            Request::Varying(r) => {
-                positive("window_ms", r.window_ms)?;
-                if let Some(ms) = r.step_ms {
-                    positive("step_ms", ms)?;
-                }
-                r.params().check()?
-            }
+            Request::Reflex(r) => Settings::Reflex(r.check()?),
+            Request::Varying(r) => Settings::Varying(r.check()?),
             // the segments are checked against the recording's length when it is read
             Request::Spectra(r) => {
                 crate::spectra::check_columns(&r.inputs, &r.outputs)?;
@@ -197,9 +232,13 @@ impl Request {
                         ));
                     }
                 }
+                Settings::Spectra(r.clone())
             }
-        }
-        Ok(Checked(self))
+        };
+        Ok(Checked {
+            request: self,
+            settings,
+        })
     }
 }
 
@@ -210,7 +249,6 @@ mod tests {
 
     #[test]
     fn defaults_are_the_estimators_defaults() {
-        assert_eq!(ReflexRequest::default().params().decimated_rate_hz, 100.0);
         let p = PrepareRequest::default().params().unwrap();
         assert_eq!(p.filter_order, PrepareParams::default().filter_order);
         assert_eq!(

@@ -6,10 +6,11 @@ use schemars::JsonSchema;
 use serde::Deserialize;
 
 use super::methods::{
-    ArmRequest, LinearRequest, PrepareRequest, ReflexRequest, SpectraRequest, StochasticRequest,
-    VaryingRequest,
+    ArmRequest, LinearRequest, PrepareRequest, SpectraRequest, StochasticRequest,
 };
 use super::Request;
+use crate::reflex::ReflexRequest;
+use crate::varying::VaryingRequest;
 
 /// The names of a request type's fields (its JSON Schema's properties).
 pub fn field_names<T: JsonSchema>() -> Vec<String> {

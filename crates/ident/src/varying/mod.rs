@@ -17,6 +17,9 @@
 
 pub mod ensemble;
 pub mod scheduled;
+mod settings;
+
+pub use settings::{VaryingParams, VaryingRequest};
 
 use limpid_core::criteria::{
     matrix_criteria, matrix_verdict, MatrixKind, MatrixVerdict, VAF_FLOOR_PERCENT,
@@ -25,121 +28,11 @@ use limpid_core::{Error, Matrix, Recording, Result};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::estimator::positive;
-
 /// The schedule name that asks for time-varying (ensemble) identification.
 pub const TIME: &str = "time";
 
-/// Settings of [`estimate_varying`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct VaryingParams {
-    /// `time` (ensemble over the `trial` repetitions) or a column (parameter-varying).
-    pub schedule: String,
-    /// Zero-phase low-pass before differentiation (Hz); `None`: 30 Hz or 0.4 x the rate.
-    pub cutoff_hz: Option<f64>,
-    /// Ensemble: the window pooled around each instant (s) — the time resolution.
-    pub window_s: f64,
-    /// Ensemble: grid step (s); `None`: half the window.
-    pub step_s: Option<f64>,
-    /// Ensemble: fewest repetitions for estimates with standard errors.
-    pub min_repetitions: usize,
-    /// Parameter-varying: points on the schedule's grid.
-    pub grid_points: usize,
-    /// Parameter-varying: Chebyshev order of every parameter; `None`: chosen
-    /// by blocked cross-validation up to [`MAX_BASIS_ORDER`].
-    pub basis_order: Option<usize>,
-    /// Parameter-varying: the operating point is what varies slower than
-    /// this (Hz); regression is on the deviations from it.
-    pub slow_hz: f64,
-    /// Parameter-varying: decimate to about this rate (Hz) after filtering.
-    pub rate_hz: f64,
-    /// Parameter-varying: add a stretch-reflex pathway whose gain varies with σ.
-    pub reflex: bool,
-    /// Largest reflex delay scanned (s).
-    pub max_delay_s: f64,
-}
-
 /// Highest Chebyshev order the cross-validation tries.
 pub const MAX_BASIS_ORDER: usize = 6;
-
-impl Default for VaryingParams {
-    fn default() -> Self {
-        VaryingParams {
-            schedule: TIME.into(),
-            cutoff_hz: None,
-            window_s: 0.03,
-            step_s: None,
-            min_repetitions: 10,
-            grid_points: 21,
-            basis_order: None,
-            slow_hz: 0.5,
-            rate_hz: 200.0,
-            reflex: false,
-            max_delay_s: 0.1,
-        }
-    }
-}
-
-impl VaryingParams {
-    /// Refuse settings that cannot give an honest result.
-    pub fn check(&self) -> Result<()> {
-        if self.schedule.trim().is_empty() {
-            return Err(Error::invalid(
-                "schedule",
-                "expected `time` or a column name",
-            ));
-        }
-        if let Some(c) = self.cutoff_hz {
-            positive("cutoff_hz", c)?;
-        }
-        positive("window_s", self.window_s)?;
-        if let Some(s) = self.step_s {
-            positive("step_s", s)?;
-        }
-        positive("slow_hz", self.slow_hz)?;
-        positive("rate_hz", self.rate_hz)?;
-        positive("max_delay_s", self.max_delay_s)?;
-        if self.max_delay_s > 1.0 {
-            return Err(Error::invalid(
-                "max_delay_s",
-                format!(
-                    "a reflex delay is well under 1 s, found {} s",
-                    limpid_core::significant(self.max_delay_s, 4)
-                ),
-            ));
-        }
-        if self.min_repetitions < 3 {
-            return Err(Error::invalid(
-                "min_repetitions",
-                format!(
-                    "the jackknife needs at least 3, found {}",
-                    self.min_repetitions
-                ),
-            ));
-        }
-        if !(2..=1000).contains(&self.grid_points) {
-            return Err(Error::invalid(
-                "grid_points",
-                format!("expected 2 to 1000, found {}", self.grid_points),
-            ));
-        }
-        if let Some(p) = self.basis_order {
-            if p > MAX_BASIS_ORDER {
-                return Err(Error::invalid(
-                    "basis_order",
-                    format!("expected 0 to {MAX_BASIS_ORDER}, found {p}"),
-                ));
-            }
-        }
-        if self.reflex && self.schedule == TIME {
-            return Err(Error::invalid(
-                "reflex",
-                "the reflex pathway is estimated against a measured schedule (a column), not with --schedule time",
-            ));
-        }
-        Ok(())
-    }
-}
 
 /// How the impedance was made to vary.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
@@ -349,7 +242,6 @@ pub struct VaryingEstimate {
 /// # Ok::<(), limpid_core::Error>(())
 /// ```
 pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<VaryingEstimate> {
-    params.check()?;
     let (coords, forces) = crate::prepare::choose_coordinates(rec)?;
     // the force fitted cannot schedule itself: its perturbation response
     // moves the schedule with it (issue 56: K(tau1) came out "trusted")

@@ -1,7 +1,7 @@
 //! Parallel-cascade estimator (Kearney et al. 1997): ground truth on the
 //! virtual ankle, and the real REKLAB ankle recordings.
 
-use limpid_ident::reflex::{estimate_reflex, Polarity, ReflexParams};
+use limpid_ident::reflex::{estimate_reflex, Polarity, ReflexParams, ReflexRequest};
 use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleSubject};
 
 #[test]
@@ -88,10 +88,12 @@ fn virtual_ankle_reflex_delay_and_gains_are_recovered() {
         // carry the difference to the physical order, so 2 SE still hold K
         let after = estimate_reflex(
             &rec,
-            &ReflexParams {
+            &ReflexRequest {
                 rectify_first: false,
-                ..ReflexParams::default()
-            },
+                ..ReflexRequest::default()
+            }
+            .check()
+            .unwrap(),
         )
         .unwrap();
         let ka = after.intrinsic.stiffness;

@@ -1,6 +1,6 @@
 //! Varying impedance (issue 38) against the virtual lab's truth.
 
-use limpid_ident::varying::{estimate_varying, VaryingEstimate, VaryingParams};
+use limpid_ident::varying::{estimate_varying, VaryingEstimate, VaryingParams, VaryingRequest};
 use limpid_lab::varying::{
     simulate_ensemble, simulate_scheduled_ankle, EnsembleExperiment, EnsembleSubject, RampAndHold,
     ScheduledAnkle,
@@ -145,11 +145,13 @@ fn scheduled_ankle_recovers_stiffness_and_reflex_gain_against_the_operating_angl
     let s = ScheduledAnkle::default();
     let p = RampAndHold::default();
     let rec = simulate_scheduled_ankle(&s, &p, 3).unwrap();
-    let params = VaryingParams {
+    let params = VaryingRequest {
         schedule: "sv".into(),
         reflex: true,
-        ..VaryingParams::default()
-    };
+        ..VaryingRequest::default()
+    }
+    .check()
+    .unwrap();
     let est = estimate_varying(&rec, &params).unwrap();
     let (kok, kcov, n) = within(
         &est,
@@ -202,11 +204,13 @@ fn scheduled_ankle_without_reflex_claims_none() {
         ..RampAndHold::default()
     };
     let rec = simulate_scheduled_ankle(&s, &p, 4).unwrap();
-    let params = VaryingParams {
+    let params = VaryingRequest {
         schedule: "sv".into(),
         reflex: true,
-        ..VaryingParams::default()
-    };
+        ..VaryingRequest::default()
+    }
+    .check()
+    .unwrap();
     let est = estimate_varying(&rec, &params).unwrap();
     assert!(!est.reflex.as_ref().unwrap().detected, "{:?}", est.reflex);
     let (kok, kcov, _) = within(
@@ -248,11 +252,15 @@ fn varying_on_real_ankle_recordings_agrees_with_per_file_fits() {
     }
     let names = ["t", "q1", "tau1", "trial"].map(String::from).to_vec();
     let joined = limpid_core::Recording::new("df3+df2", names, cols, 2).unwrap();
-    let params = |order| VaryingParams {
-        schedule: "q1".into(),
-        basis_order: Some(order),
-        grid_points: 41,
-        ..VaryingParams::default()
+    let params = |order| {
+        VaryingRequest {
+            schedule: "q1".into(),
+            basis_order: Some(order),
+            grid_points: 41,
+            ..VaryingRequest::default()
+        }
+        .check()
+        .unwrap()
     };
     let both = estimate_varying(&joined, &params(1)).unwrap();
     for rec in [&a, &b] {

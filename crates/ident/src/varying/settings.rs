@@ -1,0 +1,196 @@
+//! The settings of `limpid estimate varying`, written once:
+//! [`VaryingRequest`] is what every front-end fills (the CLI's flags are
+//! derived from it, Python's keywords and a rerun's JSON are read into it),
+//! [`VaryingRequest::check`] refuses what cannot give an honest result and
+//! returns [`VaryingParams`], the only settings [`super::estimate_varying`]
+//! accepts, with the durations in seconds computed once.
+
+use std::ops::Deref;
+
+use limpid_core::{Error, Result};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::{MAX_BASIS_ORDER, TIME};
+use crate::estimator::positive;
+
+/// Impedance that varies with time (`schedule = "time"`, an ensemble of
+/// repetitions) or with a measured operating point (a column: parameter-varying).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[serde(default, deny_unknown_fields)]
+pub struct VaryingRequest {
+    /// `time` (ensemble over the `trial` repetitions) or the column the impedance varies with (e.g. sv, level, q1).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = VaryingRequest::default().schedule, value_name = "time|COLUMN"))]
+    pub schedule: String,
+    /// Zero-phase low-pass before differentiation (Hz) [default: 30, or 0.4 x the rate].
+    #[cfg_attr(feature = "clap", arg(long = "cutoff", value_name = "HZ"))]
+    pub cutoff_hz: Option<f64>,
+    /// Ensemble: the window pooled around each instant (ms), the time resolution.
+    #[cfg_attr(feature = "clap", arg(long = "window-ms", default_value_t = VaryingRequest::default().window_ms, value_name = "MS"))]
+    pub window_ms: f64,
+    /// Ensemble: grid step (ms) [default: half the window].
+    #[cfg_attr(feature = "clap", arg(long = "step", value_name = "MS"))]
+    pub step_ms: Option<f64>,
+    /// Ensemble: fewest repetitions for an identifiable instant.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = VaryingRequest::default().min_repetitions, value_name = "N"))]
+    pub min_repetitions: usize,
+    /// Parameter-varying: points on the schedule's grid.
+    #[cfg_attr(feature = "clap", arg(long = "grid", default_value_t = VaryingRequest::default().grid_points, value_name = "N"))]
+    pub grid_points: usize,
+    /// Parameter-varying: Chebyshev order of every parameter [default: chosen by 10-fold blocked cross-validation, 0-6].
+    #[cfg_attr(feature = "clap", arg(long = "order", value_name = "P"))]
+    pub basis_order: Option<usize>,
+    /// Parameter-varying: the operating point is what varies slower than this (Hz); regression is on the deviations from it.
+    #[cfg_attr(feature = "clap", arg(long = "slow", default_value_t = VaryingRequest::default().slow_hz, value_name = "HZ"))]
+    pub slow_hz: f64,
+    /// Parameter-varying: decimate to about this rate (Hz) after filtering.
+    #[cfg_attr(feature = "clap", arg(long = "rate", default_value_t = VaryingRequest::default().rate_hz, value_name = "HZ"))]
+    pub rate_hz: f64,
+    /// Parameter-varying: add a stretch-reflex pathway (rectified velocity, delay, low-pass) whose gain varies with the schedule.
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub reflex: bool,
+    /// Largest reflex delay scanned (s).
+    #[cfg_attr(feature = "clap", arg(long = "max-delay", default_value_t = VaryingRequest::default().max_delay_s, value_name = "S"))]
+    pub max_delay_s: f64,
+}
+
+impl Default for VaryingRequest {
+    fn default() -> Self {
+        VaryingRequest {
+            schedule: TIME.into(),
+            cutoff_hz: None,
+            window_ms: 30.0,
+            step_ms: None,
+            min_repetitions: 10,
+            grid_points: 21,
+            basis_order: None,
+            slow_hz: 0.5,
+            rate_hz: 200.0,
+            reflex: false,
+            max_delay_s: 0.1,
+        }
+    }
+}
+
+/// Checked settings of [`super::estimate_varying`]; only
+/// [`VaryingRequest::check`] makes them. They read as the request they were
+/// checked from, plus its durations in seconds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VaryingParams {
+    request: VaryingRequest,
+    /// Ensemble: the window pooled around each instant (s).
+    pub(crate) window_s: f64,
+    /// Ensemble: grid step (s); `None`: half the window.
+    pub(crate) step_s: Option<f64>,
+}
+
+impl Deref for VaryingParams {
+    type Target = VaryingRequest;
+
+    fn deref(&self) -> &VaryingRequest {
+        &self.request
+    }
+}
+
+impl Default for VaryingParams {
+    /// The defaults, which pass the check (tested).
+    fn default() -> Self {
+        VaryingRequest::default().valid()
+    }
+}
+
+impl VaryingRequest {
+    /// Refuse settings that cannot give an honest result, before any data is read.
+    pub fn check(&self) -> Result<VaryingParams> {
+        if self.schedule.trim().is_empty() {
+            return Err(Error::invalid(
+                "schedule",
+                "expected `time` or a column name",
+            ));
+        }
+        if let Some(c) = self.cutoff_hz {
+            positive("cutoff_hz", c)?;
+        }
+        positive("window_ms", self.window_ms)?;
+        if let Some(s) = self.step_ms {
+            positive("step_ms", s)?;
+        }
+        positive("slow_hz", self.slow_hz)?;
+        positive("rate_hz", self.rate_hz)?;
+        positive("max_delay_s", self.max_delay_s)?;
+        if self.max_delay_s > 1.0 {
+            return Err(Error::invalid(
+                "max_delay_s",
+                format!(
+                    "a reflex delay is well under 1 s, found {} s",
+                    limpid_core::significant(self.max_delay_s, 4)
+                ),
+            ));
+        }
+        if self.min_repetitions < 3 {
+            return Err(Error::invalid(
+                "min_repetitions",
+                format!(
+                    "the jackknife needs at least 3, found {}",
+                    self.min_repetitions
+                ),
+            ));
+        }
+        if !(2..=1000).contains(&self.grid_points) {
+            return Err(Error::invalid(
+                "grid_points",
+                format!("expected 2 to 1000, found {}", self.grid_points),
+            ));
+        }
+        if let Some(p) = self.basis_order {
+            if p > MAX_BASIS_ORDER {
+                return Err(Error::invalid(
+                    "basis_order",
+                    format!("expected 0 to {MAX_BASIS_ORDER}, found {p}"),
+                ));
+            }
+        }
+        if self.reflex && self.schedule == TIME {
+            return Err(Error::invalid(
+                "reflex",
+                "the reflex pathway is estimated against a measured schedule (a column), not with --schedule time",
+            ));
+        }
+        Ok(self.valid())
+    }
+
+    fn valid(&self) -> VaryingParams {
+        VaryingParams {
+            request: self.clone(),
+            window_s: self.window_ms / 1e3,
+            step_s: self.step_ms.map(|ms| ms / 1e3),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_defaults_pass_the_check() {
+        let p = VaryingRequest::default().check().unwrap();
+        assert_eq!(p, VaryingParams::default());
+        assert_eq!(p.window_s, 0.03);
+    }
+
+    #[test]
+    fn the_check_names_the_field() {
+        let r = VaryingRequest {
+            step_ms: Some(-1.0),
+            ..VaryingRequest::default()
+        };
+        assert!(r.check().unwrap_err().to_string().contains("step_ms"));
+        let r = VaryingRequest {
+            reflex: true,
+            ..VaryingRequest::default()
+        };
+        assert!(r.check().unwrap_err().to_string().contains("reflex"));
+    }
+}
