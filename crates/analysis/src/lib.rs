@@ -13,17 +13,13 @@
 
 #![warn(missing_docs)]
 
-pub mod calibrate;
 pub mod cocontraction;
-pub mod demo;
 pub mod emg;
 pub mod linear;
 pub mod markers;
-pub mod reproduce;
 pub mod result;
 pub mod shapes;
 pub mod shoulder;
-pub mod study;
 
 use nalgebra::{DMatrix, Matrix3};
 use schemars::JsonSchema;

@@ -100,7 +100,7 @@ fn window_sweep(w: &limpid_ident::planar::Sweep) -> Result<(), String> {
 }
 
 /// Every level's stiffness and ellipsoid, and every recording's result.
-fn study(st: &crate::study::StudyResult) -> Result<(), String> {
+fn study(st: &crate::result::study::StudyResult) -> Result<(), String> {
     for (i, l) in st.levels.iter().enumerate() {
         let d = l.stiffness.0.nrows();
         square(&format!("levels[{i}].stiffness"), &l.stiffness, d)?;
@@ -115,7 +115,7 @@ fn study(st: &crate::study::StudyResult) -> Result<(), String> {
 }
 
 /// Every point's estimate and its truths.
-fn demo(d: &crate::demo::DemoResult) -> Result<(), String> {
+fn demo(d: &crate::result::demo::DemoResult) -> Result<(), String> {
     for (i, p) in d.points.iter().enumerate() {
         linear(&format!("points[{i}].estimate."), &p.estimate)?;
         let n = p.estimate.stiffness.0.nrows();
@@ -173,7 +173,7 @@ fn varying(v: &limpid_ident::varying::VaryingEstimate) -> Result<(), String> {
 }
 
 /// The window-sweep counts agree.
-fn calibration(c: &crate::calibrate::Calibration) -> Result<(), String> {
+fn calibration(c: &crate::result::calibration::Calibration) -> Result<(), String> {
     sweep_counts("window_sweep", &c.window_sweep)?;
     match &c.window_sweep_varied {
         Some(w) => sweep_counts("window_sweep_varied", w),
@@ -231,7 +231,7 @@ fn spectra(s: &limpid_ident::spectra::SpectraResult) -> Result<(), String> {
 }
 
 /// The counts of a set of window sweeps are parts of their wholes.
-fn sweep_counts(at: &str, w: &crate::calibrate::SweepCalibration) -> Result<(), String> {
+fn sweep_counts(at: &str, w: &crate::result::calibration::SweepCalibration) -> Result<(), String> {
     let without = w.without_reflex();
     for (name, part, whole, of) in [
         ("with_reflex", w.with_reflex, w.sweeps, "sweeps"),
@@ -529,7 +529,7 @@ fn same(name: &str, len: usize, want: usize, of: &str) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calibrate::SweepCalibration;
+    use crate::result::calibration::SweepCalibration;
 
     fn sweeps() -> SweepCalibration {
         SweepCalibration {

@@ -6,15 +6,15 @@
 //! offset, drift and noise (`limpid_lab`). Every start point is estimated
 //! with the linear estimator (seed 000 eq. (3)-(8)) and compared with the
 //! subject's true matrices by the relative Frobenius error
-//! ([`limpid_analysis::demo`] holds the result types).
+//! ([`limpid_analysis::result::demo`] holds the result types).
 
 use limpid_core::{Matrix, Result};
 use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
 use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
 use rayon::prelude::*;
 
-pub use limpid_analysis::demo::*;
 use limpid_analysis::linear::linear_result;
+use limpid_analysis::result::demo::{relative_error_percent, DemoPoint, DemoResult, DemoSubject};
 
 fn run_point(
     p: &Posture,

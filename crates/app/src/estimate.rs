@@ -112,8 +112,8 @@ pub fn with_robot(mut rec: Recording, prepare: &PrepareRequest) -> Result<Record
 
 /// A robot by name (`kuka-lwr4`, `puma3` or a `.urdf` file), its base
 /// placed at X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad) when given.
-pub fn placed_robot(name: &str, base: Option<&[f64]>) -> Result<limpid_lab::robot::Robot> {
-    let robot = limpid_lab::robot::Robot::by_name(name)?;
+pub fn placed_robot(name: &str, base: Option<&[f64]>) -> Result<limpid_robot::Robot> {
+    let robot = limpid_robot::Robot::by_name(name)?;
     match base {
         None => Ok(robot),
         Some(base) => robot.placed_at(base),

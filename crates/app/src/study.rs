@@ -1,7 +1,7 @@
 //! Whole studies (seed 001 Tables 1-5), run: the manifest read, every
 //! recording processed in parallel, the tables written, virtual studies
 //! simulated. The manifest, the outcomes and the tables are
-//! [`limpid_analysis::study`]'s.
+//! [`limpid_analysis::result::study`]'s.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -10,8 +10,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use limpid_analysis::cocontraction::CocontractionResult;
+use limpid_analysis::result::study::{
+    markdown, summarise, Entry, Failure, Manifest, Processed, StudyResult,
+};
 use limpid_analysis::result::Estimate;
-pub use limpid_analysis::study::*;
 use limpid_core::truth::{About, CocontractionTruth, LevelTruth, Truth};
 use limpid_core::{Error, Result};
 use limpid_ident::request::{CocontractionRequest, Request};

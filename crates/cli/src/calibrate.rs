@@ -79,7 +79,7 @@ pub fn run(args: CalibrateArgs) -> CliResult {
 }
 
 /// The text lines of one set of window sweeps.
-fn print_sweeps(title: &str, w: &limpid_app::calibrate::SweepCalibration) {
+fn print_sweeps(title: &str, w: &limpid_analysis::result::calibration::SweepCalibration) {
     println!(
         "\n{title}: {} sweeps ({} with a stretch reflex, {} on end-point data, {} through a cuff, {} refused); {} windows trusted, {} of them beyond K 10 % or D 25 % of the truth; {} windows were within both; sweeps trusting some window: {} of {} without reflex, {} of {} with",
         w.sweeps,

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use limpid_analysis::linear::MatrixKind;
+use limpid_analysis::result::demo::{demo_csv, DemoSubject};
 use limpid_analysis::result::{Document, Estimate};
-use limpid_app::demo::{demo_csv, run_demo, DemoSubject};
+use limpid_app::demo::run_demo;
 use limpid_core::criteria::MatrixVerdict;
 use limpid_core::Matrix;
 use limpid_lab::Profile;
@@ -112,7 +113,7 @@ pub fn run(args: DemoArgs) -> CliResult {
 
 /// The demo's table: per start point the true and estimated diagonals, the
 /// errors where the data identify the matrix, and the worst errors.
-fn print_demo(result: &limpid_analysis::demo::DemoResult) {
+fn print_demo(result: &limpid_analysis::result::demo::DemoResult) {
     println!(
         "limpid demo: Artemiadis et al. (2010) protocol on a virtual subject (Table I, subject 1): 6 start points x {} {} perturbations of {} cm, {} s, {} Hz",
         result.directions,

@@ -5,7 +5,6 @@
 use std::path::{Path, PathBuf};
 
 use limpid_analysis::result::{Document, Run};
-use limpid_app::estimate::Estimated;
 use limpid_ident::request::Request;
 
 use crate::context::{CliResult, Context};
@@ -18,6 +17,8 @@ pub struct Output<'a> {
     pub report: Option<&'a Path>,
     /// Print the request instead of running it.
     pub print_request: bool,
+    /// The text as CSV, where the method has a table (`window-sweep --csv`).
+    pub csv: bool,
 }
 
 /// The flags every estimating command shares: where its result goes.
@@ -41,19 +42,14 @@ impl OutputArgs {
             json: self.json,
             report: self.report.as_deref(),
             print_request: self.print_request,
+            csv: false,
         }
     }
 }
 
-/// Run `request` on the recordings at `paths` and emit the result; `text`
-/// prints it for people.
-pub fn estimate(
-    cx: &Context,
-    request: Request,
-    paths: &[PathBuf],
-    out: Output<'_>,
-    text: impl FnOnce(&Estimated, &Request, &[PathBuf]) -> CliResult,
-) -> CliResult {
+/// Run `request` on the recordings at `paths` and emit the result (as text
+/// for people: [`crate::text::print`]).
+pub fn estimate(cx: &Context, request: Request, paths: &[PathBuf], out: Output<'_>) -> CliResult {
     let request_command = request.command();
     // checked before it is printed too: a request limpid would refuse to run is not printed
     let checked = request
@@ -98,7 +94,7 @@ pub fn estimate(
         println!("{}", json(&estimated.document, checked.request()));
         return Ok(());
     }
-    text(&estimated, checked.request(), paths)
+    crate::text::print(&estimated, checked.request(), paths, out.csv)
 }
 
 /// The JSON text of a result: indented for the matrix methods, one line for

@@ -3,12 +3,13 @@
 use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
-use limpid_analysis::result::Estimate;
-use limpid_app::estimate::Estimated;
 use limpid_ident::request::{
     Axis, CocontractionRequest, Frame, LinearRequest, PrepareRequest, Request,
 };
 use limpid_ident::{Derivative, Offsets, Windowing};
+
+use limpid_analysis::cocontraction::CocontractionResult;
+use limpid_analysis::linear::LinearResult;
 
 use crate::context::{CliResult, Context};
 use crate::table;
@@ -125,7 +126,7 @@ pub struct RobotArgs {
 
 impl RobotArgs {
     /// The robot, placed as `--robot-base` says, if `--robot` is given.
-    pub fn robot(&self) -> CliResult<Option<limpid_lab::robot::Robot>> {
+    pub fn robot(&self) -> CliResult<Option<limpid_robot::Robot>> {
         let Some(name) = &self.robot else {
             return Ok(None);
         };
@@ -274,7 +275,6 @@ pub fn run(method: Method, cx: &Context) -> CliResult {
             args.request()?,
             std::slice::from_ref(&args.recording),
             args.output.output(),
-            linear_text,
         ),
         Method::Planar(args) => crate::planar::run_estimate(args, cx),
         Method::Stochastic(args) => crate::stochastic::run_estimate(args, cx),
@@ -285,24 +285,18 @@ pub fn run(method: Method, cx: &Context) -> CliResult {
             args.request(),
             &[args.recording.clone(), args.mvc.clone()],
             args.output.output(),
-            cocontraction_text,
         ),
     }
 }
 
 /// `limpid estimate cocontraction`'s text.
-pub fn cocontraction_text(e: &Estimated, _: &Request, _: &[PathBuf]) -> CliResult {
-    if let Estimate::Cocontraction(result) = &e.document.estimate {
-        print!("{}", table::cocontraction_text(result));
-    }
+pub fn cocontraction_text(result: &CocontractionResult) -> CliResult {
+    print!("{}", table::cocontraction_text(result));
     Ok(())
 }
 
 /// `limpid estimate linear`'s text: the matrices, the arm, the shoulder.
-pub fn linear_text(e: &Estimated, _: &Request, _: &[PathBuf]) -> CliResult {
-    let Estimate::Linear(result) = &e.document.estimate else {
-        return Ok(());
-    };
+pub fn linear_text(result: &LinearResult) -> CliResult {
     print!("{}", table::linear_text(result));
     if let Some(a) = &result.arm_configuration {
         print!("{}", table::arm_configuration_text(a));

@@ -19,6 +19,7 @@ mod rerun;
 mod stochastic;
 mod study;
 mod table;
+mod text;
 mod varying;
 
 use std::process::ExitCode;
@@ -40,6 +41,9 @@ struct Cli {
     /// Channel map (TOML) for commands that read recordings: which channel of a lab file (XDF, C3D, TDMS, MAT, CSV) is which column, in which unit and sign.
     #[arg(long, global = true, value_name = "MAP.toml")]
     map: Option<std::path::PathBuf>,
+    /// Threads the estimators run on [default: one a core, or RAYON_NUM_THREADS].
+    #[arg(long, global = true, value_name = "N")]
+    threads: Option<std::num::NonZeroUsize>,
 }
 
 #[derive(Subcommand)]
@@ -184,7 +188,7 @@ fn main() -> ExitCode {
             *slot = Some(format!("{message}{place}"));
         }
     }));
-    let result = std::panic::catch_unwind(|| run(cli)).unwrap_or_else(|_| {
+    let result = std::panic::catch_unwind(|| in_thread_pool(cli)).unwrap_or_else(|_| {
         let what = PANIC
             .lock()
             .ok()
@@ -243,6 +247,18 @@ fn stdout_was_closed() -> bool {
             && (out.st_mode & libc::S_IFMT) == libc::S_IFCHR
             && out.st_rdev == null.st_rdev
     }
+}
+
+/// Run the command on a pool of `--threads` threads, else on rayon's global pool.
+fn in_thread_pool(cli: Cli) -> CliResult {
+    let Some(n) = cli.threads else {
+        return run(cli);
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(n.get())
+        .build()
+        .map_err(|e| format!("--threads {n}: cannot start the threads: {e}"))?;
+    pool.install(|| run(cli))
 }
 
 fn run(cli: Cli) -> CliResult {

@@ -4,13 +4,15 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::Args;
-use limpid_analysis::result::Estimate;
 use limpid_app::estimate::Estimated;
 use limpid_core::Matrix;
 use limpid_ident::planar::PlanarEstimate;
 use limpid_ident::request::{ArmRequest, PlanarRequest, Request, SweepRequest, DEFAULT_SWEEP_MS};
 
+use limpid_ident::planar::Sweep;
+
 use crate::context::{CliResult, Context};
+use crate::emit::Output;
 use crate::table::num;
 
 /// Arm geometry and preparation flags shared by both commands.
@@ -210,18 +212,15 @@ pub fn run_estimate(args: PlanarArgs, cx: &Context) -> CliResult {
         request,
         std::slice::from_ref(&args.arm.recording),
         args.output.output(),
-        planar_text,
     )
 }
 
 /// `limpid estimate planar`'s text.
-pub fn planar_text(e: &Estimated, _: &Request, paths: &[PathBuf]) -> CliResult {
-    if let Estimate::Planar(est) = &e.document.estimate {
-        print!(
-            "{}",
-            text(est, &paths[0], e.from_endpoint.unwrap_or_default())
-        );
-    }
+pub fn planar_text(est: &PlanarEstimate, e: &Estimated, paths: &[PathBuf]) -> CliResult {
+    print!(
+        "{}",
+        text(est, &paths[0], e.from_endpoint.unwrap_or_default())
+    );
     Ok(())
 }
 
@@ -232,21 +231,19 @@ pub fn run_sweep(args: SweepArgs, cx: &Context) -> CliResult {
         to_ms: args.to_ms,
         step_ms: args.step_ms,
     });
-    let csv = args.csv;
     crate::emit::estimate(
         cx,
         request,
         std::slice::from_ref(&args.arm.recording),
-        args.output.output(),
-        |e, r, paths| sweep_text(e, r, paths, csv),
+        Output {
+            csv: args.csv,
+            ..args.output.output()
+        },
     )
 }
 
 /// `limpid window-sweep`'s table (CSV with `--csv`).
-pub fn sweep_text(e: &Estimated, _: &Request, paths: &[PathBuf], csv: bool) -> CliResult {
-    let Estimate::WindowSweep(sweep) = &e.document.estimate else {
-        return Ok(());
-    };
+pub fn sweep_text(sweep: &Sweep, e: &Estimated, paths: &[PathBuf], csv: bool) -> CliResult {
     if csv {
         print!("{}", sweep_csv(sweep));
         return Ok(());

@@ -4,9 +4,9 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use limpid_analysis::result::Estimate;
-use limpid_app::estimate::Estimated;
 use limpid_ident::request::{ReflexRequest, Request};
+
+use limpid_ident::reflex::ReflexEstimate;
 
 use crate::context::{CliResult, Context};
 use crate::table::num;
@@ -34,15 +34,11 @@ pub fn run(args: ReflexArgs, cx: &Context) -> CliResult {
         args.request(),
         std::slice::from_ref(&args.recording),
         args.output.output(),
-        reflex_text,
     )
 }
 
 /// `limpid estimate reflex`'s text.
-pub fn reflex_text(estimated: &Estimated, _: &Request, paths: &[PathBuf]) -> CliResult {
-    let Estimate::Reflex(e) = &estimated.document.estimate else {
-        return Ok(());
-    };
+pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
     let (i, r) = (&e.intrinsic, &e.reflex);
     println!("limpid estimate reflex: {}", paths[0].display());
     println!(

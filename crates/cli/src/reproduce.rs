@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use limpid_app::reproduce::{reproduce, text, Seed};
+use limpid_analysis::result::reproduction::{text, Seed};
+use limpid_app::reproduce::reproduce;
 
 use crate::context::CliResult;
 

@@ -6,7 +6,6 @@ use std::path::PathBuf;
 
 use clap::Args;
 use limpid_analysis::result::Document;
-use limpid_ident::request::Request;
 
 use crate::context::{CliResult, Context};
 use crate::emit::Output;
@@ -96,39 +95,7 @@ pub fn run(args: RerunArgs, cx: &Context) -> CliResult {
         json: args.json,
         report: args.report.as_deref(),
         print_request: false,
+        csv: false,
     };
-    match request {
-        Request::Linear(_) => {
-            crate::emit::estimate(&cx, request, &paths, out, crate::estimate::linear_text)
-        }
-        Request::Cocontraction(_) => crate::emit::estimate(
-            &cx,
-            request,
-            &paths,
-            out,
-            crate::estimate::cocontraction_text,
-        ),
-        Request::Planar(_) => {
-            crate::emit::estimate(&cx, request, &paths, out, crate::planar::planar_text)
-        }
-        Request::WindowSweep(_) => crate::emit::estimate(&cx, request, &paths, out, |e, r, p| {
-            crate::planar::sweep_text(e, r, p, false)
-        }),
-        Request::Stochastic(_) => crate::emit::estimate(
-            &cx,
-            request,
-            &paths,
-            out,
-            crate::stochastic::stochastic_text,
-        ),
-        Request::Reflex(_) => {
-            crate::emit::estimate(&cx, request, &paths, out, crate::reflex::reflex_text)
-        }
-        Request::Varying(_) => {
-            crate::emit::estimate(&cx, request, &paths, out, crate::varying::varying_text)
-        }
-        Request::Spectra(_) => {
-            crate::emit::estimate(&cx, request, &paths, out, crate::stochastic::spectra_text)
-        }
-    }
+    crate::emit::estimate(&cx, request, &paths, out)
 }

@@ -4,11 +4,13 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use limpid_analysis::result::Estimate;
 use limpid_app::estimate::Estimated;
 use limpid_ident::request::{
     Request, SegmentWindow, SpectraRequest, StochasticRequest, DEFAULT_BAND_HZ,
 };
+
+use limpid_ident::spectra::SpectraResult;
+use limpid_ident::stochastic::StochasticEstimate;
 
 use crate::context::{CliResult, Context};
 use crate::table::num;
@@ -125,21 +127,16 @@ impl StochasticArgs {
 }
 
 pub fn run_estimate(args: StochasticArgs, cx: &Context) -> CliResult {
-    crate::emit::estimate(
-        cx,
-        args.request()?,
-        &args.recordings,
-        args.output.output(),
-        stochastic_text,
-    )
+    crate::emit::estimate(cx, args.request()?, &args.recordings, args.output.output())
 }
 
 /// `limpid estimate stochastic`'s text.
-pub fn stochastic_text(e: &Estimated, request: &Request, paths: &[PathBuf]) -> CliResult {
-    let (Estimate::Stochastic(est), Request::Stochastic(r)) = (&e.document.estimate, request)
-    else {
-        return Ok(());
-    };
+pub fn stochastic_text(
+    est: &StochasticEstimate,
+    e: &Estimated,
+    r: &StochasticRequest,
+    paths: &[PathBuf],
+) -> CliResult {
     let band = (r.band_hz[0], r.band_hz[1]);
     let posture = &e.posture;
     let c = &est.criteria;
@@ -244,20 +241,17 @@ pub fn run_spectra(args: SpectraArgs, cx: &Context) -> CliResult {
         args.request(),
         std::slice::from_ref(&args.recording),
         args.output.output(),
-        spectra_text,
     )
 }
 
 /// `limpid spectra`'s text: CSV.
-pub fn spectra_text(e: &Estimated, _: &Request, _: &[PathBuf]) -> CliResult {
-    if let Estimate::Spectra(r) = &e.document.estimate {
-        match &r.periodic {
-            Some(p) => {
-                print!("{}", periodic_csv(p));
-                eprintln!("limpid: {}", periodic_summary(p));
-            }
-            None => print!("{}", spectra_csv(r)),
+pub fn spectra_text(r: &SpectraResult) -> CliResult {
+    match &r.periodic {
+        Some(p) => {
+            print!("{}", periodic_csv(p));
+            eprintln!("limpid: {}", periodic_summary(p));
         }
+        None => print!("{}", spectra_csv(r)),
     }
     Ok(())
 }

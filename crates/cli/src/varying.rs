@@ -4,11 +4,11 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use limpid_analysis::result::Estimate;
-use limpid_app::estimate::Estimated;
 use limpid_core::{significant, with_standard_error};
 use limpid_ident::request::{Request, VaryingRequest};
 use limpid_ident::varying::VaryingMethod;
+
+use limpid_ident::varying::VaryingEstimate;
 
 use crate::context::{CliResult, Context};
 
@@ -35,15 +35,11 @@ pub fn run(args: VaryingArgs, cx: &Context) -> CliResult {
         args.request(),
         std::slice::from_ref(&args.recording),
         args.output.output(),
-        varying_text,
     )
 }
 
 /// `limpid estimate varying`'s text: one line per grid point, diagonal elements.
-pub fn varying_text(estimated: &Estimated, _: &Request, paths: &[PathBuf]) -> CliResult {
-    let Estimate::Varying(e) = &estimated.document.estimate else {
-        return Ok(());
-    };
+pub fn varying_text(e: &VaryingEstimate, paths: &[PathBuf]) -> CliResult {
     println!("limpid estimate varying: {}", paths[0].display());
     match e.method {
         VaryingMethod::Ensemble => println!(

@@ -11,8 +11,8 @@ use nalgebra::Matrix3;
 
 use crate::design::{PlanarDesign, StochasticDesign};
 use crate::protocol::Protocol;
-use crate::robot::Robot;
 use limpid_core::{Error, Recording, Result};
+use limpid_robot::Robot;
 
 /// The robot of a centre-out protocol, placed where the protocol says.
 pub fn placed_robot(name: &str, p: &Protocol) -> Result<Robot> {

@@ -21,7 +21,7 @@ use limpid_core::frame::GravityCompensation;
 use limpid_core::{Error, PayloadCalibration, Recording, Result};
 use nalgebra::{Matrix3, Vector3};
 
-use crate::robot::Robot;
+use limpid_robot::Robot;
 
 /// Where the load and biases come from.
 pub enum LoadSource<'a> {

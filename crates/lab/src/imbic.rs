@@ -34,8 +34,8 @@ use rand::{rngs::StdRng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
 use crate::rig::{stochastic_input, RigExperiment};
-use crate::robot::{Convention, Joint, Robot};
 use limpid_core::{Error, Recording, Result};
+use limpid_robot::{Convention, Joint, Robot};
 
 /// The robot's dynamics and friction.
 #[derive(Debug, Clone)]

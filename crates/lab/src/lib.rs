@@ -1,7 +1,7 @@
 //! limpid-lab: the virtual lab — perturbation profiles, target directions,
 //! virtual subjects with known impedance, and simulated recordings.
 //!
-//! Protocols of all four seeds ([`design`]), robots ([`robot`], [`imbic`]),
+//! Protocols of all four seeds ([`design`]), robots (`limpid_robot`, [`imbic`]),
 //! subjects and rigs ([`subject`], [`planar`], [`rig`], [`cocontraction`]),
 //! and [`session`], which runs a protocol on a subject; each module names the
 //! seed and equation it implements.
@@ -20,7 +20,6 @@ pub mod profile;
 pub mod protocol;
 pub mod realistic;
 pub mod rig;
-pub mod robot;
 pub mod session;
 pub mod simulate;
 pub mod sphere;

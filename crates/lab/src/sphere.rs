@@ -81,6 +81,28 @@ mod tests {
     use super::*;
 
     #[test]
+    fn placed_robot_reaches_the_seed000_start_points() {
+        // seed 000's six start points on a 20 cm sphere, reached with the home
+        // orientation held, once the base is placed behind the workspace facing it
+        // (the artemiadis-3d preset's placement); unplaced, the far points are out of reach
+        let robot = limpid_robot::Robot::kuka_lwr4()
+            .placed([-0.05, 0.0, -0.6], [0.0, 0.0, std::f64::consts::PI]);
+        let orientation: nalgebra::Matrix3<f64> =
+            robot.fk(&robot.home()).fixed_view::<3, 3>(0, 0).into();
+        // start points and the farthest and nearest targets 3 cm around them
+        let centre = Vector3::new(0.40, 0.0, 0.0);
+        let mut points = octahedron_points(centre, 0.20);
+        points.extend(octahedron_points(centre, 0.23));
+        points.extend(octahedron_points(centre, 0.17));
+        for p in points {
+            let q = robot.reach(&p, &orientation, &robot.home()).unwrap();
+            let got = robot.fk(&q);
+            assert!((got.fixed_view::<3, 1>(0, 3) - p).norm() < 1e-9);
+            assert!(robot.check_joint_trajectory(&[q], 1.0).is_ok());
+        }
+    }
+
+    #[test]
     fn directions_are_unit_and_near_tammes_optimum() {
         // best known minimum separations (Tammes problem): N = 16: 52.24 deg, N = 18: 49.56 deg
         for (n, best) in [(16, 52.24), (18, 49.56)] {

@@ -31,27 +31,50 @@ fn err(e: Error) -> PyErr {
 /// parallel call waits for ever (Python's default start method on Linux
 /// before 3.14). So the package keeps its own pool, tagged with the process
 /// id; a forked child finds a foreign tag and builds a fresh pool.
+/// The pool's size is the caller's ([`set_threads`]); 0: one thread a core.
 fn pool() -> Result<std::sync::Arc<rayon::ThreadPool>, rayon::ThreadPoolBuildError> {
-    use std::sync::{Arc, Mutex};
-    static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
+    use std::sync::Arc;
     let pid = std::process::id();
+    let threads = THREADS.load(std::sync::atomic::Ordering::Relaxed);
     let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((owner, pool)) = slot.as_ref() {
-        if *owner == pid {
+    if let Some((owner, size, pool)) = slot.as_ref() {
+        if *owner == pid && *size == threads {
             return Ok(pool.clone());
         }
     }
-    if let Some((_, inherited)) = slot.take() {
+    match slot.take() {
+        // this process's pool of another size: its threads end when it is dropped
+        Some((owner, _, ours)) if owner == pid => drop(ours),
         // its threads exist only in the parent: never signal or wait for them
-        std::mem::forget(inherited);
+        Some((_, _, inherited)) => std::mem::forget(inherited),
+        None => {}
     }
     let fresh = Arc::new(
         rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
             .thread_name(|i| format!("limpid-{i}"))
             .build()?,
     );
-    *slot = Some((pid, fresh.clone()));
+    *slot = Some((pid, threads, fresh.clone()));
     Ok(fresh)
+}
+
+/// The pool, the process that made it and the size it was asked for.
+type Pool = Option<(u32, usize, std::sync::Arc<rayon::ThreadPool>)>;
+static POOL: std::sync::Mutex<Pool> = std::sync::Mutex::new(None);
+static THREADS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// How many threads limpid's estimators use (None: one a core).
+#[pyfunction]
+#[pyo3(signature = (threads=None))]
+fn set_threads(threads: Option<usize>) -> PyResult<()> {
+    if threads == Some(0) {
+        return Err(PyValueError::new_err(
+            "invalid threads: expected at least 1, or None for one a core",
+        ));
+    }
+    THREADS.store(threads.unwrap_or(0), std::sync::atomic::Ordering::Relaxed);
+    Ok(())
 }
 
 /// Run `work` without the GIL on this process's thread pool (on the calling
@@ -340,7 +363,8 @@ fn study_entries(manifest: std::path::PathBuf) -> PyResult<String> {
 /// JSON text of `{"Ok": processed}` or `{"Err": failure}`.
 #[pyfunction]
 fn study_process(py: Python<'_>, entry: &str, request: &Bound<'_, PyDict>) -> PyResult<String> {
-    use limpid_app::study::{process_entry, Entry};
+    use limpid_analysis::result::study::Entry;
+    use limpid_app::study::process_entry;
     use limpid_ident::request::Request;
     let e: Entry = serde_json::from_str(entry).map_err(value_err)?;
     let Request::Cocontraction(request) = build_request("cocontraction", request)? else {
@@ -360,7 +384,7 @@ fn study_combine(
     outcomes: Vec<String>,
     out: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
-    use limpid_app::study::{Failure, Processed};
+    use limpid_analysis::result::study::{Failure, Processed};
     let parsed = outcomes
         .iter()
         .enumerate()
@@ -373,7 +397,9 @@ fn study_combine(
             })
         })
         .collect::<PyResult<Vec<_>>>()?;
-    let result = detached(py, || limpid_app::study::summarise(name, parsed));
+    let result = detached(py, || {
+        limpid_analysis::result::study::summarise(name, parsed)
+    });
     finish_study(result, out)
 }
 
@@ -392,7 +418,7 @@ fn study_run(
 }
 
 fn finish_study(
-    result: limpid_app::study::StudyResult,
+    result: limpid_analysis::result::study::StudyResult,
     out: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
     if result.recordings.is_empty() {
@@ -607,5 +633,6 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(report, m)?)?;
     m.add_function(wrap_pyfunction!(with_standard_error, m)?)?;
     m.add_function(wrap_pyfunction!(matrix_element_unit, m)?)?;
+    m.add_function(wrap_pyfunction!(set_threads, m)?)?;
     Ok(())
 }

@@ -145,3 +145,20 @@ def test_plot_periodic_draws_the_lines_and_each_pair(tmp_path):
     assert "nonlinear" in fig.axes[0].get_title()
     with pytest.raises(ValueError, match="no periodic analysis"):
         plot.periodic(limpid.spectra({"t": t, "drive": u, "response": y}, ["drive"], ["response"]))
+
+
+def test_the_thread_count_is_the_callers_and_changes_no_number():
+    """Issue 57: a caller-chosen pool size; the estimate is the same on one
+    thread as on one a core (the reductions are ordered)."""
+    default = limpid.estimate_linear(CUBIC)
+    try:
+        limpid.set_threads(1)
+        one = limpid.estimate_linear(CUBIC)
+    finally:
+        limpid.set_threads(None)
+    np.testing.assert_allclose(one.stiffness, default.stiffness, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(one.damping, default.damping, rtol=1e-12, atol=0)
+    with pytest.raises(ValueError, match="at least 1"):
+        limpid.set_threads(0)
+    with pytest.raises(TypeError, match="an int or None"):
+        limpid.set_threads(2.5)

@@ -1,7 +1,7 @@
 //! The page of `limpid reproduce --report`: one table per paper (the paper's
 //! number, limpid's, the difference, the note) and the findings.
 
-use limpid_analysis::reproduce::{citation, sig, Reproduction};
+use limpid_analysis::result::reproduction::{citation, sig, Reproduction};
 
 use crate::svg::escape;
 use crate::STYLE;

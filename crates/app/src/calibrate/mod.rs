@@ -36,7 +36,9 @@ use methods::{
 use subjects::{planar_subject, random_matrix2, random_matrix3, sensors, uniform, PLANAR_NOISE};
 use sweeps::{sweep, sweep_session, SweepOutcome};
 
-pub use limpid_analysis::calibrate::*;
+use limpid_analysis::result::calibration::{
+    Calibration, MatrixCalibration, MethodCalibration, ReflexClaims, SweepCalibration,
+};
 
 /// What one recording contributes: per matrix kind (stiffness, damping), the
 /// |z| of every element, the relative error and the verdict.

@@ -29,7 +29,7 @@ use nalgebra::Matrix3;
 use limpid_core::criteria::MatrixVerdict;
 use limpid_core::{Matrix, Result};
 
-pub use limpid_analysis::reproduce::*;
+use limpid_analysis::result::reproduction::{sig, Finding, Reproduction, Row, Seed};
 use limpid_analysis::{antisymmetric, symmetric};
 
 mod seed000;

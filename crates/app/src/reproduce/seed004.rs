@@ -107,7 +107,10 @@ pub(super) fn seed004(seed: u64) -> Result<Reproduction> {
     let profiles = case_rows(&mut out, &results, band);
     let get = |n: &str, c: &str| results.iter().find(|r| r.0 == n && r.1 == c);
     let k_error = |r: &CaseResult| {
-        limpid_analysis::demo::relative_error_percent(&r.3.stiffness, &Matrix::from(r.2.stiffness))
+        limpid_analysis::result::demo::relative_error_percent(
+            &r.3.stiffness,
+            &Matrix::from(r.2.stiffness),
+        )
     };
     for (name, ctrl) in [
         ("sa1", "IMBIC"),

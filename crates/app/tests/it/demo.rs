@@ -6,7 +6,7 @@ use limpid_analysis::result::{Document, Estimate, SCHEMA_VERSION};
 fn a_demo_document_round_trips_and_names_its_kind_and_schema() {
     let demo = limpid_app::demo::run_demo(
         limpid_lab::Profile::Cubic,
-        limpid_analysis::demo::DemoSubject::Realistic,
+        limpid_analysis::result::demo::DemoSubject::Realistic,
         3,
         &|| (),
     )

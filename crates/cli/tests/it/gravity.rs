@@ -123,7 +123,7 @@ fn the_sensor_orientation_comes_from_the_placed_robot() {
     let fs = 500.0;
     let n = 3000;
     let base = [0.1, -0.2, 0.3, 0.2, 0.0, 0.7];
-    let robot = limpid_lab::robot::Robot::by_name("puma3")
+    let robot = limpid_robot::Robot::by_name("puma3")
         .unwrap()
         .placed([base[0], base[1], base[2]], [base[3], base[4], base[5]]);
     let bias = Vector3::new(-0.4, 0.9, 1.6);

@@ -21,5 +21,6 @@ mod report_documents;
 mod reproduce;
 mod rerun;
 mod robustness;
+mod settings;
 mod stochastic;
 mod varying;

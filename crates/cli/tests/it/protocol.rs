@@ -72,7 +72,7 @@ fn over_fast_protocol_is_refused() {
 
 #[test]
 fn export_for_the_kuka_and_estimate_from_robot_joint_angles() {
-    use limpid_lab::robot::Robot;
+    use limpid_robot::Robot;
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("p.toml");
     assert_eq!(
@@ -191,7 +191,7 @@ fn urdf_robot_exports_the_same_joint_trajectory_as_its_dh_model() {
         p.to_str().unwrap(),
     ]);
     let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../lab/tests/fixtures/kuka_lwr4.urdf");
+        .join("../robot/tests/fixtures/kuka_lwr4.urdf");
     let mut recs = Vec::new();
     for (name, robot) in [
         ("dh.parquet", "kuka-lwr4"),

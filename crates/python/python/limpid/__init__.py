@@ -64,6 +64,7 @@ __all__ = [
     "simulate",
     "gravity_compensate",
     "report",
+    "set_threads",
 ]
 
 RecordingLike = Union[str, "os.PathLike[str]", Mapping[str, Any], Any]
@@ -788,6 +789,15 @@ def _value_errors(f: Any) -> Any:
             raise ValueError(f"{f.__name__}: {e}") from e
 
     return checked
+
+
+def set_threads(threads: Optional[int] = None) -> None:
+    """How many threads limpid's estimators run on: ``threads`` (at least 1),
+    or ``None`` for one a core (the default). Takes effect at the next call;
+    a forked worker (multiprocessing, dask) starts its own pool of this size."""
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int)):
+        raise TypeError(f"set_threads: expected an int or None, found {type(threads).__name__}")
+    _limpid.set_threads(threads)
 
 
 def __dir__() -> List[str]:

@@ -4,10 +4,10 @@ use crate::{Section, Table};
 
 pub(crate) fn calibration_section(
     name: &str,
-    v: &limpid_analysis::calibrate::Calibration,
+    v: &limpid_analysis::result::calibration::Calibration,
 ) -> Section {
     let (header, rows) = v.table();
-    let sweep = |title: &str, w: &limpid_analysis::calibrate::SweepCalibration| {
+    let sweep = |title: &str, w: &limpid_analysis::result::calibration::SweepCalibration| {
         format!(
             "; window sweep, {title}: {} of {} trusted windows beyond K 10 % / D 25 % of the truth, a change (reflex?) claimed in {} of {} sweeps without a reflex and {} of {} with one ({} and {} of them on cuffed arms, {} and {} put down to soft tissue in series)",
             w.trusted_but_wrong,

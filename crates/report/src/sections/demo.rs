@@ -2,8 +2,8 @@
 
 use super::linear::{ellipsoids_of, fit_figures, linear_tables};
 use crate::{fmt, group_warnings, Section, Table};
-use limpid_analysis::demo::DemoResult;
 use limpid_analysis::linear::{MatrixKind, MatrixVerdict};
+use limpid_analysis::result::demo::DemoResult;
 
 pub(crate) fn demo_section(name: &str, v: &DemoResult) -> Section {
     let mut section = Section {

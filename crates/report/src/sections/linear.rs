@@ -4,8 +4,8 @@ use crate::{
     fmt, force_unit, kind_unit, matrix_table, messages, Chart, EllipsoidView, Figure, Section,
     Series, Stroke, Table, PALETTE,
 };
-use limpid_analysis::demo::DemoPoint;
 use limpid_analysis::linear::{LinearResult, MatrixKind};
+use limpid_analysis::result::demo::DemoPoint;
 use limpid_analysis::Ellipsoid;
 
 pub(crate) fn ellipsoids_of(

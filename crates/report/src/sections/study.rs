@@ -5,7 +5,7 @@ use crate::{
     ellipse, fmt, mean_sd, Chart, Drawing, EllipsoidView, Figure, Section, Series, Stroke, Table,
     PALETTE,
 };
-use limpid_analysis::study::StudyResult;
+use limpid_analysis::result::study::StudyResult;
 
 /// A whole seed 001 study: means over subjects per configuration and level,
 /// ellipsoid rotation from level 0 to 1, and the stiffness against the index.

@@ -11,13 +11,18 @@
 //! CLI tables, Python), not a blank table; a consumer of the JSON checks
 //! `schema` and gets a one-line error for a result it does not know.
 
+pub mod calibration;
+pub mod demo;
+pub mod reproduction;
+pub mod study;
+
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::cocontraction::CocontractionResult;
-use crate::demo::DemoResult;
 use crate::linear::LinearResult;
-use crate::study::StudyResult;
+use crate::result::demo::DemoResult;
+use crate::result::study::StudyResult;
 use limpid_ident::planar::{PlanarEstimate, Sweep};
 use limpid_ident::reflex::ReflexEstimate;
 use limpid_ident::spectra::SpectraResult;
@@ -53,7 +58,7 @@ pub enum Estimate {
     /// The virtual seed 000 study of `limpid demo`, with its truth.
     Demo(DemoResult),
     /// Coverage and verdict calibration over virtual subjects (`limpid calibrate`).
-    Calibration(crate::calibrate::Calibration),
+    Calibration(crate::result::calibration::Calibration),
 }
 
 impl Estimate {

@@ -234,7 +234,7 @@ fn check_joint_numbers(j: &urdf_rs::Joint) -> std::result::Result<(), String> {
 pub(super) mod tests {
     use super::*;
 
-    pub(in crate::robot) fn fixture(name: &str) -> std::path::PathBuf {
+    pub(crate) fn fixture(name: &str) -> std::path::PathBuf {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("tests/fixtures")
             .join(name)

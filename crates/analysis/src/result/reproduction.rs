@@ -173,7 +173,7 @@ pub fn text(r: &Reproduction) -> String {
                 "diff"
             );
         }
-        let f = |v: Option<f64>| v.map_or("-".to_string(), crate::reproduce::sig);
+        let f = |v: Option<f64>| v.map_or("-".to_string(), crate::result::reproduction::sig);
         let diff = x.difference();
         let _ = write!(
             s,
