@@ -94,7 +94,7 @@ pub fn run(args: DemoArgs) -> CliResult {
         .report
         .clone()
         .unwrap_or_else(|| args.out.join("report.html"));
-    outputs.add(&report_path, crate::report::page(&doc).as_bytes())?;
+    outputs.add(&report_path, limpid_report::page(&doc).as_bytes())?;
     outputs.commit()?;
     eprintln!("report: {}", report_path.display());
 

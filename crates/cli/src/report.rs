@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use limpid_analysis::result::{Document, Estimate, Run};
+use limpid_analysis::result::Document;
 
 use crate::context::CliResult;
 
@@ -21,50 +21,9 @@ pub struct ReportArgs {
     pub figures: Option<PathBuf>,
 }
 
-/// The report of named results (with how each was made, where known).
-fn build_named(inputs: &[(String, Estimate)], runs: &[Option<&Run>]) -> limpid_report::Report {
-    let mut report = limpid_report::build(inputs);
-    for (section, run) in report.sections.iter_mut().zip(runs) {
-        if let Some(run) = run {
-            section.tables.insert(0, limpid_report::run_table(run));
-        }
-    }
-    report
-}
-
-/// A section's name: the recording's file name where the result names it,
-/// else the first input the command read, else its place in the list.
-fn section_name(doc: &Document, i: usize) -> String {
-    let file_name = |p: &Path| {
-        p.file_name().map_or_else(
-            || p.display().to_string(),
-            |f| f.to_string_lossy().into_owned(),
-        )
-    };
-    let source = doc
-        .run
-        .as_ref()
-        .and_then(|r| r.inputs.first())
-        .map(|f| PathBuf::from(&f.path));
-    doc.estimate
-        .recording()
-        .map(|r| file_name(Path::new(r)))
-        .or_else(|| source.as_deref().map(file_name))
-        .unwrap_or_else(|| format!("result {}", i + 1))
-}
-
-/// The HTML page of `--report FILE` of the other commands: the result of this run.
-pub fn page(doc: &Document) -> String {
-    let report = build_named(
-        &[(section_name(doc, 0), doc.estimate.clone())],
-        &[doc.run.as_ref()],
-    );
-    limpid_report::to_html(&report)
-}
-
 /// `--report FILE` of the other commands: the result of this run.
 pub fn write(doc: &Document, path: &Path) -> CliResult {
-    limpid_core::files::write_file(path, page(doc).as_bytes())?;
+    limpid_core::files::write_file(path, limpid_report::page(doc).as_bytes())?;
     eprintln!("report: {}", path.display());
     Ok(())
 }
@@ -86,12 +45,8 @@ pub fn run(args: ReportArgs) -> CliResult {
         let name = p.display().to_string();
         docs.push((name.clone(), Document::from_json(&name, &text)?));
     }
-    let inputs: Vec<(String, Estimate)> = docs
-        .iter()
-        .map(|(name, d)| (name.clone(), d.estimate.clone()))
-        .collect();
-    let runs: Vec<Option<&Run>> = docs.iter().map(|(_, d)| d.run.as_ref()).collect();
-    let report = build_named(&inputs, &runs);
+    let named: Vec<(String, &Document)> = docs.iter().map(|(n, d)| (n.clone(), d)).collect();
+    let report = limpid_report::build_documents(&named);
     // the page and its figures are one set: a figures folder that cannot be
     // made or written leaves no page behind either (issue 36)
     let mut outputs = limpid_core::files::OutputSet::new();

@@ -98,7 +98,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 &args.manifest
             ]));
             if let Some(path) = &args.report {
-                outputs.add(path, crate::report::page(&doc).as_bytes())?;
+                outputs.add(path, limpid_report::page(&doc).as_bytes())?;
             }
             outputs.commit()?;
             if let Some(path) = &args.report {

@@ -575,26 +575,15 @@ fn gravity_compensate<'py>(
 /// Write the HTML report of JSON results (texts) to `path`.
 #[pyfunction]
 fn report(py: Python<'_>, results: Vec<String>, path: std::path::PathBuf) -> PyResult<()> {
-    let inputs: Vec<(String, Estimate)> = results
+    let docs: Vec<Document> = results
         .iter()
         .enumerate()
-        .map(|(i, t)| {
-            let doc = Document::from_json(&format!("result {}", i + 1), t).map_err(value_err)?;
-            let name = doc.estimate.recording().map_or_else(
-                || format!("result {}", i + 1),
-                |r| {
-                    Path::new(r)
-                        .file_name()
-                        .map_or_else(|| r.to_string(), |f| f.to_string_lossy().into_owned())
-                },
-            );
-            Ok((name, doc.estimate))
-        })
+        .map(|(i, t)| Document::from_json(&format!("result {}", i + 1), t).map_err(value_err))
         .collect::<PyResult<_>>()?;
     // the recordings the results were made from are inputs: never replaced (issue 56)
-    let recordings: Vec<std::path::PathBuf> = inputs
+    let recordings: Vec<std::path::PathBuf> = docs
         .iter()
-        .filter_map(|(_, e)| e.recording().map(std::path::PathBuf::from))
+        .filter_map(|d| d.estimate.recording().map(std::path::PathBuf::from))
         .collect();
     let named: Vec<(&Path, &str)> = recordings
         .iter()
@@ -602,7 +591,12 @@ fn report(py: Python<'_>, results: Vec<String>, path: std::path::PathBuf) -> PyR
         .collect();
     limpid_core::files::refuse_overwriting_inputs(&[(&path, "the report path")], &named)
         .map_err(value_err)?;
-    let r = detached(py, || limpid_report::build(&inputs));
+    let named: Vec<(String, &Document)> = docs
+        .iter()
+        .enumerate()
+        .map(|(i, d)| (limpid_report::section_name(d, i), d))
+        .collect();
+    let r = detached(py, || limpid_report::build_documents(&named));
     limpid_core::files::write_file(&path, limpid_report::to_html(&r).as_bytes())
         .map_err(|e| PyOSError::new_err(e.to_string()))
 }

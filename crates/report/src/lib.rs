@@ -199,6 +199,50 @@ pub fn matrix_element_unit(kind: MatrixKind, row: &str, column: &str) -> String 
 /// How a result was made (limpid_analysis::result::Run) as the first table
 /// of its section: the files read (size, modification time), the command
 /// line, limpid's version and when.
+/// The report of result documents, each section under its name, with how
+/// each was made (the run table) first where the document says.
+pub fn build_documents(docs: &[(String, &limpid_analysis::result::Document)]) -> Report {
+    let inputs: Vec<(String, Estimate)> = docs
+        .iter()
+        .map(|(name, d)| (name.clone(), d.estimate.clone()))
+        .collect();
+    let mut report = build(&inputs);
+    for (section, (_, doc)) in report.sections.iter_mut().zip(docs) {
+        if let Some(run) = &doc.run {
+            section.tables.insert(0, run_table(run));
+        }
+    }
+    report
+}
+
+/// The name of the `i`-th result's section: the file name of the recording
+/// the result names, else of the first input its run read, else `result i+1`.
+pub fn section_name(doc: &limpid_analysis::result::Document, i: usize) -> String {
+    use std::path::Path;
+    let file_name = |p: &Path| {
+        p.file_name().map_or_else(
+            || p.display().to_string(),
+            |f| f.to_string_lossy().into_owned(),
+        )
+    };
+    let source = doc
+        .run
+        .as_ref()
+        .and_then(|r| r.inputs.first())
+        .map(|f| std::path::PathBuf::from(&f.path));
+    doc.estimate
+        .recording()
+        .map(|r| file_name(Path::new(r)))
+        .or_else(|| source.as_deref().map(file_name))
+        .unwrap_or_else(|| format!("result {}", i + 1))
+}
+
+/// The HTML page of one result document (a command's `--report FILE`).
+pub fn page(doc: &limpid_analysis::result::Document) -> String {
+    to_html(&build_documents(&[(section_name(doc, 0), doc)]))
+}
+
+/// The table of how a result was made: version, command line, inputs.
 pub fn run_table(run: &limpid_analysis::result::Run) -> Table {
     let mut rows: Vec<Vec<String>> = run
         .inputs

@@ -215,7 +215,8 @@ fn bad_parameters() {
     assert_eq!(out.code, 2);
     assert_eq!(
         out.stderr.trim_end(),
-        "limpid: invalid transform: the rotation part must be orthonormal with determinant +1"
+        // the field is named by its flag, as every setting's (issue 57)
+        "limpid: invalid --transform: the rotation part must be orthonormal with determinant +1"
     );
 }
 
