@@ -4,10 +4,9 @@ use limpid_analysis::linear::{linear_result, shoulder_impedance, ShoulderPosture
 use limpid_analysis::result::{Document, Estimate};
 use limpid_core::{Error, Recording, Result};
 use limpid_ident::request::{
-    Axis, Checked, CocontractionRequest, LinearRequest, PlanarRequest, PrepareRequest, Request,
-    Settings, StochasticRequest, SweepRequest,
+    Axis, Checked, CocontractionRequest, LinearRequest, PlanarRequest, PrepareRequest, Settings,
+    StochasticRequest, SweepRequest,
 };
-use limpid_ident::Estimator;
 
 /// A result and what its text rendering needs beyond it.
 #[derive(Debug)]
@@ -33,20 +32,11 @@ impl Estimated {
     }
 }
 
-/// How many recordings a method reads: (fewest, most).
-pub fn inputs_expected(request: &Request) -> (usize, usize) {
-    match request {
-        Request::Cocontraction(_) => (2, 2),
-        Request::Stochastic(_) => (1, usize::MAX),
-        _ => (1, 1),
-    }
-}
-
 /// Run a checked request on its recordings: the recording (co-contraction:
 /// then the MVC recording; stochastic: one or more, pooled).
 pub fn run(checked: &Checked, mut recordings: Vec<Recording>) -> Result<Estimated> {
     let request = checked.request();
-    let (least, most) = inputs_expected(request);
+    let (least, most) = request.inputs_expected();
     if recordings.len() < least || recordings.len() > most {
         return Err(Error::invalid(
             "recordings",
@@ -222,7 +212,6 @@ fn stochastic(r: &StochasticRequest, recordings: Vec<Recording>) -> Result<Estim
     };
     let first = &recordings[0];
     let params = r.params(first.len(), first.sample_rate());
-    params.check()?;
     let mut est = limpid_ident::stochastic::estimate_stochastic_pooled(&recordings, &params)?;
     if let Some(path) = &r.expected {
         let path = std::path::Path::new(path);

@@ -100,10 +100,9 @@ pub fn estimate(cx: &Context, request: Request, paths: &[PathBuf], out: Output<'
 /// The JSON text of a result: indented for the matrix methods, one line for
 /// the long frequency and IRF arrays.
 fn json(doc: &Document, request: &Request) -> String {
-    match request {
-        Request::Stochastic(_) | Request::Reflex(_) | Request::Varying(_) | Request::Spectra(_) => {
-            doc.to_json()
-        }
-        _ => doc.to_json_pretty(),
+    if request.long_arrays() {
+        doc.to_json()
+    } else {
+        doc.to_json_pretty()
     }
 }

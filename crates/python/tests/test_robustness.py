@@ -160,5 +160,5 @@ def test_the_thread_count_is_the_callers_and_changes_no_number():
     np.testing.assert_allclose(one.damping, default.damping, rtol=1e-12, atol=0)
     with pytest.raises(ValueError, match="at least 1"):
         limpid.set_threads(0)
-    with pytest.raises(TypeError, match="an int or None"):
+    with pytest.raises(ValueError, match="set_threads: expected an int or None"):
         limpid.set_threads(2.5)

@@ -12,6 +12,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::estimator::positive;
+use crate::request::{boolean_names, Method};
 
 /// Stop alternating when the total VAF rises by less than this (percentage points).
 pub const TOLERANCE_VAF: f64 = 0.05;
@@ -139,6 +140,20 @@ impl ReflexRequest {
         Ok(ReflexParams {
             request: self.clone(),
         })
+    }
+}
+
+impl Method for ReflexRequest {
+    const COMMAND: &'static str = "estimate reflex";
+    const LONG_ARRAYS: bool = true;
+    type Valid = ReflexParams;
+
+    fn check_settings(&self) -> Result<ReflexParams> {
+        self.check()
+    }
+
+    fn booleans() -> Vec<String> {
+        boolean_names::<ReflexRequest>()
     }
 }
 

@@ -6,7 +6,9 @@ use limpid_dsp::spectral::{Welch, Window};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::{DEFAULT_BAND_HZ, DEFAULT_SWEEP_MS, DEFAULT_TOLERANCE};
+use super::options::{boolean_names, field_names};
+use super::{Method, DEFAULT_BAND_HZ, DEFAULT_SWEEP_MS, DEFAULT_TOLERANCE};
+use crate::estimator::positive;
 use crate::planar::{Arm, PlanarPrepare};
 use crate::prepare::{Derivative, Offsets, PrepareParams, Windowing};
 use crate::stochastic::StochasticParams;
@@ -408,5 +410,203 @@ impl SpectraRequest {
     /// The Welch settings for a recording of `n` samples at `fs` Hz (the stochastic request's rule).
     pub fn welch(&self, n: usize, fs: f64) -> Welch {
         welch(self.nperseg, self.noverlap, self.window, n, fs)
+    }
+}
+
+/// The checks shared by the methods that prepare a recording or a planar arm.
+fn finite(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            name,
+            format!(
+                "expected a finite number, found {}",
+                limpid_core::error::Num(v)
+            ),
+        ))
+    }
+}
+
+pub(crate) fn check_prepare(p: &PrepareRequest) -> Result<()> {
+    if !(1..=20).contains(&p.order) {
+        return Err(Error::invalid(
+            "order",
+            format!(
+                "expected a Butterworth order from 1 to 20, found {}",
+                p.order
+            ),
+        ));
+    }
+    if let Some(c) = p.cutoff_hz {
+        positive("cutoff_hz", c)?;
+    }
+    if let Some(l) = p.level {
+        finite("level", l)?;
+    }
+    p.params().map(|_| ())
+}
+
+pub(crate) fn check_arm(a: &ArmRequest) -> Result<()> {
+    for v in a.link_lengths {
+        positive("link_lengths", v)?;
+    }
+    for v in a.shoulder {
+        finite("shoulder", v)?;
+    }
+    if let Some(c) = a.cutoff_hz {
+        positive("cutoff_hz", c)?;
+    }
+    if let Some(xi) = a.inertial_parameters {
+        crate::planar::check_inertial_parameters(&xi)?;
+    }
+    Ok(())
+}
+
+impl Method for LinearRequest {
+    const COMMAND: &'static str = "estimate linear";
+    type Valid = LinearRequest;
+
+    fn check_settings(&self) -> Result<Self> {
+        // the posture itself is checked where it is used, with reasons
+        check_prepare(&self.prepare)?;
+        Ok(self.clone())
+    }
+
+    fn nesting() -> Option<(&'static str, Vec<String>)> {
+        Some(("prepare", field_names::<PrepareRequest>()))
+    }
+
+    fn booleans() -> Vec<String> {
+        [
+            boolean_names::<LinearRequest>(),
+            boolean_names::<PrepareRequest>(),
+        ]
+        .concat()
+    }
+}
+
+impl Method for CocontractionRequest {
+    const COMMAND: &'static str = "estimate cocontraction";
+    const INPUTS: (usize, usize) = (2, 2);
+    type Valid = CocontractionRequest;
+
+    fn check_settings(&self) -> Result<Self> {
+        check_prepare(&self.prepare)?;
+        // finite too: an infinite band counts every sample "on target" (issue 56)
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(Error::invalid(
+                "tolerance",
+                format!(
+                    "expected a positive, finite band half-width, found {}",
+                    limpid_core::error::Num(self.tolerance)
+                ),
+            ));
+        }
+        Ok(self.clone())
+    }
+
+    fn nesting() -> Option<(&'static str, Vec<String>)> {
+        Some(("prepare", field_names::<PrepareRequest>()))
+    }
+
+    fn booleans() -> Vec<String> {
+        boolean_names::<PrepareRequest>()
+    }
+}
+
+impl Method for PlanarRequest {
+    const COMMAND: &'static str = "estimate planar";
+    type Valid = PlanarRequest;
+
+    fn check_settings(&self) -> Result<Self> {
+        check_arm(&self.arm)?;
+        if let Some(ms) = self.window_ms {
+            // finite too: an infinite window was stored as null and
+            // refused by `rerun` (issue 56)
+            if !(ms.is_finite() && ms > 0.0) {
+                return Err(Error::invalid(
+                    "window_ms",
+                    format!(
+                        "expected a positive, finite duration in ms, found {}",
+                        limpid_core::error::Num(ms)
+                    ),
+                ));
+            }
+        }
+        Ok(self.clone())
+    }
+
+    fn nesting() -> Option<(&'static str, Vec<String>)> {
+        Some(("arm", field_names::<ArmRequest>()))
+    }
+
+    fn booleans() -> Vec<String> {
+        boolean_names::<ArmRequest>()
+    }
+}
+
+impl Method for SweepRequest {
+    const COMMAND: &'static str = "window-sweep";
+    type Valid = SweepRequest;
+
+    fn check_settings(&self) -> Result<Self> {
+        check_arm(&self.arm)?;
+        positive("from_ms", self.from_ms)?;
+        positive("to_ms", self.to_ms)?;
+        positive("step_ms", self.step_ms)?;
+        Ok(self.clone())
+    }
+
+    fn nesting() -> Option<(&'static str, Vec<String>)> {
+        Some(("arm", field_names::<ArmRequest>()))
+    }
+
+    fn booleans() -> Vec<String> {
+        boolean_names::<ArmRequest>()
+    }
+}
+
+impl Method for StochasticRequest {
+    const COMMAND: &'static str = "estimate stochastic";
+    const INPUTS: (usize, usize) = (1, usize::MAX);
+    const LONG_ARRAYS: bool = true;
+    type Valid = StochasticRequest;
+
+    fn check_settings(&self) -> Result<Self> {
+        crate::Estimator::check(&StochasticParams {
+            welch: None,
+            band_hz: (self.band_hz[0], self.band_hz[1]),
+        })?;
+        Ok(self.clone())
+    }
+
+    fn booleans() -> Vec<String> {
+        boolean_names::<StochasticRequest>()
+    }
+}
+
+impl Method for SpectraRequest {
+    const COMMAND: &'static str = "spectra";
+    const LONG_ARRAYS: bool = true;
+    type Valid = SpectraRequest;
+
+    // the segments are checked against the recording's length when it is read
+    fn check_settings(&self) -> Result<Self> {
+        crate::spectra::check_columns(&self.inputs, &self.outputs)?;
+        if let Some(p) = self.period_s {
+            positive("period_s", p)?;
+            if self.nperseg.is_some() || self.noverlap.is_some() {
+                return Err(Error::invalid(
+                    "period_s",
+                    "a periodic analysis takes whole periods as its segments: leave out the segment length and overlap",
+                ));
+            }
+        }
+        Ok(self.clone())
+    }
+
+    fn booleans() -> Vec<String> {
+        boolean_names::<SpectraRequest>()
     }
 }

@@ -5,6 +5,11 @@
 //! into the validated settings the estimators run on ([`Checked`]), the only
 //! way `limpid-app` runs one.
 //!
+//! The methods are listed once, in the `methods!` invocation below: the
+//! `Request` and `Settings` enums, the names, the commands and the option
+//! parsing are made from that list, and each method says the rest of itself
+//! by implementing [`Method`] beside its request type.
+//!
 //! Requests are plain data: file paths are named, not read (reading,
 //! robot kinematics and the shoulder's joint space happen in `limpid-app`).
 //! Field names carry their units (`_hz`, `_ms`, `_s`, `_m`, `_deg`).
@@ -13,11 +18,7 @@ use limpid_core::{Error, Result};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::estimator::positive;
-use crate::reflex::ReflexParams;
 pub use crate::reflex::ReflexRequest;
-use crate::stochastic::StochasticParams;
-use crate::varying::VaryingParams;
 pub use crate::varying::VaryingRequest;
 
 mod methods;
@@ -27,7 +28,7 @@ pub use methods::{
     ArmRequest, Axis, CocontractionRequest, Frame, LinearRequest, PlanarRequest, PrepareRequest,
     SegmentWindow, SpectraRequest, StochasticRequest, SweepRequest,
 };
-pub use options::{boolean_options, deserialize_request, field_names, from_options, nesting};
+pub use options::{boolean_names, boolean_options, field_names, from_options, nesting};
 
 /// Band of the stochastic parametric fit and accuracy measures (Hz).
 pub const DEFAULT_BAND_HZ: [f64; 2] = [0.5, 10.0];
@@ -36,26 +37,147 @@ pub const DEFAULT_SWEEP_MS: [f64; 3] = [50.0, 400.0, 10.0];
 /// Half-width of the band around a co-contraction target counted as "on target".
 pub const DEFAULT_TOLERANCE: f64 = 0.1;
 
-/// One estimate, as any front-end asks for it; `method` names the estimator.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(tag = "method", rename_all = "snake_case")]
-pub enum Request {
+/// What a method's request says of itself. Each method implements it beside
+/// its request type; `methods!` below is the one list of methods, and the
+/// enums, names, commands, option parsing and checks are made from it.
+pub trait Method: Clone + std::fmt::Debug {
+    /// The command a user types.
+    const COMMAND: &'static str;
+    /// How many recordings it reads: (fewest, most).
+    const INPUTS: (usize, usize) = (1, 1);
+    /// Its result holds long frequency or lag arrays: written as one JSON
+    /// line, not indented.
+    const LONG_ARRAYS: bool = false;
+    /// The settings it runs with once checked.
+    type Valid: Clone + std::fmt::Debug;
+    /// Refuse settings that cannot give an honest result, before any data is
+    /// read; the estimator takes what this returns and checks nothing again.
+    fn check_settings(&self) -> Result<Self::Valid>;
+    /// Where its flat options nest (`prepare`, `arm`) and that part's field names.
+    fn nesting() -> Option<(&'static str, Vec<String>)> {
+        None
+    }
+    /// Its yes/no options, top level and nested.
+    fn booleans() -> Vec<String>;
+}
+
+/// The one list of methods: each entry is a variant, its request type and
+/// its name (`method` in JSON).
+macro_rules! methods {
+    ($($(#[$doc:meta])* $variant:ident($request:ty) = $name:literal,)*) => {
+        /// One estimate, as any front-end asks for it; `method` names the estimator.
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+        #[serde(tag = "method")]
+        pub enum Request {
+            $($(#[$doc])* #[serde(rename = $name)] $variant($request),)*
+        }
+
+        /// The settings a checked request runs with (its method's
+        /// [`Method::Valid`]): the request is not checked again.
+        #[derive(Debug, Clone)]
+        #[allow(clippy::large_enum_variant)]
+        pub enum Settings {
+            $($(#[$doc])* $variant(<$request as Method>::Valid),)*
+        }
+
+        /// Every method's name, in the list's order.
+        pub const METHODS: &[&str] = &[$($name),*];
+
+        impl Request {
+            /// The method's name (`method` in JSON).
+            pub fn method(&self) -> &'static str {
+                match self {
+                    $(Request::$variant(_) => $name,)*
+                }
+            }
+
+            /// The command a user types for this method.
+            pub fn command(&self) -> &'static str {
+                match self {
+                    $(Request::$variant(_) => <$request as Method>::COMMAND,)*
+                }
+            }
+
+            /// How many recordings the method reads: (fewest, most).
+            pub fn inputs_expected(&self) -> (usize, usize) {
+                match self {
+                    $(Request::$variant(_) => <$request as Method>::INPUTS,)*
+                }
+            }
+
+            /// The result holds long arrays (one JSON line, not indented).
+            pub fn long_arrays(&self) -> bool {
+                match self {
+                    $(Request::$variant(_) => <$request as Method>::LONG_ARRAYS,)*
+                }
+            }
+
+            /// Refuse settings that cannot give an honest result, before any data is read.
+            pub fn check(self) -> Result<Checked> {
+                let settings = match &self {
+                    $(Request::$variant(r) => Settings::$variant(r.check_settings()?),)*
+                };
+                Ok(Checked {
+                    request: self,
+                    settings,
+                })
+            }
+        }
+
+        /// A method's nesting and yes/no options by its name.
+        fn method_options(method: &str) -> Result<(Option<(&'static str, Vec<String>)>, Vec<String>)> {
+            $(if method == $name {
+                return Ok((<$request as Method>::nesting(), <$request as Method>::booleans()));
+            })*
+            Err(not_a_method(method))
+        }
+
+        /// A method's request from any serde deserializer of its (nested)
+        /// options: each method's own type (not the tagged enum, which would
+        /// buffer the value and lose the path of an error); an error names
+        /// the option (`band_hz`, `order`, ...).
+        pub fn deserialize_request<'de, D: serde::Deserializer<'de>>(
+            method: &str,
+            options: D,
+        ) -> Result<Request> {
+            $(if method == $name {
+                return Ok(Request::$variant(options::typed(options)?));
+            })*
+            Err(not_a_method(method))
+        }
+    };
+}
+
+fn not_a_method(method: &str) -> Error {
+    Error::invalid(
+        "method",
+        format!(
+            "{method:?} is not a method: {}",
+            match METHODS.split_last() {
+                Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+                None => String::new(),
+            }
+        ),
+    )
+}
+
+methods! {
     /// `limpid estimate linear`.
-    Linear(LinearRequest),
+    Linear(LinearRequest) = "linear",
     /// `limpid estimate cocontraction` (inputs: the recording, then the MVC recording).
-    Cocontraction(CocontractionRequest),
+    Cocontraction(CocontractionRequest) = "cocontraction",
     /// `limpid estimate planar`.
-    Planar(PlanarRequest),
+    Planar(PlanarRequest) = "planar",
     /// `limpid window-sweep`.
-    WindowSweep(SweepRequest),
+    WindowSweep(SweepRequest) = "window_sweep",
     /// `limpid estimate stochastic` (inputs: one or more recordings, pooled).
-    Stochastic(StochasticRequest),
+    Stochastic(StochasticRequest) = "stochastic",
     /// `limpid estimate reflex`.
-    Reflex(ReflexRequest),
+    Reflex(ReflexRequest) = "reflex",
     /// `limpid estimate varying`.
-    Varying(VaryingRequest),
+    Varying(VaryingRequest) = "varying",
     /// `limpid spectra`.
-    Spectra(SpectraRequest),
+    Spectra(SpectraRequest) = "spectra",
 }
 
 /// A request whose settings were checked; only [`Request::check`] makes one.
@@ -63,30 +185,6 @@ pub enum Request {
 pub struct Checked {
     request: Request,
     settings: Settings,
-}
-
-/// The settings a checked request runs with: the estimator's checked
-/// settings where the method has them (the request is not checked again),
-/// else the request itself.
-#[derive(Debug, Clone)]
-#[allow(clippy::large_enum_variant)]
-pub enum Settings {
-    /// `limpid estimate linear`.
-    Linear(LinearRequest),
-    /// `limpid estimate cocontraction`.
-    Cocontraction(CocontractionRequest),
-    /// `limpid estimate planar`.
-    Planar(PlanarRequest),
-    /// `limpid window-sweep`.
-    WindowSweep(SweepRequest),
-    /// `limpid estimate stochastic`.
-    Stochastic(StochasticRequest),
-    /// `limpid estimate reflex`.
-    Reflex(ReflexParams),
-    /// `limpid estimate varying`.
-    Varying(VaryingParams),
-    /// `limpid spectra`.
-    Spectra(SpectraRequest),
 }
 
 impl Checked {
@@ -101,151 +199,11 @@ impl Checked {
     }
 }
 
-fn finite(name: &str, v: f64) -> Result<()> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            name,
-            format!(
-                "expected a finite number, found {}",
-                limpid_core::error::Num(v)
-            ),
-        ))
-    }
-}
-
-fn check_prepare(p: &PrepareRequest) -> Result<()> {
-    if !(1..=20).contains(&p.order) {
-        return Err(Error::invalid(
-            "order",
-            format!(
-                "expected a Butterworth order from 1 to 20, found {}",
-                p.order
-            ),
-        ));
-    }
-    if let Some(c) = p.cutoff_hz {
-        positive("cutoff_hz", c)?;
-    }
-    if let Some(l) = p.level {
-        finite("level", l)?;
-    }
-    p.params().map(|_| ())
-}
-
-fn check_arm(a: &ArmRequest) -> Result<()> {
-    for v in a.link_lengths {
-        positive("link_lengths", v)?;
-    }
-    for v in a.shoulder {
-        finite("shoulder", v)?;
-    }
-    if let Some(c) = a.cutoff_hz {
-        positive("cutoff_hz", c)?;
-    }
-    if let Some(xi) = a.inertial_parameters {
-        crate::planar::check_inertial_parameters(&xi)?;
-    }
-    Ok(())
-}
-
-impl Request {
-    /// The command a user types for this method.
-    pub fn command(&self) -> &'static str {
-        match self {
-            Request::Linear(_) => "estimate linear",
-            Request::Cocontraction(_) => "estimate cocontraction",
-            Request::Planar(_) => "estimate planar",
-            Request::WindowSweep(_) => "window-sweep",
-            Request::Stochastic(_) => "estimate stochastic",
-            Request::Reflex(_) => "estimate reflex",
-            Request::Varying(_) => "estimate varying",
-            Request::Spectra(_) => "spectra",
-        }
-    }
-
-    /// Refuse settings that cannot give an honest result, before any data is read.
-    pub fn check(self) -> Result<Checked> {
-        let settings = match &self {
-            Request::Linear(r) => {
-                // the posture itself is checked where it is used, with reasons
-                check_prepare(&r.prepare)?;
-                Settings::Linear(r.clone())
-            }
-            Request::Cocontraction(r) => {
-                check_prepare(&r.prepare)?;
-                // finite too: an infinite band counts every sample "on target" (issue 56)
-                if !(r.tolerance.is_finite() && r.tolerance > 0.0) {
-                    return Err(Error::invalid(
-                        "tolerance",
-                        format!(
-                            "expected a positive, finite band half-width, found {}",
-                            limpid_core::error::Num(r.tolerance)
-                        ),
-                    ));
-                }
-                Settings::Cocontraction(r.clone())
-            }
-            Request::Planar(r) => {
-                check_arm(&r.arm)?;
-                if let Some(ms) = r.window_ms {
-                    // finite too: an infinite window was stored as null and
-                    // refused by `rerun` (issue 56)
-                    if !(ms.is_finite() && ms > 0.0) {
-                        return Err(Error::invalid(
-                            "window_ms",
-                            format!(
-                                "expected a positive, finite duration in ms, found {}",
-                                limpid_core::error::Num(ms)
-                            ),
-                        ));
-                    }
-                }
-                Settings::Planar(r.clone())
-            }
-            Request::WindowSweep(r) => {
-                check_arm(&r.arm)?;
-                positive("from_ms", r.from_ms)?;
-                positive("to_ms", r.to_ms)?;
-                positive("step_ms", r.step_ms)?;
-                Settings::WindowSweep(r.clone())
-            }
-            Request::Stochastic(r) => {
-                crate::Estimator::check(&StochasticParams {
-                    welch: None,
-                    band_hz: (r.band_hz[0], r.band_hz[1]),
-                })?;
-                Settings::Stochastic(r.clone())
-            }
-            Request::Reflex(r) => Settings::Reflex(r.check()?),
-            Request::Varying(r) => Settings::Varying(r.check()?),
-            // the segments are checked against the recording's length when it is read
-            Request::Spectra(r) => {
-                crate::spectra::check_columns(&r.inputs, &r.outputs)?;
-                if let Some(p) = r.period_s {
-                    positive("period_s", p)?;
-                    if r.nperseg.is_some() || r.noverlap.is_some() {
-                        return Err(Error::invalid(
-                            "period_s",
-                            "a periodic analysis takes whole periods as its segments: leave out the segment length and overlap",
-                        ));
-                    }
-                }
-                Settings::Spectra(r.clone())
-            }
-        };
-        Ok(Checked {
-            request: self,
-            settings,
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::prepare::PrepareParams;
+    use crate::stochastic::StochasticParams;
 
     #[test]
     fn defaults_are_the_estimators_defaults() {

@@ -5,12 +5,7 @@ use limpid_core::{Error, Result};
 use schemars::JsonSchema;
 use serde::Deserialize;
 
-use super::methods::{
-    ArmRequest, LinearRequest, PrepareRequest, SpectraRequest, StochasticRequest,
-};
-use super::Request;
-use crate::reflex::ReflexRequest;
-use crate::varying::VaryingRequest;
+use super::{deserialize_request, Request};
 
 /// The names of a request type's fields (its JSON Schema's properties).
 pub fn field_names<T: JsonSchema>() -> Vec<String> {
@@ -22,7 +17,8 @@ pub fn field_names<T: JsonSchema>() -> Vec<String> {
         .unwrap_or_default()
 }
 
-fn boolean_names<T: JsonSchema>() -> Vec<String> {
+/// The names of a request type's yes/no fields.
+pub fn boolean_names<T: JsonSchema>() -> Vec<String> {
     let schema = schemars::schema_for!(T);
     schema
         .get("properties")
@@ -39,72 +35,29 @@ fn boolean_names<T: JsonSchema>() -> Vec<String> {
 /// The yes/no options of a method (top level and nested), so a front-end
 /// whose numbers and truth values mix (Python: `True == 1`) can keep them apart.
 pub fn boolean_options(method: &str) -> Result<Vec<String>> {
-    nesting(method)?;
-    Ok(match method {
-        "linear" => [
-            boolean_names::<LinearRequest>(),
-            boolean_names::<PrepareRequest>(),
-        ]
-        .concat(),
-        "cocontraction" => boolean_names::<PrepareRequest>(),
-        "planar" | "window_sweep" => boolean_names::<ArmRequest>(),
-        "stochastic" => boolean_names::<StochasticRequest>(),
-        "varying" => boolean_names::<VaryingRequest>(),
-        "spectra" => boolean_names::<SpectraRequest>(),
-        _ => boolean_names::<ReflexRequest>(),
-    })
+    Ok(super::method_options(method)?.1)
 }
 
 /// Where a method's flat options nest: `prepare` (linear, co-contraction)
 /// or `arm` (planar, window sweep) and that part's field names; `None` for
 /// methods whose options are all at the top level.
 pub fn nesting(method: &str) -> Result<Option<(&'static str, Vec<String>)>> {
-    Ok(match method {
-        "linear" | "cocontraction" => Some(("prepare", field_names::<PrepareRequest>())),
-        "planar" | "window_sweep" => Some(("arm", field_names::<ArmRequest>())),
-        "stochastic" | "reflex" | "varying" | "spectra" => None,
-        other => {
-            return Err(Error::invalid(
-                "method",
-                format!(
-                    "{other:?} is not a method: linear, cocontraction, planar, window_sweep, stochastic, reflex, varying or spectra"
-                ),
-            ))
-        }
-    })
+    Ok(super::method_options(method)?.0)
 }
 
-/// A method's request from any serde deserializer of its (nested) options:
-/// each method's own type (not the tagged enum, which would buffer the value
-/// and lose the path of an error); an error names the option (`band_hz`, `order`, ...).
-pub fn deserialize_request<'de, D: serde::Deserializer<'de>>(
-    method: &str,
-    options: D,
-) -> Result<Request> {
-    fn typed<'de, T: Deserialize<'de>, D: serde::Deserializer<'de>>(d: D) -> Result<T> {
-        serde_path_to_error::deserialize(d).map_err(|e| {
-            let path = e.path().to_string();
-            let message = e.into_inner().to_string();
-            let path = path
-                .trim_start_matches("prepare.")
-                .trim_start_matches("arm.");
-            let name = match path {
-                "." | "prepare" | "arm" => "options",
-                p => p,
-            };
-            Error::invalid(name, message)
-        })
-    }
-    nesting(method)?;
-    Ok(match method {
-        "linear" => Request::Linear(typed(options)?),
-        "cocontraction" => Request::Cocontraction(typed(options)?),
-        "planar" => Request::Planar(typed(options)?),
-        "window_sweep" => Request::WindowSweep(typed(options)?),
-        "stochastic" => Request::Stochastic(typed(options)?),
-        "varying" => Request::Varying(typed(options)?),
-        "spectra" => Request::Spectra(typed(options)?),
-        _ => Request::Reflex(typed(options)?),
+/// One method's request type from a deserializer, errors naming the option.
+pub(super) fn typed<'de, T: Deserialize<'de>, D: serde::Deserializer<'de>>(d: D) -> Result<T> {
+    serde_path_to_error::deserialize(d).map_err(|e| {
+        let path = e.path().to_string();
+        let message = e.into_inner().to_string();
+        let path = path
+            .trim_start_matches("prepare.")
+            .trim_start_matches("arm.");
+        let name = match path {
+            "." | "prepare" | "arm" => "options",
+            p => p,
+        };
+        Error::invalid(name, message)
     })
 }
 

@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{MAX_BASIS_ORDER, TIME};
 use crate::estimator::positive;
+use crate::request::{boolean_names, Method};
 
 /// Impedance that varies with time (`schedule = "time"`, an ensemble of
 /// repetitions) or with a measured operating point (a column: parameter-varying).
@@ -166,6 +167,20 @@ impl VaryingRequest {
             window_s: self.window_ms / 1e3,
             step_s: self.step_ms.map(|ms| ms / 1e3),
         }
+    }
+}
+
+impl Method for VaryingRequest {
+    const COMMAND: &'static str = "estimate varying";
+    const LONG_ARRAYS: bool = true;
+    type Valid = VaryingParams;
+
+    fn check_settings(&self) -> Result<VaryingParams> {
+        self.check()
+    }
+
+    fn booleans() -> Vec<String> {
+        boolean_names::<VaryingRequest>()
     }
 }
 

@@ -796,7 +796,8 @@ def set_threads(threads: Optional[int] = None) -> None:
     or ``None`` for one a core (the default). Takes effect at the next call;
     a forked worker (multiprocessing, dask) starts its own pool of this size."""
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int)):
-        raise TypeError(f"set_threads: expected an int or None, found {type(threads).__name__}")
+        # a TypeError: turned into "set_threads: ..." ValueError as every bad value
+        raise TypeError(f"expected an int or None, found {type(threads).__name__}")
     _limpid.set_threads(threads)
 
 
