@@ -269,8 +269,44 @@ fn periodic_summary(p: &limpid_ident::spectra::PeriodicResult) -> String {
         ),
         None => "every line in the band is excited: no detection line for nonlinear distortion (use an odd or random-odd multisine)".into(),
     };
+    let impedance = match &p.impedance {
+        Some(z) => {
+            let diagonal = |m: &limpid_core::Matrix, se: &limpid_core::Matrix| {
+                (0..m.nrows())
+                    .map(|i| limpid_core::with_standard_error(m[(i, i)], se[(i, i)]))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let e = &z.standard_errors;
+            let nonlinear = p
+                .distortion
+                .iter()
+                .chain(&p.input_distortion)
+                .any(|d| d.verdict == "nonlinear");
+            let trust = if nonlinear {
+                "not trusted: the response is nonlinear, these are its best linear approximation at this amplitude".to_string()
+            } else {
+                format!(
+                    "K {}",
+                    crate::table::verdict_flag(z.verdicts.stiffness)
+                        .trim()
+                        .trim_matches(['[', ']'])
+                )
+            };
+            format!(
+                "; fitted at {} excited lines (VAF {:.1} %, residual ratio {}): diagonal K {}, B {}, M {} [{trust}]",
+                z.lines,
+                z.fit_vaf,
+                limpid_core::significant(z.residual_ratio, 3),
+                diagonal(&z.stiffness, &e.stiffness),
+                diagonal(&z.damping, &e.damping),
+                diagonal(&z.inertia, &e.inertia),
+            )
+        }
+        None => String::new(),
+    };
     format!(
-        "periodic analysis of {} periods of {} s ({}); {verdict}",
+        "periodic analysis of {} periods of {} s ({}); {verdict}{impedance}",
         p.periods,
         limpid_core::error::Num(p.period_s),
         p.transient

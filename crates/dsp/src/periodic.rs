@@ -108,6 +108,20 @@ impl PeriodSpectra {
             / (m * (m - 1.0))
     }
 
+    /// The spectra of `signals` (indices into these), in that order; a
+    /// signal may appear twice (an input analysed as an output too).
+    pub fn select(&self, signals: &[usize]) -> PeriodSpectra {
+        PeriodSpectra {
+            period: self.period,
+            periods: self.periods,
+            mean: signals.iter().map(|&s| self.mean[s].clone()).collect(),
+            per_period: signals
+                .iter()
+                .map(|&s| self.per_period[s].clone())
+                .collect(),
+        }
+    }
+
     /// Variance of the period average of signal `s` at `line`.
     pub fn variance_of_mean(&self, s: usize, line: usize) -> f64 {
         self.covariance_of_mean(s, s, line).re
@@ -192,6 +206,8 @@ pub struct PeriodicAnalysis {
 
 /// Excited lines: input power within 30 dB of that input's strongest line.
 const EXCITED_BELOW_PEAK: f64 = 1e-3;
+/// Output power this far below the excited lines' (200 dB) is rounding, not signal.
+const EXACTLY_NOTHING: f64 = 1e-20;
 /// An excited line belongs to one input when the others are 30 dB below it there.
 const ONE_INPUT_RATIO: f64 = 1e3;
 
@@ -276,7 +292,16 @@ pub fn analyse(spectra: &PeriodSpectra, inputs: usize) -> Result<PeriodicAnalysi
             input: owned,
             output_db: db(p),
             noise_db: db(n),
-            ratio: if n > 0.0 { p / n } else { f64::INFINITY },
+            // an output 200 dB below its excited lines is exactly periodic
+            // and has nothing there (a noise-free signal whose rounding
+            // repeats every period): no distortion, whatever its "noise"
+            ratio: if p <= EXACTLY_NOTHING * reference {
+                0.0
+            } else if n > 0.0 {
+                p / n
+            } else {
+                f64::INFINITY
+            },
         });
         if let Some(i) = owned {
             let u = spectra.mean[i][k];

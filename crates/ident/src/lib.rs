@@ -17,6 +17,7 @@ pub mod estimator;
 pub mod linear;
 pub mod lsq;
 pub mod online;
+pub mod periodic_fit;
 pub mod planar;
 pub mod prepare;
 pub mod reflex;

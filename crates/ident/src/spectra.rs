@@ -59,6 +59,15 @@ pub struct PeriodicResult {
     pub distortion: Option<PeriodicDistortion>,
     /// The frequency response at each input's excited lines, per input-output pair.
     pub frf: Vec<LineFrf>,
+    /// The inputs' own detection lines against their noise: where a
+    /// force-driven experiment shows its nonlinear distortion (the
+    /// displacement carries it); with inputs of disjoint lines only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_distortion: Option<PeriodicDistortion>,
+    /// M, B, K fitted to the excited lines, when the inputs are displacements
+    /// (m, rad) and the outputs as many forces or torques (N, N m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub impedance: Option<crate::periodic_fit::PeriodicImpedance>,
 }
 
 /// One line of a periodic analysis.
@@ -371,9 +380,24 @@ pub fn periodic_spectra(
         ..Welch::new(fs)
     };
     let mut result = spectra_of(rec, inputs, outputs, &used, &welch)?;
-    result.periodic = Some(periodic_result(
-        &analysis, inputs, outputs, period_s, periods, transient,
-    ));
+    let mut periodic = periodic_result(&analysis, inputs, outputs, period_s, periods, transient);
+    // the inputs analysed as outputs of themselves: their detection lines
+    let n_in = inputs.len();
+    let twice: Vec<usize> = (0..n_in).chain(0..n_in).collect();
+    let input_side = limpid_dsp::periodic::analyse(&analysed.select(&twice), n_in)
+        .ok()
+        .and_then(|a| a.distortion);
+    let nonlinear = analysis
+        .distortion
+        .iter()
+        .chain(&input_side)
+        .any(|d| d.nonlinear);
+    periodic.input_distortion = input_side.as_ref().map(distortion_of);
+    if displacements_to_forces(inputs, outputs) {
+        periodic.impedance =
+            crate::periodic_fit::fit(&analysed, &analysis, n_in, period_s, nonlinear);
+    }
+    result.periodic = Some(periodic);
     Ok(result)
 }
 
@@ -435,14 +459,29 @@ fn periodic_result(
         periods,
         transient,
         lines,
-        distortion: a.distortion.as_ref().map(|d| PeriodicDistortion {
-            odd_db: d.odd_db,
-            even_db: d.even_db,
-            noise_db: d.noise_db,
-            verdict: if d.nonlinear { "nonlinear" } else { "linear" }.into(),
-        }),
+        distortion: a.distortion.as_ref().map(distortion_of),
         frf,
+        input_distortion: None,
+        impedance: None,
     }
+}
+
+fn distortion_of(d: &limpid_dsp::periodic::Distortion) -> PeriodicDistortion {
+    PeriodicDistortion {
+        odd_db: d.odd_db,
+        even_db: d.even_db,
+        noise_db: d.noise_db,
+        verdict: if d.nonlinear { "nonlinear" } else { "linear" }.into(),
+    }
+}
+
+/// Inputs all displacements (m, rad) and outputs as many forces or torques
+/// (N, N m), by what the columns are (FORMAT.md).
+fn displacements_to_forces(inputs: &[String], outputs: &[String]) -> bool {
+    let unit = |c: &String| limpid_core::recording::magnitude_limit(c).1;
+    inputs.len() == outputs.len()
+        && inputs.iter().all(|c| matches!(unit(c), "m" | "rad"))
+        && outputs.iter().all(|c| matches!(unit(c), "N" | "N m"))
 }
 
 /// Phases in degrees on one branch along frequency: each differs from the

@@ -187,7 +187,7 @@ pub struct Accuracy {
 /// replicate refitting Z and its parametric model without one group); with
 /// fewer than [`MIN_JACKKNIFE_GROUPS`] segments, least squares over the band
 /// inflated by the window's equivalent noise bandwidth.
-#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ParametricErrors {
     /// How they were obtained.
     #[serde(default)]

@@ -450,3 +450,70 @@ fn multisine_and_prbs_protocols_check_export_and_simulate() {
     assert_eq!(levels, limpid_dsp::excitation::mls(7).unwrap());
     assert!(q[n..2 * n].iter().all(|v| v.abs() <= 0.03 + 1e-12));
 }
+
+#[test]
+fn inertia_damping_and_stiffness_come_from_the_excited_lines_with_honest_errors() {
+    let d = tempfile::tempdir().unwrap();
+    let linear = d.path().join("linear.csv");
+    // noise well above the simulation's own error, so that the SEs are tested
+    let (inertia, damping, stiffness) = joint_recording(&linear, 8, (0.0, 0.0), 2e-3, true);
+    // the impedance: displacement in, torque out
+    let v = spectra(&linear, "q1", "tau1");
+    let z = &v["periodic"]["impedance"];
+    let se = &z["standard_errors"];
+    for (key, truth) in [
+        ("inertia", inertia),
+        ("damping", damping),
+        ("stiffness", stiffness),
+    ] {
+        let (est, err) = (
+            z[key][0][0].as_f64().unwrap(),
+            se[key][0][0].as_f64().unwrap(),
+        );
+        assert!(err > 0.0, "{key}: {z}");
+        assert!(
+            (est - truth).abs() < 3.0 * err,
+            "{key}: {est} ± {err} vs {truth}"
+        );
+        assert!(
+            (est - truth).abs() < 0.02 * truth,
+            "{key}: {est} vs {truth}"
+        );
+    }
+    assert_eq!(z["verdicts"]["stiffness"], "trusted", "{z}");
+    let ratio = z["residual_ratio"].as_f64().unwrap();
+    assert!(
+        ratio < 2.0,
+        "a linear joint's fit is within its noise: {ratio}"
+    );
+    // a cubic spring: the best linear approximation, not trusted, and errors
+    // scaled by how far the model misses
+    let cubic = d.path().join("cubic.csv");
+    joint_recording(&cubic, 8, (0.0, 40.0 * 400.0), 2e-5, true);
+    let v = spectra(&cubic, "q1", "tau1");
+    let z = &v["periodic"]["impedance"];
+    assert_ne!(z["verdicts"]["stiffness"], "trusted", "{z}");
+    assert!(z["residual_ratio"].as_f64().unwrap() > 5.0, "{z}");
+    let out = limpid(&[
+        "spectra",
+        cubic.to_str().unwrap(),
+        "--inputs",
+        "q1",
+        "--outputs",
+        "tau1",
+        "--period",
+        "4",
+    ]);
+    assert!(
+        out.stderr.contains("best linear approximation"),
+        "{}",
+        out.stderr
+    );
+    // torque in, angle out is not an impedance: no fit
+    let v = spectra(&linear, "tau1", "q1");
+    assert!(
+        v["periodic"].get("impedance").is_none(),
+        "{}",
+        v["periodic"]
+    );
+}

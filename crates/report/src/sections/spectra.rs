@@ -174,6 +174,23 @@ pub(crate) fn spectra_section(name: &str, r: &SpectraResult) -> Section {
     if let Some(p) = &r.periodic {
         figures.splice(0..0, periodic_figures(p));
         tables.insert(0, periodic_table(p));
+        if let Some(z) = &p.impedance {
+            let at = tables.len().min(1);
+            let how = format!(
+                "fitted at {} excited lines, VAF {} %, residual ratio {}",
+                z.lines,
+                fmt(z.fit_vaf),
+                fmt(z.residual_ratio)
+            );
+            let fitted = super::stochastic::parametric_tables(
+                &r.inputs,
+                &z.standard_errors,
+                [&z.stiffness, &z.damping, &z.inertia],
+                None,
+                &how,
+            );
+            tables.splice(at..at, fitted);
+        }
         verdict_extra = format!(
             "; periodic: {} periods of {} s ({})",
             p.periods,

@@ -306,28 +306,56 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
             fmt(100.0 * a.mean_relative_error)
         );
     }
-    let se = &v.standard_errors;
-    let matrix_tables = [
+    let matrix_tables = parametric_tables(
+        coords,
+        &v.standard_errors,
+        [&v.stiffness, &v.damping, &v.inertia],
+        expected.map(|e| [&e.stiffness, &e.damping, &e.inertia]),
+        "parametric fit over the band",
+    );
+    let mut tables = vec![stochastic_criteria_table(v)];
+    tables.extend(matrix_tables);
+    Section {
+        heading: format!("Stochastic estimate: {name}"),
+        verdict,
+        warnings: messages(&v.warnings),
+        tables,
+        figures,
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}
+
+/// K, B and M of a parametric fit with their standard errors (and truth),
+/// one table each, units per element where the coordinates mix m and rad.
+pub(crate) fn parametric_tables(
+    coords: &[String],
+    se: &limpid_ident::stochastic::ParametricErrors,
+    [k, b, m]: [&limpid_core::Matrix; 3],
+    truth: Option<[&limpid_core::Matrix; 3]>,
+    how: &str,
+) -> Vec<Table> {
+    [
         (
             MatrixKind::Stiffness,
             "K",
-            &v.stiffness,
+            k,
             &se.stiffness,
-            expected.map(|e| &e.stiffness),
+            truth.map(|t| t[0]),
         ),
         (
             MatrixKind::Damping,
             "B",
-            &v.damping,
+            b,
             &se.damping,
-            expected.map(|e| &e.damping),
+            truth.map(|t| t[1]),
         ),
         (
             MatrixKind::Inertia,
             "M",
-            &v.inertia,
+            m,
             &se.inertia,
-            expected.map(|e| &e.inertia),
+            truth.map(|t| t[2]),
         ),
     ]
     .into_iter()
@@ -339,10 +367,7 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
             kind_unit(kind, coords).to_string()
         };
         let mut t = matrix_table(
-            &format!(
-                "{sym} ({}, {unit}, parametric fit over the band) ± standard error",
-                kind.name()
-            ),
+            &format!("{sym} ({}, {unit}, {how}) ± standard error", kind.name()),
             coords,
             m,
             Some(se),
@@ -361,16 +386,5 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
         }
         t
     })
-    .collect::<Vec<_>>();
-    let mut tables = vec![stochastic_criteria_table(v)];
-    tables.extend(matrix_tables);
-    Section {
-        heading: format!("Stochastic estimate: {name}"),
-        verdict,
-        warnings: messages(&v.warnings),
-        tables,
-        figures,
-        ellipsoids: vec![],
-        drawings: vec![],
-    }
+    .collect()
 }
