@@ -126,6 +126,28 @@ pub(super) fn estimate(
         ));
     }
     let design = design_at(order, reflex.is_some());
+    // the most flexible order's fit: where it differs from this one by more
+    // than its own extra noise, the basis truncates the impedance's
+    // variation (a model error no block of the robust covariance sees); the
+    // next lower order when the highest was chosen; none for an order the
+    // user set (the rows hold no higher one)
+    let flexible = if order + 1 < top {
+        Some(top - 1)
+    } else if params.basis_order.is_none() {
+        order.checked_sub(1)
+    } else {
+        None
+    }
+    .map(|p| design_at(p, reflex.is_some()));
+    let flexible_fit = flexible.as_ref().and_then(fit);
+    let flexible_cov = flexible
+        .as_ref()
+        .zip(flexible_fit.as_ref())
+        .and_then(|(d, f)| robust_covariances(d, f));
+    let neighbour = match (&flexible, &flexible_fit, &flexible_cov) {
+        (Some(d), Some(f), Some(c)) => Some((d, f, c.as_slice())),
+        _ => None,
+    };
     let cov = robust_covariances(&design, &fitted).ok_or_else(|| {
         Error::invalid(
             "recording",
@@ -145,6 +167,7 @@ pub(super) fn estimate(
     let grid_fit = GridFit {
         design: &design,
         fitted: &fitted,
+        neighbour,
         cov: &cov,
         reflex: reflex_summary.as_ref(),
         reach: (0.5 * span / (params.grid_points - 1) as f64).max(span / (2.0 * p1 as f64)),
@@ -302,6 +325,8 @@ fn reflex_test(
 struct GridFit<'a> {
     design: &'a Design<'a>,
     fitted: &'a Fitted,
+    /// The most flexible order's design, fit and covariance (the truncation error).
+    neighbour: Option<(&'a Design<'a>, &'a Fitted, &'a [DMatrix<f64>])>,
     /// Coefficient covariance per output.
     cov: &'a [DMatrix<f64>],
     reflex: Option<&'a VaryingReflex>,
@@ -315,21 +340,19 @@ struct GridFit<'a> {
 impl GridFit<'_> {
     /// Parameter group `group` (M, B, K of each coordinate, then the reflex
     /// gain) of output `j` at the basis values `phi`: value and standard error.
-    fn value(&self, phi: &[f64], group: usize, j: usize) -> (f64, f64) {
-        let (d, p1) = (self.design.rows.d, phi.len());
-        let base = if group == 3 * d {
-            self.design.reflex_start()
-        } else {
-            group * p1
-        };
-        let cols: Vec<usize> = (0..p1).map(|i| base + i).collect();
-        let v: f64 = (0..p1)
-            .map(|i| phi[i] * self.fitted.theta[(cols[i], j)])
-            .sum();
-        let var: f64 = (0..p1)
-            .flat_map(|a| (0..p1).map(move |b| (a, b)))
-            .map(|(a, b)| phi[a] * phi[b] * self.cov[j][(cols[a], cols[b])])
-            .sum();
+    fn value(&self, sigma: f64, phi: &[f64], group: usize, j: usize) -> (f64, f64) {
+        let v = evaluate(self.design, self.fitted, phi, group, j);
+        let var = variance(self.design, &self.cov[j], phi, group);
+        // the difference to the flexible fit, less what its extra noise
+        // explains (the fits are nested: the difference's variance is the
+        // difference of their variances)
+        let truncation = self.neighbour.map_or(0.0, |(design, fitted, cov)| {
+            let mut other = vec![0.0; design.order + 1];
+            design.rows.basis(sigma, design.order, &mut other);
+            let delta = evaluate(design, fitted, &other, group, j) - v;
+            let noise = (variance(design, &cov[j], &other, group) - var).max(0.0);
+            (delta * delta - noise).max(0.0).sqrt()
+        });
         let se = var.max(0.0).sqrt();
         // the reflex pathway's model error, which no block of the jackknife
         // sees (see REFLEX_MODEL_FLOOR)
@@ -338,7 +361,7 @@ impl GridFit<'_> {
         } else {
             0.0
         };
-        (v, se.hypot(floor))
+        (v, se.hypot(floor).hypot(truncation))
     }
 
     fn point(&self, g: usize, sigma: f64) -> VaryingPoint {
@@ -355,13 +378,13 @@ impl GridFit<'_> {
         let mats: Vec<(limpid_core::Matrix, limpid_core::Matrix)> = (0..3)
             .map(|kind| {
                 (
-                    matrix(d, |j, k| self.value(&phi, kind * d + k, j).0),
-                    matrix(d, |j, k| self.value(&phi, kind * d + k, j).1),
+                    matrix(d, |j, k| self.value(sigma, &phi, kind * d + k, j).0),
+                    matrix(d, |j, k| self.value(sigma, &phi, kind * d + k, j).1),
                 )
             })
             .collect();
         let point_reflex = self.reflex.map(|r| {
-            let (gain, gain_se) = self.value(&phi, 3 * d, 0);
+            let (gain, gain_se) = self.value(sigma, &phi, 3 * d, 0);
             PointReflex {
                 gain,
                 gain_se,
@@ -413,6 +436,32 @@ impl GridFit<'_> {
             verdicts,
         }
     }
+}
+
+/// The variance of parameter group `group` at the basis values `phi`, from
+/// one output's coefficient covariance.
+fn variance(design: &Design<'_>, cov: &DMatrix<f64>, phi: &[f64], group: usize) -> f64 {
+    let p1 = phi.len();
+    let base = if group == 3 * design.rows.d {
+        design.reflex_start()
+    } else {
+        group * p1
+    };
+    (0..p1)
+        .flat_map(|a| (0..p1).map(move |b| (a, b)))
+        .map(|(a, b)| phi[a] * phi[b] * cov[(base + a, base + b)])
+        .sum()
+}
+
+/// Parameter group `group` of output `j` of a fit at the basis values `phi`.
+fn evaluate(design: &Design<'_>, fitted: &Fitted, phi: &[f64], group: usize, j: usize) -> f64 {
+    let p1 = phi.len();
+    let base = if group == 3 * design.rows.d {
+        design.reflex_start()
+    } else {
+        group * p1
+    };
+    (0..p1).map(|i| phi[i] * fitted.theta[(base + i, j)]).sum()
 }
 
 fn short(v: f64) -> String {
