@@ -126,6 +126,35 @@ pub(super) fn estimate(
         ));
     }
     let design = design_at(order, reflex.is_some());
+    let too_short = || {
+        Error::invalid(
+            "recording",
+            "too short for block-robust standard errors (fewer than two 1 s blocks)",
+        )
+    };
+    let cov = robust_covariances(&design, &fitted).ok_or_else(too_short)?;
+    let p1 = order + 1;
+    let reflex_summary = reflex.as_ref().map(|c| {
+        let without = fit(&design_at(order, false));
+        let gain = without.map_or(0.0, |w| vaf(fitted.press) - vaf(w.press));
+        reflex_test(c, &design, &fitted, &cov[0], gain, fs, &mut warnings)
+    });
+    // a pathway the data do not show still takes up part of K and B (its
+    // regressor correlates with velocity): the intrinsic parameters then
+    // come from the fit without it; the gains shown are the pathway's fit
+    let undetected = reflex_summary.as_ref().is_some_and(|s| !s.detected);
+    let intrinsic_design = design_at(order, reflex.is_some() && !undetected);
+    let intrinsic = if undetected {
+        let f = fit(&intrinsic_design).ok_or_else(too_short)?;
+        let c = robust_covariances(&intrinsic_design, &f).ok_or_else(too_short)?;
+        Some((f, c))
+    } else {
+        None
+    };
+    let (m_design, m_fitted, m_cov) = match &intrinsic {
+        Some((f, c)) => (&intrinsic_design, f, c.as_slice()),
+        None => (&design, &fitted, cov.as_slice()),
+    };
     // the most flexible order's fit: where it differs from this one by more
     // than its own extra noise, the basis truncates the impedance's
     // variation (a model error no block of the robust covariance sees); the
@@ -138,7 +167,7 @@ pub(super) fn estimate(
     } else {
         None
     }
-    .map(|p| design_at(p, reflex.is_some()));
+    .map(|p| design_at(p, m_design.reflex.is_some()));
     let flexible_fit = flexible.as_ref().and_then(fit);
     let flexible_cov = flexible
         .as_ref()
@@ -148,31 +177,20 @@ pub(super) fn estimate(
         (Some(d), Some(f), Some(c)) => Some((d, f, c.as_slice())),
         _ => None,
     };
-    let cov = robust_covariances(&design, &fitted).ok_or_else(|| {
-        Error::invalid(
-            "recording",
-            "too short for block-robust standard errors (fewer than two 1 s blocks)",
-        )
-    })?;
-    let p1 = order + 1;
-    let reflex_summary = reflex.as_ref().map(|c| {
-        let without = fit(&design_at(order, false));
-        let gain = without.map_or(0.0, |w| vaf(fitted.press) - vaf(w.press));
-        reflex_test(c, &design, &fitted, &cov[0], gain, fs, &mut warnings)
-    });
     let grid: Vec<f64> = (0..params.grid_points)
         .map(|g| lo + span * g as f64 / (params.grid_points - 1) as f64)
         .collect();
     let region = nearest_regions(&rows, &grid);
     let grid_fit = GridFit {
-        design: &design,
-        fitted: &fitted,
+        design: m_design,
+        fitted: m_fitted,
         neighbour,
-        cov: &cov,
+        cov: m_cov,
+        gains: reflex.as_ref().map(|_| (&design, &fitted, cov.as_slice())),
         reflex: reflex_summary.as_ref(),
         reach: (0.5 * span / (params.grid_points - 1) as f64).max(span / (2.0 * p1 as f64)),
         seconds_per_row: dec as f64 / fs,
-        residual_ss: region_residuals(&design, &fitted, &region, grid.len()),
+        residual_ss: region_residuals(m_design, m_fitted, &region, grid.len()),
     };
     let mut points: Vec<VaryingPoint> = grid
         .iter()
@@ -329,6 +347,8 @@ struct GridFit<'a> {
     neighbour: Option<(&'a Design<'a>, &'a Fitted, &'a [DMatrix<f64>])>,
     /// Coefficient covariance per output.
     cov: &'a [DMatrix<f64>],
+    /// The fit with the reflex pathway (design, fit, covariance): its gains.
+    gains: Option<(&'a Design<'a>, &'a Fitted, &'a [DMatrix<f64>])>,
     reflex: Option<&'a VaryingReflex>,
     /// Half-width of the schedule interval whose data support a point.
     reach: f64,
@@ -356,7 +376,7 @@ impl GridFit<'_> {
         let se = var.max(0.0).sqrt();
         // the reflex pathway's model error, which no block of the jackknife
         // sees (see REFLEX_MODEL_FLOOR)
-        let floor = if self.reflex.is_some() {
+        let floor = if self.design.reflex.is_some() {
             REFLEX_MODEL_FLOOR * v.abs()
         } else {
             0.0
@@ -383,14 +403,19 @@ impl GridFit<'_> {
                 )
             })
             .collect();
-        let point_reflex = self.reflex.map(|r| {
-            let (gain, gain_se) = self.value(sigma, &phi, 3 * d, 0);
-            PointReflex {
-                gain,
-                gain_se,
-                delay_s: r.delay_s,
-            }
-        });
+        let point_reflex = self
+            .reflex
+            .zip(self.gains)
+            .map(|(r, (design, fitted, cov))| {
+                let v = evaluate(design, fitted, &phi, 3 * d, 0);
+                let se = variance(design, &cov[0], &phi, 3 * d).max(0.0).sqrt();
+                let (gain, gain_se) = (v, se.hypot(REFLEX_MODEL_FLOOR * v.abs()));
+                PointReflex {
+                    gain,
+                    gain_se,
+                    delay_s: r.delay_s,
+                }
+            });
         let finite = mats
             .iter()
             .all(|(m, s)| m.iter().chain(s.iter()).all(|v| v.is_finite()))
