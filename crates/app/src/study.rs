@@ -3,16 +3,13 @@
 //! simulated. The manifest, the outcomes and the tables are
 //! [`limpid_analysis::result::study`]'s.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 use serde::Serialize;
 
 use limpid_analysis::cocontraction::CocontractionResult;
-use limpid_analysis::result::study::{
-    markdown, summarise, Entry, Failure, Manifest, Processed, StudyResult,
-};
+use limpid_analysis::result::study::{summarise, Entry, Failure, Manifest, Processed, StudyResult};
 use limpid_analysis::result::Estimate;
 use limpid_core::truth::{About, CocontractionTruth, LevelTruth, Truth};
 use limpid_core::{Error, Result};
@@ -368,62 +365,6 @@ pub fn stage_tables(
     let mut write = |name: &str, text: String| -> Result<PathBuf> {
         outputs.add(&dir.join(name), text.as_bytes())
     };
-    let mut csv = String::from(
-        "configuration,level,subjects,cocontraction_index,cocontraction_index_sd,kxx,kxx_sd,kyy,kyy_sd,kzz,kzz_sd,k_max_a,k_max_a_sd,k1,k1_sd,k2,k2_sd,k3,k3_sd\n",
-    );
-    // every digit, shortest round-trip (exponents for the tiny and huge); a
-    // value no recording has is an empty cell, never "NaN"
-    let cell = |v: Option<f64>, _decimals: usize| {
-        v.filter(|v| v.is_finite())
-            .map_or(String::new(), |v| limpid_core::CsvNumber(v).to_string())
-    };
-    for l in &r.levels {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            l.configuration,
-            l.level,
-            l.subjects,
-            cell(l.cocontraction_index, 4),
-            cell(l.sd.cocontraction_index, 4),
-            cell(l.kxx, 2),
-            cell(l.sd.kxx, 2),
-            cell(l.kyy, 2),
-            cell(l.sd.kyy, 2),
-            cell(l.kzz, 2),
-            cell(l.sd.kzz, 2),
-            cell(l.k_max_a, 2),
-            cell(l.sd.k_max_a, 2),
-            cell(l.k1, 2),
-            cell(l.sd.k1, 2),
-            cell(l.k2, 2),
-            cell(l.sd.k2, 2),
-            cell(l.k3, 2),
-            cell(l.sd.k3, 2)
-        );
-    }
-    let mut rot = String::from("configuration,from_level,to_level,subjects,rotation_primary_deg,rotation_secondary_deg,rotation_tertiary_deg,change_primary_percent,change_secondary_percent,change_tertiary_percent\n");
-    for x in &r.rotation {
-        let g = |v: &Vec<f64>, i: usize| {
-            v.get(i)
-                .filter(|x| x.is_finite())
-                .map_or(String::new(), |x| limpid_core::CsvNumber(*x).to_string())
-        };
-        let _ = writeln!(
-            rot,
-            "{},{},{},{},{},{},{},{},{},{}",
-            x.configuration,
-            x.from_level,
-            x.to_level,
-            x.subjects,
-            g(&x.rotation_deg, 0),
-            g(&x.rotation_deg, 1),
-            g(&x.rotation_deg, 2),
-            g(&x.principal_change_percent, 0),
-            g(&x.principal_change_percent, 1),
-            g(&x.principal_change_percent, 2)
-        );
-    }
     // study.json keeps every number but not the fit traces (150 kB per level
     // and recording); each recording's full result is in recordings/
     let mut slimmed = r.clone();
@@ -435,10 +376,10 @@ pub fn stage_tables(
         message: e.to_string(),
     })?;
     Ok(vec![
-        write("tables.csv", csv)?,
-        write("rotation.csv", rot)?,
+        write("tables.csv", limpid_report::text::study_levels_csv(r))?,
+        write("rotation.csv", limpid_report::text::study_rotation_csv(r))?,
         write("study.json", json)?,
-        write("tables.md", markdown(r))?,
+        write("tables.md", limpid_report::text::study_markdown(r))?,
     ])
 }
 

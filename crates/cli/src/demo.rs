@@ -6,12 +6,13 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use limpid_analysis::linear::MatrixKind;
-use limpid_analysis::result::demo::{demo_csv, DemoSubject};
+use limpid_analysis::result::demo::DemoSubject;
 use limpid_analysis::result::{Document, Estimate};
 use limpid_app::demo::run_demo;
 use limpid_core::criteria::MatrixVerdict;
 use limpid_core::Matrix;
 use limpid_lab::Profile;
+use limpid_report::text::demo_csv;
 
 use crate::context::CliResult;
 use crate::table::num;

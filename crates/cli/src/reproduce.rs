@@ -4,8 +4,9 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use limpid_analysis::result::reproduction::{text, Seed};
+use limpid_analysis::result::reproduction::Seed;
 use limpid_app::reproduce::reproduce;
+use limpid_report::text::reproduction_text as text;
 
 use crate::context::CliResult;
 

@@ -120,7 +120,7 @@ pub fn run(cmd: StudyCommand) -> CliResult {
                 );
             }
             if args.print {
-                println!("\n{}", limpid_analysis::result::study::markdown(result));
+                println!("\n{}", limpid_report::text::study_markdown(result));
             }
             println!(
                 "wrote {} and {} per-recording results in {}",

@@ -27,7 +27,7 @@ pub fn print(e: &Estimated, request: &Request, paths: &[PathBuf], csv: bool) -> 
         Estimate::Reflex(r) => crate::reflex::reflex_text(r, paths),
         Estimate::Varying(r) => crate::varying::varying_text(r, paths),
         Estimate::Study(r) => {
-            println!("{}", limpid_analysis::result::study::markdown(r));
+            println!("{}", limpid_report::text::study_markdown(r));
             Ok(())
         }
         Estimate::Demo(_) | Estimate::Calibration(_) => Err(format!(

@@ -25,6 +25,7 @@ pub mod png;
 pub mod reproduce;
 mod sections;
 pub mod svg;
+pub mod text;
 
 use std::fmt::Write as _;
 

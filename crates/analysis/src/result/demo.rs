@@ -11,7 +11,6 @@
 //! with the linear estimator (seed 000 eq. (3)-(8)) and compared with the
 //! subject's true matrices by the relative Frobenius error.
 
-use std::fmt::Write as _;
 
 use limpid_core::Matrix;
 use schemars::JsonSchema;
@@ -120,39 +119,4 @@ pub fn relative_error_percent(estimate: &Matrix, truth: &Matrix) -> f64 {
 
 fn ideal() -> DemoSubject {
     DemoSubject::Ideal
-}
-
-/// One row per start point and matrix kind: diagonal of truth and estimate,
-/// error, identifiability.
-pub fn demo_csv(result: &DemoResult) -> String {
-    use limpid_core::CsvNumber;
-    let mut s = String::from("start_point,x,y,z,kind,true_xx,true_yy,true_zz,est_xx,est_yy,est_zz,error_percent,identifiable\n");
-    for d in &result.points {
-        let e = &d.estimate;
-        for kind in MatrixKind::ALL {
-            let (t, m) = (d.truth(kind), e.matrix(kind));
-            let ok = match kind {
-                MatrixKind::Stiffness => e.criteria.identifiable.stiffness,
-                MatrixKind::Damping => e.criteria.identifiable.damping,
-                MatrixKind::Inertia => e.criteria.identifiable.inertia,
-            };
-            let _ = writeln!(
-                s,
-                "{},{},{},{},{},{},{},{},{},{},{},{:.4},{ok}",
-                d.start_point,
-                CsvNumber(d.position[0]),
-                CsvNumber(d.position[1]),
-                CsvNumber(d.position[2]),
-                kind.name(),
-                CsvNumber(t[(0, 0)]),
-                CsvNumber(t[(1, 1)]),
-                CsvNumber(t[(2, 2)]),
-                CsvNumber(m[(0, 0)]),
-                CsvNumber(m[(1, 1)]),
-                CsvNumber(m[(2, 2)]),
-                d.error_percent(kind)
-            );
-        }
-    }
-    s
 }

@@ -154,55 +154,6 @@ impl Row {
     }
 }
 
-/// The reproduction as text: one table per seed (item, paper, limpid,
-/// difference), then the findings.
-pub fn text(r: &Reproduction) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::new();
-    let mut current = String::new();
-    for x in &r.rows {
-        if x.seed != current {
-            current.clone_from(&x.seed);
-            let _ = writeln!(
-                s,
-                "\n{}\n{:<78} {:>10} {:>10} {:>9}  unit",
-                citation(&current),
-                "item",
-                "paper",
-                "limpid",
-                "diff"
-            );
-        }
-        let f = |v: Option<f64>| v.map_or("-".to_string(), crate::result::reproduction::sig);
-        let diff = x.difference();
-        let _ = write!(
-            s,
-            "{:<78} {:>10} {:>10} {:>9}  {}",
-            x.item,
-            f(x.paper),
-            f(x.limpid),
-            diff,
-            x.unit
-        );
-        if !x.note.is_empty() {
-            let _ = write!(s, "  ({})", x.note);
-        }
-        s.push('\n');
-    }
-    s.push_str("\nfindings\n");
-    for f in &r.findings {
-        let _ = writeln!(
-            s,
-            "[{}] {}: {} — {}",
-            if f.holds { "holds" } else { "DIFFERS" },
-            citation(&f.seed),
-            f.claim,
-            f.evidence
-        );
-    }
-    s
-}
-
 /// Four significant digits, exponent for very small or large values.
 pub fn sig(v: f64) -> String {
     if v == 0.0 {

@@ -27,7 +27,6 @@
 //! percent change of each principal stiffness (Fig. 6). A recording that fails
 //! is listed with its error and left out of the means.
 
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use schemars::JsonSchema;
@@ -375,73 +374,4 @@ fn natural(a: &str, b: &str) -> std::cmp::Ordering {
 pub fn cell(v: Option<f64>, decimals: usize, missing: &str) -> String {
     v.filter(|v| v.is_finite())
         .map_or(missing.to_string(), |v| format!("{v:.decimals$}"))
-}
-
-/// Seed 001's tables as Markdown.
-pub fn markdown(r: &StudyResult) -> String {
-    // a value no recording has is a dash, never "NaN"
-    let cell = |v: Option<f64>, decimals: usize| cell(v, decimals, "-");
-    let mut md = format!("# {}\n\n", r.name);
-    let mut levels: Vec<f64> = r.levels.iter().map(|l| l.level).collect();
-    levels.sort_by(f64::total_cmp);
-    levels.dedup();
-    for (i, level) in levels.iter().enumerate() {
-        let _ = writeln!(
-            md,
-            "## Table {}: stiffness at co-contraction level {level}, mean ± sd across subjects (N/m)\n",
-            i + 1
-        );
-        md.push_str("| configuration | subjects | C | Kxx | Kyy | Kzz | K_maxA | K1 | K2 | K3 |\n|---|---|---|---|---|---|---|---|---|---|\n");
-        let pm =
-            |v: Option<f64>, sd: Option<f64>, decimals: usize| match sd.filter(|s| s.is_finite()) {
-                Some(sd) if v.is_some() => format!("{} ± {sd:.decimals$}", cell(v, decimals)),
-                _ => cell(v, decimals),
-            };
-        for l in r.levels.iter().filter(|l| l.level == *level) {
-            let d = &l.sd;
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                l.configuration,
-                l.subjects,
-                pm(l.cocontraction_index, d.cocontraction_index, 3),
-                pm(l.kxx, d.kxx, 1),
-                pm(l.kyy, d.kyy, 1),
-                pm(l.kzz, d.kzz, 1),
-                pm(l.k_max_a, d.k_max_a, 1),
-                pm(l.k1, d.k1, 1),
-                pm(l.k2, d.k2, 1),
-                pm(l.k3, d.k3, 1)
-            );
-        }
-        md.push('\n');
-    }
-    let _ = writeln!(md, "## Table {}: rotation of the principal axes and change of the principal stiffnesses, lowest to highest level\n", levels.len() + 1);
-    md.push_str("| configuration | subjects | Δθ1 (deg) | Δθ2 (deg) | Δθ3 (deg) | ΔK1 (%) | ΔK2 (%) | ΔK3 (%) |\n|---|---|---|---|---|---|---|---|\n");
-    for x in &r.rotation {
-        let g = |v: &Vec<f64>, i: usize| v.get(i).map_or("-".to_string(), |x| format!("{x:.1}"));
-        let _ = writeln!(
-            md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
-            x.configuration,
-            x.subjects,
-            g(&x.rotation_deg, 0),
-            g(&x.rotation_deg, 1),
-            g(&x.rotation_deg, 2),
-            g(&x.principal_change_percent, 0),
-            g(&x.principal_change_percent, 1),
-            g(&x.principal_change_percent, 2)
-        );
-    }
-    if !r.failures.is_empty() {
-        md.push_str("\n## Recordings left out\n\n");
-        for f in &r.failures {
-            let _ = writeln!(
-                md,
-                "- subject {}, configuration {}: {}",
-                f.subject, f.configuration, f.error
-            );
-        }
-    }
-    md
 }
