@@ -11,7 +11,6 @@
 //! with the linear estimator (seed 000 eq. (3)-(8)) and compared with the
 //! subject's true matrices by the relative Frobenius error.
 
-
 use limpid_core::Matrix;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
