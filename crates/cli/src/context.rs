@@ -37,7 +37,7 @@ impl Context {
     }
 
     /// The same, reading recordings as they are.
-    pub fn with_map_none(&self) -> Self {
+    pub fn without_map(&self) -> Self {
         Context::new(self.commands.clone())
     }
 

@@ -58,7 +58,7 @@ pub fn run(args: RerunArgs, cx: &Context) -> CliResult {
             };
             cx.with_map(&p)?
         }
-        None => cx.with_map_none(),
+        None => cx.without_map(),
     };
     let paths: Vec<PathBuf> = run
         .inputs
