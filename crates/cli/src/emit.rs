@@ -79,6 +79,16 @@ pub fn estimate(cx: &Context, request: Request, paths: &[PathBuf], out: Output<'
             }
         })
         .collect::<limpid_core::Result<Vec<_>>>()?;
+    // a periodic recording (multisine, PRBS) read by a time-domain method:
+    // accepted as one continuous record, and said (issue 59)
+    if matches!(checked.request(), Request::Linear(_) | Request::Reflex(_)) {
+        if let Some(rec) = recordings.first().filter(|r| r.column("period").is_some()) {
+            eprintln!(
+                "limpid: note: {}: a periodic recording (period column): estimated as one continuous record, transient periods included; `limpid spectra --period S` analyses it period by period",
+                rec.path().display()
+            );
+        }
+    }
     let mut estimated = limpid_app::estimate::run(&checked, recordings)
         .map_err(|e| cx.with_flag_names(request_command, e))?;
     let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();

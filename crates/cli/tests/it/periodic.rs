@@ -517,3 +517,31 @@ fn inertia_damping_and_stiffness_come_from_the_excited_lines_with_honest_errors(
         v["periodic"]
     );
 }
+
+#[test]
+fn time_domain_methods_accept_a_periodic_recording_and_say_so() {
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("joint.csv");
+    let (inertia, damping, stiffness) = joint_recording(&path, 6, (0.0, 0.0), 2e-5, true);
+    let out = limpid(&["estimate", "reflex", path.to_str().unwrap(), "--json"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("a periodic recording"),
+        "{}",
+        out.stderr
+    );
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    let i = &v["intrinsic"];
+    // the torque-driven joint through the reflex-free cascade
+    for (key, truth) in [
+        ("inertia", inertia),
+        ("damping", damping),
+        ("stiffness", stiffness),
+    ] {
+        let est = i[key].as_f64().unwrap();
+        assert!(
+            (est - truth).abs() < 0.05 * truth,
+            "{key}: {est} vs {truth}"
+        );
+    }
+}
