@@ -278,12 +278,7 @@ fn periodic_summary(p: &limpid_ident::spectra::PeriodicResult) -> String {
                     .join(", ")
             };
             let e = &z.standard_errors;
-            let nonlinear = p
-                .distortion
-                .iter()
-                .chain(&p.input_distortion)
-                .any(|d| d.verdict == "nonlinear");
-            let trust = if nonlinear {
+            let trust = if p.nonlinear() {
                 "not trusted: the response is nonlinear, these are its best linear approximation at this amplitude".to_string()
             } else {
                 format!(

@@ -8,8 +8,8 @@
 //! the full displacement vector X̄ and force vector F̄, so no interpolation
 //! between lines is needed. Weights: each line's residual noise
 //! `var(F̄_o - Z_o X̄)`, from the period-to-period (co)variances of all the
-//! signals at that line (the displacement noise included), with Z from an
-//! unweighted first pass. Standard errors: the weighted least-squares
+//! signals at that line (the displacement noise included), with Z from a
+//! first pass weighted by the force's noise alone. Standard errors: the weighted least-squares
 //! covariance, scaled by the weighted residual per degree of freedom when it
 //! exceeds 1 (what the noise leaves unexplained: model error, a nonlinearity,
 //! drift), so they carry the misfit instead of assuming the model exact.
@@ -73,8 +73,8 @@ pub fn fit(
     let mut rows: Vec<Row> = Vec::with_capacity(n);
     for o in 0..n {
         let f = n + o;
-        // unweighted first pass (each line's force noise alone), then the
-        // residual's own noise with that Z
+        // a first pass weighted by each line's force noise alone, then by
+        // the residual's own noise with that Z
         let first = solve(spectra, &lines, n, f, &omega, |k| {
             spectra.variance_of_mean(f, k)
         })?;

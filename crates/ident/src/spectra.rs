@@ -70,6 +70,17 @@ pub struct PeriodicResult {
     pub impedance: Option<crate::periodic_fit::PeriodicImpedance>,
 }
 
+impl PeriodicResult {
+    /// The outputs' or the inputs' detection lines show nonlinear distortion:
+    /// a linear model is then the best linear approximation at this amplitude.
+    pub fn nonlinear(&self) -> bool {
+        self.distortion
+            .iter()
+            .chain(&self.input_distortion)
+            .any(|d| d.verdict == "nonlinear")
+    }
+}
+
 /// One line of a periodic analysis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PeriodicLine {
@@ -387,13 +398,9 @@ pub fn periodic_spectra(
     let input_side = limpid_dsp::periodic::analyse(&analysed.select(&twice), n_in)
         .ok()
         .and_then(|a| a.distortion);
-    let nonlinear = analysis
-        .distortion
-        .iter()
-        .chain(&input_side)
-        .any(|d| d.nonlinear);
     periodic.input_distortion = input_side.as_ref().map(distortion_of);
     if displacements_to_forces(inputs, outputs) {
+        let nonlinear = periodic.nonlinear();
         periodic.impedance =
             crate::periodic_fit::fit(&analysed, &analysis, n_in, period_s, nonlinear);
     }

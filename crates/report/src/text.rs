@@ -80,18 +80,20 @@ pub fn study_markdown(r: &StudyResult) -> String {
     md
 }
 
+/// A CSV cell: every digit, shortest round trip (exponents for the tiny and
+/// huge); a value no recording has is an empty cell, never "NaN".
+fn csv_cell(v: Option<f64>) -> String {
+    v.filter(|v| v.is_finite())
+        .map_or(String::new(), |v| CsvNumber(v).to_string())
+}
+
 /// A study's level table as CSV (`tables.csv`): every digit, shortest
 /// round trip; a value no recording has is an empty cell, never "NaN".
 pub fn study_levels_csv(r: &StudyResult) -> String {
     let mut csv = String::from(
         "configuration,level,subjects,cocontraction_index,cocontraction_index_sd,kxx,kxx_sd,kyy,kyy_sd,kzz,kzz_sd,k_max_a,k_max_a_sd,k1,k1_sd,k2,k2_sd,k3,k3_sd\n",
     );
-    // every digit, shortest round-trip (exponents for the tiny and huge); a
-    // value no recording has is an empty cell, never "NaN"
-    let cell = |v: Option<f64>, _decimals: usize| {
-        v.filter(|v| v.is_finite())
-            .map_or(String::new(), |v| limpid_core::CsvNumber(v).to_string())
-    };
+    let cell = |v: Option<f64>, _: usize| csv_cell(v);
     for l in &r.levels {
         let _ = writeln!(
             csv,
@@ -124,11 +126,7 @@ pub fn study_levels_csv(r: &StudyResult) -> String {
 pub fn study_rotation_csv(r: &StudyResult) -> String {
     let mut rot = String::from("configuration,from_level,to_level,subjects,rotation_primary_deg,rotation_secondary_deg,rotation_tertiary_deg,change_primary_percent,change_secondary_percent,change_tertiary_percent\n");
     for x in &r.rotation {
-        let g = |v: &Vec<f64>, i: usize| {
-            v.get(i)
-                .filter(|x| x.is_finite())
-                .map_or(String::new(), |x| limpid_core::CsvNumber(*x).to_string())
-        };
+        let g = |v: &Vec<f64>, i: usize| csv_cell(v.get(i).copied());
         let _ = writeln!(
             rot,
             "{},{},{},{},{},{},{},{},{},{}",

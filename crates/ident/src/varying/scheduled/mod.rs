@@ -134,9 +134,13 @@ pub(super) fn estimate(
     };
     let cov = robust_covariances(&design, &fitted).ok_or_else(too_short)?;
     let p1 = order + 1;
+    // the fit without the pathway: what the pathway adds, and the intrinsic
+    // parameters when no reflex is detected
+    let without = reflex.as_ref().and_then(|_| fit(&design_at(order, false)));
     let reflex_summary = reflex.as_ref().map(|c| {
-        let without = fit(&design_at(order, false));
-        let gain = without.map_or(0.0, |w| vaf(fitted.press) - vaf(w.press));
+        let gain = without
+            .as_ref()
+            .map_or(0.0, |w| vaf(fitted.press) - vaf(w.press));
         reflex_test(c, &design, &fitted, &cov[0], gain, fs, &mut warnings)
     });
     // a pathway the data do not show still takes up part of K and B (its
@@ -145,7 +149,7 @@ pub(super) fn estimate(
     let undetected = reflex_summary.as_ref().is_some_and(|s| !s.detected);
     let intrinsic_design = design_at(order, reflex.is_some() && !undetected);
     let intrinsic = if undetected {
-        let f = fit(&intrinsic_design).ok_or_else(too_short)?;
+        let f = without.ok_or_else(too_short)?;
         let c = robust_covariances(&intrinsic_design, &f).ok_or_else(too_short)?;
         Some((f, c))
     } else {
@@ -466,12 +470,7 @@ impl GridFit<'_> {
 /// The variance of parameter group `group` at the basis values `phi`, from
 /// one output's coefficient covariance.
 fn variance(design: &Design<'_>, cov: &DMatrix<f64>, phi: &[f64], group: usize) -> f64 {
-    let p1 = phi.len();
-    let base = if group == 3 * design.rows.d {
-        design.reflex_start()
-    } else {
-        group * p1
-    };
+    let (p1, base) = (phi.len(), group_start(design, group));
     (0..p1)
         .flat_map(|a| (0..p1).map(move |b| (a, b)))
         .map(|(a, b)| phi[a] * phi[b] * cov[(base + a, base + b)])
@@ -480,13 +479,18 @@ fn variance(design: &Design<'_>, cov: &DMatrix<f64>, phi: &[f64], group: usize) 
 
 /// Parameter group `group` of output `j` of a fit at the basis values `phi`.
 fn evaluate(design: &Design<'_>, fitted: &Fitted, phi: &[f64], group: usize, j: usize) -> f64 {
-    let p1 = phi.len();
-    let base = if group == 3 * design.rows.d {
+    let (p1, base) = (phi.len(), group_start(design, group));
+    (0..p1).map(|i| phi[i] * fitted.theta[(base + i, j)]).sum()
+}
+
+/// The first coefficient column of parameter group `group` (M, B, K of each
+/// coordinate, then the reflex gain).
+fn group_start(design: &Design<'_>, group: usize) -> usize {
+    if group == 3 * design.rows.d {
         design.reflex_start()
     } else {
-        group * p1
-    };
-    (0..p1).map(|i| phi[i] * fitted.theta[(base + i, j)]).sum()
+        group * (design.order + 1)
+    }
 }
 
 fn short(v: f64) -> String {
