@@ -227,6 +227,38 @@ fn spectra(s: &limpid_ident::spectra::SpectraResult) -> Result<(), String> {
             }
         }
     }
+    if let Some(p) = &s.periodic {
+        periodic(p, ni)?;
+    }
+    Ok(())
+}
+
+/// Each pair's response arrays along its lines; M, B, K square in the inputs.
+fn periodic(p: &limpid_ident::spectra::PeriodicResult, ni: usize) -> Result<(), String> {
+    for (k, f) in p.frf.iter().enumerate() {
+        let n = f.frequency_hz.len();
+        for (name, len) in [
+            ("magnitude", f.magnitude.len()),
+            ("magnitude_se", f.magnitude_se.len()),
+            ("phase_deg", f.phase_deg.len()),
+            ("phase_se_deg", f.phase_se_deg.len()),
+        ] {
+            same(&format!("periodic.frf[{k}].{name}"), len, n, "frequency_hz")?;
+        }
+    }
+    if let Some(z) = &p.impedance {
+        let e = &z.standard_errors;
+        for (name, m) in [
+            ("inertia", &z.inertia),
+            ("damping", &z.damping),
+            ("stiffness", &z.stiffness),
+            ("standard_errors.inertia", &e.inertia),
+            ("standard_errors.damping", &e.damping),
+            ("standard_errors.stiffness", &e.stiffness),
+        ] {
+            square(&format!("periodic.impedance.{name}"), m, ni)?;
+        }
+    }
     Ok(())
 }
 

@@ -545,3 +545,39 @@ fn time_domain_methods_accept_a_periodic_recording_and_say_so() {
         );
     }
 }
+
+#[test]
+fn a_periodic_result_whose_arrays_disagree_is_refused_by_the_report() {
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("joint.csv");
+    joint_recording(&path, 4, (0.0, 0.0), 2e-3, true);
+    let good = spectra(&path, "q1", "tau1");
+    let html = d.path().join("r.html");
+    for (edit, says) in [
+        (
+            "/periodic/impedance/stiffness",
+            "periodic.impedance.stiffness",
+        ),
+        ("/periodic/frf/0/magnitude", "periodic.frf[0].magnitude"),
+    ] {
+        let mut bad = good.clone();
+        let target = bad.pointer_mut(edit).unwrap();
+        *target = if edit.ends_with("stiffness") {
+            serde_json::json!([[1.0, 2.0]])
+        } else {
+            serde_json::json!([1.0])
+        };
+        let file = d.path().join("bad.json");
+        std::fs::write(&file, bad.to_string()).unwrap();
+        let out = limpid(&[
+            "report",
+            file.to_str().unwrap(),
+            "-o",
+            html.to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 2, "{edit}: {}", out.stderr);
+        assert!(out.stderr.contains(says), "{edit}: {}", out.stderr);
+        assert_eq!(out.stderr.trim_end().lines().count(), 1, "{}", out.stderr);
+        assert!(!out.stderr.contains("internal error"), "{}", out.stderr);
+    }
+}
