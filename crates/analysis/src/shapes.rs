@@ -29,7 +29,35 @@ pub fn check(e: &Estimate) -> Result<(), String> {
         Estimate::Reflex(r) => reflex(r),
         Estimate::Varying(v) => varying(v),
         Estimate::Calibration(c) => calibration(c),
+        Estimate::Design(d) => design(d),
     }
+}
+
+/// A design's matrices are 3 x 3 (the prediction, the baseline's).
+fn design(d: &crate::result::design::DesignResult) -> Result<(), String> {
+    let mut predictions = vec![("predicted", &d.predicted)];
+    predictions.extend(d.baseline.as_ref().map(|b| ("baseline", b)));
+    for (name, p) in predictions {
+        for (field, m) in [
+            ("stiffness_se", &p.stiffness_se),
+            ("damping_se", &p.damping_se),
+            ("inertia_se", &p.inertia_se),
+        ] {
+            same(
+                &format!("{name}.{field} rows"),
+                m.0.nrows(),
+                3,
+                "coordinates",
+            )?;
+            same(
+                &format!("{name}.{field} columns"),
+                m.0.ncols(),
+                3,
+                "coordinates",
+            )?;
+        }
+    }
+    Ok(())
 }
 
 /// Every spectrum, coherence and matrix agrees with the frequencies, coordinates and inputs.

@@ -14,6 +14,7 @@
 
 pub mod calibrate;
 pub mod demo;
+pub mod design;
 pub mod estimate;
 pub mod live_check;
 pub mod protocol;

@@ -26,12 +26,17 @@ pub enum ProtocolCommand {
     /// (planar), or the input signals (stochastic).
     Export {
         protocol: PathBuf,
-        /// Centre-out only: kuka-lwr4, puma3 or a .urdf file.
+        /// Centre-out only: kuka-lwr4, puma3 or a .urdf file, for joint angles as well;
+        /// without it, the end-point command (t, start_point, trial, x, y, z).
         #[arg(long)]
         robot: Option<String>,
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Design a centre-out protocol for the linear estimator: the profile, radius, speed, hold,
+    /// rest and number of perturbations that minimise the predicted variance of the chosen
+    /// parameters on a prior subject, within the limits at every sample and a time budget.
+    Design(DesignArgs),
     /// Check a protocol against its safety limits and report what it will excite,
     /// with the condition number the estimator will meet on a nominal subject.
     Check {
@@ -39,6 +44,49 @@ pub enum ProtocolCommand {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Args)]
+pub struct DesignArgs {
+    /// Prior subject (TOML): 3 x 3 `inertia`, `damping`, `stiffness` (SI), optional `start_m`
+    /// (the posture), `[other_end]` (the same matrices at the other end of its range: the
+    /// design is for the worse end), `[noise]` (default: a human subject's) and `[limits]`.
+    /// `demo:S1` .. `demo:S6`: the demo's realistic subject at that start point.
+    #[arg(long)]
+    pub prior: String,
+    /// Take the limits, workspace and sample rate of this centre-out protocol (TOML).
+    #[arg(long, value_name = "P.toml")]
+    pub limits_from: Option<PathBuf>,
+    /// The designed protocol's whole length (s): rests, motions, holds, returns and relaxation.
+    #[arg(long, value_name = "S")]
+    pub duration: f64,
+    /// What matters: `stiffness,damping` or weights, `stiffness=2,damping=1,inertia=0.5`.
+    #[arg(long, default_value = "stiffness,damping")]
+    pub objective: String,
+    /// The family the protocol is chosen from: centre-out (multisine and PRBS designs are not available yet).
+    #[arg(long, default_value = "centre-out")]
+    pub family: String,
+    /// The estimator the design is for: linear.
+    #[arg(long, default_value = "linear")]
+    pub method: String,
+    /// The protocol it replaces (TOML, centre-out): predicted at the prior's start point beside the design.
+    #[arg(long, value_name = "P.toml")]
+    pub baseline: Option<PathBuf>,
+    /// Simulate N recordings on subjects drawn from the prior and print predicted against achieved spread.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub verify: usize,
+    /// Simulated recordings behind the prediction.
+    #[arg(long, value_name = "N", default_value_t = 40)]
+    pub runs: usize,
+    /// Seed of the simulated noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Write the designed protocol (TOML) here.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Print the result as JSON (`kind: design`).
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
@@ -108,9 +156,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             )?;
             match (read_design(&protocol)?.0, robot) {
             (Design::CentreOut(p), Some(robot)) => export(&p, &robot, &protocol, &output),
-            (Design::CentreOut(_), None) => {
-                Err("a centre-out protocol is exported for a robot: add --robot kuka-lwr4|puma3|FILE.urdf".into())
-            }
+            (Design::CentreOut(p), None) => export_command(&p, &protocol, &output),
             (Design::Planar(p), _) => export_planar(&p, &output),
             (Design::Periodic(p), None) => export_periodic(&p, &output),
             (Design::Periodic(_), Some(_)) => Err(
@@ -122,6 +168,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             ),
             }
         }
+        ProtocolCommand::Design(args) => run_design(args),
         ProtocolCommand::Check { protocol, json } => {
             let (d, report) = read_design(&protocol)?;
             let predicted = limpid_app::protocol::predicted_condition(&d)?;
@@ -254,7 +301,7 @@ fn export(p: &Protocol, robot: &str, protocol: &Path, output: &Path) -> CliResul
         .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
     let source = if is_urdf { urdf } else { protocol };
     let robot = placed_robot(robot, p)?;
-    let rec = limpid_lab::export::centre_out_schedule(p, &robot, source)?;
+    let rec = limpid_lab::export::centre_out_schedule(p, Some(&robot), source)?;
     limpid_io::write_recording(&rec, output)?;
     println!(
         "wrote {}: {} samples of end-effector positions and {} joint angles ({})",
@@ -262,6 +309,19 @@ fn export(p: &Protocol, robot: &str, protocol: &Path, output: &Path) -> CliResul
         rec.len(),
         robot.dof(),
         robot.name
+    );
+    Ok(())
+}
+
+/// Write a centre-out protocol's end-point command (no robot) and say so.
+fn export_command(p: &Protocol, protocol: &Path, output: &Path) -> CliResult {
+    let rec = limpid_lab::export::centre_out_schedule(p, None, protocol)?;
+    limpid_io::write_recording(&rec, output)?;
+    println!(
+        "wrote {}: {} samples ({:.1} s) of end-point positions x, y, z (m) with start_point and trial columns, at rest at the start point at both ends",
+        output.display(),
+        rec.len(),
+        rec.len() as f64 / p.sample_rate_hz
     );
     Ok(())
 }
@@ -357,4 +417,215 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
         write_truth(&out, run.recording.len(), &run.truth)?;
     }
     Ok(())
+}
+
+/// A centre-out protocol from a file, or a one-line error saying what it is instead.
+fn read_centre_out(path: &Path, role: &str) -> CliResult<Protocol> {
+    match read_design(path)?.0 {
+        Design::CentreOut(p) => Ok(p),
+        _ => Err(format!(
+            "{}: {role} must be a centre-out protocol (the design is for the linear method)",
+            path.display()
+        )
+        .into()),
+    }
+}
+
+fn run_design(args: DesignArgs) -> CliResult {
+    use limpid_app::design::{design, DesignRequest, Objective, Prior};
+    let mut inputs: Vec<(&Path, &str)> = Vec::new();
+    let prior_path = PathBuf::from(&args.prior);
+    let demo = args.prior.strip_prefix("demo:");
+    if demo.is_none() {
+        inputs.push((&prior_path, "the prior (--prior)"));
+    }
+    inputs.extend(
+        args.limits_from
+            .as_deref()
+            .map(|p| (p, "the limits (--limits-from)")),
+    );
+    inputs.extend(
+        args.baseline
+            .as_deref()
+            .map(|p| (p, "the baseline (--baseline)")),
+    );
+    if let Some(out) = &args.output {
+        limpid_core::files::refuse_overwriting_inputs(&[(out, "the output (-o)")], &inputs)?;
+    }
+    if args.method != "linear" {
+        return Err(format!(
+            "--method {}: designs are available for the linear method only (reflex, stochastic and planar designs are not written yet)",
+            args.method
+        )
+        .into());
+    }
+    if !matches!(args.family.as_str(), "centre-out" | "any") {
+        return Err(format!(
+            "--family {}: the linear method's designs are centre-out (prbs and multisine designs are not written yet); expected centre-out or any",
+            args.family
+        )
+        .into());
+    }
+    let objective =
+        Objective::parse(&args.objective).map_err(|e| format!("invalid --objective: {e}"))?;
+    let prior = match demo {
+        Some(point) => {
+            let index = point
+                .strip_prefix('S')
+                .and_then(|i| i.parse::<usize>().ok())
+                .filter(|i| (1..=6).contains(i))
+                .ok_or_else(|| format!("--prior {}: expected demo:S1 .. demo:S6", args.prior))?;
+            Prior::demo(index - 1)
+        }
+        None => Prior::from_toml(&limpid_core::files::read_text(&prior_path)?, &prior_path)?,
+    };
+    let limits_from = args
+        .limits_from
+        .as_deref()
+        .map(|p| read_centre_out(p, "--limits-from"))
+        .transpose()?;
+    let baseline = args
+        .baseline
+        .as_deref()
+        .map(|p| read_centre_out(p, "--baseline"))
+        .transpose()?;
+    let (limits, sample_rate_hz) = match (&limits_from, &prior.limits) {
+        (Some(p), _) => (p.limits.clone(), p.sample_rate_hz),
+        (None, Some(l)) => (l.clone(), baseline.as_ref().map_or(500.0, |b| b.sample_rate_hz)),
+        (None, None) => {
+            return Err("no limits: give --limits-from P.toml (a centre-out protocol) or a [limits] table in the prior".into())
+        }
+    };
+    let request = DesignRequest {
+        prior,
+        limits,
+        sample_rate_hz,
+        budget_s: args.duration,
+        objective,
+        runs: args.runs,
+        baseline,
+        verify: args.verify,
+        seed: args.seed,
+    };
+    // a setting's error names its flag; the prior's (a start point outside the workspace) the file
+    let named = |e: limpid_core::Error| match e {
+        limpid_core::Error::InvalidParameter { name, message }
+            if ["duration", "runs", "verify"].contains(&name.as_str()) =>
+        {
+            format!("invalid --{name}: {message}")
+        }
+        limpid_core::Error::InvalidParameter { name, message } if name == "prior" && demo.is_none() => {
+            format!("{}: {message}", args.prior)
+        }
+        other => other.to_string(),
+    };
+    limpid_app::design::check_request(&request).map_err(named)?;
+    if !args.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        eprintln!("designing: every candidate is simulated and estimated on the prior (a few seconds) ...");
+    }
+    let designed = design(&request).map_err(named)?;
+    if let Some(out) = &args.output {
+        let text = format!(
+            "# limpid protocol design (objective {}, budget {} s); units: m, rad, s, Hz, N\nkind = \"centre-out\"\n{}",
+            args.objective,
+            args.duration,
+            designed.protocol.to_toml()
+        );
+        limpid_core::files::write_file(out, text.as_bytes())?;
+    }
+    if args.json {
+        println!(
+            "{}",
+            limpid_analysis::result::Document::new(limpid_analysis::result::Estimate::Design(
+                designed.result
+            ))
+            .with_run(limpid_analysis::result::Run::of_this_process(
+                &inputs.iter().map(|(p, _)| *p).collect::<Vec<_>>()
+            ))
+            .to_json_pretty()
+        );
+        return Ok(());
+    }
+    print_design(&designed.result);
+    match &args.output {
+        Some(out) => println!("wrote {} (check it: limpid protocol check {0}; play it: limpid protocol export {0} -o command.csv)", out.display()),
+        None => println!("protocol not written: add -o D.toml"),
+    }
+    Ok(())
+}
+
+fn print_design(r: &limpid_analysis::result::design::DesignResult) {
+    let c = &r.chosen;
+    println!(
+        "designed: {} {} perturbations of {} mm, {} ms out, {} ms hold, {} ms back; rest {} s, relax {} s: {:.1} s of {} s, at ({}, {}, {}) m",
+        c.trials,
+        c.profile,
+        num(c.radius_m * 1e3),
+        num(c.motion_s * 1e3),
+        num(c.hold_s * 1e3),
+        num(c.motion_s * 1e3),
+        num(c.rest_s),
+        num(c.relax_s),
+        c.duration_s,
+        num(r.budget_s),
+        num(r.start_m[0]),
+        num(r.start_m[1]),
+        num(r.start_m[2])
+    );
+    println!(
+        "predicted on the prior ({} simulated recordings each; SE: RMS element s.d., and relative to the RMS element):",
+        r.predicted.runs
+    );
+    println!(
+        "  {:<9} {:>22} {:>22} {:>22} {:>9} {:>9} {:>16}",
+        "", "K SE (N/m)", "B SE (N s/m)", "M SE (kg)", "K err %", "B err %", "identifiable K/B/M %"
+    );
+    let row = |label: &str, p: &limpid_analysis::result::design::Prediction| {
+        let cell = |m: usize| format!("{} ({:.1} %)", num(p.pooled.se[m]), p.pooled.se_percent[m]);
+        println!(
+            "  {:<9} {:>22} {:>22} {:>22} {:>9.1} {:>9.1} {:>10.0}/{:.0}/{:.0}",
+            label,
+            cell(0),
+            cell(1),
+            cell(2),
+            p.pooled.error_percent[0],
+            p.pooled.error_percent[1],
+            100.0 * p.identifiable_share[0],
+            100.0 * p.identifiable_share[1],
+            100.0 * p.identifiable_share[2]
+        );
+    };
+    row("design", &r.predicted);
+    if let Some(b) = &r.baseline {
+        row("baseline", b);
+        println!("  (baseline: {:.1} s at this start point)", b.duration_s);
+    }
+    println!("margins to the limits:");
+    for m in &r.limits {
+        println!(
+            "  {:<40} {} of {} {} ({:.1} % to spare)",
+            m.quantity,
+            num(m.peak),
+            num(m.limit),
+            m.unit,
+            m.margin_percent
+        );
+    }
+    if let Some(v) = &r.verify {
+        println!(
+            "verified on {} subjects drawn from the prior: achieved SE K {}, B {}, M {}; predicted/achieved {:.2}, {:.2}, {:.2}; K within 5 % and B within 20 % of the truth, both identifiable: {:.0} %",
+            v.runs,
+            num(v.achieved_se[0]),
+            num(v.achieved_se[1]),
+            num(v.achieved_se[2]),
+            v.ratio[0],
+            v.ratio[1],
+            v.ratio[2],
+            100.0 * v.within_tolerance_share
+        );
+    }
+    println!(
+        "search: {} candidates on {} recordings each ({} refused by a limit or the budget)",
+        r.search.candidates, r.search.runs_per_candidate, r.search.refused
+    );
 }

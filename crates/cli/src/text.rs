@@ -30,11 +30,12 @@ pub fn print(e: &Estimated, request: &Request, paths: &[PathBuf], csv: bool) -> 
             println!("{}", limpid_report::text::study_markdown(r));
             Ok(())
         }
-        Estimate::Demo(_) | Estimate::Calibration(_) => Err(format!(
+        Estimate::Demo(_) | Estimate::Calibration(_) | Estimate::Design(_) => Err(format!(
             "a {} result is printed by its own command (`limpid {}`), not by an estimate",
             e.document.estimate.kind(),
             match e.document.estimate {
                 Estimate::Demo(_) => "demo",
+                Estimate::Design(_) => "protocol design",
                 _ => "calibrate",
             }
         )

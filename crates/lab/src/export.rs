@@ -25,23 +25,28 @@ pub fn placed_robot(name: &str, p: &Protocol) -> Result<Robot> {
 
 /// Every phase of every trial of a centre-out protocol (rest, centre-out,
 /// hold, return by the same profile reversed, relax, and seed 001's rests
-/// between sets), tracked by `robot` with the orientation of its home pose
-/// held: columns t, start_point, trial, x, y, z, robot_q1..n. `source` is the
-/// file errors name: the robot's URDF, or the protocol for a built-in robot
-/// (a start point out of reach is theirs, not the output's).
-pub fn centre_out_schedule(p: &Protocol, robot: &Robot, source: &Path) -> Result<Recording> {
+/// between sets): columns t, start_point, trial, x, y, z, and with a `robot`
+/// its joint angles robot_q1..n, tracking the path with the orientation of
+/// its home pose held. Without a robot it is the end-point command any rig or
+/// simulator can play: at rest at the start point at its first and last
+/// sample. `source` is the file errors name: the robot's URDF, or the
+/// protocol for a built-in robot (a start point out of reach is theirs, not
+/// the output's).
+pub fn centre_out_schedule(
+    p: &Protocol,
+    robot: Option<&Robot>,
+    source: &Path,
+) -> Result<Recording> {
     let fail = |message: String| Error::Format {
         path: source.to_path_buf(),
         message,
     };
-    let home = robot.home();
-    let orientation: Matrix3<f64> = robot.fk(&home).fixed_view::<3, 3>(0, 0).into();
     let fs = p.sample_rate_hz;
     let ph = &p.phases;
     let total_s = ph.rest_s + ph.centre_out_s + ph.hold_s + ph.return_s + ph.relax_s;
     let per = (total_s * fs).round() as usize;
     let dirs = p.directions();
-    let n = robot.dof();
+    let n = robot.map_or(0, Robot::dof);
     // start points in parallel (each tracks its trials in order, every trial
     // starting from the joints where the previous one ended); the time column
     // is numbered once they are joined
@@ -61,9 +66,17 @@ pub fn centre_out_schedule(p: &Protocol, robot: &Robot, source: &Path) -> Result
                     cols[5 + j].push(*v);
                 }
             };
-            let mut q = robot
-                .reach(start, &orientation, &home)
-                .map_err(|e| fail(format!("{}: start point {}: {e}", robot.name, si + 1)))?;
+            let mut q = match robot {
+                Some(robot) => {
+                    let home = robot.home();
+                    let orientation: Matrix3<f64> = robot.fk(&home).fixed_view::<3, 3>(0, 0).into();
+                    let q = robot.reach(start, &orientation, &home).map_err(|e| {
+                        fail(format!("{}: start point {}: {e}", robot.name, si + 1))
+                    })?;
+                    Some((robot, orientation, q))
+                }
+                None => None,
+            };
             for (ti, dir) in dirs.iter().enumerate() {
                 let positions: Vec<nalgebra::Vector3<f64>> = (0..per)
                     .map(|i| {
@@ -76,28 +89,37 @@ pub fn centre_out_schedule(p: &Protocol, robot: &Robot, source: &Path) -> Result
                         start + dir * (p.targets.radius_m * (out - back))
                     })
                     .collect();
-                let joints = robot
-                    .track(&positions, &orientation, &q)
-                    .map_err(|e| fail(format!("start point {}, target {}: {e}", si + 1, ti + 1)))?;
-                robot
-                    .check_joint_trajectory(&joints, 1.0 / fs)
-                    .map_err(|e| {
-                        fail(format!(
-                            "{}: start point {}, target {}: {e}",
-                            robot.name,
-                            si + 1,
-                            ti + 1
-                        ))
-                    })?;
+                let joints = match &mut q {
+                    Some((robot, orientation, q)) => {
+                        let joints = robot.track(&positions, orientation, q).map_err(|e| {
+                            fail(format!("start point {}, target {}: {e}", si + 1, ti + 1))
+                        })?;
+                        robot
+                            .check_joint_trajectory(&joints, 1.0 / fs)
+                            .map_err(|e| {
+                                fail(format!(
+                                    "{}: start point {}, target {}: {e}",
+                                    robot.name,
+                                    si + 1,
+                                    ti + 1
+                                ))
+                            })?;
+                        if let Some(last) = joints.last() {
+                            *q = last.clone();
+                        }
+                        joints
+                    }
+                    None => vec![Vec::new(); positions.len()],
+                };
                 for (x, qk) in positions.iter().zip(&joints) {
                     push((ti + 1) as f64, x, qk.as_slice());
                 }
-                q = joints.last().cloned().unwrap_or(q);
                 // seed 001: a longer rest between sets, holding the start point
                 let set = p.phases.trials_per_set;
                 if set > 0 && (ti + 1) % set == 0 && ti + 1 < dirs.len() {
                     for _ in 0..(p.phases.set_rest_s * fs).round() as usize {
-                        push(0.0, start, q.as_slice());
+                        let held = q.as_ref().map_or(&[][..], |(_, _, q)| q.as_slice());
+                        push(0.0, start, held);
                     }
                 }
             }

@@ -32,6 +32,7 @@ use std::fmt::Write as _;
 use sections::calibration::calibration_section;
 use sections::cocontraction::cocontraction_section;
 use sections::demo::demo_section;
+use sections::design;
 use sections::linear::linear_section;
 use sections::planar::{planar_section, sweep_section};
 use sections::reflex::reflex_section;
@@ -136,6 +137,7 @@ pub fn build(inputs: &[(String, Estimate)]) -> Report {
             Estimate::Study(r) => study_section(name, r),
             Estimate::Cocontraction(r) => cocontraction_section(name, r),
             Estimate::Calibration(r) => calibration_section(name, r),
+            Estimate::Design(r) => design::section(name, r),
             Estimate::Varying(r) => varying::section(name, r),
         })
         .collect();

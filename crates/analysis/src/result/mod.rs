@@ -13,6 +13,7 @@
 
 pub mod calibration;
 pub mod demo;
+pub mod design;
 pub mod reproduction;
 pub mod study;
 
@@ -59,6 +60,8 @@ pub enum Estimate {
     Demo(DemoResult),
     /// Coverage and verdict calibration over virtual subjects (`limpid calibrate`).
     Calibration(crate::result::calibration::Calibration),
+    /// A protocol designed for an estimate (`limpid protocol design`), with its predicted precision.
+    Design(crate::result::design::DesignResult),
 }
 
 impl Estimate {
@@ -76,6 +79,7 @@ impl Estimate {
             Estimate::Study(_) => "study",
             Estimate::Demo(_) => "demo",
             Estimate::Calibration(_) => "calibration",
+            Estimate::Design(_) => "design",
         }
     }
 

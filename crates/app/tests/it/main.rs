@@ -2,5 +2,6 @@
 
 mod accuracy;
 mod demo;
+mod design;
 mod live_coverage;
 mod requests;

@@ -5,6 +5,7 @@ mod bad_input;
 mod cocontraction;
 mod common;
 mod coverage;
+mod design;
 mod examples;
 mod gravity;
 mod hostile;

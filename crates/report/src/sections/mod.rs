@@ -3,6 +3,7 @@
 pub(crate) mod calibration;
 pub(crate) mod cocontraction;
 pub(crate) mod demo;
+pub(crate) mod design;
 pub(crate) mod linear;
 pub(crate) mod planar;
 pub(crate) mod reflex;

@@ -1,0 +1,176 @@
+//! The result of `limpid protocol design` (issue 60): the chosen protocol,
+//! the standard errors it is predicted to give on the prior subject, the same
+//! for the protocol it replaces, the margin to every limit and, with
+//! `--verify`, the spread it achieved on subjects drawn from the prior.
+
+use limpid_core::Matrix;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// A designed experiment.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct DesignResult {
+    /// The estimator the design is for (`linear`).
+    pub method: String,
+    /// The family the protocol was chosen from (`centre-out`).
+    pub family: String,
+    /// Weights of the relative variances of K, B and M in the objective.
+    pub objective: ObjectiveWeights,
+    /// The time budget (s): rests, motions, holds, returns and relaxation counted.
+    pub budget_s: f64,
+    /// The start point the design is for (m): the prior's posture.
+    pub start_m: [f64; 3],
+    /// The family's parameters that were chosen.
+    pub chosen: CentreOutChoice,
+    /// Predicted on the prior subject (the nominal one; the worse end when the prior has a range).
+    pub predicted: Prediction,
+    /// The same for the protocol it replaces (`--baseline`), at the same start point.
+    pub baseline: Option<Prediction>,
+    /// The designed protocol (the TOML written by `-o`, as JSON).
+    pub protocol: serde_json::Value,
+    /// Largest value reached against each limit.
+    pub limits: Vec<LimitMargin>,
+    /// How the design was searched.
+    pub search: SearchSummary,
+    /// With `--verify N`: the design run on subjects drawn from the prior.
+    pub verify: Option<Verification>,
+    /// One perturbation of the design along its direction, for plots.
+    pub command: CommandTrace,
+    /// What one perturbation excites, against the limits.
+    pub spectrum: CommandSpectrum,
+}
+
+/// One perturbation (rest, out, hold, back, relax) along its direction.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct CommandTrace {
+    /// Time from the start of the trial (s).
+    pub t_s: Vec<f64>,
+    /// Displacement from the start point (m).
+    pub displacement_m: Vec<f64>,
+    /// Velocity (m/s).
+    pub velocity_m_s: Vec<f64>,
+    /// Acceleration (m/s^2).
+    pub acceleration_m_s2: Vec<f64>,
+}
+
+/// Amplitude of one perturbation's displacement by frequency: `2 |X(f)| / T`
+/// over the trial of length T (the amplitude a sine filling the trial would
+/// have), beside the largest sine amplitude the limits allow at that
+/// frequency, `min(d_max, v_max / ω, a_max / ω²)`.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct CommandSpectrum {
+    /// Frequencies (Hz), log-spaced.
+    pub frequency_hz: Vec<f64>,
+    /// The design's (m).
+    pub designed_m: Vec<f64>,
+    /// The baseline's, when there is one (m).
+    pub baseline_m: Option<Vec<f64>>,
+    /// The limits' envelope (m).
+    pub limit_m: Vec<f64>,
+}
+
+/// Weights of the objective.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema)]
+pub struct ObjectiveWeights {
+    /// Of K's relative variance.
+    pub stiffness: f64,
+    /// Of B's relative variance.
+    pub damping: f64,
+    /// Of M's relative variance.
+    pub inertia: f64,
+}
+
+/// The parameters of a centre-out protocol that the design chooses.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct CentreOutChoice {
+    /// Profile of the motion out and of the return.
+    pub profile: String,
+    /// Distance from start to target (m).
+    pub radius_m: f64,
+    /// Duration of the motion out, and of the return (s).
+    pub motion_s: f64,
+    /// Recorded hold at the target (s).
+    pub hold_s: f64,
+    /// Recorded rest before each perturbation (s).
+    pub rest_s: f64,
+    /// Unrecorded relaxation after each return (s).
+    pub relax_s: f64,
+    /// Perturbations (target directions).
+    pub trials: usize,
+    /// Length of the whole protocol (s).
+    pub duration_s: f64,
+}
+
+/// Standard errors and bias a protocol is predicted to give.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct Prediction {
+    /// Spread (s.d.) of each K element over the simulated recordings (N/m).
+    pub stiffness_se: Matrix,
+    /// Of each B element (N s/m).
+    pub damping_se: Matrix,
+    /// Of each M element (kg).
+    pub inertia_se: Matrix,
+    /// Root mean square of the nine s.d. of K, B and M, and relative to the
+    /// RMS element of the prior's matrix (percent).
+    pub pooled: Pooled,
+    /// Recordings simulated for the prediction.
+    pub runs: usize,
+    /// Length of the protocol at one start point (s).
+    pub duration_s: f64,
+    /// Share of the runs whose estimate the criteria called identifiable: K, B, M.
+    pub identifiable_share: [f64; 3],
+}
+
+/// Pooled figures of a matrix triple.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema)]
+pub struct Pooled {
+    /// RMS of the element s.d. of K (N/m), B (N s/m), M (kg).
+    pub se: [f64; 3],
+    /// The same relative to the prior's RMS element (percent).
+    pub se_percent: [f64; 3],
+    /// Mean relative Frobenius error of K, B, M against the truth (percent): bias and spread.
+    pub error_percent: [f64; 3],
+}
+
+/// The largest value a protocol reaches against one limit.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct LimitMargin {
+    /// What is limited.
+    pub quantity: String,
+    /// Unit of `peak` and `limit`.
+    pub unit: String,
+    /// Largest value over every sample.
+    pub peak: f64,
+    /// The limit.
+    pub limit: f64,
+    /// `1 - peak / limit`, percent.
+    pub margin_percent: f64,
+}
+
+/// How the search went.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct SearchSummary {
+    /// Candidate protocols evaluated.
+    pub candidates: usize,
+    /// Simulated recordings per candidate (the same noise seeds for every candidate).
+    pub runs_per_candidate: usize,
+    /// Candidates refused by a limit or the time budget.
+    pub refused: usize,
+    /// The objective of the chosen design (weighted relative variance, percent squared).
+    pub objective: f64,
+}
+
+/// Predicted against achieved spread on subjects drawn from the prior.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct Verification {
+    /// Recordings simulated.
+    pub runs: usize,
+    /// Achieved pooled s.d. of the estimate's error for K, B, M (same units as `Pooled::se`).
+    pub achieved_se: [f64; 3],
+    /// Predicted over achieved, K, B, M.
+    pub ratio: [f64; 3],
+    /// Share of runs with K within 5 % and B within 20 % of the truth (Frobenius), both identifiable.
+    pub within_tolerance_share: f64,
+    /// Mean relative Frobenius error of K, B, M (percent).
+    pub error_percent: [f64; 3],
+}

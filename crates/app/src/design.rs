@@ -1,0 +1,964 @@
+//! Experiment design (issue 60): choose a centre-out protocol for the linear
+//! estimator (seed 000 eq. (2)-(8)) that minimises the predicted variance of
+//! the parameters that matter, within the safety limits and a time budget,
+//! at one posture.
+//!
+//! **Prediction.** A protocol's predicted standard errors are the spread of
+//! the linear estimator's own estimates over recordings of the protocol
+//! simulated on the prior subject with the prior's noise model (limpid's lab:
+//! servo, sensor offsets, drift, signal-dependent force fluctuation, posture
+//! drift), each prepared and fitted exactly as `limpid estimate linear` does.
+//! This is the estimator's covariance computed through its own preparation
+//! (filter, derivatives, rest offsets) rather than through a linearised
+//! Fisher information: the realistic noise model is signal-dependent and
+//! slow, and the rest-offset subtraction makes it non-stationary, which a
+//! closed-form information matrix would have to approximate.
+//!
+//! **Objective.** A-optimal on relative variances: `Σ_p w_p MSE_p / (‖P‖²/9)`
+//! for P in K, B, M, the mean squared error of the nine elements (spread and
+//! the preparation's bias alike) against the prior's own matrices; with a
+//! prior range (`[other_end]`), the worse of the two ends (worst case).
+//!
+//! **Search.** The family is the centre-out protocol with recorded return
+//! (seed 001's out-hold-back): profile (cubic, quintic, trapezoid; seed 000's
+//! sinusoid starts at full speed and so is not at rest at its ends), radius
+//! (a share of the largest the displacement, force and workspace limits
+//! allow), motion duration (a multiple of the shortest the velocity and
+//! acceleration limits allow for that radius), recorded hold and rest; the
+//! number of perturbations fills the budget (at least 6 directions). The
+//! unrecorded relaxation after each return is fixed at [`RELAX_S`]. Candidates
+//! are compared on [`RANKING_RUNS`] recordings with the same noise seeds
+//! (common random numbers), by coordinate descent over the five parameters
+//! from a fast cubic; the chosen one is then predicted on `runs` fresh seeds.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
+use serde::Deserialize;
+
+use limpid_analysis::result::design::{
+    CentreOutChoice, CommandSpectrum, CommandTrace, DesignResult, LimitMargin, ObjectiveWeights,
+    Pooled, Prediction, SearchSummary, Verification,
+};
+use limpid_core::{Error, Matrix, Result};
+use limpid_ident::{fit_linear, prepare, LinearEstimate, LinearParams, PrepareParams};
+use limpid_lab::protocol::{self, Limits, Phases, Protocol, StartPoints, Targets};
+use limpid_lab::{simulate_centre_out, NoiseModel, Posture, Profile};
+
+/// Unrecorded relaxation after each return (s): the subject's pause before the next rest.
+pub const RELAX_S: f64 = 0.5;
+/// Fewest perturbation directions: three axes, each both ways.
+pub const MIN_TRIALS: usize = 6;
+/// Recordings per candidate while searching.
+pub const RANKING_RUNS: usize = 6;
+/// K within this share of the truth (Frobenius) counts as within tolerance in `--verify`.
+pub const STIFFNESS_TOLERANCE: f64 = 0.05;
+/// B within this share.
+pub const DAMPING_TOLERANCE: f64 = 0.20;
+
+const PROFILES: [Profile; 3] = [Profile::Cubic, Profile::Quintic, Profile::Trapezoid];
+/// Radius as a share of the largest the limits allow.
+const RADIUS_SHARES: [f64; 5] = [0.2, 0.35, 0.5, 0.7, 1.0];
+/// Motion duration as a multiple of the shortest the limits allow.
+const SLOWNESS: [f64; 5] = [1.0, 1.4, 2.0, 3.0, 5.0];
+const HOLDS_S: [f64; 3] = [0.0, 0.25, 0.6];
+const RESTS_S: [f64; 3] = [0.2, 0.4, 0.8];
+/// Below the limits by this share, so that rounding never breaches them.
+const LIMIT_MARGIN: f64 = 0.995;
+
+/// M, B, K of a subject (SI, force applied to the limb).
+#[derive(Debug, Clone, Copy)]
+pub struct Impedance {
+    /// M (kg).
+    pub inertia: Matrix3<f64>,
+    /// B (N s/m).
+    pub damping: Matrix3<f64>,
+    /// K (N/m).
+    pub stiffness: Matrix3<f64>,
+}
+
+impl Impedance {
+    fn blend(&self, other: &Impedance, t: f64) -> Impedance {
+        Impedance {
+            inertia: self.inertia + (other.inertia - self.inertia) * t,
+            damping: self.damping + (other.damping - self.damping) * t,
+            stiffness: self.stiffness + (other.stiffness - self.stiffness) * t,
+        }
+    }
+
+    fn matrices(&self) -> [Matrix3<f64>; 3] {
+        [self.stiffness, self.damping, self.inertia]
+    }
+}
+
+/// What is known of the subject before the experiment.
+#[derive(Debug, Clone)]
+pub struct Prior {
+    /// The posture (start point, m).
+    pub start: Vector3<f64>,
+    /// Nominal impedance.
+    pub nominal: Impedance,
+    /// The other end of its range, if any.
+    pub other_end: Option<Impedance>,
+    /// The rig's and subject's noise.
+    pub noise: NoiseModel,
+    /// Limits given in the prior file (`[limits]`), if any.
+    pub limits: Option<Limits>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ImpedanceFile {
+    inertia: [[f64; 3]; 3],
+    damping: [[f64; 3]; 3],
+    stiffness: [[f64; 3]; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PriorFile {
+    #[serde(default)]
+    start_m: Option<[f64; 3]>,
+    inertia: [[f64; 3]; 3],
+    damping: [[f64; 3]; 3],
+    stiffness: [[f64; 3]; 3],
+    #[serde(default)]
+    other_end: Option<ImpedanceFile>,
+    #[serde(default)]
+    noise: Option<NoiseModel>,
+    #[serde(default)]
+    limits: Option<Limits>,
+}
+
+fn impedance(
+    m: &[[f64; 3]; 3],
+    b: &[[f64; 3]; 3],
+    k: &[[f64; 3]; 3],
+    path: &Path,
+    table: &str,
+) -> Result<Impedance> {
+    let m3 = |a: &[[f64; 3]; 3]| Matrix3::from_fn(|r, c| a[r][c]);
+    let imp = Impedance {
+        inertia: m3(m),
+        damping: m3(b),
+        stiffness: m3(k),
+    };
+    for (name, mat) in [
+        ("inertia", imp.inertia),
+        ("damping", imp.damping),
+        ("stiffness", imp.stiffness),
+    ] {
+        if let Some(i) = (0..3).find(|&i| mat[(i, i)] <= 0.0) {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{table}{name}[{i}][{i}] = {}: a prior's diagonal must be positive",
+                    mat[(i, i)]
+                ),
+            });
+        }
+    }
+    Ok(imp)
+}
+
+impl Prior {
+    /// Read a prior subject file: 3 x 3 `inertia`, `damping`, `stiffness`
+    /// (SI), optional `start_m`, `[other_end]` (the same three matrices),
+    /// `[noise]` (default: [`NoiseModel::realistic`], a human subject) and
+    /// `[limits]` (the centre-out protocol's limits table).
+    pub fn from_toml(text: &str, path: &Path) -> Result<Prior> {
+        limpid_lab::validate::check_numbers(text, path)?;
+        let f: PriorFile =
+            toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
+        let nominal = impedance(&f.inertia, &f.damping, &f.stiffness, path, "")?;
+        let other_end = f
+            .other_end
+            .as_ref()
+            .map(|o| impedance(&o.inertia, &o.damping, &o.stiffness, path, "other_end."))
+            .transpose()?;
+        let noise = f.noise.unwrap_or_else(NoiseModel::realistic);
+        noise.check().map_err(|message| Error::Format {
+            path: path.to_path_buf(),
+            message: format!("[noise] {message}"),
+        })?;
+        let start = f.start_m.map(Vector3::from);
+        let limits = f.limits;
+        let start = match (start, &limits) {
+            (Some(s), _) => s,
+            (None, Some(l)) => workspace_centre(l),
+            (None, None) => Vector3::zeros(),
+        };
+        Ok(Prior {
+            start,
+            nominal,
+            other_end,
+            noise,
+            limits,
+        })
+    }
+
+    /// The demo's realistic subject at start point `index` (0: S1): seed 000
+    /// Table I subject 1 with Table II's antisymmetric stiffness and
+    /// [`NoiseModel::realistic`].
+    pub fn demo(index: usize) -> Prior {
+        let mut p = limpid_lab::seed000_subject1().remove(index % 6);
+        p.stiffness += limpid_lab::realistic::antisymmetric_part(
+            limpid_lab::realistic::SEED000_K_MAX_A[index % 6],
+        );
+        Prior {
+            start: p.start,
+            nominal: Impedance {
+                inertia: p.inertia,
+                damping: p.damping,
+                stiffness: p.stiffness,
+            },
+            other_end: None,
+            noise: NoiseModel::realistic(),
+            limits: None,
+        }
+    }
+
+    fn ends(&self) -> Vec<Impedance> {
+        std::iter::once(self.nominal)
+            .chain(self.other_end)
+            .collect()
+    }
+
+    fn posture(&self, imp: &Impedance) -> Posture {
+        Posture {
+            name: "S1".into(),
+            start: self.start,
+            inertia: imp.inertia,
+            damping: imp.damping,
+            stiffness: imp.stiffness,
+        }
+    }
+}
+
+fn workspace_centre(l: &Limits) -> Vector3<f64> {
+    Vector3::from_fn(|i, _| 0.5 * (l.workspace_min_m[i] + l.workspace_max_m[i]))
+}
+
+/// Weights of K, B, M in the objective.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Objective {
+    /// Of K.
+    pub stiffness: f64,
+    /// Of B.
+    pub damping: f64,
+    /// Of M.
+    pub inertia: f64,
+}
+
+impl Default for Objective {
+    /// Stiffness and damping, equally.
+    fn default() -> Self {
+        Objective {
+            stiffness: 1.0,
+            damping: 1.0,
+            inertia: 0.0,
+        }
+    }
+}
+
+impl Objective {
+    /// `stiffness,damping` (weight 1 each) or `stiffness=2,damping=1`.
+    pub fn parse(text: &str) -> std::result::Result<Objective, String> {
+        let mut o = Objective {
+            stiffness: 0.0,
+            damping: 0.0,
+            inertia: 0.0,
+        };
+        for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (name, weight) = match part.split_once('=') {
+                Some((n, w)) => {
+                    let w: f64 = w
+                        .trim()
+                        .parse()
+                        .map_err(|_| format!("{part:?}: the weight after '=' is not a number"))?;
+                    (n.trim(), w)
+                }
+                None => (part, 1.0),
+            };
+            if !(weight >= 0.0 && weight.is_finite()) {
+                return Err(format!("{part:?}: a weight is zero or a positive number"));
+            }
+            match name {
+                "stiffness" => o.stiffness = weight,
+                "damping" => o.damping = weight,
+                "inertia" => o.inertia = weight,
+                other => {
+                    return Err(format!(
+                        "{other:?} is not a parameter of the linear method; expected stiffness, damping or inertia"
+                    ))
+                }
+            }
+        }
+        if o.stiffness + o.damping + o.inertia <= 0.0 {
+            return Err("no parameter has a positive weight".into());
+        }
+        Ok(o)
+    }
+
+    fn weights(&self) -> [f64; 3] {
+        [self.stiffness, self.damping, self.inertia]
+    }
+}
+
+/// A design request.
+#[derive(Debug, Clone)]
+pub struct DesignRequest {
+    /// The prior subject.
+    pub prior: Prior,
+    /// The limits.
+    pub limits: Limits,
+    /// Sample rate of the designed protocol (Hz).
+    pub sample_rate_hz: f64,
+    /// The whole protocol's length (s).
+    pub budget_s: f64,
+    /// What matters.
+    pub objective: Objective,
+    /// Recordings simulated for the chosen design's prediction (and the baseline's).
+    pub runs: usize,
+    /// The protocol it replaces, if any (its start points are replaced by the prior's).
+    pub baseline: Option<Protocol>,
+    /// Recordings on subjects drawn from the prior to check the prediction (0: none).
+    pub verify: usize,
+    /// Seed of the noise.
+    pub seed: u64,
+}
+
+/// The designed protocol and its result.
+pub struct Designed {
+    /// The protocol (single start point: the prior's).
+    pub protocol: Protocol,
+    /// Everything measured about it.
+    pub result: DesignResult,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct Choice {
+    profile: usize,
+    radius: usize,
+    slowness: usize,
+    hold: usize,
+    rest: usize,
+}
+
+impl Choice {
+    const SIZES: [usize; 5] = [
+        PROFILES.len(),
+        RADIUS_SHARES.len(),
+        SLOWNESS.len(),
+        HOLDS_S.len(),
+        RESTS_S.len(),
+    ];
+
+    fn with(&self, dim: usize, value: usize) -> Choice {
+        let mut c = *self;
+        match dim {
+            0 => c.profile = value,
+            1 => c.radius = value,
+            2 => c.slowness = value,
+            3 => c.hold = value,
+            _ => c.rest = value,
+        }
+        c
+    }
+}
+
+/// Checked inputs the search works from.
+struct Space<'a> {
+    req: &'a DesignRequest,
+    largest_radius: f64,
+}
+
+impl Space<'_> {
+    /// The protocol of a choice, or why it is refused.
+    fn protocol(&self, c: &Choice) -> std::result::Result<Protocol, String> {
+        let req = self.req;
+        let l = &req.limits;
+        let profile = PROFILES[c.profile];
+        let radius = RADIUS_SHARES[c.radius] * self.largest_radius;
+        let (_, v_peak, a_peak) = profile.peaks(1.0);
+        let shortest = (radius * v_peak / (LIMIT_MARGIN * l.max_velocity_m_s))
+            .max((radius * a_peak / (LIMIT_MARGIN * l.max_acceleration_m_s2)).sqrt());
+        let motion = shortest * SLOWNESS[c.slowness];
+        let (hold, rest) = (HOLDS_S[c.hold], RESTS_S[c.rest]);
+        let trial = rest + motion + hold + motion + RELAX_S;
+        let trials = ((req.budget_s / trial).floor() as usize)
+            .min(limpid_lab::validate::MAX_TARGETS as usize);
+        if trials < MIN_TRIALS {
+            return Err(format!(
+                "{trials} perturbations of {trial:.2} s fit in {} s; at least {MIN_TRIALS} are needed",
+                req.budget_s
+            ));
+        }
+        let p = Protocol {
+            name: format!(
+                "designed by limpid protocol design: {trials} {} perturbations of {:.1} mm, {:.0} ms out and back",
+                format!("{profile:?}").to_lowercase(),
+                radius * 1e3,
+                motion * 1e3
+            ),
+            sample_rate_hz: req.sample_rate_hz,
+            start_points: StartPoints {
+                points: vec![req.prior.start.into()],
+                centre_m: [0.0; 3],
+                radius_m: 0.0,
+            },
+            targets: Targets {
+                count: trials,
+                radius_m: radius,
+            },
+            phases: Phases {
+                profile,
+                rest_s: rest,
+                centre_out_s: motion,
+                hold_s: hold,
+                return_s: motion,
+                relax_s: RELAX_S,
+                record_hold_and_return: true,
+                trials_per_set: 0,
+                set_rest_s: 0.0,
+            },
+            limits: l.clone(),
+            robot_base: None,
+        };
+        let peak = peak_force(&p, &req.prior);
+        if peak > LIMIT_MARGIN * l.max_force_n {
+            return Err(format!(
+                "force {peak:.1} N on the prior exceeds the limit {} N",
+                l.max_force_n
+            ));
+        }
+        protocol::check(&p).map_err(|e| e.to_string())?;
+        Ok(p)
+    }
+}
+
+/// Largest force `|M a + B v + K x|` the protocol needs on either end of the prior (N).
+fn peak_force(p: &Protocol, prior: &Prior) -> f64 {
+    let dirs = p.directions();
+    let d = p.phases.centre_out_s;
+    let r = p.targets.radius_m;
+    let mut peak = 0.0f64;
+    for imp in prior.ends() {
+        for k in 0..=200 {
+            let (s, v, a) = p.phases.profile.eval(d * k as f64 / 200.0, d);
+            for dir in &dirs {
+                let f = imp.inertia * dir * (r * a)
+                    + imp.damping * dir * (r * v)
+                    + imp.stiffness * dir * (r * s);
+                peak = peak.max(f.norm());
+            }
+        }
+    }
+    peak
+}
+
+/// The largest radius the displacement, force and workspace limits allow at the prior's start.
+fn largest_radius(req: &DesignRequest) -> Result<f64> {
+    let l = &req.limits;
+    let s = req.prior.start;
+    let room = (0..3)
+        .map(|i| (s[i] - l.workspace_min_m[i]).min(l.workspace_max_m[i] - s[i]))
+        .fold(f64::INFINITY, f64::min);
+    if room <= 0.0 {
+        return Err(Error::invalid(
+            "prior",
+            format!(
+                "start_m [{:.3}, {:.3}, {:.3}] is not inside the workspace",
+                s[0], s[1], s[2]
+            ),
+        ));
+    }
+    // the stiffest direction's static force K r must stay below the force limit
+    let stiffest = req
+        .prior
+        .ends()
+        .iter()
+        .map(|imp| imp.stiffness.norm())
+        .fold(l.nominal_stiffness_n_per_m, f64::max);
+    Ok(l.max_displacement_m.min(room).min(l.max_force_n / stiffest) * LIMIT_MARGIN)
+}
+
+/// Errors of one recording's estimate against the truth, K, B, M.
+struct Run {
+    errors: [Matrix3<f64>; 3],
+    identifiable: [bool; 3],
+}
+
+fn run_once(p: &Protocol, prior: &Prior, imp: &Impedance, seed: u64) -> Result<Run> {
+    let posture = prior.posture(imp);
+    let rec = simulate_centre_out(&posture, &p.centre_out(), &prior.noise, seed)?;
+    let prepared = prepare(&rec, &PrepareParams::default())?;
+    let est: LinearEstimate = fit_linear(&prepared, &LinearParams::default())?;
+    let m3 = |m: &Matrix| Matrix3::from_fn(|r, c| m.0[(r, c)]);
+    Ok(Run {
+        errors: [
+            m3(&est.stiffness) - imp.stiffness,
+            m3(&est.damping) - imp.damping,
+            m3(&est.inertia) - imp.inertia,
+        ],
+        identifiable: [
+            est.identifiable.stiffness,
+            est.identifiable.damping,
+            est.identifiable.inertia,
+        ],
+    })
+}
+
+fn runs(p: &Protocol, prior: &Prior, imp: &Impedance, seeds: &[u64]) -> Result<Vec<Run>> {
+    seeds
+        .par_iter()
+        .map(|&s| run_once(p, prior, imp, s))
+        .collect()
+}
+
+/// Mean squared error of the nine elements relative to the RMS element, K, B, M (percent²).
+fn relative_mse(runs: &[Run], imp: &Impedance) -> [f64; 3] {
+    let truth = imp.matrices();
+    std::array::from_fn(|m| {
+        let scale = truth[m].norm_squared() / 9.0;
+        let mse = runs
+            .iter()
+            .map(|r| r.errors[m].norm_squared() / 9.0)
+            .sum::<f64>()
+            / runs.len() as f64;
+        1e4 * mse / scale
+    })
+}
+
+fn objective_value(rel: &[f64; 3], w: [f64; 3]) -> f64 {
+    (0..3).map(|m| w[m] * rel[m]).sum()
+}
+
+/// Element-wise s.d. over runs, K, B, M.
+fn spread(runs: &[Run]) -> [Matrix3<f64>; 3] {
+    let n = runs.len() as f64;
+    std::array::from_fn(|m| {
+        let mean = runs.iter().map(|r| r.errors[m]).sum::<Matrix3<f64>>() / n;
+        let var = runs
+            .iter()
+            .map(|r| (r.errors[m] - mean).map(|v| v * v))
+            .sum::<Matrix3<f64>>()
+            / (n - 1.0).max(1.0);
+        var.map(f64::sqrt)
+    })
+}
+
+fn pooled_se(se: &[Matrix3<f64>; 3]) -> [f64; 3] {
+    std::array::from_fn(|m| (se[m].norm_squared() / 9.0).sqrt())
+}
+
+fn predict(
+    p: &Protocol,
+    prior: &Prior,
+    objective: &Objective,
+    seeds: &[u64],
+) -> Result<Prediction> {
+    // the worse end of the prior's range
+    let mut worst: Option<(f64, Prediction)> = None;
+    for imp in prior.ends() {
+        let rs = runs(p, prior, &imp, seeds)?;
+        let value = objective_value(&relative_mse(&rs, &imp), objective.weights());
+        let se = spread(&rs);
+        let pooled = pooled_se(&se);
+        let truth = imp.matrices();
+        let n = rs.len() as f64;
+        let prediction = Prediction {
+            stiffness_se: Matrix::from(se[0]),
+            damping_se: Matrix::from(se[1]),
+            inertia_se: Matrix::from(se[2]),
+            pooled: Pooled {
+                se: pooled,
+                se_percent: std::array::from_fn(|m| 100.0 * pooled[m] / (truth[m].norm() / 3.0)),
+                error_percent: std::array::from_fn(|m| {
+                    100.0 * rs.iter().map(|r| r.errors[m].norm()).sum::<f64>() / n / truth[m].norm()
+                }),
+            },
+            runs: rs.len(),
+            duration_s: protocol_duration(p),
+            identifiable_share: std::array::from_fn(|m| {
+                rs.iter().filter(|r| r.identifiable[m]).count() as f64 / n
+            }),
+        };
+        if worst.as_ref().is_none_or(|(v, _)| value > *v) {
+            worst = Some((value, prediction));
+        }
+    }
+    Ok(worst.expect("a prior has a nominal end").1)
+}
+
+/// Length of a centre-out protocol at one start point (s), every phase counted.
+pub fn protocol_duration(p: &Protocol) -> f64 {
+    let ph = &p.phases;
+    let per = ph.rest_s + ph.centre_out_s + ph.hold_s + ph.return_s + ph.relax_s;
+    let sets = if ph.trials_per_set > 0 {
+        p.targets.count.div_ceil(ph.trials_per_set)
+    } else {
+        1
+    };
+    per * p.targets.count as f64 + ph.set_rest_s * sets.saturating_sub(1) as f64
+}
+
+fn seeds(base: u64, offset: u64, n: usize) -> Vec<u64> {
+    (0..n as u64)
+        .map(|i| base.wrapping_mul(1_000_003).wrapping_add(offset + i))
+        .collect()
+}
+
+fn margins(p: &Protocol, prior: &Prior) -> Vec<LimitMargin> {
+    let l = &p.limits;
+    let r = p.targets.radius_m;
+    let (_, v, a) = p.phases.profile.peaks(p.phases.centre_out_s);
+    let s = prior.start;
+    let room = (0..3)
+        .map(|i| (s[i] - l.workspace_min_m[i]).min(l.workspace_max_m[i] - s[i]))
+        .fold(f64::INFINITY, f64::min);
+    let entry = |quantity: &str, unit: &str, peak: f64, limit: f64| LimitMargin {
+        quantity: quantity.into(),
+        unit: unit.into(),
+        peak,
+        limit,
+        margin_percent: 100.0 * (1.0 - peak / limit),
+    };
+    vec![
+        entry("displacement", "m", r, l.max_displacement_m),
+        entry("velocity", "m/s", r * v, l.max_velocity_m_s),
+        entry("acceleration", "m/s^2", r * a, l.max_acceleration_m_s2),
+        entry(
+            "force on the prior",
+            "N",
+            peak_force(p, prior),
+            l.max_force_n,
+        ),
+        entry(
+            "force at the nominal stiffness",
+            "N",
+            l.nominal_stiffness_n_per_m * r,
+            l.max_force_n,
+        ),
+        entry("distance to the workspace's edge used", "m", r, room),
+    ]
+}
+
+/// The request's numbers, before any simulation.
+pub fn check_request(req: &DesignRequest) -> Result<()> {
+    let l = &req.limits;
+    for (name, v) in [
+        ("max_displacement_m", l.max_displacement_m),
+        ("max_velocity_m_s", l.max_velocity_m_s),
+        ("max_acceleration_m_s2", l.max_acceleration_m_s2),
+        ("max_force_n", l.max_force_n),
+    ] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(Error::invalid(
+                "limits",
+                format!("{name} = {v}: a limit is a positive number"),
+            ));
+        }
+    }
+    if !(req.budget_s > 0.0 && req.budget_s <= limpid_lab::validate::MAX_DURATION_S) {
+        return Err(Error::invalid(
+            "duration",
+            format!(
+                "{} s: expected a positive duration of at most {} s",
+                req.budget_s,
+                limpid_lab::validate::MAX_DURATION_S
+            ),
+        ));
+    }
+    if !(req.sample_rate_hz > 0.0 && req.sample_rate_hz <= 10_000.0) {
+        return Err(Error::invalid(
+            "sample_rate_hz",
+            format!("{} Hz: expected 0 < rate <= 10000", req.sample_rate_hz),
+        ));
+    }
+    if req.runs < 2 {
+        return Err(Error::invalid(
+            "runs",
+            "at least 2 recordings are needed for a spread",
+        ));
+    }
+    if req.verify == 1 {
+        return Err(Error::invalid(
+            "verify",
+            "at least 2 recordings are needed for a spread (0: no verification)",
+        ));
+    }
+    Ok(())
+}
+
+/// Choose the protocol. Deterministic for a given request (seeded noise).
+pub fn design(req: &DesignRequest) -> Result<Designed> {
+    check_request(req)?;
+    let space = Space {
+        req,
+        largest_radius: largest_radius(req)?,
+    };
+    let ranking = seeds(req.seed, 0, RANKING_RUNS);
+    let w = req.objective.weights();
+    let mut seen: HashMap<Choice, Option<f64>> = HashMap::new();
+    let mut refused = 0usize;
+    let mut last_refusal = String::new();
+    let mut evaluate =
+        |c: Choice, seen: &mut HashMap<Choice, Option<f64>>| -> Result<Option<f64>> {
+            if let Some(v) = seen.get(&c) {
+                return Ok(*v);
+            }
+            let value = match space.protocol(&c) {
+                Ok(p) => {
+                    let mut worst = 0.0f64;
+                    for imp in req.prior.ends() {
+                        let rs = runs(&p, &req.prior, &imp, &ranking)?;
+                        worst = worst.max(objective_value(&relative_mse(&rs, &imp), w));
+                    }
+                    Some(worst)
+                }
+                Err(why) => {
+                    refused += 1;
+                    last_refusal = why;
+                    None
+                }
+            };
+            seen.insert(c, value);
+            Ok(value)
+        };
+    // start: the fastest cubic at 70 % of the largest radius, short hold, 0.4 s rest
+    let mut best = Choice {
+        profile: 0,
+        radius: 3,
+        slowness: 0,
+        hold: 1,
+        rest: 1,
+    };
+    let mut best_value = evaluate(best, &mut seen)?;
+    for _sweep in 0..4 {
+        let before = best;
+        for dim in 0..5 {
+            for value in 0..Choice::SIZES[dim] {
+                let c = best.with(dim, value);
+                if c == best {
+                    continue;
+                }
+                if let Some(v) = evaluate(c, &mut seen)? {
+                    if best_value.is_none_or(|b| v < b) {
+                        best = c;
+                        best_value = Some(v);
+                    }
+                }
+            }
+        }
+        if best == before {
+            break;
+        }
+    }
+    let Some(objective) = best_value else {
+        return Err(Error::invalid(
+            "design",
+            format!("no protocol of the family fits the limits and the budget: {last_refusal}"),
+        ));
+    };
+    let protocol = space
+        .protocol(&best)
+        .map_err(|why| Error::invalid("design", why))?;
+    let final_seeds = seeds(req.seed, 10_000, req.runs);
+    let predicted = predict(&protocol, &req.prior, &req.objective, &final_seeds)?;
+    let baseline = req
+        .baseline
+        .as_ref()
+        .map(|b| {
+            let mut b = b.clone();
+            b.start_points = StartPoints {
+                points: vec![req.prior.start.into()],
+                centre_m: [0.0; 3],
+                radius_m: 0.0,
+            };
+            predict(&b, &req.prior, &req.objective, &final_seeds)
+        })
+        .transpose()?;
+    let verify = (req.verify > 0)
+        .then(|| verify(&protocol, &req.prior, &predicted, req.verify, req.seed))
+        .transpose()?;
+    let ph = &protocol.phases;
+    let result = DesignResult {
+        method: "linear".into(),
+        family: "centre-out".into(),
+        objective: ObjectiveWeights {
+            stiffness: w[0],
+            damping: w[1],
+            inertia: w[2],
+        },
+        budget_s: req.budget_s,
+        start_m: req.prior.start.into(),
+        chosen: CentreOutChoice {
+            profile: format!("{:?}", ph.profile).to_lowercase(),
+            radius_m: protocol.targets.radius_m,
+            motion_s: ph.centre_out_s,
+            hold_s: ph.hold_s,
+            rest_s: ph.rest_s,
+            relax_s: ph.relax_s,
+            trials: protocol.targets.count,
+            duration_s: protocol_duration(&protocol),
+        },
+        predicted,
+        baseline,
+        protocol: serde_json::to_value(&protocol)
+            .map_err(|e| Error::invalid("protocol", e.to_string()))?,
+        limits: margins(&protocol, &req.prior),
+        search: SearchSummary {
+            candidates: seen.len(),
+            runs_per_candidate: RANKING_RUNS,
+            refused,
+            objective,
+        },
+        verify,
+        command: command_trace(&protocol),
+        spectrum: CommandSpectrum {
+            frequency_hz: SPECTRUM_HZ.to_vec(),
+            designed_m: amplitude_spectrum(&protocol),
+            baseline_m: req.baseline.as_ref().map(amplitude_spectrum),
+            limit_m: SPECTRUM_HZ
+                .iter()
+                .map(|f| {
+                    let w = std::f64::consts::TAU * f;
+                    let l = &protocol.limits;
+                    l.max_displacement_m
+                        .min(l.max_velocity_m_s / w)
+                        .min(l.max_acceleration_m_s2 / (w * w))
+                })
+                .collect(),
+        },
+    };
+    Ok(Designed { protocol, result })
+}
+
+/// Frequencies of the command spectrum: 0.1 to 30 Hz, 60 log-spaced.
+const SPECTRUM_HZ: [f64; 60] = {
+    let mut f = [0.0; 60];
+    let mut i = 0;
+    // 0.1 * 300^(i / 59), by repeated multiplication (const fn has no powf)
+    let ratio = 1.101_501_533_257_344; // 300^(1/59)
+    let mut v = 0.1;
+    while i < 60 {
+        f[i] = v;
+        v *= ratio;
+        i += 1;
+    }
+    f
+};
+
+/// Displacement, velocity and acceleration along the direction of one trial.
+fn trial_path(p: &Protocol, t: f64) -> (f64, f64, f64) {
+    let ph = &p.phases;
+    let r = p.targets.radius_m;
+    let (s1, v1, a1) = ph.profile.eval(t - ph.rest_s, ph.centre_out_s);
+    let (s2, v2, a2) = ph
+        .profile
+        .eval(t - ph.rest_s - ph.centre_out_s - ph.hold_s, ph.return_s);
+    (r * (s1 - s2), r * (v1 - v2), r * (a1 - a2))
+}
+
+fn trial_length(p: &Protocol) -> f64 {
+    let ph = &p.phases;
+    ph.rest_s + ph.centre_out_s + ph.hold_s + ph.return_s + ph.relax_s
+}
+
+fn command_trace(p: &Protocol) -> CommandTrace {
+    let n = ((trial_length(p) * p.sample_rate_hz).round() as usize).clamp(2, 2000);
+    let t: Vec<f64> = (0..n)
+        .map(|i| trial_length(p) * i as f64 / (n - 1) as f64)
+        .collect();
+    let path: Vec<(f64, f64, f64)> = t.iter().map(|&t| trial_path(p, t)).collect();
+    CommandTrace {
+        displacement_m: path.iter().map(|v| v.0).collect(),
+        velocity_m_s: path.iter().map(|v| v.1).collect(),
+        acceleration_m_s2: path.iter().map(|v| v.2).collect(),
+        t_s: t,
+    }
+}
+
+/// `2 |X(f)| / T` of one trial's displacement at [`SPECTRUM_HZ`].
+fn amplitude_spectrum(p: &Protocol) -> Vec<f64> {
+    let length = trial_length(p);
+    let n = ((length * p.sample_rate_hz).round() as usize).max(2);
+    let dt = length / n as f64;
+    let x: Vec<f64> = (0..n).map(|i| trial_path(p, i as f64 * dt).0).collect();
+    SPECTRUM_HZ
+        .iter()
+        .map(|f| {
+            let w = std::f64::consts::TAU * f * dt;
+            let (re, im) = x.iter().enumerate().fold((0.0, 0.0), |(re, im), (i, v)| {
+                let phase = w * i as f64;
+                (re + v * phase.cos(), im - v * phase.sin())
+            });
+            2.0 * re.hypot(im) / n as f64
+        })
+        .collect()
+}
+
+/// Run the design on `n` subjects drawn uniformly between the prior's ends
+/// (the nominal subject when it has no range) and compare the achieved
+/// spread of the errors with the prediction.
+fn verify(
+    p: &Protocol,
+    prior: &Prior,
+    predicted: &Prediction,
+    n: usize,
+    seed: u64,
+) -> Result<Verification> {
+    use rand::{rngs::StdRng, Rng, SeedableRng};
+    let mut rng = StdRng::seed_from_u64(seed ^ 0x5eed_0060);
+    let subjects: Vec<(Impedance, u64)> = seeds(seed, 50_000, n)
+        .into_iter()
+        .map(|s| {
+            let t: f64 = rng.random();
+            let imp = match &prior.other_end {
+                Some(o) => prior.nominal.blend(o, t),
+                None => prior.nominal,
+            };
+            (imp, s)
+        })
+        .collect();
+    let outcomes: Vec<(Run, Impedance)> = subjects
+        .par_iter()
+        .map(|(imp, s)| Ok((run_once(p, prior, imp, *s)?, *imp)))
+        .collect::<Result<_>>()?;
+    let rs: Vec<Run> = outcomes
+        .iter()
+        .map(|(r, _)| Run {
+            errors: r.errors,
+            identifiable: r.identifiable,
+        })
+        .collect();
+    let achieved = pooled_se(&spread(&rs));
+    let nf = n as f64;
+    let frob = |m: usize| -> Vec<f64> {
+        outcomes
+            .iter()
+            .map(|(r, imp)| 100.0 * r.errors[m].norm() / imp.matrices()[m].norm())
+            .collect()
+    };
+    let (k, b) = (frob(0), frob(1));
+    let within = outcomes
+        .iter()
+        .enumerate()
+        .filter(|(i, (r, _))| {
+            k[*i] < 100.0 * STIFFNESS_TOLERANCE
+                && b[*i] < 100.0 * DAMPING_TOLERANCE
+                && r.identifiable[0]
+                && r.identifiable[1]
+        })
+        .count();
+    Ok(Verification {
+        runs: n,
+        achieved_se: achieved,
+        ratio: std::array::from_fn(|m| predicted.pooled.se[m] / achieved[m]),
+        within_tolerance_share: within as f64 / nf,
+        error_percent: std::array::from_fn(|m| frob(m).iter().sum::<f64>() / nf),
+    })
+}

@@ -1,0 +1,257 @@
+//! `limpid protocol design` (issue 60): a design for the demo's realistic
+//! subject, exported as an end-point command without a robot, played on a
+//! subject simulated here (not limpid's lab: its own noise and its own
+//! derivatives of the command) and estimated back.
+
+use crate::common::*;
+
+/// A small deterministic generator (xorshift), so the player shares nothing with limpid's lab.
+struct Noise(u64);
+
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Approximately normal (sum of 12 uniforms).
+    fn normal(&mut self) -> f64 {
+        (0..12).map(|_| self.uniform()).sum::<f64>() - 6.0
+    }
+}
+
+/// Play an end-point command (t, start_point, trial, x, y, z) on a subject
+/// with impedance `m, b, k` at its first position; write t,x,y,z,fx,fy,fz,trial.
+fn play(command: &str, m: [[f64; 3]; 3], b: [[f64; 3]; 3], k: [[f64; 3]; 3], seed: u64) -> String {
+    let rows: Vec<Vec<f64>> = command
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let n = rows.len();
+    let dt = rows[1][0] - rows[0][0];
+    let pos = |i: usize, a: usize| rows[i.min(n - 1)][3 + a];
+    let start = [pos(0, 0), pos(0, 1), pos(0, 2)];
+    let mut rng = Noise(seed.max(1));
+    // slow fluctuation of the subject's own force (first-order, 0.1 s), per axis
+    let mut slow = [0.0f64; 3];
+    let alpha = dt / 0.1;
+    let mut offset = [0.0f64; 3];
+    let mut trial = -1.0;
+    let mut out = String::from("t,x,y,z,fx,fy,fz,trial\n");
+    for i in 0..n {
+        if rows[i][2] != trial {
+            trial = rows[i][2];
+            offset = [2.0 * rng.normal(), 2.0 * rng.normal(), 2.0 * rng.normal()];
+        }
+        let im = i.saturating_sub(1);
+        let ip = (i + 1).min(n - 1);
+        let x: Vec<f64> = (0..3).map(|a| pos(i, a) - start[a]).collect();
+        let v: Vec<f64> = (0..3)
+            .map(|a| (pos(ip, a) - pos(im, a)) / ((ip - im) as f64 * dt))
+            .collect();
+        let acc: Vec<f64> = (0..3)
+            .map(|a| {
+                (pos(ip, a) - 2.0 * pos(i, a) + pos(im, a)) / (dt * dt)
+                    * if ip - im == 2 { 1.0 } else { 0.0 }
+            })
+            .collect();
+        let mut line = format!("{}", rows[i][0]);
+        for a in 0..3 {
+            line += &format!(",{}", pos(i, a) + 2e-5 * rng.normal());
+        }
+        for r in 0..3 {
+            slow[r] += alpha * (rng.normal() * (2.0 / alpha).sqrt() - slow[r]);
+            let own: f64 = (0..3).map(|c| b[r][c] * v[c] + k[r][c] * x[c]).sum();
+            let inertial: f64 = (0..3).map(|c| m[r][c] * acc[c]).sum();
+            let f = inertial + own + 0.2 * slow[r] * own.abs() + offset[r] + 0.1 * rng.normal();
+            line += &format!(",{f}");
+        }
+        line += &format!(",{}\n", rows[i][2]);
+        out += &line;
+    }
+    out
+}
+
+#[test]
+fn a_designed_command_played_elsewhere_gives_stiffness_and_damping_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let seed = dir.path().join("seed.toml");
+    let d = dir.path().join("d.toml");
+    let cmd = dir.path().join("command.csv");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    assert_eq!(
+        limpid(&[
+            "protocol",
+            "new",
+            "--preset",
+            "artemiadis-3d",
+            "-o",
+            &s(&seed)
+        ])
+        .code,
+        0
+    );
+    let out = limpid(&[
+        "protocol",
+        "design",
+        "--prior",
+        "demo:S1",
+        "--limits-from",
+        &s(&seed),
+        "--duration",
+        "147.2",
+        "--runs",
+        "8",
+        "-o",
+        &s(&d),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(
+        out.stdout.contains("predicted on the prior")
+            && out.stdout.contains("margins to the limits"),
+        "{}",
+        out.stdout
+    );
+    let check = limpid(&["protocol", "check", &s(&d)]);
+    assert_eq!(check.code, 0, "{}", check.stderr);
+    let export = limpid(&["protocol", "export", &s(&d), "-o", &s(&cmd)]);
+    assert_eq!(export.code, 0, "{}", export.stderr);
+    let command = std::fs::read_to_string(&cmd).unwrap();
+    // at rest at the start point at both ends, and within the limits at every sample
+    let rows: Vec<Vec<f64>> = command
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let (first, last) = (&rows[0], &rows[rows.len() - 1]);
+    assert!((0..3).all(|a| (first[3 + a] - last[3 + a]).abs() < 1e-12));
+    let dt = rows[1][0] - rows[0][0];
+    assert!(rows.len() as f64 * dt <= 147.2 + 1e-9);
+    for w in rows.windows(2) {
+        let step: f64 = (0..3)
+            .map(|a| (w[1][3 + a] - w[0][3 + a]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(
+            step / dt <= 0.1 * 1.001,
+            "velocity {} m/s at t = {}",
+            step / dt,
+            w[0][0]
+        );
+        let disp: f64 = (0..3)
+            .map(|a| (w[0][3 + a] - first[3 + a]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(disp <= 0.05);
+    }
+    // the demo's subject at S1 (seed 000 Table I plus Table II's antisymmetric stiffness)
+    let k = [
+        [1002.0, 14.0, 27.0],
+        [10.0, 250.0, 95.0],
+        [25.0, 93.0, 320.0],
+    ];
+    let b = [[80.0, 22.0, 25.0], [22.0, 50.0, 47.0], [25.0, 47.0, 86.0]];
+    let m = [[0.40, 0.03, 0.02], [0.03, 0.35, 0.01], [0.02, 0.01, 0.19]];
+    let mut good = 0;
+    for seed in 1..=5u64 {
+        let rec = dir.path().join(format!("rec{seed}.csv"));
+        std::fs::write(&rec, play(&command, m, b, k, seed * 7919)).unwrap();
+        let est = json(&["estimate", "linear", &s(&rec), "--json"]);
+        let ek = rel_err(&mat(&est["stiffness"]), &mat(&serde_json::json!(k)));
+        let eb = rel_err(&mat(&est["damping"]), &mat(&serde_json::json!(b)));
+        let ident = &est["criteria"]["identifiable"];
+        // neither not identifiable, not passive nor a poor fit
+        let bad_warning = est["warnings"].as_array().unwrap().iter().any(|w| {
+            let code = w["code"].as_str().unwrap_or("");
+            ["not_positive_definite", "poor_fit"].contains(&code)
+                || (code == "not_identifiable"
+                    && !w["message"].as_str().unwrap_or("").contains("inertia"))
+        });
+        if ek < 0.05
+            && eb < 0.20
+            && ident["stiffness"] == true
+            && ident["damping"] == true
+            && !bad_warning
+        {
+            good += 1;
+        } else {
+            eprintln!(
+                "seed {seed}: K {ek:.3}, B {eb:.3}, {ident}, {}",
+                est["warnings"]
+            );
+        }
+    }
+    assert!(good >= 4, "{good} of 5 within K 5 % and B 20 %, identified");
+}
+
+#[test]
+fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let seed = dir.path().join("seed.toml");
+    let s = seed.to_str().unwrap();
+    assert_eq!(
+        limpid(&["protocol", "new", "--preset", "artemiadis-3d", "-o", s]).code,
+        0
+    );
+    let base = [
+        "protocol",
+        "design",
+        "--prior",
+        "demo:S1",
+        "--limits-from",
+        s,
+        "--duration",
+    ];
+    let cases: [(&[&str], &str); 7] = [
+        (&["147", "--baseline", s, "-o", s], "would replace the input"),
+        (&["147", "--method", "reflex"], "linear method only"),
+        (&["147", "--family", "prbs"], "not written yet"),
+        (&["147", "--objective", "stifness"], "invalid --objective"),
+        (&["-1"], "duration"),
+        (&["3"], "at least 6 are needed"),
+        (&["147", "--runs", "1"], "at least 2 recordings"),
+    ];
+    for (extra, expected) in cases {
+        let mut args = base.to_vec();
+        args.extend_from_slice(extra);
+        let out = limpid(&args);
+        assert_eq!(out.code, 2, "{extra:?}: {}", out.stderr);
+        assert!(out.stderr.contains(expected), "{extra:?}: {}", out.stderr);
+        assert_eq!(
+            out.stderr.trim().lines().count(),
+            1,
+            "{extra:?}: {}",
+            out.stderr
+        );
+    }
+    let bad_prior = limpid(&[
+        "protocol",
+        "design",
+        "--prior",
+        "demo:S9",
+        "--limits-from",
+        s,
+        "--duration",
+        "147",
+    ]);
+    assert!(
+        bad_prior.code == 2 && bad_prior.stderr.contains("demo:S1 .. demo:S6"),
+        "{}",
+        bad_prior.stderr
+    );
+    let no_limits = limpid(&[
+        "protocol",
+        "design",
+        "--prior",
+        "demo:S1",
+        "--duration",
+        "147",
+    ]);
+    assert!(
+        no_limits.code == 2 && no_limits.stderr.contains("no limits"),
+        "{}",
+        no_limits.stderr
+    );
+}

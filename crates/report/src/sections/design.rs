@@ -1,0 +1,185 @@
+//! The section of a designed protocol (`limpid protocol design`, issue 60):
+//! predicted against baseline precision, the margins to the limits, one
+//! perturbation of the command and its frequency content against the limits.
+
+use limpid_analysis::result::design::{DesignResult, Prediction};
+
+use crate::svg::{Chart, Series, Stroke, PALETTE};
+use crate::{fmt, Figure, Section, Table};
+
+const MATRICES: [(&str, &str); 3] = [("K", "N/m"), ("B", "N s/m"), ("M", "kg")];
+
+fn prediction_rows(label: &str, p: &Prediction) -> Vec<Vec<String>> {
+    (0..3)
+        .map(|m| {
+            vec![
+                label.to_string(),
+                format!("{} ({})", MATRICES[m].0, MATRICES[m].1),
+                fmt(p.pooled.se[m]),
+                format!("{:.1}", p.pooled.se_percent[m]),
+                format!("{:.1}", p.pooled.error_percent[m]),
+                format!("{:.0}", 100.0 * p.identifiable_share[m]),
+                format!("{:.1}", p.duration_s),
+            ]
+        })
+        .collect()
+}
+
+fn series(name: &str, x: &[f64], y: &[f64], stroke: Stroke, colour: usize) -> Series {
+    Series {
+        name: name.into(),
+        x: x.to_vec(),
+        y: y.iter()
+            .map(|&v| if v > 0.0 { v } else { f64::NAN })
+            .collect(),
+        stroke,
+        color: PALETTE[colour % PALETTE.len()].into(),
+    }
+}
+
+pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
+    let c = &r.chosen;
+    let mut verdict = format!(
+        "{} {} perturbations of {} mm, {} ms out, {} ms hold, {} ms back, rest {} s, relax {} s: {:.1} s of the {} s budget at ({}, {}, {}) m. Predicted on the prior ({} simulated recordings): K ± {:.1} %, B ± {:.1} %, M ± {:.1} % (RMS element s.d. relative to the RMS element).",
+        c.trials,
+        c.profile,
+        fmt(c.radius_m * 1e3),
+        fmt(c.motion_s * 1e3),
+        fmt(c.hold_s * 1e3),
+        fmt(c.motion_s * 1e3),
+        fmt(c.rest_s),
+        fmt(c.relax_s),
+        c.duration_s,
+        fmt(r.budget_s),
+        fmt(r.start_m[0]),
+        fmt(r.start_m[1]),
+        fmt(r.start_m[2]),
+        r.predicted.runs,
+        r.predicted.pooled.se_percent[0],
+        r.predicted.pooled.se_percent[1],
+        r.predicted.pooled.se_percent[2],
+    );
+    if let Some(b) = &r.baseline {
+        verdict += &format!(
+            " The protocol it replaces: K ± {:.1} %, B ± {:.1} %, M ± {:.1} % in {:.1} s.",
+            b.pooled.se_percent[0], b.pooled.se_percent[1], b.pooled.se_percent[2], b.duration_s
+        );
+    }
+    if let Some(v) = &r.verify {
+        verdict += &format!(
+            " Checked on {} subjects drawn from the prior: predicted/achieved spread K {:.2}, B {:.2}, M {:.2}; K within 5 % and B within 20 %, both identifiable, in {:.0} % of them.",
+            v.runs, v.ratio[0], v.ratio[1], v.ratio[2], 100.0 * v.within_tolerance_share
+        );
+    }
+    let mut rows = prediction_rows("design", &r.predicted);
+    if let Some(b) = &r.baseline {
+        rows.extend(prediction_rows("baseline", b));
+    }
+    let precision = Table {
+        caption: "Predicted precision on the prior subject: RMS standard error of the nine elements, relative to the RMS element, mean relative Frobenius error and share of recordings called identifiable".into(),
+        header: ["protocol", "matrix", "SE", "SE %", "error %", "identifiable %", "duration (s)"]
+            .map(String::from)
+            .to_vec(),
+        rows,
+    };
+    let margins = Table {
+        caption: "Largest value reached against each limit".into(),
+        header: ["quantity", "peak", "limit", "unit", "margin %"]
+            .map(String::from)
+            .to_vec(),
+        rows: r
+            .limits
+            .iter()
+            .map(|m| {
+                vec![
+                    m.quantity.clone(),
+                    fmt(m.peak),
+                    fmt(m.limit),
+                    m.unit.clone(),
+                    format!("{:.1}", m.margin_percent),
+                ]
+            })
+            .collect(),
+    };
+    let cmd = &r.command;
+    let peak = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs())).max(1e-300);
+    let (dp, vp, ap) = (
+        peak(&cmd.displacement_m),
+        peak(&cmd.velocity_m_s),
+        peak(&cmd.acceleration_m_s2),
+    );
+    let command = Figure {
+        id: "design-command".into(),
+        chart: Chart {
+            title: format!(
+                "One perturbation along its direction, each relative to its peak (displacement {} mm, velocity {} m/s, acceleration {} m/s²)",
+                fmt(dp * 1e3),
+                fmt(vp),
+                fmt(ap)
+            ),
+            x_label: "time from the trial's start (s)".into(),
+            y_label: "share of the peak".into(),
+            x_log: false,
+            y_log: false,
+            y_range: Some((-1.05, 1.05)),
+            series: vec![
+                Series {
+                    name: "displacement".into(),
+                    x: cmd.t_s.clone(),
+                    y: cmd.displacement_m.iter().map(|v| v / dp).collect(),
+                    stroke: Stroke::Solid,
+                    color: PALETTE[0].into(),
+                },
+                Series {
+                    name: "velocity".into(),
+                    x: cmd.t_s.clone(),
+                    y: cmd.velocity_m_s.iter().map(|v| v / vp).collect(),
+                    stroke: Stroke::Dashed,
+                    color: PALETTE[1].into(),
+                },
+                Series {
+                    name: "acceleration".into(),
+                    x: cmd.t_s.clone(),
+                    y: cmd.acceleration_m_s2.iter().map(|v| v / ap).collect(),
+                    stroke: Stroke::Dotted,
+                    color: PALETTE[2].into(),
+                },
+            ],
+        },
+    };
+    let s = &r.spectrum;
+    let mut lines = vec![
+        series("design", &s.frequency_hz, &s.designed_m, Stroke::Solid, 0),
+        series(
+            "limits: min(d, v/ω, a/ω²)",
+            &s.frequency_hz,
+            &s.limit_m,
+            Stroke::Dashed,
+            6,
+        ),
+    ];
+    if let Some(b) = &s.baseline_m {
+        lines.push(series("baseline", &s.frequency_hz, b, Stroke::Solid, 1));
+    }
+    let spectrum = Figure {
+        id: "design-spectrum".into(),
+        chart: Chart {
+            title: "Amplitude of one perturbation's displacement by frequency (2|X(f)|/T), against the largest sine the limits allow".into(),
+            x_label: "frequency (Hz)".into(),
+            y_label: "amplitude (m)".into(),
+            x_log: true,
+            y_log: true,
+            y_range: None,
+            series: lines,
+        },
+    };
+    Section {
+        heading: format!("Designed protocol: {name}"),
+        verdict,
+        warnings: vec![],
+        tables: vec![precision, margins],
+        figures: vec![command, spectrum],
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}
