@@ -330,6 +330,81 @@ pub struct DesignRequest {
     pub seed: u64,
 }
 
+/// A file's text and its path (for errors).
+pub type Text<'a> = (&'a str, &'a Path);
+
+/// A design request from its texts, as the CLI and Python take it: the prior
+/// (`demo:S1` .. `demo:S6`, or a prior file's text), the limits from a
+/// centre-out protocol (else the prior's `[limits]`), the baseline protocol.
+/// The sample rate is the limits protocol's, else the baseline's, else 500 Hz.
+#[allow(clippy::too_many_arguments)]
+pub fn request_from_texts(
+    prior: Text<'_>,
+    limits_from: Option<Text<'_>>,
+    baseline: Option<Text<'_>>,
+    budget_s: f64,
+    objective: &str,
+    runs: usize,
+    verify: usize,
+    seed: u64,
+) -> Result<DesignRequest> {
+    let prior = match prior.0.strip_prefix("demo:") {
+        Some(point) => {
+            let index = point
+                .strip_prefix('S')
+                .and_then(|i| i.parse::<usize>().ok())
+                .filter(|i| (1..=6).contains(i))
+                .ok_or_else(|| {
+                    Error::invalid("prior", format!("{}: expected demo:S1 .. demo:S6", prior.0))
+                })?;
+            Prior::demo(index - 1)
+        }
+        None => Prior::from_toml(prior.0, prior.1)?,
+    };
+    let centre_out = |(text, path): Text<'_>, role: &str| -> Result<Protocol> {
+        match limpid_lab::design::Design::from_toml(text, path)? {
+            limpid_lab::design::Design::CentreOut(p) => Ok(p),
+            _ => Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{role} must be a centre-out protocol (the design is for the linear method)"
+                ),
+            }),
+        }
+    };
+    let limits_from = limits_from
+        .map(|t| centre_out(t, "the limits' protocol"))
+        .transpose()?;
+    let baseline = baseline
+        .map(|t| centre_out(t, "the baseline"))
+        .transpose()?;
+    let (limits, sample_rate_hz) = match (&limits_from, &prior.limits) {
+        (Some(p), _) => (p.limits.clone(), p.sample_rate_hz),
+        (None, Some(l)) => (
+            l.clone(),
+            baseline.as_ref().map_or(500.0, |b| b.sample_rate_hz),
+        ),
+        (None, None) => return Err(Error::invalid(
+            "limits",
+            "no limits: take them from a centre-out protocol or give a [limits] table in the prior",
+        )),
+    };
+    let objective = Objective::parse(objective).map_err(|e| Error::invalid("objective", e))?;
+    let request = DesignRequest {
+        prior,
+        limits,
+        sample_rate_hz,
+        budget_s,
+        objective,
+        runs,
+        baseline,
+        verify,
+        seed,
+    };
+    check_request(&request)?;
+    Ok(request)
+}
+
 /// The designed protocol and its result.
 pub struct Designed {
     /// The protocol (single start point: the prior's).

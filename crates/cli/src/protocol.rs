@@ -419,24 +419,12 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
     Ok(())
 }
 
-/// A centre-out protocol from a file, or a one-line error saying what it is instead.
-fn read_centre_out(path: &Path, role: &str) -> CliResult<Protocol> {
-    match read_design(path)?.0 {
-        Design::CentreOut(p) => Ok(p),
-        _ => Err(format!(
-            "{}: {role} must be a centre-out protocol (the design is for the linear method)",
-            path.display()
-        )
-        .into()),
-    }
-}
-
 fn run_design(args: DesignArgs) -> CliResult {
-    use limpid_app::design::{design, DesignRequest, Objective, Prior};
+    use limpid_app::design::{design, request_from_texts};
     let mut inputs: Vec<(&Path, &str)> = Vec::new();
     let prior_path = PathBuf::from(&args.prior);
-    let demo = args.prior.strip_prefix("demo:");
-    if demo.is_none() {
+    let demo = args.prior.starts_with("demo:");
+    if !demo {
         inputs.push((&prior_path, "the prior (--prior)"));
     }
     inputs.extend(
@@ -466,60 +454,49 @@ fn run_design(args: DesignArgs) -> CliResult {
         )
         .into());
     }
-    let objective =
-        Objective::parse(&args.objective).map_err(|e| format!("invalid --objective: {e}"))?;
-    let prior = match demo {
-        Some(point) => {
-            let index = point
-                .strip_prefix('S')
-                .and_then(|i| i.parse::<usize>().ok())
-                .filter(|i| (1..=6).contains(i))
-                .ok_or_else(|| format!("--prior {}: expected demo:S1 .. demo:S6", args.prior))?;
-            Prior::demo(index - 1)
-        }
-        None => Prior::from_toml(&limpid_core::files::read_text(&prior_path)?, &prior_path)?,
+    let read = |p: &Path| limpid_core::files::read_text(p);
+    let prior_text = if demo {
+        args.prior.clone()
+    } else {
+        read(&prior_path)?
     };
-    let limits_from = args
-        .limits_from
-        .as_deref()
-        .map(|p| read_centre_out(p, "--limits-from"))
-        .transpose()?;
-    let baseline = args
-        .baseline
-        .as_deref()
-        .map(|p| read_centre_out(p, "--baseline"))
-        .transpose()?;
-    let (limits, sample_rate_hz) = match (&limits_from, &prior.limits) {
-        (Some(p), _) => (p.limits.clone(), p.sample_rate_hz),
-        (None, Some(l)) => (l.clone(), baseline.as_ref().map_or(500.0, |b| b.sample_rate_hz)),
-        (None, None) => {
-            return Err("no limits: give --limits-from P.toml (a centre-out protocol) or a [limits] table in the prior".into())
-        }
-    };
-    let request = DesignRequest {
-        prior,
-        limits,
-        sample_rate_hz,
-        budget_s: args.duration,
-        objective,
-        runs: args.runs,
-        baseline,
-        verify: args.verify,
-        seed: args.seed,
-    };
+    let limits_text = args.limits_from.as_deref().map(read).transpose()?;
+    let baseline_text = args.baseline.as_deref().map(read).transpose()?;
     // a setting's error names its flag; the prior's (a start point outside the workspace) the file
     let named = |e: limpid_core::Error| match e {
         limpid_core::Error::InvalidParameter { name, message }
-            if ["duration", "runs", "verify"].contains(&name.as_str()) =>
+            if ["duration", "runs", "verify", "objective"].contains(&name.as_str()) =>
         {
             format!("invalid --{name}: {message}")
         }
-        limpid_core::Error::InvalidParameter { name, message } if name == "prior" && demo.is_none() => {
+        limpid_core::Error::InvalidParameter { name, message } if name == "prior" && !demo => {
             format!("{}: {message}", args.prior)
+        }
+        limpid_core::Error::InvalidParameter { name, message }
+            if name == "prior" || name == "limits" =>
+        {
+            format!(
+                "--{}: {message}",
+                if name == "limits" {
+                    "limits-from"
+                } else {
+                    "prior"
+                }
+            )
         }
         other => other.to_string(),
     };
-    limpid_app::design::check_request(&request).map_err(named)?;
+    let request = request_from_texts(
+        (&prior_text, &prior_path),
+        limits_text.as_deref().zip(args.limits_from.as_deref()),
+        baseline_text.as_deref().zip(args.baseline.as_deref()),
+        args.duration,
+        &args.objective,
+        args.runs,
+        args.verify,
+        args.seed,
+    )
+    .map_err(named)?;
     if !args.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         eprintln!("designing: every candidate is simulated and estimated on the prior (a few seconds) ...");
     }

@@ -503,6 +503,45 @@ fn protocol_check(py: Python<'_>, toml_text: &str) -> PyResult<String> {
     serde_json::to_string(&r).map_err(value_err)
 }
 
+/// Design a centre-out protocol for the linear method, as `limpid protocol
+/// design`: the prior (`demo:S1` .. `demo:S6` or a prior file's text, named
+/// `prior_name` in errors), the limits from a centre-out protocol's text (else
+/// the prior's `[limits]`), the baseline's text. Returns (the designed
+/// protocol as TOML, the result document as JSON).
+#[pyfunction]
+#[pyo3(signature = (prior, duration_s, limits_from=None, objective="stiffness,damping", baseline=None, verify=0, runs=40, seed=1, prior_name="<prior>"))]
+#[allow(clippy::too_many_arguments)]
+fn design(
+    py: Python<'_>,
+    prior: &str,
+    duration_s: f64,
+    limits_from: Option<&str>,
+    objective: &str,
+    baseline: Option<&str>,
+    verify: usize,
+    runs: usize,
+    seed: u64,
+    prior_name: &str,
+) -> PyResult<(String, String)> {
+    let request = limpid_app::design::request_from_texts(
+        (prior, Path::new(prior_name)),
+        limits_from.map(|t| (t, Path::new("<limits_from>"))),
+        baseline.map(|t| (t, Path::new("<baseline>"))),
+        duration_s,
+        objective,
+        runs,
+        verify,
+        seed,
+    )
+    .map_err(err)?;
+    let designed = detached(py, || limpid_app::design::design(&request)).map_err(err)?;
+    let toml = format!("kind = \"centre-out\"\n{}", designed.protocol.to_toml());
+    let doc = limpid_analysis::result::Document::new(limpid_analysis::result::Estimate::Design(
+        designed.result,
+    ));
+    Ok((toml, doc.to_json()))
+}
+
 /// Simulate a protocol (TOML text), as `limpid simulate`: on `subject` (TOML
 /// text, named `subject_name` in errors) or the built-in subjects, stochastic
 /// protocols held by `controller` (ideal, imbic, pd). One (columns, truth
@@ -623,6 +662,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study_run, m)?)?;
     m.add_function(wrap_pyfunction!(protocol_preset, m)?)?;
     m.add_function(wrap_pyfunction!(protocol_check, m)?)?;
+    m.add_function(wrap_pyfunction!(design, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(report, m)?)?;
     m.add_function(wrap_pyfunction!(with_standard_error, m)?)?;

@@ -462,3 +462,24 @@ def test_spectra_of_named_columns_give_the_analytic_coherences():
         limpid.spectra(cols, "u1", ["y"])
     with pytest.raises(ValueError, match="named twice"):
         limpid.spectra(cols, ["u1", "u1"], ["y"])
+
+
+def test_design_for_the_demo_subject_beats_the_seed_protocol_and_plots(tmp_path):
+    toml_text, r = limpid.design("demo:S1", 147.2, limits_from="artemiadis-3d", baseline="artemiadis-3d", runs=6)
+    assert r.kind == "design"
+    # the designed protocol passes its own check and fits the budget
+    report = limpid.protocol_check(toml_text)
+    assert report.trials == r.chosen.trials
+    assert r.chosen.duration_s <= 147.2
+    # damping: the seed's slow cubic leaves it to the force fluctuation, the design does not
+    assert r.predicted.pooled.se_percent[1] < 0.25 * r.baseline.pooled.se_percent[1]
+    assert all(m["margin_percent"] >= 0 for m in r.limits)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    fig = limpid.plot.design(r)
+    fig.savefig(tmp_path / "design.png")
+    with pytest.raises(ValueError, match="objective"):
+        limpid.design("demo:S1", 147.2, limits_from="artemiadis-3d", objective="stifness")
+    with pytest.raises(ValueError, match="demo:S1 .. demo:S6"):
+        limpid.design("demo:S7", 147.2, limits_from="artemiadis-3d")

@@ -23,6 +23,7 @@ impl Noise {
 
 /// Play an end-point command (t, start_point, trial, x, y, z) on a subject
 /// with impedance `m, b, k` at its first position; write t,x,y,z,fx,fy,fz,trial.
+#[allow(clippy::needless_range_loop)] // neighbours i-1, i+1 of each row
 fn play(command: &str, m: [[f64; 3]; 3], b: [[f64; 3]; 3], k: [[f64; 3]; 3], seed: u64) -> String {
     let rows: Vec<Vec<f64>> = command
         .lines()
@@ -205,7 +206,10 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         "--duration",
     ];
     let cases: [(&[&str], &str); 7] = [
-        (&["147", "--baseline", s, "-o", s], "would replace the input"),
+        (
+            &["147", "--baseline", s, "-o", s],
+            "would replace the input",
+        ),
         (&["147", "--method", "reflex"], "linear method only"),
         (&["147", "--family", "prbs"], "not written yet"),
         (&["147", "--objective", "stifness"], "invalid --objective"),

@@ -61,6 +61,7 @@ __all__ = [
     "study_run",
     "protocol_preset",
     "protocol_check",
+    "design",
     "simulate",
     "gravity_compensate",
     "report",
@@ -708,6 +709,65 @@ def protocol_preset(name: str) -> str:
 def protocol_check(toml_text: str) -> Result:
     """Check a protocol (TOML text) against its limits; raises ValueError at the first breach."""
     return Result(json.loads(_limpid.protocol_check(toml_text)))
+
+
+def _text_or_file(value: Union[str, "os.PathLike[str]"]) -> Tuple[str, str]:
+    """(text, name): TOML text as given, or a file's text and its path."""
+    if isinstance(value, str) and ("\n" in value or "=" in value):
+        return value, "<text>"
+    name = os.fspath(value)
+    with open(name, encoding="utf-8") as f:
+        return f.read(), name
+
+
+def design(
+    prior: Union[str, "os.PathLike[str]"],
+    duration_s: float,
+    *,
+    limits_from: Optional[Union[str, "os.PathLike[str]"]] = None,
+    objective: str = "stiffness,damping",
+    baseline: Optional[Union[str, "os.PathLike[str]"]] = None,
+    verify: int = 0,
+    runs: int = 40,
+    seed: int = 1,
+) -> Tuple[str, Result]:
+    """Design a centre-out protocol for the linear method, as ``limpid
+    protocol design``: (the protocol as TOML text, the result).
+
+    ``prior`` is ``"demo:S1"`` .. ``"demo:S6"`` (the demo's realistic subject),
+    TOML text or a path to a prior file (3 x 3 ``inertia``, ``damping``,
+    ``stiffness``, optional ``start_m``, ``[other_end]``, ``[noise]``,
+    ``[limits]``). ``limits_from`` and ``baseline`` are centre-out protocols:
+    a preset name (``"artemiadis-3d"``), TOML text or a path. The result has
+    ``predicted`` and ``baseline`` (pooled standard errors, errors, shares
+    identifiable), ``limits`` (margins), ``chosen``, ``command`` and
+    ``spectrum`` (for ``limpid.plot.design``) and, with ``verify`` > 0,
+    ``verify`` (predicted against achieved spread)."""
+
+    def protocol_text(value: Optional[Union[str, "os.PathLike[str]"]]) -> Optional[str]:
+        if value is None:
+            return None
+        if isinstance(value, str) and "\n" not in value and "=" not in value and not os.path.exists(value):
+            return protocol_preset(value)
+        return _text_or_file(value)[0]
+
+    if isinstance(prior, str) and prior.startswith("demo:"):
+        prior_text, prior_name = prior, "<prior>"
+    else:
+        prior_text, prior_name = _text_or_file(prior)
+    duration = float(duration_s)
+    toml_text, doc = _limpid.design(
+        prior_text,
+        duration,
+        protocol_text(limits_from),
+        objective,
+        protocol_text(baseline),
+        _integer("verify", verify, minimum=0),
+        _integer("runs", runs, minimum=0),
+        _integer("seed", seed, minimum=0),
+        prior_name,
+    )
+    return toml_text, Result(json.loads(doc))
 
 
 def simulate(

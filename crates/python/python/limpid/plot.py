@@ -29,7 +29,7 @@ import numpy as np
 
 from . import _display
 
-__all__ = ["ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex"]
+__all__ = ["ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex", "design"]
 
 
 def _plt() -> Any:
@@ -377,5 +377,52 @@ def reflex(result: Any, axes: Any = None) -> Any:
     a[0, 2].set_xlabel(f"velocity ({pu}/s)")
     a[0, 2].set_ylabel(f"reflex torque at DC ({tu})")
     a[0, 2].set_title(f"Nonlinearity: {r.get('polarity', '?')} half-wave, gain {r['gain']:.3g}", fontsize="medium")
+    fig.tight_layout()
+    return fig
+
+
+def design(result: Any, axes: Any = None) -> Any:
+    """A designed protocol (``limpid.design``): one perturbation's
+    displacement, velocity and acceleration, its amplitude by frequency
+    (2|X(f)|/T) against the largest sine the limits allow (and the baseline's,
+    when given), and the predicted relative standard errors of K, B and M for
+    the design and the baseline."""
+    d = _data(result)
+    _kind(d, "design")
+    fig, a = _grid(axes, 1, 3, figsize=(13, 3.4))
+    cmd = d["command"]
+    t = np.asarray(cmd["t_s"], dtype=float)
+    for key, label, style, unit in (
+        ("displacement_m", "displacement", "-", "m"),
+        ("velocity_m_s", "velocity", "--", "m/s"),
+        ("acceleration_m_s2", "acceleration", ":", "m/s²"),
+    ):
+        y = np.asarray(cmd[key], dtype=float)
+        peak = float(np.max(np.abs(y))) if y.size else 0.0
+        a[0, 0].plot(t, y / peak if peak > 0 else y, style, label=f"{label} (peak {peak:.3g} {unit})")
+    a[0, 0].set_xlabel("time from the trial's start (s)")
+    a[0, 0].set_ylabel("share of the peak (1)")
+    a[0, 0].legend(fontsize="small")
+    sp = d["spectrum"]
+    f = np.asarray(sp["frequency_hz"], dtype=float)
+    a[0, 1].loglog(f, np.asarray(sp["designed_m"], dtype=float), label="design")
+    if sp.get("baseline_m") is not None:
+        a[0, 1].loglog(f, np.asarray(sp["baseline_m"], dtype=float), label="baseline")
+    a[0, 1].loglog(f, np.asarray(sp["limit_m"], dtype=float), "k--", label="limits")
+    a[0, 1].set_xlabel("frequency (Hz)")
+    a[0, 1].set_ylabel("amplitude (m)")
+    a[0, 1].legend(fontsize="small")
+    names = ["K", "B", "M"]
+    x = np.arange(3)
+    pred = np.asarray(d["predicted"]["pooled"]["se_percent"], dtype=float)
+    base = d.get("baseline")
+    width = 0.4 if base is not None else 0.6
+    a[0, 2].bar(x - (width / 2 if base is not None else 0), pred, width, label="design")
+    if base is not None:
+        a[0, 2].bar(x + width / 2, np.asarray(base["pooled"]["se_percent"], dtype=float), width, label="baseline")
+    a[0, 2].set_xticks(x, names)
+    a[0, 2].set_yscale("log")
+    a[0, 2].set_ylabel("predicted SE (% of the RMS element)")
+    a[0, 2].legend(fontsize="small")
     fig.tight_layout()
     return fig

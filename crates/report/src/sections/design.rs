@@ -111,12 +111,7 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
     let command = Figure {
         id: "design-command".into(),
         chart: Chart {
-            title: format!(
-                "One perturbation along its direction, each relative to its peak (displacement {} mm, velocity {} m/s, acceleration {} m/s²)",
-                fmt(dp * 1e3),
-                fmt(vp),
-                fmt(ap)
-            ),
+            title: "One perturbation, relative to each peak".into(),
             x_label: "time from the trial's start (s)".into(),
             y_label: "share of the peak".into(),
             x_log: false,
@@ -124,21 +119,21 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
             y_range: Some((-1.05, 1.05)),
             series: vec![
                 Series {
-                    name: "displacement".into(),
+                    name: format!("displacement (peak {} mm)", fmt(dp * 1e3)),
                     x: cmd.t_s.clone(),
                     y: cmd.displacement_m.iter().map(|v| v / dp).collect(),
                     stroke: Stroke::Solid,
                     color: PALETTE[0].into(),
                 },
                 Series {
-                    name: "velocity".into(),
+                    name: format!("velocity (peak {} m/s)", fmt(vp)),
                     x: cmd.t_s.clone(),
                     y: cmd.velocity_m_s.iter().map(|v| v / vp).collect(),
                     stroke: Stroke::Dashed,
                     color: PALETTE[1].into(),
                 },
                 Series {
-                    name: "acceleration".into(),
+                    name: format!("acceleration (peak {} m/s²)", fmt(ap)),
                     x: cmd.t_s.clone(),
                     y: cmd.acceleration_m_s2.iter().map(|v| v / ap).collect(),
                     stroke: Stroke::Dotted,
@@ -164,7 +159,7 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
     let spectrum = Figure {
         id: "design-spectrum".into(),
         chart: Chart {
-            title: "Amplitude of one perturbation's displacement by frequency (2|X(f)|/T), against the largest sine the limits allow".into(),
+            title: "Amplitude 2|X(f)|/T and the limits".into(),
             x_label: "frequency (Hz)".into(),
             y_label: "amplitude (m)".into(),
             x_log: true,
