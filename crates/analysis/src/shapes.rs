@@ -144,15 +144,24 @@ fn study(st: &crate::result::study::StudyResult) -> Result<(), String> {
 
 /// Every point's estimate and its truths.
 fn demo(d: &crate::result::demo::DemoResult) -> Result<(), String> {
-    for (i, p) in d.points.iter().enumerate() {
-        linear(&format!("points[{i}].estimate."), &p.estimate)?;
+    let points = d
+        .points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (format!("points[{i}]"), p));
+    let designed = d
+        .designed
+        .iter()
+        .map(|x| ("designed.point".to_string(), &x.point));
+    for (at, p) in points.chain(designed) {
+        linear(&format!("{at}.estimate."), &p.estimate)?;
         let n = p.estimate.stiffness.0.nrows();
         for (name, m) in [
             ("true_stiffness", &p.true_stiffness),
             ("true_damping", &p.true_damping),
             ("true_inertia", &p.true_inertia),
         ] {
-            square(&format!("points[{i}].{name}"), m, n)?;
+            square(&format!("{at}.{name}"), m, n)?;
         }
     }
     Ok(())

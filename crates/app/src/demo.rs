@@ -14,7 +14,9 @@ use limpid_lab::{seed000_subject1, simulate_centre_out, CentreOut, NoiseModel, P
 use rayon::prelude::*;
 
 use limpid_analysis::linear::linear_result;
-use limpid_analysis::result::demo::{relative_error_percent, DemoPoint, DemoResult, DemoSubject};
+use limpid_analysis::result::demo::{
+    relative_error_percent, DemoDesigned, DemoPoint, DemoResult, DemoSubject,
+};
 
 fn run_point(
     p: &Posture,
@@ -44,12 +46,53 @@ fn run_point(
     })
 }
 
+/// Recordings behind the demo design's prediction (the search itself uses
+/// [`crate::design::RANKING_RUNS`] each).
+const DEMO_DESIGN_RUNS: usize = 12;
+
+/// `limpid protocol design` for the first start point on the realistic
+/// subject, with the seed protocol's limits and its time at one start point,
+/// then the designed protocol run like the seed's (same noise seed).
+fn designed_point(noise: &NoiseModel, posture: &Posture, seed: u64) -> Result<DemoDesigned> {
+    let seed_protocol = limpid_lab::protocol::preset("artemiadis-3d")?;
+    let budget_s = crate::design::protocol_duration(&seed_protocol);
+    let request = crate::design::DesignRequest {
+        prior: crate::design::Prior::demo(0),
+        limits: seed_protocol.limits.clone(),
+        sample_rate_hz: seed_protocol.sample_rate_hz,
+        budget_s,
+        objective: crate::design::Objective::default(),
+        runs: DEMO_DESIGN_RUNS,
+        baseline: None,
+        verify: 0,
+        seed,
+    };
+    let designed = crate::design::design(&request)?;
+    let mut at = posture.clone();
+    at.start = designed.protocol.start_points()[0];
+    let point = run_point(
+        &at,
+        &designed.protocol.centre_out(),
+        noise,
+        seed.wrapping_mul(1000),
+    )?;
+    Ok(DemoDesigned {
+        chosen: designed.result.chosen,
+        budget_s,
+        predicted_se_percent: designed.result.predicted.pooled.se_percent,
+        point,
+    })
+}
+
 /// Simulate and estimate every start point (in parallel); `progress` is
-/// called once per start point.
+/// called once per start point. With `design` (realistic subject only), the
+/// first start point is also run with the protocol `limpid protocol design`
+/// chooses for it ([`DemoResult::designed`]).
 pub fn run_demo(
     profile: Profile,
     subject: DemoSubject,
     seed: u64,
+    design: bool,
     progress: &(dyn Fn() + Sync),
 ) -> Result<DemoResult> {
     let protocol = CentreOut::seed000(profile);
@@ -75,7 +118,11 @@ pub fn run_demo(
             r
         })
         .collect::<Result<Vec<_>>>()?;
+    let designed = (design && subject == DemoSubject::Realistic)
+        .then(|| designed_point(&noise, &postures[0], seed))
+        .transpose()?;
     Ok(DemoResult {
+        designed,
         subject,
         profile: format!("{profile:?}").to_lowercase(),
         directions: protocol.directions.len(),

@@ -45,7 +45,7 @@ use limpid_analysis::result::design::{
 use limpid_core::{Error, Matrix, Result};
 use limpid_ident::{fit_linear, prepare, LinearEstimate, LinearParams, PrepareParams};
 use limpid_lab::protocol::{self, Limits, Phases, Protocol, StartPoints, Targets};
-use limpid_lab::{simulate_centre_out, NoiseModel, Posture, Profile};
+use limpid_lab::{simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
 
 /// Unrecorded relaxation after each return (s): the subject's pause before the next rest.
 pub const RELAX_S: f64 = 0.5;
@@ -452,7 +452,8 @@ struct Space<'a> {
 
 impl Space<'_> {
     /// The protocol of a choice, or why it is refused.
-    fn protocol(&self, c: &Choice) -> std::result::Result<Protocol, String> {
+    /// The protocol of a choice and its trials (directions spread once), or why it is refused.
+    fn protocol(&self, c: &Choice) -> std::result::Result<(Protocol, CentreOut), String> {
         let req = self.req;
         let l = &req.limits;
         let profile = PROFILES[c.profile];
@@ -502,28 +503,27 @@ impl Space<'_> {
             limits: l.clone(),
             robot_base: None,
         };
-        let peak = peak_force(&p, &req.prior);
+        let centre_out = p.centre_out();
+        let peak = peak_force(&p, &centre_out.directions, &req.prior);
         if peak > LIMIT_MARGIN * l.max_force_n {
             return Err(format!(
                 "force {peak:.1} N on the prior exceeds the limit {} N",
                 l.max_force_n
             ));
         }
-        protocol::check(&p).map_err(|e| e.to_string())?;
-        Ok(p)
+        Ok((p, centre_out))
     }
 }
 
 /// Largest force `|M a + B v + K x|` the protocol needs on either end of the prior (N).
-fn peak_force(p: &Protocol, prior: &Prior) -> f64 {
-    let dirs = p.directions();
+fn peak_force(p: &Protocol, dirs: &[Vector3<f64>], prior: &Prior) -> f64 {
     let d = p.phases.centre_out_s;
     let r = p.targets.radius_m;
     let mut peak = 0.0f64;
     for imp in prior.ends() {
         for k in 0..=200 {
             let (s, v, a) = p.phases.profile.eval(d * k as f64 / 200.0, d);
-            for dir in &dirs {
+            for dir in dirs {
                 let f = imp.inertia * dir * (r * a)
                     + imp.damping * dir * (r * v)
                     + imp.stiffness * dir * (r * s);
@@ -566,9 +566,9 @@ struct Run {
     identifiable: [bool; 3],
 }
 
-fn run_once(p: &Protocol, prior: &Prior, imp: &Impedance, seed: u64) -> Result<Run> {
+fn run_once(p: &CentreOut, prior: &Prior, imp: &Impedance, seed: u64) -> Result<Run> {
     let posture = prior.posture(imp);
-    let rec = simulate_centre_out(&posture, &p.centre_out(), &prior.noise, seed)?;
+    let rec = simulate_centre_out(&posture, p, &prior.noise, seed)?;
     let prepared = prepare(&rec, &PrepareParams::default())?;
     let est: LinearEstimate = fit_linear(&prepared, &LinearParams::default())?;
     let m3 = |m: &Matrix| Matrix3::from_fn(|r, c| m.0[(r, c)]);
@@ -586,7 +586,9 @@ fn run_once(p: &Protocol, prior: &Prior, imp: &Impedance, seed: u64) -> Result<R
     })
 }
 
-fn runs(p: &Protocol, prior: &Prior, imp: &Impedance, seeds: &[u64]) -> Result<Vec<Run>> {
+/// The directions are relaxed by repulsion (`even_directions`, O(n²) per
+/// step): a candidate's [`CentreOut`] is made once and shared by its recordings.
+fn runs(p: &CentreOut, prior: &Prior, imp: &Impedance, seeds: &[u64]) -> Result<Vec<Run>> {
     seeds
         .par_iter()
         .map(|&s| run_once(p, prior, imp, s))
@@ -637,8 +639,9 @@ fn predict(
 ) -> Result<Prediction> {
     // the worse end of the prior's range
     let mut worst: Option<(f64, Prediction)> = None;
+    let centre_out = p.centre_out();
     for imp in prior.ends() {
-        let rs = runs(p, prior, &imp, seeds)?;
+        let rs = runs(&centre_out, prior, &imp, seeds)?;
         let value = objective_value(&relative_mse(&rs, &imp), objective.weights());
         let se = spread(&rs);
         let pooled = pooled_se(&se);
@@ -708,7 +711,7 @@ fn margins(p: &Protocol, prior: &Prior) -> Vec<LimitMargin> {
         entry(
             "force on the prior",
             "N",
-            peak_force(p, prior),
+            peak_force(p, &p.directions(), prior),
             l.max_force_n,
         ),
         entry(
@@ -786,7 +789,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
                 return Ok(*v);
             }
             let value = match space.protocol(&c) {
-                Ok(p) => {
+                Ok((_, p)) => {
                     let mut worst = 0.0f64;
                     for imp in req.prior.ends() {
                         let rs = runs(&p, &req.prior, &imp, &ranking)?;
@@ -838,9 +841,12 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             format!("no protocol of the family fits the limits and the budget: {last_refusal}"),
         ));
     };
-    let protocol = space
+    let (protocol, _) = space
         .protocol(&best)
         .map_err(|why| Error::invalid("design", why))?;
+    // the sample-by-sample check `limpid protocol check` makes (the search kept
+    // every limit with a margin on the continuous profile)
+    protocol::check(&protocol)?;
     let final_seeds = seeds(req.seed, 10_000, req.runs);
     let predicted = predict(&protocol, &req.prior, &req.objective, &final_seeds)?;
     let baseline = req
@@ -999,9 +1005,10 @@ fn verify(
             (imp, s)
         })
         .collect();
+    let centre_out = p.centre_out();
     let outcomes: Vec<(Run, Impedance)> = subjects
         .par_iter()
-        .map(|(imp, s)| Ok((run_once(p, prior, imp, *s)?, *imp)))
+        .map(|(imp, s)| Ok((run_once(&centre_out, prior, imp, *s)?, *imp)))
         .collect::<Result<_>>()?;
     let rs: Vec<Run> = outcomes
         .iter()

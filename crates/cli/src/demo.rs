@@ -50,6 +50,10 @@ pub struct DemoArgs {
     /// Print the comparison as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Leave out the designed protocol (`limpid protocol design` for S1 on the same subject,
+    /// limits and time), which takes a few seconds.
+    #[arg(long)]
+    pub no_design: bool,
     /// Where to write the HTML report (default: report.html in the output folder).
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
@@ -75,7 +79,7 @@ pub fn run(args: DemoArgs) -> CliResult {
         SubjectArg::Realistic => DemoSubject::Realistic,
         SubjectArg::Ideal => DemoSubject::Ideal,
     };
-    let result = run_demo(profile, subject, args.seed, &|| bar.inc(1))?;
+    let result = run_demo(profile, subject, args.seed, !args.no_design, &|| bar.inc(1))?;
     bar.finish_and_clear();
     let doc = Document::new(Estimate::Demo(result))
         .with_run(limpid_analysis::result::Run::of_this_process(&[]));
@@ -186,4 +190,51 @@ fn print_demo(result: &limpid_analysis::result::demo::DemoResult) {
         worst(MatrixKind::Stiffness, "stiffness", 2),
         worst(MatrixKind::Damping, "damping", 1)
     );
+    if let Some(d) = &result.designed {
+        let c = &d.chosen;
+        let p = &d.point;
+        let e = &p.estimate;
+        let verdict = |kind: MatrixKind, v: f64| {
+            if e.criteria.verdicts.get(kind) == &MatrixVerdict::NotIdentifiable {
+                "not identifiable".to_string()
+            } else {
+                format!("{v:.1} %")
+            }
+        };
+        println!(
+            "\nthe same minutes designed (limpid protocol design, objective K and B): at {} the seed's {:.1} s hold {} {} perturbations of {} mm, {} ms out, {} ms hold, {} ms back, within the same limits",
+            p.start_point,
+            d.budget_s,
+            c.trials,
+            c.profile,
+            num(c.radius_m * 1e3),
+            num(c.motion_s * 1e3),
+            num(c.hold_s * 1e3),
+            num(c.motion_s * 1e3)
+        );
+        println!(
+            "{:<6}{:<10}{:>30}{:>30}{:>10}{:>10}  inertia {}",
+            p.start_point,
+            "designed",
+            format!(
+                "{:>9} {:>9} {:>9}",
+                num(e.stiffness[(0, 0)]),
+                num(e.stiffness[(1, 1)]),
+                num(e.stiffness[(2, 2)])
+            ),
+            format!(
+                "{:>9} {:>9} {:>9}",
+                num(e.damping[(0, 0)]),
+                num(e.damping[(1, 1)]),
+                num(e.damping[(2, 2)])
+            ),
+            verdict(MatrixKind::Stiffness, p.stiffness_error_percent),
+            verdict(MatrixKind::Damping, p.damping_error_percent),
+            verdict(MatrixKind::Inertia, p.inertia_error_percent)
+        );
+        println!(
+            "      (predicted for the design: K ± {:.1} %, B ± {:.1} % of the RMS element; `limpid protocol design --prior demo:S1 --limits-from P.toml --duration {:.1}` writes it)",
+            d.predicted_se_percent[0], d.predicted_se_percent[1], d.budget_s
+        );
+    }
 }

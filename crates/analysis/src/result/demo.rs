@@ -93,6 +93,24 @@ pub struct DemoResult {
     pub seed: u64,
     /// One entry per start point.
     pub points: Vec<DemoPoint>,
+    /// The protocol `limpid protocol design` chooses for the first start
+    /// point on the same subject, limits and time, run with the same noise
+    /// seed (realistic subject; absent with `--no-design`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub designed: Option<DemoDesigned>,
+}
+
+/// The designed protocol beside the seed's at one start point.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct DemoDesigned {
+    /// What was chosen.
+    pub chosen: crate::result::design::CentreOutChoice,
+    /// The seed protocol's length at one start point, the design's budget (s).
+    pub budget_s: f64,
+    /// Predicted RMS element s.d. of K, B, M relative to the RMS element (percent).
+    pub predicted_se_percent: [f64; 3],
+    /// The designed protocol simulated and estimated at the start point.
+    pub point: DemoPoint,
 }
 
 impl DemoResult {

@@ -8,6 +8,7 @@ fn a_demo_document_round_trips_and_names_its_kind_and_schema() {
         limpid_lab::Profile::Cubic,
         limpid_analysis::result::demo::DemoSubject::Realistic,
         3,
+        true,
         &|| (),
     )
     .unwrap();

@@ -365,7 +365,7 @@ fn stochastic_preset_simulates_and_estimates_back_to_its_truth() {
 }
 
 #[test]
-fn protocol_files_of_unknown_kind_or_without_a_robot_are_refused() {
+fn protocol_files_of_unknown_kind_are_refused_and_without_a_robot_export_the_command() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("odd.toml");
     std::fs::write(&p, "kind = \"spiral\"\n").unwrap();
@@ -411,8 +411,20 @@ fn protocol_files_of_unknown_kind_or_without_a_robot_are_refused() {
         "-o",
         dir.path().join("x.csv").to_str().unwrap(),
     ]);
-    assert_eq!(out.code, 2);
-    assert!(out.stderr.contains("add --robot"), "{}", out.stderr);
+    // without a robot: the end-point command (issue 60), at rest at each start point
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let csv = std::fs::read_to_string(dir.path().join("x.csv")).unwrap();
+    assert_eq!(csv.lines().next(), Some("t,start_point,trial,x,y,z"));
+    let last: Vec<f64> = csv
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    // the last sample: start point 6, trial 16, back at the start point (the octahedron's -z vertex)
+    assert_eq!((last[1], last[2]), (6.0, 16.0));
+    assert!((last[5] + 0.2).abs() < 1e-9, "{last:?}");
 }
 
 #[test]

@@ -73,6 +73,37 @@ pub(crate) fn demo_section(name: &str, v: &DemoResult) -> Section {
             v.points.len()
         ),
     };
+    if let Some(d) = &v.designed {
+        let p = &d.point;
+        let est = &p.estimate;
+        let error = |kind: MatrixKind, percent: f64| {
+            if est.criteria.verdict_of(kind) == MatrixVerdict::NotIdentifiable {
+                "n/i".to_string()
+            } else {
+                fmt(percent)
+            }
+        };
+        errors.rows.push(vec![
+            format!("{} designed", p.start_point),
+            error(MatrixKind::Stiffness, p.stiffness_error_percent),
+            error(MatrixKind::Damping, p.damping_error_percent),
+            error(MatrixKind::Inertia, p.inertia_error_percent),
+            est.verdict(),
+        ]);
+        let c = &d.chosen;
+        section.verdict += &format!(
+            ". In the same {} s at {} within the same limits, `limpid protocol design` chooses {} {} perturbations of {} mm, {} ms out and back (predicted K ± {:.1} %, B ± {:.1} %): row \"{} designed\"",
+            fmt(d.budget_s),
+            p.start_point,
+            c.trials,
+            c.profile,
+            fmt(c.radius_m * 1e3),
+            fmt(c.motion_s * 1e3),
+            d.predicted_se_percent[0],
+            d.predicted_se_percent[1],
+            p.start_point
+        );
+    }
     section.tables.insert(0, errors);
     section
 }
