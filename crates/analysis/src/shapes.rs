@@ -30,6 +30,8 @@ pub fn check(e: &Estimate) -> Result<(), String> {
         Estimate::Varying(v) => varying(v),
         Estimate::Calibration(c) => calibration(c),
         Estimate::Design(d) => design(d),
+        // scalars and a protocol: nothing to fit together
+        Estimate::ReflexDesign(_) => Ok(()),
     }
 }
 

@@ -60,13 +60,16 @@ pub struct DesignArgs {
     /// The designed protocol's whole length (s): rests, motions, holds, returns and relaxation.
     #[arg(long, value_name = "S")]
     pub duration: f64,
-    /// What matters: `stiffness,damping` or weights, `stiffness=2,damping=1,inertia=0.5`.
+    /// What matters: `stiffness,damping` or weights, `stiffness=2,damping=1,inertia=0.5`
+    /// (linear); the reflex method minimises the reflex gain's error (`gain`).
     #[arg(long, default_value = "stiffness,damping")]
     pub objective: String,
-    /// The family the protocol is chosen from: centre-out (multisine and PRBS designs are not available yet).
-    #[arg(long, default_value = "centre-out")]
+    /// The family the protocol is chosen from: centre-out (linear), prbs (reflex) or any.
+    #[arg(long, default_value = "any")]
     pub family: String,
-    /// The estimator the design is for: linear.
+    /// The estimator the design is for: linear (a centre-out protocol for K, B, M) or reflex
+    /// (a PRBS for the stretch-reflex gain; --prior is an ankle: inertia, damping, stiffness,
+    /// [reflex], torque_noise_nm, or demo:ankle; --limits-from a PRBS protocol).
     #[arg(long, default_value = "linear")]
     pub method: String,
     /// The protocol it replaces (TOML, centre-out): predicted at the prior's start point beside the design.
@@ -440,19 +443,23 @@ fn run_design(args: DesignArgs) -> CliResult {
     if let Some(out) = &args.output {
         limpid_core::files::refuse_overwriting_inputs(&[(out, "the output (-o)")], &inputs)?;
     }
-    if args.method != "linear" {
-        return Err(format!(
-            "--method {}: designs are available for the linear method only (reflex, stochastic and planar designs are not written yet)",
-            args.method
-        )
-        .into());
-    }
-    if !matches!(args.family.as_str(), "centre-out" | "any") {
-        return Err(format!(
-            "--family {}: the linear method's designs are centre-out (prbs and multisine designs are not written yet); expected centre-out or any",
-            args.family
-        )
-        .into());
+    match (args.method.as_str(), args.family.as_str()) {
+        ("linear", "centre-out" | "any") => {}
+        ("reflex", "prbs" | "any") => return run_reflex_design(&args, demo),
+        ("linear" | "reflex", family) => {
+            return Err(format!(
+                "--family {family}: the {} method's designs are {} (other families are not written yet)",
+                args.method,
+                if args.method == "linear" { "centre-out" } else { "prbs" }
+            )
+            .into())
+        }
+        (method, _) => {
+            return Err(format!(
+                "--method {method}: designs are available for the linear and reflex methods (stochastic and planar designs are not written yet)"
+            )
+            .into())
+        }
     }
     let read = |p: &Path| limpid_core::files::read_text(p);
     let prior_text = if demo {
@@ -605,4 +612,143 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
         "search: {} candidates on {} recordings each ({} refused by a limit or the budget)",
         r.search.candidates, r.search.runs_per_candidate, r.search.refused
     );
+}
+
+/// `--method reflex`: a PRBS for the reflex gain on a prior ankle.
+fn run_reflex_design(args: &DesignArgs, demo: bool) -> CliResult {
+    use limpid_app::design::reflex::{design_reflex, ReflexDesignRequest, ReflexPrior};
+    use limpid_lab::periodic::PeriodicDesign;
+    if !matches!(
+        args.objective.as_str(),
+        "stiffness,damping" | "gain" | "reflex-gain"
+    ) {
+        return Err(format!(
+            "invalid --objective {:?}: the reflex method's design minimises the reflex gain's error (--objective gain)",
+            args.objective
+        )
+        .into());
+    }
+    let prior_path = PathBuf::from(&args.prior);
+    let prior = match args.prior.as_str() {
+        "demo:ankle" => ReflexPrior::demo(),
+        _ if demo => {
+            return Err(format!(
+                "--prior {}: the reflex method's demo prior is demo:ankle",
+                args.prior
+            )
+            .into())
+        }
+        _ => ReflexPrior::from_toml(&limpid_core::files::read_text(&prior_path)?, &prior_path)?,
+    };
+    let periodic = |path: &Path, role: &str| -> CliResult<PeriodicDesign> {
+        match read_design(path)?.0 {
+            Design::Periodic(p) if matches!(p.signal, limpid_lab::periodic::Signal::Prbs(_)) => {
+                Ok(p)
+            }
+            _ => Err(format!(
+                "{}: {role} must be a PRBS protocol (kind = \"prbs\") on one joint",
+                path.display()
+            )
+            .into()),
+        }
+    };
+    let baseline = args
+        .baseline
+        .as_deref()
+        .map(|p| periodic(p, "--baseline"))
+        .transpose()?;
+    let limits_from = args
+        .limits_from
+        .as_deref()
+        .map(|p| periodic(p, "--limits-from"))
+        .transpose()?;
+    let Some(limits_source) = limits_from.as_ref().or(baseline.as_ref()) else {
+        return Err("no limits: give --limits-from P.toml (a PRBS protocol, e.g. `limpid protocol new --preset ankle-prbs`)".into());
+    };
+    let request = ReflexDesignRequest {
+        prior,
+        limits: limits_source.limits.clone(),
+        sample_rate_hz: limits_source.sample_rate_hz,
+        budget_s: args.duration,
+        runs: args.runs,
+        baseline,
+        seed: args.seed,
+    };
+    let designed = design_reflex(&request).map_err(|e| match e {
+        limpid_core::Error::InvalidParameter { name, message }
+            if ["duration", "runs"].contains(&name.as_str()) =>
+        {
+            format!("invalid --{name}: {message}")
+        }
+        other => other.to_string(),
+    })?;
+    if let Some(out) = &args.output {
+        let text = format!(
+            "# limpid protocol design --method reflex (budget {} s); units: rad, s, Hz, N m\nkind = \"prbs\"\n{}",
+            args.duration,
+            toml::to_string(&designed.protocol)?
+        );
+        limpid_core::files::write_file(out, text.as_bytes())?;
+    }
+    let r = designed.result;
+    if args.json {
+        println!(
+            "{}",
+            limpid_analysis::result::Document::new(
+                limpid_analysis::result::Estimate::ReflexDesign(r)
+            )
+            .with_run(limpid_analysis::result::Run::of_this_process(&[]))
+            .to_json_pretty()
+        );
+        return Ok(());
+    }
+    let c = &r.chosen;
+    println!(
+        "designed: PRBS {} rad, {} ms switching, order {}, {} periods with a fade-in and a fade-out period: {:.1} s of {} s",
+        num(c.amplitude_rad),
+        num(c.switch_interval_s * 1e3),
+        c.order,
+        c.periods,
+        c.duration_s,
+        num(args.duration)
+    );
+    println!(
+        "predicted on the prior ankle ({} simulated recordings each): reflex gain s.d., the estimator's mean SE, mean error; intrinsic K and B s.d.",
+        r.predicted.runs
+    );
+    let row = |label: &str, p: &limpid_analysis::result::design::ReflexPrediction| {
+        println!(
+            "  {label:<9} gain s.d. {} N m s/rad (information: {}), SE {}, error {:.2} %; K s.d. {} N m/rad, B s.d. {} N m s/rad ({:.1} s)",
+            num(p.gain_sd),
+            num(p.gain_se_information),
+            num(p.gain_se_mean),
+            p.gain_error_percent,
+            num(p.intrinsic_sd[0]),
+            num(p.intrinsic_sd[1]),
+            p.duration_s
+        );
+    };
+    row("design", &r.predicted);
+    if let Some(b) = &r.baseline {
+        row("baseline", b);
+    }
+    if let Some(ratio) = r.gain_spread_ratio {
+        println!("  the design's gain spread is {ratio:.2} of the baseline's");
+    }
+    println!("margins to the limits:");
+    for m in &r.limits {
+        println!(
+            "  {:<32} {} of {} {} ({:.1} % to spare)",
+            m.quantity,
+            num(m.peak),
+            num(m.limit),
+            m.unit,
+            m.margin_percent
+        );
+    }
+    match &args.output {
+        Some(out) => println!("wrote {}", out.display()),
+        None => println!("protocol not written: add -o D.toml"),
+    }
+    Ok(())
 }

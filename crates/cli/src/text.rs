@@ -30,12 +30,15 @@ pub fn print(e: &Estimated, request: &Request, paths: &[PathBuf], csv: bool) -> 
             println!("{}", limpid_report::text::study_markdown(r));
             Ok(())
         }
-        Estimate::Demo(_) | Estimate::Calibration(_) | Estimate::Design(_) => Err(format!(
+        Estimate::Demo(_)
+        | Estimate::Calibration(_)
+        | Estimate::Design(_)
+        | Estimate::ReflexDesign(_) => Err(format!(
             "a {} result is printed by its own command (`limpid {}`), not by an estimate",
             e.document.estimate.kind(),
             match e.document.estimate {
                 Estimate::Demo(_) => "demo",
-                Estimate::Design(_) => "protocol design",
+                Estimate::Design(_) | Estimate::ReflexDesign(_) => "protocol design",
                 _ => "calibrate",
             }
         )

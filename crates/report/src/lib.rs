@@ -138,6 +138,7 @@ pub fn build(inputs: &[(String, Estimate)]) -> Report {
             Estimate::Cocontraction(r) => cocontraction_section(name, r),
             Estimate::Calibration(r) => calibration_section(name, r),
             Estimate::Design(r) => design::section(name, r),
+            Estimate::ReflexDesign(r) => design::reflex_section(name, r),
             Estimate::Varying(r) => varying::section(name, r),
         })
         .collect();

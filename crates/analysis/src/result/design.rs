@@ -174,3 +174,60 @@ pub struct Verification {
     /// Mean relative Frobenius error of K, B, M (percent).
     pub error_percent: [f64; 3],
 }
+
+/// A PRBS designed for the reflex method (`limpid protocol design --method reflex`).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct ReflexDesignResult {
+    /// The time budget (s): fade-in, periods and fade-out counted.
+    pub budget_s: f64,
+    /// What was chosen.
+    pub chosen: PrbsChoice,
+    /// Predicted on the prior ankle.
+    pub predicted: ReflexPrediction,
+    /// The same for the protocol it replaces, if given.
+    pub baseline: Option<ReflexPrediction>,
+    /// Predicted spread of the reflex gain over the baseline's (when there is one).
+    pub gain_spread_ratio: Option<f64>,
+    /// The designed protocol (`kind = "prbs"`, as JSON).
+    pub protocol: serde_json::Value,
+    /// Largest value reached against each limit.
+    pub limits: Vec<LimitMargin>,
+    /// How the design was searched.
+    pub search: SearchSummary,
+}
+
+/// The PRBS parameters the design chooses.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct PrbsChoice {
+    /// Switching interval (s).
+    pub switch_interval_s: f64,
+    /// Register order (period 2^order - 1 intervals).
+    pub order: usize,
+    /// Recorded periods (a fade-in and a fade-out period come on top).
+    pub periods: usize,
+    /// Half-swing (rad).
+    pub amplitude_rad: f64,
+    /// Length of the whole command (s).
+    pub duration_s: f64,
+}
+
+/// The reflex gain's (and the intrinsic K and B's) predicted precision.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct ReflexPrediction {
+    /// Spread (s.d.) of the reflex gain over the simulated recordings (N m s/rad).
+    pub gain_sd: f64,
+    /// Mean of the estimator's own standard error of the gain (N m s/rad).
+    pub gain_se_mean: f64,
+    /// The gain's standard error from the information in the parametric
+    /// model with white torque noise, `σ / sqrt(Σ r⊥²)` (N m s/rad): what
+    /// the design ranks by.
+    pub gain_se_information: f64,
+    /// Mean relative error of the gain against the prior's (percent).
+    pub gain_error_percent: f64,
+    /// Spread of the intrinsic stiffness (N m/rad) and damping (N m s/rad).
+    pub intrinsic_sd: [f64; 2],
+    /// Recordings simulated.
+    pub runs: usize,
+    /// Length of the protocol (s).
+    pub duration_s: f64,
+}

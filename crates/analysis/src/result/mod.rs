@@ -62,6 +62,8 @@ pub enum Estimate {
     Calibration(crate::result::calibration::Calibration),
     /// A protocol designed for an estimate (`limpid protocol design`), with its predicted precision.
     Design(crate::result::design::DesignResult),
+    /// A PRBS designed for the reflex method (`limpid protocol design --method reflex`).
+    ReflexDesign(crate::result::design::ReflexDesignResult),
 }
 
 impl Estimate {
@@ -80,6 +82,7 @@ impl Estimate {
             Estimate::Demo(_) => "demo",
             Estimate::Calibration(_) => "calibration",
             Estimate::Design(_) => "design",
+            Estimate::ReflexDesign(_) => "reflex_design",
         }
     }
 

@@ -205,13 +205,14 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         s,
         "--duration",
     ];
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 8] = [
         (
             &["147", "--baseline", s, "-o", s],
             "would replace the input",
         ),
-        (&["147", "--method", "reflex"], "linear method only"),
-        (&["147", "--family", "prbs"], "not written yet"),
+        (&["147", "--method", "reflex"], "demo prior is demo:ankle"),
+        (&["147", "--method", "planar"], "linear and reflex methods"),
+        (&["147", "--family", "prbs"], "designs are centre-out"),
         (&["147", "--objective", "stifness"], "invalid --objective"),
         (&["-1"], "duration"),
         (&["3"], "at least 6 are needed"),
@@ -257,5 +258,65 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         no_limits.code == 2 && no_limits.stderr.contains("no limits"),
         "{}",
         no_limits.stderr
+    );
+}
+
+#[test]
+fn a_reflex_design_writes_a_prbs_that_its_check_accepts() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let base = dir.path().join("prbs.toml");
+    assert_eq!(
+        limpid(&["protocol", "new", "--preset", "ankle-prbs", "-o", &s(&base)]).code,
+        0
+    );
+    let d = dir.path().join("d.toml");
+    let out = limpid(&[
+        "protocol",
+        "design",
+        "--method",
+        "reflex",
+        "--family",
+        "prbs",
+        "--prior",
+        "demo:ankle",
+        "--limits-from",
+        &s(&base),
+        "--duration",
+        "30",
+        "--runs",
+        "3",
+        "-o",
+        &s(&d),
+        "--json",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert_eq!(v["kind"], "reflex_design");
+    assert!(v["chosen"]["duration_s"].as_f64().unwrap() <= 30.0);
+    let check = limpid(&["protocol", "check", &s(&d)]);
+    assert_eq!(check.code, 0, "{}", check.stderr);
+    // a centre-out protocol is not a PRBS's limits
+    let c = dir.path().join("c.toml");
+    assert_eq!(
+        limpid(&["protocol", "new", "--preset", "artemiadis-3d", "-o", &s(&c)]).code,
+        0
+    );
+    let out = limpid(&[
+        "protocol",
+        "design",
+        "--method",
+        "reflex",
+        "--prior",
+        "demo:ankle",
+        "--limits-from",
+        &s(&c),
+        "--duration",
+        "30",
+    ]);
+    assert!(
+        out.code == 2 && out.stderr.contains("must be a PRBS protocol"),
+        "{}",
+        out.stderr
     );
 }

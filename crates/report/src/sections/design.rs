@@ -178,3 +178,90 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
         drawings: vec![],
     }
 }
+
+/// The section of a PRBS designed for the reflex method.
+pub(crate) fn reflex_section(
+    name: &str,
+    r: &limpid_analysis::result::design::ReflexDesignResult,
+) -> Section {
+    let c = &r.chosen;
+    let mut verdict = format!(
+        "PRBS of {} rad, {} ms switching, order {}, {} periods with a fade-in and a fade-out period: {:.1} s of the {} s budget. Predicted reflex gain spread {} N m s/rad ({} simulated recordings; the estimator's own SE {} on average)",
+        fmt(c.amplitude_rad),
+        fmt(c.switch_interval_s * 1e3),
+        c.order,
+        c.periods,
+        c.duration_s,
+        fmt(r.budget_s),
+        fmt(r.predicted.gain_sd),
+        r.predicted.runs,
+        fmt(r.predicted.gain_se_mean)
+    );
+    if let (Some(b), Some(ratio)) = (&r.baseline, r.gain_spread_ratio) {
+        verdict += &format!(
+            "; the protocol it replaces: {} (the design's spread is {:.2} of it)",
+            fmt(b.gain_sd),
+            ratio
+        );
+    }
+    verdict.push('.');
+    let row = |label: &str, p: &limpid_analysis::result::design::ReflexPrediction| {
+        vec![
+            label.to_string(),
+            fmt(p.gain_sd),
+            fmt(p.gain_se_mean),
+            format!("{:.2}", p.gain_error_percent),
+            fmt(p.intrinsic_sd[0]),
+            fmt(p.intrinsic_sd[1]),
+            format!("{:.1}", p.duration_s),
+        ]
+    };
+    let mut rows = vec![row("design", &r.predicted)];
+    if let Some(b) = &r.baseline {
+        rows.push(row("baseline", b));
+    }
+    Section {
+        heading: format!("Designed PRBS for the reflex gain: {name}"),
+        verdict,
+        warnings: vec![],
+        tables: vec![
+            Table {
+                caption: "Predicted on the prior ankle: spread of the reflex gain, the estimator's mean SE, mean error, spread of the intrinsic K and B".into(),
+                header: [
+                    "protocol",
+                    "gain s.d. (N m s/rad)",
+                    "gain SE (N m s/rad)",
+                    "gain error %",
+                    "K s.d. (N m/rad)",
+                    "B s.d. (N m s/rad)",
+                    "duration (s)",
+                ]
+                .map(String::from)
+                .to_vec(),
+                rows,
+            },
+            Table {
+                caption: "Largest value reached against each limit".into(),
+                header: ["quantity", "peak", "limit", "unit", "margin %"]
+                    .map(String::from)
+                    .to_vec(),
+                rows: r
+                    .limits
+                    .iter()
+                    .map(|m| {
+                        vec![
+                            m.quantity.clone(),
+                            fmt(m.peak),
+                            fmt(m.limit),
+                            m.unit.clone(),
+                            format!("{:.1}", m.margin_percent),
+                        ]
+                    })
+                    .collect(),
+            },
+        ],
+        figures: vec![],
+        ellipsoids: vec![],
+        drawings: vec![],
+    }
+}

@@ -31,6 +31,8 @@
 //! (common random numbers), by coordinate descent over the five parameters
 //! from a fast cubic; the chosen one is then predicted on `runs` fresh seeds.
 
+pub mod reflex;
+
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -66,7 +68,7 @@ const SLOWNESS: [f64; 5] = [1.0, 1.4, 2.0, 3.0, 5.0];
 const HOLDS_S: [f64; 3] = [0.0, 0.25, 0.6];
 const RESTS_S: [f64; 3] = [0.2, 0.4, 0.8];
 /// Below the limits by this share, so that rounding never breaches them.
-const LIMIT_MARGIN: f64 = 0.995;
+pub(crate) const LIMIT_MARGIN: f64 = 0.995;
 
 /// M, B, K of a subject (SI, force applied to the limb).
 #[derive(Debug, Clone, Copy)]
@@ -683,7 +685,7 @@ pub fn protocol_duration(p: &Protocol) -> f64 {
     per * p.targets.count as f64 + ph.set_rest_s * sets.saturating_sub(1) as f64
 }
 
-fn seeds(base: u64, offset: u64, n: usize) -> Vec<u64> {
+pub(crate) fn seeds(base: u64, offset: u64, n: usize) -> Vec<u64> {
     (0..n as u64)
         .map(|i| base.wrapping_mul(1_000_003).wrapping_add(offset + i))
         .collect()
