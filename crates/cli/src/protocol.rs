@@ -33,9 +33,10 @@ pub enum ProtocolCommand {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Design a centre-out protocol for the linear estimator: the profile, radius, speed, hold,
-    /// rest and number of perturbations that minimise the predicted variance of the chosen
-    /// parameters on a prior subject, within the limits at every sample and a time budget.
+    /// Design a protocol for an estimate, within the limits at every sample and a time budget:
+    /// a centre-out protocol for the linear estimator (profile, radius, speed, hold, rest and
+    /// number of perturbations that minimise the predicted variance of K, B, M on a prior
+    /// subject), or a PRBS for the reflex method's gain (--method reflex).
     Design(DesignArgs),
     /// Check a protocol against its safety limits and report what it will excite,
     /// with the condition number the estimator will meet on a nominal subject.
@@ -72,10 +73,12 @@ pub struct DesignArgs {
     /// [reflex], torque_noise_nm, or demo:ankle; --limits-from a PRBS protocol).
     #[arg(long, default_value = "linear")]
     pub method: String,
-    /// The protocol it replaces (TOML, centre-out): predicted at the prior's start point beside the design.
+    /// The protocol it replaces (TOML; centre-out, or a PRBS for --method reflex): predicted on
+    /// the prior beside the design (a centre-out one at the prior's start point).
     #[arg(long, value_name = "P.toml")]
     pub baseline: Option<PathBuf>,
-    /// Simulate N recordings on subjects drawn from the prior and print predicted against achieved spread.
+    /// Linear method: simulate N recordings on subjects drawn from the prior and print predicted
+    /// against achieved spread.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub verify: usize,
     /// Simulated recordings behind the prediction.
@@ -87,7 +90,7 @@ pub struct DesignArgs {
     /// Write the designed protocol (TOML) here.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Print the result as JSON (`kind: design`).
+    /// Print the result as JSON (`kind: design`; `reflex_design` for --method reflex).
     #[arg(long)]
     pub json: bool,
 }
@@ -618,6 +621,9 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
 fn run_reflex_design(args: &DesignArgs, demo: bool) -> CliResult {
     use limpid_app::design::reflex::{design_reflex, ReflexDesignRequest, ReflexPrior};
     use limpid_lab::periodic::PeriodicDesign;
+    if args.verify > 0 {
+        return Err("--verify is for the linear method: the reflex design's prediction is already the spread over --runs simulated recordings".into());
+    }
     if !matches!(
         args.objective.as_str(),
         "stiffness,damping" | "gain" | "reflex-gain"

@@ -296,6 +296,25 @@ fn a_reflex_design_writes_a_prbs_that_its_check_accepts() {
     assert!(v["chosen"]["duration_s"].as_f64().unwrap() <= 30.0);
     let check = limpid(&["protocol", "check", &s(&d)]);
     assert_eq!(check.code, 0, "{}", check.stderr);
+    let verify = limpid(&[
+        "protocol",
+        "design",
+        "--method",
+        "reflex",
+        "--prior",
+        "demo:ankle",
+        "--limits-from",
+        &s(&base),
+        "--duration",
+        "30",
+        "--verify",
+        "5",
+    ]);
+    assert!(
+        verify.code == 2 && verify.stderr.contains("--verify is for the linear method"),
+        "{}",
+        verify.stderr
+    );
     // a centre-out protocol is not a PRBS's limits
     let c = dir.path().join("c.toml");
     assert_eq!(
