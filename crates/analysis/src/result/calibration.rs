@@ -136,6 +136,29 @@ pub struct Calibration {
     /// Reflex claims of the parameter-varying ankle.
     #[serde(default)]
     pub varying_reflex: ReflexClaims,
+    /// `limpid protocol design` checked against what its design achieves.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub design: Option<DesignCalibration>,
+}
+
+/// The linear design for the demo's S1 on a prior range, predicted at the
+/// range's worse end and run on subjects drawn uniformly from the range.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct DesignCalibration {
+    /// The prior, in words.
+    pub prior: String,
+    /// Subjects drawn from the prior (and recordings behind the prediction).
+    pub recordings: usize,
+    /// Predicted pooled SE of K (N/m), B (N s/m), M (kg).
+    pub predicted_se: [f64; 3],
+    /// Achieved pooled s.d. of the errors.
+    pub achieved_se: [f64; 3],
+    /// Predicted over achieved.
+    pub ratio: [f64; 3],
+    /// Share with K within 5 % and B within 20 % of the truth, both identifiable.
+    pub within_tolerance_share: f64,
+    /// Wall time (s).
+    pub seconds: f64,
 }
 
 /// How often the parameter-varying fit claims a reflex, with and without one.

@@ -726,6 +726,20 @@ fn margins(p: &Protocol, prior: &Prior) -> Vec<LimitMargin> {
     ]
 }
 
+/// A time budget is positive and at most a protocol's longest duration.
+pub(crate) fn check_budget(budget_s: f64) -> Result<()> {
+    if budget_s > 0.0 && budget_s <= limpid_lab::validate::MAX_DURATION_S {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        "duration",
+        format!(
+            "{budget_s} s: expected a positive duration of at most {} s",
+            limpid_lab::validate::MAX_DURATION_S
+        ),
+    ))
+}
+
 /// The request's numbers, before any simulation.
 pub fn check_request(req: &DesignRequest) -> Result<()> {
     let l = &req.limits;
@@ -742,16 +756,7 @@ pub fn check_request(req: &DesignRequest) -> Result<()> {
             ));
         }
     }
-    if !(req.budget_s > 0.0 && req.budget_s <= limpid_lab::validate::MAX_DURATION_S) {
-        return Err(Error::invalid(
-            "duration",
-            format!(
-                "{} s: expected a positive duration of at most {} s",
-                req.budget_s,
-                limpid_lab::validate::MAX_DURATION_S
-            ),
-        ));
-    }
+    check_budget(req.budget_s)?;
     if !(req.sample_rate_hz > 0.0 && req.sample_rate_hz <= 10_000.0) {
         return Err(Error::invalid(
             "sample_rate_hz",

@@ -371,16 +371,7 @@ pub fn design_reflex(req: &ReflexDesignRequest) -> Result<ReflexDesigned> {
             "the prior ankle has no reflex to design for",
         ));
     }
-    if !(req.budget_s > 0.0 && req.budget_s <= limpid_lab::validate::MAX_DURATION_S) {
-        return Err(Error::invalid(
-            "duration",
-            format!(
-                "{} s: expected a positive duration of at most {} s",
-                req.budget_s,
-                limpid_lab::validate::MAX_DURATION_S
-            ),
-        ));
-    }
+    super::check_budget(req.budget_s)?;
     if req.runs < 2 {
         return Err(Error::invalid(
             "runs",

@@ -30,6 +30,16 @@ pub(crate) fn calibration_section(
     if let Some(w) = &v.window_sweep_varied {
         verdict += &sweep("varied subjects", w);
     }
+    if let Some(d) = &v.design {
+        verdict += &format!(
+            "; protocol design for {}: predicted/achieved spread K {:.2}, B {:.2} over {} subjects, {:.0} % within K 5 % and B 20 %",
+            d.prior,
+            d.ratio[0],
+            d.ratio[1],
+            d.recordings,
+            100.0 * d.within_tolerance_share
+        );
+    }
     Section {
         heading: format!("Calibration of standard errors and verdicts: {name}"),
         verdict,

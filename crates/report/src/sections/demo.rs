@@ -3,7 +3,27 @@
 use super::linear::{ellipsoids_of, fit_figures, linear_tables};
 use crate::{fmt, group_warnings, Section, Table};
 use limpid_analysis::linear::{MatrixKind, MatrixVerdict};
-use limpid_analysis::result::demo::DemoResult;
+use limpid_analysis::result::demo::{DemoPoint, DemoResult};
+
+/// A start point's errors against the truth; "n/i" for a matrix the data do
+/// not identify (its error against the truth means nothing).
+fn error_row(label: String, p: &DemoPoint) -> Vec<String> {
+    let est = &p.estimate;
+    let error = |kind: MatrixKind, percent: f64| {
+        if est.criteria.verdict_of(kind) == MatrixVerdict::NotIdentifiable {
+            "n/i".to_string()
+        } else {
+            fmt(percent)
+        }
+    };
+    vec![
+        label,
+        error(MatrixKind::Stiffness, p.stiffness_error_percent),
+        error(MatrixKind::Damping, p.damping_error_percent),
+        error(MatrixKind::Inertia, p.inertia_error_percent),
+        est.verdict(),
+    ]
+}
 
 pub(crate) fn demo_section(name: &str, v: &DemoResult) -> Section {
     let mut section = Section {
@@ -31,21 +51,7 @@ pub(crate) fn demo_section(name: &str, v: &DemoResult) -> Section {
     for p in &v.points {
         let id = &p.start_point;
         let est = &p.estimate;
-        // an error against the truth means nothing for a matrix the data do not identify
-        let error = |kind: MatrixKind, percent: f64| {
-            if est.criteria.verdict_of(kind) == MatrixVerdict::NotIdentifiable {
-                "n/i".to_string()
-            } else {
-                fmt(percent)
-            }
-        };
-        errors.rows.push(vec![
-            id.clone(),
-            error(MatrixKind::Stiffness, p.stiffness_error_percent),
-            error(MatrixKind::Damping, p.damping_error_percent),
-            error(MatrixKind::Inertia, p.inertia_error_percent),
-            est.verdict(),
-        ]);
+        errors.rows.push(error_row(id.clone(), p));
         section
             .ellipsoids
             .extend(ellipsoids_of(id, p.position, est));
@@ -75,21 +81,9 @@ pub(crate) fn demo_section(name: &str, v: &DemoResult) -> Section {
     };
     if let Some(d) = &v.designed {
         let p = &d.point;
-        let est = &p.estimate;
-        let error = |kind: MatrixKind, percent: f64| {
-            if est.criteria.verdict_of(kind) == MatrixVerdict::NotIdentifiable {
-                "n/i".to_string()
-            } else {
-                fmt(percent)
-            }
-        };
-        errors.rows.push(vec![
-            format!("{} designed", p.start_point),
-            error(MatrixKind::Stiffness, p.stiffness_error_percent),
-            error(MatrixKind::Damping, p.damping_error_percent),
-            error(MatrixKind::Inertia, p.inertia_error_percent),
-            est.verdict(),
-        ]);
+        errors
+            .rows
+            .push(error_row(format!("{} designed", p.start_point), p));
         let c = &d.chosen;
         section.verdict += &format!(
             ". In the same {} s at {} within the same limits, `limpid protocol design` chooses {} {} perturbations of {} mm, {} ms out and back (predicted K ± {:.1} %, B ± {:.1} %): row \"{} designed\"",

@@ -2,7 +2,7 @@
 //! predicted against baseline precision, the margins to the limits, one
 //! perturbation of the command and its frequency content against the limits.
 
-use limpid_analysis::result::design::{DesignResult, Prediction};
+use limpid_analysis::result::design::{DesignResult, LimitMargin, Prediction};
 
 use crate::svg::{Chart, Series, Stroke, PALETTE};
 use crate::{fmt, Figure, Section, Table};
@@ -23,6 +23,28 @@ fn prediction_rows(label: &str, p: &Prediction) -> Vec<Vec<String>> {
             ]
         })
         .collect()
+}
+
+/// The largest value a protocol reaches against each limit.
+fn margins_table(limits: &[LimitMargin]) -> Table {
+    Table {
+        caption: "Largest value reached against each limit".into(),
+        header: ["quantity", "peak", "limit", "unit", "margin %"]
+            .map(String::from)
+            .to_vec(),
+        rows: limits
+            .iter()
+            .map(|m| {
+                vec![
+                    m.quantity.clone(),
+                    fmt(m.peak),
+                    fmt(m.limit),
+                    m.unit.clone(),
+                    format!("{:.1}", m.margin_percent),
+                ]
+            })
+            .collect(),
+    }
 }
 
 fn series(name: &str, x: &[f64], y: &[f64], stroke: Stroke, colour: usize) -> Series {
@@ -82,25 +104,7 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
             .to_vec(),
         rows,
     };
-    let margins = Table {
-        caption: "Largest value reached against each limit".into(),
-        header: ["quantity", "peak", "limit", "unit", "margin %"]
-            .map(String::from)
-            .to_vec(),
-        rows: r
-            .limits
-            .iter()
-            .map(|m| {
-                vec![
-                    m.quantity.clone(),
-                    fmt(m.peak),
-                    fmt(m.limit),
-                    m.unit.clone(),
-                    format!("{:.1}", m.margin_percent),
-                ]
-            })
-            .collect(),
-    };
+    let margins = margins_table(&r.limits);
     let cmd = &r.command;
     let peak = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs())).max(1e-300);
     let (dp, vp, ap) = (
@@ -240,25 +244,7 @@ pub(crate) fn reflex_section(
                 .to_vec(),
                 rows,
             },
-            Table {
-                caption: "Largest value reached against each limit".into(),
-                header: ["quantity", "peak", "limit", "unit", "margin %"]
-                    .map(String::from)
-                    .to_vec(),
-                rows: r
-                    .limits
-                    .iter()
-                    .map(|m| {
-                        vec![
-                            m.quantity.clone(),
-                            fmt(m.peak),
-                            fmt(m.limit),
-                            m.unit.clone(),
-                            format!("{:.1}", m.margin_percent),
-                        ]
-                    })
-                    .collect(),
-            },
+            margins_table(&r.limits),
         ],
         figures: vec![],
         ellipsoids: vec![],
