@@ -619,8 +619,7 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
 
 /// `--method reflex`: a PRBS for the reflex gain on a prior ankle.
 fn run_reflex_design(args: &DesignArgs, demo: bool) -> CliResult {
-    use limpid_app::design::reflex::{design_reflex, ReflexDesignRequest, ReflexPrior};
-    use limpid_lab::periodic::PeriodicDesign;
+    use limpid_app::design::reflex::{design_reflex, reflex_request_from_texts};
     if args.verify > 0 {
         return Err("--verify is for the linear method: the reflex design's prediction is already the spread over --runs simulated recordings".into());
     }
@@ -635,51 +634,37 @@ fn run_reflex_design(args: &DesignArgs, demo: bool) -> CliResult {
         .into());
     }
     let prior_path = PathBuf::from(&args.prior);
-    let prior = match args.prior.as_str() {
-        "demo:ankle" => ReflexPrior::demo(),
-        _ if demo => {
-            return Err(format!(
-                "--prior {}: the reflex method's demo prior is demo:ankle",
-                args.prior
+    let read = |p: &Path| limpid_core::files::read_text(p);
+    let prior_text = if demo {
+        args.prior.clone()
+    } else {
+        read(&prior_path)?
+    };
+    let limits_text = args.limits_from.as_deref().map(read).transpose()?;
+    let baseline_text = args.baseline.as_deref().map(read).transpose()?;
+    let request = reflex_request_from_texts(
+        (&prior_text, &prior_path),
+        limits_text.as_deref().zip(args.limits_from.as_deref()),
+        baseline_text.as_deref().zip(args.baseline.as_deref()),
+        args.duration,
+        args.runs,
+        args.seed,
+    )
+    .map_err(|e| match e {
+        limpid_core::Error::InvalidParameter { name, message }
+            if name == "prior" || name == "limits" =>
+        {
+            format!(
+                "--{}: {message}",
+                if name == "limits" {
+                    "limits-from"
+                } else {
+                    "prior"
+                }
             )
-            .into())
         }
-        _ => ReflexPrior::from_toml(&limpid_core::files::read_text(&prior_path)?, &prior_path)?,
-    };
-    let periodic = |path: &Path, role: &str| -> CliResult<PeriodicDesign> {
-        match read_design(path)?.0 {
-            Design::Periodic(p) if matches!(p.signal, limpid_lab::periodic::Signal::Prbs(_)) => {
-                Ok(p)
-            }
-            _ => Err(format!(
-                "{}: {role} must be a PRBS protocol (kind = \"prbs\") on one joint",
-                path.display()
-            )
-            .into()),
-        }
-    };
-    let baseline = args
-        .baseline
-        .as_deref()
-        .map(|p| periodic(p, "--baseline"))
-        .transpose()?;
-    let limits_from = args
-        .limits_from
-        .as_deref()
-        .map(|p| periodic(p, "--limits-from"))
-        .transpose()?;
-    let Some(limits_source) = limits_from.as_ref().or(baseline.as_ref()) else {
-        return Err("no limits: give --limits-from P.toml (a PRBS protocol, e.g. `limpid protocol new --preset ankle-prbs`)".into());
-    };
-    let request = ReflexDesignRequest {
-        prior,
-        limits: limits_source.limits.clone(),
-        sample_rate_hz: limits_source.sample_rate_hz,
-        budget_s: args.duration,
-        runs: args.runs,
-        baseline,
-        seed: args.seed,
-    };
+        other => other.to_string(),
+    })?;
     let designed = design_reflex(&request).map_err(|e| match e {
         limpid_core::Error::InvalidParameter { name, message }
             if ["duration", "runs"].contains(&name.as_str()) =>
@@ -690,9 +675,9 @@ fn run_reflex_design(args: &DesignArgs, demo: bool) -> CliResult {
     })?;
     if let Some(out) = &args.output {
         let text = format!(
-            "# limpid protocol design --method reflex (budget {} s); units: rad, s, Hz, N m\nkind = \"prbs\"\n{}",
+            "# limpid protocol design --method reflex (budget {} s); units: rad, s, Hz, N m\n{}",
             args.duration,
-            toml::to_string(&designed.protocol)?
+            Design::Periodic(designed.protocol).to_toml()
         );
         limpid_core::files::write_file(out, text.as_bytes())?;
     }

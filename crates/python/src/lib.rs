@@ -509,7 +509,7 @@ fn protocol_check(py: Python<'_>, toml_text: &str) -> PyResult<String> {
 /// the prior's `[limits]`), the baseline's text. Returns (the designed
 /// protocol as TOML, the result document as JSON).
 #[pyfunction]
-#[pyo3(signature = (prior, duration_s, limits_from=None, objective="stiffness,damping", baseline=None, verify=0, runs=40, seed=1, prior_name="<prior>"))]
+#[pyo3(signature = (prior, duration_s, limits_from=None, objective="stiffness,damping", baseline=None, verify=0, runs=40, seed=1, prior_name="<prior>", method="linear"))]
 #[allow(clippy::too_many_arguments)]
 fn design(
     py: Python<'_>,
@@ -522,7 +522,33 @@ fn design(
     runs: usize,
     seed: u64,
     prior_name: &str,
+    method: &str,
 ) -> PyResult<(String, String)> {
+    use limpid_analysis::result::{Document, Estimate};
+    if method == "reflex" {
+        if verify > 0 {
+            return Err(value_err("verify is for the linear method: the reflex design's prediction is already the spread over `runs` simulated recordings".to_string()));
+        }
+        let request = limpid_app::design::reflex::reflex_request_from_texts(
+            (prior, Path::new(prior_name)),
+            limits_from.map(|t| (t, Path::new("<limits_from>"))),
+            baseline.map(|t| (t, Path::new("<baseline>"))),
+            duration_s,
+            runs,
+            seed,
+        )
+        .map_err(err)?;
+        let designed =
+            detached(py, || limpid_app::design::reflex::design_reflex(&request)).map_err(err)?;
+        let toml = limpid_lab::design::Design::Periodic(designed.protocol).to_toml();
+        let doc = Document::new(Estimate::ReflexDesign(designed.result));
+        return Ok((toml, doc.to_json()));
+    }
+    if method != "linear" {
+        return Err(value_err(format!(
+            "method: expected linear or reflex, found {method:?}"
+        )));
+    }
     let request = limpid_app::design::request_from_texts(
         (prior, Path::new(prior_name)),
         limits_from.map(|t| (t, Path::new("<limits_from>"))),
@@ -536,9 +562,7 @@ fn design(
     .map_err(err)?;
     let designed = detached(py, || limpid_app::design::design(&request)).map_err(err)?;
     let toml = format!("kind = \"centre-out\"\n{}", designed.protocol.to_toml());
-    let doc = limpid_analysis::result::Document::new(limpid_analysis::result::Estimate::Design(
-        designed.result,
-    ));
+    let doc = Document::new(Estimate::Design(designed.result));
     Ok((toml, doc.to_json()))
 }
 

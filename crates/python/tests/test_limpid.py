@@ -483,3 +483,15 @@ def test_design_for_the_demo_subject_beats_the_seed_protocol_and_plots(tmp_path)
         limpid.design("demo:S1", 147.2, limits_from="artemiadis-3d", objective="stifness")
     with pytest.raises(ValueError, match="demo:S1 .. demo:S6"):
         limpid.design("demo:S7", 147.2, limits_from="artemiadis-3d")
+
+
+def test_reflex_design_writes_a_prbs_its_check_accepts():
+    toml_text, r = limpid.design("demo:ankle", 30.0, limits_from="ankle-prbs", method="reflex", runs=3)
+    assert r.kind == "reflex_design"
+    assert r.chosen.duration_s <= 30.0
+    report = limpid.protocol_check(toml_text)
+    assert report.duration_s == pytest.approx(r.chosen.duration_s)
+    with pytest.raises(ValueError, match="demo:ankle"):
+        limpid.design("demo:S1", 30.0, limits_from="ankle-prbs", method="reflex")
+    with pytest.raises(ValueError, match="method"):
+        limpid.design("demo:S1", 30.0, limits_from="artemiadis-3d", method="planar")

@@ -138,6 +138,57 @@ pub struct ReflexDesignRequest {
     pub seed: u64,
 }
 
+/// A reflex design request from its texts, as the CLI and Python take it:
+/// the prior (`demo:ankle` or a prior ankle file's text), the limits and
+/// sample rate from a PRBS protocol (else the baseline's), the baseline PRBS.
+pub fn reflex_request_from_texts(
+    prior: super::Text<'_>,
+    limits_from: Option<super::Text<'_>>,
+    baseline: Option<super::Text<'_>>,
+    budget_s: f64,
+    runs: usize,
+    seed: u64,
+) -> Result<ReflexDesignRequest> {
+    let prior = match prior.0 {
+        "demo:ankle" => ReflexPrior::demo(),
+        other if other.starts_with("demo:") => {
+            return Err(Error::invalid(
+                "prior",
+                format!("{other}: the reflex method's demo prior is demo:ankle"),
+            ))
+        }
+        text => ReflexPrior::from_toml(text, prior.1)?,
+    };
+    let prbs = |(text, path): super::Text<'_>, role: &str| -> Result<PeriodicDesign> {
+        match limpid_lab::design::Design::from_toml(text, path)? {
+            limpid_lab::design::Design::Periodic(p) if matches!(p.signal, Signal::Prbs(_)) => Ok(p),
+            _ => Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!("{role} must be a PRBS protocol (kind = \"prbs\") on one joint"),
+            }),
+        }
+    };
+    let limits_from = limits_from
+        .map(|t| prbs(t, "the limits' protocol"))
+        .transpose()?;
+    let baseline = baseline.map(|t| prbs(t, "the baseline")).transpose()?;
+    let Some(source) = limits_from.as_ref().or(baseline.as_ref()) else {
+        return Err(Error::invalid(
+            "limits",
+            "no limits: take them from a PRBS protocol (e.g. the ankle-prbs preset)",
+        ));
+    };
+    Ok(ReflexDesignRequest {
+        prior,
+        limits: source.limits.clone(),
+        sample_rate_hz: source.sample_rate_hz,
+        budget_s,
+        runs,
+        baseline,
+        seed,
+    })
+}
+
 /// The designed PRBS and its result.
 pub struct ReflexDesigned {
     /// The protocol (`kind = "prbs"`).

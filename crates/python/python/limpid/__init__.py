@@ -730,6 +730,7 @@ def design(
     verify: int = 0,
     runs: int = 40,
     seed: int = 1,
+    method: str = "linear",
 ) -> Tuple[str, Result]:
     """Design a centre-out protocol for the linear method, as ``limpid
     protocol design``: (the protocol as TOML text, the result).
@@ -742,7 +743,11 @@ def design(
     ``predicted`` and ``baseline`` (pooled standard errors, errors, shares
     identifiable), ``limits`` (margins), ``chosen``, ``command`` and
     ``spectrum`` (for ``limpid.plot.design``) and, with ``verify`` > 0,
-    ``verify`` (predicted against achieved spread)."""
+    ``verify`` (predicted against achieved spread).
+
+    ``method="reflex"``: a PRBS for the stretch-reflex gain (``kind``
+    ``reflex_design``); ``prior`` is ``"demo:ankle"``, an ankle's TOML text or
+    file, ``limits_from`` and ``baseline`` PRBS protocols (``"ankle-prbs"``)."""
 
     def protocol_text(value: Optional[Union[str, "os.PathLike[str]"]]) -> Optional[str]:
         if value is None:
@@ -751,6 +756,7 @@ def design(
             return protocol_preset(value)
         return _text_or_file(value)[0]
 
+    _choice("method", method, ("linear", "reflex"))
     if isinstance(prior, str) and prior.startswith("demo:"):
         prior_text, prior_name = prior, "<prior>"
     else:
@@ -766,6 +772,7 @@ def design(
         _integer("runs", runs, minimum=0),
         _integer("seed", seed, minimum=0),
         prior_name,
+        method,
     )
     return toml_text, Result(json.loads(doc))
 

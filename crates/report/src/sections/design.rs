@@ -4,8 +4,10 @@
 
 use limpid_analysis::result::design::{DesignResult, LimitMargin, Prediction};
 
-use crate::svg::{Chart, Series, Stroke, PALETTE};
-use crate::{fmt, Figure, Section, Table};
+use std::fmt::Write as _;
+
+use crate::svg::{escape, Chart, Series, Stroke, PALETTE};
+use crate::{fmt, Drawing, Figure, Section, Table};
 
 const MATRICES: [(&str, &str); 3] = [("K", "N/m"), ("B", "N s/m"), ("M", "kg")];
 
@@ -45,6 +47,94 @@ fn margins_table(limits: &[LimitMargin]) -> Table {
             })
             .collect(),
     }
+}
+
+/// Predicted relative SEs of K, B and M as bars, the design's beside the
+/// baseline's, on a log scale (percent of the RMS element).
+fn se_bars(design: &Prediction, baseline: Option<&Prediction>) -> String {
+    let (width, height, left, bottom, top) = (460.0, 240.0, 60.0, 40.0, 36.0);
+    let values: Vec<f64> = design
+        .pooled
+        .se_percent
+        .iter()
+        .chain(baseline.iter().flat_map(|b| b.pooled.se_percent.iter()))
+        .copied()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .collect();
+    let hi = values
+        .iter()
+        .fold(1.0f64, |a, v| a.max(*v))
+        .log10()
+        .ceil()
+        .max(1.0);
+    let lo = values
+        .iter()
+        .fold(hi, |a, v| a.min(v.log10()))
+        .floor()
+        .min(hi - 1.0);
+    let y =
+        |v: f64| top + (height - top - bottom) * (hi - v.max(10f64.powf(lo)).log10()) / (hi - lo);
+    let title = "Predicted SE of K, B and M (% of the RMS element)";
+    let mut s = format!(
+        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="12"><title>{}</title><rect width="{width}" height="{height}" fill="#fff"/><text x="{}" y="18" text-anchor="middle" font-weight="bold">{}</text>"##,
+        escape(title),
+        width / 2.0,
+        escape(title)
+    );
+    let mut decade = lo;
+    while decade <= hi + 1e-9 {
+        let yy = y(10f64.powf(decade));
+        let _ = write!(
+            s,
+            r##"<line x1="{left}" x2="{}" y1="{yy:.1}" y2="{yy:.1}" stroke="#ddd"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
+            width - 10.0,
+            left - 6.0,
+            yy + 4.0,
+            fmt(10f64.powf(decade))
+        );
+        decade += 1.0;
+    }
+    let group = (width - left - 10.0) / 3.0;
+    let bars: Vec<(&str, &Prediction, &str)> = std::iter::once(("design", design, PALETTE[0]))
+        .chain(baseline.map(|b| ("baseline", b, PALETTE[1])))
+        .collect();
+    let bar = group * 0.7 / bars.len() as f64;
+    for (m, name) in ["K", "B", "M"].iter().enumerate() {
+        let x0 = left + group * m as f64 + group * 0.15;
+        for (k, (label, p, colour)) in bars.iter().enumerate() {
+            let v = p.pooled.se_percent[m];
+            if !(v.is_finite() && v > 0.0) {
+                continue;
+            }
+            let (x, yy) = (x0 + bar * k as f64, y(v));
+            let _ = write!(
+                s,
+                r##"<rect x="{x:.1}" y="{yy:.1}" width="{:.1}" height="{:.1}" fill="{colour}"><title>{label} {name}: {v:.1} %</title></rect><text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="10">{v:.1}</text>"##,
+                bar - 2.0,
+                (height - bottom - yy).max(0.0),
+                x + bar / 2.0 - 1.0,
+                yy - 3.0
+            );
+        }
+        let _ = write!(
+            s,
+            r##"<text x="{:.1}" y="{:.1}" text-anchor="middle">{name}</text>"##,
+            left + group * (m as f64 + 0.5),
+            height - bottom + 16.0
+        );
+    }
+    for (k, (label, _, colour)) in bars.iter().enumerate() {
+        let x = left + 10.0 + 110.0 * k as f64;
+        let _ = write!(
+            s,
+            r##"<rect x="{x}" y="{}" width="10" height="10" fill="{colour}"/><text x="{}" y="{}">{label}</text>"##,
+            height - 14.0,
+            x + 14.0,
+            height - 5.0
+        );
+    }
+    s.push_str("</svg>");
+    s
 }
 
 fn series(name: &str, x: &[f64], y: &[f64], stroke: Stroke, colour: usize) -> Series {
@@ -179,7 +269,10 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
         tables: vec![precision, margins],
         figures: vec![command, spectrum],
         ellipsoids: vec![],
-        drawings: vec![],
+        drawings: vec![Drawing {
+            id: "design-se".into(),
+            svg: se_bars(&r.predicted, r.baseline.as_ref()),
+        }],
     }
 }
 
