@@ -98,8 +98,8 @@ impl Impedance {
 /// What is known of the subject before the experiment.
 #[derive(Debug, Clone)]
 pub struct Prior {
-    /// The posture (start point, m).
-    pub start: Vector3<f64>,
+    /// The posture (start point, m); None: the centre of the limits' workspace.
+    pub start: Option<Vector3<f64>>,
     /// Nominal impedance.
     pub nominal: Impedance,
     /// The other end of its range, if any.
@@ -187,11 +187,6 @@ impl Prior {
         })?;
         let start = f.start_m.map(Vector3::from);
         let limits = f.limits;
-        let start = match (start, &limits) {
-            (Some(s), _) => s,
-            (None, Some(l)) => workspace_centre(l),
-            (None, None) => Vector3::zeros(),
-        };
         Ok(Prior {
             start,
             nominal,
@@ -210,7 +205,7 @@ impl Prior {
             limpid_lab::realistic::SEED000_K_MAX_A[index % 6],
         );
         Prior {
-            start: p.start,
+            start: Some(p.start),
             nominal: Impedance {
                 inertia: p.inertia,
                 damping: p.damping,
@@ -222,6 +217,12 @@ impl Prior {
         }
     }
 
+    /// The posture: `start`, else the origin (a request resolves it against
+    /// its limits before any use: see [`design`]).
+    pub fn start(&self) -> Vector3<f64> {
+        self.start.unwrap_or_default()
+    }
+
     fn ends(&self) -> Vec<Impedance> {
         std::iter::once(self.nominal)
             .chain(self.other_end)
@@ -231,7 +232,7 @@ impl Prior {
     fn posture(&self, imp: &Impedance) -> Posture {
         Posture {
             name: "S1".into(),
-            start: self.start,
+            start: self.start(),
             inertia: imp.inertia,
             damping: imp.damping,
             stiffness: imp.stiffness,
@@ -483,7 +484,7 @@ impl Space<'_> {
             ),
             sample_rate_hz: req.sample_rate_hz,
             start_points: StartPoints {
-                points: vec![req.prior.start.into()],
+                points: vec![req.prior.start().into()],
                 centre_m: [0.0; 3],
                 radius_m: 0.0,
             },
@@ -539,7 +540,7 @@ fn peak_force(p: &Protocol, dirs: &[Vector3<f64>], prior: &Prior) -> f64 {
 /// The largest radius the displacement, force and workspace limits allow at the prior's start.
 fn largest_radius(req: &DesignRequest) -> Result<f64> {
     let l = &req.limits;
-    let s = req.prior.start;
+    let s = req.prior.start();
     let room = (0..3)
         .map(|i| (s[i] - l.workspace_min_m[i]).min(l.workspace_max_m[i] - s[i]))
         .fold(f64::INFINITY, f64::min);
@@ -695,7 +696,7 @@ fn margins(p: &Protocol, prior: &Prior) -> Vec<LimitMargin> {
     let l = &p.limits;
     let r = p.targets.radius_m;
     let (_, v, a) = p.phases.profile.peaks(p.phases.centre_out_s);
-    let s = prior.start;
+    let s = prior.start();
     let room = (0..3)
         .map(|i| (s[i] - l.workspace_min_m[i]).min(l.workspace_max_m[i] - s[i]))
         .fold(f64::INFINITY, f64::min);
@@ -781,6 +782,17 @@ pub fn check_request(req: &DesignRequest) -> Result<()> {
 /// Choose the protocol. Deterministic for a given request (seeded noise).
 pub fn design(req: &DesignRequest) -> Result<Designed> {
     check_request(req)?;
+    // a prior without a posture is designed for at the centre of the workspace
+    let resolved;
+    let req = match req.prior.start {
+        Some(_) => req,
+        None => {
+            let mut r = req.clone();
+            r.prior.start = Some(workspace_centre(&req.limits));
+            resolved = r;
+            &resolved
+        }
+    };
     let space = Space {
         req,
         largest_radius: largest_radius(req)?,
@@ -862,7 +874,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
         .map(|b| {
             let mut b = b.clone();
             b.start_points = StartPoints {
-                points: vec![req.prior.start.into()],
+                points: vec![req.prior.start().into()],
                 centre_m: [0.0; 3],
                 radius_m: 0.0,
             };
@@ -882,7 +894,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             inertia: w[2],
         },
         budget_s: req.budget_s,
-        start_m: req.prior.start.into(),
+        start_m: req.prior.start().into(),
         chosen: CentreOutChoice {
             profile: format!("{:?}", ph.profile).to_lowercase(),
             radius_m: protocol.targets.radius_m,

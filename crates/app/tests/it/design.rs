@@ -89,7 +89,10 @@ fn a_prior_file_is_checked_field_by_field() {
     let good =
         format!("inertia = {eye}\ndamping = {eye}\nstiffness = {eye}\nstart_m = [0.4, 0.0, 0.0]\n");
     let p = Prior::from_toml(&good, path).unwrap();
-    assert_eq!(p.start[0], 0.4);
+    assert_eq!(p.start().x, 0.4);
+    // without start_m the design is for the centre of the limits' workspace
+    let centred = Prior::from_toml(&good.replace("start_m = [0.4, 0.0, 0.0]\n", ""), path).unwrap();
+    assert!(centred.start.is_none());
     let negative = good.replace("damping = [[1.0", "damping = [[-1.0");
     let e = Prior::from_toml(&negative, path).err().unwrap().to_string();
     assert!(
