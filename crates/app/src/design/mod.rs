@@ -49,6 +49,15 @@ use limpid_ident::{fit_linear, prepare, LinearEstimate, LinearParams, PreparePar
 use limpid_lab::protocol::{self, Limits, Phases, Protocol, StartPoints, Targets};
 use limpid_lab::{simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
 
+/// Largest magnitude of an end-point inertia element a prior may give (kg).
+const MOST_INERTIA_KG: f64 = 1e3;
+/// Of a damping element (N s/m).
+const MOST_DAMPING_N_S_PER_M: f64 = 1e5;
+/// Of a stiffness element (N/m).
+const MOST_STIFFNESS_N_PER_M: f64 = 1e7;
+/// Smallest radius worth designing (m): below it position noise is the signal.
+const LEAST_RADIUS_M: f64 = 1e-4;
+
 /// Unrecorded relaxation after each return (s): the subject's pause before the next rest.
 pub const RELAX_S: f64 = 0.5;
 /// Fewest perturbation directions: three axes, each both ways.
@@ -147,11 +156,23 @@ fn impedance(
         damping: m3(b),
         stiffness: m3(k),
     };
-    for (name, mat) in [
-        ("inertia", imp.inertia),
-        ("damping", imp.damping),
-        ("stiffness", imp.stiffness),
+    for (name, mat, most) in [
+        ("inertia", imp.inertia, MOST_INERTIA_KG),
+        ("damping", imp.damping, MOST_DAMPING_N_S_PER_M),
+        ("stiffness", imp.stiffness, MOST_STIFFNESS_N_PER_M),
     ] {
+        if let Some((r, c)) = (0..9)
+            .map(|k| (k / 3, k % 3))
+            .find(|&(r, c)| mat[(r, c)].abs() > most)
+        {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{table}{name}[{r}][{c}] = {}: a limb's {name} is below {most:e} in magnitude",
+                    limpid_core::error::Num(mat[(r, c)])
+                ),
+            });
+        }
         if let Some(i) = (0..3).find(|&i| mat[(i, i)] <= 0.0) {
             return Err(Error::Format {
                 path: path.to_path_buf(),
@@ -560,7 +581,17 @@ fn largest_radius(req: &DesignRequest) -> Result<f64> {
         .iter()
         .map(|imp| imp.stiffness.norm())
         .fold(l.nominal_stiffness_n_per_m, f64::max);
-    Ok(l.max_displacement_m.min(room).min(l.max_force_n / stiffest) * LIMIT_MARGIN)
+    let radius = l.max_displacement_m.min(room).min(l.max_force_n / stiffest) * LIMIT_MARGIN;
+    if radius < LEAST_RADIUS_M {
+        return Err(Error::invalid(
+            "prior",
+            format!(
+                "the limits leave a largest displacement of {radius:.3e} m (force {} N at a stiffness norm of {stiffest:.4e} N/m, displacement {} m, workspace room {room:.3} m); nothing below {LEAST_RADIUS_M} m can be designed",
+                l.max_force_n, l.max_displacement_m
+            ),
+        ));
+    }
+    Ok(radius)
 }
 
 /// Errors of one recording's estimate against the truth, K, B, M.
@@ -727,18 +758,57 @@ fn margins(p: &Protocol, prior: &Prior) -> Vec<LimitMargin> {
     ]
 }
 
-/// A time budget is positive and at most a protocol's longest duration.
-pub(crate) fn check_budget(budget_s: f64) -> Result<()> {
-    if budget_s > 0.0 && budget_s <= limpid_lab::validate::MAX_DURATION_S {
+/// Most simulated recordings behind a prediction or a verification.
+pub const MAX_RUNS: usize = 1000;
+
+/// A number of recordings for a spread: 2 to [`MAX_RUNS`] (or 0 when `optional`).
+pub(crate) fn check_runs(name: &str, runs: usize, optional: bool) -> Result<()> {
+    if optional && runs == 0 {
         return Ok(());
     }
-    Err(Error::invalid(
-        "duration",
-        format!(
-            "{budget_s} s: expected a positive duration of at most {} s",
-            limpid_lab::validate::MAX_DURATION_S
-        ),
-    ))
+    if runs < 2 {
+        return Err(Error::invalid(
+            name,
+            format!(
+                "at least 2 recordings are needed for a spread{}",
+                if optional { " (0: none)" } else { "" }
+            ),
+        ));
+    }
+    if runs > MAX_RUNS {
+        return Err(Error::invalid(
+            name,
+            format!("{runs} recordings: at most {MAX_RUNS}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Most samples a design's budget may hold at its sample rate: every
+/// candidate is simulated and estimated several times over.
+pub const MAX_DESIGN_SAMPLES: f64 = 5e6;
+
+/// A time budget is positive and holds at most [`MAX_DESIGN_SAMPLES`] at `rate_hz`.
+pub(crate) fn check_budget(budget_s: f64, rate_hz: f64) -> Result<()> {
+    if !(budget_s > 0.0 && budget_s <= limpid_lab::validate::MAX_DURATION_S) {
+        return Err(Error::invalid(
+            "duration",
+            format!(
+                "{budget_s} s: expected a positive duration of at most {} s",
+                limpid_lab::validate::MAX_DURATION_S
+            ),
+        ));
+    }
+    if budget_s * rate_hz > MAX_DESIGN_SAMPLES {
+        return Err(Error::invalid(
+            "duration",
+            format!(
+                "{budget_s} s at {rate_hz} Hz is {:.0} samples; a design simulates its candidates many times and takes at most {MAX_DESIGN_SAMPLES:.0} (design one session and repeat it)",
+                budget_s * rate_hz
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The request's numbers, before any simulation.
@@ -757,25 +827,24 @@ pub fn check_request(req: &DesignRequest) -> Result<()> {
             ));
         }
     }
-    check_budget(req.budget_s)?;
     if !(req.sample_rate_hz > 0.0 && req.sample_rate_hz <= 10_000.0) {
         return Err(Error::invalid(
             "sample_rate_hz",
             format!("{} Hz: expected 0 < rate <= 10000", req.sample_rate_hz),
         ));
     }
-    if req.runs < 2 {
-        return Err(Error::invalid(
-            "runs",
-            "at least 2 recordings are needed for a spread",
-        ));
+    check_budget(req.budget_s, req.sample_rate_hz)?;
+    if let Some(b) = &req.baseline {
+        let samples = protocol_duration(b) * b.sample_rate_hz;
+        if samples > MAX_DESIGN_SAMPLES {
+            return Err(Error::invalid(
+                "baseline",
+                format!("{samples:.0} samples at one start point; a baseline is simulated `runs` times and may hold at most {MAX_DESIGN_SAMPLES:.0}"),
+            ));
+        }
     }
-    if req.verify == 1 {
-        return Err(Error::invalid(
-            "verify",
-            "at least 2 recordings are needed for a spread (0: no verification)",
-        ));
-    }
+    check_runs("runs", req.runs, false)?;
+    check_runs("verify", req.verify, true)?;
     Ok(())
 }
 
@@ -809,12 +878,25 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             }
             let value = match space.protocol(&c) {
                 Ok((_, p)) => {
-                    let mut worst = 0.0f64;
-                    for imp in req.prior.ends() {
-                        let rs = runs(&p, &req.prior, &imp, &ranking)?;
-                        worst = worst.max(objective_value(&relative_mse(&rs, &imp), w));
+                    // a candidate whose recordings the estimator refuses (or whose
+                    // objective is not a number) is refused, with the reason kept
+                    let worst = req.prior.ends().iter().try_fold(0.0f64, |worst, imp| {
+                        let rs = runs(&p, &req.prior, imp, &ranking)?;
+                        Ok::<f64, Error>(worst.max(objective_value(&relative_mse(&rs, imp), w)))
+                    });
+                    match worst {
+                        Ok(v) if v.is_finite() => Some(v),
+                        Ok(v) => {
+                            refused += 1;
+                            last_refusal = format!("objective {v}");
+                            None
+                        }
+                        Err(e) => {
+                            refused += 1;
+                            last_refusal = e.to_string();
+                            None
+                        }
                     }
-                    Some(worst)
                 }
                 Err(why) => {
                     refused += 1;

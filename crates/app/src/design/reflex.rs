@@ -422,13 +422,17 @@ pub fn design_reflex(req: &ReflexDesignRequest) -> Result<ReflexDesigned> {
             "the prior ankle has no reflex to design for",
         ));
     }
-    super::check_budget(req.budget_s)?;
-    if req.runs < 2 {
-        return Err(Error::invalid(
-            "runs",
-            "at least 2 recordings are needed for a spread",
-        ));
+    super::check_budget(req.budget_s, req.sample_rate_hz)?;
+    if let Some(b) = &req.baseline {
+        let samples = b.check()?.samples as f64;
+        if samples > super::MAX_DESIGN_SAMPLES {
+            return Err(Error::invalid(
+                "baseline",
+                format!("{samples:.0} samples; a baseline is simulated `runs` times and may hold at most {:.0}", super::MAX_DESIGN_SAMPLES),
+            ));
+        }
     }
+    super::check_runs("runs", req.runs, false)?;
     let amplitude = req
         .limits
         .max_joint_displacement_rad

@@ -104,6 +104,18 @@ fn a_prior_file_is_checked_field_by_field() {
     assert!(e.contains("stifness"), "{e}");
     let nan = good.replace("start_m = [0.4", "start_m = [nan");
     assert!(Prior::from_toml(&nan, path).is_err());
+    let huge = good.replace("stiffness = [[1.0", "stiffness = [[1e307");
+    let e = Prior::from_toml(&huge, path).err().unwrap().to_string();
+    assert!(
+        e.contains("stiffness[0][0] = 1e307") && e.contains("below 1e7"),
+        "{e}"
+    );
+    // a prior so stiff that the force limit leaves 12 µm is refused before any simulation
+    let stiff = good.replace("stiffness = [[1.0", "stiffness = [[5e6");
+    let mut r = request(30.0, 4, 0, false);
+    r.prior = Prior::from_toml(&stiff, path).unwrap();
+    let e = design(&r).err().unwrap().to_string();
+    assert!(e.contains("nothing below 0.0001 m can be designed"), "{e}");
 }
 
 /// The reflex method: on a noisy ankle with a weak reflex (within the range

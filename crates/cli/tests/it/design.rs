@@ -205,7 +205,7 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         s,
         "--duration",
     ];
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 10] = [
         (
             &["147", "--baseline", s, "-o", s],
             "would replace the input",
@@ -217,6 +217,8 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         (&["-1"], "duration"),
         (&["3"], "at least 6 are needed"),
         (&["147", "--runs", "1"], "at least 2 recordings"),
+        (&["147", "--runs", "100000"], "at most 1000"),
+        (&["100000"], "samples"),
     ];
     for (extra, expected) in cases {
         let mut args = base.to_vec();
