@@ -414,12 +414,21 @@ def design(result: Any, axes: Any = None) -> Any:
     a[0, 1].legend(fontsize="small")
     names = ["K", "B", "M"]
     x = np.arange(3)
-    pred = np.asarray(d["predicted"]["pooled"]["se_percent"], dtype=float)
     base = d.get("baseline")
     width = 0.4 if base is not None else 0.6
-    a[0, 2].bar(x - (width / 2 if base is not None else 0), pred, width, label="design")
+    # a spread of estimates mostly called not identifiable is the estimator's prior: faint, "n/i"
+    def bars(offset: float, p: Dict[str, Any], label: str) -> None:
+        se = np.asarray(p["pooled"]["se_percent"], dtype=float)
+        ok = np.asarray(p["identifiable_share"], dtype=float) >= 0.5
+        drawn = a[0, 2].bar(x + offset, se, width, label=label)
+        for rect, identified, v in zip(drawn, ok, se):
+            rect.set_alpha(1.0 if identified else 0.3)
+            a[0, 2].annotate(f"{v:.1f}" + ("" if identified else " n/i"), (rect.get_x() + rect.get_width() / 2, v),
+                             ha="center", va="bottom", fontsize="small")
+
+    bars(-(width / 2) if base is not None else 0.0, d["predicted"], "design")
     if base is not None:
-        a[0, 2].bar(x + width / 2, np.asarray(base["pooled"]["se_percent"], dtype=float), width, label="baseline")
+        bars(width / 2, base, "baseline")
     a[0, 2].set_xticks(x, names)
     a[0, 2].set_yscale("log")
     a[0, 2].set_ylabel("predicted SE (% of the RMS element)")

@@ -74,7 +74,7 @@ fn se_bars(design: &Prediction, baseline: Option<&Prediction>) -> String {
         .min(hi - 1.0);
     let y =
         |v: f64| top + (height - top - bottom) * (hi - v.max(10f64.powf(lo)).log10()) / (hi - lo);
-    let title = "Predicted SE of K, B and M (% of the RMS element)";
+    let title = "Predicted SE of K, B and M (% of the RMS element; n/i: mostly not identifiable)";
     let mut s = format!(
         r##"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="12"><title>{}</title><rect width="{width}" height="{height}" fill="#fff"/><text x="{}" y="18" text-anchor="middle" font-weight="bold">{}</text>"##,
         escape(title),
@@ -107,9 +107,17 @@ fn se_bars(design: &Prediction, baseline: Option<&Prediction>) -> String {
                 continue;
             }
             let (x, yy) = (x0 + bar * k as f64, y(v));
+            // a spread of estimates the criteria mostly call not identifiable is
+            // the estimator's prior, not the data: drawn faint and labelled n/i
+            let identified = p.identifiable_share[m] >= 0.5;
+            let (opacity, text) = if identified {
+                ("1", format!("{v:.1}"))
+            } else {
+                ("0.3", format!("{v:.1} n/i"))
+            };
             let _ = write!(
                 s,
-                r##"<rect x="{x:.1}" y="{yy:.1}" width="{:.1}" height="{:.1}" fill="{colour}"><title>{label} {name}: {v:.1} %</title></rect><text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="10">{v:.1}</text>"##,
+                r##"<rect x="{x:.1}" y="{yy:.1}" width="{:.1}" height="{:.1}" fill="{colour}" fill-opacity="{opacity}"><title>{label} {name}: {v:.1} %</title></rect><text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="10">{text}</text>"##,
                 bar - 2.0,
                 (height - bottom - yy).max(0.0),
                 x + bar / 2.0 - 1.0,
