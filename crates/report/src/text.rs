@@ -93,30 +93,33 @@ pub fn study_levels_csv(r: &StudyResult) -> String {
     let mut csv = String::from(
         "configuration,level,subjects,cocontraction_index,cocontraction_index_sd,kxx,kxx_sd,kyy,kyy_sd,kzz,kzz_sd,k_max_a,k_max_a_sd,k1,k1_sd,k2,k2_sd,k3,k3_sd\n",
     );
-    let cell = |v: Option<f64>, _: usize| csv_cell(v);
     for l in &r.levels {
+        let values = [
+            l.cocontraction_index,
+            l.sd.cocontraction_index,
+            l.kxx,
+            l.sd.kxx,
+            l.kyy,
+            l.sd.kyy,
+            l.kzz,
+            l.sd.kzz,
+            l.k_max_a,
+            l.sd.k_max_a,
+            l.k1,
+            l.sd.k1,
+            l.k2,
+            l.sd.k2,
+            l.k3,
+            l.sd.k3,
+        ];
+        let cells: Vec<String> = values.into_iter().map(csv_cell).collect();
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{}",
             l.configuration,
             l.level,
             l.subjects,
-            cell(l.cocontraction_index, 4),
-            cell(l.sd.cocontraction_index, 4),
-            cell(l.kxx, 2),
-            cell(l.sd.kxx, 2),
-            cell(l.kyy, 2),
-            cell(l.sd.kyy, 2),
-            cell(l.kzz, 2),
-            cell(l.sd.kzz, 2),
-            cell(l.k_max_a, 2),
-            cell(l.sd.k_max_a, 2),
-            cell(l.k1, 2),
-            cell(l.sd.k1, 2),
-            cell(l.k2, 2),
-            cell(l.sd.k2, 2),
-            cell(l.k3, 2),
-            cell(l.sd.k3, 2)
+            cells.join(",")
         );
     }
     csv
