@@ -295,7 +295,7 @@ fn run(cli: Cli) -> CliResult {
         Command::Study { command } => study::run(command),
         Command::WindowSweep(args) => planar::run_sweep(args, &cx),
         Command::Spectra(args) => stochastic::run_spectra(args, &cx),
-        Command::Protocol { command } => protocol::run(command),
+        Command::Protocol { command } => protocol::run(command, &cx),
         Command::Simulate(args) => protocol::run_simulate(args),
         Command::GravityCompensate(args) => gravity::run(args, &cx),
         Command::Report(args) => report::run(args),

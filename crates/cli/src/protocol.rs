@@ -8,7 +8,7 @@ use limpid_lab::export::placed_robot;
 use limpid_lab::protocol::Protocol;
 use limpid_lab::session::{simulate_design, RigController, SubjectText};
 
-use crate::context::CliResult;
+use crate::context::{CliResult, Context};
 use crate::table::num;
 
 #[derive(Subcommand)]
@@ -135,7 +135,7 @@ fn read_design(path: &Path) -> CliResult<(Design, DesignReport)> {
     Ok((d, report))
 }
 
-pub fn run(cmd: ProtocolCommand) -> CliResult {
+pub fn run(cmd: ProtocolCommand, cx: &Context) -> CliResult {
     match cmd {
         ProtocolCommand::New {
             preset: name,
@@ -174,7 +174,7 @@ pub fn run(cmd: ProtocolCommand) -> CliResult {
             ),
             }
         }
-        ProtocolCommand::Design(args) => run_design(args),
+        ProtocolCommand::Design(args) => run_design(args, cx),
         ProtocolCommand::Check { protocol, json } => {
             let (d, report) = read_design(&protocol)?;
             let predicted = limpid_app::protocol::predicted_condition(&d)?;
@@ -425,7 +425,21 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
     Ok(())
 }
 
-fn run_design(args: DesignArgs) -> CliResult {
+/// A design's error: a setting's names its flag by the CLI's one rule
+/// ([`Context::with_flag_names`]); the prior file's (a start point outside the
+/// workspace, a prior too stiff for the force limit) names the file.
+fn design_error(cx: &Context, args: &DesignArgs, e: limpid_core::Error) -> String {
+    match e {
+        limpid_core::Error::InvalidParameter { name, message }
+            if name == "prior" && !args.prior.starts_with("demo:") =>
+        {
+            format!("{}: {message}", args.prior)
+        }
+        e => cx.with_flag_names("protocol design", e).to_string(),
+    }
+}
+
+fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
     use limpid_app::design::{design, request_from_texts};
     let mut inputs: Vec<(&Path, &str)> = Vec::new();
     let prior_path = PathBuf::from(&args.prior);
@@ -448,7 +462,7 @@ fn run_design(args: DesignArgs) -> CliResult {
     }
     match (args.method.as_str(), args.family.as_str()) {
         ("linear", "centre-out" | "any") => {}
-        ("reflex", "prbs" | "any") => return run_reflex_design(&args, demo),
+        ("reflex", "prbs" | "any") => return run_reflex_design(&args, demo, cx),
         ("linear" | "reflex", family) => {
             return Err(format!(
                 "--family {family}: the {} method's designs are {} (other families are not written yet)",
@@ -472,30 +486,7 @@ fn run_design(args: DesignArgs) -> CliResult {
     };
     let limits_text = args.limits_from.as_deref().map(read).transpose()?;
     let baseline_text = args.baseline.as_deref().map(read).transpose()?;
-    // a setting's error names its flag; the prior's (a start point outside the workspace) the file
-    let named = |e: limpid_core::Error| match e {
-        limpid_core::Error::InvalidParameter { name, message }
-            if ["duration", "runs", "verify", "objective"].contains(&name.as_str()) =>
-        {
-            format!("invalid --{name}: {message}")
-        }
-        limpid_core::Error::InvalidParameter { name, message } if name == "prior" && !demo => {
-            format!("{}: {message}", args.prior)
-        }
-        limpid_core::Error::InvalidParameter { name, message }
-            if name == "prior" || name == "limits" =>
-        {
-            format!(
-                "--{}: {message}",
-                if name == "limits" {
-                    "limits-from"
-                } else {
-                    "prior"
-                }
-            )
-        }
-        other => other.to_string(),
-    };
+    let named = |e| design_error(cx, &args, e);
     let request = request_from_texts(
         (&prior_text, &prior_path),
         limits_text.as_deref().zip(args.limits_from.as_deref()),
@@ -618,7 +609,7 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
 }
 
 /// `--method reflex`: a PRBS for the reflex gain on a prior ankle.
-fn run_reflex_design(args: &DesignArgs, demo: bool) -> CliResult {
+fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     use limpid_app::design::reflex::{design_reflex, reflex_request_from_texts};
     if args.verify > 0 {
         return Err("--verify is for the linear method: the reflex design's prediction is already the spread over --runs simulated recordings".into());
@@ -650,29 +641,10 @@ fn run_reflex_design(args: &DesignArgs, demo: bool) -> CliResult {
         args.runs,
         args.seed,
     )
-    .map_err(|e| match e {
-        limpid_core::Error::InvalidParameter { name, message }
-            if name == "prior" || name == "limits" =>
-        {
-            format!(
-                "--{}: {message}",
-                if name == "limits" {
-                    "limits-from"
-                } else {
-                    "prior"
-                }
-            )
-        }
-        other => other.to_string(),
-    })?;
-    let designed = design_reflex(&request).map_err(|e| match e {
-        limpid_core::Error::InvalidParameter { name, message }
-            if ["duration", "runs"].contains(&name.as_str()) =>
-        {
-            format!("invalid --{name}: {message}")
-        }
-        other => other.to_string(),
-    })?;
+    .map_err(|e| design_error(cx, args, e))?;
+
+    let designed = design_reflex(&request).map_err(|e| design_error(cx, args, e))?;
+
     if let Some(out) = &args.output {
         let text = format!(
             "# limpid protocol design --method reflex (budget {} s); units: rad, s, Hz, N m\n{}",

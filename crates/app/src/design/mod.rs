@@ -409,7 +409,7 @@ pub fn request_from_texts(
             baseline.as_ref().map_or(500.0, |b| b.sample_rate_hz),
         ),
         (None, None) => return Err(Error::invalid(
-            "limits",
+            "limits_from",
             "no limits: take them from a centre-out protocol or give a [limits] table in the prior",
         )),
     };

@@ -174,7 +174,7 @@ pub fn reflex_request_from_texts(
     let baseline = baseline.map(|t| prbs(t, "the baseline")).transpose()?;
     let Some(source) = limits_from.as_ref().or(baseline.as_ref()) else {
         return Err(Error::invalid(
-            "limits",
+            "limits_from",
             "no limits: take them from a PRBS protocol (e.g. the ankle-prbs preset)",
         ));
     };
