@@ -597,6 +597,8 @@ fn largest_radius(req: &DesignRequest) -> Result<f64> {
 /// Errors of one recording's estimate against the truth, K, B, M.
 struct Run {
     errors: [Matrix3<f64>; 3],
+    /// Relative Frobenius error of K, B, M against the subject's own (percent).
+    error_percent: [f64; 3],
     identifiable: [bool; 3],
 }
 
@@ -606,12 +608,15 @@ fn run_once(p: &CentreOut, prior: &Prior, imp: &Impedance, seed: u64) -> Result<
     let prepared = prepare(&rec, &PrepareParams::default())?;
     let est: LinearEstimate = fit_linear(&prepared, &LinearParams::default())?;
     let m3 = |m: &Matrix| Matrix3::from_fn(|r, c| m.0[(r, c)]);
+    let errors = [
+        m3(&est.stiffness) - imp.stiffness,
+        m3(&est.damping) - imp.damping,
+        m3(&est.inertia) - imp.inertia,
+    ];
+    let truth = imp.matrices();
     Ok(Run {
-        errors: [
-            m3(&est.stiffness) - imp.stiffness,
-            m3(&est.damping) - imp.damping,
-            m3(&est.inertia) - imp.inertia,
-        ],
+        error_percent: std::array::from_fn(|m| 100.0 * errors[m].norm() / truth[m].norm()),
+        errors,
         identifiable: [
             est.identifiable.stiffness,
             est.identifiable.damping,
@@ -665,17 +670,18 @@ fn pooled_se(se: &[Matrix3<f64>; 3]) -> [f64; 3] {
     std::array::from_fn(|m| (se[m].norm_squared() / 9.0).sqrt())
 }
 
+/// The prediction of protocol `p` with its trials `centre_out`.
 fn predict(
     p: &Protocol,
+    centre_out: &CentreOut,
     prior: &Prior,
     objective: &Objective,
     seeds: &[u64],
 ) -> Result<Prediction> {
     // the worse end of the prior's range
     let mut worst: Option<(f64, Prediction)> = None;
-    let centre_out = p.centre_out();
     for imp in prior.ends() {
-        let rs = runs(&centre_out, prior, &imp, seeds)?;
+        let rs = runs(centre_out, prior, &imp, seeds)?;
         let value = objective_value(&relative_mse(&rs, &imp), objective.weights());
         let se = spread(&rs);
         let pooled = pooled_se(&se);
@@ -689,7 +695,7 @@ fn predict(
                 se: pooled,
                 se_percent: std::array::from_fn(|m| 100.0 * pooled[m] / (truth[m].norm() / 3.0)),
                 error_percent: std::array::from_fn(|m| {
-                    100.0 * rs.iter().map(|r| r.errors[m].norm()).sum::<f64>() / n / truth[m].norm()
+                    rs.iter().map(|r| r.error_percent[m]).sum::<f64>() / n
                 }),
             },
             runs: rs.len(),
@@ -723,7 +729,7 @@ pub(crate) fn seeds(base: u64, offset: u64, n: usize) -> Vec<u64> {
         .collect()
 }
 
-fn margins(p: &Protocol, prior: &Prior) -> Vec<LimitMargin> {
+fn margins(p: &Protocol, centre_out: &CentreOut, prior: &Prior) -> Vec<LimitMargin> {
     let l = &p.limits;
     let r = p.targets.radius_m;
     let (_, v, a) = p.phases.profile.peaks(p.phases.centre_out_s);
@@ -745,7 +751,7 @@ fn margins(p: &Protocol, prior: &Prior) -> Vec<LimitMargin> {
         entry(
             "force on the prior",
             "N",
-            peak_force(p, &p.directions(), prior),
+            peak_force(p, &centre_out.directions, prior),
             l.max_force_n,
         ),
         entry(
@@ -942,14 +948,14 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             format!("no protocol of the family fits the limits and the budget: {last_refusal}"),
         ));
     };
-    let (protocol, _) = space
+    let (protocol, trials) = space
         .protocol(&best)
         .map_err(|why| Error::invalid("design", why))?;
     // the sample-by-sample check `limpid protocol check` makes (the search kept
     // every limit with a margin on the continuous profile)
     protocol::check(&protocol)?;
     let final_seeds = seeds(req.seed, 10_000, req.runs);
-    let predicted = predict(&protocol, &req.prior, &req.objective, &final_seeds)?;
+    let predicted = predict(&protocol, &trials, &req.prior, &req.objective, &final_seeds)?;
     let baseline = req
         .baseline
         .as_ref()
@@ -960,11 +966,17 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
                 centre_m: [0.0; 3],
                 radius_m: 0.0,
             };
-            predict(&b, &req.prior, &req.objective, &final_seeds)
+            predict(
+                &b,
+                &b.centre_out(),
+                &req.prior,
+                &req.objective,
+                &final_seeds,
+            )
         })
         .transpose()?;
     let verify = (req.verify > 0)
-        .then(|| verify(&protocol, &req.prior, &predicted, req.verify, req.seed))
+        .then(|| verify(&trials, &req.prior, &predicted, req.verify, req.seed))
         .transpose()?;
     let ph = &protocol.phases;
     let result = DesignResult {
@@ -991,7 +1003,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
         baseline,
         protocol: serde_json::to_value(&protocol)
             .map_err(|e| Error::invalid("protocol", e.to_string()))?,
-        limits: margins(&protocol, &req.prior),
+        limits: margins(&protocol, &trials, &req.prior),
         search: SearchSummary {
             candidates: seen.len(),
             runs_per_candidate: RANKING_RUNS,
@@ -1087,7 +1099,7 @@ fn amplitude_spectrum(p: &Protocol) -> Vec<f64> {
 /// (the nominal subject when it has no range) and compare the achieved
 /// spread of the errors with the prediction.
 fn verify(
-    p: &Protocol,
+    centre_out: &CentreOut,
     prior: &Prior,
     predicted: &Prediction,
     n: usize,
@@ -1106,33 +1118,17 @@ fn verify(
             (imp, s)
         })
         .collect();
-    let centre_out = p.centre_out();
-    let outcomes: Vec<(Run, Impedance)> = subjects
+    let rs: Vec<Run> = subjects
         .par_iter()
-        .map(|(imp, s)| Ok((run_once(&centre_out, prior, imp, *s)?, *imp)))
+        .map(|(imp, s)| run_once(centre_out, prior, imp, *s))
         .collect::<Result<_>>()?;
-    let rs: Vec<Run> = outcomes
-        .iter()
-        .map(|(r, _)| Run {
-            errors: r.errors,
-            identifiable: r.identifiable,
-        })
-        .collect();
     let achieved = pooled_se(&spread(&rs));
     let nf = n as f64;
-    let frob = |m: usize| -> Vec<f64> {
-        outcomes
-            .iter()
-            .map(|(r, imp)| 100.0 * r.errors[m].norm() / imp.matrices()[m].norm())
-            .collect()
-    };
-    let (k, b) = (frob(0), frob(1));
-    let within = outcomes
+    let within = rs
         .iter()
-        .enumerate()
-        .filter(|(i, (r, _))| {
-            k[*i] < 100.0 * STIFFNESS_TOLERANCE
-                && b[*i] < 100.0 * DAMPING_TOLERANCE
+        .filter(|r| {
+            r.error_percent[0] < 100.0 * STIFFNESS_TOLERANCE
+                && r.error_percent[1] < 100.0 * DAMPING_TOLERANCE
                 && r.identifiable[0]
                 && r.identifiable[1]
         })
@@ -1142,6 +1138,8 @@ fn verify(
         achieved_se: achieved,
         ratio: std::array::from_fn(|m| predicted.pooled.se[m] / achieved[m]),
         within_tolerance_share: within as f64 / nf,
-        error_percent: std::array::from_fn(|m| frob(m).iter().sum::<f64>() / nf),
+        error_percent: std::array::from_fn(|m| {
+            rs.iter().map(|r| r.error_percent[m]).sum::<f64>() / nf
+        }),
     })
 }
