@@ -78,22 +78,10 @@ fn play(command: &str, m: [[f64; 3]; 3], b: [[f64; 3]; 3], k: [[f64; 3]; 3], see
 #[test]
 fn a_designed_command_played_elsewhere_gives_stiffness_and_damping_back() {
     let dir = tempfile::tempdir().unwrap();
-    let seed = dir.path().join("seed.toml");
+    let seed = preset(dir.path(), "artemiadis-3d");
     let d = dir.path().join("d.toml");
     let cmd = dir.path().join("command.csv");
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
-    assert_eq!(
-        limpid(&[
-            "protocol",
-            "new",
-            "--preset",
-            "artemiadis-3d",
-            "-o",
-            &s(&seed)
-        ])
-        .code,
-        0
-    );
     let out = limpid(&[
         "protocol",
         "design",
@@ -190,12 +178,8 @@ fn a_designed_command_played_elsewhere_gives_stiffness_and_damping_back() {
 #[test]
 fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
-    let seed = dir.path().join("seed.toml");
+    let seed = preset(dir.path(), "artemiadis-3d");
     let s = seed.to_str().unwrap();
-    assert_eq!(
-        limpid(&["protocol", "new", "--preset", "artemiadis-3d", "-o", s]).code,
-        0
-    );
     let base = [
         "protocol",
         "design",
@@ -267,11 +251,7 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
 fn a_reflex_design_writes_a_prbs_that_its_check_accepts() {
     let dir = tempfile::tempdir().unwrap();
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
-    let base = dir.path().join("prbs.toml");
-    assert_eq!(
-        limpid(&["protocol", "new", "--preset", "ankle-prbs", "-o", &s(&base)]).code,
-        0
-    );
+    let base = preset(dir.path(), "ankle-prbs");
     let d = dir.path().join("d.toml");
     let out = limpid(&[
         "protocol",
@@ -318,11 +298,7 @@ fn a_reflex_design_writes_a_prbs_that_its_check_accepts() {
         verify.stderr
     );
     // a centre-out protocol is not a PRBS's limits
-    let c = dir.path().join("c.toml");
-    assert_eq!(
-        limpid(&["protocol", "new", "--preset", "artemiadis-3d", "-o", &s(&c)]).code,
-        0
-    );
+    let c = preset(dir.path(), "artemiadis-3d");
     let out = limpid(&[
         "protocol",
         "design",

@@ -18,20 +18,6 @@ fn one_line_error(out: &Output) -> &str {
     line
 }
 
-fn preset(dir: &Path, name: &str) -> PathBuf {
-    let p = dir.join(format!("{name}.toml"));
-    let out = limpid(&[
-        "protocol",
-        "new",
-        "--preset",
-        name,
-        "-o",
-        p.to_str().unwrap(),
-    ]);
-    assert_eq!(out.code, 0, "{}", out.stderr);
-    p
-}
-
 fn edit(p: &Path, from: &str, to: &str) -> PathBuf {
     let text = std::fs::read_to_string(p).unwrap();
     assert!(text.contains(from), "{from} not in {}", p.display());

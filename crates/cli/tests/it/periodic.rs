@@ -284,21 +284,6 @@ fn zippered_multisines_give_each_inputs_response() {
     }
 }
 
-/// A preset's protocol from `protocol new`, written to `dir`.
-fn preset(dir: &Path, name: &str) -> std::path::PathBuf {
-    let path = dir.join(format!("{name}.toml"));
-    let out = limpid(&[
-        "protocol",
-        "new",
-        "--preset",
-        name,
-        "-o",
-        path.to_str().unwrap(),
-    ]);
-    assert_eq!(out.code, 0, "{}", out.stderr);
-    path
-}
-
 #[test]
 fn multisine_and_prbs_protocols_check_export_and_simulate() {
     let d = tempfile::tempdir().unwrap();

@@ -108,3 +108,18 @@ pub fn chromium(url: &str, extra: &[String]) -> (String, String) {
         String::from_utf8_lossy(&out.stderr).to_string(),
     )
 }
+
+/// A preset's protocol from `protocol new`, written to `dir` as `NAME.toml`.
+pub fn preset(dir: &std::path::Path, name: &str) -> std::path::PathBuf {
+    let path = dir.join(format!("{name}.toml"));
+    let out = limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        name,
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    path
+}
