@@ -59,6 +59,31 @@ fn design(d: &crate::result::design::DesignResult) -> Result<(), String> {
             )?;
         }
     }
+    // the command's traces span its times, the spectra its frequencies
+    let c = &d.command;
+    for (field, v) in [
+        ("command.displacement_m", &c.displacement_m),
+        ("command.velocity_m_s", &c.velocity_m_s),
+        ("command.acceleration_m_s2", &c.acceleration_m_s2),
+    ] {
+        same(field, v.len(), c.t_s.len(), "command.t_s")?;
+    }
+    let s = &d.spectrum;
+    let baseline = s.baseline_m.iter().map(|v| ("spectrum.baseline_m", v));
+    for (field, v) in [
+        ("spectrum.designed_m", &s.designed_m),
+        ("spectrum.limit_m", &s.limit_m),
+    ]
+    .into_iter()
+    .chain(baseline)
+    {
+        same(
+            field,
+            v.len(),
+            s.frequency_hz.len(),
+            "spectrum.frequency_hz",
+        )?;
+    }
     Ok(())
 }
 

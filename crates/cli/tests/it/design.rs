@@ -317,3 +317,41 @@ fn a_reflex_design_writes_a_prbs_that_its_check_accepts() {
         out.stderr
     );
 }
+
+#[test]
+fn a_design_result_whose_arrays_disagree_is_refused_by_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let seed = preset(dir.path(), "artemiadis-3d");
+    let good = json(&[
+        "protocol",
+        "design",
+        "--prior",
+        "demo:S1",
+        "--limits-from",
+        seed.to_str().unwrap(),
+        "--duration",
+        "30",
+        "--runs",
+        "2",
+        "--json",
+    ]);
+    let html = dir.path().join("r.html");
+    for (edit, says) in [
+        ("/command/displacement_m", "command.displacement_m"),
+        ("/spectrum/limit_m", "spectrum.limit_m"),
+    ] {
+        let mut bad = good.clone();
+        *bad.pointer_mut(edit).unwrap() = serde_json::json!([1.0]);
+        let file = dir.path().join("bad.json");
+        std::fs::write(&file, bad.to_string()).unwrap();
+        let out = limpid(&[
+            "report",
+            file.to_str().unwrap(),
+            "-o",
+            html.to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 2, "{edit}: {}", out.stderr);
+        assert!(out.stderr.contains(says), "{edit}: {}", out.stderr);
+        assert_eq!(out.stderr.trim_end().lines().count(), 1, "{}", out.stderr);
+    }
+}
