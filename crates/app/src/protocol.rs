@@ -36,6 +36,7 @@ pub fn predicted_condition(d: &Design) -> Result<Option<f64>> {
         Design::Stochastic(_)
         | Design::Ensemble(_)
         | Design::RampAndHold(_)
+        | Design::Walking(_)
         | Design::Periodic(_) => Ok(None),
     }
 }

@@ -169,8 +169,8 @@ pub fn run(cmd: ProtocolCommand, cx: &Context) -> CliResult {
                 "a multisine or PRBS is exported in its own coordinates (t, the channels, period): leave out --robot".into(),
             ),
             (Design::Stochastic(p), _) => export_stochastic(&p, &output),
-            (Design::Ensemble(_) | Design::RampAndHold(_), _) => Err(
-                "ensemble and ramp-and-hold protocols are for `limpid simulate`; exporting them to a robot is not supported yet".into(),
+            (Design::Ensemble(_) | Design::RampAndHold(_) | Design::Walking(_), _) => Err(
+                "ensemble, ramp-and-hold and walking protocols are for `limpid simulate`; exporting them to a robot is not supported yet".into(),
             ),
             }
         }

@@ -54,6 +54,34 @@ pub fn varying_text(e: &VaryingEstimate, paths: &[PathBuf]) -> CliResult {
             e.basis_order.unwrap_or_default(),
             significant(e.cutoff_hz, 3)
         ),
+        VaryingMethod::Pulses => println!(
+            "perturbed minus unperturbed strides: {} perturbations at {} Hz, low-pass {} Hz",
+            e.repetitions.unwrap_or_default(),
+            significant(e.sample_rate_hz, 4),
+            significant(e.cutoff_hz, 3)
+        ),
+    }
+    if let Some(g) = &e.gait {
+        println!(
+            "strides: {} of {} used (median {} s, {} to {} s); baseline: {}",
+            g.strides_used,
+            g.strides_found,
+            significant(g.stride_s[0], 3),
+            significant(g.stride_s[1], 3),
+            significant(g.stride_s[2], 3),
+            g.baseline
+        );
+        for f in &g.flawed {
+            println!(
+                "  stride {} (t = {} s, row {}, {} s): {}: {}",
+                f.stride,
+                significant(f.start_s, 6),
+                f.start_row,
+                significant(f.duration_s, 3),
+                f.kind,
+                f.note
+            );
+        }
     }
     println!("resolution: {}", e.resolution_note);
     let d = e.coordinates.len();

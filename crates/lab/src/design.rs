@@ -37,10 +37,12 @@ pub enum Design {
     RampAndHold(crate::varying::RampAndHold),
     /// A multisine or PRBS repeated for whole periods (`kind = "multisine"` or `"prbs"`).
     Periodic(crate::periodic::PeriodicDesign),
+    /// Walking with pulses on some strides or a perturbation on every stride (`kind = "walking"`).
+    Walking(crate::varying::WalkingExperiment),
 }
 
 /// The preset names, by kind.
-pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold), ankle-multisine (multisine), ankle-prbs (prbs)";
+pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold), ankle-multisine (multisine), ankle-prbs (prbs), walking-pulses, walking-continuous (walking)";
 
 impl Design {
     /// A preset: seed 000 (`artemiadis-3d`), seed 001 (`patel-cocontraction`),
@@ -60,6 +62,11 @@ impl Design {
             "ankle-prbs" => Ok(Design::Periodic(
                 crate::periodic::PeriodicDesign::prbs_joint(),
             )),
+            "walking-pulses" => Ok(Design::Walking(Default::default())),
+            "walking-continuous" => Ok(Design::Walking(crate::varying::WalkingExperiment {
+                perturbation: crate::varying::WalkingExperiment::continuous(),
+                ..Default::default()
+            })),
             other => Err(Error::invalid(
                 "preset",
                 format!("unknown preset {other:?}; presets: {PRESETS}"),
@@ -90,7 +97,7 @@ impl Design {
                         path,
                         text,
                         Some(span),
-                        "kind must be a string: centre-out, planar, stochastic, ensemble, ramp-and-hold, multisine or prbs",
+                        "kind must be a string: centre-out, planar, stochastic, ensemble, ramp-and-hold, multisine, prbs or walking",
                     ));
                 };
                 // blank the `kind = ...` line so that every other byte keeps its place
@@ -131,6 +138,12 @@ impl Design {
                     toml::from_str(&body).map_err(|e| located(&body, e))?;
                 d.validate().map_err(|e| fail(e.to_string()))?;
                 Design::RampAndHold(d)
+            }
+            "walking" => {
+                let d: crate::varying::WalkingExperiment =
+                    toml::from_str(&body).map_err(|e| located(&body, e))?;
+                d.validate().map_err(|e| fail(e.to_string()))?;
+                Design::Walking(d)
             }
             "multisine" | "prbs" => {
                 let d: crate::periodic::PeriodicDesign = toml::from_str(&body).map_err(|e| {
@@ -206,6 +219,7 @@ impl Design {
             ),
             Design::Ensemble(p) => p.validate(),
             Design::RampAndHold(p) => p.validate(),
+            Design::Walking(p) => p.validate(),
             Design::Periodic(p) => p.validate().map_err(|m| Error::invalid("protocol", m)),
         }
     }
@@ -218,6 +232,7 @@ impl Design {
             Design::Stochastic(p) => ("stochastic", toml::to_string(p).unwrap_or_default()),
             Design::Ensemble(p) => ("ensemble", toml::to_string(p).unwrap_or_default()),
             Design::RampAndHold(p) => ("ramp-and-hold", toml::to_string(p).unwrap_or_default()),
+            Design::Walking(p) => ("walking", toml::to_string(p).unwrap_or_default()),
             Design::Periodic(p) => (
                 match p.signal {
                     crate::periodic::Signal::Prbs(_) => "prbs",
@@ -566,6 +581,14 @@ pub fn check(d: &Design) -> Result<DesignReport> {
         Design::RampAndHold(p) => {
             p.validate()?;
             let duration_s = p.duration_s();
+            Ok(DesignReport::Varying(VaryingReport {
+                samples: (duration_s * p.rate_hz).round() as usize,
+                duration_s,
+            }))
+        }
+        Design::Walking(p) => {
+            p.validate()?;
+            let duration_s = p.strides as f64 * p.stride_s;
             Ok(DesignReport::Varying(VaryingReport {
                 samples: (duration_s * p.rate_hz).round() as usize,
                 duration_s,

@@ -145,6 +145,19 @@ pub fn simulate_design(
             }])
         }
         Design::Periodic(p) => periodic(p, subject, seed).map(|s| vec![s]),
+        Design::Walking(p) => {
+            let s: crate::varying::WalkingAnkle = match subject {
+                Some(text) => parse(text)?,
+                None => crate::varying::WalkingAnkle::default(),
+            };
+            let recording = crate::varying::simulate_walking(&s, p, seed)?;
+            let truth = crate::varying::walking_truth(&s, p);
+            Ok(vec![Simulated {
+                label: None,
+                recording,
+                truth: Truth::Varying(truth),
+            }])
+        }
         Design::RampAndHold(p) => {
             let s: crate::varying::ScheduledAnkle = match subject {
                 Some(text) => parse(text)?,

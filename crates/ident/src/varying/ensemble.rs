@@ -34,10 +34,10 @@ use super::{
 const FILTER_ORDER: usize = 4;
 
 /// Per repetition, per instant: `[x'' (d), x' (d), x (d), f (d)]`, row-major `L x 4d`.
-struct Ensemble {
-    z: Vec<Vec<f64>>,
-    len: usize,
-    d: usize,
+pub(super) struct Ensemble {
+    pub z: Vec<Vec<f64>>,
+    pub len: usize,
+    pub d: usize,
 }
 
 fn repetitions(
@@ -200,57 +200,143 @@ pub(super) fn estimate(
     let fs = rec.sample_rate();
     let e = repetitions(rec, &coords, &forces, cutoff, &mut warnings)?;
     let reps = e.z.len();
-    // compared before any cast: 1e307 ms would saturate a sample count
-    let repetition_ms = e.len as f64 / fs * 1e3;
     let step_s = params.step_s.unwrap_or(params.window_s / 2.0);
-    for (name, seconds) in [("window_ms", params.window_s), ("step_ms", step_s)] {
-        if seconds * 1e3 >= repetition_ms {
+    let layout = Layout::new(
+        &e,
+        (params.window_s, step_s),
+        1.0 / fs,
+        // derivatives of the zero-phase filter's padded ends are not trusted within one cut-off period
+        (fs / cutoff).ceil() as usize,
+    )?;
+    let (points, fit) = fit_grid(&e, &layout, params.min_repetitions, &mut warnings);
+    Ok(VaryingEstimate {
+        method: VaryingMethod::Ensemble,
+        schedule: ScheduleAxis {
+            name: "time since trial start".into(),
+            unit: "s".into(),
+            values: points.iter().map(|p| p.sigma).collect(),
+        },
+        coordinates: coords,
+        forces,
+        sample_rate_hz: fs,
+        cutoff_hz: cutoff,
+        resolution: layout.width() as f64 / fs,
+        resolution_note: layout.note(),
+        repetitions: Some(reps),
+        basis_order: None,
+        order_cv_vaf: Vec::new(),
+        points,
+        fit,
+        reflex: None,
+        gait: None,
+        warnings,
+    })
+}
+
+/// Where the grid points of an ensemble lie and how wide each pools: in
+/// samples of the aligned repetitions, with what a sample is on the schedule
+/// (seconds, or a fraction of the stride) and in seconds.
+pub(super) struct Layout {
+    /// Half the window (samples).
+    pub half: usize,
+    /// Grid step (samples).
+    pub step: usize,
+    /// Samples at each end not trusted.
+    pub edge: usize,
+    /// The schedule's value per sample.
+    pub sigma_per_sample: f64,
+    /// Seconds per sample (for messages; an average over strides when phase-normalised).
+    pub sample_s: f64,
+    /// Share of each value added in quadrature to its standard error (see
+    /// [`super::gait::WALKING_MODEL_FLOOR`]); 0 for repetitions of a task.
+    pub model_floor: f64,
+}
+
+impl Layout {
+    /// The layout of a window and step given in seconds, on repetitions
+    /// whose samples last `sample_s`; refuses a window or step not shorter
+    /// than the repetitions.
+    pub(super) fn new(
+        e: &Ensemble,
+        (window_s, step_s): (f64, f64),
+        sample_s: f64,
+        edge: usize,
+    ) -> Result<Layout> {
+        // compared before any cast: 1e307 ms would saturate a sample count
+        let repetition_ms = e.len as f64 * sample_s * 1e3;
+        for (name, seconds) in [("window_ms", window_s), ("step_ms", step_s)] {
+            if seconds * 1e3 >= repetition_ms {
+                return Err(Error::invalid(
+                    name,
+                    format!(
+                        "{} ms is not shorter than the repetitions ({} ms)",
+                        limpid_core::significant(seconds * 1e3, 4),
+                        limpid_core::significant(repetition_ms, 4)
+                    ),
+                ));
+            }
+        }
+        let half = ((window_s / sample_s / 2.0).round() as usize).max(1);
+        let step = ((step_s / sample_s).round() as usize).max(1);
+        if e.len < 2 * half + 1 {
             return Err(Error::invalid(
-                name,
+                "window_ms",
                 format!(
-                    "{} ms is not shorter than the repetitions ({} ms)",
-                    limpid_core::significant(seconds * 1e3, 4),
-                    limpid_core::significant(repetition_ms, 4)
+                    "the window ({} samples) is longer than the repetitions ({} samples)",
+                    2 * half + 1,
+                    e.len
                 ),
             ));
         }
+        if (e.len - 2 * half) / step > 100_000 {
+            return Err(Error::invalid(
+                "step_ms",
+                format!(
+                    "{} grid points: choose a longer step",
+                    (e.len - 2 * half) / step
+                ),
+            ));
+        }
+        Ok(Layout {
+            half,
+            step,
+            edge,
+            sigma_per_sample: sample_s,
+            sample_s,
+            model_floor: 0.0,
+        })
     }
-    let half = ((params.window_s * fs / 2.0).round() as usize).max(1);
-    let width = 2 * half + 1;
-    let step = ((step_s * fs).round() as usize).max(1);
-    // derivatives of the zero-phase filter's padded ends are not trusted within one cut-off period
-    let edge = (fs / cutoff).ceil() as usize;
-    if e.len < width {
-        return Err(Error::invalid(
-            "window_ms",
-            format!(
-                "the window ({width} samples) is longer than the repetitions ({} samples)",
-                e.len
-            ),
-        ));
+
+    /// Samples pooled per point.
+    pub(super) fn width(&self) -> usize {
+        2 * self.half + 1
     }
-    let pre = prefix(&e);
-    let centres: Vec<usize> = (half..e.len - half).step_by(step).collect();
-    if centres.len() > 100_000 {
-        return Err(Error::invalid(
-            "step_s",
-            format!("{} grid points: choose a longer step", centres.len()),
-        ));
+
+    /// The resolution, in words.
+    pub(super) fn note(&self) -> String {
+        format!(
+            "each point pools the instants within ±{} ms (a box {} ms wide): a change of impedance narrower than that is smoothed",
+            crate::varying::round_ms(self.half as f64 * self.sample_s),
+            crate::varying::round_ms(self.width() as f64 * self.sample_s)
+        )
     }
+}
+
+/// Fit every grid point of an aligned ensemble: the points and the overall fit.
+pub(super) fn fit_grid(
+    e: &Ensemble,
+    layout: &Layout,
+    min_repetitions: usize,
+    warnings: &mut Vec<String>,
+) -> (Vec<VaryingPoint>, VaryingFit) {
+    let pre = prefix(e);
+    let half = layout.half;
+    let centres: Vec<usize> = (half..e.len - half).step_by(layout.step).collect();
     let mut fits: Vec<GridFit> = centres
         .par_iter()
-        .map(|&c| {
-            fit_window(
-                &e,
-                &pre,
-                c - half..c + half + 1,
-                params.min_repetitions,
-                edge,
-                fs,
-            )
-        })
+        .map(|&c| fit_window(e, &pre, c - half..c + half + 1, min_repetitions, layout))
         .collect();
-    judge_with_smoothing_bias(&mut fits, width, step as f64 / fs, fs);
+    judge_with_smoothing_bias(&mut fits, layout.width(), layout.step);
     let sum = |f: fn(&GridFit) -> f64| {
         fits.iter()
             .filter(|g| g.point.identifiable)
@@ -263,49 +349,27 @@ pub(super) fn estimate(
         sum(|g| g.press),
         sum(|g| g.press_tss),
     );
-    let identifiable = fits.iter().filter(|g| g.point.identifiable).count();
-    if identifiable == 0 {
+    if !fits.iter().any(|g| g.point.identifiable) {
         warnings.push("no instant is identifiable: see each point's reason".to_string());
     }
     let vaf = |r: f64, t: f64| if t > 0.0 { 100.0 * (1.0 - r / t) } else { 0.0 };
-    Ok(VaryingEstimate {
-        method: VaryingMethod::Ensemble,
-        schedule: ScheduleAxis {
-            name: "time since trial start".into(),
-            unit: "s".into(),
-            values: centres.iter().map(|&c| c as f64 / fs).collect(),
-        },
-        coordinates: coords,
-        forces,
-        sample_rate_hz: fs,
-        cutoff_hz: cutoff,
-        resolution: width as f64 / fs,
-        resolution_note: format!(
-            "each point pools the instants within ±{} ms (a box {} ms wide): a change of impedance narrower than that is smoothed",
-            crate::varying::round_ms(half as f64 / fs),
-            crate::varying::round_ms(width as f64 / fs)
-        ),
-        repetitions: Some(reps),
-        basis_order: None,
-        order_cv_vaf: Vec::new(),
-        points: fits.into_iter().map(|g| g.point).collect(),
-        fit: VaryingFit {
+    (
+        fits.into_iter().map(|g| g.point).collect(),
+        VaryingFit {
             vaf: vaf(rss, tss),
             cross_validated_vaf: vaf(press, press_tss),
         },
-        reflex: None,
-        warnings,
-    })
+    )
 }
 
 /// The box average over `width` samples differs from the value at the
 /// centre by about `K'' (width² - 1) / 24` samples² where the impedance
 /// curves; its standard error does not say so. Each point's verdicts are
 /// taken again with `sqrt(SE² + bias²)`, the curvature from the second
-/// difference of the neighbouring points (`step_s` apart), so a point on a
+/// difference of the neighbouring points (`step` samples apart), so a point on a
 /// sharp change is not trusted beyond its tolerance.
-fn judge_with_smoothing_bias(fits: &mut [GridFit], width: usize, step_s: f64, fs: f64) {
-    let factor = (width as f64 * width as f64 - 1.0) / 24.0 / (fs * fs) / (step_s * step_s);
+fn judge_with_smoothing_bias(fits: &mut [GridFit], width: usize, step: usize) {
+    let factor = (width as f64 * width as f64 - 1.0) / 24.0 / (step as f64 * step as f64);
     let widened: Vec<Option<PointVerdicts>> = (0..fits.len())
         .map(|g| {
             if g == 0 || g + 1 >= fits.len() {
@@ -359,13 +423,12 @@ fn fit_window(
     pre: &Prefix,
     w: std::ops::Range<usize>,
     min_repetitions: usize,
-    edge: usize,
-    fs: f64,
+    layout: &Layout,
 ) -> GridFit {
     let (d, m, reps) = (e.d, 4 * e.d, e.z.len());
     let r = reps as f64;
     let centre = (w.start + w.end - 1) / 2;
-    let sigma = centre as f64 / fs;
+    let sigma = centre as f64 * layout.sigma_per_sample;
     let c = centred_cross_product(pre, &w, m, r);
     let (cxx, cxf, cff) = blocks(&c, d);
     let condition = scaled_condition(&cxx);
@@ -391,7 +454,7 @@ fn fit_window(
         press: 0.0,
         press_tss: 0.0,
     };
-    if let Some(reason) = refusal(e, &w, (min_repetitions, edge), condition, fs) {
+    if let Some(reason) = refusal(e, &w, min_repetitions, condition, layout) {
         return empty(reason);
     }
     if !repetitions_differ(pre, &w, m, &c) {
@@ -424,6 +487,8 @@ fn fit_window(
         part(&theta, 2),
         part(&se, 2),
     ];
+    let [ms, bs, ks] =
+        [(&m, ms), (&b, bs), (&k, ks)].map(|(v, e)| super::floored(v, e, layout.model_floor));
     let vaf = (tss > 0.0).then(|| 100.0 * (1.0 - full_rss / tss));
     let verdicts = PointVerdicts::of([&k, &ks, &b, &bs, &m, &ms], vaf);
     GridFit {
@@ -483,10 +548,11 @@ fn repetitions_differ(pre: &Prefix, w: &std::ops::Range<usize>, m: usize, centre
 fn refusal(
     e: &Ensemble,
     w: &std::ops::Range<usize>,
-    (min_repetitions, edge): (usize, usize),
+    min_repetitions: usize,
     condition: f64,
-    fs: f64,
+    layout: &Layout,
 ) -> Option<String> {
+    let edge = layout.edge;
     let reps = e.z.len();
     if reps < min_repetitions {
         return Some(format!(
@@ -496,7 +562,7 @@ fn refusal(
     if w.start < edge || w.end + edge > e.len {
         return Some(format!(
             "within {} ms of the repetitions' ends, where the zero-phase filter's derivatives are not reliable",
-            crate::varying::round_ms(edge as f64 / fs)
+            crate::varying::round_ms(edge as f64 * layout.sample_s)
         ));
     }
     if !well_conditioned(condition) {

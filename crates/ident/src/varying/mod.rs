@@ -16,6 +16,7 @@
 //! numbers there.
 
 pub mod ensemble;
+pub mod gait;
 pub mod scheduled;
 mod settings;
 
@@ -42,6 +43,8 @@ pub enum VaryingMethod {
     Ensemble,
     /// One regression, parameters expanded in a basis of the schedule.
     ParameterVarying,
+    /// Walking: perturbed strides minus the unperturbed ones near them.
+    Pulses,
 }
 
 /// The schedule the impedance is given against.
@@ -198,7 +201,7 @@ pub struct VaryingEstimate {
     pub resolution: f64,
     /// What the resolution means, in words.
     pub resolution_note: String,
-    /// Ensemble: repetitions used.
+    /// Ensemble: repetitions (strides) used; pulses: perturbations fitted.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repetitions: Option<usize>,
     /// Parameter-varying: Chebyshev order of every parameter.
@@ -214,6 +217,9 @@ pub struct VaryingEstimate {
     /// The reflex pathway (parameter-varying with `reflex`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reflex: Option<VaryingReflex>,
+    /// Walking: the strides, the flawed events and the baseline.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gait: Option<gait::GaitSummary>,
     /// What a reader should know.
     pub warnings: Vec<String>,
 }
@@ -273,11 +279,23 @@ pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<Varyi
             ),
         ));
     }
-    if params.schedule == TIME {
+    if params.event.is_some() {
+        gait::estimate(rec, params, coords, forces, cutoff)
+    } else if params.schedule == TIME {
         ensemble::estimate(rec, params, coords, forces, cutoff)
     } else {
         scheduled::estimate(rec, params, coords, forces, cutoff)
     }
+}
+
+/// Standard errors with `share` of each value's magnitude added in quadrature.
+pub(crate) fn floored(value: &Matrix, se: Matrix, share: f64) -> Matrix {
+    if share == 0.0 {
+        return se;
+    }
+    matrix(value.nrows(), |i, j| {
+        se[(i, j)].hypot(share * value[(i, j)].abs())
+    })
 }
 
 /// A d x d matrix from a column-of-outputs layout: `at(j, k)` is row j, column k.

@@ -21,9 +21,42 @@ use crate::request::{boolean_names, Method};
 #[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(default, deny_unknown_fields)]
 pub struct VaryingRequest {
-    /// `time` (ensemble over the `trial` repetitions) or the column the impedance varies with (e.g. sv, level, q1).
-    #[cfg_attr(feature = "clap", arg(long, default_value_t = VaryingRequest::default().schedule, value_name = "time|COLUMN"))]
+    /// `time` (ensemble over the `trial` repetitions) or the column the impedance varies with (e.g. sv, level, q1); with --event, `gait-phase` (the default then) or `time-since-event`.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = VaryingRequest::default().schedule, value_name = "time|COLUMN|gait-phase|time-since-event"))]
     pub schedule: String,
+    /// Walking: the stride event, a 0/1 column (e.g. heel_strike) or a threshold crossing COLUMN>LEVEL / COLUMN<LEVEL.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "COLUMN|COLUMN>LEVEL"))]
+    pub event: Option<String>,
+    /// Walking: hysteresis of a threshold event, in the column's unit [default: 5 % of the level].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "X"))]
+    pub hysteresis: Option<f64>,
+    /// Walking: an event sooner than this after the one before is ignored (ms), and reported.
+    #[cfg_attr(feature = "clap", arg(long = "refractory", default_value_t = VaryingRequest::default().refractory_ms, value_name = "MS"))]
+    pub refractory_ms: f64,
+    /// Walking: the 0/1 column that is 1 while a perturbation is active [default: `perturbation` when present].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "COLUMN"))]
+    pub trigger: Option<String>,
+    /// Walking: `pulses` (perturbed minus unperturbed strides) or `ensemble` (a perturbation on every stride) [default: pulses when the trigger marks some strides].
+    #[cfg_attr(
+        feature = "clap",
+        arg(long = "method", value_enum, value_name = "METHOD")
+    )]
+    pub gait_method: Option<super::gait::GaitMethod>,
+    /// Walking: strides in each baseline [default: 10 unperturbed strides (pulses), 20 strides (ensemble)].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N"))]
+    pub neighbours: Option<usize>,
+    /// Walking, pulses: width of the onset bins (fraction of the stride, or s with time-since-event) [default: 0.05].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "WIDTH"))]
+    pub bin: Option<f64>,
+    /// Walking, pulses: fewest perturbations in an identifiable bin.
+    #[cfg_attr(feature = "clap", arg(long = "min-pulses", default_value_t = VaryingRequest::default().min_pulses, value_name = "N"))]
+    pub min_pulses: usize,
+    /// Walking, pulses: longest fit window after an onset (ms) [default: until 50 ms after the trigger falls, at most 400].
+    #[cfg_attr(feature = "clap", arg(long = "pulse-window", value_name = "MS"))]
+    pub pulse_window_ms: Option<f64>,
+    /// Walking: the gait phase where stance ends, drawn in figures (typical walking: 0.6).
+    #[cfg_attr(feature = "clap", arg(long = "stance-end", default_value_t = VaryingRequest::default().stance_end, value_name = "PHASE"))]
+    pub stance_end: f64,
     /// Zero-phase low-pass before differentiation (Hz) [default: 30, or 0.4 x the rate].
     #[cfg_attr(feature = "clap", arg(long = "cutoff", value_name = "HZ"))]
     pub cutoff_hz: Option<f64>,
@@ -60,6 +93,16 @@ impl Default for VaryingRequest {
     fn default() -> Self {
         VaryingRequest {
             schedule: TIME.into(),
+            event: None,
+            hysteresis: None,
+            refractory_ms: 250.0,
+            trigger: None,
+            gait_method: None,
+            neighbours: None,
+            bin: None,
+            min_pulses: 5,
+            pulse_window_ms: None,
+            stance_end: 0.6,
             cutoff_hz: None,
             window_ms: 30.0,
             step_ms: None,
@@ -152,6 +195,7 @@ impl VaryingRequest {
                 ));
             }
         }
+        self.check_walking()?;
         if self.reflex && self.schedule == TIME {
             return Err(Error::invalid(
                 "reflex",
@@ -161,9 +205,131 @@ impl VaryingRequest {
         Ok(self.valid())
     }
 
+    /// The walking settings (issue 61): refused unless they go with `event`.
+    fn check_walking(&self) -> Result<()> {
+        use super::gait::{EventRule, GAIT_PHASE, TIME_SINCE_EVENT};
+        let walking_schedule = [GAIT_PHASE, TIME_SINCE_EVENT].contains(&self.schedule.as_str());
+        let Some(event) = &self.event else {
+            let stray = [
+                ("schedule", walking_schedule),
+                ("trigger", self.trigger.is_some()),
+                ("gait_method", self.gait_method.is_some()),
+                ("neighbours", self.neighbours.is_some()),
+                ("bin", self.bin.is_some()),
+                ("pulse_window_ms", self.pulse_window_ms.is_some()),
+                ("hysteresis", self.hysteresis.is_some()),
+            ];
+            if let Some((name, _)) = stray.iter().find(|s| s.1) {
+                return Err(Error::invalid(
+                    *name,
+                    "is a walking setting: give the stride event too (--event heel_strike, or --event 'fz>50')",
+                ));
+            }
+            return Ok(());
+        };
+        EventRule::parse(event)?;
+        if !walking_schedule && self.schedule != TIME {
+            return Err(Error::invalid(
+                "schedule",
+                format!(
+                    "with --event the schedule is {GAIT_PHASE} or {TIME_SINCE_EVENT}, found {}",
+                    self.schedule
+                ),
+            ));
+        }
+        if self.reflex {
+            return Err(Error::invalid(
+                "reflex",
+                "the reflex pathway is not estimated during walking",
+            ));
+        }
+        if let Some(h) = self.hysteresis {
+            if !h.is_finite() || h < 0.0 {
+                return Err(Error::invalid(
+                    "hysteresis",
+                    format!(
+                        "expected a finite number >= 0, found {}",
+                        limpid_core::error::Num(h)
+                    ),
+                ));
+            }
+        }
+        positive("refractory_ms", self.refractory_ms)?;
+        if self.refractory_ms > 5000.0 {
+            return Err(Error::invalid(
+                "refractory_ms",
+                format!(
+                    "a stride event cannot be refractory for {} ms (more than 5 s)",
+                    limpid_core::significant(self.refractory_ms, 4)
+                ),
+            ));
+        }
+        if let Some(n) = self.neighbours {
+            if !(1..=1000).contains(&n) {
+                return Err(Error::invalid(
+                    "neighbours",
+                    format!("expected 1 to 1000, found {n}"),
+                ));
+            }
+        }
+        if let Some(b) = self.bin {
+            positive("bin", b)?;
+            if self.schedule != TIME_SINCE_EVENT && b > 0.5 {
+                return Err(Error::invalid(
+                    "bin",
+                    format!(
+                        "a bin of gait phase is a fraction of the stride, at most 0.5, found {}",
+                        limpid_core::significant(b, 4)
+                    ),
+                ));
+            }
+            if b > 10.0 {
+                return Err(Error::invalid(
+                    "bin",
+                    format!(
+                        "expected at most 10 s, found {}",
+                        limpid_core::significant(b, 4)
+                    ),
+                ));
+            }
+        }
+        if self.min_pulses < 3 {
+            return Err(Error::invalid(
+                "min_pulses",
+                format!("the jackknife needs at least 3, found {}", self.min_pulses),
+            ));
+        }
+        if let Some(w) = self.pulse_window_ms {
+            positive("pulse_window_ms", w)?;
+            if w > 5000.0 {
+                return Err(Error::invalid(
+                    "pulse_window_ms",
+                    format!(
+                        "expected at most 5000 ms, found {}",
+                        limpid_core::significant(w, 4)
+                    ),
+                ));
+            }
+        }
+        if !(self.stance_end > 0.0 && self.stance_end < 1.0) {
+            return Err(Error::invalid(
+                "stance_end",
+                format!(
+                    "expected a fraction of the stride between 0 and 1, found {}",
+                    limpid_core::error::Num(self.stance_end)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     fn valid(&self) -> VaryingParams {
+        let mut request = self.clone();
+        if request.event.is_some() && request.schedule == TIME {
+            request.schedule = super::gait::GAIT_PHASE.into();
+        }
         VaryingParams {
-            request: self.clone(),
+            request,
             window_s: self.window_ms / 1e3,
             step_s: self.step_ms.map(|ms| ms / 1e3),
         }

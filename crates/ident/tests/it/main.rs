@@ -4,6 +4,7 @@
 mod common;
 mod examples;
 mod few_trials;
+mod gait;
 mod noiseless;
 mod planar;
 mod reflex;

@@ -24,6 +24,7 @@ const ACTUATOR_DAMPING: f64 = 0.7;
 
 mod ensemble;
 mod scheduled;
+mod walking;
 
 pub use ensemble::{
     ensemble_truth, simulate_ensemble, EnsembleBody, EnsembleExperiment, EnsembleSubject,
@@ -32,6 +33,9 @@ pub use ensemble::{
 pub use scheduled::{
     scheduled_truth, simulate_scheduled_ankle, Quadratic, RampAndHold, ScheduledAnkle,
     ScheduledReflex,
+};
+pub use walking::{
+    simulate_walking, walking_truth, WalkingAnkle, WalkingExperiment, WalkingPerturbation,
 };
 
 #[cfg(test)]

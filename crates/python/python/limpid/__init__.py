@@ -554,6 +554,15 @@ def estimate_varying(recording: RecordingLike, schedule: str = "time", **options
     point varies slower), ``rate_hz``, ``reflex`` (a reflex gain that varies with the
     schedule), ``max_delay_s``.
 
+    Walking: ``event="heel_strike"`` (a 0/1 column, or ``"fz>50"``, a threshold crossing
+    with ``hysteresis`` and ``refractory_ms``) cuts the record into strides and puts
+    impedance against gait phase (``schedule="gait-phase"``, the default then, or
+    ``"time-since-event"``); ``gait_method="pulses"`` (perturbed minus unperturbed strides,
+    ``trigger`` the 0/1 column that is 1 while a perturbation runs, default
+    ``perturbation``) or ``"ensemble"`` (a perturbation on every stride); ``neighbours``,
+    ``bin``, ``min_pulses``, ``pulse_window_ms``, ``stance_end``. The result's ``gait``
+    lists the strides used and, by number, the ones with flawed events.
+
     Returns ``schedule`` (name, unit, values), ``points`` (per grid value: ``sigma``,
     ``identifiable``, ``stiffness``/``damping``/``inertia`` with ``*_se``, ``reflex``,
     ``vaf``, ``reason`` when not identifiable), ``fit``, ``reflex``, ``warnings``."""

@@ -64,6 +64,7 @@ fn element_figure(
             color,
         });
     }
+    series.extend(stance_boundary(v, &series));
     Figure {
         id: id.into(),
         chart: Chart {
@@ -79,6 +80,97 @@ fn element_figure(
             series,
         },
     }
+}
+
+/// Walking on gait phase: a dotted vertical line where stance ends, over the
+/// span of the figure's other series.
+fn stance_boundary(v: &VaryingEstimate, series: &[Series]) -> Option<Series> {
+    let g = v.gait.as_ref()?;
+    if v.schedule.unit != "fraction of the stride" {
+        return None;
+    }
+    let ys = series
+        .iter()
+        .flat_map(|s| s.y.iter())
+        .filter(|y| y.is_finite());
+    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+        (a.min(y), b.max(y))
+    });
+    (lo < hi).then(|| Series {
+        name: format!("stance | swing ({})", significant(g.stance_end, 2)),
+        x: vec![g.stance_end, g.stance_end],
+        y: vec![lo, hi],
+        stroke: Stroke::Dotted,
+        color: "#777777".into(),
+    })
+}
+
+/// Walking: the strides or perturbations behind each point.
+fn support_figure(v: &VaryingEstimate) -> Option<Figure> {
+    v.gait.as_ref()?;
+    let what = if v.method == VaryingMethod::Pulses {
+        "Perturbations in each onset bin"
+    } else {
+        "Strides behind each point"
+    };
+    let x: Vec<f64> = v.points.iter().map(|p| p.sigma).collect();
+    let mut series = vec![Series {
+        name: "count".into(),
+        x,
+        y: v.points.iter().map(|p| p.support).collect(),
+        stroke: Stroke::Points,
+        color: PALETTE[0].into(),
+    }];
+    series.extend(stance_boundary(v, &series));
+    Some(Figure {
+        id: "varying-support".into(),
+        chart: Chart {
+            title: format!("{what} against {}", v.schedule.name),
+            x_label: schedule_label(v),
+            y_label: "count".into(),
+            x_log: false,
+            y_log: false,
+            y_range: None,
+            series,
+        },
+    })
+}
+
+/// Walking: the strides left out or joined, by number.
+fn flawed_table(v: &VaryingEstimate) -> Option<Table> {
+    let g = v.gait.as_ref()?;
+    if g.flawed.is_empty() {
+        return None;
+    }
+    Some(Table {
+        caption: format!(
+            "Strides with flawed events ({} of {} between detected events)",
+            g.flawed.len(),
+            g.strides_found
+        ),
+        header: vec![
+            "stride".into(),
+            "start (s)".into(),
+            "row".into(),
+            "duration (s)".into(),
+            "kind".into(),
+            "what was done".into(),
+        ],
+        rows: g
+            .flawed
+            .iter()
+            .map(|f| {
+                vec![
+                    f.stride.to_string(),
+                    format!("{:.3}", f.start_s),
+                    f.start_row.to_string(),
+                    format!("{:.3}", f.duration_s),
+                    f.kind.clone(),
+                    f.note.clone(),
+                ]
+            })
+            .collect(),
+    })
 }
 
 fn cell(m: Option<&Matrix>, se: Option<&Matrix>, i: usize, j: usize) -> String {
@@ -103,11 +195,14 @@ pub(crate) fn section(name: &str, v: &VaryingEstimate) -> Section {
         }),
     ];
     figures.extend(reflex_gain_figure(v));
+    figures.extend(support_figure(v));
+    let mut tables = vec![points_table(v)];
+    tables.extend(flawed_table(v));
     Section {
         heading: format!("Varying impedance: {name}"),
         verdict: verdict(v),
         warnings: v.warnings.clone(),
-        tables: vec![points_table(v)],
+        tables,
         figures,
         ellipsoids: vec![],
         drawings: vec![],
@@ -127,6 +222,20 @@ fn verdict(v: &VaryingEstimate) -> String {
             v.schedule.name,
             v.basis_order.unwrap_or_default()
         ),
+        VaryingMethod::Pulses => format!(
+            "perturbed minus unperturbed strides, {} perturbations",
+            v.repetitions.unwrap_or_default()
+        ),
+    };
+    let method = match &v.gait {
+        Some(g) => format!(
+            "{method} ({} of {} strides used, median {} s; {})",
+            g.strides_used,
+            g.strides_found,
+            significant(g.stride_s[0], 3),
+            g.baseline
+        ),
+        None => method,
     };
     let mut verdict = format!(
         "{method}: {identifiable} of {} points identifiable; VAF {} % (cross-validated {} %); {}",

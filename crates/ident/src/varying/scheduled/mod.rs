@@ -239,6 +239,7 @@ pub(super) fn estimate(
             cross_validated_vaf: vaf(fitted.press),
         },
         reflex: reflex_summary,
+        gait: None,
         warnings,
     })
 }
