@@ -1,13 +1,15 @@
 //! Criterion benchmarks of `estimate varying` (issue 38), from a recording in
 //! memory to the estimate: an ensemble of 200 repetitions x 2 s at 1 kHz
 //! (one joint), and 180 s of parameter-varying ankle data at 1 kHz with the
-//! reflex scan. Both recordings come from limpid's virtual lab.
+//! reflex scan, and walking (issue 61): 400 strides at 1 kHz with pulses on
+//! a third of them, and with a perturbation on every stride. The recordings
+//! come from limpid's virtual lab.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use limpid_ident::varying::{estimate_varying, VaryingParams, VaryingRequest};
 use limpid_lab::varying::{
-    simulate_ensemble, simulate_scheduled_ankle, EnsembleExperiment, EnsembleSubject, RampAndHold,
-    ScheduledAnkle,
+    simulate_ensemble, simulate_scheduled_ankle, simulate_walking, EnsembleExperiment,
+    EnsembleSubject, RampAndHold, ScheduledAnkle, WalkingAnkle, WalkingExperiment,
 };
 
 fn bench(c: &mut Criterion) {
@@ -48,6 +50,37 @@ fn bench(c: &mut Criterion) {
     group.bench_function("parameter_varying_reflex_180s_1kHz", |b| {
         b.iter(|| estimate_varying(&ankle, &pv).expect("estimate"))
     });
+    let walking = VaryingRequest {
+        event: Some("heel_strike".into()),
+        ..VaryingRequest::default()
+    }
+    .check()
+    .expect("valid settings");
+    for (name, perturbation) in [
+        (
+            "walking_pulses_400_strides_1kHz",
+            WalkingExperiment::pulses(),
+        ),
+        (
+            "walking_ensemble_400_strides_1kHz",
+            WalkingExperiment::continuous(),
+        ),
+    ] {
+        let walk = simulate_walking(
+            &WalkingAnkle::default(),
+            &WalkingExperiment {
+                strides: 400,
+                rate_hz: 1000.0,
+                perturbation,
+                ..WalkingExperiment::default()
+            },
+            1,
+        )
+        .expect("walk");
+        group.bench_function(name, |b| {
+            b.iter(|| estimate_varying(&walk, &walking).expect("estimate"))
+        });
+    }
     group.finish();
 }
 

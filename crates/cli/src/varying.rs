@@ -63,13 +63,15 @@ pub fn varying_text(e: &VaryingEstimate, paths: &[PathBuf]) -> CliResult {
     }
     if let Some(g) = &e.gait {
         println!(
-            "strides: {} of {} used (median {} s, {} to {} s); baseline: {}",
+            "strides: {} of {} used (median {} s, {} to {} s); baseline: {}; verdicts against walking tolerances K {} %, B {} %",
             g.strides_used,
             g.strides_found,
             significant(g.stride_s[0], 3),
             significant(g.stride_s[1], 3),
             significant(g.stride_s[2], 3),
-            g.baseline
+            g.baseline,
+            significant(100.0 * g.tolerances[0], 2),
+            significant(100.0 * g.tolerances[1], 2)
         );
         for f in &g.flawed {
             println!(

@@ -104,7 +104,7 @@ pub const VAF_FLOOR_PERCENT: f64 = 50.0;
 /// K 10 %, B 25 %, M 25 %. A matrix is trusted only when twice its standard
 /// error stays within it; `limpid calibrate` measures how often a trusted
 /// matrix is nevertheless further from the truth.
-pub fn tolerance(kind: MatrixKind) -> f64 {
+pub const fn tolerance(kind: MatrixKind) -> f64 {
     match kind {
         MatrixKind::Stiffness => 0.10,
         MatrixKind::Damping | MatrixKind::Inertia => 0.25,
@@ -148,6 +148,26 @@ pub fn matrix_verdict(
     identified: bool,
     positive_definite: bool,
 ) -> MatrixVerdict {
+    matrix_verdict_within(
+        tolerance(kind),
+        value,
+        se,
+        fit_ok,
+        identified,
+        positive_definite,
+    )
+}
+
+/// [`matrix_verdict`] against a tolerance of its own (relative): walking
+/// judges its points against wider ones than the bench.
+pub fn matrix_verdict_within(
+    tolerance: f64,
+    value: &crate::Matrix,
+    se: &crate::Matrix,
+    fit_ok: bool,
+    identified: bool,
+    positive_definite: bool,
+) -> MatrixVerdict {
     let relative_se = se.norm() / value.norm();
     if !fit_ok {
         MatrixVerdict::PoorFit
@@ -155,7 +175,7 @@ pub fn matrix_verdict(
         MatrixVerdict::NotIdentifiable
     } else if !positive_definite {
         MatrixVerdict::NotPassive
-    } else if relative_se.is_nan() || 2.0 * relative_se > tolerance(kind) {
+    } else if relative_se.is_nan() || 2.0 * relative_se > tolerance {
         MatrixVerdict::Imprecise
     } else {
         MatrixVerdict::Trusted

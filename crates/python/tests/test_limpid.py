@@ -495,3 +495,33 @@ def test_reflex_design_writes_a_prbs_its_check_accepts():
         limpid.design("demo:S1", 30.0, limits_from="ankle-prbs", method="reflex")
     with pytest.raises(ValueError, match="method"):
         limpid.design("demo:S1", 30.0, limits_from="artemiadis-3d", method="planar")
+
+
+def test_walking_from_the_virtual_lab_to_the_figure(tmp_path):
+    # issue 61: a walk with pulses, its strides, and the figure against gait phase
+    import subprocess
+    cli = os.environ.get("LIMPID_CLI")
+    if not cli:
+        pytest.skip("LIMPID_CLI is not set (scripts/test.sh sets it)")
+    proto = tmp_path / "walk.toml"
+    subprocess.run([cli, "protocol", "new", "--preset", "walking-pulses", "-o", str(proto)], check=True)
+    text = proto.read_text().replace("strides = 300", "strides = 90").replace("missed_events = 0.0", "missed_events = 0.05")
+    proto.write_text(text)
+    subprocess.run([cli, "simulate", str(proto), "-o", str(tmp_path / "walk.csv"), "--seed", "2"], check=True,
+                   capture_output=True)
+    est = limpid.estimate_varying(str(tmp_path / "walk.csv"), event="heel_strike")
+    d = est.to_dict() if hasattr(est, "to_dict") else est
+    assert d["method"] == "pulses" and "phase" in d["schedule"]["name"]
+    assert all(0.0 <= v < 1.0 for v in d["schedule"]["values"])
+    assert any(f["kind"] == "missed" for f in d["gait"]["flawed"])
+    truth = json.loads((tmp_path / "walk.truth.json").read_text())
+    ks = {round(p["sigma"], 2): p["stiffness"][0][0] for p in truth["points"]}
+    mid = [p for p in d["points"] if p["identifiable"] and 0.2 <= p["sigma"] <= 0.45]
+    assert mid, "stance points identifiable"
+    for p in mid:
+        k = p["stiffness"][0][0]
+        assert abs(k - ks[round(p["sigma"], 2)]) <= 0.25 * ks[round(p["sigma"], 2)], (p["sigma"], k)
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    fig = limpid.plot.varying(est)
+    assert len(fig.axes) == 4 and "gait phase" in fig.axes[0].get_xlabel()

@@ -363,3 +363,59 @@ pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool),
     let detected = est.reflex.as_ref().is_some_and(|r| r.detected);
     Ok((o, with_reflex, detected))
 }
+
+/// A walking ankle drawn at random (issue 61): stance stiffness and damping
+/// profiles scaled by 0.6-1.5, inertia 0.02-0.05 kg m², 80-300 strides of
+/// 0.95-1.3 s at a speed changing by up to 30 %, pulses on a third of the
+/// strides or a perturbation on every stride (half each), sensor noise,
+/// stride-to-stride variability and the servo varied, up to 3 % of the heel
+/// strikes missed or doubled. Only the stance points (phase 0.05-0.55, where
+/// the designs excite the ankle) are judged.
+pub(super) fn walking(seed: u64) -> std::result::Result<Outcome, String> {
+    use limpid_ident::varying::{estimate_varying, VaryingRequest};
+    use limpid_lab::varying::{simulate_walking, WalkingAnkle, WalkingExperiment};
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut ankle = WalkingAnkle::default();
+    let (ks, bs) = (uniform(&mut rng, 0.6, 1.5), uniform(&mut rng, 0.6, 1.5));
+    ankle.stiffness.iter_mut().for_each(|p| p[1] *= ks);
+    ankle.damping.iter_mut().for_each(|p| p[1] *= bs);
+    ankle.inertia = uniform(&mut rng, 0.02, 0.05);
+    ankle.impedance_scale_sd = uniform(&mut rng, 0.0, 0.08);
+    let spread = uniform(&mut rng, 0.5, 1.5);
+    let base = WalkingExperiment::default();
+    let experiment = WalkingExperiment {
+        strides: rng.random_range(80..=300),
+        stride_s: uniform(&mut rng, 0.95, 1.3),
+        speed_change: uniform(&mut rng, 0.0, 0.3),
+        rate_hz: if rng.random::<bool>() { 500.0 } else { 1000.0 },
+        servo_hz: uniform(&mut rng, 20.0, 50.0),
+        perturbation: if rng.random::<bool>() {
+            WalkingExperiment::pulses()
+        } else {
+            WalkingExperiment::continuous()
+        },
+        variability: base.variability.map(|v| v * spread),
+        torque_noise_nm: uniform(&mut rng, 0.1, 0.5),
+        coloured_noise_nm: uniform(&mut rng, 0.1, 0.5),
+        drift_nm: uniform(&mut rng, 0.0, 2.0),
+        missed_events: uniform(&mut rng, 0.0, 0.03),
+        double_events: uniform(&mut rng, 0.0, 0.03),
+        ..base
+    };
+    let rec = simulate_walking(&ankle, &experiment, seed).map_err(|e| e.to_string())?;
+    let params = VaryingRequest {
+        event: Some("heel_strike".into()),
+        ..VaryingRequest::default()
+    }
+    .check()
+    .map_err(|e| e.to_string())?;
+    let mut est = estimate_varying(&rec, &params).map_err(|e| e.to_string())?;
+    est.points.retain(|p| (0.05..=0.55).contains(&p.sigma));
+    let mut o = Outcome::default();
+    let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
+    add_varying(&mut o, &est, |phase| {
+        let [k, b] = ankle.at(phase);
+        (one(k), one(b))
+    });
+    Ok(o)
+}

@@ -32,6 +32,7 @@ mod subjects;
 mod sweeps;
 use methods::{
     centre_out, cocontraction, ensemble, planar, planar_session, reflex, scheduled, stochastic,
+    walking,
 };
 use subjects::{planar_subject, random_matrix2, random_matrix3, sensors, uniform, PLANAR_NOISE};
 use sweeps::{sweep, sweep_session, SweepOutcome};
@@ -83,6 +84,17 @@ fn summarise(
     outcomes: Vec<std::result::Result<Outcome, String>>,
     seconds: f64,
 ) -> MethodCalibration {
+    summarise_within(method, outcomes, seconds, None)
+}
+
+/// [`summarise`] judging "trusted beyond tolerance" against the method's own
+/// tolerances (K, B), when it has them (walking).
+fn summarise_within(
+    method: &str,
+    outcomes: Vec<std::result::Result<Outcome, String>>,
+    seconds: f64,
+    tolerances: Option<[f64; 2]>,
+) -> MethodCalibration {
     let recordings = outcomes.len();
     let mut refused = 0;
     let mut first_refusal = None;
@@ -107,7 +119,7 @@ fn summarise(
         .map(|(k, kind)| {
             let z = &all.z[k];
             let m = &all.matrices[k];
-            let tol = tolerance(*kind);
+            let tol = tolerances.map_or_else(|| tolerance(*kind), |t| t[k]);
             let share = |num: usize, den: usize| (den > 0).then(|| 100.0 * num as f64 / den as f64);
             let trusted = m.iter().filter(|(_, t)| *t).count();
             let within = m.iter().filter(|(e, _)| *e <= tol).count();
@@ -158,7 +170,7 @@ pub(crate) fn cocontraction_subject(seed: u64) -> CocontractionSubject {
 }
 
 /// Methods of the study (each `recordings` virtual recordings).
-pub const METHODS: usize = 9;
+pub const METHODS: usize = 10;
 
 /// Sets of window sweeps: seed 003's session, and the varied subjects.
 pub const SWEEP_SETS: usize = 2;
@@ -176,9 +188,10 @@ pub fn calibrate(
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Calibration> {
-    let run = |name: &str,
-               f: &(dyn Fn(u64) -> std::result::Result<Outcome, String> + Sync),
-               salt: u64| {
+    let run_within = |name: &str,
+                      f: &(dyn Fn(u64) -> std::result::Result<Outcome, String> + Sync),
+                      salt: u64,
+                      tolerances: Option<[f64; 2]>| {
         let started = std::time::Instant::now();
         let outcomes: Vec<_> = (0..recordings as u64)
             .into_par_iter()
@@ -190,8 +203,11 @@ pub fn calibrate(
                 o
             })
             .collect();
-        summarise(name, outcomes, started.elapsed().as_secs_f64())
+        summarise_within(name, outcomes, started.elapsed().as_secs_f64(), tolerances)
     };
+    let run = |name: &str,
+               f: &(dyn Fn(u64) -> std::result::Result<Outcome, String> + Sync),
+               salt: u64| run_within(name, f, salt, None);
     let methods = vec![
         run(
             "centre-out cubic (Artemiadis et al. 2010)",
@@ -228,6 +244,15 @@ pub fn calibrate(
             "time-varying ensemble, joint and planar (per instant)",
             &ensemble,
             9,
+        ),
+        run_within(
+            "walking ankle, pulses or continuous perturbation (per stance gait-phase point)",
+            &walking,
+            10,
+            {
+                let t = limpid_ident::varying::gait::WALKING_TOLERANCES;
+                Some([t[0], t[1]])
+            },
         ),
     ];
     let mut methods = methods;

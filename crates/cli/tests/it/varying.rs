@@ -284,3 +284,172 @@ fn extreme_windows_and_rates_are_refused_or_bounded() {
     ]);
     assert_eq!(v["kind"], "varying");
 }
+
+/// Walking (issue 61): the CLI end to end on a simulated walk (its result
+/// validates against the schema, the report draws the gait figures), and
+/// each class of bad walking input refused in one line naming what is wrong.
+#[test]
+fn walking_estimate_reports_flawed_strides_and_refuses_bad_events() {
+    let dir = tempfile::tempdir().unwrap();
+    // the keys go before the [perturbation] table: set them in place
+    let protocol = preset(dir.path(), "walking-pulses");
+    let text = std::fs::read_to_string(&protocol)
+        .unwrap()
+        .replace("strides = 300", "strides = 80")
+        .replace("missed_events = 0.0", "missed_events = 0.05");
+    std::fs::write(&protocol, text).unwrap();
+    let rec = dir.path().join("walk.csv");
+    let out = limpid(&[
+        "simulate",
+        protocol.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+        "--seed",
+        "3",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let html = dir.path().join("w.html");
+    let r = rec.to_str().unwrap();
+    let v = json(&[
+        "estimate",
+        "varying",
+        r,
+        "--event",
+        "heel_strike",
+        "--json",
+        "--report",
+        html.to_str().unwrap(),
+    ]);
+    validate(&v);
+    assert_eq!(v["method"], "pulses");
+    assert_eq!(v["schedule"]["unit"], "fraction of the stride");
+    let flawed = v["gait"]["flawed"].as_array().unwrap();
+    assert!(flawed.iter().any(|f| f["kind"] == "missed"), "{flawed:?}");
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("stance | swing") && page.contains("Strides with flawed events"));
+
+    // the walking file with one bad cell at a time
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let write = |name: &str, column: &str, value: &str| {
+        let c = header.iter().position(|h| *h == column).unwrap();
+        let body: String = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| {
+                if i == 101 {
+                    let mut cells: Vec<&str> = l.split(',').collect();
+                    cells[c] = value;
+                    format!("{}\n", cells.join(","))
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect();
+        let p = dir.path().join(name);
+        std::fs::write(&p, body).unwrap();
+        p
+    };
+    let refused = |args: &[&str], needles: &[&str]| {
+        let out = limpid(args);
+        assert_ne!(out.code, 0, "{args:?} was accepted");
+        assert!(
+            !out.stderr.contains("panicked") && out.stderr.trim().lines().count() == 1,
+            "{}",
+            out.stderr
+        );
+        for n in needles {
+            assert!(out.stderr.contains(n), "{args:?}: {} lacks {n}", out.stderr);
+        }
+    };
+    let two = write("two.csv", "heel_strike", "2");
+    refused(
+        &[
+            "estimate",
+            "varying",
+            two.to_str().unwrap(),
+            "--event",
+            "heel_strike",
+        ],
+        &["row 102", "heel_strike", "0 or 1"],
+    );
+    let half = write("half.csv", "perturbation", "0.5");
+    refused(
+        &[
+            "estimate",
+            "varying",
+            half.to_str().unwrap(),
+            "--event",
+            "heel_strike",
+        ],
+        &["row 102", "perturbation"],
+    );
+    refused(
+        &["estimate", "varying", r, "--event", "toe_off"],
+        &["toe_off"],
+    );
+    refused(
+        &["estimate", "varying", r, "--event", "tau1>abc"],
+        &["--event", "abc"],
+    );
+    refused(
+        &["estimate", "varying", r, "--event", "tau1"],
+        &["--event", "tau1"],
+    );
+    refused(
+        &["estimate", "varying", r, "--event", "t<-1"],
+        &["event(s)"],
+    );
+    refused(
+        &["estimate", "varying", r, "--trigger", "perturbation"],
+        &["--trigger", "--event"],
+    );
+    refused(
+        &[
+            "estimate",
+            "varying",
+            r,
+            "--event",
+            "heel_strike",
+            "--bin",
+            "0.7",
+        ],
+        &["--bin"],
+    );
+    refused(
+        &[
+            "estimate",
+            "varying",
+            r,
+            "--event",
+            "heel_strike",
+            "--refractory",
+            "1e307",
+        ],
+        &["--refractory"],
+    );
+    refused(
+        &[
+            "estimate",
+            "varying",
+            r,
+            "--event",
+            "heel_strike",
+            "--stance-end",
+            "1",
+        ],
+        &["--stance-end"],
+    );
+    refused(
+        &[
+            "estimate",
+            "varying",
+            r,
+            "--event",
+            "heel_strike",
+            "--schedule",
+            "sv",
+        ],
+        &["--schedule"],
+    );
+}

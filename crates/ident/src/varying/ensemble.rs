@@ -250,6 +250,8 @@ pub(super) struct Layout {
     /// Share of each value added in quadrature to its standard error (see
     /// [`super::gait::WALKING_MODEL_FLOOR`]); 0 for repetitions of a task.
     pub model_floor: f64,
+    /// The relative tolerances (K, B, M) the points' verdicts are judged against.
+    pub tolerances: [f64; 3],
 }
 
 impl Layout {
@@ -304,6 +306,7 @@ impl Layout {
             sigma_per_sample: sample_s,
             sample_s,
             model_floor: 0.0,
+            tolerances: super::BENCH_TOLERANCES,
         })
     }
 
@@ -336,7 +339,7 @@ pub(super) fn fit_grid(
         .par_iter()
         .map(|&c| fit_window(e, &pre, c - half..c + half + 1, min_repetitions, layout))
         .collect();
-    judge_with_smoothing_bias(&mut fits, layout.width(), layout.step);
+    judge_with_smoothing_bias(&mut fits, layout);
     let sum = |f: fn(&GridFit) -> f64| {
         fits.iter()
             .filter(|g| g.point.identifiable)
@@ -368,7 +371,8 @@ pub(super) fn fit_grid(
 /// taken again with `sqrt(SE² + bias²)`, the curvature from the second
 /// difference of the neighbouring points (`step` samples apart), so a point on a
 /// sharp change is not trusted beyond its tolerance.
-fn judge_with_smoothing_bias(fits: &mut [GridFit], width: usize, step: usize) {
+fn judge_with_smoothing_bias(fits: &mut [GridFit], layout: &Layout) {
+    let (width, step) = (layout.width(), layout.step);
     let factor = (width as f64 * width as f64 - 1.0) / 24.0 / (step as f64 * step as f64);
     let widened: Vec<Option<PointVerdicts>> = (0..fits.len())
         .map(|g| {
@@ -398,7 +402,7 @@ fn judge_with_smoothing_bias(fits: &mut [GridFit], width: usize, step: usize) {
             let ks = widen(|p| (&p.stiffness, &p.stiffness_se))?;
             let bs = widen(|p| (&p.damping, &p.damping_se))?;
             let ms = widen(|p| (&p.inertia, &p.inertia_se))?;
-            Some(PointVerdicts::of(
+            Some(PointVerdicts::within(
                 [
                     b.stiffness.as_ref()?,
                     &ks,
@@ -408,6 +412,7 @@ fn judge_with_smoothing_bias(fits: &mut [GridFit], width: usize, step: usize) {
                     &ms,
                 ],
                 b.vaf,
+                layout.tolerances,
             ))
         })
         .collect();
@@ -490,7 +495,7 @@ fn fit_window(
     let [ms, bs, ks] =
         [(&m, ms), (&b, bs), (&k, ks)].map(|(v, e)| super::floored(v, e, layout.model_floor));
     let vaf = (tss > 0.0).then(|| 100.0 * (1.0 - full_rss / tss));
-    let verdicts = PointVerdicts::of([&k, &ks, &b, &bs, &m, &ms], vaf);
+    let verdicts = PointVerdicts::within([&k, &ks, &b, &bs, &m, &ms], vaf, layout.tolerances);
     GridFit {
         point: VaryingPoint {
             sigma,

@@ -23,7 +23,7 @@ mod settings;
 pub use settings::{VaryingParams, VaryingRequest};
 
 use limpid_core::criteria::{
-    matrix_criteria, matrix_verdict, MatrixKind, MatrixVerdict, VAF_FLOOR_PERCENT,
+    matrix_criteria, matrix_verdict_within, tolerance, MatrixKind, MatrixVerdict, VAF_FLOOR_PERCENT,
 };
 use limpid_core::{Error, Matrix, Recording, Result};
 use schemars::JsonSchema;
@@ -129,22 +129,39 @@ impl PointVerdicts {
     /// about one trusted point in a few hundred came out beyond its tolerance
     /// by chance (`limpid calibrate`), so a point is judged at
     /// [`POINT_SE_FACTOR`] x 2 SE.
-    pub(crate) fn of([k, ks, b, bs, m, ms]: [&Matrix; 6], vaf: Option<f64>) -> Self {
-        let one = |kind, v: &Matrix, se: &Matrix| {
+    pub(crate) fn of(matrices: [&Matrix; 6], vaf: Option<f64>) -> Self {
+        Self::within(matrices, vaf, BENCH_TOLERANCES)
+    }
+
+    /// [`PointVerdicts::of`] against tolerances of their own (K, B, M;
+    /// relative): walking's are [`gait::WALKING_TOLERANCES`].
+    pub(crate) fn within(
+        [k, ks, b, bs, m, ms]: [&Matrix; 6],
+        vaf: Option<f64>,
+        tolerances: [f64; 3],
+    ) -> Self {
+        let one = |tol, v: &Matrix, se: &Matrix| {
             let se = &Matrix(se.0.map(|x| x * POINT_SE_FACTOR));
             let d = v.nrows();
             let identified = (0..d).all(|i| v[(i, i)].abs() >= 2.0 * se[(i, i)]);
             let passive = matrix_criteria(v).positive_definite;
             let fit_ok = vaf.is_some_and(|x| x >= VAF_FLOOR_PERCENT);
-            matrix_verdict(kind, v, se, fit_ok, identified, passive)
+            matrix_verdict_within(tol, v, se, fit_ok, identified, passive)
         };
         PointVerdicts {
-            stiffness: one(MatrixKind::Stiffness, k, ks),
-            damping: one(MatrixKind::Damping, b, bs),
-            inertia: one(MatrixKind::Inertia, m, ms),
+            stiffness: one(tolerances[0], k, ks),
+            damping: one(tolerances[1], b, bs),
+            inertia: one(tolerances[2], m, ms),
         }
     }
 }
+
+/// Every limpid matrix's tolerances (K, B, M): what "trusted" promises.
+pub const BENCH_TOLERANCES: [f64; 3] = [
+    tolerance(MatrixKind::Stiffness),
+    tolerance(MatrixKind::Damping),
+    tolerance(MatrixKind::Inertia),
+];
 
 /// Fit quality over the whole record.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]

@@ -18,6 +18,9 @@ axes given (``ax=``/``axes=``) or into a new figure, and returns the
   trusted windows marked (Lakatos et al. 2011 §IV).
 - :func:`reflex` — intrinsic and reflex impulse responses and the reflex
   pathway's static nonlinearity (parallel cascade).
+- :func:`varying` — K, B and I against time, an operating point or gait
+  phase with ±2 SE bands; walking adds the stance | swing boundary and the
+  perturbations (or strides) behind each point.
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ import numpy as np
 
 from . import _display
 
-__all__ = ["ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex", "design"]
+__all__ = ["ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex", "design", "varying"]
 
 
 def _plt() -> Any:
@@ -377,6 +380,60 @@ def reflex(result: Any, axes: Any = None) -> Any:
     a[0, 2].set_xlabel(f"velocity ({pu}/s)")
     a[0, 2].set_ylabel(f"reflex torque at DC ({tu})")
     a[0, 2].set_title(f"Nonlinearity: {r.get('polarity', '?')} half-wave, gain {r['gain']:.3g}", fontsize="medium")
+    fig.tight_layout()
+    return fig
+
+
+def varying(result: Any, axes: Any = None) -> Any:
+    """Impedance that varies: the diagonal of K, B and I (M) against the schedule with
+    ±2 SE bands; points not identifiable are gaps. Walking results (``gait``) add
+    the stance | swing boundary and a fourth panel with the perturbations (pulses) or
+    strides (ensemble) behind each point."""
+    d = _data(result)
+    _kind(d, "varying")
+    gait = d.get("gait")
+    panels = 4 if gait else 3
+    fig, a = _grid(axes, 1, panels, figsize=(3.6 * panels, 3.2))
+    angular = all(c == "theta" or c.startswith("q") for c in d["coordinates"])
+    units = ("N m/rad", "N m s/rad", "kg m²") if angular else ("N/m", "N s/m", "kg")
+    sched = d["schedule"]
+    xlabel = f"{sched['name']} ({sched['unit']})" if sched.get("unit") else sched["name"]
+    if sched.get("unit") == "fraction of the stride":
+        # "gait phase (from heel_strike) (fraction of the stride)" does not fit under a panel
+        xlabel = "gait phase"
+        fig.suptitle(f"{sched['name']}: 0 at the event, 1 at the next", fontsize="medium")
+    x = np.asarray([p["sigma"] for p in d["points"]], dtype=float)
+    n = len(d["coordinates"])
+    for col, (key, symbol, word) in enumerate([("stiffness", "K", "Stiffness"), ("damping", "B", "Damping"),
+                                               ("inertia", "I" if angular else "M", "Inertia")]):
+        ax = a[0, col]
+        for i in range(n):
+            def el(p: Dict[str, Any], k: str) -> float:
+                m = p.get(k)
+                return float(m[i][i]) if (p["identifiable"] and m is not None) else math.nan
+            v = np.asarray([el(p, key) for p in d["points"]])
+            se = np.asarray([el(p, key + "_se") for p in d["points"]])
+            label = symbol if n == 1 else f"{symbol}{i + 1}{i + 1}"
+            line = ax.plot(x, v, marker="o", markersize=2.5, linewidth=1.2, label=label)[0]
+            ax.fill_between(x, v - 2 * se, v + 2 * se, color=line.get_color(), alpha=0.2, linewidth=0)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(f"{symbol} ({units[col]})")
+        ax.set_title(f"{word} (±2 SE shaded)", fontsize="medium")
+        if n > 1:
+            ax.legend(fontsize="small")
+    if gait:
+        ax = a[0, 3]
+        ax.bar(x, [p["support"] for p in d["points"]], width=0.8 * (x[1] - x[0]) if len(x) > 1 else 0.02,
+               color="#999999")
+        ax.set_xlabel(xlabel)
+        what = "perturbations" if d.get("method") == "pulses" else "strides"
+        ax.set_ylabel(f"{what} behind each point")
+        ax.set_title(f"{gait['strides_used']} of {gait['strides_found']} strides used", fontsize="medium")
+        if sched.get("unit") == "fraction of the stride":
+            for ax in a[0, :]:
+                ax.axvline(gait["stance_end"], color="#777777", linestyle=":", linewidth=1)
+                ax.text(gait["stance_end"], 1.0, " swing", transform=ax.get_xaxis_transform(),
+                        va="top", fontsize="x-small", color="#555555")
     fig.tight_layout()
     return fig
 

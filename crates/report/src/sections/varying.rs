@@ -109,7 +109,7 @@ fn stance_boundary(v: &VaryingEstimate, series: &[Series]) -> Option<Series> {
 fn support_figure(v: &VaryingEstimate) -> Option<Figure> {
     v.gait.as_ref()?;
     let what = if v.method == VaryingMethod::Pulses {
-        "Perturbations in each onset bin"
+        "Perturbations behind each point"
     } else {
         "Strides behind each point"
     };
@@ -229,11 +229,13 @@ fn verdict(v: &VaryingEstimate) -> String {
     };
     let method = match &v.gait {
         Some(g) => format!(
-            "{method} ({} of {} strides used, median {} s; {})",
+            "{method} ({} of {} strides used, median {} s; {}; verdicts against walking tolerances K {} %, B {} %)",
             g.strides_used,
             g.strides_found,
             significant(g.stride_s[0], 3),
-            g.baseline
+            g.baseline,
+            significant(100.0 * g.tolerances[0], 2),
+            significant(100.0 * g.tolerances[1], 2)
         ),
         None => method,
     };

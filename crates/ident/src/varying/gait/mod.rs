@@ -50,6 +50,15 @@ const FILTER_ORDER: usize = 4;
 /// `limpid calibrate` for the coverage with it.
 pub const WALKING_MODEL_FLOOR: f64 = 0.05;
 
+/// The relative tolerances (K, B, I) a walking point's verdict is judged
+/// against: twice the bench's ([`super::BENCH_TOLERANCES`]). With the model
+/// floor a walking K can never come within 3 SE of 10 % (`limpid calibrate`:
+/// 0 of 1097 stance points trusted, median error 2.6 %), and walking is
+/// harder than the bench: a stride-to-stride varying baseline of up to
+/// 100 N m is subtracted. The outside walking examples are judged at the same
+/// 20 % and 40 %.
+pub const WALKING_TOLERANCES: [f64; 3] = [0.2, 0.4, 0.4];
+
 /// The walking estimators.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -84,6 +93,9 @@ pub struct GaitSummary {
     pub baseline: String,
     /// The gait phase where stance is taken to end (drawn in figures).
     pub stance_end: f64,
+    /// The relative tolerances (K, B, I) the points' verdicts are judged
+    /// against ([`WALKING_TOLERANCES`]).
+    pub tolerances: [f64; 3],
 }
 
 /// `estimate varying` with `--event`.
@@ -318,6 +330,7 @@ fn ensemble(
     let mut layout = Layout::new(&e, (params.window_s, step_s), sample_s, 0)?;
     layout.sigma_per_sample = if phase { 1.0 / p as f64 } else { 1.0 / fs };
     layout.model_floor = WALKING_MODEL_FLOOR;
+    layout.tolerances = WALKING_TOLERANCES;
     let (points, fit) = fit_grid(&e, &layout, params.min_repetitions, warnings);
     let mut schedule = axis(phase, params.event.as_deref().unwrap_or_default());
     schedule.values = points.iter().map(|p| p.sigma).collect();
@@ -362,6 +375,7 @@ fn ensemble(
             perturbations: None,
             baseline,
             stance_end: params.stance_end,
+            tolerances: WALKING_TOLERANCES,
         }),
         warnings: Vec::new(),
     })

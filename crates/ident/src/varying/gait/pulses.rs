@@ -41,7 +41,7 @@ use super::super::{
     matrix, scaled_condition, solve_scaled, PointVerdicts, VaryingEstimate, VaryingFit,
     VaryingMethod, VaryingParams, VaryingPoint,
 };
-use super::{axis, interp, GaitSummary, Strides, WALKING_MODEL_FLOOR};
+use super::{axis, interp, GaitSummary, Strides, WALKING_MODEL_FLOOR, WALKING_TOLERANCES};
 
 /// Fit window before the onset (s).
 const PRE_S: f64 = 0.05;
@@ -348,6 +348,7 @@ pub(super) fn estimate(
                 baseline_strides.len()
             ),
             stance_end: params.stance_end,
+            tolerances: WALKING_TOLERANCES,
         }),
         warnings: Vec::new(),
     })
@@ -570,7 +571,11 @@ fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) ->
         let bs = floored(&b, widen(d), WALKING_MODEL_FLOOR);
         let inertia_se = floored(&inertia, inertia_se.clone(), WALKING_MODEL_FLOOR);
         let vaf = (knot_tss[j] > 0.0).then(|| 100.0 * (1.0 - knot_rss[j] / knot_tss[j]));
-        let verdicts = PointVerdicts::of([&k, &ks, &b, &bs, &inertia, &inertia_se], vaf);
+        let verdicts = PointVerdicts::within(
+            [&k, &ks, &b, &bs, &inertia, &inertia_se],
+            vaf,
+            WALKING_TOLERANCES,
+        );
         rss += knot_rss[j];
         tss += knot_tss[j];
         points.push(VaryingPoint {
