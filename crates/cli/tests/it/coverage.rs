@@ -219,7 +219,7 @@ fn calibrate_measures_coverage_and_wrong_verdicts_of_every_method() {
     let r = json(&["calibrate", "--recordings", "12", "--seed", "7", "--json"]);
     assert_eq!(r["kind"], "calibration");
     let methods = r["methods"].as_array().unwrap();
-    assert_eq!(methods.len(), 9);
+    assert_eq!(methods.len(), limpid_app::calibrate::METHODS);
     for m in methods {
         assert_eq!(m["refused"], 0, "{}", m["method"]);
         for c in m["matrices"].as_array().unwrap() {

@@ -362,6 +362,32 @@ fn walking_estimate_reports_flawed_strides_and_refuses_bad_events() {
             assert!(out.stderr.contains(n), "{args:?}: {} lacks {n}", out.stderr);
         }
     };
+    // a detector chattering on every other sample: refused, not 80 000 flawed strides listed
+    let hs = header.iter().position(|h| *h == "heel_strike").unwrap();
+    let chatter: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 {
+                return format!("{l}\n");
+            }
+            let mut cells: Vec<String> = l.split(',').map(String::from).collect();
+            cells[hs] = (i % 2).to_string();
+            format!("{}\n", cells.join(","))
+        })
+        .collect();
+    let chattering = dir.path().join("chatter.csv");
+    std::fs::write(&chattering, chatter).unwrap();
+    refused(
+        &[
+            "estimate",
+            "varying",
+            chattering.to_str().unwrap(),
+            "--event",
+            "heel_strike",
+        ],
+        &["--event", "check the event column"],
+    );
     let two = write("two.csv", "heel_strike", "2");
     refused(
         &[

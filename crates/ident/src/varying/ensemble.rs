@@ -439,20 +439,8 @@ fn fit_window(
     let condition = scaled_condition(&cxx);
     let empty = |reason: String| GridFit {
         point: VaryingPoint {
-            sigma,
-            identifiable: false,
-            reason: Some(reason),
-            stiffness: None,
-            stiffness_se: None,
-            damping: None,
-            damping_se: None,
-            inertia: None,
-            inertia_se: None,
-            reflex: None,
-            vaf: None,
-            support: reps as f64,
             condition_number: condition.is_finite().then_some(condition),
-            verdicts: None,
+            ..VaryingPoint::unidentified(sigma, reason, reps as f64)
         },
         rss: 0.0,
         tss: 0.0,

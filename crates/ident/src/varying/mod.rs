@@ -108,6 +108,28 @@ pub struct VaryingPoint {
     pub verdicts: Option<PointVerdicts>,
 }
 
+impl VaryingPoint {
+    /// A point the data give no number at, and why.
+    pub(crate) fn unidentified(sigma: f64, reason: String, support: f64) -> Self {
+        VaryingPoint {
+            sigma,
+            identifiable: false,
+            reason: Some(reason),
+            stiffness: None,
+            stiffness_se: None,
+            damping: None,
+            damping_se: None,
+            inertia: None,
+            inertia_se: None,
+            reflex: None,
+            vaf: None,
+            support,
+            condition_number: None,
+            verdicts: None,
+        }
+    }
+}
+
 /// How much wider than a single estimate's a point's standard error is taken
 /// for its verdict (see [`PointVerdicts`]): 2 x 1.5 = 3 SE within the tolerance.
 pub const POINT_SE_FACTOR: f64 = 1.5;

@@ -219,6 +219,19 @@ pub fn strides(
         f.index = f.stride - 1;
     }
     flaws.sort_by_key(|f| f.start_row);
+    // a detector this wrong is not walking data with a few flawed events
+    if flaws.len() > 20 && 2 * flaws.len() > raw.len() {
+        return Err(Error::invalid(
+            "event",
+            format!(
+                "{}: {} of the {} events in column {column} are doubled, missed or outliers (the first at row {}): check the event column or threshold",
+                rec.path().display(),
+                flaws.len(),
+                raw.len(),
+                flaws[0].start_row
+            ),
+        ));
+    }
     if kept.len() < 3 {
         return Err(Error::invalid(
             "event",

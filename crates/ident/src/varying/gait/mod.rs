@@ -98,6 +98,25 @@ pub struct GaitSummary {
     pub tolerances: [f64; 3],
 }
 
+impl GaitSummary {
+    /// The summary of `used` strides of `strides` (stride durations and, for
+    /// pulses, the trigger are filled in by the caller).
+    fn new(params: &VaryingParams, strides: &Strides, used: usize, baseline: String) -> Self {
+        GaitSummary {
+            event: params.event.clone().unwrap_or_default(),
+            strides_found: strides.found,
+            strides_used: used,
+            stride_s: [0.0; 3],
+            flawed: strides.flaws.clone(),
+            trigger: None,
+            perturbations: None,
+            baseline,
+            stance_end: params.stance_end,
+            tolerances: WALKING_TOLERANCES,
+        }
+    }
+}
+
 /// `estimate varying` with `--event`.
 pub(super) fn estimate(
     rec: &Recording,
@@ -122,13 +141,19 @@ pub(super) fn estimate(
         .trigger
         .clone()
         .or_else(|| rec.has("perturbation").then(|| "perturbation".to_string()));
+    let mut warnings = Vec::new();
     let method = match (params.gait_method, &trigger) {
         (Some(m), _) => m,
         (None, Some(t)) if pulses::marks_some_strides(rec, t, &strides)? => GaitMethod::Pulses,
-        (None, _) => GaitMethod::Ensemble,
+        (None, Some(t)) => {
+            warnings.push(format!(
+                "the trigger column {t} marks no stride, or leaves fewer than 3 unmarked: perturbed minus unperturbed is impossible, the ensemble over every stride is used (it assumes a perturbation on every stride)"
+            ));
+            GaitMethod::Ensemble
+        }
+        (None, None) => GaitMethod::Ensemble,
     };
     let phase = params.schedule != TIME_SINCE_EVENT;
-    let mut warnings = Vec::new();
     let fs = rec.sample_rate();
     let lp = LowPass::butterworth(FILTER_ORDER, cutoff, fs)?;
     let mut est = match method {
@@ -285,6 +310,13 @@ fn ensemble(
     } else {
         kept.iter().map(|r| r.len()).min().unwrap_or(0)
     };
+    if !phase && strides.median_len() as f64 > 1.05 * p as f64 {
+        warnings.push(format!(
+            "strides differ in length (the shortest {} s, the median {} s): against time since the event, away from the event the strides are not at the same point of the gait and the mean subtracted is not their baseline; gait phase (the default) aligns them",
+            limpid_core::significant(p as f64 / rec.sample_rate(), 3),
+            limpid_core::significant(strides.median_len() as f64 / rec.sample_rate(), 3)
+        ));
+    }
     let m = 4 * d;
     let raw: Vec<Vec<f64>> = kept
         .iter()
@@ -365,18 +397,7 @@ fn ensemble(
         points,
         fit,
         reflex: None,
-        gait: Some(GaitSummary {
-            event: params.event.clone().unwrap_or_default(),
-            strides_found: strides.found,
-            strides_used: reps,
-            stride_s: [0.0; 3],
-            flawed: strides.flaws.clone(),
-            trigger: None,
-            perturbations: None,
-            baseline,
-            stance_end: params.stance_end,
-            tolerances: WALKING_TOLERANCES,
-        }),
+        gait: Some(GaitSummary::new(params, strides, reps, baseline)),
         warnings: Vec::new(),
     })
 }

@@ -335,20 +335,18 @@ pub(super) fn estimate(
         },
         reflex: None,
         gait: Some(GaitSummary {
-            event: params.event.clone().unwrap_or_default(),
-            strides_found: strides.found,
-            strides_used: kept.len(),
-            stride_s: [0.0; 3],
-            flawed: strides.flaws.clone(),
             trigger: Some(trigger.to_string()),
             perturbations: Some(pulses.len()),
-            baseline: format!(
-                "each perturbed stride minus the mean of the {} unperturbed strides nearest it ({} unperturbed in all), phase-normalised and stretched to its duration",
-                neighbours.min(baseline_strides.len()),
-                baseline_strides.len()
-            ),
-            stance_end: params.stance_end,
-            tolerances: WALKING_TOLERANCES,
+            ..GaitSummary::new(
+                params,
+                strides,
+                kept.len(),
+                format!(
+                    "each perturbed stride minus the mean of the {} unperturbed strides nearest it ({} unperturbed in all), phase-normalised and stretched to its duration",
+                    neighbours.min(baseline_strides.len()),
+                    baseline_strides.len()
+                ),
+            )
         }),
         warnings: Vec::new(),
     })
@@ -440,22 +438,8 @@ fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) ->
     let grid: Vec<usize> = (0..nk)
         .filter(|&j| knots[j] >= -1e-9 && knots[j] < top - 1e-9)
         .collect();
-    let blank = |j: usize, reason: String| VaryingPoint {
-        sigma: knots[j],
-        identifiable: false,
-        reason: Some(reason),
-        stiffness: None,
-        stiffness_se: None,
-        damping: None,
-        damping_se: None,
-        inertia: None,
-        inertia_se: None,
-        reflex: None,
-        vaf: None,
-        support: support[j] as f64,
-        condition_number: None,
-        verdicts: None,
-    };
+    let blank =
+        |j: usize, reason: String| VaryingPoint::unidentified(knots[j], reason, support[j] as f64);
     let reason_few = |j: usize| {
         if support[j] == 0 {
             "no perturbation moved the joint here".to_string()
