@@ -521,7 +521,37 @@ def test_walking_from_the_virtual_lab_to_the_figure(tmp_path):
     for p in mid:
         k = p["stiffness"][0][0]
         assert abs(k - ks[round(p["sigma"], 2)]) <= 0.25 * ks[round(p["sigma"], 2)], (p["sigma"], k)
+    # the display shows K, B and I with their units, the strides and the flawed ones
+    html = est._repr_html_()
+    for needle in ("K (N m/rad)", "B (N m s/rad)", "I (kg m²)", "Strides with flawed events", "walking tolerances"):
+        assert needle in html, needle
+    assert "strides used" in repr(est)
+    pd = pytest.importorskip("pandas")
+    flawed = est.to_pandas("flawed")
+    assert isinstance(flawed, pd.DataFrame) and (flawed["kind"] == "missed").any()
+    assert {"stride", "index", "start_s", "start_row"} <= set(flawed.columns)
+    xr = pytest.importorskip("xarray")
+    ds = est.to_xarray()
+    assert isinstance(ds, xr.Dataset) and ds["stiffness"].dims == ("sigma", "output", "coordinate")
+    assert ds["stiffness"].attrs["units"] == "N m/rad" and ds["sigma"].attrs["units"] == "fraction of the stride"
+    ok = ds["identifiable"].values
+    assert np.isnan(ds["stiffness"].values[~ok]).all() and np.isfinite(ds["stiffness"].values[ok]).all()
     matplotlib = pytest.importorskip("matplotlib")
     matplotlib.use("Agg")
     fig = limpid.plot.varying(est)
     assert len(fig.axes) == 4 and "gait phase" in fig.axes[0].get_xlabel()
+
+
+def test_a_long_varying_table_is_shortened_and_an_operating_point_has_no_empty_unit(tmp_path):
+    # issue 63, item 3: a 100-row time-varying table is not shown whole; "sv ()" is not a header
+    points = [{"sigma": 0.01 * i, "identifiable": True, "support": 40.0,
+               "stiffness": [[100.0 + i]], "stiffness_se": [[2.0]], "damping": [[1.5]], "damping_se": [[0.1]],
+               "inertia": [[0.02]], "inertia_se": [[0.001]], "vaf": 90.0} for i in range(100)]
+    d = {"schema": 1, "kind": "varying", "method": "parameter_varying",
+         "schedule": {"name": "sv", "unit": "", "values": [p["sigma"] for p in points]},
+         "coordinates": ["q1"], "forces": ["tau1"], "sample_rate_hz": 1000.0, "cutoff_hz": 30.0,
+         "resolution": 0.1, "resolution_note": "", "points": points,
+         "fit": {"vaf": 90.0, "cross_validated_vaf": 89.0}, "warnings": []}
+    html = limpid.Result(d)._repr_html_()
+    assert "sv ()" not in html and "more rows" in html
+    assert html.count("<tr>") < 25

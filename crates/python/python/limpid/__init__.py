@@ -200,6 +200,7 @@ class Result:
         (stochastic, spectra): multiple and partial (spectra: also ordinary)
         coherence per frequency, output and input; ``table="psd"`` (spectra):
         the power spectral density per frequency and signal. ``table="rotation"`` (study): the ellipsoid rotations.
+        ``table="flawed"`` (walking): the strides left out or joined, by number, with start, row, duration and why.
         The values are the result's own floats; absent ones are NaN."""
         try:
             import importlib
@@ -210,21 +211,56 @@ class Result:
         return pd.DataFrame.from_records(_display.records(self._data, table))
 
     def to_xarray(self) -> Any:
-        """A stochastic result's Z(f) as an ``xarray.DataArray`` (complex,
-        dims ``frequency, output, displacement``; xarray must be installed)."""
-        if self._data.get("kind") != "stochastic":
-            raise ValueError(f"to_xarray is for stochastic results, this one is {self._data.get('kind')!r}")
+        """The result over its axis, with units (xarray must be installed).
+
+        Stochastic: Z(f) as an ``xarray.DataArray`` (complex, dims ``frequency,
+        output, displacement``). Varying (and walking): an ``xarray.Dataset``
+        over the schedule (``sigma``: time, the operating point or gait phase)
+        with ``stiffness``, ``damping``, ``inertia`` and their ``*_se`` (dims
+        ``sigma, output, coordinate``; NaN where a point is not identifiable),
+        ``identifiable`` and ``support``; every variable carries ``units``."""
+        kind = self._data.get("kind")
+        if kind not in ("stochastic", "varying"):
+            raise ValueError(f"to_xarray is for stochastic and varying results, this one is {kind!r}")
         try:
             import xarray as xr
         except ImportError:
             raise ImportError("Result.to_xarray needs xarray: pip install xarray") from None
-        z = np.asarray(self._data["impedance"], dtype=float)
         coords = self._data["coordinates"]
+        if kind == "varying":
+            return _varying_dataset(xr, self._data)
+        z = np.asarray(self._data["impedance"], dtype=float)
         return xr.DataArray(z[..., 0] + 1j * z[..., 1], dims=("frequency", "output", "displacement"),
                             coords={"frequency": self._data["frequencies"], "output": coords,
                                     "displacement": coords},
                             name="impedance", attrs={"units": "N/m, N/rad, N m/m or N m/rad by element",
                                                      "frequency_units": "Hz"})
+
+
+def _varying_dataset(xr: Any, d: Dict[str, Any]) -> Any:
+    """A varying result as an xarray Dataset over its schedule."""
+    coords = d["coordinates"]
+    n = len(coords)
+    points = d["points"]
+    sched = d["schedule"]
+    data: Dict[str, Any] = {}
+    for q in ("stiffness", "damping", "inertia"):
+        unit = _display._unit(q, coords[0], coords[0]) if n == 1 else "by element (see to_pandas)"
+        for name in (q, q + "_se"):
+            a = np.full((len(points), n, n), np.nan)
+            for k, p in enumerate(points):
+                if p["identifiable"] and p.get(name) is not None:
+                    a[k] = np.asarray(p[name], dtype=float)
+            data[name] = (("sigma", "output", "coordinate"), a, {"units": unit})
+    data["identifiable"] = (("sigma",), np.asarray([bool(p["identifiable"]) for p in points]))
+    data["support"] = (("sigma",), np.asarray([float(p["support"]) for p in points]),
+                       {"units": "perturbations" if d.get("method") == "pulses"
+                        else ("strides" if d.get("gait") else "repetitions or s")})
+    ds = xr.Dataset(data, coords={"sigma": ("sigma", [p["sigma"] for p in points],
+                                            {"long_name": sched["name"], "units": sched.get("unit", "")}),
+                                  "output": coords, "coordinate": coords},
+                    attrs={"method": d.get("method", ""), "resolution": d.get("resolution_note", "")})
+    return ds
 
 
 def _integer(name: str, value: Any, *, minimum: Optional[int] = None) -> int:

@@ -94,8 +94,13 @@ def records(d: Dict[str, Any], table: str = "parameters") -> List[Record]:
         if kind != "study":
             raise ValueError(f"table 'rotation' is for study results, this one is {kind!r}")
         return [dict(r) for r in d["rotation"]]
+    if table == "flawed":
+        if kind != "varying" or not d.get("gait"):
+            raise ValueError(f"table 'flawed' is for walking results (estimate_varying with event=), this one is {kind!r}")
+        return [dict(f) for f in d["gait"]["flawed"]]
     if table != "parameters":
-        raise ValueError(f"table: expected 'parameters', 'impedance', 'coherence', 'psd' or 'rotation', found {table!r}")
+        raise ValueError(
+            f"table: expected 'parameters', 'impedance', 'coherence', 'psd', 'rotation' or 'flawed', found {table!r}")
     if kind == "linear":
         return _linear(d)
     if kind == "cocontraction":
@@ -297,6 +302,10 @@ def summary(d: Dict[str, Any]) -> str:
         elif kind == "varying":
             n = sum(1 for p in d["points"] if p["identifiable"])
             body = f"{d['method']}, {n} of {len(d['points'])} points identifiable"
+            gait = d.get("gait")
+            if gait:
+                body += (f"; {gait['strides_used']} of {gait['strides_found']} strides used"
+                         f"{', ' + str(len(gait['flawed'])) + ' flawed' if gait['flawed'] else ''}")
         elif kind == "demo":
             worst = max(p["stiffness_error_percent"] for p in d["points"])
             body = f"{len(d['points'])} start points, stiffness within {worst:.1f} % of the truth"
@@ -399,6 +408,65 @@ def _matrices(recs: List[Record], kinds: Sequence[str] = MATRICES, symbols: Opti
     return "".join(_matrix_table(recs, k, f"{k.capitalize()} {(symbols or SYMBOL)[k]}") for k in kinds)
 
 
+#: Rows of a long table shown at its head and tail (the rest summarised in one row).
+HEAD_ROWS, TAIL_ROWS = 12, 4
+
+
+def _shortened(rows: List[List[str]], width: int) -> List[List[str]]:
+    if len(rows) <= HEAD_ROWS + TAIL_ROWS + 1:
+        return rows
+    hidden = len(rows) - HEAD_ROWS - TAIL_ROWS
+    gap = [f"… {hidden} more rows (to_pandas() has them all)"] + [""] * (width - 1)
+    return rows[:HEAD_ROWS] + [gap] + rows[-TAIL_ROWS:]
+
+
+def _varying_html(d: Dict[str, Any]) -> List[str]:
+    """K, B and M (I for a joint) at every point, value ± SE with units, the
+    points the data do not support named with their reason; walking adds the
+    strides and the flawed ones."""
+    coords = d["coordinates"]
+    s = d["schedule"]
+    axis = f"{s['name']} ({s['unit']})" if s.get("unit") else s["name"]
+    angular = all(c == "theta" or c.startswith("q") for c in coords)
+    symbols = {"stiffness": "K", "damping": "B", "inertia": "I" if angular else "M"}
+    header = [axis]
+    for q in MATRICES:
+        for i in range(len(coords)):
+            sub = "" if len(coords) == 1 else _sub(coords, i, i)
+            header.append(f"{symbols[q]}{sub} ({_unit(q, coords[i], coords[i]).replace('^2', '²')})")
+    header += ["count" if d.get("gait") else "support", "note"]
+    rows: List[List[str]] = []
+    for p in d["points"]:
+        row = [f"{p['sigma']:.4g}"]
+        if not p["identifiable"]:
+            rows.append(row + ["—"] * (len(header) - 3) + [f"{p['support']:g}", p.get("reason") or "not identifiable"])
+            continue
+        for q in MATRICES:
+            for i in range(len(coords)):
+                m, e = p.get(q), p.get(q + "_se")
+                row.append("—" if m is None or e is None else with_se(m[i][i], e[i][i]))
+        v = p.get("verdicts") or {}
+        note = ", ".join(f"{symbols[q]} {_words(v.get(q))}" for q in ("stiffness", "damping") if v.get(q))
+        rows.append(row + [f"{p['support']:g}", note])
+    parts = []
+    g = d.get("gait")
+    if g:
+        parts.append("<p>" + _e(
+            f"{g['strides_used']} of {g['strides_found']} strides used (median {g['stride_s'][0]:.3g} s, "
+            f"{g['stride_s'][1]:.3g} to {g['stride_s'][2]:.3g} s); baseline: {g['baseline']}; verdicts against "
+            f"walking tolerances K {100 * g['tolerances'][0]:.0f} %, B {100 * g['tolerances'][1]:.0f} %") + "</p>")
+    parts.append(_list_table(header, _shortened(rows, len(header)),
+                             f"Impedance against {s['name']} ({d['method']}; value ± SE)"))
+    if g and g.get("flawed"):
+        flawed = [[f["stride"], f"{f['start_s']:.3f}", f["start_row"], f"{f['duration_s']:.3f}", f["kind"], f["note"]]
+                  for f in g["flawed"]]
+        parts.append(_list_table(["stride", "start (s)", "row", "duration (s)", "kind", "what was done"],
+                                 _shortened(flawed, 6), f"Strides with flawed events ({len(flawed)})"))
+    parts.append(_e(d.get("resolution_note", "")) and f"<p>{_e(d['resolution_note'])}</p>")
+    parts.append(_fit_line(d))
+    return parts
+
+
 def why(e: BaseException) -> str:
     """Why a result could not be displayed, in one line (issue 56: a ragged
     hand-made result raised IndexError from ``_repr_html_``)."""
@@ -466,23 +534,7 @@ def to_html(d: Dict[str, Any]) -> str:
                                   for r in recs], "Intrinsic and reflex pathways (parallel cascade)"))
         parts.append(_fit_line(d))
     elif kind == "varying":
-        recs = records(d)
-        coords = d["coordinates"]
-        names = [f"{SYMBOL['stiffness']}{_sub(coords, i, i)}" for i in range(len(coords))]
-        table_rows: List[List[str]] = []
-        for p in d["points"]:
-            if not p["identifiable"]:
-                table_rows.append([f"{p['sigma']:.4g}"] + ["—"] * len(names) + [p.get("reason") or "not identifiable"])
-                continue
-            here = {r["element"]: r for r in recs if r["sigma"] == p["sigma"] and r["quantity"] == "stiffness"}
-            verdict = _words((p.get("verdicts") or {}).get("stiffness"))
-            table_rows.append([f"{p['sigma']:.4g}"] + [with_se(here[e]["value"], here[e]["se"]) for e in names]
-                              + [f"K {verdict}" if verdict else ""])
-        unit = _unit("stiffness", coords[0], coords[0])
-        s = d["schedule"]
-        parts.append(_list_table([f"{s['name']} ({s['unit']})"] + [f"{e} ({unit})" for e in names] + ["note"],
-                                 table_rows, f"Stiffness against {s['name']} ({d['method']})"))
-        parts.append(_fit_line(d))
+        parts.extend(_varying_html(d))
     elif kind == "study":
         header = ["configuration", "level", "subjects", "CCI", "Kxx", "Kyy", "Kzz"]
         rows = [[r["configuration"], f"{r['level']:g}", r["subjects"]]
