@@ -43,8 +43,13 @@ pub fn varying_text(e: &VaryingEstimate, paths: &[PathBuf]) -> CliResult {
     println!("limpid estimate varying: {}", paths[0].display());
     match e.method {
         VaryingMethod::Ensemble => println!(
-            "ensemble of {} repetitions at {} Hz, low-pass {} Hz",
+            "ensemble of {} {} at {} Hz, low-pass {} Hz",
             e.repetitions.unwrap_or_default(),
+            if e.gait.is_some() {
+                "strides"
+            } else {
+                "repetitions"
+            },
             significant(e.sample_rate_hz, 4),
             significant(e.cutoff_hz, 3)
         ),

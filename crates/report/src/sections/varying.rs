@@ -114,6 +114,8 @@ fn support_figure(v: &VaryingEstimate) -> Option<Figure> {
         "Strides behind each point"
     };
     let x: Vec<f64> = v.points.iter().map(|p| p.sigma).collect();
+    // counts from zero: a flat 300 must not read as a spread around 300
+    let top = v.points.iter().map(|p| p.support).fold(1.0, f64::max) * 1.1;
     let mut series = vec![Series {
         name: "count".into(),
         x,
@@ -130,7 +132,7 @@ fn support_figure(v: &VaryingEstimate) -> Option<Figure> {
             y_label: "count".into(),
             x_log: false,
             y_log: false,
-            y_range: None,
+            y_range: Some((0.0, top)),
             series,
         },
     })
@@ -214,8 +216,13 @@ fn verdict(v: &VaryingEstimate) -> String {
     let identifiable = v.points.iter().filter(|p| p.identifiable).count();
     let method = match v.method {
         VaryingMethod::Ensemble => format!(
-            "ensemble of {} repetitions",
-            v.repetitions.unwrap_or_default()
+            "ensemble of {} {}",
+            v.repetitions.unwrap_or_default(),
+            if v.gait.is_some() {
+                "strides"
+            } else {
+                "repetitions"
+            }
         ),
         VaryingMethod::ParameterVarying => format!(
             "parameter-varying on {}, Chebyshev order {}",
