@@ -175,6 +175,19 @@ fn flawed_table(v: &VaryingEstimate) -> Option<Table> {
     })
 }
 
+/// I for joint coordinates (angles: q1, theta), M for end-point ones, as
+/// Python's display names them.
+fn inertia_symbol(v: &VaryingEstimate) -> &'static str {
+    if v.coordinates
+        .iter()
+        .all(|c| c == "theta" || c.starts_with('q'))
+    {
+        "I"
+    } else {
+        "M"
+    }
+}
+
 fn cell(m: Option<&Matrix>, se: Option<&Matrix>, i: usize, j: usize) -> String {
     match (m, se) {
         (Some(m), Some(se)) => with_standard_error(m[(i, j)], se[(i, j)]),
@@ -192,9 +205,13 @@ pub(crate) fn section(name: &str, v: &VaryingEstimate) -> Section {
         element_figure(v, "varying-damping", ("B", "Damping"), bu, |p| {
             (p.damping.as_ref(), p.damping_se.as_ref())
         }),
-        element_figure(v, "varying-inertia", ("M", "Inertia"), mu, |p| {
-            (p.inertia.as_ref(), p.inertia_se.as_ref())
-        }),
+        element_figure(
+            v,
+            "varying-inertia",
+            (inertia_symbol(v), "Inertia"),
+            mu,
+            |p| (p.inertia.as_ref(), p.inertia_se.as_ref()),
+        ),
     ];
     figures.extend(reflex_gain_figure(v));
     figures.extend(support_figure(v));
@@ -321,7 +338,7 @@ fn points_table(v: &VaryingEstimate) -> Table {
     let d = v.coordinates.len();
     let mut header = vec![schedule_label(v)];
     let diag: Vec<(usize, usize)> = (0..d).map(|i| (i, i)).collect();
-    for (q, unit) in [("K", ku), ("B", bu), ("M", mu)] {
+    for (q, unit) in [("K", ku), ("B", bu), (inertia_symbol(v), mu)] {
         for &(i, _) in &diag {
             let el = if d == 1 {
                 q.to_string()
