@@ -439,6 +439,29 @@ fn design_error(cx: &Context, args: &DesignArgs, e: limpid_core::Error) -> Strin
     }
 }
 
+/// The texts a design reads: the prior (`demo:S1` is its own text), the
+/// limits and the baseline protocol, each read once for both methods.
+struct DesignTexts {
+    prior: String,
+    limits: Option<String>,
+    baseline: Option<String>,
+}
+
+impl DesignTexts {
+    fn read(args: &DesignArgs, demo: bool) -> limpid_core::Result<Self> {
+        let read = |p: &Path| limpid_core::files::read_text(p);
+        Ok(DesignTexts {
+            prior: if demo {
+                args.prior.clone()
+            } else {
+                read(Path::new(&args.prior))?
+            },
+            limits: args.limits_from.as_deref().map(read).transpose()?,
+            baseline: args.baseline.as_deref().map(read).transpose()?,
+        })
+    }
+}
+
 fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
     use limpid_app::design::{design, request_from_texts};
     let mut inputs: Vec<(&Path, &str)> = Vec::new();
@@ -478,14 +501,11 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
             .into())
         }
     }
-    let read = |p: &Path| limpid_core::files::read_text(p);
-    let prior_text = if demo {
-        args.prior.clone()
-    } else {
-        read(&prior_path)?
-    };
-    let limits_text = args.limits_from.as_deref().map(read).transpose()?;
-    let baseline_text = args.baseline.as_deref().map(read).transpose()?;
+    let DesignTexts {
+        prior: prior_text,
+        limits: limits_text,
+        baseline: baseline_text,
+    } = DesignTexts::read(&args, demo)?;
     let named = |e| design_error(cx, &args, e);
     let request = request_from_texts(
         (&prior_text, &prior_path),
@@ -625,14 +645,11 @@ fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
         .into());
     }
     let prior_path = PathBuf::from(&args.prior);
-    let read = |p: &Path| limpid_core::files::read_text(p);
-    let prior_text = if demo {
-        args.prior.clone()
-    } else {
-        read(&prior_path)?
-    };
-    let limits_text = args.limits_from.as_deref().map(read).transpose()?;
-    let baseline_text = args.baseline.as_deref().map(read).transpose()?;
+    let DesignTexts {
+        prior: prior_text,
+        limits: limits_text,
+        baseline: baseline_text,
+    } = DesignTexts::read(args, demo)?;
     let request = reflex_request_from_texts(
         (&prior_text, &prior_path),
         limits_text.as_deref().zip(args.limits_from.as_deref()),

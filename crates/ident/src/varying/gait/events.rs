@@ -102,6 +102,29 @@ pub struct StrideFlaw {
     pub note: String,
 }
 
+impl StrideFlaw {
+    /// The flaw of the samples `a..b` of `rec`; its number is given later
+    /// (0 until then) when the events around it are still being sorted out.
+    fn new(
+        rec: &Recording,
+        (a, b): (usize, usize),
+        number: usize,
+        kind: &str,
+        note: String,
+    ) -> Self {
+        let fs = rec.sample_rate();
+        StrideFlaw {
+            stride: number,
+            index: number.saturating_sub(1),
+            start_s: a as f64 / fs,
+            start_row: rec.row_of(a),
+            duration_s: (b - a) as f64 / fs,
+            kind: kind.into(),
+            note,
+        }
+    }
+}
+
 /// The strides of a record.
 #[derive(Debug, Clone)]
 pub struct Strides {
@@ -142,19 +165,17 @@ pub fn strides(
     let mut events: Vec<usize> = Vec::with_capacity(raw.len());
     for &e in &raw {
         match events.last() {
-            Some(&last) if e - last < refractory => flaws.push(StrideFlaw {
-                stride: 0,
-                index: 0,
-                start_s: last as f64 / fs,
-                start_row: rec.row_of(last),
-                duration_s: (e - last) as f64 / fs,
-                kind: "double".into(),
-                note: format!(
+            Some(&last) if e - last < refractory => flaws.push(StrideFlaw::new(
+                rec,
+                (last, e),
+                0,
+                "double",
+                format!(
                     "a second event {} ms after the one at row {} (within the refractory time): ignored",
                     crate::varying::round_ms((e - last) as f64 / fs),
                     rec.row_of(last)
                 ),
-            }),
+            )),
             _ => events.push(e),
         }
     }
@@ -188,15 +209,7 @@ pub fn strides(
     let mut numbers = Vec::new();
     for (i, &(a, b)) in bounds.iter().enumerate() {
         let (ratio, n) = (ratios[i], number_of[i]);
-        let flaw = |kind: &str, note: String| StrideFlaw {
-            stride: n,
-            index: n - 1,
-            start_s: a as f64 / fs,
-            start_row: rec.row_of(a),
-            duration_s: (b - a) as f64 / fs,
-            kind: kind.into(),
-            note,
-        };
+        let flaw = |kind: &str, note: String| StrideFlaw::new(rec, (a, b), n, kind, note);
         if missed(ratio) {
             flaws.push(flaw("missed", format!("{ratio:.2} times the median stride around it: {} event(s) probably missed; left out", ratio.round() - 1.0)));
         } else if !(0.75..=1.33).contains(&ratio) {
@@ -294,19 +307,17 @@ fn join_split_strides(
             };
             let (a, mid) = bounds[first];
             let (_, b) = bounds[first + 1];
-            flaws.push(StrideFlaw {
-                stride: 0,
-                index: 0,
-                start_s: a as f64 / fs,
-                start_row: rec.row_of(a),
-                duration_s: (b - a) as f64 / fs,
-                kind: "double".into(),
-                note: format!(
+            flaws.push(StrideFlaw::new(
+                rec,
+                (a, b),
+                0,
+                "double",
+                format!(
                     "an extra event at row {} (t = {} s) split it in two: ignored, the parts joined",
                     rec.row_of(mid),
                     limpid_core::significant(mid as f64 / fs, 6)
                 ),
-            });
+            ));
             bounds[first] = (a, b);
             bounds.remove(first + 1);
             joined = true;

@@ -99,14 +99,24 @@ pub struct GaitSummary {
 }
 
 impl GaitSummary {
-    /// The summary of `used` strides of `strides` (stride durations and, for
-    /// pulses, the trigger are filled in by the caller).
-    fn new(params: &VaryingParams, strides: &Strides, used: usize, baseline: String) -> Self {
+    /// The summary of `used` strides of `strides` recorded at `fs` (for
+    /// pulses, the trigger is filled in by the caller).
+    fn new(
+        params: &VaryingParams,
+        (strides, fs): (&Strides, f64),
+        used: usize,
+        baseline: String,
+    ) -> Self {
+        let lengths = strides.kept.iter().map(|r| r.len() as f64 / fs);
         GaitSummary {
             event: params.event.clone().unwrap_or_default(),
             strides_found: strides.found,
             strides_used: used,
-            stride_s: [0.0; 3],
+            stride_s: [
+                strides.median_len() as f64 / fs,
+                lengths.clone().fold(f64::INFINITY, f64::min),
+                lengths.fold(0.0, f64::max),
+            ],
             flawed: strides.flaws.clone(),
             trigger: None,
             perturbations: None,
@@ -184,12 +194,6 @@ pub(super) fn estimate(
             &mut warnings,
         )?,
     };
-    let used: Vec<f64> = strides.kept.iter().map(|r| r.len() as f64 / fs).collect();
-    est.gait.as_mut().expect("set by both methods").stride_s = [
-        strides.median_len() as f64 / fs,
-        used.iter().copied().fold(f64::INFINITY, f64::min),
-        used.iter().copied().fold(0.0, f64::max),
-    ];
     if !strides.flaws.is_empty() {
         let list: Vec<String> = strides
             .flaws
@@ -397,7 +401,7 @@ fn ensemble(
         points,
         fit,
         reflex: None,
-        gait: Some(GaitSummary::new(params, strides, reps, baseline)),
+        gait: Some(GaitSummary::new(params, (strides, fs), reps, baseline)),
         warnings: Vec::new(),
     })
 }

@@ -339,7 +339,7 @@ pub(super) fn estimate(
             perturbations: Some(pulses.len()),
             ..GaitSummary::new(
                 params,
-                strides,
+                (strides, fs),
                 kept.len(),
                 format!(
                     "each perturbed stride minus the mean of the {} unperturbed strides nearest it ({} unperturbed in all), phase-normalised and stretched to its duration",
@@ -360,9 +360,22 @@ struct KnotFit {
     failure: Option<String>,
 }
 
-/// Hat function of knot `k` (spacing `h`) at `s`.
-fn hat(k: f64, h: f64, s: f64) -> f64 {
-    (1.0 - (s - k).abs() / h).max(0.0)
+/// Knots `h` apart on the schedule, the first at `first · h`.
+struct Knots {
+    at: Vec<f64>,
+    h: f64,
+    first: i64,
+}
+
+impl Knots {
+    /// The knots whose hat functions cover `s`, with the hats' values there.
+    fn around(&self, s: f64) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let j = (((s / self.h).floor() as i64) - self.first) as usize;
+        [j, j + 1]
+            .into_iter()
+            .filter(|&jj| jj < self.at.len())
+            .map(move |jj| (jj, (1.0 - (s - self.at[jj]).abs() / self.h).max(0.0)))
+    }
 }
 
 /// Least perturbations behind a knot for it to be fitted at all (the jackknife's minimum).
@@ -384,8 +397,12 @@ fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) ->
     // knots over the whole stride (the figures show where nothing was perturbed) and the windows
     let first = (lo.min(0.0) / h).floor() as i64;
     let last = (hi.max(top) / h).ceil() as i64;
-    let knots: Vec<f64> = (first..=last).map(|i| i as f64 * h).collect();
-    let nk = knots.len();
+    let knots = Knots {
+        at: (first..=last).map(|i| i as f64 * h).collect(),
+        h,
+        first,
+    };
+    let nk = knots.at.len();
     // each window's share of displacement weight per knot
     let share: Vec<Vec<f64>> = pulses
         .iter()
@@ -393,11 +410,8 @@ fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) ->
             let mut w = vec![0.0; nk];
             for (t, &s) in p.sigma.iter().enumerate() {
                 let x2: f64 = (0..d).map(|c| p.x[2 * d + c][t].powi(2)).sum();
-                let j = (((s / h).floor() as i64) - first) as usize;
-                for jj in [j, j + 1] {
-                    if jj < nk {
-                        w[jj] += hat(knots[jj], h, s) * x2;
-                    }
+                for (jj, hat) in knots.around(s) {
+                    w[jj] += hat * x2;
                 }
             }
             let total: f64 = w.iter().sum();
@@ -423,10 +437,11 @@ fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) ->
             .collect()
     };
     let q = d + 2 * d * fitted.iter().filter(|&&f| f).count();
-    let normals: Vec<Normal> = pulses
+    let designs: Vec<Design> = pulses
         .iter()
-        .map(|p| normal_equations(p, d, (&knots, h, first), &column, q))
+        .map(|p| design(p, d, &knots, &column, q))
         .collect();
+    let normals: Vec<Normal> = designs.iter().map(Normal::of).collect();
     let mut g = DMatrix::zeros(q, q);
     let mut hh = DMatrix::zeros(q, d);
     let mut ff = 0.0;
@@ -436,10 +451,11 @@ fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) ->
         ff += n.ff;
     }
     let grid: Vec<usize> = (0..nk)
-        .filter(|&j| knots[j] >= -1e-9 && knots[j] < top - 1e-9)
+        .filter(|&j| knots.at[j] >= -1e-9 && knots.at[j] < top - 1e-9)
         .collect();
-    let blank =
-        |j: usize, reason: String| VaryingPoint::unidentified(knots[j], reason, support[j] as f64);
+    let blank = |j: usize, reason: String| {
+        VaryingPoint::unidentified(knots.at[j], reason, support[j] as f64)
+    };
     let reason_few = |j: usize| {
         if support[j] == 0 {
             "no perturbation moved the joint here".to_string()
@@ -501,17 +517,12 @@ fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) ->
     // per knot VAF over the samples its hat covers, weighted by the hat
     let mut knot_rss = vec![0.0; nk];
     let mut knot_tss = vec![0.0; nk];
-    for p in pulses {
-        let (x, f, rows) = design(p, d, (&knots, h, first), &column, q);
-        let res = &f - &x * &theta;
+    for (p, Design { x, f, rows }) in pulses.iter().zip(&designs) {
+        let res = f - x * &theta;
         for (t, s) in rows.iter().map(|&row| p.sigma[row]).enumerate() {
-            let j = (((s / h).floor() as i64) - first) as usize;
-            for jj in [j, j + 1] {
-                if jj < nk {
-                    let w = hat(knots[jj], h, s);
-                    knot_rss[jj] += w * res.row(t).iter().map(|v| v * v).sum::<f64>();
-                    knot_tss[jj] += w * f.row(t).iter().map(|v| v * v).sum::<f64>();
-                }
+            for (jj, hat) in knots.around(s) {
+                knot_rss[jj] += hat * res.row(t).iter().map(|v| v * v).sum::<f64>();
+                knot_tss[jj] += hat * f.row(t).iter().map(|v| v * v).sum::<f64>();
             }
         }
     }
@@ -563,7 +574,7 @@ fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) ->
         rss += knot_rss[j];
         tss += knot_tss[j];
         points.push(VaryingPoint {
-            sigma: knots[j],
+            sigma: knots.at[j],
             identifiable: true,
             reason: None,
             stiffness: Some(k),
@@ -599,24 +610,31 @@ struct Normal {
     ff: f64,
 }
 
-/// A perturbation's regressors (I, then K and B of each fitted knot) and
-/// forces, its offset and drift projected out. Samples on a knot not fitted
-/// are left out.
-fn design(
-    p: &Pulse,
-    d: usize,
-    (knots, h, first): (&[f64], f64, i64),
-    column: &[Option<usize>],
-    q: usize,
-) -> (DMatrix<f64>, DMatrix<f64>, Vec<usize>) {
-    let nk = knots.len();
+impl Normal {
+    fn of(d: &Design) -> Normal {
+        Normal {
+            g: d.x.transpose() * &d.x,
+            h: d.x.transpose() * &d.f,
+            ff: d.f.iter().map(|v| v * v).sum(),
+        }
+    }
+}
+
+/// One perturbation's regressors `x` (I, then K and B of each fitted knot)
+/// and forces `f`, its offset and drift projected out, over the window
+/// samples `rows` kept (those on a knot not fitted are left out).
+struct Design {
+    x: DMatrix<f64>,
+    f: DMatrix<f64>,
+    rows: Vec<usize>,
+}
+
+fn design(p: &Pulse, d: usize, knots: &Knots, column: &[Option<usize>], q: usize) -> Design {
     let rows: Vec<usize> = (0..p.sigma.len())
         .filter(|&t| {
-            let s = p.sigma[t];
-            let j = (((s / h).floor() as i64) - first) as usize;
-            [j, j + 1]
-                .iter()
-                .all(|&jj| jj >= nk || hat(knots[jj], h, s) == 0.0 || column[jj].is_some())
+            knots
+                .around(p.sigma[t])
+                .all(|(jj, hat)| hat == 0.0 || column[jj].is_some())
         })
         .collect();
     let n = rows.len();
@@ -628,12 +646,10 @@ fn design(
             x[(r, c)] = p.x[c][t];
             f[(r, c)] = p.f[c][t];
         }
-        let j = (((s / h).floor() as i64) - first) as usize;
-        for jj in [j, j + 1] {
-            let Some(col) = column.get(jj).copied().flatten() else {
+        for (jj, w) in knots.around(s) {
+            let Some(col) = column[jj] else {
                 continue;
             };
-            let w = hat(knots[jj], h, s);
             for c in 0..d {
                 x[(r, col + c)] = w * p.x[2 * d + c][t];
                 x[(r, col + d + c)] = w * p.x[d + c][t];
@@ -667,22 +683,7 @@ fn design(
         x.fill(0.0);
         f.fill(0.0);
     }
-    (x, f, rows)
-}
-
-fn normal_equations(
-    p: &Pulse,
-    d: usize,
-    knots: (&[f64], f64, i64),
-    column: &[Option<usize>],
-    q: usize,
-) -> Normal {
-    let (x, f, _) = design(p, d, knots, column, q);
-    Normal {
-        g: x.transpose() * &x,
-        h: x.transpose() * &f,
-        ff: f.iter().map(|v| v * v).sum(),
-    }
+    Design { x, f, rows }
 }
 
 fn rss_of(n: &Normal, theta: &DMatrix<f64>) -> f64 {
