@@ -36,10 +36,11 @@ rm -rf "$LIMPID_TEST_EXAMPLES"
 "$target_dir/$profile/limpid-test-examples" "$LIMPID_TEST_EXAMPLES"
 venv="$target_dir/venv-test"
 python3 -m venv --clear "$venv"
-# h5py/hdf5storage, ezc3d and npTDMS write the lab-file versions of a recording (test_lab_formats.py);
+# h5py/hdf5storage, ezc3d and npTDMS write the lab-file versions of a recording (test_lab_formats.py),
+# rosbags and mcap-ros2-support its ROS 2 bags (test_lab_bags.py);
 # pandas, xarray, matplotlib, nbclient/nbformat/ipykernel: results in a notebook and the tutorial (test_notebook.py)
 "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy scipy pytest mypy "dask[distributed]" \
-  h5py hdf5storage ezc3d npTDMS pandas xarray matplotlib nbclient nbformat ipykernel
+  h5py hdf5storage ezc3d npTDMS rosbags mcap mcap-ros2-support pandas xarray matplotlib nbclient nbformat ipykernel
 rm -rf "$target_dir/wheels"
 "$venv/bin/maturin" build --profile "$profile" -q -m crates/python/Cargo.toml -o "$target_dir/wheels"
 "$venv/bin/pip" install -q --disable-pip-version-check --no-deps "$target_dir"/wheels/limpid-*.whl

@@ -1,5 +1,5 @@
 //! `limpid inspect FILE` and `limpid convert FILE --map M -o REC`: lab files
-//! (XDF, C3D, TDMS, MAT, and any table) seen as streams and channels, and turned into
+//! (XDF, C3D, TDMS, MAT, ROS 2 bags, and any table) seen as streams and channels, and turned into
 //! FORMAT.md recordings by a channel map (limpid-io `sources`, `map`).
 
 use std::path::PathBuf;
@@ -11,7 +11,7 @@ use crate::context::{CliResult, Context};
 /// `limpid inspect`.
 #[derive(Args)]
 pub struct InspectArgs {
-    /// The file (XDF, C3D, TDMS, MAT, CSV, Parquet).
+    /// The file (XDF, C3D, TDMS, MAT, a ROS 2 bag: .mcap, .db3 or a rosbag2 folder, CSV, Parquet).
     pub file: PathBuf,
     /// Print JSON instead of text.
     #[arg(long)]
@@ -21,7 +21,7 @@ pub struct InspectArgs {
 /// `limpid convert`.
 #[derive(Args)]
 pub struct ConvertArgs {
-    /// The file (XDF, C3D, TDMS, MAT, CSV, Parquet).
+    /// The file (XDF, C3D, TDMS, MAT, a ROS 2 bag: .mcap, .db3 or a rosbag2 folder, CSV, Parquet).
     pub file: PathBuf,
     /// Output recording (.csv or .parquet).
     #[arg(short, long)]
@@ -78,6 +78,9 @@ pub fn run_inspect(args: InspectArgs) -> CliResult {
         if s.clock_offsets > 0 {
             out.push_str(&format!(", {} clock offsets applied", s.clock_offsets));
         }
+        if let Some(clock) = &s.clock {
+            out.push_str(&format!(", time from {clock}"));
+        }
         out.push('\n');
         if s.gaps > 0 {
             out.push_str(&format!(
@@ -86,6 +89,13 @@ pub fn run_inspect(args: InspectArgs) -> CliResult {
                 limpid_core::error::significant(s.longest_gap_s.unwrap_or(0.0), 3)
             ));
         }
+        let width = s
+            .channels
+            .iter()
+            .map(|c| c.name.chars().count())
+            .max()
+            .unwrap_or(0)
+            .clamp(24, 60);
         for c in &s.channels {
             let range = match (c.min, c.max) {
                 (Some(a), Some(b)) => format!(
@@ -96,14 +106,18 @@ pub fn run_inspect(args: InspectArgs) -> CliResult {
                 _ => "no finite value".into(),
             };
             out.push_str(&format!(
-                "  {:<24} {:<8} {range}{}\n",
+                "  {:<width$} {:<8} {range}{}{}\n",
                 c.name,
                 c.unit.as_deref().unwrap_or("-"),
                 if c.non_finite > 0 {
                     format!("  ({} NaN/inf)", c.non_finite)
                 } else {
                     String::new()
-                }
+                },
+                c.also
+                    .as_ref()
+                    .map(|a| format!("  (also {a})"))
+                    .unwrap_or_default()
             ));
         }
         for m in &s.markers {

@@ -38,7 +38,7 @@ use context::{CliResult, Context};
 struct Cli {
     #[command(subcommand)]
     command: Command,
-    /// Channel map (TOML) for commands that read recordings: which channel of a lab file (XDF, C3D, TDMS, MAT, CSV) is which column, in which unit and sign.
+    /// Channel map (TOML) for commands that read recordings: which channel of a lab file (XDF, C3D, TDMS, MAT, ROS 2 bag, CSV) is which column, in which unit and sign.
     #[arg(long, global = true, value_name = "MAP.toml")]
     map: Option<std::path::PathBuf>,
     /// Threads the estimators run on [default: one a core, or RAYON_NUM_THREADS].
@@ -78,7 +78,7 @@ enum Command {
     Reproduce(reproduce::ReproduceArgs),
     /// Run the request recorded in a result's run block again, on the same input files.
     Rerun(rerun::RerunArgs),
-    /// Show the streams, channels, rates, units, gaps and markers of a lab file (XDF, C3D, TDMS, MAT, CSV, Parquet), with a proposed channel map.
+    /// Show the streams, channels, rates, units, gaps and markers of a lab file (XDF, C3D, TDMS, MAT, ROS 2 bag, CSV, Parquet), with a proposed channel map.
     Inspect(files::InspectArgs),
     /// Convert a lab file to a recording (CSV or Parquet) through a channel map (--map).
     Convert(files::ConvertArgs),

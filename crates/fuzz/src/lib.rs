@@ -1,7 +1,8 @@
 //! An in-process mutation fuzzer on stable Rust (issue 13).
 //!
 //! Each execution takes an input of the corpus (`corpus/seeds`: small
-//! recordings as CSV, Parquet and MAT-files, protocol TOML files, live
+//! recordings as CSV, Parquet and MAT-files, lab files (XDF, C3D, TDMS,
+//! MAT v7.3, ROS 2 bags as MCAP and SQLite), protocol TOML files, live
 //! datagrams; `corpus/regressions`: inputs that once failed), mutates it
 //! (bit flips, byte runs, cuts, and for text the replacement of numbers by
 //! extreme values: 1e307, nan, 1e-320, i64::MAX, ...), and runs it through
@@ -75,7 +76,7 @@ pub fn execute(name: &str, bytes: &[u8]) -> Outcome {
         "toml" => protocol(name, bytes),
         "paths" => output_paths(bytes),
         "wire" => datagrams(bytes),
-        "xdf" | "c3d" | "tdms" => lab_file(name, bytes),
+        "xdf" | "c3d" | "tdms" | "mcap" | "db3" => lab_file(name, bytes),
         "mat" if name.starts_with("rig") => lab_file(name, bytes),
         "json" if name.starts_with("request") => request(bytes),
         "json" => result_document(bytes),
@@ -143,6 +144,7 @@ fn seed_map(name: &str) -> &'static str {
         "xdf" => include_str!("../../io/tests/fixtures/formats/rig_xdf.toml"),
         "c3d" => include_str!("../../io/tests/fixtures/formats/rig_c3d.toml"),
         "tdms" => include_str!("../../io/tests/fixtures/formats/rig_tdms.toml"),
+        "mcap" | "db3" => include_str!("../../io/tests/fixtures/formats/rig_bag.toml"),
         _ => include_str!("../../io/tests/fixtures/formats/rig_mat73.toml"),
     }
 }

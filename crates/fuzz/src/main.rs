@@ -1,7 +1,7 @@
 //! `limpid-fuzz`: run the mutation fuzzer (see the library docs).
 //!
 //! ```text
-//! cargo run --release -p limpid-fuzz -- [--executions N] [--seed S] [--threads T]
+//! cargo run --release -p limpid-fuzz -- [--executions N] [--seed S] [--threads T] [--only mcap,db3]
 //! ```
 //!
 //! Prints executions per kind of input, refused / accepted counts and every
@@ -52,7 +52,25 @@ fn main() {
         "--threads",
         std::thread::available_parallelism().map_or(1, |n| n.get()) as u64,
     ) as usize;
-    let inputs = Arc::new(corpus());
+    // --only EXT[,EXT]: the inputs of those kinds alone (a campaign on one reader)
+    let args: Vec<String> = std::env::args().collect();
+    let only: Option<Vec<String>> = args
+        .iter()
+        .position(|a| a == "--only")
+        .and_then(|i| args.get(i + 1))
+        .map(|list| list.split(',').map(str::to_string).collect());
+    let inputs = Arc::new(
+        corpus()
+            .into_iter()
+            .filter(|(name, _)| {
+                only.as_ref().is_none_or(|kinds| {
+                    kinds
+                        .iter()
+                        .any(|k| name.rsplit('.').next() == Some(k.as_str()))
+                })
+            })
+            .collect::<Vec<_>>(),
+    );
     assert!(
         !inputs.is_empty(),
         "no corpus in {}",

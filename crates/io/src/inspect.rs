@@ -44,6 +44,9 @@ pub struct StreamSummary {
     pub longest_gap_s: Option<f64>,
     /// Clock-offset records applied.
     pub clock_offsets: usize,
+    /// Where the stamps come from when the file offers a choice (a bag
+    /// topic's `header stamps` or `log time`).
+    pub clock: Option<String>,
     /// Numeric channels.
     pub channels: Vec<ChannelSummary>,
     /// Distinct marker texts with their counts.
@@ -57,6 +60,9 @@ pub struct ChannelSummary {
     pub name: String,
     /// Declared unit.
     pub unit: Option<String>,
+    /// Another name a map may use for it (a JointState element's index
+    /// form, `/joint_states.position[0]` for `/joint_states.position[ankle]`).
+    pub also: Option<String>,
     /// Smallest finite value.
     pub min: Option<f64>,
     /// Largest finite value.
@@ -111,14 +117,21 @@ fn summary(s: &Stream) -> StreamSummary {
         gaps: gaps.len(),
         longest_gap_s: gaps.iter().map(|g| g.1).reduce(f64::max),
         clock_offsets: s.clock_offsets,
+        clock: s.clock.clone(),
         channels: s
             .channels
             .iter()
-            .map(|c| {
+            .enumerate()
+            .map(|(k, c)| {
                 let finite = c.values.iter().filter(|v| v.is_finite());
                 ChannelSummary {
                     name: c.name.clone(),
                     unit: c.unit.clone(),
+                    also: s
+                        .aliases
+                        .iter()
+                        .find(|(_, i)| *i == k)
+                        .map(|(a, _)| a.clone()),
                     min: finite.clone().copied().reduce(f64::min),
                     max: finite.copied().reduce(f64::max),
                     non_finite: c.values.iter().filter(|v| !v.is_finite()).count(),

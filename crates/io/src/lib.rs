@@ -58,7 +58,7 @@ pub fn is_mat(path: &Path) -> bool {
 }
 
 /// Whether `path` is named like a file limpid reads as a recording
-/// (CSV/TSV/text, Parquet, MAT, XDF, C3D, TDMS). `limpid rerun` reads only
+/// (CSV/TSV/text, Parquet, MAT, XDF, C3D, TDMS, a ROS 2 bag). `limpid rerun` reads only
 /// such files from a result's run block: a hand-edited result naming
 /// `/etc/passwd` had its first line echoed in the error (issue 56).
 pub fn named_like_a_recording(path: &Path) -> bool {
@@ -68,8 +68,20 @@ pub fn named_like_a_recording(path: &Path) -> bool {
         .map(str::to_ascii_lowercase);
     matches!(
         ext.as_deref(),
-        Some("csv" | "tsv" | "txt" | "parquet" | "pq" | "mat" | "xdf" | "c3d" | "tdms")
-    )
+        Some(
+            "csv"
+                | "tsv"
+                | "txt"
+                | "parquet"
+                | "pq"
+                | "mat"
+                | "xdf"
+                | "c3d"
+                | "tdms"
+                | "mcap"
+                | "db3"
+        )
+    ) || sources::is_bag_folder(path)
 }
 
 /// Read a recording, choosing the format by extension.

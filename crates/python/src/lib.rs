@@ -193,7 +193,7 @@ fn channel_map(map: &Bound<'_, PyAny>) -> PyResult<limpid_io::map::ChannelMap> {
 }
 
 /// A recording file as a dict of numpy arrays (column order kept); lab
-/// files (XDF, C3D, TDMS, MAT structs) through a channel map.
+/// files (XDF, C3D, TDMS, MAT structs, ROS 2 bags) through a channel map.
 #[pyfunction]
 #[pyo3(signature = (path, map=None, partial=false))]
 fn read_recording<'py>(

@@ -3,6 +3,7 @@
 use super::{nearest_hint, ChannelMap, ColumnRule, Quantity, TimeSpec, ENVELOPE_HZ};
 use crate::sources::{Marker, Source, Stream};
 use limpid_core::{Recording, Result};
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 /// The stream called `name`, or an error naming the nearest streams.
@@ -42,25 +43,35 @@ pub(crate) fn find_channel<'a>(
     let hits: Vec<(&Stream, &crate::sources::Channel)> = candidates
         .iter()
         .flat_map(|s| {
+            let aliased = s
+                .aliases
+                .iter()
+                .filter(|(a, _)| a == channel)
+                .filter_map(|(_, k)| s.channels.get(*k));
             s.channels
                 .iter()
                 .filter(|c| c.name == channel)
+                .chain(aliased)
                 .map(move |c| (*s, c))
         })
         .collect();
+    // a bag topic that was not read holds the channel by its prefix
+    let unread = source.unread.iter().find(|(p, _)| {
+        p == channel
+            || (p.starts_with('/')
+                && channel
+                    .strip_prefix(p.as_str())
+                    .is_some_and(|rest| rest.starts_with('.')))
+    });
     match hits.as_slice() {
         [(s, c)] => Ok(Found {
             stream: s,
             values: &c.values,
             declared_unit: c.unit.as_deref(),
         }),
-        [] if source.unread.iter().any(|(p, _)| p == channel) => {
+        [] if unread.is_some() => {
             // present but not a vector: say what it is (issue 56)
-            let why = source
-                .unread
-                .iter()
-                .find(|(p, _)| p == channel)
-                .map_or("", |(_, w)| w.as_str());
+            let why = unread.map_or("", |(_, w)| w.as_str());
             Err(source.error(format!(
                 "map column {column}: {why}; a column needs a numeric vector"
             )))
@@ -175,6 +186,13 @@ pub fn apply_partial(source: &Source, map: &ChannelMap) -> Result<Converted> {
             rate: map.time.rate,
         },
         columns: kept,
+        // rules of streams this file lacks do not apply to it
+        streams: map
+            .streams
+            .iter()
+            .filter(|(name, _)| source.streams.iter().any(|s| &s.name == *name))
+            .map(|(n, r)| (n.clone(), r.clone()))
+            .collect(),
         path: map.path.clone(),
     };
     let mut converted = apply(source, &partial)?;
@@ -192,6 +210,8 @@ pub fn apply_partial(source: &Source, map: &ChannelMap) -> Result<Converted> {
 /// Apply `map` to `source`: a FORMAT.md recording.
 pub fn apply(source: &Source, map: &ChannelMap) -> Result<Converted> {
     let mut notes = Vec::new();
+    let adjusted = stream_rules(source, map, &mut notes)?;
+    let source: &Source = &adjusted;
     let map_name = map
         .path
         .as_ref()
@@ -740,4 +760,101 @@ pub(crate) fn marker_column(
         }
     }
     Ok((out, before))
+}
+
+/// The map's `[streams]` rules applied: a bag topic's log times in place of
+/// its header stamps (`clock = "log"`), stamps replaced by their piecewise
+/// straight-line fit (`dejitter`).
+fn stream_rules<'s>(
+    source: &'s Source,
+    map: &ChannelMap,
+    notes: &mut Vec<String>,
+) -> Result<Cow<'s, Source>> {
+    if map.streams.is_empty() {
+        return Ok(Cow::Borrowed(source));
+    }
+    let mut adjusted = source.clone();
+    for (name, rule) in &map.streams {
+        named_stream(source, name, &format!("[streams.{name:?}]"))?;
+        let s = adjusted
+            .streams
+            .iter_mut()
+            .find(|s| &s.name == name)
+            .expect("found above");
+        if rule.clock.as_deref() == Some("log") {
+            let log = s.log_stamps.take().ok_or_else(|| {
+                source.error(format!(
+                    "[streams.{name:?}] clock = \"log\": the stream has one clock only{}",
+                    s.clock
+                        .as_ref()
+                        .map(|c| format!(" ({c})"))
+                        .unwrap_or_default()
+                ))
+            })?;
+            s.stamps = Some(log);
+            s.clock = Some("log time".into());
+        }
+        if rule.dejitter {
+            let stamps = s.stamps.as_mut().ok_or_else(|| {
+                source.error(format!(
+                    "[streams.{name:?}] dejitter: the stream has no stamps to fit"
+                ))
+            })?;
+            let (pieces, rms) = dejitter(stamps);
+            notes.push(format!(
+                "{}: stamps replaced by a line fit in {pieces} piece(s) (they scattered by {} ms rms about it)",
+                s.label(),
+                limpid_core::error::significant(rms * 1e3, 3)
+            ));
+        }
+    }
+    Ok(Cow::Owned(adjusted))
+}
+
+/// Replace `stamps` by least-squares lines of stamp against sample index,
+/// one per piece between breaks: an interval longer than 1 s and 500
+/// median intervals, or a backward jump. Returns the pieces and the rms
+/// of the stamps about the lines (s).
+pub(crate) fn dejitter(stamps: &mut [f64]) -> (usize, f64) {
+    let n = stamps.len();
+    if n < 3 {
+        return (1, 0.0);
+    }
+    let mut intervals: Vec<f64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
+    let mid = intervals.len() / 2;
+    let median = *intervals.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let limit = (500.0 * median).max(1.0);
+    let mut starts = vec![0];
+    for i in 1..n {
+        let d = stamps[i] - stamps[i - 1];
+        if d > limit || d < 0.0 {
+            starts.push(i);
+        }
+    }
+    starts.push(n);
+    let mut square = 0.0;
+    for w in starts.windows(2) {
+        let piece = &mut stamps[w[0]..w[1]];
+        let m = piece.len() as f64;
+        if piece.len() < 2 {
+            continue;
+        }
+        // centred sums: the stamps may be large (a wall clock)
+        let i_mean = (m - 1.0) / 2.0;
+        let t0 = piece[0];
+        let t_mean = piece.iter().map(|t| t - t0).sum::<f64>() / m;
+        let (mut sxy, mut sxx) = (0.0, 0.0);
+        for (i, t) in piece.iter().enumerate() {
+            let di = i as f64 - i_mean;
+            sxy += di * (t - t0 - t_mean);
+            sxx += di * di;
+        }
+        let slope = sxy / sxx;
+        for (i, t) in piece.iter_mut().enumerate() {
+            let fit = t0 + t_mean + slope * (i as f64 - i_mean);
+            square += (*t - fit).powi(2);
+            *t = fit;
+        }
+    }
+    (starts.len() - 1, (square / n as f64).sqrt())
 }

@@ -12,6 +12,9 @@
 //! emg_biceps = { channel = "EMG1", stream = "emg", unit = "mV" }
 //! trial = { marker = "perturbation_start" }
 //! level = { marker_prefix = "level=" }
+//! [streams."/wrench"]       # optional, per stream
+//! clock = "log"             # a bag topic's log times instead of its header stamps
+//! dejitter = true           # stamps replaced by a straight-line fit (pyxdf's option)
 //! ```
 //!
 //! value = convert(raw, unit) x scale + offset (offset in SI). The unit
@@ -48,6 +51,9 @@ pub struct ChannelMap {
     pub time: TimeSpec,
     /// FORMAT.md column name -> where its values come from.
     pub columns: BTreeMap<String, ColumnSpec>,
+    /// Per-stream treatment of the stamps, by stream name.
+    #[serde(default)]
+    pub streams: BTreeMap<String, StreamRule>,
     /// The file the map was read from (for messages).
     #[serde(skip)]
     pub path: Option<PathBuf>,
@@ -62,6 +68,20 @@ pub struct TimeSpec {
     pub stream: Option<String>,
     /// Sample rate (Hz) of a table without a time column.
     pub rate: Option<f64>,
+}
+
+/// A `[streams."name"]` table: how a stream's stamps are taken.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StreamRule {
+    /// `"header"` (a bag message's header stamp, the default) or `"log"`
+    /// (the time the recorder logged it).
+    pub clock: Option<String>,
+    /// Replace the stamps by a least-squares line through them, piece by
+    /// piece between breaks (gaps over 1 s and 500 sampling intervals, or
+    /// backward jumps), as pyxdf's `dejitter_timestamps` does.
+    #[serde(default)]
+    pub dejitter: bool,
 }
 
 /// One column's source: a channel, or a marker rule.
@@ -154,6 +174,15 @@ impl ChannelMap {
     fn check(&self) -> std::result::Result<(), String> {
         if self.columns.is_empty() {
             return Err("[columns] names no column".into());
+        }
+        for (name, rule) in &self.streams {
+            if let Some(clock) = &rule.clock {
+                if clock != "header" && clock != "log" {
+                    return Err(format!(
+                        "[streams.{name:?}] clock = {clock:?}: \"header\" or \"log\""
+                    ));
+                }
+            }
         }
         if let Some(rate) = self.time.rate {
             if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
@@ -271,6 +300,7 @@ impl ChannelMap {
                 rate: None,
             },
             columns,
+            streams: BTreeMap::new(),
             path: None,
         })
     }

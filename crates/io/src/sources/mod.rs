@@ -14,6 +14,7 @@ use limpid_core::{Error, Result};
 pub mod c3d;
 mod cursor;
 pub mod mat73;
+pub mod ros2;
 pub mod tdms;
 pub mod xdf;
 
@@ -52,6 +53,15 @@ pub struct Stream {
     pub markers: Vec<Marker>,
     /// How many clock-offset records were applied to the stamps.
     pub clock_offsets: usize,
+    /// Where the stamps come from when the file offers a choice (a bag's
+    /// `header stamps` or `log time`).
+    pub clock: Option<String>,
+    /// The other clock's stamps (a bag topic's log times beside its header
+    /// stamps), for a map's `clock = "log"`.
+    pub log_stamps: Option<Vec<f64>>,
+    /// Other names of channels (`position[0]` for `position[ankle]`), with
+    /// the channel's index.
+    pub aliases: Vec<(String, usize)>,
 }
 
 /// One numeric channel.
@@ -135,7 +145,22 @@ impl Stream {
 /// True when the path names a file that [`read_source`] reads as a
 /// multi-stream lab file (not a FORMAT.md table).
 pub fn is_lab_file(path: &Path) -> bool {
-    matches!(extension(path).as_deref(), Some("xdf" | "c3d" | "tdms"))
+    matches!(
+        extension(path).as_deref(),
+        Some("xdf" | "c3d" | "tdms" | "mcap" | "db3")
+    ) || is_bag_folder(path)
+}
+
+/// True for a folder that holds a rosbag2 bag (its `metadata.yaml`, or
+/// `.mcap`/`.db3` files).
+pub fn is_bag_folder(path: &Path) -> bool {
+    path.is_dir()
+        && (path.join("metadata.yaml").is_file()
+            || std::fs::read_dir(path).is_ok_and(|entries| {
+                entries
+                    .flatten()
+                    .any(|e| matches!(extension(&e.path()).as_deref(), Some("mcap" | "db3")))
+            }))
 }
 
 fn extension(path: &Path) -> Option<String> {
@@ -145,10 +170,15 @@ fn extension(path: &Path) -> Option<String> {
 }
 
 /// Read any file limpid knows as a [`Source`], choosing the reader by
-/// extension: `.xdf` (Lab Streaming Layer), `.c3d` (motion capture), `.tdms` (LabVIEW), else a table (CSV, Parquet, MAT)
+/// extension: `.xdf` (Lab Streaming Layer), `.c3d` (motion capture), `.tdms` (LabVIEW),
+/// `.mcap`, `.db3` or a rosbag2 folder (ROS 2 bags), else a table (CSV, Parquet, MAT)
 /// as one stream without stamps.
 pub fn read_source(path: &Path) -> Result<Source> {
+    if is_bag_folder(path) {
+        return ros2::read(path);
+    }
     match extension(path).as_deref() {
+        Some("mcap" | "db3") => ros2::read(path),
         Some("xdf") => xdf::read(path),
         Some("c3d") => c3d::read(path),
         Some("tdms") => tdms::read(path),
@@ -259,6 +289,7 @@ pub fn read_source_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     match extension(path).as_deref() {
         Some("c3d") => c3d::read_bytes(path, bytes),
         Some("tdms") => tdms::read_bytes(path, bytes),
+        Some("mcap" | "db3") => ros2::read_bytes(path, bytes),
         Some("mat") if is_mat73(bytes) => mat73::read_bytes(path, bytes),
         Some("mat") => crate::read_mat_source(path, bytes),
         _ => xdf::read_bytes(path, bytes),

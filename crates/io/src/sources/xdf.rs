@@ -292,7 +292,7 @@ fn header(id: u32, xml: &str) -> std::result::Result<Building, String> {
                 channels
             },
             markers: Vec::new(),
-            clock_offsets: 0,
+            ..Stream::default()
         },
         format,
         channel_count,

@@ -342,7 +342,7 @@ def read_recording(path: Union[str, "os.PathLike[str]"],
     """Read a recording (docs/src/format.md) into a dict of arrays.
 
     CSV, Parquet and MAT files whose columns carry FORMAT.md's names are read
-    as they are. Lab files (XDF, C3D, TDMS, MAT v7.3, MAT structs, or a CSV
+    as they are. Lab files (XDF, C3D, TDMS, MAT v7.3, MAT structs, ROS 2 bags, or a CSV
     with the lab's own names) are read through a channel map: the path of its
     TOML file, or a dict of the same shape, e.g.
     ``{"time": {"stream": "robot"}, "columns": {"x": {"channel": "EndEff.X", "unit": "mm"}}}``
