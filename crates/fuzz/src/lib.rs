@@ -2,7 +2,7 @@
 //!
 //! Each execution takes an input of the corpus (`corpus/seeds`: small
 //! recordings as CSV, Parquet and MAT-files, lab files (XDF, C3D, TDMS,
-//! MAT v7.3, ROS 2 bags as MCAP and SQLite), protocol TOML files, live
+//! MAT v7.3, MATLAB objects, ROS 2 bags as MCAP and SQLite), protocol TOML files, live
 //! datagrams; `corpus/regressions`: inputs that once failed), mutates it
 //! (bit flips, byte runs, cuts, and for text the replacement of numbers by
 //! extreme values: 1e307, nan, 1e-320, i64::MAX, ...), and runs it through
@@ -145,6 +145,9 @@ fn seed_map(name: &str) -> &'static str {
         "c3d" => include_str!("../../io/tests/fixtures/formats/rig_c3d.toml"),
         "tdms" => include_str!("../../io/tests/fixtures/formats/rig_tdms.toml"),
         "mcap" | "db3" => include_str!("../../io/tests/fixtures/formats/rig_bag.toml"),
+        "mat" if name.starts_with("rig-mcos") => {
+            include_str!("../../io/tests/fixtures/formats/rig_mcos.toml")
+        }
         _ => include_str!("../../io/tests/fixtures/formats/rig_mat73.toml"),
     }
 }

@@ -27,6 +27,7 @@ use std::path::Path;
 pub mod inspect;
 pub mod map;
 mod mat;
+mod mcos;
 pub mod sources;
 
 use limpid_core::{Error, Recording, Result};
@@ -286,9 +287,13 @@ pub(crate) fn read_mat_source(path: &Path, bytes: &[u8]) -> Result<sources::Sour
         path: path.to_path_buf(),
         message,
     })?;
+    let mut notes = Vec::new();
+    let vars = mcos::resolve(vars, &bytes[126..128] == b"IM", &mut notes);
     let mut found = Vec::new();
     mat::flatten(vars, "", &mut found);
-    sources::vectors_source(path, "MAT", found)
+    let mut source = sources::vectors_source(path, "MAT", found)?;
+    source.notes.extend(notes);
+    Ok(source)
 }
 
 /// The numeric vectors of a MAT-file as a table.

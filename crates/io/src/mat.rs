@@ -22,6 +22,7 @@ const MI_MATRIX: u32 = 14;
 const MI_COMPRESSED: u32 = 15;
 
 /// One variable of the file.
+#[derive(Clone)]
 pub struct Variable {
     pub name: String,
     /// MATLAB class name (`double`, `struct`, `char`, ...).
@@ -30,13 +31,61 @@ pub struct Variable {
     /// Real values (column-major) of a real numeric array; `None` otherwise.
     pub real: Option<Vec<f64>>,
     pub complex: bool,
-    /// The fields of a 1 x 1 struct, each named by its field name.
+    /// Real and imaginary parts of a complex numeric array.
+    pub complex_parts: Option<(Vec<f64>, Vec<f64>)>,
+    /// The fields of a 1 x 1 struct (or object), each named by its field name.
     pub fields: Vec<Variable>,
+    /// The elements of a cell array, column-major.
+    pub cells: Vec<Variable>,
+    /// The text of a char array (rows joined by newlines).
+    pub text: Option<String>,
+    /// An opaque value (MATLAB objects: classdef, table, string, datetime).
+    pub opaque: Option<Box<Opaque>>,
+    /// The class name of an object (classdef or old-style).
+    pub object_class: Option<String>,
+}
+
+/// An opaque value's header: its type system (`MCOS` for classdef objects),
+/// its class, and its metadata array (for MCOS: object ids and class id).
+#[derive(Clone)]
+pub struct Opaque {
+    pub type_system: String,
+    pub class_name: String,
+    pub metadata: Variable,
+}
+
+impl Variable {
+    /// An empty double array (a zero-length element: MATLAB's `[]`).
+    pub fn empty(name: &str) -> Variable {
+        Variable {
+            name: name.to_string(),
+            class: "double",
+            dims: vec![0, 0],
+            real: Some(Vec::new()),
+            complex: false,
+            complex_parts: None,
+            fields: Vec::new(),
+            cells: Vec::new(),
+            text: None,
+            opaque: None,
+            object_class: None,
+        }
+    }
+
+    /// Its dimensions as MATLAB writes them: `60000 x 2`.
+    pub fn shape(&self) -> String {
+        let dims: Vec<String> = self.dims.iter().map(usize::to_string).collect();
+        dims.join(" x ")
+    }
 }
 
 /// Deepest struct nesting decoded.
 const MAX_DEPTH: usize = 32;
+const MX_CELL: u32 = 1;
 const MX_STRUCT: u32 = 2;
+const MX_OBJECT: u32 = 3;
+const MX_CHAR: u32 = 4;
+const MX_OPAQUE: u32 = 17;
 
 struct Reader<'a> {
     bytes: &'a [u8],
@@ -147,7 +196,9 @@ fn class_name(class: u32) -> &'static str {
     }
 }
 
-/// The variables of a level-5 MAT-file (after the header checks of the caller).
+/// The variables of a level-5 MAT-file (after the header checks of the
+/// caller). A file with MATLAB objects ends in a variable without a name:
+/// the subsystem ([`crate::mcos`]) that holds their properties.
 pub fn variables(bytes: &[u8]) -> Result<Vec<Variable>, String> {
     const HEADER: usize = 128;
     if bytes.len() < HEADER {
@@ -161,16 +212,25 @@ pub fn variables(bytes: &[u8]) -> Result<Vec<Variable>, String> {
         b"MI" => false,
         _ => return Err("not a MAT-file: no endian indicator (IM or MI) at byte 126".into()),
     };
+    body(bytes, HEADER, little, &mut 0)
+}
+
+/// The variables of a MAT-file body: data elements from `start` to the end.
+pub(crate) fn body(
+    bytes: &[u8],
+    start: usize,
+    little: bool,
+    decoded: &mut usize,
+) -> Result<Vec<Variable>, String> {
     let file = Reader { bytes, little };
     let mut out = Vec::new();
-    let mut decoded = 0usize;
-    let mut at = HEADER;
+    let mut at = start;
     while at < bytes.len() {
         let (kind, range, next) = file.element(at)?;
         match kind {
             MI_MATRIX => out.push(matrix(&file, range, at, 0)?),
             MI_COMPRESSED => {
-                let inflated = inflate(&bytes[range], little, at, &mut decoded)?;
+                let inflated = inflate(&bytes[range], little, at, decoded)?;
                 let inner = Reader {
                     bytes: &inflated,
                     little,
@@ -249,7 +309,8 @@ fn matrix(
         Ok((kind, range))
     };
     if range.is_empty() {
-        return Err(format!("empty variable element at byte {at}"));
+        // MATLAB's canonical empty array (a cell element or field left [])
+        return Ok(Variable::empty(""));
     }
     let (_, flags) = next()?;
     let flags = r.numbers(6, &r.bytes[flags])?;
@@ -258,6 +319,28 @@ fn matrix(
         .ok_or(format!("variable at byte {at} has no array flags"))? as u32;
     let class = flags & 0xff;
     let complex = flags & 0x0800 != 0;
+    let text =
+        |range: std::ops::Range<usize>| String::from_utf8_lossy(&r.bytes[range]).into_owned();
+    if class == MX_OPAQUE {
+        // no dimensions: name, type system, class name, then the metadata array
+        let (_, name) = next()?;
+        let (_, system) = next()?;
+        let (_, class_name) = next()?;
+        let (kind, metadata) = next()?;
+        if kind != MI_MATRIX {
+            return Err(format!("the object at byte {at} has no metadata array"));
+        }
+        let mut var = Variable::empty(&text(name));
+        var.class = "opaque";
+        var.dims = Vec::new();
+        var.real = None;
+        var.opaque = Some(Box::new(Opaque {
+            type_system: text(system),
+            class_name: text(class_name),
+            metadata: matrix(r, metadata, at, depth + 1)?,
+        }));
+        return Ok(var);
+    }
     let (_, dims) = next()?;
     let dims: Vec<usize> = r
         .numbers(5, &r.bytes[dims])?
@@ -267,23 +350,84 @@ fn matrix(
     let (_, name) = next()?;
     let name = String::from_utf8_lossy(&r.bytes[name]).into_owned();
     let numeric = (6..=15).contains(&class);
-    let real = if numeric && !complex {
+    let expected = dims.iter().try_fold(1usize, |a, d| a.checked_mul(*d));
+    let part = || -> Result<Vec<f64>, String> {
         let (kind, data) = next()?;
         let values = r.numbers(kind, &r.bytes[data])?;
-        let expected = dims.iter().try_fold(1usize, |a, d| a.checked_mul(*d));
         if expected != Some(values.len()) {
             return Err(format!(
                 "variable {name}: {} values for dimensions {dims:?}",
                 values.len()
             ));
         }
-        Some(values)
-    } else {
-        None
+        Ok(values)
     };
+    let (real, complex_parts) = match (numeric, complex) {
+        (true, false) => (Some(part()?), None),
+        // a complex array is no channel, but a MATLAB datetime keeps its
+        // milliseconds in the real part and their fraction in the imaginary
+        (true, true) => {
+            let re = part()?;
+            (None, Some((re, part()?)))
+        }
+        _ => (None, None),
+    };
+    let count = dims.iter().try_fold(1usize, |a, d| a.checked_mul(*d));
+    let mut object_class = None;
+    if class == MX_OBJECT {
+        let (_, class_name) = next()?;
+        object_class = Some(text(class_name));
+    }
+    let mut cells = Vec::new();
+    if class == MX_CELL {
+        // each element is an miMATRIX of at least its 8-byte tag
+        let n = count.filter(|n| *n <= (end - p.get()) / 8).ok_or_else(|| {
+            format!("cell array {name}: dimensions {dims:?} for the bytes it holds")
+        })?;
+        for _ in 0..n {
+            let (kind, range) = next()?;
+            if kind != MI_MATRIX {
+                return Err(format!(
+                    "cell array {name}: an element is not a MATLAB array"
+                ));
+            }
+            cells.push(matrix(r, range, at, depth + 1)?);
+        }
+    }
+    let mut chars = None;
+    if class == MX_CHAR && !complex && p.get() < end {
+        let (kind, data) = next()?;
+        let units: Vec<u32> = match kind {
+            16 => String::from_utf8_lossy(&r.bytes[data])
+                .chars()
+                .map(u32::from)
+                .collect(),
+            1 | 2 | 17 => r.bytes[data].iter().map(|b| u32::from(*b)).collect(),
+            _ => r
+                .numbers(kind, &r.bytes[data])?
+                .into_iter()
+                .map(|v| v as u32)
+                .collect(),
+        };
+        // the rows come from the dimensions: no more than there are characters
+        let rows = dims
+            .first()
+            .copied()
+            .unwrap_or(1)
+            .clamp(1, units.len().max(1));
+        let cols = units.len() / rows;
+        let lines: Vec<String> = (0..rows)
+            .map(|i| {
+                (0..cols)
+                    .filter_map(|j| char::from_u32(units[j * rows + i]))
+                    .collect()
+            })
+            .collect();
+        chars = Some(lines.join("\n"));
+    }
     let mut fields = Vec::new();
     // a struct without its field parts (an empty struct) has no fields
-    if class == MX_STRUCT && dims.iter().product::<usize>() == 1 && p.get() < end {
+    if (class == MX_STRUCT || class == MX_OBJECT) && count == Some(1) && p.get() < end {
         // field name length, the names (each that many bytes, NUL-padded), then one miMATRIX per field
         let (kind, len) = next()?;
         let len = r
@@ -319,13 +463,29 @@ fn matrix(
         dims,
         real,
         complex,
+        complex_parts,
         fields,
+        cells,
+        text: chars,
+        opaque: None,
+        object_class,
     })
 }
 
-/// Every variable and struct field as (dotted path, values of a real numeric
-/// vector or `None`, why it is not a channel).
+/// Most columns of a matrix read as channels (`m(:,1)` .. `m(:,k)`).
+const MAX_COLUMNS: usize = 1024;
+
+/// Every variable, struct field and object property as (dotted path, values
+/// of a real numeric vector or `None`, why it is not a channel). A real
+/// matrix gives its columns in MATLAB's syntax, `rec.data(:,2)`; a real
+/// scalar is kept as a scalar (a sample increment for `[time]`); an object
+/// is described with its class and properties, which are read as fields.
 pub fn flatten(vars: Vec<Variable>, prefix: &str, out: &mut Vec<crate::sources::Found>) {
+    walk(vars, prefix, false, out);
+}
+
+fn walk(vars: Vec<Variable>, prefix: &str, in_object: bool, out: &mut Vec<crate::sources::Found>) {
+    use crate::sources::Listing;
     for var in vars {
         let path = if prefix.is_empty() {
             var.name.clone()
@@ -334,11 +494,94 @@ pub fn flatten(vars: Vec<Variable>, prefix: &str, out: &mut Vec<crate::sources::
         };
         let samples: usize = var.dims.iter().product();
         let vector = var.dims.len() == 2 && var.dims.contains(&1) && samples > 1;
-        let dims: Vec<String> = var.dims.iter().map(usize::to_string).collect();
-        let described = format!("{path} ({}, {})", dims.join(" x "), var.class);
-        if !var.fields.is_empty() {
-            flatten(var.fields, &path, out);
+        let described = format!("{path} ({}, {})", var.shape(), var.class);
+        let is_object = var.object_class.is_some();
+        let mut found = |values: Option<Vec<f64>>,
+                         why_not: Option<String>,
+                         scalar: Option<f64>,
+                         path: String| {
+            let listing = if is_object {
+                Listing::Object
+            } else if in_object {
+                Listing::Quiet
+            } else {
+                Listing::Unread
+            };
+            out.push(crate::sources::Found {
+                values,
+                path,
+                why_not,
+                scalar,
+                listing,
+            })
+        };
+        if let Some(class) = &var.object_class {
+            let properties: Vec<String> = var.fields.iter().map(property_summary).collect();
+            found(
+                None,
+                Some(format!(
+                    "{path}: a {class} object; properties {}",
+                    if properties.is_empty() {
+                        "none".to_string()
+                    } else {
+                        properties.join(", ")
+                    }
+                )),
+                None,
+                path.clone(),
+            );
+            walk(var.fields, &path, true, out);
             continue;
+        }
+        if !var.fields.is_empty() {
+            walk(var.fields, &path, in_object, out);
+            continue;
+        }
+        if let Some(o) = &var.opaque {
+            found(
+                None,
+                Some(format!(
+                    "{path}: a {} object ({}) whose properties could not be read",
+                    o.class_name, o.type_system
+                )),
+                None,
+                path.clone(),
+            );
+            continue;
+        }
+        let matrix = var.dims.len() == 2 && var.dims[0] > 1 && var.dims[1] > 1;
+        match (&var.real, var.complex) {
+            (Some(real), false) if matrix && var.dims[1] <= MAX_COLUMNS => {
+                let rows = var.dims[0];
+                found(
+                    None,
+                    Some(format!(
+                        "{described}: a matrix; its columns are {path}(:,1) to {path}(:,{})",
+                        var.dims[1]
+                    )),
+                    None,
+                    path.clone(),
+                );
+                for (k, column) in real.chunks_exact(rows).enumerate() {
+                    found(
+                        Some(column.to_vec()),
+                        None,
+                        None,
+                        format!("{path}(:,{})", k + 1),
+                    );
+                }
+                continue;
+            }
+            (Some(real), false) if samples == 1 => {
+                found(
+                    None,
+                    Some(format!("{described}: a scalar, not a vector")),
+                    Some(real[0]),
+                    path.clone(),
+                );
+                continue;
+            }
+            _ => {}
         }
         let why_not = if var.complex {
             Some(format!("{described}: complex values"))
@@ -356,10 +599,41 @@ pub fn flatten(vars: Vec<Variable>, prefix: &str, out: &mut Vec<crate::sources::
         } else {
             None
         };
-        out.push(crate::sources::Found {
-            values: if why_not.is_none() { var.real } else { None },
-            path,
+        found(
+            if why_not.is_none() { var.real } else { None },
             why_not,
-        });
+            None,
+            path,
+        );
     }
+}
+
+/// A property as `limpid inspect` lists it: short text and scalars by value
+/// (`domainIncr = 0.001`, `chanNames = {'pos1', 'tq1'}`), the rest by shape
+/// and class.
+fn property_summary(f: &Variable) -> String {
+    let short = |t: &str| {
+        let t: String = t.chars().take(40).collect();
+        format!("'{t}'")
+    };
+    if let Some(c) = &f.object_class {
+        return format!("{} ({c} object)", f.name);
+    }
+    if let Some(t) = &f.text {
+        return format!("{} = {}", f.name, short(t));
+    }
+    if let (Some(real), false) = (&f.real, f.complex) {
+        if real.len() == 1 {
+            return format!("{} = {}", f.name, limpid_core::error::Num(real[0]));
+        }
+    }
+    if !f.cells.is_empty() && f.cells.len() <= 8 && f.cells.iter().all(|c| c.text.is_some()) {
+        let texts: Vec<String> = f
+            .cells
+            .iter()
+            .map(|c| short(c.text.as_deref().unwrap_or("")))
+            .collect();
+        return format!("{} = {{{}}}", f.name, texts.join(", "));
+    }
+    format!("{} ({}, {})", f.name, f.shape(), f.class)
 }

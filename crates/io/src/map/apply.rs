@@ -184,6 +184,7 @@ pub fn apply_partial(source: &Source, map: &ChannelMap) -> Result<Converted> {
         time: TimeSpec {
             stream,
             rate: map.time.rate,
+            increment: map.time.increment.clone(),
         },
         columns: kept,
         // rules of streams this file lacks do not apply to it
@@ -383,13 +384,36 @@ fn time_base<'s>(
         stamps.clone()
     } else if let Some(rate) = map.time.rate {
         (0..base.len()).map(|i| i as f64 / rate).collect()
+    } else if let Some(name) = &map.time.increment {
+        let step = scalar_increment(source, name, map_name)?;
+        (0..base.len()).map(|i| i as f64 * step).collect()
     } else {
         return Err(source.error(format!(
-            "{map_name}: {} has no time stamps; map a t column (t = {{ channel = \"...\", unit = \"s\" }}) or give [time] rate = <Hz>",
+            "{map_name}: {} has no time stamps; map a t column (t = {{ channel = \"...\", unit = \"s\" }}) or give [time] rate = <Hz> (or increment = \"<a scalar of the file, in s>\")",
             base.label()
         )));
     };
     Ok((base, base_time))
+}
+
+/// The sampling interval (s) a map's `[time] increment` names: a real
+/// scalar of the file, above 0 and finite.
+fn scalar_increment(source: &Source, name: &str, map_name: &str) -> Result<f64> {
+    let found = source.scalars.iter().find(|(p, _)| p == name);
+    match found {
+        Some((_, v)) if v.is_finite() && *v > 0.0 && *v <= 1e6 => Ok(*v),
+        Some((_, v)) => Err(source.error(format!(
+            "{map_name}: [time] increment = {name:?} is {}, not a sampling interval in seconds",
+            limpid_core::error::Num(*v)
+        ))),
+        None => {
+            let names: Vec<&str> = source.scalars.iter().map(|(p, _)| p.as_str()).collect();
+            Err(source.error(format!(
+                "{map_name}: [time] increment: no scalar {name:?} in the file{}",
+                nearest_hint(name, &names)
+            )))
+        }
+    }
 }
 
 /// The rows of the time base `first..last` that every other used stream

@@ -6,6 +6,8 @@
 //! ```toml
 //! [time]
 //! stream = "robot"          # the stream whose stamps are the recording's t
+//! # rate = 1000 (Hz), or increment = "z.domainIncr" (a scalar in the file, s),
+//! # for a table without a time column
 //! [columns]
 //! x  = { channel = "EndEff.X", unit = "mm" }
 //! fx = { channel = "Force.Fx", unit = "N", scale = -1.0 }
@@ -68,6 +70,9 @@ pub struct TimeSpec {
     pub stream: Option<String>,
     /// Sample rate (Hz) of a table without a time column.
     pub rate: Option<f64>,
+    /// Or the file's own scalar that holds the sampling interval in
+    /// seconds (a MAT object's `z.domainIncr`).
+    pub increment: Option<String>,
 }
 
 /// A `[streams."name"]` table: how a stream's stamps are taken.
@@ -184,6 +189,9 @@ impl ChannelMap {
                 }
             }
         }
+        if self.time.rate.is_some() && self.time.increment.is_some() {
+            return Err("[time] gives both rate and increment; keep one".into());
+        }
         if let Some(rate) = self.time.rate {
             if !(rate.is_finite() && rate > 0.0 && rate <= 1e7) {
                 return Err(format!(
@@ -298,6 +306,7 @@ impl ChannelMap {
             time: TimeSpec {
                 stream: Some(best.name.clone()),
                 rate: None,
+                increment: None,
             },
             columns,
             streams: BTreeMap::new(),

@@ -279,6 +279,14 @@ fn check_layout(bytes: &[u8]) -> std::result::Result<(), String> {
         .saturating_mul(4)
         .saturating_add(l.analog_per_frame))
     .saturating_mul(l.value_bytes);
+    if frame == 0 {
+        // frames of nothing: the decoder would loop over a declared count
+        // (up to 2^32 with POINT:LONG_FRAMES) without reading a byte
+        return Err(format!(
+            "the header and parameters declare {} frames but no point and no analog channel (POINT:USED {}, {} analog samples per frame)",
+            l.frames, l.points, l.analog_per_frame
+        ));
+    }
     if frame > l.data_bytes {
         return Err(format!(
             "the header declares frames of {frame} bytes ({} points, {} analog samples each), more than the {} bytes of data in the file (corrupt header?)",
@@ -332,6 +340,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         streams,
         notes: Vec::new(),
         unread: Vec::new(),
+        scalars: Vec::new(),
     })
 }
 

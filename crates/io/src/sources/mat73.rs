@@ -262,6 +262,8 @@ fn walk(
             path,
             values,
             why_not,
+            scalar: None,
+            listing: Default::default(),
         });
     }
     for g in groups {
@@ -287,6 +289,8 @@ fn walk(
                 )),
                 path,
                 values: None,
+                scalar: None,
+                listing: Default::default(),
             }),
         }
     }

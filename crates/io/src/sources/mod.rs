@@ -32,6 +32,9 @@ pub struct Source {
     /// Variables present but not read as channels (a matrix, a cell, an
     /// empty array), each with why: a map that names one is told its shape.
     pub unread: Vec<(String, String)>,
+    /// Real scalars by path (a MAT file's sample increment), for a map's
+    /// `[time] increment`.
+    pub scalars: Vec<(String, f64)>,
 }
 
 /// One stream: channels sampled together on one clock.
@@ -205,6 +208,22 @@ pub struct Found {
     pub values: Option<Vec<f64>>,
     /// Why it is not a channel otherwise.
     pub why_not: Option<String>,
+    /// Its value when it is a real scalar.
+    pub scalar: Option<f64>,
+    /// How it is listed in the notes when it is not a channel.
+    pub listing: Listing,
+}
+
+/// How a variable that is not a channel appears in the notes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Listing {
+    /// In the note of variables not read.
+    #[default]
+    Unread,
+    /// A MATLAB object: a note of its own (class and properties).
+    Object,
+    /// A property of an object already described: not listed again.
+    Quiet,
 }
 
 /// A MAT-file's vectors as one stream: those of the most common length;
@@ -240,7 +259,12 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
     let mut skipped = Vec::new();
     let mut unread = Vec::new();
     let mut channels = Vec::new();
+    let mut scalars = Vec::new();
+    let mut objects = Vec::new();
     for f in found {
+        if let Some(v) = f.scalar {
+            scalars.push((f.path.clone(), v));
+        }
         match f.values {
             Some(values) if values.len() == length => channels.push(Channel {
                 name: f.path,
@@ -250,23 +274,28 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
             Some(values) => {
                 let why = format!("{} ({} samples, not {length})", f.path, values.len());
                 unread.push((f.path, why.clone()));
-                skipped.push(why);
+                if f.listing != Listing::Quiet {
+                    skipped.push(why);
+                }
             }
             None => {
                 let why = f.why_not.unwrap_or_else(|| f.path.clone());
                 unread.push((f.path, why.clone()));
-                skipped.push(why);
+                match f.listing {
+                    Listing::Unread => skipped.push(why),
+                    Listing::Object => objects.push(format!("MATLAB object {why}")),
+                    Listing::Quiet => {}
+                }
             }
         }
     }
-    let notes = if skipped.is_empty() {
-        Vec::new()
-    } else {
-        vec![format!(
+    let mut notes = objects;
+    if !skipped.is_empty() {
+        notes.push(format!(
             "MAT variables not read as channels: {}",
             skipped.join("; ")
-        )]
-    };
+        ));
+    }
     Ok(Source {
         path: path.to_path_buf(),
         format,
@@ -276,6 +305,7 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
         }],
         notes,
         unread,
+        scalars,
     })
 }
 
@@ -363,6 +393,7 @@ impl Source {
             }],
             notes: table.warnings,
             unread: Vec::new(),
+            scalars: Vec::new(),
         }
     }
 

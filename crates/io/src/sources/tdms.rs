@@ -453,5 +453,6 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         streams,
         notes: Vec::new(),
         unread: Vec::new(),
+        scalars: Vec::new(),
     })
 }

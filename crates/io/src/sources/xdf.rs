@@ -19,8 +19,13 @@
 //!   corrected = stamp + offset, the offset interpolated linearly between
 //!   the collection times of the ClockOffset records (held beyond them);
 //! - a string stream becomes markers (its first channel's text); a numeric
-//!   stream whose corrected stamps go backwards is refused, naming the
-//!   stream and sample.
+//!   stream whose corrected clock jumps back (a reset) keeps its longest
+//!   stretch without a jump, the jumps reported by stream, sample and time;
+//!   one that stands still (a stamp twice) is refused;
+//! - a stream without clock offsets, in a file of several streams, is used
+//!   on its own clock, with a warning;
+//! - a file that ends inside a chunk (a recording cut off, no footers) is
+//!   read up to its last whole chunk, with a warning naming the byte.
 //!
 //! Bounds: every length is checked against the bytes that are there before
 //! anything is allocated; the file is read whole up to [`MAX_XDF_BYTES`].
@@ -128,7 +133,18 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     let mut notes = Vec::new();
     while file.left() > 0 {
         let chunk_at = file.at;
-        let length = file.varlen("chunk length").map_err(&fail)?;
+        let length = match file.varlen("chunk length") {
+            Ok(length) => length,
+            Err(_) if !order.is_empty() => {
+                notes.push(cut_note(chunk_at, None, file.bytes.len()));
+                break;
+            }
+            Err(m) => return Err(fail(m)),
+        };
+        if length >= 2 && length > file.left() as u64 && !order.is_empty() {
+            notes.push(cut_note(chunk_at, Some(length), file.bytes.len()));
+            break;
+        }
         if length < 2 || length > file.left() as u64 {
             return Err(fail(format!(
                 "byte {chunk_at}: a chunk of {length} bytes, but {} are left in the file{}",
@@ -198,10 +214,21 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
     if order.is_empty() {
         return Err(fail("the XDF file holds no stream header".into()));
     }
+    let several = order.len() > 1;
+    let mut own_clock = Vec::new();
     let mut out = Vec::with_capacity(order.len());
     for id in order {
         let b = streams.remove(&id).expect("stream of the order list");
-        out.push(finish(b).map_err(&fail)?);
+        if several && b.offsets.is_empty() {
+            own_clock.push(format!("{:?}", b.stream.name));
+        }
+        out.push(finish(b, &mut notes).map_err(&fail)?);
+    }
+    if !own_clock.is_empty() {
+        notes.push(format!(
+            "no clock offsets for stream(s) {}: used on their own clock, uncorrected (aligned with the others only if they share one machine's clock)",
+            own_clock.join(", ")
+        ));
     }
     Ok(Source {
         path: path.to_path_buf(),
@@ -209,6 +236,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         streams: out,
         notes,
         unread: Vec::new(),
+        scalars: Vec::new(),
     })
 }
 
@@ -381,8 +409,23 @@ fn samples(s: &mut Building, c: &mut Cursor) -> std::result::Result<(), String> 
     Ok(())
 }
 
-/// Apply the clock offsets and check the stamps.
-fn finish(mut b: Building) -> std::result::Result<Stream, String> {
+/// The note for a file that ends inside the chunk starting at `at`.
+fn cut_note(at: usize, declared: Option<u64>, size: usize) -> String {
+    format!(
+        "the file ends inside the chunk at byte {at}{}: read up to there, the last whole chunk (a recording cut off?)",
+        declared
+            .map(|n| format!(
+                " ({n} bytes declared, {} there)",
+                size.saturating_sub(at)
+            ))
+            .unwrap_or_default()
+    )
+}
+
+/// Apply the clock offsets and check the stamps. A numeric stream whose
+/// clock jumps back (a reset) keeps its longest stretch without a jump;
+/// the jumps and what was left out are noted.
+fn finish(mut b: Building, notes: &mut Vec<String>) -> std::result::Result<Stream, String> {
     let name = b.stream.name.clone();
     b.offsets.sort_by(|a, b| a.0.total_cmp(&b.0));
     if !b.offsets.is_empty() {
@@ -404,11 +447,55 @@ fn finish(mut b: Building) -> std::result::Result<Stream, String> {
         b.stream.stamps = Some(b.stamps);
         return Ok(b.stream);
     }
+    let jumps: Vec<usize> = b
+        .stamps
+        .windows(2)
+        .enumerate()
+        .filter(|(_, w)| w[1] < w[0])
+        .map(|(i, _)| i + 1)
+        .collect();
+    if !jumps.is_empty() {
+        let described: Vec<String> = jumps
+            .iter()
+            .take(5)
+            .map(|&i| {
+                format!(
+                    "at sample {} back by {} s (from {} s to {} s)",
+                    i + 1,
+                    limpid_core::error::significant(b.stamps[i - 1] - b.stamps[i], 4),
+                    limpid_core::error::significant(b.stamps[i - 1], 9),
+                    limpid_core::error::significant(b.stamps[i], 9)
+                )
+            })
+            .collect();
+        let mut bounds = vec![0];
+        bounds.extend(&jumps);
+        bounds.push(b.stamps.len());
+        let (from, to) = bounds
+            .windows(2)
+            .map(|w| (w[0], w[1]))
+            .max_by_key(|(a, z)| z - a)
+            .expect("two bounds at least");
+        notes.push(format!(
+            "stream {name:?}: the clock jumps back {} time(s) (a clock reset?): {}{}; samples {} to {} ({} s to {} s), the longest stretch without a jump, are read, {} left out",
+            jumps.len(),
+            described.join("; "),
+            if jumps.len() > 5 { "; ..." } else { "" },
+            from + 1,
+            to,
+            limpid_core::error::significant(b.stamps[from], 9),
+            limpid_core::error::significant(b.stamps[to - 1], 9),
+            b.stamps.len() - (to - from)
+        ));
+        b.stamps = b.stamps[from..to].to_vec();
+        for ch in &mut b.stream.channels {
+            ch.values = ch.values[from..to].to_vec();
+        }
+    }
     if let Some(i) = b.stamps.windows(2).position(|w| w[1] <= w[0]) {
         return Err(format!(
-            "stream {name:?}, sample {}: the clock goes backwards or stands still ({} s after {} s)",
+            "stream {name:?}, sample {}: the clock stands still ({} s twice)",
             i + 2,
-            b.stamps[i + 1],
             b.stamps[i]
         ));
     }

@@ -295,6 +295,40 @@ fn declared_sizes_beyond_the_file_are_refused_without_allocating_them() {
 }
 
 #[test]
+fn a_c3d_file_declaring_frames_of_nothing_is_refused_before_the_decoder() {
+    // POINT:USED and ANALOG:USED set to 0 and the header's analog samples
+    // per frame too: its frames hold no byte
+    let mut whole = std::fs::read(fixture("rig.c3d")).unwrap();
+    whole[2..4].copy_from_slice(&[0, 0]);
+    whole[4..6].copy_from_slice(&[0, 0]);
+    let found: Vec<usize> = whole
+        .windows(4)
+        .enumerate()
+        .filter(|(i, w)| {
+            *w == b"USED" && (whole[i - 2] as i8).unsigned_abs() == 4 && whole[i + 6] == 2
+        })
+        .map(|(i, _)| i)
+        .collect();
+    assert!(found.len() >= 2, "POINT:USED and ANALOG:USED");
+    for i in found {
+        // name (its length negative when locked), 2-byte offset to the next record, type 2, 0 dimensions, the value
+        assert_eq!(whole[i + 6], 2);
+        whole[i + 8..i + 10].copy_from_slice(&[0, 0]);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("nothing.c3d");
+    std::fs::write(&path, whole).unwrap();
+    let e = limpid_io::sources::read_source(&path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("nothing.c3d") && e.contains("no point and no analog channel"),
+        "{e}"
+    );
+    assert_eq!(e.lines().count(), 1);
+}
+
+#[test]
 fn an_hdf5_group_that_links_to_itself_is_read_once() {
     let source = limpid_io::sources::read_source(&fixture("cyclic.mat")).unwrap();
     let names: Vec<&str> = source.streams[0]
@@ -333,17 +367,28 @@ fn xdf_with_stamps(stamps: &[f64]) -> Vec<u8> {
 }
 
 #[test]
-fn an_xdf_stream_whose_clock_goes_backwards_is_refused_naming_stream_and_sample() {
+fn an_xdf_clock_reset_is_reported_by_stream_sample_and_time_and_the_longest_stretch_read() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("back.xdf");
     std::fs::write(&path, xdf_with_stamps(&[1.0, 1.01, 1.02, 1.015, 1.03])).unwrap();
+    let source = limpid_io::sources::read_source(&path).unwrap();
+    let notes = source.notes.join("\n");
+    assert!(
+        notes.contains("stream \"robot\": the clock jumps back 1 time(s)")
+            && notes.contains("at sample 4 back by 0.005 s (from 1.02 s to 1.015 s)")
+            && notes.contains("samples 1 to 3"),
+        "{notes}"
+    );
+    assert_eq!(source.streams[0].channels[0].values, [0.0, 1.0, 2.0]);
+    // a clock that stands still is refused, naming stream and sample
+    std::fs::write(&path, xdf_with_stamps(&[1.0, 1.01, 1.01, 1.03])).unwrap();
     let e = limpid_io::sources::read_source(&path)
         .unwrap_err()
         .to_string();
     assert!(
         e.contains("back.xdf")
-            && e.contains("stream \"robot\", sample 4")
-            && e.contains("backwards"),
+            && e.contains("stream \"robot\", sample 3")
+            && e.contains("stands still"),
         "{e}"
     );
     // a drop-out in the time base is named too, not interpolated over
@@ -355,6 +400,49 @@ fn an_xdf_stream_whose_clock_goes_backwards_is_refused_naming_stream_and_sample(
     assert!(
         e.contains("stream \"robot\", sample 4") && e.contains("dropped samples"),
         "{e}"
+    );
+}
+
+#[test]
+fn an_xdf_file_cut_off_is_read_to_its_last_whole_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cut.xdf");
+    // header and a samples chunk of two, then a second samples chunk cut short
+    let header_end = xdf_with_stamps(&[]).len() - 16;
+    let mut bytes = xdf_with_stamps(&[1.0, 1.01]);
+    let second = xdf_with_stamps(&[1.02, 1.03]);
+    bytes.extend_from_slice(&second[header_end..second.len() - 3]);
+    std::fs::write(&path, &bytes).unwrap();
+    let source = limpid_io::sources::read_source(&path).unwrap();
+    let notes = source.notes.join("\n");
+    let at = xdf_with_stamps(&[1.0, 1.01]).len();
+    assert!(
+        notes.contains(&format!("the file ends inside the chunk at byte {at}")),
+        "{notes}"
+    );
+    assert_eq!(source.streams[0].len(), 2);
+    // cut inside the length field of the next chunk
+    std::fs::write(&path, &bytes[..at + 2]).unwrap();
+    let source = limpid_io::sources::read_source(&path).unwrap();
+    assert!(source.notes.join(" ").contains("ends inside the chunk"));
+    // before any stream header: nothing to read, one line
+    std::fs::write(&path, &bytes[..10]).unwrap();
+    let e = limpid_io::sources::read_source(&path)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e.lines().count(), 1, "{e}");
+}
+
+#[test]
+fn xdf_streams_without_clock_offsets_are_named_in_a_warning() {
+    let source = limpid_io::sources::read_source(&fixture("rig.xdf")).unwrap();
+    let notes = source.notes.join("\n");
+    // rig.xdf: the EMG stream has ClockOffset records, the robot and marker streams none
+    assert!(
+        notes.contains(
+            "no clock offsets for stream(s) \"robot\", \"markers\": used on their own clock"
+        ),
+        "{notes}"
     );
 }
 
@@ -527,9 +615,22 @@ fn a_map_naming_a_matrix_is_told_its_shape() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("map column x: note (3 x 2, double): not a vector"),
+        e.contains(
+            "map column x: note (3 x 2, double): a matrix; its columns are note(:,1) to note(:,2)"
+        ),
         "{e}"
     );
+    // a column of it names its length
+    std::fs::write(
+        dir.path().join("c.toml"),
+        "[columns]\nt = \"t\"\nx = \"note(:,2)\"\nfx = \"fx\"\n",
+    )
+    .unwrap();
+    let map = ChannelMap::read(&dir.path().join("c.toml")).unwrap();
+    let e = limpid_io::read_recording_mapped(&small, Some(&map))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("note(:,2) (3 samples, not"), "{e}");
 }
 
 /// Issue 56: an empty lab file names its format, not a CSV's header row.

@@ -108,3 +108,183 @@ fn cut_or_damaged_mat_files_give_errors_not_panics() {
         }
     }
 }
+
+/// REKLAB's `stiffnessID/experimental_data.mat` (reklab/reklab_public,
+/// GPL-2.0, kept out of this repository): five `nldat` objects saved by
+/// MATLAB, read through the MCOS subsystem. Each converts to the samples of
+/// the CSV in `$LIMPID_REAL_DATA/reklab_ankle` to its 8 printed digits
+/// (`tau1` is the negative of `dataSet(:,2)`). Set `LIMPID_REKLAB_MAT` to
+/// the file's path to run it.
+#[test]
+fn reklab_nldat_objects_convert_to_the_real_ankle_csvs() {
+    let (Some(mat), Some(real)) = (
+        std::env::var_os("LIMPID_REKLAB_MAT"),
+        std::env::var_os("LIMPID_REAL_DATA"),
+    ) else {
+        eprintln!("skipped: LIMPID_REKLAB_MAT or LIMPID_REAL_DATA is not set");
+        return;
+    };
+    let mat = std::path::PathBuf::from(mat);
+    let source = limpid_io::sources::read_source(&mat).unwrap();
+    let notes = source.notes.join("\n");
+    assert!(
+        notes.contains("z_df: a nldat object; properties"),
+        "{notes}"
+    );
+    for name in ["df", "df2", "df3", "pf", "pf2"] {
+        let map = limpid_io::map::ChannelMap::parse(&format!(
+            "[time]\nincrement = \"z_{name}.domainIncr\"\n[columns]\nq1 = \"z_{name}.dataSet(:,1)\"\ntau1 = {{ channel = \"z_{name}.dataSet(:,2)\", scale = -1.0 }}\n"
+        ))
+        .unwrap();
+        let got = limpid_io::read_recording_mapped(&mat, Some(&map)).unwrap();
+        let want = limpid_io::read_recording(
+            std::path::Path::new(&real).join(format!("reklab_ankle/{name}.csv")),
+        )
+        .unwrap();
+        assert_eq!(got.len(), want.len(), "{name}: samples");
+        for column in ["t", "q1", "tau1"] {
+            let (g, w) = (got.column(column).unwrap(), want.column(column).unwrap());
+            for (i, (a, b)) in g.iter().zip(w).enumerate() {
+                // 8 significant digits printed (t to 4 decimals)
+                let tolerance = if column == "t" {
+                    5.1e-5
+                } else {
+                    5.1e-8 * b.abs().max(1e-3)
+                };
+                assert!(
+                    (a - b).abs() <= tolerance,
+                    "{name} {column}[{i}]: {a} vs {b}"
+                );
+            }
+        }
+    }
+}
+
+mod objects {
+    //! MATLAB objects (issue 62): classdef objects, tables and timetables in
+    //! level-5 files written by mat-io (`fixtures/formats/make_mcos.py`).
+
+    use limpid_io::map::ChannelMap;
+    use limpid_io::sources::read_source;
+    use std::path::{Path, PathBuf};
+
+    fn fixture(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/formats")
+            .join(name)
+    }
+
+    fn channel<'a>(source: &'a limpid_io::sources::Source, name: &str) -> &'a [f64] {
+        &source.streams[0]
+            .channels
+            .iter()
+            .find(|c| c.name == name)
+            .unwrap_or_else(|| panic!("no channel {name}"))
+            .values
+    }
+
+    #[test]
+    fn a_classdef_object_reads_its_properties_matrix_columns_and_nested_objects() {
+        let source = read_source(&fixture("obj_v7.mat")).unwrap();
+        for k in [0, 57, 199] {
+            let t = k as f64 / 500.0;
+            let x = 0.1 * (2.0 * std::f64::consts::PI * 2.0 * t).sin();
+            let f = 5.0 * (2.0 * std::f64::consts::PI * 2.0 * t).cos();
+            assert!((channel(&source, "z.dataSet(:,1)")[k] - x).abs() < 1e-15);
+            assert!((channel(&source, "z.dataSet(:,2)")[k] - f).abs() < 1e-14);
+        }
+        assert_eq!(
+            source.scalars,
+            [
+                ("z.domainIncr".to_string(), 0.002),
+                ("z.calibration.gain".to_string(), 2.5),
+                ("fs".to_string(), 500.0)
+            ]
+        );
+        let notes = source.notes.join("\n");
+        assert!(
+            notes.contains("MATLAB object z: a nldatlike object; properties dataSet (200 x 2, double), domainIncr = 0.002, chanNames = {'pos', 'tq'}, calibration (lab.Calibration object)"),
+            "{notes}"
+        );
+        assert!(
+            notes.contains(
+                "z.calibration: a lab.Calibration object; properties gain = 2.5, label = 'sensor'"
+            ),
+            "{notes}"
+        );
+        // the time from the object's increment
+        let map = ChannelMap::parse(
+            "[time]\nincrement = \"z.domainIncr\"\n[columns]\nq1 = \"z.dataSet(:,1)\"\ntau1 = { channel = \"z.dataSet(:,2)\", scale = -1.0 }\n",
+        )
+        .unwrap();
+        let rec = limpid_io::read_recording_mapped(fixture("obj_v7.mat"), Some(&map)).unwrap();
+        assert!((rec.sample_rate() - 500.0).abs() < 1e-9);
+        assert_eq!(rec.column("tau1").unwrap()[0], -5.0);
+        // a map naming the object, or a missing scalar, is told what there is
+        let map =
+            ChannelMap::parse("[time]\nincrement = \"z.domainIncr\"\n[columns]\nq1 = \"z\"\n")
+                .unwrap();
+        let e = limpid_io::read_recording_mapped(fixture("obj_v7.mat"), Some(&map))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("z: a nldatlike object"), "{e}");
+        let map = ChannelMap::parse(
+            "[time]\nincrement = \"z.domainInc\"\n[columns]\nq1 = \"z.dataSet(:,1)\"\n",
+        )
+        .unwrap();
+        let e = limpid_io::read_recording_mapped(fixture("obj_v7.mat"), Some(&map))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no scalar \"z.domainInc\"") && e.contains("z.domainIncr"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn tables_and_timetables_convert_to_their_variables_values() {
+        let table = read_source(&fixture("table_v7.mat")).unwrap();
+        assert_eq!(
+            channel(&table, "T.Angle"),
+            [0.0, 0.1, 0.2, 0.30000000000000004, 0.4]
+        );
+        assert_eq!(channel(&table, "T.Torque"), [0.0, 2.0, 4.0, 6.0, 8.0]);
+        for file in ["tt_dur.mat", "tt_dt.mat"] {
+            let tt = read_source(&fixture(file)).unwrap();
+            let time = channel(&tt, "TT.Time");
+            // mat-io stores a datetime's milliseconds without their fraction
+            // (MATLAB keeps it in the imaginary part): 0.24 us resolution in 2024
+            for (k, t) in time.iter().enumerate() {
+                assert!((t - k as f64 * 0.002).abs() < 3e-7, "{file}: {time:?}");
+            }
+            assert_eq!(channel(&tt, "TT.Torque")[5], 10.0);
+            let map = ChannelMap::parse(
+                "[columns]\nt = \"TT.Time\"\nq1 = \"TT.Angle\"\ntau1 = \"TT.Torque\"\n",
+            )
+            .unwrap();
+            let rec = limpid_io::read_recording_mapped(fixture(file), Some(&map)).unwrap();
+            assert!((rec.sample_rate() - 500.0).abs() < 1e-6, "{file}");
+        }
+    }
+
+    #[test]
+    fn corrupt_object_data_ends_in_a_note_or_a_one_line_error() {
+        // the fuzzer's uncompressed copy: every third byte flipped in turn
+        let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/seeds/rig-mcos.mat");
+        let bytes = std::fs::read(seed).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("flip.mat");
+        let mut refused = 0;
+        for at in (128..bytes.len()).step_by(3) {
+            let mut b = bytes.clone();
+            b[at] ^= 0x5a;
+            std::fs::write(&path, &b).unwrap();
+            if let Err(e) = read_source(&path) {
+                refused += 1;
+                let e = e.to_string();
+                assert_eq!(e.lines().count(), 1, "byte {at}: {e}");
+            }
+        }
+        assert!(refused > 0);
+    }
+}

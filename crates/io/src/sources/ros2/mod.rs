@@ -435,6 +435,7 @@ impl Collector {
             streams,
             notes,
             unread,
+            scalars: Vec::new(),
         })
     }
 }
