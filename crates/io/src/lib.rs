@@ -291,7 +291,8 @@ pub(crate) fn read_mat_source(path: &Path, bytes: &[u8]) -> Result<sources::Sour
     let vars = mcos::resolve(vars, &bytes[126..128] == b"IM", &mut notes);
     let mut found = Vec::new();
     mat::flatten(vars, "", &mut found);
-    let mut source = sources::vectors_source(path, "MAT", found)?;
+    let mut source =
+        sources::vectors_source(path, "MAT", found).map_err(|e| sources::with_notes(e, &notes))?;
     source.notes.extend(notes);
     Ok(source)
 }

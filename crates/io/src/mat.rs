@@ -472,6 +472,9 @@ fn matrix(
     })
 }
 
+/// MATLAB classes whose saved properties are packed words, not numbers.
+const OPAQUE_CLASSES: [&str; 3] = ["string", "function_handle", "containers.Map"];
+
 /// Most columns of a matrix read as channels (`m(:,1)` .. `m(:,k)`).
 const MAX_COLUMNS: usize = 1024;
 
@@ -516,6 +519,16 @@ fn walk(vars: Vec<Variable>, prefix: &str, in_object: bool, out: &mut Vec<crate:
             })
         };
         if let Some(class) = &var.object_class {
+            if OPAQUE_CLASSES.contains(&class.as_str()) {
+                // stored as packed words (a string's UTF-16 in uint64s): not numbers
+                found(
+                    None,
+                    Some(format!("{path}: a MATLAB {class}, not read as numbers")),
+                    None,
+                    path.clone(),
+                );
+                continue;
+            }
             let properties: Vec<String> = var.fields.iter().map(property_summary).collect();
             found(
                 None,

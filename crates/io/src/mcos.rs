@@ -56,16 +56,27 @@ struct Subsystem {
 /// drop the subsystem. What could not be resolved stays opaque and is named
 /// in the notes.
 pub(crate) fn resolve(vars: Vec<Variable>, little: bool, notes: &mut Vec<String>) -> Vec<Variable> {
-    let (subsystem, mut vars): (Vec<Variable>, Vec<Variable>) = vars
+    let (subsystem, vars): (Vec<Variable>, Vec<Variable>) = vars
         .into_iter()
         .partition(|v| v.name.is_empty() && v.class == "uint8");
     if !vars.iter().any(|v| is_mcos(v.opaque.as_deref())) {
         return vars;
     }
-    let parsed = match subsystem.last() {
-        Some(s) => Subsystem::parse(s, little),
+    let wrapper = match subsystem.last() {
+        Some(s) => wrapper_of(s, little),
         None => Err("the file has objects but no subsystem to hold their properties".into()),
     };
+    resolve_with(vars, wrapper, notes)
+}
+
+/// [`resolve`] with the FileWrapper__'s cells found another way (a v7.3
+/// file's `#subsystem#/MCOS`), or why there are none.
+pub(crate) fn resolve_with(
+    mut vars: Vec<Variable>,
+    wrapper: Result<(Vec<Variable>, bool), String>,
+    notes: &mut Vec<String>,
+) -> Vec<Variable> {
+    let parsed = wrapper.and_then(|(cells, little)| Subsystem::from_cells(cells, little));
     let sub = match parsed {
         Ok(sub) => sub,
         Err(m) => {
@@ -115,31 +126,36 @@ fn reference(metadata: &Variable) -> Option<(Vec<u32>, Vec<u32>, u32)> {
     Some((dims, ids, class))
 }
 
+/// The FileWrapper__'s cells of a level-5 subsystem (a `uint8` array that
+/// is a MAT-file body), and its byte order.
+fn wrapper_of(sub: &Variable, little: bool) -> Result<(Vec<Variable>, bool), String> {
+    let bytes: Vec<u8> = sub
+        .real
+        .as_ref()
+        .map(|r| r.iter().map(|v| *v as u8).collect())
+        .unwrap_or_default();
+    if bytes.len() < 8 {
+        return Err("the subsystem is shorter than its 8-byte header".into());
+    }
+    let little = match &bytes[2..4] {
+        b"IM" => true,
+        b"MI" => false,
+        _ => little,
+    };
+    let inner = crate::mat::body(&bytes, 8, little, &mut 0)
+        .map_err(|m| format!("the subsystem does not decode: {m}"))?;
+    let wrapper = inner
+        .into_iter()
+        .flat_map(|v| v.fields)
+        .find(|f| f.name == "MCOS")
+        .and_then(|f| f.opaque)
+        .filter(|o| o.class_name == "FileWrapper__")
+        .ok_or("the subsystem holds no MCOS FileWrapper__")?;
+    Ok((wrapper.metadata.cells, little))
+}
+
 impl Subsystem {
-    fn parse(sub: &Variable, little: bool) -> Result<Subsystem, String> {
-        let bytes: Vec<u8> = sub
-            .real
-            .as_ref()
-            .map(|r| r.iter().map(|v| *v as u8).collect())
-            .unwrap_or_default();
-        if bytes.len() < 8 {
-            return Err("the subsystem is shorter than its 8-byte header".into());
-        }
-        let little = match &bytes[2..4] {
-            b"IM" => true,
-            b"MI" => false,
-            _ => little,
-        };
-        let inner = crate::mat::body(&bytes, 8, little, &mut 0)
-            .map_err(|m| format!("the subsystem does not decode: {m}"))?;
-        let wrapper = inner
-            .into_iter()
-            .flat_map(|v| v.fields)
-            .find(|f| f.name == "MCOS")
-            .and_then(|f| f.opaque)
-            .filter(|o| o.class_name == "FileWrapper__")
-            .ok_or("the subsystem holds no MCOS FileWrapper__")?;
-        let mut cells = wrapper.metadata.cells;
+    fn from_cells(mut cells: Vec<Variable>, little: bool) -> Result<Subsystem, String> {
         if cells.len() < 3 {
             return Err(format!(
                 "the FileWrapper__ holds {} cells, fewer than 3",
@@ -395,7 +411,8 @@ fn tabulated(mut v: Variable) -> Variable {
 }
 
 /// A MATLAB `table` or `timetable` object's properties replaced by its
-/// variables, each named by its variable name (`T.Angle`), and a
+/// variables, each named by its variable name (`T.Angle`; a duration or
+/// datetime variable in seconds as row times are), and a
 /// timetable's row times by its first dimension name (`TT.Time`) in
 /// seconds: a `duration` as stored, a `datetime` counted from the first
 /// row. The properties sit on the object or, saved through `saveobj`, in
@@ -419,12 +436,21 @@ fn tabular(v: &mut Variable) {
     if data.cells.len() != names.len() {
         return;
     }
+    // variables by name; durations and datetimes as seconds
     let mut fields: Vec<Variable> = data
         .cells
         .iter()
         .zip(&names)
         .map(|(c, n)| {
-            let mut c = c.clone();
+            let mut c = match row_seconds(c) {
+                Some(seconds) => {
+                    let mut t = Variable::empty(n);
+                    t.dims = vec![seconds.len(), 1];
+                    t.real = Some(seconds);
+                    t
+                }
+                None => c.clone(),
+            };
             c.name = n.clone();
             c
         })

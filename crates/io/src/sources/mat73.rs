@@ -9,9 +9,10 @@
 //! column-major, so an N x 1 vector is stored 1 x N: either way it is a
 //! vector. The stream holds the vectors of the most common length; others
 //! (and scalars, matrices, strings) are listed in a note. Refused with the
-//! variable's name and class when named by a map: cell arrays, MATLAB
-//! objects such as `table` (save with `table2struct(T, 'ToScalar', true)`),
-//! sparse and complex arrays.
+//! variable's name and class when named by a map: cell arrays, sparse and
+//! complex arrays. MATLAB objects (classdef, `table`, `timetable`: datasets
+//! with `MATLAB_object_decode` 3) are resolved through `#subsystem#/MCOS`
+//! as in level-5 files ([`crate::mcos`], issue 62).
 
 use std::path::Path;
 
@@ -86,6 +87,7 @@ fn element_bytes(d: &Dataset) -> u64 {
 }
 
 use super::Found;
+use crate::mat::{Opaque, Variable};
 
 fn class_of_dataset(d: &Dataset) -> Option<String> {
     d.attribute("MATLAB_class")
@@ -311,6 +313,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
         })
     })?;
     let mut found = Vec::new();
+    let mut notes = Vec::new();
     limpid_core::error::catch_panic(path, "HDF5 decoder (corrupt file)", || {
         let root = file
             .root_group()
@@ -324,7 +327,247 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Source> {
             &mut budget,
             &mut found,
         )
-        .map_err(|m| fail(format!("variable {m}")))
+        .map_err(|m| fail(format!("variable {m}")))?;
+        // MATLAB objects replace what the walk said of them
+        let objects = objects(&root, &mut budget, &mut notes).map_err(fail)?;
+        found.retain(|f| !objects.iter().any(|o| o.path == f.path));
+        found.extend(objects);
+        Ok(())
     })?;
-    super::vectors_source(path, "MAT v7.3", found)
+    let mut source =
+        super::vectors_source(path, "MAT v7.3", found).map_err(|e| super::with_notes(e, &notes))?;
+    source.notes.extend(notes);
+    Ok(source)
+}
+
+/// The MATLAB objects among the top-level variables (datasets with
+/// `MATLAB_object_decode` 3: their MCOS metadata), resolved through the
+/// FileWrapper__ in `#subsystem#/MCOS` whose cells are references into
+/// `#refs#`, then listed as the level-5 reader lists them ([`crate::mcos`]).
+fn objects(
+    root: &Group,
+    budget: &mut Budget,
+    notes: &mut Vec<String>,
+) -> std::result::Result<Vec<Found>, String> {
+    let (_, datasets) = root.members().map_err(|e| e.to_string())?;
+    let top: Vec<&Dataset> = datasets
+        .iter()
+        .filter(|d| !d.name().starts_with('#') && d.attribute("MATLAB_object_decode").is_ok())
+        .collect();
+    if top.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut reader = Refs {
+        refs: root.group("#refs#").ok(),
+        offset_size: root.offset_size(),
+        budget,
+        seen: Vec::new(),
+    };
+    let mut vars = Vec::new();
+    for d in top {
+        vars.push(reader.dataset(d, d.name(), 0)?);
+    }
+    let wrapper = match root.group("#subsystem#").and_then(|g| g.dataset("MCOS")) {
+        Ok(d) => reader.cells(&d, 0).map(|cells| (cells, true)),
+        Err(_) => {
+            Err("the file has objects but no #subsystem#/MCOS to hold their properties".into())
+        }
+    };
+    let vars = crate::mcos::resolve_with(vars, wrapper, notes);
+    let mut found = Vec::new();
+    crate::mat::flatten(vars, "", &mut found);
+    Ok(found)
+}
+
+/// Builds level-5 style variables from a v7.3 file's datasets and groups,
+/// following cell references into `#refs#` (each referenced object once
+/// per path: a cycle ends; depth bounded).
+struct Refs<'a> {
+    refs: Option<Group>,
+    offset_size: u8,
+    budget: &'a mut Budget,
+    seen: Vec<u64>,
+}
+
+fn static_class(class: &str) -> &'static str {
+    const CLASSES: [&str; 16] = [
+        "double",
+        "single",
+        "int8",
+        "uint8",
+        "int16",
+        "uint16",
+        "int32",
+        "uint32",
+        "int64",
+        "uint64",
+        "logical",
+        "char",
+        "cell",
+        "struct",
+        "function_handle",
+        "canonical empty",
+    ];
+    CLASSES
+        .iter()
+        .find(|c| **c == class)
+        .copied()
+        .unwrap_or("object")
+}
+
+impl Refs<'_> {
+    fn dataset(
+        &mut self,
+        d: &Dataset,
+        name: &str,
+        depth: usize,
+    ) -> std::result::Result<Variable, String> {
+        if depth > MAX_DEPTH {
+            return Err(format!(
+                "{name}: cells nested deeper than {MAX_DEPTH} levels"
+            ));
+        }
+        let class = class_of_dataset(d).unwrap_or_else(|| "double".into());
+        let dims: Vec<usize> = d.shape().iter().rev().map(|s| *s as usize).collect();
+        let mut v = Variable::empty(name);
+        v.class = static_class(&class);
+        if d.attribute("MATLAB_empty").is_ok() {
+            return Ok(v);
+        }
+        v.dims = dims;
+        if d.attribute("MATLAB_object_decode").is_ok() {
+            let metadata = if class == "FileWrapper__" {
+                let mut cell = Variable::empty("");
+                cell.class = "cell";
+                cell.real = None;
+                cell.cells = self.cells(d, depth + 1)?;
+                cell
+            } else {
+                let mut m = Variable::empty("");
+                m.class = "uint32";
+                m.dims = v.dims.clone();
+                m.real = Some(self.numbers(d, name)?);
+                m
+            };
+            v.class = "opaque";
+            v.real = None;
+            v.opaque = Some(Box::new(Opaque {
+                type_system: "MCOS".into(),
+                class_name: class,
+                metadata,
+            }));
+            return Ok(v);
+        }
+        match class.as_str() {
+            "cell" => {
+                v.real = None;
+                v.cells = self.cells(d, depth + 1)?;
+            }
+            "char" => {
+                v.real = None;
+                let units = self.numbers(d, name)?;
+                v.text = Some(
+                    units
+                        .iter()
+                        .filter_map(|u| char::from_u32(*u as u32))
+                        .collect(),
+                );
+            }
+            c if numeric_class(c) => match d.dtype() {
+                // MATLAB's complex doubles: a compound of real and imag
+                Datatype::Compound { size: 16, fields }
+                    if fields.len() == 2 && fields[1].byte_offset == 8 =>
+                {
+                    let raw = d.read_raw_bytes().map_err(|e| e.to_string())?;
+                    self.budget.take(name, 2 * raw.len() as u64)?;
+                    let pairs: Vec<(f64, f64)> = raw
+                        .chunks_exact(16)
+                        .map(|c| {
+                            let f = |b: &[u8]| f64::from_le_bytes(b.try_into().expect("8 bytes"));
+                            (f(&c[..8]), f(&c[8..]))
+                        })
+                        .collect();
+                    v.real = None;
+                    v.complex = true;
+                    v.complex_parts = Some(pairs.into_iter().unzip());
+                }
+                _ => v.real = Some(self.numbers(d, name)?),
+            },
+            _ => v.real = None,
+        }
+        Ok(v)
+    }
+
+    fn numbers(&mut self, d: &Dataset, name: &str) -> std::result::Result<Vec<f64>, String> {
+        let elements: u64 = d.shape().iter().fold(1u64, |a, &b| a.saturating_mul(b));
+        self.budget
+            .take(name, elements.saturating_mul(8 + element_bytes(d)))?;
+        read_f64(d).map_err(|m| format!("{name}: {m}"))
+    }
+
+    /// The elements a dataset of object references points to.
+    fn cells(&mut self, d: &Dataset, depth: usize) -> std::result::Result<Vec<Variable>, String> {
+        if depth > MAX_DEPTH {
+            return Err(format!("cells nested deeper than {MAX_DEPTH} levels"));
+        }
+        let raw = d.read_raw_bytes().map_err(|e| e.to_string())?;
+        self.budget.take(d.name(), raw.len() as u64)?;
+        let addresses = hdf5_reader::reference::read_object_references(&raw, self.offset_size)
+            .map_err(|e| e.to_string())?;
+        let Some(refs) = &self.refs else {
+            return Err("a cell refers to #refs#, which the file lacks".into());
+        };
+        let refs = refs.clone();
+        let mut out = Vec::with_capacity(addresses.len().min(MAX_OBJECTS));
+        for address in addresses {
+            if out.len() >= MAX_OBJECTS {
+                return Err(format!("more than {MAX_OBJECTS} cells"));
+            }
+            if self.seen.contains(&address) {
+                out.push(Variable::empty(""));
+                continue;
+            }
+            let name = refs
+                .child_name_by_address(address)
+                .map_err(|e| e.to_string())?
+                .ok_or_else(|| format!("a cell refers to address {address}, outside #refs#"))?;
+            self.seen.push(address);
+            let v = match refs.dataset(&name) {
+                Ok(child) => self.dataset(&child, "", depth),
+                Err(_) => match refs.group(&name) {
+                    Ok(g) => self.group(&g, "", depth),
+                    Err(e) => Err(format!("#refs#/{name}: {e}")),
+                },
+            };
+            self.seen.pop();
+            out.push(v?);
+        }
+        Ok(out)
+    }
+
+    /// A struct group's fields.
+    fn group(
+        &mut self,
+        g: &Group,
+        name: &str,
+        depth: usize,
+    ) -> std::result::Result<Variable, String> {
+        if depth > MAX_DEPTH {
+            return Err(format!(
+                "{name}: structs nested deeper than {MAX_DEPTH} levels"
+            ));
+        }
+        let mut v = Variable::empty(name);
+        v.class = "struct";
+        v.real = None;
+        v.dims = vec![1, 1];
+        let (groups, datasets) = g.members().map_err(|e| e.to_string())?;
+        for d in &datasets {
+            v.fields.push(self.dataset(d, d.name(), depth + 1)?);
+        }
+        for sub in &groups {
+            v.fields.push(self.group(sub, sub.name(), depth + 1)?);
+        }
+        Ok(v)
+    }
 }

@@ -238,7 +238,14 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
             }
         }
     }
-    let Some(&(length, _)) = lengths.iter().max_by_key(|(n, count)| (*count, *n)) else {
+    // a file of MATLAB objects without any vector is still listed (inspect)
+    let objects_only = lengths.is_empty() && found.iter().any(|f| f.listing == Listing::Object);
+    let chosen = lengths
+        .iter()
+        .max_by_key(|(n, count)| (*count, *n))
+        .map(|l| l.0)
+        .or(objects_only.then_some(0));
+    let Some(length) = chosen else {
         let listed: Vec<&str> = found
             .iter()
             .filter_map(|f| f.why_not.as_deref())
@@ -307,6 +314,18 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
         unread,
         scalars,
     })
+}
+
+/// An error with the reader's notes appended (why its objects were not
+/// read, when that left nothing to read).
+pub(crate) fn with_notes(e: Error, notes: &[String]) -> Error {
+    match e {
+        Error::Format { path, message } if !notes.is_empty() => Error::Format {
+            path,
+            message: format!("{message}; {}", notes.join("; ")),
+        },
+        other => other,
+    }
 }
 
 /// True for a MATLAB `-v7.3` (HDF5) MAT-file's bytes.
