@@ -33,6 +33,8 @@ pub struct Variable {
     pub complex: bool,
     /// Real and imaginary parts of a complex numeric array.
     pub complex_parts: Option<(Vec<f64>, Vec<f64>)>,
+    /// The exact words of a `uint64` array.
+    pub words: Option<Vec<u64>>,
     /// The fields of a 1 x 1 struct (or object), each named by its field name.
     pub fields: Vec<Variable>,
     /// The elements of a cell array, column-major.
@@ -43,6 +45,9 @@ pub struct Variable {
     pub opaque: Option<Box<Opaque>>,
     /// The class name of an object (classdef or old-style).
     pub object_class: Option<String>,
+    /// Text events of a timetable: (column, row time in s, text), from its
+    /// string, categorical and cellstr variables.
+    pub events: Vec<(String, f64, String)>,
 }
 
 /// An opaque value's header: its type system (`MCOS` for classdef objects),
@@ -64,11 +69,13 @@ impl Variable {
             real: Some(Vec::new()),
             complex: false,
             complex_parts: None,
+            words: None,
             fields: Vec::new(),
             cells: Vec::new(),
             text: None,
             opaque: None,
             object_class: None,
+            events: Vec::new(),
         }
     }
 
@@ -351,14 +358,31 @@ fn matrix(
     let name = String::from_utf8_lossy(&r.bytes[name]).into_owned();
     let numeric = (6..=15).contains(&class);
     let expected = dims.iter().try_fold(1usize, |a, d| a.checked_mul(*d));
+    // 64-bit words kept exact too (a MATLAB string packs UTF-16 into them)
+    let words = std::cell::RefCell::new(None);
     let part = || -> Result<Vec<f64>, String> {
         let (kind, data) = next()?;
-        let values = r.numbers(kind, &r.bytes[data])?;
+        let values = r.numbers(kind, &r.bytes[data.clone()])?;
         if expected != Some(values.len()) {
             return Err(format!(
                 "variable {name}: {} values for dimensions {dims:?}",
                 values.len()
             ));
+        }
+        if kind == 13 {
+            *words.borrow_mut() = Some(
+                r.bytes[data]
+                    .chunks_exact(8)
+                    .map(|c| {
+                        let b: [u8; 8] = c.try_into().expect("8 bytes");
+                        if r.little {
+                            u64::from_le_bytes(b)
+                        } else {
+                            u64::from_be_bytes(b)
+                        }
+                    })
+                    .collect(),
+            );
         }
         Ok(values)
     };
@@ -464,11 +488,13 @@ fn matrix(
         real,
         complex,
         complex_parts,
+        words: words.into_inner(),
         fields,
         cells,
         text: chars,
         opaque: None,
         object_class,
+        events: Vec::new(),
     })
 }
 
@@ -498,6 +524,25 @@ fn walk(vars: Vec<Variable>, prefix: &str, in_object: bool, out: &mut Vec<crate:
         let samples: usize = var.dims.iter().product();
         let vector = var.dims.len() == 2 && var.dims.contains(&1) && samples > 1;
         let described = format!("{path} ({}, {})", var.shape(), var.class);
+        // a timetable's text variables: one marker stream each
+        let mut columns: Vec<&str> = var.events.iter().map(|e| e.0.as_str()).collect();
+        columns.dedup();
+        for column in columns {
+            let events = var
+                .events
+                .iter()
+                .filter(|e| e.0 == column)
+                .map(|e| (e.1, e.2.clone()))
+                .collect();
+            out.push(crate::sources::Found {
+                path: format!("{path}.{column}"),
+                values: None,
+                why_not: None,
+                scalar: None,
+                listing: Listing::Quiet,
+                events,
+            });
+        }
         let is_object = var.object_class.is_some();
         let mut found = |values: Option<Vec<f64>>,
                          why_not: Option<String>,
@@ -516,6 +561,7 @@ fn walk(vars: Vec<Variable>, prefix: &str, in_object: bool, out: &mut Vec<crate:
                 why_not,
                 scalar,
                 listing,
+                events: Vec::new(),
             })
         };
         if let Some(class) = &var.object_class {

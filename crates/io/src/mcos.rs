@@ -396,17 +396,99 @@ impl Subsystem {
             real: None,
             complex: false,
             complex_parts: None,
+            words: None,
             fields,
             cells: Vec::new(),
             text: None,
             opaque: None,
             object_class: Some(class),
+            events: Vec::new(),
         }))
     }
 }
 
 fn tabulated(mut v: Variable) -> Variable {
     tabular(&mut v);
+    v
+}
+
+/// The texts of a MATLAB `string` array (its `any` words: version 1, the
+/// number of dimensions, the dimensions, each string's length in UTF-16
+/// units or `u64::MAX` for `<missing>`, then the units packed four to a
+/// word), a `categorical` (each code's category name; code 0, undefined,
+/// is `None`), or a cell array of char vectors.
+fn texts_of(v: &Variable) -> Option<Vec<Option<String>>> {
+    let field = |n: &str| v.fields.iter().find(|f| f.name == n);
+    match v.object_class.as_deref() {
+        Some("string") => {
+            let w = field("any")?.words.as_ref()?;
+            if *w.first()? != 1 {
+                return None;
+            }
+            let ndims = usize::try_from(*w.get(1)?).ok()?;
+            let dims = w.get(2..2 + ndims)?;
+            let count = dims
+                .iter()
+                .try_fold(1usize, |a, d| a.checked_mul(usize::try_from(*d).ok()?))?;
+            let lengths = w.get(2 + ndims..(2 + ndims).checked_add(count)?)?;
+            let units: Vec<u16> = w[2 + ndims + count..]
+                .iter()
+                .flat_map(|x| (0..4).map(move |k| (x >> (16 * k)) as u16))
+                .collect();
+            let mut at = 0usize;
+            let mut out = Vec::with_capacity(count);
+            for &n in lengths {
+                if n == u64::MAX {
+                    out.push(None);
+                    continue;
+                }
+                let end = at.checked_add(usize::try_from(n).ok()?)?;
+                out.push(Some(String::from_utf16_lossy(units.get(at..end)?)));
+                at = end;
+            }
+            Some(out)
+        }
+        Some("categorical") => {
+            let codes = field("codes")?.real.as_ref()?;
+            let names: Vec<String> = field("categoryNames")?
+                .cells
+                .iter()
+                .map(|c| c.text.clone())
+                .collect::<Option<_>>()?;
+            Some(
+                codes
+                    .iter()
+                    .map(|&c| {
+                        (c >= 1.0)
+                            .then(|| names.get(c as usize - 1).cloned())
+                            .flatten()
+                    })
+                    .collect(),
+            )
+        }
+        None if v.class == "cell" && !v.cells.is_empty() => {
+            v.cells.iter().map(|c| c.text.clone().map(Some)).collect()
+        }
+        _ => None,
+    }
+}
+
+/// A variable of texts: a char scalar for one, a cell of chars for more.
+fn text_variable(name: &str, texts: Vec<Option<String>>) -> Variable {
+    let mut v = Variable::empty(name);
+    v.real = None;
+    if let [one] = texts.as_slice() {
+        v.class = "char";
+        v.dims = vec![1, one.as_ref().map_or(0, |t| t.chars().count())];
+        v.text = Some(one.clone().unwrap_or_default());
+    } else {
+        v.class = "cell";
+        v.dims = vec![texts.len(), 1];
+        v.cells = texts
+            .into_iter()
+            .map(|t| text_variable("", vec![t]))
+            .collect();
+    }
     v
 }
 
@@ -419,6 +501,13 @@ fn tabulated(mut v: Variable) -> Variable {
 /// its struct field `any`. Left as it is when the layout is not that.
 fn tabular(v: &mut Variable) {
     let class = v.object_class.as_deref().unwrap_or("");
+    if class == "string" {
+        if let Some(texts) = texts_of(v) {
+            let name = v.name.clone();
+            *v = text_variable(&name, texts);
+        }
+        return;
+    }
     if class != "table" && class != "timetable" {
         return;
     }
@@ -455,11 +544,24 @@ fn tabular(v: &mut Variable) {
             c
         })
         .collect();
+    let mut events = Vec::new();
     if class == "timetable" {
         let time_name = texts(get(&["dimNames", "dimnames"]))
             .and_then(|d| d.into_iter().next())
             .unwrap_or_else(|| "Time".into());
         if let Some(times) = get(&["rowTimes"]).and_then(row_seconds) {
+            // text variables (strings, categoricals, cellstr): events at the row times
+            for f in &mut fields {
+                if let Some(texts) = texts_of(f).filter(|t| t.len() == times.len()) {
+                    for (time, text) in times.iter().zip(&texts) {
+                        if let Some(text) = text.as_ref().filter(|t| !t.is_empty()) {
+                            events.push((f.name.clone(), *time, text.clone()));
+                        }
+                    }
+                    let name = f.name.clone();
+                    *f = text_variable(&name, texts);
+                }
+            }
             let mut t = Variable::empty(&time_name);
             t.dims = vec![times.len(), 1];
             t.real = Some(times);
@@ -467,6 +569,7 @@ fn tabular(v: &mut Variable) {
         }
     }
     v.fields = fields;
+    v.events = events;
 }
 
 /// A timetable's row times in seconds: a duration's `millis`, or a

@@ -346,6 +346,15 @@ fn time_base<'s>(
         named_stream(source, name, &format!("{map_name}: [time]"))?
     } else if source.streams.len() == 1 {
         &source.streams[0]
+    } else if let [only] = source
+        .streams
+        .iter()
+        .filter(|s| !s.channels.is_empty())
+        .collect::<Vec<_>>()
+        .as_slice()
+    {
+        // one numeric stream beside marker streams sets the time
+        only
     } else {
         let names: Vec<String> = source
             .streams

@@ -266,6 +266,7 @@ fn walk(
             why_not,
             scalar: None,
             listing: Default::default(),
+            events: Vec::new(),
         });
     }
     for g in groups {
@@ -293,6 +294,7 @@ fn walk(
                 values: None,
                 scalar: None,
                 listing: Default::default(),
+                events: Vec::new(),
             }),
         }
     }
@@ -491,7 +493,18 @@ impl Refs<'_> {
                     v.complex = true;
                     v.complex_parts = Some(pairs.into_iter().unzip());
                 }
-                _ => v.real = Some(self.numbers(d, name)?),
+                _ => {
+                    v.real = Some(self.numbers(d, name)?);
+                    if class == "uint64" {
+                        // exact words (a MATLAB string packs UTF-16 into them)
+                        v.words = Some(
+                            d.read_array::<u64>()
+                                .map_err(|e| format!("{name}: {e}"))?
+                                .into_iter()
+                                .collect(),
+                        );
+                    }
+                }
             },
             _ => v.real = None,
         }

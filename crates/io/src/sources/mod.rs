@@ -212,6 +212,9 @@ pub struct Found {
     pub scalar: Option<f64>,
     /// How it is listed in the notes when it is not a channel.
     pub listing: Listing,
+    /// Text events at times (s): a timetable's text variable, read as a
+    /// marker stream named by the path.
+    pub events: Vec<(f64, String)>,
 }
 
 /// How a variable that is not a channel appears in the notes.
@@ -268,7 +271,22 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
     let mut channels = Vec::new();
     let mut scalars = Vec::new();
     let mut objects = Vec::new();
+    let mut marker_streams = Vec::new();
     for f in found {
+        if !f.events.is_empty() {
+            marker_streams.push(Stream {
+                name: f.path.clone(),
+                kind: Some("markers".into()),
+                stamps: Some(f.events.iter().map(|e| e.0).collect()),
+                markers: f
+                    .events
+                    .into_iter()
+                    .map(|(time, text)| Marker { time, text })
+                    .collect(),
+                ..Stream::default()
+            });
+            continue;
+        }
         if let Some(v) = f.scalar {
             scalars.push((f.path.clone(), v));
         }
@@ -306,10 +324,12 @@ pub fn vectors_source(path: &Path, format: &'static str, found: Vec<Found>) -> R
     Ok(Source {
         path: path.to_path_buf(),
         format,
-        streams: vec![Stream {
+        streams: std::iter::once(Stream {
             channels,
             ..Stream::default()
-        }],
+        })
+        .chain(marker_streams)
+        .collect(),
         notes,
         unread,
         scalars,

@@ -290,12 +290,11 @@ mod objects {
                 read_source(&matlab(&format!("test_user_defined_{version}.mat"))).unwrap();
             assert!(objects.streams[0].channels.is_empty());
             let notes = objects.notes.join("\n");
-            assert!(notes.contains("obj_with_default_val.a: a MATLAB string, not read as numbers"));
             for expected in [
                 "obj_with_vals: a TestClasses.BasicClass object; properties a = 10",
                 "obj_with_nested_props.a: a TestClasses.BasicClass object; properties a = 1, b = 'Obj1'",
                 "obj_with_nested_props.c.InnerProp: a TestClasses.BasicClass object; properties a = 2, b = 'Obj2'",
-                "obj_with_default_val: a TestClasses.DefaultClass object; properties a (string object), b = 10",
+                "obj_with_default_val: a TestClasses.DefaultClass object; properties a = 'Default String', b = 10",
             ] {
                 assert!(notes.contains(expected), "{version}: {expected}\n{notes}");
             }
@@ -307,6 +306,55 @@ mod objects {
             .notes
             .join("\n")
             .contains("categoryNames = {'high', 'low'}"));
+    }
+
+    #[test]
+    fn a_timetables_text_variables_are_marker_streams_at_its_row_times() {
+        let source = read_source(&fixture("tt_events.mat")).unwrap();
+        let markers = |name: &str| -> Vec<(f64, String)> {
+            source
+                .streams
+                .iter()
+                .find(|s| s.name == name)
+                .unwrap_or_else(|| panic!("no stream {name}"))
+                .markers
+                .iter()
+                .map(|m| (m.time, m.text.clone()))
+                .collect()
+        };
+        let close = |a: &[(f64, String)], b: &[(f64, &str)]| {
+            a.len() == b.len()
+                && a.iter()
+                    .zip(b)
+                    .all(|(x, y)| (x.0 - y.0).abs() < 1e-9 && x.1 == y.1)
+        };
+        let events = markers("TT.Event");
+        assert!(
+            close(&events, &[(0.0, "start"), (0.006, "start")]),
+            "{events:?}"
+        );
+        let levels = markers("TT.Level");
+        assert!(
+            close(
+                &levels,
+                &[
+                    (0.0, "low"),
+                    (0.002, "low"),
+                    (0.004, "low"),
+                    (0.006, "high"),
+                    (0.008, "high"),
+                    (0.01, "high")
+                ]
+            ),
+            "{levels:?}"
+        );
+        // a marker rule numbers the trials; the numeric stream sets the time
+        let map = ChannelMap::parse(
+            "[columns]\nt = \"TT.Time\"\nq1 = \"TT.Angle\"\ntau1 = \"TT.Torque\"\ntrial = { marker = \"start\" }\n",
+        )
+        .unwrap();
+        let rec = limpid_io::read_recording_mapped(fixture("tt_events.mat"), Some(&map)).unwrap();
+        assert_eq!(rec.column("trial").unwrap(), [1.0, 1.0, 1.0, 2.0, 2.0, 2.0]);
     }
 
     #[test]
