@@ -54,3 +54,35 @@ def test_a_wrong_call_signature_stays_a_type_error():
         limpid.psd()
     with pytest.raises(TypeError):
         limpid.psd(np.ones(10), bogus=1)
+
+
+def test_an_unknown_option_names_the_nearest_and_lists_the_options():
+    # issue 63, item 7: the options as the estimator takes them, not the request's groups
+    path = S / "cartesian_slow" / "ex_cubic.csv"
+    with pytest.raises(TypeError) as e:
+        limpid.estimate_linear(path, cuttoff_hz=10)
+    message = str(e.value)
+    assert "estimate_linear() got an unexpected keyword argument 'cuttoff_hz'" in message
+    assert "did you mean 'cutoff_hz'?" in message
+    assert "order" in message and "prepare" not in message
+    # a method whose request needs a field the call gives (planar's link lengths)
+    with pytest.raises(TypeError, match=r"did you mean 'window_ms'"):
+        limpid.estimate_planar(S / "planar" / "ex_joint_180.csv", (0.3, 0.3), windw_ms=200)
+
+
+def test_a_number_given_as_text_names_the_option_and_the_type():
+    path = S / "cartesian_slow" / "ex_cubic.csv"
+    with pytest.raises(ValueError, match=r"estimate_linear: cutoff_hz = '10': a number is expected, not str"):
+        limpid.estimate_linear(path, cutoff_hz="10")
+
+
+def test_a_dataframe_with_time_as_its_index():
+    pd = pytest.importorskip("pandas")
+    rec = limpid.read_recording(S / "cartesian_slow" / "ex_cubic.csv")
+    frame = pd.DataFrame(rec).set_index("t")
+    # an index named t is the time
+    expected = limpid.estimate_linear(S / "cartesian_slow" / "ex_cubic.csv").to_dict()["stiffness"]
+    assert limpid.estimate_linear(frame).to_dict()["stiffness"] == expected
+    # another name: said, with the fix
+    with pytest.raises(ValueError, match=r"no column t .*its index is 'time'.*reset_index"):
+        limpid.estimate_linear(frame.rename_axis("time"))

@@ -211,6 +211,18 @@ def test_the_module_shows_its_api_only():
         assert inner not in names
     assert "plot" in names and "estimate_linear" in names
     assert set(limpid.__all__) == set(names)
+    # the plot module too, and the installed version (issue 63, item 6)
+    assert dir(limpid.plot) == sorted(limpid.plot.__all__)
+    from importlib.metadata import version
+
+    assert limpid.__version__ == version("limpid") and limpid.__version__[0].isdigit()
+
+
+def test_a_result_shows_its_conversions_beside_its_fields(results):
+    names = dir(results["linear"])
+    for method in ("to_pandas", "to_dict", "to_xarray", "keys"):
+        assert method in names
+    assert "stiffness" in names and "_data" not in names
 
 
 def test_the_tutorial_notebook_executes(tmp_path):

@@ -23,9 +23,11 @@ one-line message; long computations release the GIL.
 from __future__ import annotations
 
 import copy
+import difflib
 import json
 import operator
 import os
+import re
 import warnings
 from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -34,7 +36,16 @@ import numpy as np
 from . import _display, _limpid, _spectral, plot
 from ._spectral import coherence, csd, psd
 
+try:
+    from importlib.metadata import PackageNotFoundError as _NotFound
+    from importlib.metadata import version as _version
+
+    __version__: str = _version("limpid")
+except _NotFound:  # run from a source tree without installing
+    __version__ = "0+unknown"
+
 __all__ = [
+    "__version__",
     "Result",
     "plot",
     "read_recording",
@@ -144,7 +155,9 @@ class Result:
         return name in self._data
 
     def __dir__(self) -> List[str]:
-        return sorted(self._data.keys())
+        # the fields, and the methods that turn a result into tables and arrays
+        methods = ["from_dict", "keys", "to_dict", "to_pandas", "to_xarray"]
+        return sorted(set(self._data.keys()) | set(methods))
 
     def keys(self) -> List[str]:
         return list(self._data.keys())
@@ -330,7 +343,16 @@ def _recording(rec: RecordingLike) -> Any:
     if isinstance(rec, (str, bytes)) or hasattr(rec, "__fspath__"):
         return rec
     if hasattr(rec, "columns") and not isinstance(rec, Mapping):  # a pandas DataFrame
-        return {str(c): _column(str(c), rec[c].to_numpy()) for c in rec.columns}
+        columns = {str(c): _column(str(c), rec[c].to_numpy()) for c in rec.columns}
+        index = getattr(rec, "index", None)
+        if "t" not in columns and index is not None and getattr(index, "name", None) == "t":
+            # time as the index, as pandas users keep it
+            columns = {"t": _column("t", np.asarray(index)), **columns}
+        elif "t" not in columns and index is not None and getattr(index, "name", None) is not None:
+            raise ValueError(
+                f"the DataFrame has no column t (time, s); its index is {index.name!r}: "
+                f"if that is the time, rename it (df.rename_axis('t')) or pass df.reset_index()")
+        return columns
     if isinstance(rec, Mapping):
         return {str(k): _column(str(k), v) for k, v in rec.items()}
     raise ValueError("a recording is a path, a dict of 1-D arrays or a pandas DataFrame")
@@ -501,9 +523,68 @@ def request(method: str, **options: Any) -> Dict[str, Any]:
     return r
 
 
+def _function_name(method: str) -> str:
+    return method if method in ("window_sweep", "spectra") else f"estimate_{method}"
+
+
+def _option_names(method: str, options: Mapping[str, Any]) -> Optional[List[str]]:
+    """The keyword options of ``method``: its request's fields, with groups
+    (``prepare``, ``arm``) flattened as the estimators take them; ``None``
+    when the request cannot be made without fields the call lacks."""
+    given: Dict[str, Any] = {}
+    for _ in range(4):
+        try:
+            r = _limpid.request(method, given)
+            break
+        except ValueError as e:
+            missing = re.search(r"missing field `(\w+)`", str(e))
+            if not missing or missing.group(1) not in options:
+                return None
+            given[missing.group(1)] = options[missing.group(1)]
+    else:
+        return None
+    names: set[str] = set()
+    for k, v in r.items():
+        if k == "method":
+            continue
+        if isinstance(v, dict):
+            names.update(v)
+        else:
+            names.add(k)
+    return sorted(names)
+
+
 def _estimate(method: str, recordings: Sequence[RecordingLike], options: Mapping[str, Any]) -> Result:
     opts = {k: _plain(v) for k, v in options.items()}
-    return Result(json.loads(_limpid.estimate(method, [_recording(r) for r in recordings], opts)))
+    try:
+        return Result(json.loads(_limpid.estimate(method, [_recording(r) for r in recordings], opts)))
+    except TypeError as e:
+        unknown = re.search(r"unknown field `(\w+)`(?:, expected one of (.*))?", str(e))
+        if not unknown:
+            raise
+        # the options as the estimator takes them: the request's fields with its
+        # groups (prepare, arm) opened, and those serde expected at that level
+        groups = {"prepare", "arm"}
+        expected = set(re.findall(r"`(\w+)`", unknown.group(2) or "")) - groups
+        names = sorted(expected | set(_option_names(method, opts) or []))
+        close = difflib.get_close_matches(unknown.group(1), names, n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise TypeError(
+            f"{_function_name(method)}() got an unexpected keyword argument {unknown.group(1)!r}{hint} "
+            f"(its options: {', '.join(names)})") from None
+    except ValueError as e:
+        message = str(e)
+        wrong = re.match(r"invalid (\w+): TypeError: (.*)", message)
+        if wrong and wrong.group(1) in opts:
+            value = opts[wrong.group(1)]
+            raise ValueError(
+                f"{_function_name(method)}: {wrong.group(1)} = {value!r}: a number is expected, "
+                f"not {type(value).__name__}") from None
+        if re.search(r"\brow \d+", message) and not all(
+                isinstance(r, (str, bytes)) or hasattr(r, "__fspath__") for r in recordings):
+            # a DataFrame's rows count from 0; the library's from 1
+            raise ValueError(message + " (rows count from 1: pandas' index from 0)") from None
+        raise
 
 
 def estimate_linear(recording: RecordingLike, **options: Any) -> Result:
@@ -895,6 +976,8 @@ def _value_errors(f: Any) -> Any:
         try:
             return f(*args, **kwargs)
         except (TypeError, OverflowError, IndexError) as e:
+            if isinstance(e, TypeError) and "unexpected keyword argument" in str(e):
+                raise
             if isinstance(e, TypeError) and "unknown field" in str(e):
                 # an option the estimator does not have: a wrong call, as Python says
                 raise TypeError(f"{f.__name__}() got an unexpected keyword argument: {e}") from None
@@ -920,6 +1003,8 @@ def __dir__() -> List[str]:
 
 for _name in __all__:
     _obj = globals()[_name]
+    if isinstance(_obj, str):
+        continue
     if callable(_obj) and not isinstance(_obj, type):
         globals()[_name] = _value_errors(_obj)
 del _name, _obj

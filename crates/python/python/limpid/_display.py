@@ -169,7 +169,7 @@ def _planar(d: Dict[str, Any], extra: Optional[Record] = None) -> List[Record]:
                           symbols=PLANAR_SYMBOL)
     for i, (v, s) in enumerate(zip(d["inertial_parameters"], se["inertial_parameters"])):
         out.append(dict(extra or {}, quantity="inertial_parameter", element=f"xi{i + 1}", row=None, column=None,
-                        value=_float(v), se=_float(s), unit="kg m^2", verdict=None))
+                        value=_float(v), se=_float(s), unit="kg m²", verdict=None))
     return out
 
 
@@ -374,7 +374,10 @@ def _fit_line(d: Dict[str, Any]) -> str:
     parts = []
     vaf = fit.get("vaf")
     if isinstance(vaf, list) and vaf:
-        parts.append("VAF " + ", ".join(f"{v:.1f} %" for v in vaf if v is not None))
+        # one VAF per coordinate's force: labelled by it (issue 63, item 8)
+        coords = d.get("coordinates") or []
+        labels = [str(c) for c in coords] if len(coords) == len(vaf) else [str(i + 1) for i in range(len(vaf))]
+        parts.append("VAF " + ", ".join(f"{n} {v:.1f} %" for n, v in zip(labels, vaf) if v is not None))
     elif isinstance(vaf, (int, float)):
         parts.append(f"VAF {vaf:.1f} %")
     for k, label in (("vaf_total", "VAF (both pathways)"), ("cross_validated_vaf", "cross-validated VAF")):

@@ -35,6 +35,11 @@ from . import _display
 __all__ = ["ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex", "design", "varying"]
 
 
+def __dir__() -> List[str]:
+    """The plot functions only (not the modules and typing names used inside)."""
+    return sorted(__all__)
+
+
 def _plt() -> Any:
     try:
         import matplotlib.pyplot as plt
