@@ -1,7 +1,7 @@
 //! `limpid-fuzz`: run the mutation fuzzer (see the library docs).
 //!
 //! ```text
-//! cargo run --release -p limpid-fuzz -- [--executions N] [--seed S] [--threads T] [--only mcap,db3]
+//! cargo run --release -p limpid-fuzz -- [--executions N] [--seed S] [--threads T] [--only mcap,db3 | --only rig-mcos]
 //! ```
 //!
 //! Prints executions per kind of input, refused / accepted counts and every
@@ -64,9 +64,10 @@ fn main() {
             .into_iter()
             .filter(|(name, _)| {
                 only.as_ref().is_none_or(|kinds| {
-                    kinds
-                        .iter()
-                        .any(|k| name.rsplit('.').next() == Some(k.as_str()))
+                    // an extension (mcap) or the start of a seed's name (rig-mcos)
+                    kinds.iter().any(|k| {
+                        name.rsplit('.').next() == Some(k.as_str()) || name.starts_with(k.as_str())
+                    })
                 })
             })
             .collect::<Vec<_>>(),

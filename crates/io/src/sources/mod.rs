@@ -350,7 +350,9 @@ pub(crate) fn with_notes(e: Error, notes: &[String]) -> Error {
 
 /// True for a MATLAB `-v7.3` (HDF5) MAT-file's bytes.
 pub fn is_mat73(bytes: &[u8]) -> bool {
+    // some writers (mat-io) keep the v5 header text before the HDF5 part
     bytes.starts_with(b"MATLAB 7.3 MAT-file")
+        || (bytes.starts_with(b"MATLAB ") && bytes.get(512..520) == Some(b"\x89HDF\r\n\x1a\n"))
 }
 
 /// [`read_source`] for a lab file held in memory (the fuzzer's entry).

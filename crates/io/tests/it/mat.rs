@@ -242,6 +242,23 @@ mod objects {
     }
 
     #[test]
+    fn the_same_object_in_a_v73_file_reads_the_same() {
+        // mat-io writes -v7.3 with a v5 header text before the HDF5 part: found by the HDF5 signature
+        let seed =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/seeds/rig-mcos73.mat");
+        let v73 = read_source(&seed).unwrap();
+        let v7 = read_source(&fixture("obj_v7.mat")).unwrap();
+        assert_eq!(v73.format, "MAT v7.3");
+        for name in ["z.dataSet(:,1)", "z.dataSet(:,2)"] {
+            assert_eq!(channel(&v73, name), channel(&v7, name));
+        }
+        assert!(v73
+            .notes
+            .join("\n")
+            .contains("z.calibration: a lab.Calibration object; properties gain = 2.5"));
+    }
+
+    #[test]
     fn tables_and_timetables_convert_to_their_variables_values() {
         let table = read_source(&fixture("table_v7.mat")).unwrap();
         assert_eq!(
