@@ -76,6 +76,14 @@ impl Budget {
     }
 }
 
+/// Bytes a dataset declares (its shape times its element size): what its
+/// decoder would allocate, whatever the file holds.
+fn declared_bytes(d: &Dataset) -> u64 {
+    let elements = d.shape().iter().fold(1u64, |a, &b| a.saturating_mul(b));
+    let size = d.raw_element_size().map_or(8, |s| s as u64).max(1);
+    elements.saturating_mul(size)
+}
+
 /// Bytes of one element of a numeric dataset.
 fn element_bytes(d: &Dataset) -> u64 {
     match d.dtype() {
@@ -480,8 +488,8 @@ impl Refs<'_> {
                 Datatype::Compound { size: 16, fields }
                     if fields.len() == 2 && fields[1].byte_offset == 8 =>
                 {
+                    self.budget.take(name, 2 * declared_bytes(d))?;
                     let raw = d.read_raw_bytes().map_err(|e| e.to_string())?;
-                    self.budget.take(name, 2 * raw.len() as u64)?;
                     let pairs: Vec<(f64, f64)> = raw
                         .chunks_exact(16)
                         .map(|c| {
@@ -523,8 +531,9 @@ impl Refs<'_> {
         if depth > MAX_DEPTH {
             return Err(format!("cells nested deeper than {MAX_DEPTH} levels"));
         }
+        // the declared size against the budget before the decoder allocates it
+        self.budget.take(d.name(), declared_bytes(d))?;
         let raw = d.read_raw_bytes().map_err(|e| e.to_string())?;
-        self.budget.take(d.name(), raw.len() as u64)?;
         let addresses = hdf5_reader::reference::read_object_references(&raw, self.offset_size)
             .map_err(|e| e.to_string())?;
         let Some(refs) = &self.refs else {

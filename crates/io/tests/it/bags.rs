@@ -7,53 +7,16 @@
 
 use std::collections::BTreeMap;
 use std::io::Cursor;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+use crate::formats::fixture;
 
 use limpid_io::map::ChannelMap;
 use limpid_io::sources::read_source;
 use mcap::records::MessageHeader;
 
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/formats")
-        .join(name)
-}
-
-fn expected() -> Vec<(String, Vec<f64>)> {
-    let text = std::fs::read_to_string(fixture("rig_bag.expected.json")).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v.as_object()
-        .unwrap()
-        .iter()
-        .map(|(k, v)| {
-            let vals = v
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect();
-            (k.clone(), vals)
-        })
-        .collect()
-}
-
 fn assert_converts(bag: &str) -> limpid_core::Recording {
-    let map = ChannelMap::read(&fixture("rig_bag.toml")).unwrap();
-    let rec = limpid_io::read_recording_mapped(fixture(bag), Some(&map)).unwrap();
-    for (column, want) in expected() {
-        let got = rec
-            .column(&column)
-            .unwrap_or_else(|| panic!("{bag}: no column {column}"));
-        assert_eq!(got.len(), want.len(), "{bag}: {column}: samples");
-        let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
-        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
-            assert!(
-                (g - w).abs() <= 1e-9 * scale,
-                "{bag}: {column}[{i}]: {g} != {w}"
-            );
-        }
-    }
-    rec
+    crate::formats::assert_matches_expected(bag, "rig_bag.toml", "rig_bag")
 }
 
 #[test]

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use limpid_io::map::ChannelMap;
 
-fn fixture(name: &str) -> PathBuf {
+pub(crate) fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures/formats")
         .join(name)
@@ -33,9 +33,15 @@ fn expected(name: &str) -> Vec<(String, Vec<f64>)> {
 }
 
 fn assert_matches(file: &str, map: &str) -> limpid_core::Recording {
+    assert_matches_expected(file, map, file)
+}
+
+/// `file` through `map` gives the columns of `{stem}.expected.json` to 1e-9
+/// of each column's largest value (several fixtures may share one).
+pub(crate) fn assert_matches_expected(file: &str, map: &str, stem: &str) -> limpid_core::Recording {
     let map = ChannelMap::read(&fixture(map)).unwrap();
     let rec = limpid_io::read_recording_mapped(fixture(file), Some(&map)).unwrap();
-    for (column, want) in expected(file) {
+    for (column, want) in expected(stem) {
         let got = rec
             .column(&column)
             .unwrap_or_else(|| panic!("{file}: no column {column} in {:?}", rec.names()));
