@@ -461,6 +461,18 @@ fn walking_estimate_reports_flawed_strides_and_refuses_bad_events() {
             r,
             "--event",
             "heel_strike",
+            "--neighbours",
+            "2",
+        ],
+        &["--neighbours", "3 to 1000"],
+    );
+    refused(
+        &[
+            "estimate",
+            "varying",
+            r,
+            "--event",
+            "heel_strike",
             "--stance-end",
             "1",
         ],

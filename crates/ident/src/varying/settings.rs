@@ -265,10 +265,12 @@ impl VaryingRequest {
             ));
         }
         if let Some(n) = self.neighbours {
-            if !(1..=1000).contains(&n) {
+            // pulses compare a perturbed stride with the mean of at least 3
+            // unperturbed ones (fewer failed every pulse, blaming the trigger)
+            if !(3..=1000).contains(&n) {
                 return Err(Error::invalid(
                     "neighbours",
-                    format!("expected 1 to 1000, found {n}"),
+                    format!("expected 3 to 1000 strides (a baseline of fewer is as noisy as the stride it is subtracted from), found {n}"),
                 ));
             }
         }
