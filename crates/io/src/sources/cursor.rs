@@ -1,5 +1,5 @@
-//! A bounds-checked reader of little-endian fields, shared by the XDF and
-//! TDMS decoders: every field is checked against the bytes present before
+//! A bounds-checked reader of little-endian fields, shared by the XDF, TDMS
+//! and ROS 2 CDR decoders: every field is checked against the bytes present before
 //! it is read, and a short read names the byte offset and what was read.
 
 /// Reads `bytes` from `at`; `base` is the offset of `bytes[0]` in the file.

@@ -501,18 +501,24 @@ impl Refs<'_> {
                     v.complex = true;
                     v.complex_parts = Some(pairs.into_iter().unzip());
                 }
-                _ => {
-                    v.real = Some(self.numbers(d, name)?);
-                    if class == "uint64" {
-                        // exact words (a MATLAB string packs UTF-16 into them)
-                        v.words = Some(
-                            d.read_array::<u64>()
-                                .map_err(|e| format!("{name}: {e}"))?
-                                .into_iter()
-                                .collect(),
-                        );
-                    }
+                Datatype::FixedPoint {
+                    size: 8,
+                    signed: false,
+                    ..
+                } if class == "uint64" => {
+                    // exact words (a MATLAB string packs UTF-16 into them), read
+                    // once; the f64 values from them
+                    self.budget
+                        .take(name, declared_bytes(d).saturating_mul(2))?;
+                    let words: Vec<u64> = d
+                        .read_array::<u64>()
+                        .map_err(|e| format!("{name}: {e}"))?
+                        .into_iter()
+                        .collect();
+                    v.real = Some(words.iter().map(|w| *w as f64).collect());
+                    v.words = Some(words);
                 }
+                _ => v.real = Some(self.numbers(d, name)?),
             },
             _ => v.real = None,
         }

@@ -14,6 +14,7 @@
 //! visited to a budget proportional to the message's size (empty structs).
 
 use super::msg::{Count, Element, Field, Primitive, Registry};
+use crate::sources::cursor::Cursor;
 
 /// Deepest nesting of message types.
 const MAX_DEPTH: usize = 32;
@@ -46,30 +47,19 @@ impl Decoded {
 }
 
 struct Reader<'a> {
-    data: &'a [u8],
-    pos: usize,
+    /// The shared bounds-checked reader (XDF, TDMS): every read against the bytes left.
+    bytes: Cursor<'a>,
     little: bool,
     budget: usize,
 }
 
 impl<'a> Reader<'a> {
     fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
-        match self.pos.checked_add(n).filter(|e| *e <= self.data.len()) {
-            Some(end) => {
-                let s = &self.data[self.pos..end];
-                self.pos = end;
-                Ok(s)
-            }
-            None => Err(format!(
-                "byte {}: {what} needs {n} bytes, {} are left",
-                self.pos,
-                self.data.len() - self.pos
-            )),
-        }
+        self.bytes.take(n, what)
     }
 
     fn align(&mut self, n: usize) -> Result<(), String> {
-        let off = self.pos - 4;
+        let off = self.bytes.at - 4;
         let pad = (n - off % n) % n;
         self.take(pad, "alignment padding").map(|_| ())
     }
@@ -160,8 +150,11 @@ pub(crate) fn decode(
         }
     };
     let mut r = Reader {
-        data,
-        pos: 4,
+        bytes: Cursor {
+            bytes: data,
+            at: 4,
+            base: 0,
+        },
         little,
         budget: 64 * data.len() + 4096,
     };
@@ -206,10 +199,10 @@ fn walk(
             Count::Fixed(n) => (n, false),
             Count::Sequence => {
                 let n = r.u32(path)? as usize;
-                if n > r.data.len() - r.pos {
+                if n > r.bytes.left() {
                     return Err(format!(
                         "{path}: a sequence of {n} elements in {} bytes left",
-                        r.data.len() - r.pos
+                        r.bytes.left()
                     ));
                 }
                 out.shape.push(n as u64);
