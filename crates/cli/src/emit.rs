@@ -89,14 +89,14 @@ pub fn estimate(cx: &Context, request: Request, paths: &[PathBuf], out: Output<'
             );
         }
     }
+    let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
+    let run = Run::of_this_process(&inputs)
+        .with_request(checked.request())
+        .with_channel_map(cx.map_path())
+        .with_recordings(&recordings);
     let mut estimated = limpid_app::estimate::run(&checked, recordings)
         .map_err(|e| cx.with_flag_names(request_command, e))?;
-    let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
-    estimated.document.run = Some(
-        Run::of_this_process(&inputs)
-            .with_request(checked.request())
-            .with_channel_map(cx.map_path()),
-    );
+    estimated.document.run = Some(run);
     if let Some(path) = out.report {
         crate::report::write(&estimated.document, path)?;
     }

@@ -38,7 +38,7 @@ pub struct ArmArgs {
         allow_hyphen_values = true
     )]
     pub shoulder: Vec<f64>,
-    /// Known base inertial parameters xi1,xi2,xi3 (kg m^2): the reduced 8-parameter model (eq. 23-25).
+    /// Known base inertial parameters xi1,xi2,xi3 (kg m²): the reduced 8-parameter model (eq. 23-25).
     #[arg(long, value_delimiter = ',', value_name = "A,B,C")]
     pub inertial_parameters: Option<Vec<f64>>,
     /// Inverse-kinematics branch for end-point data: the elbow angle q2 negative.
@@ -147,7 +147,7 @@ fn text(e: &PlanarEstimate, path: &std::path::Path, from_endpoint: bool) -> Stri
     if e.inertial_parameters_fixed {
         let _ = writeln!(
             s,
-            "inertial parameters (given): {}, {}, {} kg m^2",
+            "inertial parameters (given): {}, {}, {} kg m²",
             num(xi[0]),
             num(xi[1]),
             num(xi[2])
@@ -156,7 +156,7 @@ fn text(e: &PlanarEstimate, path: &std::path::Path, from_endpoint: bool) -> Stri
         let se = &e.standard_errors.inertial_parameters;
         let _ = writeln!(
             s,
-            "inertial parameters xi1..xi3: {} ± {}, {} ± {}, {} ± {} kg m^2",
+            "inertial parameters xi1..xi3: {} ± {}, {} ± {}, {} ± {} kg m²",
             num(xi[0]),
             num(se[0]),
             num(xi[1]),

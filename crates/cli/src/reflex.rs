@@ -39,7 +39,7 @@ pub fn run(args: ReflexArgs, cx: &Context) -> CliResult {
 
 /// `limpid estimate reflex`'s text.
 pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
-    let (i, r) = (&e.intrinsic, &e.reflex);
+    let (i, r, u) = (&e.intrinsic, &e.reflex, &e.units);
     println!("limpid estimate reflex: {}", paths[0].display());
     println!(
         "{} s at {} Hz, decimated to {} Hz | {} alternations",
@@ -50,17 +50,21 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
     );
     println!("intrinsic pathway (joint parametric model, +- standard error):");
     println!(
-        "  I = {} +- {} kg m^2   B = {} +- {} N m s/rad   K = {} +- {} N m/rad",
+        "  I = {} +- {} {}   B = {} +- {} {}   K = {} +- {} {}",
         num(i.inertia),
         num(i.standard_errors.inertia),
+        u.inertia,
         num(i.damping),
         num(i.standard_errors.damping),
+        u.damping,
         num(i.stiffness),
-        num(i.standard_errors.stiffness)
+        num(i.standard_errors.stiffness),
+        u.stiffness
     );
     println!(
-        "  reflex-free I-B-K fit: K = {} N m/rad (VAF {} %)",
+        "  reflex-free I-B-K fit: K = {} {} (VAF {} %)",
         num(e.reflex_free.parameters.stiffness),
+        u.stiffness,
         num(e.reflex_free.vaf)
     );
     println!(
@@ -83,9 +87,10 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
         )
     };
     println!(
-        "  delay {delay}   gain {} +- {} N m s/rad   low-pass {} Hz, damping ratio {}",
+        "  delay {delay}   gain {} +- {} {}   low-pass {} Hz, damping ratio {}",
         num(r.gain),
         num(r.gain_se),
+        u.damping,
         num(r.natural_frequency_hz),
         num(r.damping_ratio)
     );

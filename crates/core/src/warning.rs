@@ -46,6 +46,12 @@ pub enum WarningCode {
     /// EMG envelopes peak well above the MVC maxima (the MVC was not
     /// maximal, or the recording and the MVC file are swapped).
     EmgAboveMvc,
+    /// A column's quantity was not said and its name is not a
+    /// recording-format name: the units printed were assumed.
+    UnitsAssumed,
+    /// A position column moves further than a limb can (a hand by metres, a
+    /// joint by turns): it is probably in other units (cm, mm, degrees).
+    ImplausibleUnits,
 }
 
 /// A warning attached to a result.

@@ -68,7 +68,7 @@ impl Estimator for LinearParams {
 pub struct PlanarParams {
     /// Samples after each onset (the observation window); `None`: all.
     pub window_samples: Option<usize>,
-    /// Known inertial parameters ξ1..ξ3 (kg m^2): the reduced model of
+    /// Known inertial parameters ξ1..ξ3 (kg m²): the reduced model of
     /// seed 003 eq. (23)-(25); `None`: estimated with the rest.
     pub inertial_parameters: Option<[f64; 3]>,
 }

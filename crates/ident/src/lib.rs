@@ -9,6 +9,7 @@
 //! - [`reflex`]: intrinsic and reflex stiffness, parallel cascade (Kearney et al. 1997).
 //! - [`online`]: per-perturbation impedance for the live display.
 //! - [`request`]: one typed request per method, shared by every front-end.
+//! - [`units`]: units from what a column is (joint angle or displacement).
 //! - [`estimator`]: the one shape they share (settings -> check -> fit -> result).
 
 #![warn(missing_docs)]
@@ -24,6 +25,7 @@ pub mod reflex;
 pub mod request;
 pub mod spectra;
 pub mod stochastic;
+pub mod units;
 pub mod varying;
 
 pub use estimator::{Estimator, PlanarParams};

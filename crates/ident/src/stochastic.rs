@@ -337,7 +337,17 @@ pub fn estimate_stochastic_pooled(
     let phi_t_vs_fit = distance_to_fit(&impedance, &frequencies, &in_band, [&m, &b, &kk]);
     let mean_coh = in_band.iter().map(|&k| weight[k]).sum::<f64>() / in_band.len() as f64;
     let min_coh = in_band.iter().map(|&k| weight[k]).fold(1.0, f64::min);
-    let warnings = quality_warnings(min_coh, singular_in_band, max_input_coherence);
+    let mut warnings = quality_warnings(min_coh, singular_in_band, max_input_coherence);
+    for c in &coords {
+        let kind = crate::units::Coordinate::of_name(c);
+        if let (Some(kind), Some(values)) = (kind, rec.column(c)) {
+            warnings.extend(crate::units::implausible_motion(
+                c,
+                kind,
+                crate::units::range(values),
+            ));
+        }
+    }
     let fit_ok = fit_vaf >= VAF_FLOOR_PERCENT && mean_coh >= MIN_MEAN_COHERENCE;
     let verdicts = Verdicts {
         stiffness: judge_matrix(MatrixKind::Stiffness, &kk, &se.stiffness, fit_ok),

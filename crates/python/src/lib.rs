@@ -336,17 +336,18 @@ fn estimate(
         .iter()
         .map(recording)
         .collect::<PyResult<Vec<_>>>()?;
+    let inputs: Vec<&Path> = names.iter().map(|p| p.as_path()).collect();
+    // what was read, before the recordings go to the estimator
+    let run = limpid_analysis::result::Run::of_call(
+        format!("Python: limpid.{}", python_name(method)),
+        &inputs,
+    )
+    .with_request(checked.request())
+    .with_recordings(&recordings);
     let mut document = detached(py, || limpid_app::estimate::run(&checked, recordings))
         .map_err(err)?
         .document;
-    let inputs: Vec<&Path> = names.iter().map(|p| p.as_path()).collect();
-    document.run = Some(
-        limpid_analysis::result::Run::of_call(
-            format!("Python: limpid.{}", python_name(method)),
-            &inputs,
-        )
-        .with_request(checked.request()),
-    );
+    document.run = Some(run);
     Ok(document.to_json())
 }
 

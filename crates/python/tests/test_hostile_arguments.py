@@ -86,3 +86,39 @@ def test_a_dataframe_with_time_as_its_index():
     # another name: said, with the fix
     with pytest.raises(ValueError, match=r"no column t .*its index is 'time'.*reset_index"):
         limpid.estimate_linear(frame.rename_axis("time"))
+
+
+def test_units_come_from_what_the_column_is_not_its_name():
+    # issue 63, item 2: the ankle with its columns renamed reports the canonical names' units
+    pd = pytest.importorskip("pandas")
+    rec = limpid.read_recording(S / "ankle" / "ex_ankle.csv")
+    canonical = limpid.estimate_reflex(rec)
+    renamed = limpid.estimate_reflex({"t": rec["t"], "angle": rec["q1"], "torque": rec["tau1"]},
+                                     position="angle", torque="torque")
+    a, b = canonical.to_pandas(), renamed.to_pandas()
+    assert list(a.unit) == list(b.unit) and "N m/rad" in set(a.unit) and "N m s/rad" in set(a.unit)
+    assert renamed.to_dict()["units"] == canonical.to_dict()["units"]
+    assert renamed.to_dict()["intrinsic"]["stiffness"] == pytest.approx(canonical.to_dict()["intrinsic"]["stiffness"])
+    # the assumption is said; saying what the column is removes it and can change it
+    codes = lambda r: [w["code"] for w in r.to_dict()["warnings"]]  # noqa: E731
+    assert "units_assumed" in codes(renamed) and "units_assumed" not in codes(canonical)
+    said = limpid.estimate_reflex({"t": rec["t"], "angle": rec["q1"], "torque": rec["tau1"]},
+                                  position="angle", torque="torque", coordinate="angle")
+    assert "units_assumed" not in codes(said)
+    metres = limpid.estimate_reflex({"t": rec["t"], "hand": rec["q1"], "push": rec["tau1"]},
+                                    position="hand", torque="push", coordinate="displacement")
+    assert {"N/m", "N s/m", "kg"} <= set(metres.to_pandas().unit)
+    with pytest.raises(ValueError, match="coordinate"):
+        limpid.estimate_reflex(rec, coordinate="radians")
+
+
+def test_positions_in_centimetres_are_called_implausible():
+    # issue 63, item 2: a hand moving metres is a unit error the fit cannot see
+    rec = limpid.read_recording(S / "cartesian_slow" / "ex_cubic.csv")
+    cm = dict(rec)
+    for c in ("x", "y", "z"):
+        cm[c] = np.asarray(rec[c]) * 100.0
+    r = limpid.estimate_linear(cm).to_dict()
+    said = [w["message"] for w in r["warnings"] if w["code"] == "implausible_units"]
+    assert said and "centimetres" in said[0], r["warnings"]
+    assert not [w for w in limpid.estimate_linear(rec).to_dict()["warnings"] if w["code"] == "implausible_units"]

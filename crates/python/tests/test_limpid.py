@@ -112,7 +112,9 @@ def test_recovers_the_example_truths():
     # from a dict of arrays this time
     est = limpid.estimate_stochastic(limpid.read_recording(case.with_suffix(".csv")))
     assert rel(est.stiffness, truth["stiffness"]) < 0.05
-    assert est.impedance.shape[1:] == (3, 3, 2)
+    # Z(f) as complex numbers (issue 63, item 8); the dict keeps [re, im]
+    assert est.impedance.shape[1:] == (3, 3) and np.iscomplexobj(est.impedance)
+    assert est.impedance[5, 0, 1] == complex(*est.to_dict()["impedance"][5][0][1])
 
     case = examples("cocontraction") / "ex_config4"
     truth = json.loads(case.with_suffix(".truth.json").read_text())
@@ -538,8 +540,8 @@ def test_walking_from_the_virtual_lab_to_the_figure(tmp_path):
     assert np.isnan(ds["stiffness"].values[~ok]).all() and np.isfinite(ds["stiffness"].values[ok]).all()
     matplotlib = pytest.importorskip("matplotlib")
     matplotlib.use("Agg")
-    fig = limpid.plot.varying(est)
-    assert len(fig.axes) == 4 and "gait phase" in fig.axes[0].get_xlabel()
+    drawn = limpid.plot.varying(est)
+    assert drawn.axes.shape == (1, 4) and "gait phase" in drawn.ax.get_xlabel()
 
 
 def test_a_long_varying_table_is_shortened_and_an_operating_point_has_no_empty_unit(tmp_path):

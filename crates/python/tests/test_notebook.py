@@ -8,6 +8,8 @@ import math
 import pathlib
 import sys
 
+import numpy as np
+
 import pytest
 
 import limpid
@@ -152,16 +154,23 @@ def test_to_pandas_gives_back_the_numbers_of_the_json_exactly(results):
         results["linear"].to_pandas("impedance")
 
 
-def _labelled(fig):
+#: Axis labels of ratios, which have no unit (coherence, a share of the peak).
+UNITLESS = ("coherence of", "share of the peak")
+
+
+def _labelled(drawn):
     """Every axis that shows data names its quantity and unit (a shared x
-    axis once, under the bottom panel)."""
-    for ax in fig.axes:
+    axis once, under the bottom panel); ratios name their quantity only."""
+    for ax in drawn.figure.axes:
         if not ax.has_data():
             continue
         x = ax.get_xlabel() or next(
             (o.get_xlabel() for o in ax.get_shared_x_axes().get_siblings(ax) if o.get_xlabel()), "")
         labels = [x, ax.get_ylabel()] + ([ax.get_zlabel()] if hasattr(ax, "get_zlabel") else [])
         for label in labels:
+            if label.startswith(UNITLESS):
+                assert "(1)" not in label and "(" not in label, label
+                continue
             assert label and "(" in label and label.endswith(")"), (ax.get_title(), labels)
 
 
@@ -186,12 +195,13 @@ def test_every_plot_runs_on_its_kind_with_units_on_the_axes(results, tmp_path):
         assert path.stat().st_size > 5000, name
     # one ellipsoid per level
     levels = len(results["cocontraction"].to_dict()["levels"])
-    assert len(figures["ellipsoids_levels"].axes[0].get_legend().get_texts()) == levels
+    assert len(figures["ellipsoids_levels"].ax.get_legend().get_texts()) == levels
     # into given axes
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots()
-    assert plot.ellipses(results["planar"], ax=ax) is fig
+    drawn = plot.ellipses(results["planar"], ax=ax)
+    assert drawn.figure is fig and drawn.ax is ax
     # the wrong kind is a clear error
     with pytest.raises(ValueError, match="stochastic"):
         plot.bode(results["linear"])
@@ -256,3 +266,148 @@ def test_a_sweeps_change_and_tissue_in_series_are_said_in_its_table(results):
                               "residual_ratio": 88.0}
     html = limpid.Result.from_dict(d)._repr_html_()
     assert "88 times better" in html and "not a reflex" in html
+
+
+def _plain_tick_labels(drawn):
+    """Log axes read as plain numbers: no "10^" or "×10" in any tick label."""
+    drawn.figure.canvas.draw()
+    for ax in drawn.figure.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            if axis.get_scale() == "log":
+                for t in axis.get_ticklabels(which="both"):
+                    assert "10^" not in t.get_text() and "×" not in t.get_text() and "\\times" not in t.get_text(), \
+                        t.get_text()
+
+
+# (function, result kind, panels: rows, cols); the one ax= convention, issue 63 item 5
+PLOTS = [("ellipsoids", "linear", 1, 1), ("ellipses", "planar", 1, 1), ("fit", "linear", 3, 1),
+         ("fit", "reflex", 1, 1), ("bode", "stochastic", 6, 3), ("coherence", "stochastic", 6, 1),
+         ("sweep", "window_sweep", 2, 1), ("reflex", "reflex", 1, 3), ("varying", "varying", 1, 3)]
+
+
+@pytest.mark.parametrize("name,kind,rows,cols", PLOTS)
+def test_every_plot_takes_ax_as_one_axes_or_a_grid_of_its_shape(results, name, kind, rows, cols):
+    import matplotlib.pyplot as plt
+    from limpid import plot
+
+    draw = getattr(plot, name)
+    import inspect
+
+    params = inspect.signature(draw).parameters
+    assert "ax" in params and "axes" not in params
+    r = results[kind]
+    new = draw(r)
+    assert new.axes.shape == (rows, cols) and new.figure is new.ax.figure
+    _labelled(new)
+    _plain_tick_labels(new)
+    kw = {"projection": "3d"} if name == "ellipsoids" else {}
+    fig, given = plt.subplots(rows, cols, squeeze=False, subplot_kw=kw)
+    target = given[0, 0] if rows * cols == 1 else given
+    drawn = draw(r, ax=target)
+    assert drawn.figure is fig and drawn.axes.shape == (rows, cols)
+    assert all(a is b for a, b in zip(drawn.axes.flat, given.flat))
+    assert all(a.has_data() for a in drawn.axes.flat)
+    # the wrong shape says which one is wanted
+    fig, wrong = plt.subplots(rows + 1, cols, squeeze=False, subplot_kw=kw)
+    with pytest.raises(ValueError, match=rf"{rows} x {cols} panels: ax= takes"):
+        draw(r, ax=wrong)
+    if rows * cols > 1:
+        with pytest.raises(ValueError, match="got one Axes"):
+            draw(r, ax=wrong[0, 0])
+    plt.close("all")
+
+
+def test_the_measured_phase_is_drawn_on_the_fits_branch(results):
+    # issue 63, item 1: where the estimate agrees with its fit, the drawn phases agree too
+    from limpid import plot
+
+    drawn = plot.bode(results["stochastic"])
+    n = drawn.axes.shape[1]
+    compared = 0
+    for i in range(n):
+        for j in range(n):
+            mag, ph = drawn.axes[2 * i, j], drawn.axes[2 * i + 1, j]
+            zm, fm = (np.asarray(line.get_ydata()) for line in mag.get_lines()[:2])
+            zp, fp = (np.asarray(line.get_ydata()) for line in ph.get_lines()[:2])
+            # within 10 % as complex numbers: the phases are then within 6° on one branch
+            z, fit = zm * np.exp(1j * np.radians(zp)), fm * np.exp(1j * np.radians(fp))
+            close = np.abs(z / fit - 1) < 0.1
+            assert np.all(np.abs(zp - fp)[close] < 10.0), (i, j, np.abs(zp - fp)[close].max())
+            compared += int(close.sum())
+            if i == j:
+                # the well-measured diagonal: equal magnitudes mean equal phases
+                agree = np.abs(zm / fm - 1) < 0.1
+                assert np.all(np.abs(zp - fp)[agree] < 10.0), (i, np.abs(zp - fp)[agree].max())
+    assert compared > 50
+    # the same phases, mod 360°, as the result's own impedance
+    d = results["stochastic"].to_dict()
+    f = np.asarray(d["frequencies"])
+    z = np.asarray(d["impedance"])[f > 0, 0, 1]
+    drawn_phase = drawn.axes[1, 1].get_lines()[0].get_ydata()
+    wrapped = (np.asarray(drawn_phase) - np.degrees(np.arctan2(z[:, 1], z[:, 0])) + 180) % 360 - 180
+    assert np.allclose(wrapped, 0, atol=1e-9)
+
+
+def test_a_part_of_a_result_shows_its_fields_with_units(results):
+    # issue 63, item 4: r.fit, r.standard_errors, r.criteria display what they hold
+    import pickle
+
+    lin = results["linear"]
+    fit = repr(lin.fit)
+    assert fit.startswith("limpid.Result(fit of a linear result") and "vaf = " in fit and " %" in fit
+    se = lin.standard_errors._repr_html_()
+    assert se.count("<table") == 3 and "stiffness (N/m)" in se and "damping (N s/m)" in se
+    d = lin.to_dict()
+    assert f"{d['standard_errors']['stiffness'][0][0]:.4g}" in se
+    verdicts = repr(lin.criteria.verdicts)
+    assert "criteria.verdicts of a linear result" in verdicts and "stiffness = trusted" in verdicts
+    assert "trusted N/m" not in verdicts  # words carry no unit
+    crit = lin.criteria._repr_html_()
+    assert "condition number" in crit and "kind='?'" not in crit
+    # mixed coordinates: a unit per element
+    sto = results["stochastic"].standard_errors._repr_html_()
+    assert "N/rad" in sto and "N m/m" in sto
+    # the reflex result's own units reach its parts
+    ref = repr(results["reflex"].intrinsic)
+    assert "stiffness = " in ref and "N m/rad" in ref
+    # a part pickles with where it came from
+    back = pickle.loads(pickle.dumps(lin.fit))
+    assert repr(back) == fit and back.to_dict() == d["fit"]
+
+
+def test_a_result_shows_what_it_was_made_from_collapsed(results):
+    # issue 63, item 9: recording, samples, rate, duration, options used
+    html = results["linear"]._repr_html_()
+    assert "<details><summary>made from ex_cubic.csv," in html
+    run = results["linear"].to_dict()["run"]
+    f = run["inputs"][0]
+    assert f["samples"] > 1000 and f["sample_rate_hz"] == pytest.approx(500.0)
+    assert f["duration_s"] == pytest.approx(f["samples"] / f["sample_rate_hz"])
+    assert f"{f['samples']} samples at 500 Hz" in html
+    assert "Options used" in html and "prepare.order" in html
+    # arrays have no file: said so
+    rec = limpid.read_recording(examples("ankle") / "ex_ankle.csv")
+    arrays = limpid.estimate_reflex(rec)._repr_html_()
+    assert "made from &lt;arrays&gt;" in arrays and "samples at 1000 Hz" in arrays
+
+
+def test_every_result_over_an_axis_becomes_an_xarray_with_units(results):
+    # issue 63, item 3: a sweep over the window, spectra over frequency, Z(f) with a unit on f
+    xr = pytest.importorskip("xarray")
+    sw = results["window_sweep"]
+    ds = sw.to_xarray()
+    rows = sw.to_dict()["rows"]
+    assert isinstance(ds, xr.Dataset) and ds.sizes["window"] == len(rows)
+    assert ds["window"].attrs["units"] == "ms" and ds["stiffness"].attrs["units"] == "N m/rad"
+    assert float(ds["stiffness"][3, 0, 1]) == rows[3]["estimate"]["stiffness"][0][1]
+    assert list(ds["trusted"].values) == [r["trusted"] for r in rows]
+    z = results["stochastic"].to_xarray()
+    assert z["frequency"].attrs["units"] == "Hz"
+    t = np.arange(4000) / 200.0
+    u = np.random.default_rng(1).standard_normal(4000)
+    sp = limpid.spectra({"t": t, "drive": u, "response": 2 * u}, ["drive"], ["response"])
+    dsp = sp.to_xarray()
+    assert dsp["coherence"].attrs["units"] == "1" and dsp["frequency"].attrs["units"] == "Hz"
+    assert float(dsp["psd"].sel(signal="response")[10]) == pytest.approx(4 * float(dsp["psd"].sel(signal="drive")[10]))
+    with pytest.raises(ValueError, match="frequency, schedule or window"):
+        results["linear"].to_xarray()

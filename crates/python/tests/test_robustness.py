@@ -138,11 +138,11 @@ def test_plot_periodic_draws_the_lines_and_each_pair(tmp_path):
     y = 3.0 * u + 0.2 * u**2 + 0.01 * np.random.default_rng(1).standard_normal(len(t))
     # columns named outside the recording format: no unit limit applies
     r = limpid.spectra({"t": t, "drive": u, "response": y}, ["drive"], ["response"], period_s=period)
-    fig = plot.periodic(r)
-    assert len(fig.axes) == 2
-    labels = [h.get_label() for h in fig.axes[0].get_lines()]
+    drawn = plot.periodic(r)
+    assert drawn.axes.shape == (2, 1)
+    labels = [h.get_label() for h in drawn.ax.get_lines()]
     assert {"excited", "even detection", "noise"} <= set(labels)
-    assert "nonlinear" in fig.axes[0].get_title()
+    assert "nonlinear" in drawn.ax.get_title()
     with pytest.raises(ValueError, match="no periodic analysis"):
         plot.periodic(limpid.spectra({"t": t, "drive": u, "response": y}, ["drive"], ["response"]))
 

@@ -604,7 +604,7 @@ pub fn figure_files(report: &Report) -> Vec<(String, String)> {
 
 #[cfg(test)]
 mod tests {
-    use super::sections::stochastic::align_turns;
+    use super::sections::stochastic::on_one_branch;
     use super::unwrap_degrees;
 
     #[test]
@@ -615,10 +615,17 @@ mod tests {
     }
 
     #[test]
-    fn traces_drawn_together_start_within_half_a_turn() {
-        let t = align_turns(vec![vec![-179.0, -178.0], vec![180.0, 181.0]], true);
-        assert_eq!(t[1], vec![-180.0, -179.0]);
-        let m = align_turns(vec![vec![1.0], vec![500.0]], false);
-        assert_eq!(m[1], vec![500.0]);
+    fn phases_drawn_together_share_the_fits_branch() {
+        // the fit wraps from +179 to -179 (unwrapped: 181); the estimate sits
+        // at -178 (= 182) and +178: each point lands within 180° of the fit
+        let fit = vec![170.0, 179.0, -179.0, -170.0];
+        let est = vec![-178.0, 178.0, -178.0, f64::NAN];
+        let t = on_one_branch(vec![est, fit], 1);
+        assert_eq!(t[1], vec![170.0, 179.0, 181.0, 190.0]);
+        assert_eq!(&t[0][..3], &[182.0, 178.0, 182.0]);
+        assert!(t[0][3].is_nan());
+        // no finite reference: each trace unwrapped on its own
+        let u = on_one_branch(vec![vec![170.0, -175.0], vec![f64::NAN, f64::NAN]], 1);
+        assert_eq!(u[0], vec![170.0, 185.0]);
     }
 }

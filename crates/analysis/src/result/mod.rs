@@ -127,6 +127,15 @@ pub struct InputFile {
     pub bytes: Option<u64>,
     /// Last modification (UTC, RFC 3339), where the file system keeps it.
     pub modified_utc: Option<String>,
+    /// Samples read (recordings; absent for other files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples: Option<usize>,
+    /// Sample rate (Hz) of the recording read.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_rate_hz: Option<f64>,
+    /// Duration (s) of the recording read.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duration_s: Option<f64>,
 }
 
 fn rfc3339(t: std::time::SystemTime) -> String {
@@ -165,6 +174,21 @@ impl Run {
         }
     }
 
+    /// The run with what was read from each input (samples, rate, duration),
+    /// in the order of the inputs.
+    pub fn with_recordings(mut self, recordings: &[limpid_core::Recording]) -> Run {
+        let inputs = std::mem::take(&mut self.inputs);
+        self.inputs = inputs
+            .into_iter()
+            .enumerate()
+            .map(|(i, f)| match recordings.get(i) {
+                Some(rec) => f.with_recording(rec),
+                None => f,
+            })
+            .collect();
+        self
+    }
+
     /// The run with the channel map its inputs were read through.
     pub fn with_channel_map(self, map: Option<&std::path::Path>) -> Run {
         Run {
@@ -182,6 +206,20 @@ impl InputFile {
             path: p.to_string_lossy().into_owned(),
             bytes: meta.as_ref().map(|m| m.len()),
             modified_utc: meta.and_then(|m| m.modified().ok()).map(rfc3339),
+            samples: None,
+            sample_rate_hz: None,
+            duration_s: None,
+        }
+    }
+
+    /// The file with what was read from it: samples, rate and duration.
+    pub fn with_recording(self, rec: &limpid_core::Recording) -> InputFile {
+        let fs = rec.sample_rate();
+        InputFile {
+            samples: Some(rec.len()),
+            sample_rate_hz: Some(fs),
+            duration_s: Some(rec.len() as f64 / fs),
+            ..self
         }
     }
 }

@@ -142,7 +142,7 @@ fn real_ankle_inertia_in_physiological_range_and_vaf_at_least_plain_fit() {
         // the text report prints the three parameters and VAF
         let text = limpid(&["estimate", "linear", rec.to_str().unwrap()]).stdout;
         for needle in [
-            "Inertia M (kg m^2)",
+            "Inertia M (kg m²)",
             "Damping B (N m s/rad)",
             "Stiffness K (N m/rad)",
             "VAF %",

@@ -79,6 +79,69 @@ fn reflex_text_and_report() {
 }
 
 #[test]
+fn reflex_units_follow_what_the_position_column_is() {
+    // issue 63, item 2: the ankle with its columns renamed prints the same units;
+    // --coordinate displacement turns them into end-point units everywhere
+    let src = std::fs::read_to_string(examples("ankle").join("ex_ankle.csv")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let renamed = dir.path().join("renamed.csv");
+    std::fs::write(&renamed, src.replacen("t,q1,tau1", "t,angle,torque", 1)).unwrap();
+    let r = renamed.to_str().unwrap();
+    let args = [
+        "estimate",
+        "reflex",
+        r,
+        "--position",
+        "angle",
+        "--torque",
+        "torque",
+    ];
+    let out = limpid(&args);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(
+        out.stdout.contains("N m/rad") && out.stdout.contains("kg m²"),
+        "{}",
+        out.stdout
+    );
+    assert!(
+        out.stdout.contains("not a recording-format name"),
+        "{}",
+        out.stdout
+    );
+    let j = json(&[&args[..], &["--coordinate", "angle", "--json"]].concat());
+    assert_eq!(j["units"]["stiffness"], "N m/rad");
+    assert!(j["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|w| w["code"] != "units_assumed"));
+    let html = dir.path().join("m.html");
+    let out = limpid(
+        &[
+            &args[..],
+            &[
+                "--coordinate",
+                "displacement",
+                "--report",
+                html.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
+    );
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(
+        out.stdout.contains("N/m")
+            && out.stdout.contains("N s/m")
+            && !out.stdout.contains("N m/rad")
+    );
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("N s/m") && !page.contains("N m/rad"));
+    let bad = limpid(&[&args[..], &["--coordinate", "radians"]].concat());
+    assert_ne!(bad.code, 0);
+    assert!(bad.stderr.contains("--coordinate"), "{}", bad.stderr);
+}
+
+#[test]
 fn reflex_refusals() {
     // no joint angle column: names the column
     let planar = examples("planar").join("ex_endpoint_220.csv");

@@ -455,6 +455,15 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
         ),
     };
     distrust_derivatives_of_resampled_positions(data, &mut identifiable, &mut warnings);
+    for (k, c) in data.coordinates.iter().enumerate() {
+        if let Some(kind) = crate::units::Coordinate::of_name(c) {
+            warnings.extend(crate::units::implausible_motion(
+                c,
+                kind,
+                data.position_range[k],
+            ));
+        }
+    }
     quality_warnings(
         &identifiable,
         condition_number,
@@ -508,7 +517,7 @@ pub fn units(coords: &[String]) -> (&'static str, &'static str, &'static str) {
     if coords.iter().all(|c| matches!(c.as_str(), "x" | "y" | "z")) {
         ("kg", "N s/m", "N/m")
     } else if coords.iter().all(|c| c == "theta" || c.starts_with('q')) {
-        ("kg m^2", "N m s/rad", "N m/rad")
+        ("kg m²", "N m s/rad", "N m/rad")
     } else {
         ("SI", "SI", "SI")
     }

@@ -31,7 +31,7 @@ pub(crate) fn inertia_sensitivity(reg: &Regression, solved: &Solved) -> Option<D
 }
 
 /// Prior (mean, s.d.) of an inertia element the data cannot identify, for
-/// coordinate `k` (end-point kg or joint kg m^2).
+/// coordinate `k` (end-point kg or joint kg m²).
 pub(crate) fn inertia_prior(coords: &[String], k: usize) -> (f64, f64) {
     if matches!(coords[k].as_str(), "x" | "y" | "z") {
         (UNIDENTIFIED_INERTIA_MEAN_KG, UNIDENTIFIED_INERTIA_SD_KG)
@@ -213,14 +213,14 @@ pub(crate) fn widen_for_what_the_regression_cannot_see(
         se.zip_apply(&extra, |v, e| *v = (*v * *v + e).sqrt());
         let _ = write!(
             se_method,
-            "; B and K include an unknown inertia's effect (prior s.d. {UNIDENTIFIED_INERTIA_SD_KG} kg or {UNIDENTIFIED_INERTIA_SD_KG_M2} kg m^2): only {:.0} % of the acceleration the motion does not tie to displacement and velocity is signal",
+            "; B and K include an unknown inertia's effect (prior s.d. {UNIDENTIFIED_INERTIA_SD_KG} kg or {UNIDENTIFIED_INERTIA_SD_KG_M2} kg m²): only {:.0} % of the acceleration the motion does not tie to displacement and velocity is signal",
             100.0 * least
         );
     }
     if !prior_inertia.is_empty() {
         let _ = write!(
             se_method,
-            "; B and K are given for the prior mean inertia ({UNIDENTIFIED_INERTIA_MEAN_KG} kg or {UNIDENTIFIED_INERTIA_MEAN_KG_M2} kg m^2 on the diagonal) along {}: the acceleration there is mostly noise",
+            "; B and K are given for the prior mean inertia ({UNIDENTIFIED_INERTIA_MEAN_KG} kg or {UNIDENTIFIED_INERTIA_MEAN_KG_M2} kg m² on the diagonal) along {}: the acceleration there is mostly noise",
             prior_inertia.join(", ")
         );
     }

@@ -45,7 +45,7 @@ pub struct PlanarCriteria {
 /// A planar estimate.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarEstimate {
-    /// ξ1..ξ3 (kg m^2); the given values when fixed.
+    /// ξ1..ξ3 (kg m²); the given values when fixed.
     pub inertial_parameters: [f64; 3],
     /// True when the inertial parameters were given (reduced model, eq. (23)-(25)).
     pub inertial_parameters_fixed: bool,
@@ -83,7 +83,7 @@ pub struct PlanarEstimate {
 /// Standard errors of a planar estimate (delete-one-trial jackknife).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarErrors {
-    /// Of ξ1..ξ3 (kg m^2); zeros when given.
+    /// Of ξ1..ξ3 (kg m²); zeros when given.
     pub inertial_parameters: [f64; 3],
     /// Of K (N m/rad).
     pub stiffness: Matrix,
@@ -130,7 +130,7 @@ pub const MIN_LINK_M: f64 = 0.01;
 /// See [`MIN_LINK_M`].
 pub const MAX_LINK_M: f64 = 2.0;
 
-/// Largest base inertial parameter limpid accepts (kg m^2): a human arm's
+/// Largest base inertial parameter limpid accepts (kg m²): a human arm's
 /// are below 1.
 pub const MAX_INERTIAL_PARAMETER: f64 = 100.0;
 
@@ -144,7 +144,7 @@ pub fn check_inertial_parameters(xi: &[f64; 3]) -> Result<()> {
         Err(Error::invalid(
             "inertial parameters",
             format!(
-                "expected three positive values up to {MAX_INERTIAL_PARAMETER} kg m^2, found {}, {}, {}",
+                "expected three positive values up to {MAX_INERTIAL_PARAMETER} kg m², found {}, {}, {}",
                 xi[0], xi[1], xi[2]
             ),
         ))
@@ -216,7 +216,7 @@ pub fn fit_planar(
     if xi.is_none() && !xi_hat.iter().all(|v| *v > 0.0) {
         criteria.trusted = false;
         criteria.reasons.push(format!(
-            "inertial parameters not physical (xi = {:.4}, {:.4}, {:.4} kg m^2; all must be positive)",
+            "inertial parameters not physical (xi = {:.4}, {:.4}, {:.4} kg m²; all must be positive)",
             xi_hat[0], xi_hat[1], xi_hat[2]
         ));
     }

@@ -223,6 +223,9 @@ pub struct Prepared {
     pub trim: usize,
     /// Mean reference position over windows (absolute coordinates).
     pub reference: Vec<f64>,
+    /// `(min, max)` of each coordinate's position column over the recording
+    /// (its own numbers: a plausibility check of its unit reads them).
+    pub position_range: Vec<(f64, f64)>,
     /// Position noise σ per coordinate, estimated from second differences of
     /// the raw data at the rate they were measured (see `resampled`).
     pub position_noise: Vec<f64>,
@@ -416,6 +419,7 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
                 / prepared_windows.len() as f64
         })
         .collect();
+    let position_range = pos.iter().map(|c| crate::units::range(c)).collect();
     let meta = Prepared {
         path: rec.path().to_path_buf(),
         coordinates: coords,
@@ -438,6 +442,7 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
         derivative: params.derivative,
         trim,
         reference,
+        position_range,
         position_noise,
         resampled,
         regressor_noise_var,

@@ -116,9 +116,25 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         half,
         dt,
     );
+    let (coordinate, assumed) = p.coordinate();
+    if assumed {
+        warnings.push(Warning::new(
+            WarningCode::UnitsAssumed,
+            format!(
+                "position column {:?} is not a recording-format name: taken as a joint angle (rad, torque in N m); say coordinate = \"displacement\" (--coordinate displacement) if it is in metres",
+                p.position
+            ),
+        ));
+    }
+    warnings.extend(crate::units::implausible_motion(
+        &p.position,
+        coordinate,
+        crate::units::range(q),
+    ));
     let est = ReflexEstimate {
         position: p.position.clone(),
         torque: p.torque.clone(),
+        units: coordinate.units(),
         sample_rate_hz: fs,
         decimated_rate_hz: d.fs,
         duration_s: rec.len() as f64 / fs,

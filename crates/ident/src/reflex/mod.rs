@@ -202,6 +202,10 @@ pub struct ReflexEstimate {
     pub position: String,
     /// Torque column.
     pub torque: String,
+    /// The units of every number below, from what the request says the
+    /// position column is (older results without them were joint angles).
+    #[serde(default)]
+    pub units: crate::units::Units,
     /// Recorded sample rate (Hz).
     pub sample_rate_hz: f64,
     /// Rate after decimation (Hz).

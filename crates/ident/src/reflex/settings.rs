@@ -30,6 +30,10 @@ pub struct ReflexRequest {
     /// Torque column applied to the limb (N m, or N), e.g. `tau1`.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = ReflexRequest::default().torque))]
     pub torque: String,
+    /// What the position column is, `angle` (rad, torque in N m) or `displacement` (m, force in N) [default: from a recording-format name (`theta`, `q1`.. angle; `x`, `y`, `z` displacement), else angle]; the result's units follow it, never the column's name.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, value_name = "KIND"))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coordinate: Option<crate::units::Coordinate>,
     /// Decimate to this rate (Hz) before identification.
     #[cfg_attr(feature = "clap", arg(long = "rate", default_value_t = ReflexRequest::default().rate_hz, value_name = "HZ"))]
     pub rate_hz: f64,
@@ -59,6 +63,7 @@ impl Default for ReflexRequest {
         ReflexRequest {
             position: "q1".into(),
             torque: "tau1".into(),
+            coordinate: None,
             rate_hz: 100.0,
             intrinsic_lags_s: 0.04,
             reflex_lags_s: 1.0,
@@ -94,6 +99,19 @@ impl Default for ReflexParams {
 }
 
 impl ReflexRequest {
+    /// What the position column is: as the request says, else as its
+    /// recording-format name says, else (the method is a joint's) an angle;
+    /// the flag says whether it was taken without being said.
+    pub fn coordinate(&self) -> (crate::units::Coordinate, bool) {
+        match self
+            .coordinate
+            .or_else(|| crate::units::Coordinate::of_name(&self.position))
+        {
+            Some(c) => (c, false),
+            None => (crate::units::Coordinate::Angle, true),
+        }
+    }
+
     /// Refuse settings that cannot give an honest result, before any data is read.
     pub fn check(&self) -> Result<ReflexParams> {
         let described = |name: &str, what: &str, v: f64| {

@@ -220,7 +220,7 @@ pub struct ArmRequest {
     /// Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
     #[serde(default)]
     pub cutoff_hz: Option<f64>,
-    /// Known base inertial parameters xi1..xi3 (kg m^2): the reduced model (eq. 23-25).
+    /// Known base inertial parameters xi1..xi3 (kg m²): the reduced model (eq. 23-25).
     #[serde(default, deserialize_with = "numbers::optional")]
     pub inertial_parameters: Option<[f64; 3]>,
 }

@@ -107,6 +107,7 @@ proptest! {
             derivative: limpid_ident::Derivative::Central,
             trim: 0,
             reference: vec![0.0; n],
+            position_range: vec![(0.0, 0.0); n],
             position_noise: vec![0.0; n],
             resampled: vec![None; n],
             regressor_noise_var: vec![[0.0; 4]; n],

@@ -102,7 +102,7 @@ class Result:
     Results pickle and copy (``pickle``, ``copy.copy``, ``copy.deepcopy``), so
     they travel between processes (``concurrent.futures``, dask)."""
 
-    __slots__ = ("_data",)
+    __slots__ = ("_data", "_context")
 
     if TYPE_CHECKING:
         # the fields most results have, for type checkers (served by __getattr__;
@@ -123,10 +123,16 @@ class Result:
         levels: List[Any]
         rows: List[Any]
 
-    def __init__(self, data: Dict[str, Any]):
+    def __init__(self, data: Dict[str, Any], _context: Optional[Dict[str, Any]] = None):
         if not isinstance(data, dict):
             raise ValueError(f"a Result is made from a dict, found {type(data).__name__}")
         object.__setattr__(self, "_data", data)
+        # a part of a result (``r.fit``, ``r.standard_errors``) keeps where it came
+        # from: its path, the whole result's kind, coordinates and units
+        object.__setattr__(self, "_context", _context)
+
+    def _part(self, name: str, v: Dict[str, Any]) -> "Result":
+        return Result(v, _display.part_context(self._data, self._context, name))
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Result":
@@ -142,14 +148,18 @@ class Result:
         except KeyError:
             raise AttributeError(name) from None
         if isinstance(v, dict):
-            return Result(v)
+            return self._part(name, v)
+        if name == "impedance" and self._data.get("kind") == "stochastic":
+            # Z(f) as complex numbers (frequency, output, displacement); the JSON keeps [re, im]
+            z = np.asarray(v, dtype=float)
+            return z[..., 0] + 1j * z[..., 1]
         return _arrayish(v)
 
     def __getitem__(self, name: str) -> Any:
         if name not in self._data:
             raise KeyError(name)
         v = self._data[name]
-        return Result(v) if isinstance(v, dict) else _arrayish(v)
+        return self._part(name, v) if isinstance(v, dict) else _arrayish(v)
 
     def __contains__(self, name: object) -> bool:
         return name in self._data
@@ -173,16 +183,18 @@ class Result:
 
     __hash__ = None  # type: ignore[assignment]
 
-    def __reduce__(self) -> Tuple[Any, Tuple[Dict[str, Any]]]:
-        return (Result, (self._data,))
+    def __reduce__(self) -> Tuple[Any, Tuple[Dict[str, Any], Optional[Dict[str, Any]]]]:
+        return (Result, (self._data, self._context))
 
     def __copy__(self) -> "Result":
-        return Result(self._data)
+        return Result(self._data, self._context)
 
     def __deepcopy__(self, memo: Dict[int, Any]) -> "Result":
-        return Result(copy.deepcopy(self._data, memo))
+        return Result(copy.deepcopy(self._data, memo), copy.deepcopy(self._context, memo))
 
     def __repr__(self) -> str:
+        if self._context is not None:
+            return _display.part_summary(self._data, self._context)
         try:
             return _display.summary(self._data)
         except (IndexError, KeyError, TypeError, ValueError, AttributeError) as e:
@@ -191,7 +203,10 @@ class Result:
     def _repr_html_(self) -> str:
         """A notebook's view: value ± SE per matrix element with units,
         rounded to the SE, the verdict per matrix, fit quality, warnings.
-        A hand-made result whose fields disagree says so instead of raising."""
+        A hand-made result whose fields disagree says so instead of raising.
+        A part of a result (``r.fit``) shows its fields with units."""
+        if self._context is not None:
+            return _display.part_html(self._data, self._context)
         try:
             return _display.to_html(self._data)
         except (IndexError, KeyError, TypeError, ValueError, AttributeError) as e:
@@ -231,21 +246,31 @@ class Result:
         over the schedule (``sigma``: time, the operating point or gait phase)
         with ``stiffness``, ``damping``, ``inertia`` and their ``*_se`` (dims
         ``sigma, output, coordinate``; NaN where a point is not identifiable),
-        ``identifiable`` and ``support``; every variable carries ``units``."""
+        ``identifiable`` and ``support``. Window sweep: a Dataset over the
+        observation window (``window``, ms) with the planar ``stiffness``,
+        ``damping``, their ``*_se`` and ``trusted``. Spectra: a Dataset over
+        ``frequency`` with ``psd`` (per signal), ``coherence``,
+        ``multiple_coherence`` and ``partial_coherence``. Every variable
+        carries ``units`` ("1" for ratios)."""
         kind = self._data.get("kind")
-        if kind not in ("stochastic", "varying"):
-            raise ValueError(f"to_xarray is for stochastic and varying results, this one is {kind!r}")
+        if kind not in ("stochastic", "varying", "window_sweep", "spectra"):
+            raise ValueError("to_xarray is for results over a frequency, schedule or window axis (stochastic, "
+                             f"spectra, varying, window_sweep), this one is {kind!r}")
         try:
             import xarray as xr
         except ImportError:
             raise ImportError("Result.to_xarray needs xarray: pip install xarray") from None
-        coords = self._data["coordinates"]
         if kind == "varying":
             return _varying_dataset(xr, self._data)
+        if kind == "window_sweep":
+            return _sweep_dataset(xr, self._data)
+        if kind == "spectra":
+            return _spectra_dataset(xr, self._data)
+        coords = self._data["coordinates"]
         z = np.asarray(self._data["impedance"], dtype=float)
         return xr.DataArray(z[..., 0] + 1j * z[..., 1], dims=("frequency", "output", "displacement"),
-                            coords={"frequency": self._data["frequencies"], "output": coords,
-                                    "displacement": coords},
+                            coords={"frequency": ("frequency", self._data["frequencies"], {"units": "Hz"}),
+                                    "output": coords, "displacement": coords},
                             name="impedance", attrs={"units": "N/m, N/rad, N m/m or N m/rad by element",
                                                      "frequency_units": "Hz"})
 
@@ -274,6 +299,45 @@ def _varying_dataset(xr: Any, d: Dict[str, Any]) -> Any:
                                   "output": coords, "coordinate": coords},
                     attrs={"method": d.get("method", ""), "resolution": d.get("resolution_note", "")})
     return ds
+
+
+def _sweep_dataset(xr: Any, d: Dict[str, Any]) -> Any:
+    """A window sweep as an xarray Dataset over the observation window."""
+    rows = d["rows"]
+    joints = ["q1", "q2"]
+    data: Dict[str, Any] = {}
+    for q in ("stiffness", "damping"):
+        unit = _display._unit(q, "q1", "q1")
+        data[q] = (("window", "output", "coordinate"),
+                   np.asarray([r["estimate"][q] for r in rows], dtype=float), {"units": unit})
+        data[q + "_se"] = (("window", "output", "coordinate"),
+                           np.asarray([r["estimate"]["standard_errors"][q] for r in rows], dtype=float),
+                           {"units": unit})
+    data["trusted"] = (("window",), np.asarray([bool(r["trusted"]) for r in rows]))
+    return xr.Dataset(data, coords={"window": ("window", [r["observation_window_ms"] for r in rows],
+                                               {"long_name": "observation window T_obs", "units": "ms"}),
+                                    "output": joints, "coordinate": joints},
+                      attrs={"shortest_trusted_ms": d.get("shortest_trusted_ms") or float("nan")})
+
+
+def _spectra_dataset(xr: Any, d: Dict[str, Any]) -> Any:
+    """Spectra as an xarray Dataset over frequency. The signals' units are
+    the columns' own (limpid does not guess them from names)."""
+    f = ("frequency", d["frequencies"], {"units": "Hz"})
+    ratio = {"units": "1"}
+    data = {
+        "psd": (("signal", "frequency"), np.asarray(d["psd"], dtype=float),
+                {"units": "(signal unit)²/Hz", "long_name": "power spectral density (one-sided, Welch)"}),
+        "coherence": (("output", "input", "frequency"), np.asarray(d["coherence"], dtype=float),
+                      dict(ratio, long_name="ordinary coherence")),
+        "multiple_coherence": (("output", "frequency"), np.asarray(d["multiple_coherence"], dtype=float),
+                               dict(ratio, long_name="multiple coherence on all inputs")),
+        "partial_coherence": (("output", "input", "frequency"), np.asarray(d["partial_coherence"], dtype=float),
+                              dict(ratio, long_name="partial coherence")),
+    }
+    return xr.Dataset(data, coords={"frequency": f, "signal": d["signals"], "output": d["outputs"],
+                                    "input": d["inputs"]},
+                      attrs={"segment_samples": d["segment_samples"], "overlap_samples": d["overlap_samples"]})
 
 
 def _integer(name: str, value: Any, *, minimum: Optional[int] = None) -> int:

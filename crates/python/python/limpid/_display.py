@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import html as _html
 import math
+import os
 from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
 
 from . import _limpid
@@ -37,6 +38,32 @@ def _sub(coords: Sequence[str], i: int, j: int) -> str:
 
 def _unit(kind: str, row: str, column: str) -> str:
     return _limpid.matrix_element_unit(kind, row, column)
+
+
+def _is_angular(d: Dict[str, Any], coord: str) -> bool:
+    """Whether `coord` is a joint angle: as the result says (its ``units``,
+    from what the request said the column is), else by its recording-format
+    name (theta, q1..; results of every method but reflex use those names)."""
+    units = d.get("units")
+    if isinstance(units, dict) and units.get("position"):
+        return bool(units["position"] == "rad")
+    return coord == "theta" or (coord.startswith("q") and coord[1:].isdigit())
+
+
+def _position_unit(d: Dict[str, Any], coord: str) -> str:
+    return "rad" if _is_angular(d, coord) else "m"
+
+
+def _force_unit(d: Dict[str, Any], coord: str) -> str:
+    return "N m" if _is_angular(d, coord) else "N"
+
+
+def _scalar_unit(d: Dict[str, Any], kind: str, coord: str) -> str:
+    """The unit of a one-coordinate stiffness, damping or inertia of `d`."""
+    units = d.get("units")
+    if isinstance(units, dict) and units.get(kind):
+        return str(units[kind])
+    return _unit(kind, *(("q1", "q1") if _is_angular(d, coord) else ("x", "x")))
 
 
 def _matrix_records(d: Dict[str, Any], coords: Sequence[str], kinds: Iterable[str],
@@ -180,10 +207,10 @@ def _reflex(d: Dict[str, Any]) -> List[Record]:
     for kind in MATRICES:
         out.append(dict(quantity=f"intrinsic_{kind}", element="intrinsic " + SYMBOL[kind], row=None, column=None,
                         value=_float(intr[kind]), se=_float(intr["standard_errors"].get(kind)),
-                        unit=_unit(kind, pos, pos), verdict=None))
+                        unit=_scalar_unit(d, kind, pos), verdict=None))
     r = d["reflex"]
     out.append(dict(quantity="reflex_gain", element="reflex gain G", row=None, column=None, value=_float(r["gain"]),
-                    se=_float(r.get("gain_se")), unit=_unit("damping", pos, pos), verdict=None))
+                    se=_float(r.get("gain_se")), unit=_scalar_unit(d, "damping", pos), verdict=None))
     out.append(dict(quantity="reflex_delay", element="reflex delay", row=None, column=None,
                     value=_float(r["delay_s"]), se=float("nan"), unit="s",
                     verdict=None if r.get("delay_identifiable") else "not identifiable"))
@@ -375,7 +402,7 @@ def _fit_line(d: Dict[str, Any]) -> str:
     vaf = fit.get("vaf")
     if isinstance(vaf, list) and vaf:
         # one VAF per coordinate's force: labelled by it (issue 63, item 8)
-        coords = d.get("coordinates") or []
+        coords = d.get("coordinates") or (d.get("provenance") or {}).get("coordinates") or []
         labels = [str(c) for c in coords] if len(coords) == len(vaf) else [str(i + 1) for i in range(len(vaf))]
         parts.append("VAF " + ", ".join(f"{n} {v:.1f} %" for n, v in zip(labels, vaf) if v is not None))
     elif isinstance(vaf, (int, float)):
@@ -390,7 +417,14 @@ def _fit_line(d: Dict[str, Any]) -> str:
         v = crit.get(k)
         if isinstance(v, (int, float)):
             parts.append(f"{label} {v:.4g}")
-    return f"<p>Fit: {_e('; '.join(parts))}</p>" if parts else ""
+    line = f"<p>Fit: {_e('; '.join(parts))}</p>" if parts else ""
+    acc = d.get("accuracy")
+    if isinstance(acc, dict) and isinstance(acc.get("mean_relative_error"), (int, float)):
+        # stochastic with expected=: Park & Chang (2011) eq. (15)-(16) against the given model
+        line += (f"<p>Against the expected model: mean relative error "
+                 f"{100 * acc['mean_relative_error']:.2f} % of |Z|, phi_T {acc.get('phi_t', float('nan')):.4g} "
+                 "(largest singular value of Z - Z_expected, mean over the band)</p>")
+    return line
 
 
 def _warnings_html(d: Dict[str, Any]) -> str:
@@ -477,6 +511,47 @@ def why(e: BaseException) -> str:
             "a result made by limpid always does")
 
 
+def _flat_options(request: Dict[str, Any], prefix: str = "") -> List[Tuple[str, str]]:
+    """The request's fields as (name, value) rows, nested ones dotted; absent
+    (None) ones are left out: they mean "chosen from the data"."""
+    rows: List[Tuple[str, str]] = []
+    for k, v in request.items():
+        if k == "method" or v is None:
+            continue
+        if isinstance(v, dict):
+            rows.extend(_flat_options(v, f"{prefix}{k}."))
+        else:
+            rows.append((prefix + k, _value_text(v) if not isinstance(v, str) else v))
+    return rows
+
+
+def _header_html(d: Dict[str, Any]) -> str:
+    """What the result was made from, collapsed (as MNE and xarray show it):
+    the recordings (samples, rate, duration), limpid's version, when, the call
+    and the options it ran with."""
+    run = d.get("run")
+    if not isinstance(run, dict):
+        return ""
+    rows: List[List[str]] = []
+    for f in run.get("inputs") or []:
+        shape = ""
+        if f.get("samples") is not None and f.get("sample_rate_hz"):
+            shape = (f"{f['samples']} samples at {f['sample_rate_hz']:.6g} Hz ({f['duration_s']:.4g} s)")
+        rows.append(["recording", f.get("path", "?"), shape])
+    rows.append(["made by", f"limpid {run.get('limpid_version', '?')}", run.get("created_utc", "")])
+    rows.append(["call", run.get("command_line", ""), ""])
+    request = run.get("request")
+    options = _flat_options(request) if isinstance(request, dict) else []
+    table = _list_table(["", "", ""], rows, "")
+    if options:
+        table += _list_table(["option", "value"], [[k, v] for k, v in options], "Options used")
+    first = (run.get("inputs") or [{}])[0]
+    brief = os.path.basename(str(first.get("path", ""))) or "arrays"
+    if first.get("samples") is not None and first.get("sample_rate_hz"):
+        brief += f", {first['samples']} samples at {first['sample_rate_hz']:.6g} Hz"
+    return f"<details><summary>made from {_e(brief)}; limpid {_e(run.get('limpid_version', '?'))}</summary>{table}</details>"
+
+
 def to_html(d: Dict[str, Any]) -> str:
     """The result as HTML tables (``Result._repr_html_``)."""
     kind = d.get("kind", "?")
@@ -484,7 +559,7 @@ def to_html(d: Dict[str, Any]) -> str:
     rec = _recording(d)
     if rec:
         title += f" &mdash; {_e(rec)}"
-    parts = [title + "</p>"]
+    parts = [title + "</p>", _header_html(d)]
     if kind in ("linear", "stochastic"):
         parts.append(_matrices(records(d)))
         parts.append(_fit_line(d))
@@ -563,4 +638,123 @@ def to_html(d: Dict[str, Any]) -> str:
                    for k, v in d.items() if isinstance(v, (int, float, str)) and k not in ("schema", "kind")]
         parts.append(_list_table(["field", "value"], scalars, summary(d)))
     parts.append(_warnings_html(d))
+    return _STYLE + '<div class="limpid-result">' + "".join(parts) + "</div>"
+
+
+# ---------------------------------------------------------------- parts of a result (issue 63, item 4)
+
+
+def part_context(d: Dict[str, Any], parent: Optional[Dict[str, Any]], name: str) -> Dict[str, Any]:
+    """Where a part of a result comes from: its path, and the whole result's
+    kind, coordinates and units (which its matrices are in)."""
+    if parent is not None:
+        return dict(parent, path=f"{parent['path']}.{name}")
+    coords = d.get("coordinates") or (d.get("provenance") or {}).get("coordinates")
+    if coords is None and d.get("kind") == "planar":
+        coords = ["q1", "q2"]
+    return {"path": name, "kind": d.get("kind", "?"), "coordinates": coords, "units": d.get("units")}
+
+
+def _field_unit(name: str, ctx: Dict[str, Any]) -> str:
+    """The unit of a field of limpid's own schema: matrices by the result's
+    coordinates (or units), the rest by the schema's suffixes."""
+    base = name[:-3] if name.endswith("_se") else name
+    if base in MATRICES:
+        units = ctx.get("units")
+        if isinstance(units, dict) and units.get(base):
+            return str(units[base])
+        coords = ctx.get("coordinates") or []
+        if coords and len({_unit(base, c, c) for c in coords}) == 1:
+            return _unit(base, coords[0], coords[0])
+        return "by element" if coords else ""
+    if name.startswith("vaf") or name.endswith(("_vaf", "_percent")):
+        return "%"
+    for suffix, unit in (("_hz", "Hz"), ("_ms", "ms"), ("_s", "s"), ("_m", "m"), ("_rad", "rad")):
+        if name.endswith(suffix):
+            return unit
+    return ""
+
+
+def _numeric(v: Any) -> bool:
+    """A number or a list of numbers (which a unit applies to)."""
+    if isinstance(v, list):
+        return bool(v) and all(_numeric(x) for x in v)
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _is_matrix(v: Any) -> bool:
+    return (isinstance(v, list) and bool(v) and all(isinstance(r, list) and len(r) == len(v[0]) for r in v)
+            and all(isinstance(x, (int, float)) or x is None for r in v for x in r))
+
+
+def _value_text(v: Any) -> str:
+    """A field's value in words: numbers to 4 digits, short lists whole,
+    long ones by size and range, nested parts by their fields."""
+    if v is None:
+        return "—"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return f"{v:.4g}" if math.isfinite(v) else "not finite"
+    if isinstance(v, str):
+        return v.replace("_", " ")
+    if isinstance(v, dict):
+        return "part: " + ", ".join(sorted(v)[:8]) + (" …" if len(v) > 8 else "")
+    if isinstance(v, list):
+        if _is_matrix(v):
+            return f"{len(v)} x {len(v[0])} matrix"
+        nums = [x for x in v if isinstance(x, (int, float)) and not isinstance(x, bool)]
+        if len(nums) == len(v) and v:
+            if len(v) <= 6:
+                return ", ".join(f"{x:.4g}" for x in nums)
+            return f"{len(v)} values, {min(nums):.4g} to {max(nums):.4g}"
+        return f"{len(v)} items"
+    return str(v)
+
+
+def part_summary(d: Dict[str, Any], ctx: Dict[str, Any]) -> str:
+    """A part's repr: where it is from and its scalar fields."""
+    fields = []
+    for k, v in d.items():
+        if isinstance(v, (int, float, str, bool)) or (isinstance(v, list) and len(v) <= 3 and not _is_matrix(v)):
+            unit = _field_unit(k, ctx) if _numeric(v) else ""
+            fields.append(f"{k} = {_value_text(v)}" + (f" {unit}" if unit else ""))
+        else:
+            fields.append(k)
+    body = "; ".join(fields)
+    if len(body) > 300:
+        body = body[:297] + "…"
+    return f"limpid.Result({ctx['path']} of a {ctx['kind']} result: {body})"
+
+
+def part_html(d: Dict[str, Any], ctx: Dict[str, Any]) -> str:
+    """A part as HTML: its matrices as tables with units, its other fields
+    as a field | value | unit table."""
+    title = f"<p><b>{_e(ctx['path'])}</b> of a limpid {_e(ctx['kind'])} result</p>"
+    coords = ctx.get("coordinates") or []
+    tables, rows = [], []
+    for k, v in d.items():
+        if _is_matrix(v) and coords and len(v) == len(coords) and len(v[0]) == len(coords):
+            base = k[:-3] if k.endswith("_se") else k
+            head = ["", *coords]
+            body = []
+            for i, ci in enumerate(coords):
+                cells = []
+                for j, cj in enumerate(coords):
+                    x = v[i][j]
+                    unit = _unit(base, ci, cj) if base in MATRICES and not ctx.get("units") else ""
+                    cells.append(_value_text(x) + (f" {unit}" if unit and len(set(
+                        _unit(base, a, b) for a in coords for b in coords)) > 1 else ""))
+                body.append([ci, *cells])
+            unit = _field_unit(k, ctx)
+            tables.append(_list_table(head, body, k.replace("_", " ") + (f" ({unit})" if unit and unit != "by element"
+                                                                        else "")))
+        else:
+            rows.append([k.replace("_", " "), _value_text(v), _field_unit(k, ctx) if _numeric(v) else ""])
+    parts = [title, *tables]
+    if rows:
+        parts.append(_list_table(["field", "value", "unit"], rows, "fields"))
+    parts.append("<p><i>to_dict() gives the numbers in full</i></p>")
     return _STYLE + '<div class="limpid-result">' + "".join(parts) + "</div>"

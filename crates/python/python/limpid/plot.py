@@ -1,8 +1,18 @@
 """Figures of limpid results with matplotlib (``pip install limpid[plot]``).
 
-Each function takes a :class:`limpid.Result` (or its dict), draws into the
-axes given (``ax=``/``axes=``) or into a new figure, and returns the
-``matplotlib.figure.Figure``. Every axis carries its quantity and unit.
+Every function takes a :class:`limpid.Result` (or its dict) and one keyword
+for where to draw, ``ax=``, as matplotlib, pandas and python-control do:
+
+- ``ax=None`` (default): a new figure, laid out once (no ``tight_layout`` on
+  every call: a 6 x 3 Bode grid draws in well under 0.5 s);
+- a single ``Axes`` for the one-panel plots (``ellipsoids`` needs a 3-D one);
+- an array of ``Axes`` of the plot's shape for the multi-panel plots, e.g.
+  ``fig, ax = plt.subplots(6, 3); plot.bode(r, ax=ax)``; anything else is a
+  ``ValueError`` naming the shape wanted. The caller's figure keeps its layout.
+
+Each returns a :class:`Plot`: ``.figure`` and ``.axes`` (a rows x columns
+array, also for one panel), and ``.savefig(...)``. Every axis carries its
+quantity and unit; log axes read as plain numbers (0.5, 1, 2, 5, 10).
 
 - :func:`ellipsoids` — stiffness (or damping) ellipsoids in 3-D: the
   principal axes of the symmetric part, each as long as its eigenvalue
@@ -12,32 +22,63 @@ axes given (``ax=``/``axes=``) or into a new figure, and returns the
   (Lakatos et al. 2011), or any 2-D result's.
 - :func:`fit` — measured against predicted force or torque.
 - :func:`bode` — |Z(f)| and phase per element with the parametric model
-  (Park & Chang 2011), the fit band shaded.
+  (Park & Chang 2011), the fit band shaded; the measured phase is drawn on
+  the fit's branch (whole turns added point by point), so +179° and -181°
+  do not look like a failed fit.
 - :func:`coherence` — multiple and partial coherences against frequency.
+- :func:`periodic` — a periodic analysis: excited and detection lines, noise,
+  |G| with ±2 SE.
 - :func:`sweep` — K and D against the observation window with ±1 SE bands,
   trusted windows marked (Lakatos et al. 2011 §IV).
-- :func:`reflex` — intrinsic and reflex impulse responses and the reflex
-  pathway's static nonlinearity (parallel cascade).
+- :func:`reflex` — intrinsic and reflex impulse responses (per second, against
+  lag in ms) and the reflex pathway's static nonlinearity (parallel cascade).
 - :func:`varying` — K, B and I against time, an operating point or gait
   phase with ±2 SE bands; walking adds the stance | swing boundary and the
   perturbations (or strides) behind each point.
+- :func:`design` — a designed perturbation, its spectrum against the limits
+  and the predicted standard errors.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
 from . import _display
 
-__all__ = ["ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex", "design", "varying"]
+__all__ = ["Plot", "ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex", "design",
+           "varying"]
 
 
 def __dir__() -> List[str]:
     """The plot functions only (not the modules and typing names used inside)."""
     return sorted(__all__)
+
+
+class Plot:
+    """What a plot function drew: ``figure`` (a matplotlib Figure) and ``axes``
+    (a rows x columns numpy array of its Axes, also for a single panel)."""
+
+    __slots__ = ("figure", "axes")
+
+    def __init__(self, figure: Any, axes: Any) -> None:
+        self.figure = figure
+        self.axes = axes
+
+    @property
+    def ax(self) -> Any:
+        """The first (for one-panel plots: the only) Axes."""
+        return self.axes.flat[0]
+
+    def savefig(self, *args: Any, **kwargs: Any) -> None:
+        """The figure's ``savefig``."""
+        self.figure.savefig(*args, **kwargs)
+
+    def __repr__(self) -> str:
+        rows, cols = self.axes.shape
+        return f"limpid.plot.Plot({rows} x {cols} axes: {self.axes.flat[0].get_title() or 'untitled'!r})"
 
 
 def _plt() -> Any:
@@ -64,21 +105,59 @@ def _kind(d: Dict[str, Any], *kinds: str) -> str:
     return k
 
 
-def _figure(ax: Any, projection: Optional[str] = None) -> Any:
+def _panels(ax: Any, rows: int, cols: int, what: str, panel: Tuple[float, float] = (3.2, 2.4),
+            sharex: bool = False, projection: Optional[str] = None) -> Tuple[Any, Any, bool]:
+    """The figure and a rows x cols array of Axes to draw `what` into: the
+    caller's (`ax`, checked) or a new figure's; the flag says whether it is new."""
     plt = _plt()
-    if ax is not None:
-        return ax.figure, ax
-    fig = plt.figure(figsize=(5.5, 4.5))
-    return fig, fig.add_subplot(111, projection=projection)
+    if ax is None:
+        width, height = panel
+        # margins and gaps in inches, so labels fit without tight_layout (1-3 s on a 6 x 3 grid)
+        left, right, bottom, top, wgap, hgap = 0.85, 0.2, 0.55, 0.4, 0.8, 0.5 if sharex else 0.75
+        fw = left + right + cols * width + (cols - 1) * wgap
+        fh = bottom + top + rows * height + (rows - 1) * hgap
+        fig, a = plt.subplots(rows, cols, squeeze=False, figsize=(fw, fh), sharex=sharex,
+                              subplot_kw={"projection": projection} if projection else None)
+        fig.subplots_adjust(left=left / fw, right=1 - right / fw, bottom=bottom / fh, top=1 - top / fh,
+                            wspace=wgap / width, hspace=hgap / height)
+        return fig, a, True
+    shape = f"{rows} x {cols}"
+    wanted = "a single Axes" if rows * cols == 1 else f"an array of {shape} Axes, e.g. plt.subplots({rows}, {cols})[1]"
+    a = np.asarray(ax, dtype=object)
+    if a.size != rows * cols or (a.ndim == 2 and a.shape != (rows, cols)):
+        got = "one Axes" if a.ndim == 0 else f"{'x'.join(map(str, a.shape))} of them"
+        raise ValueError(f"{what} draws {shape} panels: ax= takes {wanted}; got {got}")
+    a = a.reshape(rows, cols)
+    for x in a.flat:
+        if not (hasattr(x, "figure") and hasattr(x, "plot")):
+            raise ValueError(f"{what}: ax= takes matplotlib Axes, got {type(x).__name__}")
+        if projection == "3d" and not hasattr(x, "get_zlim"):
+            raise ValueError(f"{what} needs a 3-D Axes: fig.add_subplot(projection='3d')")
+    return a.flat[0].figure, a, False
 
 
-def _grid(axes: Any, rows: int, cols: int, **kw: Any) -> Any:
-    plt = _plt()
-    if axes is not None:
-        a = np.asarray(axes, dtype=object).reshape(rows, cols)
-        return a.flat[0].figure, a
-    fig, a = plt.subplots(rows, cols, squeeze=False, **kw)
-    return fig, a
+def _plain(v: float, _pos: Any = None) -> str:
+    return f"{v:g}"
+
+
+def _log_ticks(axis: Any, values: Any) -> None:
+    """Plain numbers on a log axis (0.5, 1, 2, 5 rather than 1.35×10⁰): 1-2-5
+    steps when `values` span less than two decades, decades beyond. `axis`
+    is ``ax.xaxis`` or ``ax.yaxis``; the span comes from the data, which is
+    cheaper than asking matplotlib for the limits (an autoscale per call)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, NullLocator
+
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v) & (v > 0)]
+    decades = math.log10(float(v.max()) / float(v.min())) if v.size else 3.0
+    axis.set_major_formatter(FuncFormatter(_plain))
+    if decades < 2:
+        # 1-2-5 majors say the scale; minor ticks would only cost drawing time
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.set_minor_locator(NullLocator())
+    else:
+        axis.set_major_locator(LogLocator(base=10))
+        axis.set_minor_formatter(NullFormatter())
 
 
 # ---------------------------------------------------------------- ellipsoids
@@ -95,16 +174,18 @@ def _ellipsoid_list(d: Dict[str, Any], matrix: str) -> List[Any]:
     return [(f"level {lv['level']:g}", lv.get("ellipsoid")) for lv in d["levels"]]
 
 
-def ellipsoids(result: Any, ax: Any = None, matrix: str = "stiffness") -> Any:
+def ellipsoids(result: Any, ax: Any = None, matrix: str = "stiffness") -> Plot:
     """3-D ellipsoids of a linear, co-contraction (one per level) or demo
     (one per start point) result: axes along the principal directions of the
     symmetric part, lengths |λ| in the matrix's unit. A matrix that is not
-    positive definite is drawn with |λ| and says so in the legend."""
+    positive definite is drawn with |λ| and says so in the legend.
+    ``ax``: one 3-D Axes (``fig.add_subplot(projection='3d')``) or None."""
     d = _data(result)
     items = [(label, e) for label, e in _ellipsoid_list(d, matrix) if e is not None and len(e["axes"]) == 3]
     if not items:
         raise ValueError(f"this result has no 3-D {matrix} ellipsoid (2-D or 1-D data: use plot.ellipses)")
-    fig, ax = _figure(ax, "3d")
+    fig, a, _ = _panels(ax, 1, 1, "plot.ellipsoids", panel=(4.5, 3.6), projection="3d")
+    ax = a[0, 0]
     unit = _display._unit(matrix, "x", "x")
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 36), np.linspace(0, np.pi, 18))
     sphere = np.stack([np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v)])
@@ -120,20 +201,20 @@ def ellipsoids(result: Any, ax: Any = None, matrix: str = "stiffness") -> Any:
         ax.plot_wireframe(x, y, z, color=c, linewidth=0.5, alpha=0.7, label=(label or matrix) + note)
         reach = max(reach, float(np.abs(lam).max()))
     lim = reach * 1.05 or 1.0
-    for setter, name in ((ax.set_xlim, "x"), (ax.set_ylim, "y"), (ax.set_zlim, "z")):
+    for setter in (ax.set_xlim, ax.set_ylim, ax.set_zlim):
         setter(-lim, lim)
     ax.set_xlabel(f"x ({unit})")
     ax.set_ylabel(f"y ({unit})")
     ax.set_zlabel(f"z ({unit})")
     ax.set_title(f"{matrix.capitalize()} ellipsoid" + ("s" if len(items) > 1 else ""))
     ax.legend(loc="upper left", fontsize="small")
-    return fig
+    return Plot(fig, a)
 
 
-def ellipses(result: Any, ax: Any = None, matrix: Optional[str] = None) -> Any:
+def ellipses(result: Any, ax: Any = None, matrix: Optional[str] = None) -> Plot:
     """The end-point stiffness ellipse of a planar result (or the 2-D
     stiffness of a linear result): principal axes with lengths |λ| (N/m),
-    centred at the origin."""
+    centred at the origin. ``ax``: one Axes or None."""
     from . import ellipsoid as _ellipsoid
 
     d = _data(result)
@@ -154,7 +235,8 @@ def ellipses(result: Any, ax: Any = None, matrix: Optional[str] = None) -> Any:
     lam = np.asarray(e.radii_proportional, dtype=float)
     t = np.linspace(0, 2 * np.pi, 200)
     pts = axes @ (np.abs(lam)[:, None] * np.stack([np.cos(t), np.sin(t)]))
-    fig, ax = _figure(ax)
+    fig, a, _ = _panels(ax, 1, 1, "plot.ellipses", panel=(4.0, 3.6))
+    ax = a[0, 0]
     unit = _display._unit(qty, coords[0], coords[0])
     ax.plot(pts[0], pts[1], color="#0072B2",
             label=name + ("" if np.all(lam > 0) else " (not positive definite: |λ|)"))
@@ -165,32 +247,32 @@ def ellipses(result: Any, ax: Any = None, matrix: Optional[str] = None) -> Any:
     ax.set_ylabel(f"{coords[1]} ({unit})")
     ax.set_title(f"{name.capitalize()} ellipse")
     ax.legend(fontsize="small")
-    return fig
+    return Plot(fig, a)
 
 
 # ---------------------------------------------------------------- fit
 
 
-def fit(result: Any, axes: Any = None) -> Any:
+def fit(result: Any, ax: Any = None) -> Plot:
     """Measured against predicted force (or torque) per coordinate: linear,
     planar (joint torques) and reflex (total torque with the intrinsic and
-    reflex parts)."""
+    reflex parts). ``ax``: one Axes per coordinate (n x 1; reflex: one) or None."""
     d = _data(result)
     kind = _kind(d, "linear", "planar", "reflex")
     if kind == "reflex":
         tr = d["traces"]
-        fig, a = _grid(axes, 1, 1, figsize=(7, 3.2))
-        ax = a[0, 0]
-        unit = "N m" if d["position"] == "theta" or d["position"].startswith("q") else "N"
-        ax.plot(tr["t_s"], tr["measured"], color="#000000", linewidth=1, label="measured")
-        ax.plot(tr["t_s"], np.add(tr["intrinsic"], tr["reflex"]), color="#0072B2", linestyle="--", label="predicted")
-        ax.plot(tr["t_s"], tr["reflex"], color="#D55E00", linewidth=0.8, label="reflex part")
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel(f"torque {d['torque']} ({unit})")
-        ax.set_title(f"Parallel-cascade fit (VAF {d['fit']['vaf_total']:.1f} %)")
-        ax.legend(fontsize="small")
-        fig.tight_layout()
-        return fig
+        fig, a, _ = _panels(ax, 1, 1, "plot.fit of a reflex result", panel=(6.5, 2.6))
+        axx = a[0, 0]
+        unit = _display._force_unit(d, d["position"])
+        axx.plot(tr["t_s"], tr["measured"], color="#000000", linewidth=1, label="measured")
+        axx.plot(tr["t_s"], np.add(tr["intrinsic"], tr["reflex"]), color="#0072B2", linestyle="--",
+                 label="predicted")
+        axx.plot(tr["t_s"], tr["reflex"], color="#D55E00", linewidth=0.8, label="reflex part")
+        axx.set_xlabel("time (s)")
+        axx.set_ylabel(f"torque {d['torque']} ({unit})")
+        axx.set_title(f"Parallel-cascade fit (VAF {d['fit']['vaf_total']:.1f} %)")
+        axx.legend(fontsize="small")
+        return Plot(fig, a)
     if kind == "linear":
         tr = d["fit"]["traces"]
         coords = d["provenance"]["coordinates"]
@@ -204,27 +286,35 @@ def fit(result: Any, axes: Any = None) -> Any:
         names = ["tau1", "tau2"]
         vaf = d["fit"]["vaf"]
     n = len(tr["measured"])
-    fig, a = _grid(axes, n, 1, figsize=(7, 2.2 * n), sharex=True)
+    fig, a, _ = _panels(ax, n, 1, f"plot.fit of a {kind} result", panel=(6.5, 1.8), sharex=True)
     for i in range(n):
-        ax = a[i, 0]
-        angular = coords[i] == "theta" or coords[i].startswith("q")
-        unit = "N m" if angular else "N"
-        ax.plot(tr["time"], tr["measured"][i], color="#000000", linewidth=1, label="measured")
-        ax.plot(tr["time"], tr["predicted"][i], color="#0072B2", linestyle="--", label="predicted")
-        ax.set_ylabel(f"{names[i]} ({unit})")
-        ax.set_title(f"{names[i]}: VAF {vaf[i]:.1f} %", fontsize="medium")
+        axx = a[i, 0]
+        unit = _display._force_unit(d, coords[i])
+        axx.plot(tr["time"], tr["measured"][i], color="#000000", linewidth=1, label="measured")
+        axx.plot(tr["time"], tr["predicted"][i], color="#0072B2", linestyle="--", label="predicted")
+        axx.set_ylabel(f"{names[i]} ({unit})")
+        axx.set_title(f"{names[i]}: VAF {vaf[i]:.1f} %", fontsize="medium")
     a[-1, 0].set_xlabel("time (s)")
     a[0, 0].legend(fontsize="small")
-    fig.tight_layout()
-    return fig
+    return Plot(fig, a)
 
 
 # ---------------------------------------------------------------- frequency domain
 
 
-def bode(result: Any, axes: Any = None) -> Any:
+def _on_branch(reference: Any, trace: Any) -> Any:
+    """Phases (rad) of `trace` moved, point by point, by whole turns to lie
+    within half a turn of the unwrapped `reference` at the same frequency:
+    an estimate at +179° and its fit at -181° are drawn as the same phase."""
+    ref = np.unwrap(reference)
+    return trace - 2 * np.pi * np.round((trace - ref) / (2 * np.pi))
+
+
+def bode(result: Any, ax: Any = None) -> Plot:
     """|Z(f)| (log-log) and phase per element of a stochastic result, with
-    the fitted K - (2πf)² M + j 2πf B dashed and the fit band shaded."""
+    the fitted K - (2πf)² M + j 2πf B dashed and the fit band shaded. The
+    measured phase is drawn on the fit's branch. ``ax``: 2n x n Axes
+    (magnitude above phase for each element) or None."""
     d = _data(result)
     _kind(d, "stochastic")
     f = np.asarray(d["frequencies"], dtype=float)
@@ -236,32 +326,38 @@ def bode(result: Any, axes: Any = None) -> Any:
     w = 2 * np.pi * f
     model = k[None] - (w**2)[:, None, None] * m[None] + 1j * w[:, None, None] * b[None]
     lo, hi = d["criteria"]["band_hz"]
-    fig, a = _grid(axes, 2 * n, n, figsize=(3.2 * n, 2.4 * 2 * n), sharex=True)
+    fig, a, _ = _panels(ax, 2 * n, n, "plot.bode", panel=(2.9, 1.55), sharex=True)
     ok = f > 0
+    fo = f[ok]
     for i in range(n):
         for j in range(n):
             unit = _display._unit("stiffness", coords[i], coords[j])
             mag, ph = a[2 * i, j], a[2 * i + 1, j]
-            mag.loglog(f[ok], np.abs(z[ok, i, j]), color="#000000", linewidth=1, label="Z(f)")
-            mag.loglog(f[ok], np.abs(model[ok, i, j]), color="#0072B2", linestyle="--", label="fit")
-            # unwrapped, so that a phase near ±180° does not jump across the panel
-            ph.semilogx(f[ok], np.degrees(np.unwrap(np.angle(z[ok, i, j]))), color="#000000", linewidth=1)
-            ph.semilogx(f[ok], np.degrees(np.unwrap(np.angle(model[ok, i, j]))), color="#0072B2", linestyle="--")
+            fit_phase = np.unwrap(np.angle(model[ok, i, j]))
+            zm, mm = np.abs(z[ok, i, j]), np.abs(model[ok, i, j])
             for axx in (mag, ph):
+                axx.set_xscale("log")
                 axx.axvspan(lo, hi, color="#f0f0f0", zorder=0)
+            mag.set_yscale("log")
+            mag.plot(fo, zm, color="#000000", linewidth=1, label="Z(f)")
+            mag.plot(fo, mm, color="#0072B2", linestyle="--", label="fit")
+            ph.plot(fo, np.degrees(_on_branch(fit_phase, np.angle(z[ok, i, j]))), color="#000000", linewidth=1)
+            ph.plot(fo, np.degrees(fit_phase), color="#0072B2", linestyle="--")
+            _log_ticks(mag.yaxis, np.concatenate([zm, mm]))
             mag.set_title(f"Z {coords[i]},{coords[j]}", fontsize="medium")
             mag.set_ylabel(f"|Z| ({unit})")
             ph.set_ylabel("phase (deg)")
             if i == n - 1:
                 ph.set_xlabel("frequency (Hz)")
+    _log_ticks(a[0, 0].xaxis, fo)
     a[0, 0].legend(fontsize="small")
-    fig.tight_layout()
-    return fig
+    return Plot(fig, a)
 
 
-def coherence(result: Any, axes: Any = None) -> Any:
+def coherence(result: Any, ax: Any = None) -> Plot:
     """Multiple coherence of each output and partial coherence on each input
-    of a stochastic result, against frequency (Park & Chang 2011)."""
+    of a stochastic result, against frequency (Park & Chang 2011); coherence
+    is a ratio, its axes carry no unit. ``ax``: one Axes per output (n x 1) or None."""
     d = _data(result)
     _kind(d, "stochastic")
     f = np.asarray(d["frequencies"], dtype=float)
@@ -270,34 +366,35 @@ def coherence(result: Any, axes: Any = None) -> Any:
     mult = np.asarray(coh["multiple"], dtype=float)  # [output][frequency]
     part = np.asarray(coh["partial"], dtype=float)  # [output][input][frequency]
     n = len(outs)
-    fig, a = _grid(axes, n, 1, figsize=(6, 1.9 * n), sharex=True)
+    fig, a, _ = _panels(ax, n, 1, "plot.coherence", panel=(5.5, 1.3), sharex=True)
     ok = f > 0
     for i in range(n):
-        ax = a[i, 0]
-        ax.semilogx(f[ok], mult[i][ok], color="#000000", linewidth=1.4, label="multiple")
+        axx = a[i, 0]
+        axx.semilogx(f[ok], mult[i][ok], color="#000000", linewidth=1.4, label="multiple")
         for j, name in enumerate(ins):
-            ax.semilogx(f[ok], part[i, j][ok], linewidth=0.9, linestyle="--", label=f"partial on {name}")
-        ax.set_ylim(0, 1.05)
-        ax.set_ylabel(f"coherence of {outs[i]} (1)")
+            axx.semilogx(f[ok], part[i, j][ok], linewidth=0.9, linestyle="--", label=f"partial on {name}")
+        axx.set_ylim(0, 1.05)
+        axx.set_ylabel(f"coherence of {outs[i]}")
+        _log_ticks(axx.xaxis, f[ok])
     a[-1, 0].set_xlabel("frequency (Hz)")
     a[0, 0].legend(fontsize="small", ncol=2)
-    fig.tight_layout()
-    return fig
+    return Plot(fig, a)
 
 
-def periodic(result: Any, axes: Any = None) -> Any:
+def periodic(result: Any, ax: Any = None) -> Plot:
     """A periodic analysis (``limpid.spectra(..., period_s=...)``): the output
     at the excited, odd-detection and even-detection lines as distinct marks
     and the noise of the period average (dB relative to the excited lines),
-    then |G| of each input-output pair at its excited lines with ±2 SE."""
+    then |G| of each input-output pair at its excited lines with ±2 SE.
+    ``ax``: 1 + pairs Axes in a column, or None."""
     d = _data(result)
     _kind(d, "spectra")
     p = d.get("periodic")
     if not p:
         raise ValueError("this spectra result has no periodic analysis: use period_s=")
     frf = p["frf"]
-    fig, a = _grid(axes, 1 + len(frf), 1, figsize=(6, 2.6 * (1 + len(frf))))
-    ax = a[0, 0]
+    fig, a, _ = _panels(ax, 1 + len(frf), 1, "plot.periodic", panel=(5.5, 2.1))
+    axx = a[0, 0]
     lines = p["lines"]
     for kind, color, marker, label in (("excited", "#0072B2", "o", "excited"),
                                        ("odd_detection", "#D55E00", "^", "odd detection"),
@@ -305,78 +402,90 @@ def periodic(result: Any, axes: Any = None) -> Any:
         at = [ln["frequency_hz"] for ln in lines if ln["kind"] == kind]
         level = [ln["output_level"] for ln in lines if ln["kind"] == kind]
         if at:
-            ax.semilogx(at, level, linestyle="none", marker=marker, markersize=3.5, color=color, label=label)
-    ax.semilogx([ln["frequency_hz"] for ln in lines], [ln["noise_level"] for ln in lines],
-                color="#999999", linestyle="--", linewidth=1.0, label="noise")
-    ax.set_ylabel("output (dB re excited)")
+            axx.semilogx(at, level, linestyle="none", marker=marker, markersize=3.5, color=color, label=label)
+    axx.semilogx([ln["frequency_hz"] for ln in lines], [ln["noise_level"] for ln in lines],
+                 color="#999999", linestyle="--", linewidth=1.0, label="noise")
+    axx.set_ylabel("output (dB re excited)")
+    axx.set_xlabel("frequency (Hz)")
     verdict = (p.get("distortion") or {}).get("verdict", "no detection line")
-    ax.set_title(f"{p['periods']} periods of {p['period_s']:g} s: {verdict}", fontsize="medium")
-    ax.legend(fontsize="small", ncol=2)
+    axx.set_title(f"{p['periods']} periods of {p['period_s']:g} s: {verdict}", fontsize="medium")
+    axx.legend(fontsize="small", ncol=2)
+    _log_ticks(axx.xaxis, [ln["frequency_hz"] for ln in lines])
     for n, pair in enumerate(frf, start=1):
-        ax = a[n, 0]
+        axx = a[n, 0]
         f = np.asarray(pair["frequency_hz"], dtype=float)
         m = np.asarray(pair["magnitude"], dtype=float)
         se = np.asarray(pair["magnitude_se"], dtype=float)
-        ax.loglog(f, m, linestyle="none", marker="o", markersize=3, color="#0072B2", label="|G|")
-        ax.fill_between(f, np.clip(m - 2 * se, m * 1e-3, None), m + 2 * se, color="#0072B2", alpha=0.2, label="±2 SE")
-        ax.set_ylabel(f"|{pair['output']} / {pair['input']}|")
-        ax.legend(fontsize="small")
-    a[-1, 0].set_xlabel("frequency (Hz)")
-    fig.tight_layout()
-    return fig
+        axx.loglog(f, m, linestyle="none", marker="o", markersize=3, color="#0072B2", label="|G|")
+        axx.fill_between(f, np.clip(m - 2 * se, m * 1e-3, None), m + 2 * se, color="#0072B2", alpha=0.2,
+                         label="±2 SE")
+        axx.set_ylabel(f"|{pair['output']} / {pair['input']}|")
+        axx.set_xlabel("frequency (Hz)")
+        axx.legend(fontsize="small")
+        _log_ticks(axx.xaxis, f)
+        _log_ticks(axx.yaxis, m)
+    return Plot(fig, a)
 
 
 # ---------------------------------------------------------------- planar sweep
 
 
-def sweep(result: Any, axes: Any = None) -> Any:
+def sweep(result: Any, ax: Any = None) -> Plot:
     """The diagonal of K and D against the observation window T_obs with
-    ±1 SE bands; trusted windows filled, the shortest trusted one marked."""
+    ±1 SE bands; trusted windows filled, the shortest trusted one marked.
+    ``ax``: 2 x 1 Axes or None."""
     d = _data(result)
     _kind(d, "window_sweep")
     t = np.asarray([r["observation_window_ms"] for r in d["rows"]], dtype=float)
     trusted = np.asarray([bool(r["trusted"]) for r in d["rows"]])
-    fig, a = _grid(axes, 2, 1, figsize=(6, 5), sharex=True)
+    fig, a, _ = _panels(ax, 2, 1, "plot.sweep", panel=(5.5, 2.0), sharex=True)
     for row, (q, sym) in enumerate((("stiffness", "K"), ("damping", "D"))):
-        ax = a[row, 0]
+        axx = a[row, 0]
         for i, c in enumerate(("#0072B2", "#D55E00")):
             v = np.asarray([r["estimate"][q][i][i] for r in d["rows"]], dtype=float)
             s = np.asarray([r["estimate"]["standard_errors"][q][i][i] for r in d["rows"]], dtype=float)
-            ax.fill_between(t, v - s, v + s, color=c, alpha=0.2, linewidth=0)
-            ax.plot(t, v, color=c, linewidth=1, label=f"{sym}{i + 1}{i + 1}")
-            ax.plot(t[trusted], v[trusted], "o", color=c, markersize=4)
-            ax.plot(t[~trusted], v[~trusted], "o", color=c, markersize=4, markerfacecolor="white")
+            axx.fill_between(t, v - s, v + s, color=c, alpha=0.2, linewidth=0)
+            axx.plot(t, v, color=c, linewidth=1, label=f"{sym}{i + 1}{i + 1}")
+            axx.plot(t[trusted], v[trusted], "o", color=c, markersize=4)
+            axx.plot(t[~trusted], v[~trusted], "o", color=c, markersize=4, markerfacecolor="white")
         unit = _display._unit(q, "q1", "q1")
-        ax.set_ylabel(f"{q} {sym} ({unit})")
+        axx.set_ylabel(f"{q} {sym} ({unit})")
         short = d.get("shortest_trusted_ms")
         if short is not None:
-            ax.axvline(short, color="#444444", linestyle=":", linewidth=1)
-        ax.legend(fontsize="small", title="filled: trusted", title_fontsize="small")
+            axx.axvline(short, color="#444444", linestyle=":", linewidth=1)
+        axx.legend(fontsize="small", title="filled: trusted", title_fontsize="small")
     a[-1, 0].set_xlabel("observation window T_obs (ms)")
-    fig.tight_layout()
-    return fig
+    return Plot(fig, a)
 
 
 # ---------------------------------------------------------------- reflex
 
 
-def reflex(result: Any, axes: Any = None) -> Any:
+def reflex(result: Any, ax: Any = None) -> Plot:
     """Parallel cascade: the intrinsic IRF (position to torque), the reflex
-    IRF (rectified velocity to torque) and the reflex pathway's static
-    nonlinearity (half-wave rectifier times the gain)."""
+    IRF (rectified velocity to torque), both per second of lag (the result's
+    own values) against lag in ms, and the reflex pathway's static nonlinearity (half-wave rectifier
+    times the gain). ``ax``: 1 x 3 Axes or None."""
     d = _data(result)
     _kind(d, "reflex")
-    fig, a = _grid(axes, 1, 3, figsize=(11, 3.2))
-    angular = d["position"] == "theta" or d["position"].startswith("q")
-    pu, tu = ("rad", "N m") if angular else ("m", "N")
+    fig, a, _ = _panels(ax, 1, 3, "plot.reflex", panel=(3.0, 2.6))
+    tu = _display._force_unit(d, d["position"])
+    pu = _display._position_unit(d, d["position"])
     ii, ri = d["intrinsic"]["irf"], d["reflex"]["irf"]
-    a[0, 0].plot(ii["lags_s"], ii["values"], color="#000000", linewidth=1)
-    a[0, 0].set_xlabel("lag (s)")
-    a[0, 0].set_ylabel(f"intrinsic IRF ({tu}/{pu} per sample)")
+
+    def in_ms(irf: Dict[str, Any]) -> Tuple[Any, Any]:
+        # the result's IRFs are per second of lag already (the weights over the sampling interval)
+        return 1e3 * np.asarray(irf["lags_s"], dtype=float), np.asarray(irf["values"], dtype=float)
+
+    lag, h = in_ms(ii)
+    a[0, 0].plot(lag, h, color="#000000", linewidth=1, marker="o" if lag.size < 30 else None, markersize=3)
+    a[0, 0].set_xlabel("lag (ms)")
+    a[0, 0].set_ylabel(f"intrinsic IRF ({tu}/{pu}/s)")
     a[0, 0].set_title("Intrinsic pathway", fontsize="medium")
-    a[0, 1].plot(ri["lags_s"], ri["values"], color="#D55E00", linewidth=1)
-    a[0, 1].set_xlabel("lag (s)")
-    a[0, 1].set_ylabel(f"reflex IRF ({tu} s/{pu} per sample)")
+    lag, h = in_ms(ri)
+    a[0, 1].plot(lag, h, color="#D55E00", linewidth=1)
+    a[0, 1].set_xlabel("lag (ms)")
+    a[0, 1].set_ylabel(f"reflex IRF ({tu} s/{pu}/s)")
     a[0, 1].set_title("Reflex pathway (linear part)", fontsize="medium")
     r = d["reflex"]
     v = np.linspace(-1.0, 1.0, 201)
@@ -384,34 +493,36 @@ def reflex(result: Any, axes: Any = None) -> Any:
     a[0, 2].plot(v, r["gain"] * np.maximum(sign * v, 0.0), color="#D55E00", linewidth=1.2)
     a[0, 2].set_xlabel(f"velocity ({pu}/s)")
     a[0, 2].set_ylabel(f"reflex torque at DC ({tu})")
-    a[0, 2].set_title(f"Nonlinearity: {r.get('polarity', '?')} half-wave, gain {r['gain']:.3g}", fontsize="medium")
-    fig.tight_layout()
-    return fig
+    a[0, 2].set_title(f"{r.get('polarity', '?')} half-wave, gain {r['gain']:.3g}", fontsize="medium")
+    return Plot(fig, a)
 
 
-def varying(result: Any, axes: Any = None) -> Any:
+def varying(result: Any, ax: Any = None) -> Plot:
     """Impedance that varies: the diagonal of K, B and I (M) against the schedule with
     ±2 SE bands; points not identifiable are gaps. Walking results (``gait``) add
     the stance | swing boundary and a fourth panel with the perturbations (pulses) or
-    strides (ensemble) behind each point."""
+    strides (ensemble) behind each point. ``ax``: 1 x 3 Axes (walking: 1 x 4) or None."""
     d = _data(result)
     _kind(d, "varying")
     gait = d.get("gait")
     panels = 4 if gait else 3
-    fig, a = _grid(axes, 1, panels, figsize=(3.6 * panels, 3.2))
-    angular = all(c == "theta" or c.startswith("q") for c in d["coordinates"])
-    units = ("N m/rad", "N m s/rad", "kg m²") if angular else ("N/m", "N s/m", "kg")
+    fig, a, new = _panels(ax, 1, panels, "plot.varying" + (" of a walking result" if gait else ""),
+                          panel=(3.0, 2.6))
+    coords = d["coordinates"]
+    units = [_display._unit(q, coords[0], coords[0]) for q in ("stiffness", "damping", "inertia")]
+    angular = _display._is_angular(d, coords[0])
     sched = d["schedule"]
     xlabel = f"{sched['name']} ({sched['unit']})" if sched.get("unit") else sched["name"]
     if sched.get("unit") == "fraction of the stride":
         # "gait phase (from heel_strike) (fraction of the stride)" does not fit under a panel
         xlabel = "gait phase"
-        fig.suptitle(f"{sched['name']}: 0 at the event, 1 at the next", fontsize="medium")
+        if new:
+            fig.suptitle(f"{sched['name']}: 0 at the event, 1 at the next", fontsize="medium")
     x = np.asarray([p["sigma"] for p in d["points"]], dtype=float)
-    n = len(d["coordinates"])
+    n = len(coords)
     for col, (key, symbol, word) in enumerate([("stiffness", "K", "Stiffness"), ("damping", "B", "Damping"),
                                                ("inertia", "I" if angular else "M", "Inertia")]):
-        ax = a[0, col]
+        axx = a[0, col]
         for i in range(n):
             def el(p: Dict[str, Any], k: str) -> float:
                 m = p.get(k)
@@ -419,39 +530,38 @@ def varying(result: Any, axes: Any = None) -> Any:
             v = np.asarray([el(p, key) for p in d["points"]])
             se = np.asarray([el(p, key + "_se") for p in d["points"]])
             label = symbol if n == 1 else f"{symbol}{i + 1}{i + 1}"
-            line = ax.plot(x, v, marker="o", markersize=2.5, linewidth=1.2, label=label)[0]
-            ax.fill_between(x, v - 2 * se, v + 2 * se, color=line.get_color(), alpha=0.2, linewidth=0)
-        ax.set_xlabel(xlabel)
-        ax.set_ylabel(f"{symbol} ({units[col]})")
-        ax.set_title(f"{word} (±2 SE shaded)", fontsize="medium")
+            line = axx.plot(x, v, marker="o", markersize=2.5, linewidth=1.2, label=label)[0]
+            axx.fill_between(x, v - 2 * se, v + 2 * se, color=line.get_color(), alpha=0.2, linewidth=0)
+        axx.set_xlabel(xlabel)
+        axx.set_ylabel(f"{symbol} ({units[col]})")
+        axx.set_title(f"{word} (±2 SE shaded)", fontsize="medium")
         if n > 1:
-            ax.legend(fontsize="small")
+            axx.legend(fontsize="small")
     if gait:
-        ax = a[0, 3]
-        ax.bar(x, [p["support"] for p in d["points"]], width=0.8 * (x[1] - x[0]) if len(x) > 1 else 0.02,
-               color="#999999")
-        ax.set_xlabel(xlabel)
+        axx = a[0, 3]
+        axx.bar(x, [p["support"] for p in d["points"]], width=0.8 * (x[1] - x[0]) if len(x) > 1 else 0.02,
+                color="#999999")
+        axx.set_xlabel(xlabel)
         what = "perturbations" if d.get("method") == "pulses" else "strides"
-        ax.set_ylabel(f"{what} behind each point")
-        ax.set_title(f"{gait['strides_used']} of {gait['strides_found']} strides used", fontsize="medium")
+        axx.set_ylabel(f"{what} behind each point")
+        axx.set_title(f"{gait['strides_used']} of {gait['strides_found']} strides used", fontsize="medium")
         if sched.get("unit") == "fraction of the stride":
-            for ax in a[0, :]:
-                ax.axvline(gait["stance_end"], color="#777777", linestyle=":", linewidth=1)
-                ax.text(gait["stance_end"], 1.0, " swing", transform=ax.get_xaxis_transform(),
-                        va="top", fontsize="x-small", color="#555555")
-    fig.tight_layout()
-    return fig
+            for axx in a[0, :]:
+                axx.axvline(gait["stance_end"], color="#777777", linestyle=":", linewidth=1)
+                axx.text(gait["stance_end"], 1.0, " swing", transform=axx.get_xaxis_transform(),
+                         va="top", fontsize="x-small", color="#555555")
+    return Plot(fig, a)
 
 
-def design(result: Any, axes: Any = None) -> Any:
+def design(result: Any, ax: Any = None) -> Plot:
     """A designed protocol (``limpid.design``): one perturbation's
     displacement, velocity and acceleration, its amplitude by frequency
     (2|X(f)|/T) against the largest sine the limits allow (and the baseline's,
     when given), and the predicted relative standard errors of K, B and M for
-    the design and the baseline."""
+    the design and the baseline. ``ax``: 1 x 3 Axes or None."""
     d = _data(result)
     _kind(d, "design")
-    fig, a = _grid(axes, 1, 3, figsize=(13, 3.4))
+    fig, a, _ = _panels(ax, 1, 3, "plot.design", panel=(3.6, 2.8))
     cmd = d["command"]
     t = np.asarray(cmd["t_s"], dtype=float)
     for key, label, style, unit in (
@@ -463,7 +573,7 @@ def design(result: Any, axes: Any = None) -> Any:
         peak = float(np.max(np.abs(y))) if y.size else 0.0
         a[0, 0].plot(t, y / peak if peak > 0 else y, style, label=f"{label} (peak {peak:.3g} {unit})")
     a[0, 0].set_xlabel("time from the trial's start (s)")
-    a[0, 0].set_ylabel("share of the peak (1)")
+    a[0, 0].set_ylabel("share of the peak")
     a[0, 0].legend(fontsize="small")
     sp = d["spectrum"]
     f = np.asarray(sp["frequency_hz"], dtype=float)
@@ -474,10 +584,13 @@ def design(result: Any, axes: Any = None) -> Any:
     a[0, 1].set_xlabel("frequency (Hz)")
     a[0, 1].set_ylabel("amplitude (m)")
     a[0, 1].legend(fontsize="small")
+    _log_ticks(a[0, 1].xaxis, f)
+    _log_ticks(a[0, 1].yaxis, np.concatenate([np.asarray(sp[k], dtype=float) for k in ("designed_m", "limit_m")]))
     names = ["K", "B", "M"]
     x = np.arange(3)
     base = d.get("baseline")
     width = 0.4 if base is not None else 0.6
+
     # a spread of estimates mostly called not identifiable is the estimator's prior: faint, "n/i"
     def bars(offset: float, p: Dict[str, Any], label: str) -> None:
         se = np.asarray(p["pooled"]["se_percent"], dtype=float)
@@ -495,5 +608,6 @@ def design(result: Any, axes: Any = None) -> Any:
     a[0, 2].set_yscale("log")
     a[0, 2].set_ylabel("predicted SE (% of the RMS element)")
     a[0, 2].legend(fontsize="small")
-    fig.tight_layout()
-    return fig
+    _log_ticks(a[0, 2].yaxis, np.concatenate([np.asarray(p["pooled"]["se_percent"], dtype=float)
+                                              for p in (d["predicted"], base) if p is not None]))
+    return Plot(fig, a)

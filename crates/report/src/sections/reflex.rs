@@ -6,9 +6,9 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
     let r = &v.reflex;
     let verdict = if r.delay_identifiable {
         format!(
-            "reflex identified: delay {} ms (95 % interval {}-{} ms), gain {} ± {} N m s/rad; total VAF {} % (cross-validated {} %)",
+            "reflex identified: delay {} ms (95 % interval {}-{} ms), gain {} ± {} {}; total VAF {} % (cross-validated {} %)",
             fmt(r.delay_s * 1e3), fmt(r.delay_interval_s[0] * 1e3), fmt(r.delay_interval_s[1] * 1e3),
-            fmt(r.gain), fmt(r.gain_se), fmt(v.fit.vaf_total), fmt(v.cross_validated_vaf)
+            fmt(r.gain), fmt(r.gain_se), v.units.damping, fmt(v.fit.vaf_total), fmt(v.cross_validated_vaf)
         )
     } else {
         format!(
@@ -32,7 +32,7 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
 
 /// The pathway parameters with their standard errors, and the VAF of each model.
 fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
-    let (r, i) = (&v.reflex, &v.intrinsic);
+    let (r, i, u) = (&v.reflex, &v.intrinsic, &v.units);
     let row = |what: &str, value: f64, se: Option<f64>, unit: &str| {
         vec![
             what.to_string(),
@@ -54,27 +54,27 @@ fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
                 "intrinsic inertia I",
                 i.inertia,
                 Some(i.standard_errors.inertia),
-                "kg m²",
+                &u.inertia,
             ),
             row(
                 "intrinsic damping B",
                 i.damping,
                 Some(i.standard_errors.damping),
-                "N m s/rad",
+                &u.damping,
             ),
             row(
                 "intrinsic stiffness K",
                 i.stiffness,
                 Some(i.standard_errors.stiffness),
-                "N m/rad",
+                &u.stiffness,
             ),
             row(
                 "reflex-free fit: K",
                 v.reflex_free.parameters.stiffness,
                 None,
-                "N m/rad",
+                &u.stiffness,
             ),
-            row("reflex gain G", r.gain, Some(r.gain_se), "N m s/rad"),
+            row("reflex gain G", r.gain, Some(r.gain_se), &u.damping),
             row("reflex delay", r.delay_s * 1e3, None, "ms"),
             row(
                 "reflex low-pass natural frequency",
@@ -106,7 +106,7 @@ fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
 
 /// The IRFs, the rectifier, the delay scan and the torque traces.
 fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
-    let (r, i) = (&v.reflex, &v.intrinsic);
+    let (r, i, u) = (&v.reflex, &v.intrinsic, &v.units);
     let line = |id: &str, title: &str, x_label: &str, y_label: &str, series: Vec<Series>| Figure {
         id: id.into(),
         chart: Chart {
@@ -143,7 +143,7 @@ fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
             "reflex-intrinsic-irf",
             "Intrinsic IRF (position to torque)",
             "lag (ms)",
-            "N m/rad/s",
+            &format!("{}/s", u.stiffness),
             vec![s(
                 "intrinsic IRF",
                 &ms(&i.irf.lags_s),
@@ -155,7 +155,7 @@ fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
             "reflex-reflex-irf",
             "Reflex IRF (rectified velocity to torque)",
             "lag (ms)",
-            "N m s/rad/s",
+            &format!("{}/s", u.damping),
             vec![s("reflex IRF", &ms(&r.irf.lags_s), r.irf.values.clone(), 1)],
         ),
         line(
@@ -181,7 +181,7 @@ fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
             "reflex-torque",
             "Measured and predicted torque (10 s)",
             "time (s)",
-            "torque (N m)",
+            &format!("torque ({})", u.force),
             vec![
                 s("measured", t, v.traces.measured.clone(), 0),
                 s(

@@ -97,16 +97,47 @@ pub fn unwrap_degrees(phase: impl IntoIterator<Item = f64>) -> Vec<f64> {
     out
 }
 
-/// Phase traces drawn together, each moved by whole turns so that it starts
-/// within 180° of the first trace (an estimate at -179° and its fit at +180°
-/// are the same phase); magnitudes (`phase` false) are returned as they are.
-pub(crate) fn align_turns(mut traces: Vec<Vec<f64>>, phase: bool) -> Vec<Vec<f64>> {
-    let first = |t: &[f64]| t.iter().copied().find(|v| v.is_finite());
-    if let (true, Some(reference)) = (phase, traces.first().and_then(|t| first(t))) {
-        for t in traces.iter_mut().skip(1) {
-            if let Some(start) = first(t) {
-                let turns = 360.0 * ((reference - start) / 360.0).round();
-                t.iter_mut().for_each(|v| *v += turns);
+/// Phase traces drawn together on one branch: the reference trace (the
+/// smooth parametric fit) is unwrapped along frequency and every other trace
+/// is moved, point by point, by whole turns to lie within 180° of the
+/// reference at the same frequency. An estimate at +179° and its fit at
+/// -181° are the same phase; drawn on different branches they look like a
+/// failed fit. Where the reference is not finite the last finite value
+/// serves; without any, each trace is unwrapped on its own.
+pub(crate) fn on_one_branch(mut traces: Vec<Vec<f64>>, reference: usize) -> Vec<Vec<f64>> {
+    let Some(r) = traces.get(reference) else {
+        return traces;
+    };
+    let mut anchor = f64::NAN;
+    let guide: Vec<f64> = unwrap_degrees(r.iter().copied())
+        .into_iter()
+        .map(|v| {
+            if v.is_finite() {
+                anchor = v;
+            }
+            anchor
+        })
+        .collect();
+    if guide.iter().all(|v| !v.is_finite()) {
+        return traces
+            .into_iter()
+            .map(|t| unwrap_degrees(t.iter().copied()))
+            .collect();
+    }
+    let first = guide.iter().copied().find(|v| v.is_finite()).unwrap_or(0.0);
+    for (k, t) in traces.iter_mut().enumerate() {
+        if k == reference {
+            *t = unwrap_degrees(t.iter().copied());
+            continue;
+        }
+        for (n, v) in t.iter_mut().enumerate() {
+            let g = guide
+                .get(n)
+                .copied()
+                .filter(|g| g.is_finite())
+                .unwrap_or(first);
+            if v.is_finite() {
+                *v -= 360.0 * ((*v - g) / 360.0).round();
             }
         }
     }
@@ -147,6 +178,7 @@ fn bode_figures(v: &StochasticEstimate, positive: &[usize], fx: &[f64]) -> Vec<F
                 .iter()
                 .map(|&f| model_z(&v.inertia, &v.damping, &v.stiffness, i, j, f))
                 .collect();
+            // the fit is curves[FIT_CURVE]: the other phases are drawn on its branch
             let mut curves = vec![
                 ("estimate Z", est, Stroke::Solid, PALETTE[0]),
                 ("parametric fit", fit, Stroke::Dashed, PALETTE[1]),
@@ -229,6 +261,9 @@ fn with_band(mut chart: Chart, eps: &[f64], fx: &[f64], phase: bool) -> Chart {
     chart
 }
 
+/// Index of the parametric fit among a Bode chart's curves.
+const FIT_CURVE: usize = 1;
+
 /// A curve of Z: label, `(re, im)` per frequency, stroke, colour.
 type Curve<'a> = (&'a str, Vec<(f64, f64)>, Stroke, &'a str);
 
@@ -247,19 +282,25 @@ fn bode_chart(element: &str, unit: &str, curves: &[Curve<'_>], fx: &[f64], phase
         y_range: None,
         series: curves
             .iter()
-            .zip(align_turns(
-                curves
+            .zip({
+                let traces: Vec<Vec<f64>> = curves
                     .iter()
                     .map(|(_, c, _, _)| {
                         if phase {
-                            unwrap_degrees(c.iter().map(|(re, im)| im.atan2(*re).to_degrees()))
+                            c.iter()
+                                .map(|(re, im)| im.atan2(*re).to_degrees())
+                                .collect()
                         } else {
                             c.iter().map(|(re, im)| re.hypot(*im)).collect()
                         }
                     })
-                    .collect(),
-                phase,
-            ))
+                    .collect();
+                if phase {
+                    on_one_branch(traces, FIT_CURVE)
+                } else {
+                    traces
+                }
+            })
             .map(|((label, _, stroke, color), y)| Series {
                 name: (*label).into(),
                 x: fx.to_vec(),
