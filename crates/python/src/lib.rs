@@ -313,6 +313,15 @@ fn request<'py>(
     pythonize::pythonize(py, &value).map_err(value_err)
 }
 
+/// The JSON Schema of a method's request (its options' types, descriptions
+/// and choices), from the same types the CLI's flags are derived from: the
+/// Python signatures are generated from it (scripts/python-signatures.py).
+#[pyfunction]
+fn request_schema(method: &str) -> PyResult<String> {
+    let schema = limpid_ident::request::method_schema(method).map_err(err)?;
+    serde_json::to_string(&schema).map_err(value_err)
+}
+
 /// Any estimator (`method`: linear, cocontraction, planar, window_sweep,
 /// stochastic, reflex, varying, spectra) on its recordings, with keyword options as
 /// `limpid estimate METHOD`'s (or `limpid spectra`'s) flags; JSON text of the result.
@@ -678,6 +687,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(inspect, m)?)?;
     m.add_function(wrap_pyfunction!(request, m)?)?;
+    m.add_function(wrap_pyfunction!(request_schema, m)?)?;
     m.add_function(wrap_pyfunction!(estimate, m)?)?;
     m.add_function(wrap_pyfunction!(gravity_compensate, m)?)?;
     m.add_function(wrap_pyfunction!(ellipsoid, m)?)?;

@@ -124,6 +124,16 @@ macro_rules! methods {
             }
         }
 
+        /// The JSON Schema of a method's request type, by its name: every
+        /// option with its type, description (unit and default in words) and
+        /// choices, the nested part (`prepare`, `arm`) under `$defs`.
+        pub fn method_schema(method: &str) -> Result<serde_json::Value> {
+            $(if method == $name {
+                return Ok(schemars::schema_for!($request).to_value());
+            })*
+            Err(not_a_method(method))
+        }
+
         /// A method's nesting and yes/no options by its name.
         fn method_options(method: &str) -> Result<(Option<(&'static str, Vec<String>)>, Vec<String>)> {
             $(if method == $name {

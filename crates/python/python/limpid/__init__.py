@@ -651,136 +651,6 @@ def _estimate(method: str, recordings: Sequence[RecordingLike], options: Mapping
         raise
 
 
-def estimate_linear(recording: RecordingLike, **options: Any) -> Result:
-    """Artemiadis et al. (2010)'s linear estimator (M, B, K with standard errors, fit, criteria,
-    ellipsoids), as ``limpid estimate linear``.
-
-    Options (defaults: ``limpid.request("linear")``): ``cutoff_hz``, ``order``,
-    ``derivative`` ("central", "savgol"), ``offsets`` ("auto", "fit", "rest"), ``window``
-    ("auto", "trials", "onsets", "continuous", "continuous-trials"), ``frame`` ("identity", "seed000"),
-    ``transform`` (12 numbers), ``negate_force``, ``robot`` and ``robot_base``, ``level``,
-    ``equilibrium``, ``vertical`` ("x", "y", "z"), ``shoulder`` (upper arm m, forearm m,
-    elbow, flexion, abduction, rotation deg)."""
-    return _estimate("linear", [recording], options)
-
-
-def estimate_planar(recording: RecordingLike, link_lengths: Sequence[float], **options: Any) -> Result:
-    """Lakatos, Petit & van der Smagt (2011)'s planar-arm estimator (joint K, D, inertial
-    parameters, criteria), as ``limpid estimate planar``.
-
-    Options (defaults: ``limpid.request("planar", link_lengths=...)``): ``window_ms``,
-    ``inertial_parameters`` (kg m^2, three), ``shoulder`` (X, Y in m), ``elbow_negative``,
-    ``cutoff_hz``."""
-    return _estimate("planar", [recording], {"link_lengths": link_lengths, **options})
-
-
-def window_sweep(recording: RecordingLike, link_lengths: Sequence[float], **options: Any) -> Result:
-    """Lakatos, Petit & van der Smagt (2011)'s observation-window sweep, as ``limpid window-sweep
-    --json``: ``rows`` (one estimate with its criteria per window) and the shortest
-    trustworthy window.
-
-    Options (defaults: ``limpid.request("window_sweep", link_lengths=...)``): ``from_ms``,
-    ``to_ms``, ``step_ms``, ``inertial_parameters``, ``shoulder``, ``elbow_negative``,
-    ``cutoff_hz``."""
-    return _estimate("window_sweep", [recording], {"link_lengths": link_lengths, **options})
-
-
-def estimate_stochastic(recording: Union[RecordingLike, Sequence[RecordingLike]], **options: Any) -> Result:
-    """Park & Chang (2011)'s stochastic MIMO estimator: Z(f) = T R^-1, coherences, parametric
-    fit, as ``limpid estimate stochastic``; a list of recordings is pooled.
-
-    Options (defaults: ``limpid.request("stochastic")``): ``nperseg``, ``noverlap``,
-    ``window`` ("hann", "hamming", "boxcar"), ``band_hz`` (lo, hi), ``expected`` (a truth
-    JSON file: accuracy phi_T, phi_ij), ``shoulder``: (upper_arm_m, forearm_m, elbow_deg,
-    flexion_deg, abduction_deg, rotation_deg) estimates the shoulder's joint impedance as
-    Park & Chang (2011) does: hand X, Z become flexion ``q1`` and abduction ``q2``, forces
-    torques ``J_h^T F`` (eq. (3)), and ``theta``/``tauy``/``utheta`` internal rotation
-    ``q3``, before the spectra. The posture is the operating point (the recording's mean
-    X, Z is the hand there); x forward, y left, z up, right arm."""
-    if isinstance(recording, (list, tuple)):
-        return _estimate("stochastic", list(recording), options)
-    return _estimate("stochastic", [recording], options)
-
-
-def estimate_reflex(recording: RecordingLike, **options: Any) -> Result:
-    """Intrinsic and reflex joint stiffness by the parallel cascade (Kearney et al. 1997),
-    as ``limpid estimate reflex --json``.
-
-    The recording holds joint angle ``position`` (rad) and torque ``torque`` applied to the
-    joint (N m) under a stochastic perturbation, with time ``t`` (s). Options (defaults:
-    ``limpid.request("reflex")``): ``position``, ``torque``, ``rate_hz`` (decimation before
-    identification), ``intrinsic_lags_s``, ``reflex_lags_s``, ``max_delay_s`` (largest
-    reflex delay scanned), ``rectify_first`` (default true: rectify the velocity before
-    anti-aliasing, the physical order; false: after, Kearney et al.'s order, whose difference
-    then goes into the standard errors).
-
-    Returns ``intrinsic`` (inertia, damping, stiffness with standard errors, IRF),
-    ``reflex`` (polarity, gain N m s/rad, delay_s, delay_interval_s, IRF), ``fit`` (VAF in
-    percent), ``cross_validated_vaf``, ``warnings``."""
-    return _estimate("reflex", [recording], options)
-
-
-def estimate_varying(recording: RecordingLike, schedule: str = "time", **options: Any) -> Result:
-    """Impedance that varies, as ``limpid estimate varying --json``.
-
-    ``schedule="time"``: the recording's ``trial`` repetitions of one task form an
-    ensemble; at each instant the deviations from the ensemble mean are regressed
-    (M, B, K against time since the trial's start). ``schedule="<column>"`` (e.g. an
-    operating angle ``sv``, a ``level``): every parameter is a Chebyshev polynomial of
-    that column, fitted in one least-squares problem (parameter-varying).
-
-    Options (defaults: ``limpid.request("varying")``): ``cutoff_hz``, ``window_ms`` and
-    ``step_ms`` (ensemble time resolution and grid), ``min_repetitions``, ``grid_points``,
-    ``basis_order`` (``None``: chosen by cross-validation), ``slow_hz`` (the operating
-    point varies slower), ``rate_hz``, ``reflex`` (a reflex gain that varies with the
-    schedule), ``max_delay_s``.
-
-    Walking: ``event="heel_strike"`` (a 0/1 column, or ``"fz>50"``, a threshold crossing
-    with ``hysteresis`` and ``refractory_ms``) cuts the record into strides and puts
-    impedance against gait phase (``schedule="gait-phase"``, the default then, or
-    ``"time-since-event"``); ``gait_method="pulses"`` (perturbed minus unperturbed strides,
-    ``trigger`` the 0/1 column that is 1 while a perturbation runs, default
-    ``perturbation``) or ``"ensemble"`` (a perturbation on every stride); ``neighbours``,
-    ``bin``, ``min_pulses``, ``pulse_window_ms``, ``stance_end``. The result's ``gait``
-    lists the strides used and, by number, the ones with flawed events.
-
-    Returns ``schedule`` (name, unit, values), ``points`` (per grid value: ``sigma``,
-    ``identifiable``, ``stiffness``/``damping``/``inertia`` with ``*_se``, ``reflex``,
-    ``vaf``, ``reason`` when not identifiable), ``fit``, ``reflex``, ``warnings``."""
-    return _estimate("varying", [recording], dict(options, schedule=schedule))
-
-
-def estimate_cocontraction(recording: RecordingLike, mvc: RecordingLike, **options: Any) -> Result:
-    """Patel, O'Neill & Artemiadis (2013)'s co-contraction analysis: index and stiffness per
-    level, as ``limpid estimate cocontraction``. Options (defaults:
-    ``limpid.request("cocontraction")``): ``tolerance`` and the preparation options of
-    :func:`estimate_linear`."""
-    return _estimate("cocontraction", [recording, mvc], options)
-
-
-def spectra(recording: RecordingLike, inputs: Sequence[str], outputs: Sequence[str], **options: Any) -> Result:
-    """Welch spectra of a recording's named columns and, per output, its ordinary
-    coherence with each input, its multiple coherence on all inputs and its partial
-    coherence with each input, the others removed (Park & Chang 2011), as
-    ``limpid spectra --json``.
-
-    Options (defaults: ``limpid.request("spectra", inputs=..., outputs=...)``):
-    ``nperseg`` (samples per segment; default about 4 s, a power of two), ``noverlap``
-    (default half a segment), ``window`` ("hann", "hamming", "boxcar"), ``period_s``
-    (the period of a periodic excitation, s: spectra over whole periods, and under
-    ``periodic`` the response at the excited lines with standard errors and the
-    nonlinear distortion at the detection lines, as ``limpid spectra --period``).
-
-    Returns ``frequencies``, ``psd[signal][frequency]`` (signals: inputs then outputs),
-    ``coherence[output][input][frequency]``, ``multiple_coherence[output][frequency]``
-    and ``partial_coherence[output][input][frequency]``; the last two are ``None`` where
-    the inputs' spectral matrix is singular. ``to_pandas("psd")`` and
-    ``to_pandas("coherence")`` give them as tidy tables."""
-    if isinstance(inputs, str) or isinstance(outputs, str):
-        raise ValueError("inputs and outputs: expected lists of column names, e.g. inputs=['ux', 'uz']")
-    return _estimate("spectra", [recording], dict(options, inputs=list(inputs), outputs=list(outputs)))
-
-
 class StudyOutcome:
     """One recording of a study, processed (``ok``) or failed (``error``):
     what :func:`study_process` returns and :func:`study_combine` joins.
@@ -1036,7 +906,19 @@ def _value_errors(f: Any) -> Any:
 
     @functools.wraps(f)
     def checked(*args: Any, **kwargs: Any) -> Any:
-        sig.bind(*args, **kwargs)
+        try:
+            sig.bind(*args, **kwargs)
+        except TypeError as e:
+            unknown = re.search(r"unexpected keyword argument '(\w+)'", str(e))
+            if not unknown:
+                raise
+            # name the nearest option and list them all (issue 63, item 7)
+            names = [p.name for p in sig.parameters.values()
+                     if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)]
+            close = difflib.get_close_matches(unknown.group(1), names, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise TypeError(f"{f.__name__}() got an unexpected keyword argument {unknown.group(1)!r}{hint} "
+                            f"(its options: {', '.join(names)})") from None
         try:
             return f(*args, **kwargs)
         except (TypeError, OverflowError, IndexError) as e:
@@ -1064,6 +946,10 @@ def __dir__() -> List[str]:
     """The public API only (not the modules and typing names used inside)."""
     return sorted(__all__)
 
+
+from ._estimators import (  # noqa: E402  (they use Result and _estimate above)
+    estimate_cocontraction, estimate_linear, estimate_planar, estimate_reflex, estimate_stochastic,
+    estimate_varying, spectra, window_sweep)
 
 for _name in __all__:
     _obj = globals()[_name]
