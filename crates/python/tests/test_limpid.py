@@ -481,6 +481,15 @@ def test_design_for_the_demo_subject_beats_the_seed_protocol_and_plots(tmp_path)
     matplotlib.use("Agg")
     fig = limpid.plot.design(r)
     fig.savefig(tmp_path / "design.png")
+    # displayed and tabled as every result (issue 63): predicted errors with units, the limits
+    assert "M error" in repr(r) and "(not identifiable)" in repr(r)
+    df = r.to_pandas()
+    assert set(df.protocol) == {"design", "baseline"} and len(df) == 6
+    k = df[(df.protocol == "design") & (df.element == "K")].iloc[0]
+    assert k.unit == "N/m" and k.se_percent == r.predicted.pooled.se_percent[0]
+    assert list(r.to_pandas("limits").quantity) == [m["quantity"] for m in r.to_dict()["limits"]]
+    html = r._repr_html_()
+    assert "Within the safety limits" in html and "Predicted standard errors" in html
     with pytest.raises(ValueError, match="objective"):
         limpid.design("demo:S1", 147.2, limits_from="artemiadis-3d", objective="stifness")
     with pytest.raises(ValueError, match="demo:S1 .. demo:S6"):

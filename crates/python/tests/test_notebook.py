@@ -155,7 +155,7 @@ def test_to_pandas_gives_back_the_numbers_of_the_json_exactly(results):
 
 
 #: Axis labels of ratios, which have no unit (coherence, a share of the peak).
-UNITLESS = ("coherence of", "share of the peak")
+UNITLESS = ("coherence of", "share of the peak", "co-contraction index")
 
 
 def _labelled(drawn):
@@ -282,7 +282,8 @@ def _plain_tick_labels(drawn):
 # (function, result kind, panels: rows, cols); the one ax= convention, issue 63 item 5
 PLOTS = [("ellipsoids", "linear", 1, 1), ("ellipses", "planar", 1, 1), ("fit", "linear", 3, 1),
          ("fit", "reflex", 1, 1), ("bode", "stochastic", 6, 3), ("coherence", "stochastic", 6, 1),
-         ("sweep", "window_sweep", 2, 1), ("reflex", "reflex", 1, 3), ("varying", "varying", 1, 3)]
+         ("sweep", "window_sweep", 2, 1), ("reflex", "reflex", 1, 3), ("varying", "varying", 1, 3),
+         ("study", "study", 1, 3)]
 
 
 @pytest.mark.parametrize("name,kind,rows,cols", PLOTS)

@@ -143,6 +143,14 @@ def test_plot_periodic_draws_the_lines_and_each_pair(tmp_path):
     labels = [h.get_label() for h in drawn.ax.get_lines()]
     assert {"excited", "even detection", "noise"} <= set(labels)
     assert "nonlinear" in drawn.ax.get_title()
+    # its lines and response as tables, its verdict in the display (issue 63)
+    lines = r.to_pandas("lines")
+    assert {"excited", "even_detection"} <= set(lines.kind)
+    frf = r.to_pandas("frf")
+    assert len(frf) == sum(len(p["frequency_hz"]) for p in r.to_dict()["periodic"]["frf"])
+    assert "Periodic analysis: 8 periods" in r._repr_html_()
+    # a spectra result's coherences have a plot too
+    assert plot.coherence(r).axes.shape == (1, 1)
     with pytest.raises(ValueError, match="no periodic analysis"):
         plot.periodic(limpid.spectra({"t": t, "drive": u, "response": y}, ["drive"], ["response"]))
 

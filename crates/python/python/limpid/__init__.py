@@ -236,7 +236,10 @@ class Result:
             pd = importlib.import_module("pandas")  # optional: no stubs needed to type-check limpid
         except ImportError:
             raise ImportError("Result.to_pandas needs pandas: pip install pandas") from None
-        return pd.DataFrame.from_records(_display.records(self._data, table))
+        recs = _display.records(self._data, table)
+        # a field some rows lack is None in all of them (not NaN in one table and None in another)
+        keys = list(dict.fromkeys(k for r in recs for k in r))
+        return pd.DataFrame.from_records([{k: r.get(k) for k in keys} for r in recs], columns=keys)
 
     def to_xarray(self) -> Any:
         """The result over its axis, with units (xarray must be installed).

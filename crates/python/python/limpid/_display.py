@@ -125,9 +125,27 @@ def records(d: Dict[str, Any], table: str = "parameters") -> List[Record]:
         if kind != "varying" or not d.get("gait"):
             raise ValueError(f"table 'flawed' is for walking results (estimate_varying with event=), this one is {kind!r}")
         return [dict(f) for f in d["gait"]["flawed"]]
+    if table == "limits":
+        if kind not in ("design", "reflex_design"):
+            raise ValueError(f"table 'limits' is for design results, this one is {kind!r}")
+        return [dict(r) for r in d["limits"]]
+    if table in ("lines", "frf"):
+        if kind != "spectra" or not d.get("periodic"):
+            raise ValueError(f"table {table!r} is for periodic spectra (spectra with period_s=), this one is "
+                             f"{kind!r}" + (" without period_s" if kind == "spectra" else ""))
+        p = d["periodic"]
+        if table == "lines":
+            return [dict(ln) for ln in p["lines"]]
+        return [dict(output=pair["output"], input=pair["input"], frequency_hz=_float(f), magnitude=_float(m),
+                     magnitude_se=_float(se))
+                for pair in p["frf"]
+                for f, m, se in zip(pair["frequency_hz"], pair["magnitude"], pair["magnitude_se"])]
     if table != "parameters":
         raise ValueError(
-            f"table: expected 'parameters', 'impedance', 'coherence', 'psd', 'rotation' or 'flawed', found {table!r}")
+            f"table: expected 'parameters', 'impedance', 'coherence', 'psd', 'rotation', 'flawed', 'limits', "
+            f"'lines' or 'frf', found {table!r}")
+    if kind in ("design", "reflex_design"):
+        return _design(d)
     if kind == "linear":
         return _linear(d)
     if kind == "cocontraction":
@@ -173,7 +191,8 @@ def records(d: Dict[str, Any], table: str = "parameters") -> List[Record]:
             out.append(row)
         return out
     if kind == "spectra":
-        raise ValueError("spectra results have the tables 'psd' and 'coherence'")
+        raise ValueError("spectra results have the tables 'psd' and 'coherence' (periodic ones also 'lines' and 'frf'): "
+                         "to_pandas('coherence')")
     if kind == "demo":
         out = []
         for p in d["points"]:
@@ -198,6 +217,66 @@ def _planar(d: Dict[str, Any], extra: Optional[Record] = None) -> List[Record]:
         out.append(dict(extra or {}, quantity="inertial_parameter", element=f"xi{i + 1}", row=None, column=None,
                         value=_float(v), se=_float(s), unit="kg m²", verdict=None))
     return out
+
+
+def _design(d: Dict[str, Any]) -> List[Record]:
+    """A design's predicted standard errors, per parameter, for the design and
+    the baseline it was compared with (pooled: the RMS element's)."""
+    out: List[Record] = []
+    for which, label in (("predicted", "design"), ("baseline", "baseline")):
+        p = d.get(which)
+        if not p:
+            continue
+        if d["kind"] == "design":
+            pooled = p["pooled"]
+            for i, q in enumerate(MATRICES):
+                out.append(dict(protocol=label, quantity=q, element=SYMBOL[q], se=_float(pooled["se"][i]),
+                                unit=_unit(q, "x", "x"), se_percent=_float(pooled["se_percent"][i]),
+                                error_percent=_float(pooled["error_percent"][i]),
+                                identifiable_share=_float(p["identifiable_share"][i]), runs=p["runs"]))
+        else:
+            out.append(dict(protocol=label, quantity="reflex_gain", element="reflex gain G",
+                            se=_float(p["gain_sd"]), unit="N m s/rad", se_percent=float("nan"),
+                            error_percent=_float(p["gain_error_percent"]), identifiable_share=float("nan"),
+                            runs=p["runs"]))
+    return out
+
+
+def _design_html(d: Dict[str, Any]) -> List[str]:
+    c = d["chosen"]
+    if d["kind"] == "design":
+        what = (f"{c['trials']} {c['profile']} perturbations of {1e3 * c['radius_m']:.3g} mm in "
+                f"{c['motion_s']:.3g} s (hold {c['hold_s']:.3g} s, rest {c['rest_s']:.3g} s)")
+    else:
+        what = (f"a PRBS of {c['amplitude_rad']:.3g} rad, switching every {1e3 * c['switch_interval_s']:.3g} ms, "
+                f"order {c['order']}, {c['periods']} periods")
+    parts = [f"<p>Chosen: {_e(what)}, {c['duration_s']:.4g} s of the {d['budget_s']:.4g} s budget.</p>"]
+    recs = _design(d)
+    parts.append(_list_table(["protocol", "parameter", "predicted SE", "unit", "SE (%)", "error (%)", "identifiable"],
+                             [[r["protocol"], r["element"], f"{r['se']:.3g}", r["unit"],
+                               "—" if math.isnan(r["se_percent"]) else f"{r['se_percent']:.2f}",
+                               f"{r['error_percent']:.2f}",
+                               "—" if math.isnan(r["identifiable_share"]) else f"{100 * r['identifiable_share']:.0f} %"]
+                              for r in recs],
+                             f"Predicted standard errors ({recs[0]['runs'] if recs else 0} virtual runs each)"))
+    parts.append(_list_table(["quantity", "peak", "limit", "unit", "margin (%)"],
+                             [[m["quantity"], f"{m['peak']:.4g}", f"{m['limit']:.4g}", m["unit"].replace("^2", "²"),
+                               f"{m['margin_percent']:.1f}"] for m in d["limits"]],
+                             "Within the safety limits"))
+    return parts
+
+
+def _periodic_html(d: Dict[str, Any]) -> List[str]:
+    p = d["periodic"]
+    dist = p.get("distortion") or {}
+    line = f"{p['periods']} periods of {p['period_s']:g} s"
+    if dist.get("verdict"):
+        line += f": {dist['verdict']}"
+    kinds: Dict[str, int] = {}
+    for ln in p["lines"]:
+        kinds[ln["kind"]] = kinds.get(ln["kind"], 0) + 1
+    line += "; lines: " + ", ".join(f"{n} {k.replace('_', ' ')}" for k, n in kinds.items())
+    return [f"<p>Periodic analysis: {_e(line)} (to_pandas('lines'), to_pandas('frf'))</p>"]
 
 
 def _reflex(d: Dict[str, Any]) -> List[Record]:
@@ -338,6 +417,12 @@ def summary(d: Dict[str, Any]) -> str:
             body = f"{len(d['points'])} start points, stiffness within {worst:.1f} % of the truth"
         elif kind == "study":
             body = f"{d.get('name')!r}: {len(d['recordings'])} recordings, {len(d['failures'])} failed"
+        elif kind in ("design", "reflex_design"):
+            recs = _design(d)
+            design = [r for r in recs if r["protocol"] == "design"]
+            body = f"{d['chosen']['duration_s']:.4g} s of {d['budget_s']:.4g} s; predicted " + ", ".join(
+                f"{r['element']} error {r['error_percent']:.2g} %"
+                + (" (not identifiable)" if r["identifiable_share"] < 0.5 else "") for r in design)
         elif kind == "spectra":
             body = (f"inputs {', '.join(d['inputs'])}; outputs {', '.join(d['outputs'])}; "
                     f"{len(d['frequencies'])} frequencies, segments of {d['segment_samples']} samples")
@@ -542,7 +627,9 @@ def _header_html(d: Dict[str, Any]) -> str:
     rows.append(["call", run.get("command_line", ""), ""])
     request = run.get("request")
     options = _flat_options(request) if isinstance(request, dict) else []
-    table = _list_table(["", "", ""], rows, "")
+    table = "<table>" + "".join("<tr>" + "".join(
+        f'<td class="note">{_e(c)}</td>' if len(str(c)) > 30 else f"<td>{_e(c)}</td>" for c in row) + "</tr>"
+        for row in rows) + "</table>"
     if options:
         table += _list_table(["option", "value"], [[k, v] for k, v in options], "Options used")
     first = (run.get("inputs") or [{}])[0]
@@ -614,12 +701,17 @@ def to_html(d: Dict[str, Any]) -> str:
     elif kind == "varying":
         parts.extend(_varying_html(d))
     elif kind == "study":
-        header = ["configuration", "level", "subjects", "CCI", "Kxx", "Kyy", "Kzz"]
+        # the to_pandas() column names, so the display and the table read alike (issue 63, item 8)
+        header = ["configuration", "level", "subjects", "cocontraction_index", "kxx (N/m)", "kyy (N/m)", "kzz (N/m)"]
         rows = [[r["configuration"], f"{r['level']:g}", r["subjects"]]
                 + ["" if r.get(k) is None else f"{r[k]:.4g}" for k in ("cocontraction_index", "kxx", "kyy", "kzz")]
                 for r in d["levels"]]
         parts.append(_list_table(header, rows, "Mean over subjects (stiffness in N/m)"))
+    elif kind in ("design", "reflex_design"):
+        parts.extend(_design_html(d))
     elif kind == "spectra":
+        if d.get("periodic"):
+            parts.extend(_periodic_html(d))
         parts.append(f"<p>inputs {_e(', '.join(d['inputs']))}; outputs {_e(', '.join(d['outputs']))}; "
                      f"Welch segments of {d['segment_samples']} samples overlapping by {d['overlap_samples']}</p>")
         parts.append(_list_table(["output", "mean", "min", "note"], _multiple_coherence_rows(d),

@@ -37,6 +37,8 @@ quantity and unit; log axes read as plain numbers (0.5, 1, 2, 5, 10).
   perturbations (or strides) behind each point.
 - :func:`design` — a designed perturbation, its spectrum against the limits
   and the predicted standard errors.
+- :func:`study` — a co-contraction study's stiffness against the
+  co-contraction index per configuration.
 """
 
 from __future__ import annotations
@@ -49,7 +51,7 @@ import numpy as np
 from . import _display
 
 __all__ = ["Plot", "ellipsoids", "ellipses", "fit", "bode", "coherence", "periodic", "sweep", "reflex", "design",
-           "varying"]
+           "varying", "study"]
 
 
 def __dir__() -> List[str]:
@@ -356,15 +358,23 @@ def bode(result: Any, ax: Any = None) -> Plot:
 
 def coherence(result: Any, ax: Any = None) -> Plot:
     """Multiple coherence of each output and partial coherence on each input
-    of a stochastic result, against frequency (Park & Chang 2011); coherence
+    of a stochastic or spectra result, against frequency (Park & Chang 2011); coherence
     is a ratio, its axes carry no unit. ``ax``: one Axes per output (n x 1) or None."""
     d = _data(result)
-    _kind(d, "stochastic")
+    kind = _kind(d, "stochastic", "spectra")
     f = np.asarray(d["frequencies"], dtype=float)
-    coh = d["coherence"]
-    outs, ins = coh["outputs"], d["inputs"]
-    mult = np.asarray(coh["multiple"], dtype=float)  # [output][frequency]
-    part = np.asarray(coh["partial"], dtype=float)  # [output][input][frequency]
+    if kind == "stochastic":
+        coh = d["coherence"]
+        outs, ins = coh["outputs"], d["inputs"]
+        mult = np.asarray(coh["multiple"], dtype=float)  # [output][frequency]
+        part = np.asarray(coh["partial"], dtype=float)  # [output][input][frequency]
+    else:
+        # spectra: None where the inputs' spectral matrix is singular, drawn as gaps
+        outs, ins = d["outputs"], d["inputs"]
+        mult = np.asarray([[math.nan if v is None else v for v in row] for row in d["multiple_coherence"]],
+                          dtype=float)
+        part = np.asarray([[[math.nan if v is None else v for v in r] for r in o] for o in d["partial_coherence"]],
+                          dtype=float)
     n = len(outs)
     fig, a, _ = _panels(ax, n, 1, "plot.coherence", panel=(5.5, 1.3), sharex=True)
     ok = f > 0
@@ -550,6 +560,33 @@ def varying(result: Any, ax: Any = None) -> Plot:
                 axx.axvline(gait["stance_end"], color="#777777", linestyle=":", linewidth=1)
                 axx.text(gait["stance_end"], 1.0, " swing", transform=axx.get_xaxis_transform(),
                          va="top", fontsize="x-small", color="#555555")
+    return Plot(fig, a)
+
+
+def study(result: Any, ax: Any = None) -> Plot:
+    """A co-contraction study (``limpid.study_run``): the diagonal stiffness
+    Kxx, Kyy, Kzz against the co-contraction index, one line per
+    configuration, mean over subjects with ±1 sd where there are several
+    (Patel, O'Neill & Artemiadis 2013). ``ax``: 1 x 3 Axes or None."""
+    d = _data(result)
+    _kind(d, "study")
+    fig, a, _ = _panels(ax, 1, 3, "plot.study", panel=(3.0, 2.6))
+    configs = list(dict.fromkeys(r["configuration"] for r in d["levels"]))
+    unit = _display._unit("stiffness", "x", "x")
+    for col, key in enumerate(("kxx", "kyy", "kzz")):
+        axx = a[0, col]
+        for c in configs:
+            rows = sorted((r for r in d["levels"] if r["configuration"] == c and r.get(key) is not None),
+                          key=lambda r: float(r["cocontraction_index"]))
+            x = [float(r["cocontraction_index"]) for r in rows]
+            y = [float(r[key]) for r in rows]
+            sd = [float((r.get("sd") or {}).get(key) or 0.0) for r in rows]
+            axx.errorbar(x, y, yerr=sd if any(sd) else None, marker="o", markersize=3, linewidth=1,
+                         capsize=2, label=f"configuration {c}")
+        axx.set_xlabel("co-contraction index")
+        axx.set_ylabel(f"K{key[1:]} ({unit})")
+        axx.set_title(f"K{key[1:]} against co-contraction", fontsize="medium")
+    a[0, 0].legend(fontsize="small")
     return Plot(fig, a)
 
 
