@@ -594,51 +594,10 @@ def _function_name(method: str) -> str:
     return method if method in ("window_sweep", "spectra") else f"estimate_{method}"
 
 
-def _option_names(method: str, options: Mapping[str, Any]) -> Optional[List[str]]:
-    """The keyword options of ``method``: its request's fields, with groups
-    (``prepare``, ``arm``) flattened as the estimators take them; ``None``
-    when the request cannot be made without fields the call lacks."""
-    given: Dict[str, Any] = {}
-    for _ in range(4):
-        try:
-            r = _limpid.request(method, given)
-            break
-        except ValueError as e:
-            missing = re.search(r"missing field `(\w+)`", str(e))
-            if not missing or missing.group(1) not in options:
-                return None
-            given[missing.group(1)] = options[missing.group(1)]
-    else:
-        return None
-    names: set[str] = set()
-    for k, v in r.items():
-        if k == "method":
-            continue
-        if isinstance(v, dict):
-            names.update(v)
-        else:
-            names.add(k)
-    return sorted(names)
-
-
 def _estimate(method: str, recordings: Sequence[RecordingLike], options: Mapping[str, Any]) -> Result:
     opts = {k: _plain(v) for k, v in options.items()}
     try:
         return Result(json.loads(_limpid.estimate(method, [_recording(r) for r in recordings], opts)))
-    except TypeError as e:
-        unknown = re.search(r"unknown field `(\w+)`(?:, expected one of (.*))?", str(e))
-        if not unknown:
-            raise
-        # the options as the estimator takes them: the request's fields with its
-        # groups (prepare, arm) opened, and those serde expected at that level
-        groups = {"prepare", "arm"}
-        expected = set(re.findall(r"`(\w+)`", unknown.group(2) or "")) - groups
-        names = sorted(expected | set(_option_names(method, opts) or []))
-        close = difflib.get_close_matches(unknown.group(1), names, n=1)
-        hint = f"; did you mean {close[0]!r}?" if close else ""
-        raise TypeError(
-            f"{_function_name(method)}() got an unexpected keyword argument {unknown.group(1)!r}{hint} "
-            f"(its options: {', '.join(names)})") from None
     except ValueError as e:
         message = str(e)
         wrong = re.match(r"invalid (\w+): TypeError: (.*)", message)

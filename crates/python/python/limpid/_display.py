@@ -47,7 +47,7 @@ def _is_angular(d: Dict[str, Any], coord: str) -> bool:
     units = d.get("units")
     if isinstance(units, dict) and units.get("position"):
         return bool(units["position"] == "rad")
-    return coord == "theta" or (coord.startswith("q") and coord[1:].isdigit())
+    return coord == "theta" or coord.startswith("q")  # the rule of _limpid.matrix_element_unit
 
 
 def _position_unit(d: Dict[str, Any], coord: str) -> str:
@@ -472,13 +472,16 @@ def _matrix_table(recs: List[Record], quantity: str, caption: str) -> str:
     return "".join(out)
 
 
+def _rows_html(rows: Sequence[Sequence[Any]]) -> str:
+    """Table rows; a long cell wraps as a note."""
+    return "".join("<tr>" + "".join(
+        f'<td class="note">{_e(c)}</td>' if len(str(c)) > 30 else f"<td>{_e(c)}</td>" for c in row) + "</tr>"
+        for row in rows)
+
+
 def _list_table(header: Sequence[str], rows: Sequence[Sequence[Any]], caption: str) -> str:
-    out = [f"<table><caption>{_e(caption)}</caption><tr>" + "".join(f"<th>{_e(h)}</th>" for h in header) + "</tr>"]
-    for row in rows:
-        out.append("<tr>" + "".join(
-            f'<td class="note">{_e(c)}</td>' if len(str(c)) > 30 else f"<td>{_e(c)}</td>" for c in row) + "</tr>")
-    out.append("</table>")
-    return "".join(out)
+    head = f"<table><caption>{_e(caption)}</caption><tr>" + "".join(f"<th>{_e(h)}</th>" for h in header) + "</tr>"
+    return head + _rows_html(rows) + "</table>"
 
 
 def _fit_line(d: Dict[str, Any]) -> str:
@@ -627,9 +630,7 @@ def _header_html(d: Dict[str, Any]) -> str:
     rows.append(["call", run.get("command_line", ""), ""])
     request = run.get("request")
     options = _flat_options(request) if isinstance(request, dict) else []
-    table = "<table>" + "".join("<tr>" + "".join(
-        f'<td class="note">{_e(c)}</td>' if len(str(c)) > 30 else f"<td>{_e(c)}</td>" for c in row) + "</tr>"
-        for row in rows) + "</table>"
+    table = "<table>" + _rows_html(rows) + "</table>"
     if options:
         table += _list_table(["option", "value"], [[k, v] for k, v in options], "Options used")
     first = (run.get("inputs") or [{}])[0]
@@ -831,15 +832,12 @@ def part_html(d: Dict[str, Any], ctx: Dict[str, Any]) -> str:
         if _is_matrix(v) and coords and len(v) == len(coords) and len(v[0]) == len(coords):
             base = k[:-3] if k.endswith("_se") else k
             head = ["", *coords]
-            body = []
-            for i, ci in enumerate(coords):
-                cells = []
-                for j, cj in enumerate(coords):
-                    x = v[i][j]
-                    unit = _unit(base, ci, cj) if base in MATRICES and not ctx.get("units") else ""
-                    cells.append(_value_text(x) + (f" {unit}" if unit and len(set(
-                        _unit(base, a, b) for a in coords for b in coords)) > 1 else ""))
-                body.append([ci, *cells])
+            # a unit in each cell only where the elements' units differ (mixed m and rad)
+            per_element = base in MATRICES and not ctx.get("units") and len(
+                {_unit(base, a, b) for a in coords for b in coords}) > 1
+            body = [[ci, *(_value_text(v[i][j]) + (f" {_unit(base, ci, cj)}" if per_element else "")
+                           for j, cj in enumerate(coords))]
+                    for i, ci in enumerate(coords)]
             unit = _field_unit(k, ctx)
             tables.append(_list_table(head, body, k.replace("_", " ") + (f" ({unit})" if unit and unit != "by element"
                                                                         else "")))
