@@ -8,7 +8,6 @@ use clap::Args;
 use limpid_lab::gravity::{compensate, LoadSource};
 
 use crate::context::{CliResult, Context};
-use crate::estimate::RobotArgs;
 
 #[derive(Args)]
 #[command(group(clap::ArgGroup::new("load").required(true).args(["bias", "calibration"])))]
@@ -82,4 +81,35 @@ pub fn run(args: GravityArgs, cx: &Context) -> CliResult {
         println!("{line}");
     }
     Ok(())
+}
+
+/// `--robot` and `--robot-base`: a robot whose `robot_q1..n` columns give the
+/// sensor's orientation by forward kinematics.
+#[derive(Args)]
+pub struct RobotArgs {
+    /// Compute the sensor's orientation from the robot_q1..n columns by this robot's forward kinematics (kuka-lwr4, puma3 or a .urdf file).
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: Option<String>,
+    /// Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad), as a protocol's `robot_base`.
+    #[arg(
+        long,
+        value_name = "POSE",
+        value_delimiter = ',',
+        requires = "robot",
+        allow_hyphen_values = true
+    )]
+    pub robot_base: Option<Vec<f64>>,
+}
+
+impl RobotArgs {
+    /// The robot, placed as `--robot-base` says, if `--robot` is given.
+    pub fn robot(&self) -> CliResult<Option<limpid_robot::Robot>> {
+        let Some(name) = &self.robot else {
+            return Ok(None);
+        };
+        Ok(Some(limpid_app::estimate::placed_robot(
+            name,
+            self.robot_base.as_deref(),
+        )?))
+    }
 }

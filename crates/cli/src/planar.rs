@@ -7,7 +7,7 @@ use clap::Args;
 use limpid_app::estimate::Estimated;
 use limpid_core::Matrix;
 use limpid_ident::planar::PlanarEstimate;
-use limpid_ident::request::{ArmRequest, PlanarRequest, Request, SweepRequest, DEFAULT_SWEEP_MS};
+use limpid_ident::request::{PlanarRequest, Request, SweepRequest};
 
 use limpid_ident::planar::Sweep;
 
@@ -15,98 +15,22 @@ use crate::context::{CliResult, Context};
 use crate::emit::Output;
 use crate::table::num;
 
-/// Arm geometry and preparation flags shared by both commands.
-#[derive(Args)]
-pub struct ArmArgs {
-    /// Recording: joint space (q1,q2,tau1,tau2) or end point (x,y,fx,fy), with a trial column.
-    pub recording: PathBuf,
-    /// Upper-arm and forearm lengths (m).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        num_args = 1,
-        value_name = "L1,L2",
-        required = true
-    )]
-    pub link_lengths: Vec<f64>,
-    /// Shoulder position in the recording's frame (m).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        value_name = "X,Y",
-        default_value = "0,0",
-        allow_hyphen_values = true
-    )]
-    pub shoulder: Vec<f64>,
-    /// Known base inertial parameters xi1,xi2,xi3 (kg m²): the reduced 8-parameter model (eq. 23-25).
-    #[arg(long, value_delimiter = ',', value_name = "A,B,C")]
-    pub inertial_parameters: Option<Vec<f64>>,
-    /// Inverse-kinematics branch for end-point data: the elbow angle q2 negative.
-    #[arg(long)]
-    pub elbow_negative: bool,
-    /// Low-pass cut-off in Hz (default: 30, at most 0.4 x sample rate).
-    #[arg(long = "cutoff", value_name = "HZ")]
-    pub cutoff_hz: Option<f64>,
-}
-
-impl ArmArgs {
-    /// The arm part of a request.
-    fn request(&self) -> CliResult<ArmRequest> {
-        let pair = |v: &[f64], name: &str| -> CliResult<[f64; 2]> {
-            <[f64; 2]>::try_from(v).map_err(|_| {
-                limpid_core::Error::invalid(
-                    name,
-                    format!(
-                        "expected two numbers separated by a comma, found {}",
-                        v.len()
-                    ),
-                )
-                .into()
-            })
-        };
-        let inertial_parameters = match &self.inertial_parameters {
-            Some(v) => Some(<[f64; 3]>::try_from(v.as_slice()).map_err(|_| {
-                limpid_core::Error::invalid(
-                    "inertial parameters",
-                    format!("expected three numbers, found {}", v.len()),
-                )
-            })?),
-            None => None,
-        };
-        Ok(ArmRequest {
-            link_lengths: pair(&self.link_lengths, "link lengths")?,
-            shoulder: pair(&self.shoulder, "shoulder")?,
-            elbow_negative: self.elbow_negative,
-            cutoff_hz: self.cutoff_hz,
-            inertial_parameters,
-        })
-    }
-}
-
 #[derive(Args)]
 pub struct PlanarArgs {
+    /// Recording: joint space (q1,q2,tau1,tau2) or end point (x,y,fx,fy), with a trial column.
+    pub recording: PathBuf,
     #[command(flatten)]
-    pub arm: ArmArgs,
-    /// Observation window after the perturbation onset (ms); default: all samples of every trial.
-    #[arg(long, value_name = "T")]
-    pub window_ms: Option<f64>,
+    pub settings: PlanarRequest,
     #[command(flatten)]
     pub output: crate::emit::OutputArgs,
 }
 
 #[derive(Args)]
 pub struct SweepArgs {
+    /// Recording: joint space (q1,q2,tau1,tau2) or end point (x,y,fx,fy), with a trial column.
+    pub recording: PathBuf,
     #[command(flatten)]
-    pub arm: ArmArgs,
-    /// Shortest observation window (ms).
-    #[arg(long = "from", default_value_t = DEFAULT_SWEEP_MS[0])]
-    pub from_ms: f64,
-    /// Longest observation window (ms).
-    #[arg(long = "to", default_value_t = DEFAULT_SWEEP_MS[1])]
-    pub to_ms: f64,
-    /// Step (ms).
-    #[arg(long = "step", default_value_t = DEFAULT_SWEEP_MS[2])]
-    pub step_ms: f64,
+    pub settings: SweepRequest,
     /// Print the table as CSV.
     #[arg(long, conflicts_with = "json")]
     pub csv: bool,
@@ -203,14 +127,10 @@ fn text(e: &PlanarEstimate, path: &std::path::Path, from_endpoint: bool) -> Stri
 }
 
 pub fn run_estimate(args: PlanarArgs, cx: &Context) -> CliResult {
-    let request = Request::Planar(PlanarRequest {
-        arm: args.arm.request()?,
-        window_ms: args.window_ms,
-    });
     crate::emit::estimate(
         cx,
-        request,
-        std::slice::from_ref(&args.arm.recording),
+        Request::Planar(args.settings),
+        std::slice::from_ref(&args.recording),
         args.output.output(),
     )
 }
@@ -225,16 +145,10 @@ pub fn planar_text(est: &PlanarEstimate, e: &Estimated, paths: &[PathBuf]) -> Cl
 }
 
 pub fn run_sweep(args: SweepArgs, cx: &Context) -> CliResult {
-    let request = Request::WindowSweep(SweepRequest {
-        arm: args.arm.request()?,
-        from_ms: args.from_ms,
-        to_ms: args.to_ms,
-        step_ms: args.step_ms,
-    });
     crate::emit::estimate(
         cx,
-        request,
-        std::slice::from_ref(&args.arm.recording),
+        Request::WindowSweep(args.settings),
+        std::slice::from_ref(&args.recording),
         Output {
             csv: args.csv,
             ..args.output.output()

@@ -5,46 +5,13 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use limpid_app::estimate::Estimated;
-use limpid_ident::request::{
-    Request, SegmentWindow, SpectraRequest, StochasticRequest, DEFAULT_BAND_HZ,
-};
+use limpid_ident::request::{Request, SpectraRequest, StochasticRequest};
 
 use limpid_ident::spectra::SpectraResult;
 use limpid_ident::stochastic::StochasticEstimate;
 
 use crate::context::{CliResult, Context};
 use crate::table::num;
-
-#[derive(Clone, Copy, ValueEnum)]
-pub enum WindowArg {
-    Hann,
-    Hamming,
-    Boxcar,
-}
-
-/// Welch flags shared by both commands.
-#[derive(Args)]
-pub struct WelchArgs {
-    /// Samples per segment (= FFT length); default about 4 s, a power of two.
-    #[arg(long = "nfft", value_name = "N")]
-    pub nperseg: Option<usize>,
-    /// Overlapping samples; default half a segment.
-    #[arg(long = "overlap", value_name = "N")]
-    pub noverlap: Option<usize>,
-    /// Segment window.
-    #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
-    pub window: WindowArg,
-}
-
-impl WelchArgs {
-    fn window(&self) -> SegmentWindow {
-        match self.window {
-            WindowArg::Hann => SegmentWindow::Hann,
-            WindowArg::Hamming => SegmentWindow::Hamming,
-            WindowArg::Boxcar => SegmentWindow::Boxcar,
-        }
-    }
-}
 
 #[derive(Args)]
 pub struct StochasticArgs {
@@ -54,25 +21,7 @@ pub struct StochasticArgs {
     #[arg(required = true, num_args = 1..)]
     pub recordings: Vec<PathBuf>,
     #[command(flatten)]
-    pub welch: WelchArgs,
-    #[arg(long = "band", value_delimiter = ',', value_name = "LO,HI", help = band_help())]
-    pub band_hz: Option<Vec<f64>>,
-    /// Truth or expected model (JSON with inertia, damping, stiffness): prints phi_T and phi_ij (eq. 15-16).
-    #[arg(long, value_name = "FILE")]
-    pub expected: Option<PathBuf>,
-    /// Estimate the shoulder's joint impedance as Park & Chang (2011) does: turn hand X, Z
-    /// (with F and u) into flexion and abduction (τ = J_h^T F, eq. (3)) and
-    /// take theta, tauy, utheta as internal rotation, before estimating:
-    /// UPPER_ARM_M,FOREARM_M,ELBOW_DEG,FLEXION_DEG,ABDUCTION_DEG,ROTATION_DEG of
-    /// the operating point (frame: x forward, y left, z up, origin at the
-    /// shoulder; right arm; the recording's mean X, Z is the hand there).
-    #[arg(
-        long,
-        value_name = "L1,L2,E,F,A,R",
-        value_delimiter = ',',
-        allow_hyphen_values = true
-    )]
-    pub shoulder: Option<Vec<f64>>,
+    pub settings: StochasticRequest,
     #[command(flatten)]
     pub output: crate::emit::OutputArgs,
 }
@@ -81,53 +30,30 @@ pub struct StochasticArgs {
 pub struct SpectraArgs {
     /// Recording.
     pub recording: PathBuf,
-    /// Input columns.
-    #[arg(long, value_delimiter = ',', required = true)]
-    pub inputs: Vec<String>,
-    /// Output columns.
-    #[arg(long, value_delimiter = ',', required = true)]
-    pub outputs: Vec<String>,
     #[command(flatten)]
-    pub welch: WelchArgs,
-    /// Period (s) of a periodic excitation (multisine, PRBS): spectra over whole periods without
-    /// window or leakage, the response at the excited lines with standard errors from the
-    /// period-to-period scatter, and the nonlinear distortion at the detection lines. A `period`
-    /// column numbers the periods (-1: transient, left out); without it the first period is left out.
-    #[arg(long = "period", value_name = "S")]
-    pub period_s: Option<f64>,
+    pub settings: SpectraRequest,
     #[command(flatten)]
     pub output: crate::emit::OutputArgs,
 }
 
-/// `--band`'s help, its default written as the flag takes it.
-fn band_help() -> String {
-    let [lo, hi] = DEFAULT_BAND_HZ;
-    format!("Band of the parametric fit and accuracy measures (Hz) [default: {lo},{hi}]")
-}
-
-impl StochasticArgs {
-    /// The request these flags make.
-    pub fn request(&self) -> CliResult<Request> {
-        let band = self.band_hz.as_deref().unwrap_or(&DEFAULT_BAND_HZ);
-        let band_hz = <[f64; 2]>::try_from(band).map_err(|_| {
-            limpid_core::Error::invalid("band", "expected two frequencies LO,HI in Hz")
-        })?;
-        Ok(Request::Stochastic(StochasticRequest {
-            nperseg: self.welch.nperseg,
-            noverlap: self.welch.noverlap,
-            window: self.welch.window(),
-            band_hz,
-            shoulder: crate::estimate::shoulder_numbers(self.shoulder.as_deref())?,
-            expected: self
-                .expected
-                .as_ref()
-                .map(|p| p.to_string_lossy().into_owned()),
-        }))
-    }
-}
-
 pub fn run_estimate(args: StochasticArgs, cx: &Context) -> CliResult {
-    crate::emit::estimate(cx, args.request()?, &args.recordings, args.output.output())
+    crate::emit::estimate(
+        cx,
+        Request::Stochastic(args.settings),
+        &args.recordings,
+        args.output.output(),
+    )
+}
+
+/// A segment window as the text names it (`Hann`), from its flag's value.
+fn window_name(w: limpid_ident::request::SegmentWindow) -> String {
+    let name = w
+        .to_possible_value()
+        .map_or_else(String::new, |v| v.get_name().to_string());
+    let mut chars = name.chars();
+    chars.next().map_or_else(String::new, |c| {
+        c.to_uppercase().chain(chars).collect::<String>()
+    })
 }
 
 /// `limpid estimate stochastic`'s text.
@@ -152,8 +78,8 @@ pub fn stochastic_text(
         }
     );
     println!(
-        "coordinates {} driven by {} | Welch: {} segments of {} samples (resolution {:.3} Hz), Hann | fit band {}-{} Hz",
-        coords.join(", "), est.inputs.join(", "), c.segments, c.nperseg, c.frequency_resolution_hz, num(band.0), num(band.1)
+        "coordinates {} driven by {} | Welch: {} segments of {} samples (resolution {:.3} Hz), {} | fit band {}-{} Hz",
+        coords.join(", "), est.inputs.join(", "), c.segments, c.nperseg, c.frequency_resolution_hz, window_name(r.window), num(band.0), num(band.1)
     );
     if let Some(p) = &posture {
         println!(
@@ -221,24 +147,10 @@ pub fn stochastic_text(
     Ok(())
 }
 
-impl SpectraArgs {
-    /// The request these flags make.
-    pub fn request(&self) -> Request {
-        Request::Spectra(SpectraRequest {
-            inputs: self.inputs.clone(),
-            outputs: self.outputs.clone(),
-            nperseg: self.welch.nperseg,
-            noverlap: self.welch.noverlap,
-            window: self.welch.window(),
-            period_s: self.period_s,
-        })
-    }
-}
-
 pub fn run_spectra(args: SpectraArgs, cx: &Context) -> CliResult {
     crate::emit::estimate(
         cx,
-        args.request(),
+        Request::Spectra(args.settings),
         std::slice::from_ref(&args.recording),
         args.output.output(),
     )

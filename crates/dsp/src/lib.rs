@@ -78,7 +78,7 @@ impl LowPass {
         let nyquist = limpid_core::display_round(fs_hz / 2.0);
         if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
             return Err(Error::invalid(
-                "cut-off",
+                "cutoff_hz",
                 format!(
                     "expected 0 < cut-off < {} Hz (Nyquist), found {} Hz",
                     Num(nyquist),
@@ -89,7 +89,7 @@ impl LowPass {
         // sci-rs asserts (panics) on cut-offs that underflow its pole placement
         if cutoff_hz / nyquist < 1e-6 {
             return Err(Error::invalid(
-                "cut-off",
+                "cutoff_hz",
                 format!(
                     "{} Hz is below 1e-6 of the Nyquist frequency {} Hz: no usable filter",
                     Num(cutoff_hz),
@@ -123,7 +123,7 @@ impl LowPass {
             .all(|s| s.b.iter().chain(&s.a).all(|v| v.is_finite()));
         if !finite {
             return Err(Error::invalid(
-                "cut-off",
+                "cutoff_hz",
                 format!(
                     "{} Hz at {} Hz sampling gives no usable filter (too close to 0 or to Nyquist)",
                     Num(cutoff_hz),

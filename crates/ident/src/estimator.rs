@@ -79,14 +79,11 @@ impl Estimator for PlanarParams {
 
     fn check(&self) -> Result<()> {
         if self.window_samples == Some(0) {
-            return Err(Error::invalid(
-                "observation window",
-                "expected at least one sample",
-            ));
+            return Err(Error::invalid("window_ms", "expected at least one sample"));
         }
         if let Some(xi) = self.inertial_parameters {
             for v in xi {
-                positive("inertial parameters", v)?;
+                positive("inertial_parameters", v)?;
             }
         }
         Ok(())
@@ -109,7 +106,7 @@ impl Estimator for StochasticParams {
         let (lo, hi) = self.band_hz;
         if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi) {
             return Err(Error::invalid(
-                "band",
+                "band_hz",
                 format!("expected 0 < LO < HI in Hz, found {lo}, {hi}"),
             ));
         }

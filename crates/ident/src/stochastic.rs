@@ -391,7 +391,7 @@ fn band_below_nyquist((lo, hi): (f64, f64), fs: f64) -> Result<(f64, f64)> {
     if !(lo > 0.0 && hi > lo && hi < fs / 2.0) {
         let nyquist = limpid_core::display_round(fs / 2.0);
         return Err(Error::invalid(
-            "band",
+            "band_hz",
             format!("expected 0 < low < high < {nyquist} Hz, found {lo}-{hi} Hz"),
         ));
     }
@@ -742,7 +742,7 @@ pub fn accuracy(
     for (name, x) in [("inertia", m), ("damping", b), ("stiffness", k)] {
         if x.shape() != (n, n) {
             return Err(Error::invalid(
-                "expected model",
+                "expected",
                 format!(
                     "{name} is {} x {}, the estimate has {n} coordinates",
                     x.nrows(),

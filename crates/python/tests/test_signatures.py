@@ -84,13 +84,10 @@ def test_the_signatures_match_the_cli_flags(name, method, cli, tmp_path):
         if p.name in printed and p.default is not inspect.Parameter.empty:
             default = list(p.default) if isinstance(p.default, tuple) else p.default
             assert default == printed[p.name], (name, p.name, p.default, printed[p.name])
-    # where the CLI's flags are derived from the request type (reflex, varying),
-    # each option's description is its flag's help, the same doc comment: its
-    # first words are in --help; yes/no options are flags whose help says the
-    # other way. (linear, stochastic, planar and co-contraction flags still have
-    # their own help text: issue 57.)
-    if method not in ("reflex", "varying"):
-        return
+    # the CLI's flags are derived from the request types (issue 57): each
+    # option's description is its flag's help, the same doc comment, so its
+    # first words are in --help; yes/no options are flags whose help may say
+    # the other way
     help_text = " ".join(subprocess.run([CLI, *cli, "--help"], capture_output=True, text=True).stdout.split())
     lines = getattr(limpid, name).__doc__.splitlines()
     compared = 0

@@ -196,7 +196,7 @@ fn bad_parameters() {
     assert_eq!(out.code, 2);
     assert_eq!(
         out.stderr.trim_end(),
-        "limpid: invalid cut-off: expected 0 < cut-off < 500 Hz (Nyquist), found 700 Hz"
+        "limpid: invalid --cutoff: expected 0 < cut-off < 500 Hz (Nyquist), found 700 Hz"
     );
     let out = limpid(&["estimate", "linear", p.to_str().unwrap(), "--level", "0.5"]);
     assert_eq!(out.code, 2);
@@ -218,6 +218,25 @@ fn bad_parameters() {
         // the field is named by its flag, as every setting's (issue 57)
         "limpid: invalid --transform: the rotation part must be orthonormal with determinant +1"
     );
+    // the co-contraction analysis estimates every level: a level filter was ignored without a word
+    let out = limpid(&[
+        "estimate",
+        "cocontraction",
+        p.to_str().unwrap(),
+        "--mvc",
+        p.to_str().unwrap(),
+        "--level",
+        "0.2",
+        "--print-request",
+    ]);
+    assert_eq!(out.code, 2);
+    assert!(
+        out.stderr.starts_with(
+            "limpid: invalid --level: the co-contraction analysis estimates every level"
+        ),
+        "{}",
+        out.stderr
+    );
 }
 
 #[test]
@@ -236,7 +255,7 @@ fn shoulder_posture_with_the_wrong_count_or_a_1_dof_estimate() {
     let d = tempfile::tempdir().unwrap();
     let p = write(&d, "r.csv", &rows(2000));
     for (extra, expected) in [
-        ("0.3,0.35,90,30,20", "invalid --shoulder: expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found 5"),
+        ("0.3,0.35,90,30,20", "invalid value '0.3,0.35,90,30,20' for '--shoulder <L1,L2,E,F,A,R>': expected 6 numbers separated by commas, found 5; see --help"),
         ("0.3,0.35,90,30,20,0", "invalid --shoulder: needs a 3-D estimate (x, y, z)"),
     ] {
         let out = limpid(&["estimate", "linear", p.to_str().unwrap(), "--shoulder", extra]);
@@ -250,7 +269,7 @@ fn stochastic_shoulder_posture_that_is_singular_or_a_recording_without_z() {
     let sa3 = examples("stochastic").join("ex_sa3.csv");
     let sa3 = sa3.to_str().unwrap();
     for (extra, expected) in [
-        ("0.3,0.35,90,30", "invalid --shoulder: expected 6 numbers (L1,L2,ELBOW,FLEXION,ABDUCTION,ROTATION), found 4"),
+        ("0.3,0.35,90,30", "invalid value '0.3,0.35,90,30' for '--shoulder <L1,L2,E,F,A,R>': expected 6 numbers separated by commas, found 4; see --help"),
         // abduction 0: the arm in the sagittal plane, X and Z both follow flexion only
         ("0.3,0.35,90,30,0,0", "invalid --shoulder: at flexion 30 deg, abduction 0 deg the hand's X and Z do not determine the two angles (condition number of J_h"),
         ("-0.3,0.35,90,30,45,0", "invalid --shoulder: upper arm length must be in [0.01, 2] m, found -0.3"),

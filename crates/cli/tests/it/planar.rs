@@ -145,7 +145,7 @@ fn planar_bad_inputs() {
     assert_eq!(out.code, 2);
     assert_eq!(
         out.stderr.trim_end(),
-        "limpid: invalid link lengths: expected two numbers separated by a comma, found 1"
+        "limpid: invalid value '0.3' for '--link-lengths <L1,L2>': expected 2 numbers separated by commas, found 1; see --help"
     );
     // numbers that gave null or NaN estimates with exit 0 (issue 36)
     let joint = examples("planar").join("ex_joint_180.csv");
@@ -154,31 +154,31 @@ fn planar_bad_inputs() {
             "planar",
             "--link-lengths",
             "3,4.9e-324",
-            "invalid link lengths: expected two lengths from 0.01 to 2 m",
+            "invalid --link-lengths: expected two lengths from 0.01 to 2 m",
         ),
         (
             "window-sweep",
             "--link-lengths",
             "3,4.9e-324",
-            "invalid link lengths",
+            "invalid --link-lengths",
         ),
         (
             "planar",
             "--inertial-parameters",
             "nan,0.1,0.1",
-            "invalid inertial parameters: expected three positive values",
+            "invalid --inertial-parameters: expected three positive values",
         ),
         (
             "planar",
             "--inertial-parameters",
             "inf,0.1,0.1",
-            "invalid inertial parameters",
+            "invalid --inertial-parameters",
         ),
         (
             "window-sweep",
             "--inertial-parameters",
             "1e308,0.1,0.1",
-            "invalid inertial parameters",
+            "invalid --inertial-parameters",
         ),
         // 1 ms: 30 samples for 11 parameters gave K at 120x the truth (issue 36)
         (

@@ -129,7 +129,7 @@ fn spectra_csv_and_bad_band() {
     assert_eq!(out.code, 2);
     assert_eq!(
         out.stderr.trim_end(),
-        "limpid: invalid band: expected 0 < low < high < 500 Hz, found 5-600 Hz"
+        "limpid: invalid --band: expected 0 < low < high < 500 Hz, found 5-600 Hz"
     );
     let out = limpid(&[
         "estimate",

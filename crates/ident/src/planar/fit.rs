@@ -142,7 +142,7 @@ pub fn check_inertial_parameters(xi: &[f64; 3]) -> Result<()> {
         Ok(())
     } else {
         Err(Error::invalid(
-            "inertial parameters",
+            "inertial_parameters",
             format!(
                 "expected three positive values up to {MAX_INERTIAL_PARAMETER} kg m², found {}, {}, {}",
                 xi[0], xi[1], xi[2]

@@ -159,7 +159,7 @@ fn check_arm(arm: &Arm) -> Result<()> {
         .all(|l| (MIN_LINK_M..=MAX_LINK_M).contains(l))
     {
         return Err(Error::invalid(
-            "link lengths",
+            "link_lengths",
             format!(
                 "expected two lengths from {MIN_LINK_M} to {MAX_LINK_M} m, found {}, {}",
                 limpid_core::error::Num(arm.l1),

@@ -606,7 +606,7 @@ pub fn window_sweep(
 fn sweep_windows(data: &PlanarData, from_ms: f64, to_ms: f64, step_ms: f64) -> Result<Vec<f64>> {
     if !(from_ms > 0.0 && step_ms > 0.0 && to_ms >= from_ms) {
         return Err(Error::invalid(
-            "window range",
+            "from_ms/to_ms/step_ms",
             format!(
                 "expected 0 < from <= to and step > 0, found {from_ms}..{to_ms} step {step_ms} ms"
             ),
@@ -616,7 +616,7 @@ fn sweep_windows(data: &PlanarData, from_ms: f64, to_ms: f64, step_ms: f64) -> R
     let count = (to_ms.min(max_ms) - from_ms) / step_ms;
     if count > MAX_SWEEP_WINDOWS as f64 {
         return Err(Error::invalid(
-            "window range",
+            "from_ms/to_ms/step_ms",
             format!(
                 "{}..{} ms in steps of {} ms makes {} windows; at most {MAX_SWEEP_WINDOWS}",
                 limpid_core::error::Num(from_ms),
@@ -634,7 +634,7 @@ fn sweep_windows(data: &PlanarData, from_ms: f64, to_ms: f64, step_ms: f64) -> R
     }
     if windows.is_empty() {
         return Err(Error::invalid(
-            "window range",
+            "from_ms/to_ms/step_ms",
             format!("the trials hold only {max_ms:.0} ms after the onset, less than {from_ms} ms"),
         ));
     }

@@ -39,28 +39,35 @@ use windows::{fits_offsets, keep_level, make_windows, resolved_windowing};
 
 /// How velocity and acceleration are obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Derivative {
     /// Butterworth zero-phase low-pass, then central differences.
     Central,
-    /// Savitzky-Golay (cubic) smoothing and derivatives; window from the cut-off.
+    /// Savitzky-Golay (cubic) smoothing and derivatives (window from the cut-off).
     Savgol,
 }
 
 /// How per-trial force offsets (sensor bias, arm weight, slow drift) are handled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Offsets {
-    /// Subtract the mean force of the pre-onset rest (seed 000 §II-C, seed 001).
-    /// The equilibrium position can then be estimated with a constant term.
+    /// Subtract the pre-onset rest mean (Artemiadis et al. 2010 §II-C; Patel et al. 2013); equilibrium estimated.
+    ///
+    /// The equilibrium position is then estimated with a constant term.
     Rest,
-    /// Fit one constant per trial (within-trial demeaning of forces and
-    /// regressors). Uses every sample of a trial to find its offset, so slow
-    /// force drift biases damping of slow perturbations less (ex_cubic: damping
-    /// error 14.5 % -> 10 %), but any model mismatch during fast motion moves
-    /// the offsets and so the stiffness (ex_config7: K error 0.1 % -> 1.6 %);
-    /// the equilibrium is not identifiable.
+    /// Fit one force offset per trial (robust to slow drift; no equilibrium).
+    ///
+    /// Within-trial demeaning of forces and regressors: every sample of a
+    /// trial finds its offset, so slow force drift biases damping of slow
+    /// perturbations less (ex_cubic: damping error 14.5 % -> 10 %), but any
+    /// model mismatch during fast motion moves the offsets and so the
+    /// stiffness (ex_config7: K error 0.1 % -> 1.6 %); the equilibrium is not
+    /// identifiable.
     Fit,
+    /// Fitted for trials longer than 2 s (slow perturbations), rest mean otherwise.
+    ///
     /// `Fit` when the trials last longer than [`AUTO_FIT_ABOVE_S`] (median),
     /// `Rest` otherwise: over a short trial the force drifts little after the
     /// rest, while over seconds its drift rivals the damping force.
@@ -72,10 +79,12 @@ pub const AUTO_FIT_ABOVE_S: f64 = 2.0;
 
 /// How the recording is cut into estimation windows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Windowing {
-    /// The `trial` column if present, else one continuous window. Onsets are
-    /// not searched for automatically: a pseudo-random step perturbation
+    /// The `trial` column if present, else one continuous window.
+    ///
+    /// Onsets are not searched for automatically: a pseudo-random step perturbation
     /// (e.g. the real ankle recordings of Kearney's laboratory) has rests and steps that look like trials.
     Auto,
     /// Use the `trial` column (error if absent).
@@ -84,8 +93,7 @@ pub enum Windowing {
     Onsets,
     /// One continuous window with a constant term.
     Continuous,
-    /// The `trial` column, each trial a continuous window with its own force
-    /// offset (fitted): holds of a continuous perturbation, no rest needed.
+    /// The `trial` column, each trial a continuous window with its own force offset (holds of a continuous perturbation; no rest needed).
     #[serde(rename = "continuous-trials")]
     ContinuousTrials,
 }

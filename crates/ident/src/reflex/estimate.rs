@@ -221,9 +221,9 @@ fn lengths(rec: &Recording, p: &ReflexParams, samples: usize) -> Result<Lengths>
     let fs = rec.sample_rate();
     if p.rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE) {
         return Err(Error::invalid(
-            "decimated rate",
+            "rate_hz",
             format!(
-                "{} Hz is above the recording's {} Hz ({}); limpid decimates, it does not interpolate",
+                "the decimated rate, {} Hz, is above the recording's {} Hz ({}); limpid decimates, it does not interpolate",
                 limpid_core::short_number(p.rate_hz),
                 limpid_core::short_number(fs),
                 rec.path().display()

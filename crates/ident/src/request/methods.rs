@@ -34,10 +34,33 @@ mod numbers {
             .map(sized::<D::Error, N>)
             .transpose()
     }
+
+    /// `N` numbers separated by commas, as a flag takes them (`--band 0.5,10`).
+    #[cfg(any(feature = "clap", test))]
+    pub fn parse<const N: usize>(text: &str) -> Result<[f64; N], String> {
+        let values = text
+            .split(',')
+            .map(|v| {
+                v.trim()
+                    .parse::<f64>()
+                    .map_err(|_| format!("'{}' is not a number", v.trim()))
+            })
+            .collect::<Result<Vec<f64>, String>>()?;
+        <[f64; N]>::try_from(values.as_slice()).map_err(|_| {
+            format!(
+                "expected {N} numbers separated by commas, found {}",
+                values.len()
+            )
+        })
+    }
 }
+
+/// The default band of the stochastic fit as its flag writes it.
+pub const DEFAULT_BAND_TEXT: &str = "0.5,10";
 
 /// Frame change applied to `x,y,z` and `fx,fy,fz` before anything else.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Frame {
     /// Keep the recording's frame.
@@ -50,6 +73,7 @@ pub enum Frame {
 
 /// The upward vertical axis of the recording's frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Axis {
     /// x up (Patel et al. 2013's frame).
@@ -63,6 +87,7 @@ pub enum Axis {
 
 /// Window applied to each Welch segment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SegmentWindow {
     /// Periodic Hann.
@@ -77,30 +102,60 @@ pub enum SegmentWindow {
 /// How a recording is read and prepared for the linear estimators
 /// (Artemiadis et al. 2010 §II-C; Patel et al. 2013 "Data Processing").
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(default, deny_unknown_fields)]
 pub struct PrepareRequest {
-    /// Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
+    /// Low-pass cut-off (Hz) [default: 30 Hz, at most 0.4 x the sample rate].
+    #[cfg_attr(feature = "clap", arg(long = "cutoff", value_name = "HZ"))]
     pub cutoff_hz: Option<f64>,
     /// Butterworth order per pass.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = PrepareRequest::default().order))]
     pub order: usize,
     /// How velocity and acceleration are computed.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = PrepareRequest::default().derivative))]
     pub derivative: Derivative,
     /// How per-trial force offsets are handled.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = PrepareRequest::default().offsets))]
     pub offsets: Offsets,
     /// How the recording is cut into windows.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = PrepareRequest::default().window))]
     pub window: Windowing,
-    /// Frame change applied to positions and forces.
+    /// Frame change applied to positions (`x,y,z`) and forces (`fx,fy,fz`).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = Frame::Identity))]
     pub frame: Frame,
-    /// General transform r11..r33, tx, ty, tz (m), applied after `frame`.
+    /// General transform r11,r12,..,r33,tx,ty,tz (m), applied after `frame`.
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            value_delimiter = ',',
+            allow_hyphen_values = true,
+            value_name = "R11,..,R33,TX,TY,TZ"
+        )
+    )]
     pub transform: Option<Vec<f64>>,
     /// The force columns hold the hand's force on the sensor: negate them.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub negate_force: bool,
     /// The end-effector pose from the `robot_q1..n` columns by this robot's
-    /// forward kinematics (`kuka-lwr4`, `puma3` or a `.urdf` file).
+    /// forward kinematics (`kuka-lwr4`, `puma3` or a `.urdf` file), as
+    /// Artemiadis et al. (2010) does.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "ROBOT"))]
     pub robot: Option<String>,
-    /// Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad).
+    /// Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW (rad), as a protocol's `robot_base`.
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            value_name = "POSE",
+            value_delimiter = ',',
+            requires = "robot",
+            allow_hyphen_values = true
+        )
+    )]
     pub robot_base: Option<Vec<f64>>,
     /// Use only windows of this condition level (the `level` column).
+    #[cfg_attr(feature = "clap", arg(long, allow_hyphen_values = true))]
     pub level: Option<f64>,
 }
 
@@ -159,16 +214,41 @@ impl PrepareRequest {
 
 /// Artemiadis et al. (2010)'s linear model `M x'' + B x' + K (x - x_eq) = f`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(default, deny_unknown_fields)]
 pub struct LinearRequest {
     /// Reading and preparation.
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub prepare: PrepareRequest,
     /// Fit the equilibrium constant (false: the 9-column form P = F Y^+ of Patel et al. 2013).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long = "no-equilibrium",
+            action = clap::ArgAction::SetFalse,
+            help = "Fit without the equilibrium constant (the 9-column form P = F Y^+ of Patel et al. 2013)"
+        )
+    )]
     pub equilibrium: bool,
-    /// The upward axis, for the arm configuration from `elbow_*`/`wrist_*` markers.
+    /// The upward axis of the frame, for the arm configuration from
+    /// `elbow_*`/`wrist_*` markers (Patel et al. 2013's frame has x up).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = Axis::Z))]
     pub vertical: Axis,
     /// Also the shoulder's joint-space stiffness and damping J_h^T Z J_h (Park & Chang 2011):
     /// upper arm (m), forearm (m), elbow, flexion, abduction, rotation (deg).
+    ///
+    /// Frame: x forward, y left, z up, origin at the shoulder; right arm. The
+    /// hand's position cannot sense rotation about the shoulder-hand line:
+    /// these matrices are singular along it (rank 2).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            value_name = "L1,L2,E,F,A,R",
+            value_parser = numbers::parse::<6>,
+            allow_hyphen_values = true
+        )
+    )]
     #[serde(deserialize_with = "numbers::optional")]
     pub shoulder: Option<[f64; 6]>,
 }
@@ -187,11 +267,14 @@ impl Default for LinearRequest {
 /// Patel, O'Neill & Artemiadis (2013)'s co-contraction analysis (the MVC
 /// recording is the second input).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(default, deny_unknown_fields)]
 pub struct CocontractionRequest {
     /// Reading and preparation.
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub prepare: PrepareRequest,
     /// Half-width of the band around the target level counted as "on target".
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = DEFAULT_TOLERANCE))]
     pub tolerance: f64,
 }
 
@@ -206,21 +289,36 @@ impl Default for CocontractionRequest {
 
 /// The planar two-link arm (Lakatos et al. 2011).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields)]
 pub struct ArmRequest {
     /// Upper-arm and forearm lengths (m).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "L1,L2", value_parser = numbers::parse::<2>))]
     #[serde(deserialize_with = "numbers::exact")]
     pub link_lengths: [f64; 2],
     /// Shoulder position in the recording's frame (m).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            value_name = "X,Y",
+            value_parser = numbers::parse::<2>,
+            default_value = "0,0",
+            allow_hyphen_values = true
+        )
+    )]
     #[serde(default, deserialize_with = "numbers::exact")]
     pub shoulder: [f64; 2],
     /// Inverse-kinematics branch for end-point data: the elbow angle q2 negative.
+    #[cfg_attr(feature = "clap", arg(long))]
     #[serde(default)]
     pub elbow_negative: bool,
-    /// Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
+    /// Low-pass cut-off (Hz) [default: 30 Hz, at most 0.4 x the sample rate].
+    #[cfg_attr(feature = "clap", arg(long = "cutoff", value_name = "HZ"))]
     #[serde(default)]
     pub cutoff_hz: Option<f64>,
-    /// Known base inertial parameters xi1..xi3 (kg m²): the reduced model (eq. 23-25).
+    /// Known base inertial parameters xi1..xi3 (kg m²): the reduced 8-parameter model (eq. 23-25).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "A,B,C", value_parser = numbers::parse::<3>))]
     #[serde(default, deserialize_with = "numbers::optional")]
     pub inertial_parameters: Option<[f64; 3]>,
 }
@@ -255,28 +353,36 @@ impl ArmRequest {
 
 /// One planar estimate (Lakatos et al. 2011).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields)]
 pub struct PlanarRequest {
     /// The arm.
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub arm: ArmRequest,
-    /// Observation window after the perturbation onset (ms); none: every sample of every trial.
+    /// Observation window after the perturbation onset (ms) [default: every sample of every trial].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "T"))]
     #[serde(default)]
     pub window_ms: Option<f64>,
 }
 
 /// Planar estimates over a range of observation windows (Lakatos et al. 2011).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields)]
 pub struct SweepRequest {
     /// The arm.
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub arm: ArmRequest,
     /// Shortest observation window (ms).
+    #[cfg_attr(feature = "clap", arg(long = "from", default_value_t = sweep_from(), value_name = "MS"))]
     #[serde(default = "sweep_from")]
     pub from_ms: f64,
     /// Longest observation window (ms).
+    #[cfg_attr(feature = "clap", arg(long = "to", default_value_t = sweep_to(), value_name = "MS"))]
     #[serde(default = "sweep_to")]
     pub to_ms: f64,
     /// Step (ms).
+    #[cfg_attr(feature = "clap", arg(long = "step", default_value_t = sweep_step(), value_name = "MS"))]
     #[serde(default = "sweep_step")]
     pub step_ms: f64,
 }
@@ -305,22 +411,50 @@ impl SweepRequest {
 
 /// Park & Chang (2011)'s stochastic MIMO estimate (several inputs are pooled).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(default, deny_unknown_fields)]
 pub struct StochasticRequest {
-    /// Samples per segment (= FFT length); none: about 4 s, a power of two.
+    /// Samples per segment (= FFT length) [default: about 4 s, a power of two].
+    #[cfg_attr(feature = "clap", arg(long = "nfft", value_name = "N"))]
     pub nperseg: Option<usize>,
-    /// Overlapping samples; none: half a segment.
+    /// Overlapping samples [default: half a segment].
+    #[cfg_attr(feature = "clap", arg(long = "overlap", value_name = "N"))]
     pub noverlap: Option<usize>,
     /// Segment window.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = SegmentWindow::Hann))]
     pub window: SegmentWindow,
     /// Band of the parametric fit and accuracy measures (Hz).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long = "band",
+            value_name = "LO,HI",
+            value_parser = numbers::parse::<2>,
+            default_value = DEFAULT_BAND_TEXT
+        )
+    )]
     #[serde(deserialize_with = "numbers::exact")]
     pub band_hz: [f64; 2],
     /// The shoulder's joint space before estimation (Park & Chang 2011 eq. (3)):
     /// upper arm (m), forearm (m), elbow, flexion, abduction, rotation (deg).
+    ///
+    /// Hand X, Z (with F and u) become flexion and abduction (τ = J_h^T F)
+    /// and theta, tauy, utheta internal rotation. Frame: x forward, y left,
+    /// z up, origin at the shoulder; right arm; the recording's mean X, Z is
+    /// the hand at this posture.
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            value_name = "L1,L2,E,F,A,R",
+            value_parser = numbers::parse::<6>,
+            allow_hyphen_values = true
+        )
+    )]
     #[serde(deserialize_with = "numbers::optional")]
     pub shoulder: Option<[f64; 6]>,
     /// A truth or expected model (JSON with inertia, damping, stiffness): accuracy phi_T, phi_ij (eq. 15-16).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "FILE"))]
     pub expected: Option<String>,
 }
 
@@ -372,24 +506,35 @@ fn welch(
 /// Welch spectra, ordinary, multiple and partial coherences of named columns
 /// (Park & Chang 2011 §III, eq. 3-6), as `limpid spectra` computes them.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields)]
 pub struct SpectraRequest {
     /// Input columns.
+    #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', required = true))]
     pub inputs: Vec<String>,
     /// Output columns.
+    #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', required = true))]
     pub outputs: Vec<String>,
-    /// Samples per segment (= FFT length); none: about 4 s, a power of two.
+    /// Samples per segment (= FFT length) [default: about 4 s, a power of two].
+    #[cfg_attr(feature = "clap", arg(long = "nfft", value_name = "N"))]
     #[serde(default)]
     pub nperseg: Option<usize>,
-    /// Overlapping samples; none: half a segment.
+    /// Overlapping samples [default: half a segment].
+    #[cfg_attr(feature = "clap", arg(long = "overlap", value_name = "N"))]
     #[serde(default)]
     pub noverlap: Option<usize>,
     /// Segment window.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = SegmentWindow::Hann))]
     #[serde(default)]
     pub window: SegmentWindow,
     /// Period of a periodic excitation (s): spectra over whole periods
     /// (no window, no overlap), the response at the excited lines and the
     /// nonlinear distortion at the detection lines (issue 59).
+    ///
+    /// A `period` column numbers the periods (-1: transient, left out);
+    /// without it the first period is left out. The response's standard
+    /// errors come from the period-to-period scatter.
+    #[cfg_attr(feature = "clap", arg(long = "period", value_name = "S"))]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub period_s: Option<f64>,
 }
@@ -493,6 +638,16 @@ impl Method for CocontractionRequest {
 
     fn check_settings(&self) -> Result<Self> {
         check_prepare(&self.prepare)?;
+        // the preparation's level filter is the linear method's: this one
+        // estimates every level (it was ignored without a word)
+        if let Some(level) = self.prepare.level {
+            return Err(Error::invalid(
+                "level",
+                format!(
+                    "the co-contraction analysis estimates every level and compares each with the lowest, so it takes no level ({level}); `estimate linear --level L` estimates one"
+                ),
+            ));
+        }
         // finite too: an infinite band counts every sample "on target" (issue 56)
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
             return Err(Error::invalid(
@@ -608,5 +763,23 @@ impl Method for SpectraRequest {
 
     fn booleans() -> Vec<String> {
         boolean_names::<SpectraRequest>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_band_flag_s_default_is_the_default_band() {
+        assert_eq!(numbers::parse::<2>(DEFAULT_BAND_TEXT), Ok(DEFAULT_BAND_HZ));
+        assert_eq!(
+            numbers::parse::<2>("1, x"),
+            Err("'x' is not a number".to_string())
+        );
+        assert_eq!(
+            numbers::parse::<6>("1,2,3"),
+            Err("expected 6 numbers separated by commas, found 3".to_string())
+        );
     }
 }

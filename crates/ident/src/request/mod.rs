@@ -26,7 +26,7 @@ mod options;
 
 pub use methods::{
     ArmRequest, Axis, CocontractionRequest, Frame, LinearRequest, PlanarRequest, PrepareRequest,
-    SegmentWindow, SpectraRequest, StochasticRequest, SweepRequest,
+    SegmentWindow, SpectraRequest, StochasticRequest, SweepRequest, DEFAULT_BAND_TEXT,
 };
 pub use options::{boolean_names, boolean_options, field_names, from_options, nesting};
 

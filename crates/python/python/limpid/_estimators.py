@@ -42,11 +42,11 @@ def estimate_linear(
         Fit the equilibrium constant (false: the 9-column form P = F Y^+ of Patel et al.
         2013).
     cutoff_hz : float or None, default None
-        Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
+        Low-pass cut-off (Hz) [default: 30 Hz, at most 0.4 x the sample rate].
     derivative : {'central', 'savgol'}, default 'central'
         How velocity and acceleration are computed.
     frame : {'identity', 'seed000'}, default 'identity'
-        Frame change applied to positions and forces.
+        Frame change applied to positions (`x,y,z`) and forces (`fx,fy,fz`).
     level : float or None, default None
         Use only windows of this condition level (the `level` column).
     negate_force : bool, default False
@@ -57,19 +57,24 @@ def estimate_linear(
         Butterworth order per pass.
     robot : str or None, default None
         The end-effector pose from the `robot_q1..n` columns by this robot's forward
-        kinematics (`kuka-lwr4`, `puma3` or a `.urdf` file).
+        kinematics (`kuka-lwr4`, `puma3` or a `.urdf` file), as Artemiadis et al. (2010)
+        does.
     robot_base : sequence of float or None, default None
         Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW
-        (rad).
+        (rad), as a protocol's `robot_base`.
     transform : sequence of float or None, default None
-        General transform r11..r33, tx, ty, tz (m), applied after `frame`.
+        General transform r11,r12,..,r33,tx,ty,tz (m), applied after `frame`.
     window : {'auto', 'trials', 'onsets', 'continuous', 'continuous-trials'}, default 'auto'
         How the recording is cut into windows.
     shoulder : sequence of 6 float or None, default None
         Also the shoulder's joint-space stiffness and damping J_h^T Z J_h (Park & Chang
-        2011): upper arm (m), forearm (m), elbow, flexion, abduction, rotation (deg).
+        2011): upper arm (m), forearm (m), elbow, flexion, abduction, rotation (deg). Frame:
+        x forward, y left, z up, origin at the shoulder; right arm. The hand's position
+        cannot sense rotation about the shoulder-hand line: these matrices are singular
+        along it (rank 2).
     vertical : {'x', 'y', 'z'}, default 'z'
-        The upward axis, for the arm configuration from `elbow_*`/`wrist_*` markers.
+        The upward axis of the frame, for the arm configuration from `elbow_*`/`wrist_*`
+        markers (Patel et al. 2013's frame has x up).
 
     Returns
     -------
@@ -104,16 +109,17 @@ def estimate_planar(
     link_lengths : sequence of 2 floats
         Upper arm and forearm length (m).
     cutoff_hz : float or None, default None
-        Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
+        Low-pass cut-off (Hz) [default: 30 Hz, at most 0.4 x the sample rate].
     elbow_negative : bool, default False
         Inverse-kinematics branch for end-point data: the elbow angle q2 negative.
     inertial_parameters : sequence of 3 float or None, default None
-        Known base inertial parameters xi1..xi3 (kg m²): the reduced model (eq. 23-25).
+        Known base inertial parameters xi1..xi3 (kg m²): the reduced 8-parameter model (eq.
+        23-25).
     shoulder : sequence of 2 float, default (0.0, 0.0)
         Shoulder position in the recording's frame (m).
     window_ms : float or None, default None
-        Observation window after the perturbation onset (ms); none: every sample of every
-        trial.
+        Observation window after the perturbation onset (ms) [default: every sample of every
+        trial].
 
     Returns
     -------
@@ -150,11 +156,12 @@ def window_sweep(
     link_lengths : sequence of 2 floats
         Upper arm and forearm length (m).
     cutoff_hz : float or None, default None
-        Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
+        Low-pass cut-off (Hz) [default: 30 Hz, at most 0.4 x the sample rate].
     elbow_negative : bool, default False
         Inverse-kinematics branch for end-point data: the elbow angle q2 negative.
     inertial_parameters : sequence of 3 float or None, default None
-        Known base inertial parameters xi1..xi3 (kg m²): the reduced model (eq. 23-25).
+        Known base inertial parameters xi1..xi3 (kg m²): the reduced 8-parameter model (eq.
+        23-25).
     shoulder : sequence of 2 float, default (0.0, 0.0)
         Shoulder position in the recording's frame (m).
     from_ms : float, default 50.0
@@ -205,12 +212,15 @@ def estimate_stochastic(
         A truth or expected model (JSON with inertia, damping, stiffness): accuracy phi_T,
         phi_ij (eq. 15-16).
     noverlap : int or None, default None
-        Overlapping samples; none: half a segment.
+        Overlapping samples [default: half a segment].
     nperseg : int or None, default None
-        Samples per segment (= FFT length); none: about 4 s, a power of two.
+        Samples per segment (= FFT length) [default: about 4 s, a power of two].
     shoulder : sequence of 6 float or None, default None
         The shoulder's joint space before estimation (Park & Chang 2011 eq. (3)): upper arm
-        (m), forearm (m), elbow, flexion, abduction, rotation (deg).
+        (m), forearm (m), elbow, flexion, abduction, rotation (deg). Hand X, Z (with F and
+        u) become flexion and abduction (τ = J_h^T F) and theta, tauy, utheta internal
+        rotation. Frame: x forward, y left, z up, origin at the shoulder; right arm; the
+        recording's mean X, Z is the hand at this posture.
     window : {'hann', 'hamming', 'boxcar'}, default 'hann'
         Segment window.
 
@@ -420,11 +430,11 @@ def estimate_cocontraction(
     mvc : str, os.PathLike, dict of arrays or pandas.DataFrame
         The maximum voluntary contraction recording of the same muscles.
     cutoff_hz : float or None, default None
-        Low-pass cut-off (Hz); none: 30 Hz, at most 0.4 x the sample rate.
+        Low-pass cut-off (Hz) [default: 30 Hz, at most 0.4 x the sample rate].
     derivative : {'central', 'savgol'}, default 'central'
         How velocity and acceleration are computed.
     frame : {'identity', 'seed000'}, default 'identity'
-        Frame change applied to positions and forces.
+        Frame change applied to positions (`x,y,z`) and forces (`fx,fy,fz`).
     level : float or None, default None
         Use only windows of this condition level (the `level` column).
     negate_force : bool, default False
@@ -435,12 +445,13 @@ def estimate_cocontraction(
         Butterworth order per pass.
     robot : str or None, default None
         The end-effector pose from the `robot_q1..n` columns by this robot's forward
-        kinematics (`kuka-lwr4`, `puma3` or a `.urdf` file).
+        kinematics (`kuka-lwr4`, `puma3` or a `.urdf` file), as Artemiadis et al. (2010)
+        does.
     robot_base : sequence of float or None, default None
         Where the robot's base sits in the lab frame: X,Y,Z (m) or X,Y,Z,ROLL,PITCH,YAW
-        (rad).
+        (rad), as a protocol's `robot_base`.
     transform : sequence of float or None, default None
-        General transform r11..r33, tx, ty, tz (m), applied after `frame`.
+        General transform r11,r12,..,r33,tx,ty,tz (m), applied after `frame`.
     window : {'auto', 'trials', 'onsets', 'continuous', 'continuous-trials'}, default 'auto'
         How the recording is cut into windows.
     tolerance : float, default 0.1
@@ -481,13 +492,15 @@ def spectra(
     outputs : sequence of str
         Output columns.
     noverlap : int or None, default None
-        Overlapping samples; none: half a segment.
+        Overlapping samples [default: half a segment].
     nperseg : int or None, default None
-        Samples per segment (= FFT length); none: about 4 s, a power of two.
+        Samples per segment (= FFT length) [default: about 4 s, a power of two].
     period_s : float or None, default None
         Period of a periodic excitation (s): spectra over whole periods (no window, no
         overlap), the response at the excited lines and the nonlinear distortion at the
-        detection lines (issue 59).
+        detection lines (issue 59). A `period` column numbers the periods (-1: transient,
+        left out); without it the first period is left out. The response's standard errors
+        come from the period-to-period scatter.
     window : {'hann', 'hamming', 'boxcar'}, default 'hann'
         Segment window.
 
