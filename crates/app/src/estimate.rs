@@ -5,7 +5,7 @@ use limpid_analysis::result::{Document, Estimate};
 use limpid_core::{Error, Recording, Result};
 use limpid_ident::request::{
     Axis, Checked, CocontractionRequest, LinearRequest, PlanarRequest, PrepareRequest, Settings,
-    StochasticRequest, SweepRequest,
+    StochasticRequest, SweepRequest, ValidArm, ValidPrepared,
 };
 
 /// A result and what its text rendering needs beyond it.
@@ -121,10 +121,9 @@ pub fn shoulder_posture(v: &[f64; 6]) -> ShoulderPosture {
     }
 }
 
-fn linear(r: &LinearRequest, rec: &Recording) -> Result<Estimated> {
-    let params = r.prepare.params()?;
+fn linear(r: &ValidPrepared<LinearRequest>, rec: &Recording) -> Result<Estimated> {
     // window by window: the prepared signals are never held whole (issue 16)
-    let plan = limpid_ident::plan(rec, &params)?;
+    let plan = limpid_ident::plan(rec, r.derived())?;
     let est = limpid_ident::fit_linear_plan(
         &plan,
         &limpid_ident::LinearParams {
@@ -148,30 +147,22 @@ fn linear(r: &LinearRequest, rec: &Recording) -> Result<Estimated> {
     Ok(Estimated::of(Estimate::Linear(result)))
 }
 
-fn cocontraction(r: &CocontractionRequest, rec: &Recording, mvc: &Recording) -> Result<Estimated> {
+fn cocontraction(
+    r: &ValidPrepared<CocontractionRequest>,
+    rec: &Recording,
+    mvc: &Recording,
+) -> Result<Estimated> {
     let emg = limpid_analysis::emg::EmgParams {
         tolerance: r.tolerance,
         ..limpid_analysis::emg::EmgParams::default()
     };
     Ok(Estimated::of(Estimate::Cocontraction(
-        limpid_analysis::cocontraction::estimate_cocontraction(
-            rec,
-            mvc,
-            &r.prepare.params()?,
-            &emg,
-        )?,
+        limpid_analysis::cocontraction::estimate_cocontraction(rec, mvc, r.derived(), &emg)?,
     )))
 }
 
-fn planar_data(
-    arm: &limpid_ident::request::ArmRequest,
-    rec: &Recording,
-) -> Result<limpid_ident::planar::PlanarData> {
-    limpid_ident::planar::prepare_planar(rec, &arm.prepare())
-}
-
-fn planar(r: &PlanarRequest, rec: &Recording) -> Result<Estimated> {
-    let data = planar_data(&r.arm, rec)?;
+fn planar(r: &ValidArm<PlanarRequest>, rec: &Recording) -> Result<Estimated> {
+    let data = limpid_ident::planar::prepare_planar(rec, r.derived())?;
     let window = match r.window_ms {
         None => usize::MAX,
         Some(ms) => (ms * data.fs / 1000.0).round() as usize,
@@ -184,8 +175,8 @@ fn planar(r: &PlanarRequest, rec: &Recording) -> Result<Estimated> {
     })
 }
 
-fn sweep(r: &SweepRequest, rec: &Recording) -> Result<Estimated> {
-    let data = planar_data(&r.arm, rec)?;
+fn sweep(r: &ValidArm<SweepRequest>, rec: &Recording) -> Result<Estimated> {
+    let data = limpid_ident::planar::prepare_planar(rec, r.derived())?;
     let sweep = limpid_ident::planar::window_sweep(
         &data,
         r.from_ms,

@@ -573,7 +573,36 @@ fn finite(name: &str, v: f64) -> Result<()> {
     }
 }
 
-pub(crate) fn check_prepare(p: &PrepareRequest) -> Result<()> {
+/// A request that passed its method's check, with what is derived from it
+/// once (the preparation's settings, the planar arm); only the check makes
+/// one, and it reads as its request.
+#[derive(Debug, Clone)]
+pub struct Valid<R, D> {
+    request: R,
+    derived: D,
+}
+
+impl<R, D> std::ops::Deref for Valid<R, D> {
+    type Target = R;
+
+    fn deref(&self) -> &R {
+        &self.request
+    }
+}
+
+impl<R, D> Valid<R, D> {
+    /// What the check derived from the request.
+    pub fn derived(&self) -> &D {
+        &self.derived
+    }
+}
+
+/// The settings of the linear and co-contraction methods once checked.
+pub type ValidPrepared<R> = Valid<R, PrepareParams>;
+/// The settings of the planar methods once checked.
+pub type ValidArm<R> = Valid<R, PlanarPrepare>;
+
+pub(crate) fn check_prepare(p: &PrepareRequest) -> Result<PrepareParams> {
     if !(1..=20).contains(&p.order) {
         return Err(Error::invalid(
             "order",
@@ -589,10 +618,10 @@ pub(crate) fn check_prepare(p: &PrepareRequest) -> Result<()> {
     if let Some(l) = p.level {
         finite("level", l)?;
     }
-    p.params().map(|_| ())
+    p.params()
 }
 
-pub(crate) fn check_arm(a: &ArmRequest) -> Result<()> {
+pub(crate) fn check_arm(a: &ArmRequest) -> Result<PlanarPrepare> {
     for v in a.link_lengths {
         positive("link_lengths", v)?;
     }
@@ -605,17 +634,19 @@ pub(crate) fn check_arm(a: &ArmRequest) -> Result<()> {
     if let Some(xi) = a.inertial_parameters {
         crate::planar::check_inertial_parameters(&xi)?;
     }
-    Ok(())
+    Ok(a.prepare())
 }
 
 impl Method for LinearRequest {
     const COMMAND: &'static str = "estimate linear";
-    type Valid = LinearRequest;
+    type Valid = ValidPrepared<LinearRequest>;
 
-    fn check_settings(&self) -> Result<Self> {
+    fn check_settings(&self) -> Result<Self::Valid> {
         // the posture itself is checked where it is used, with reasons
-        check_prepare(&self.prepare)?;
-        Ok(self.clone())
+        Ok(Valid {
+            derived: check_prepare(&self.prepare)?,
+            request: self.clone(),
+        })
     }
 
     fn nesting() -> Option<(&'static str, Vec<String>)> {
@@ -634,10 +665,10 @@ impl Method for LinearRequest {
 impl Method for CocontractionRequest {
     const COMMAND: &'static str = "estimate cocontraction";
     const INPUTS: (usize, usize) = (2, 2);
-    type Valid = CocontractionRequest;
+    type Valid = ValidPrepared<CocontractionRequest>;
 
-    fn check_settings(&self) -> Result<Self> {
-        check_prepare(&self.prepare)?;
+    fn check_settings(&self) -> Result<Self::Valid> {
+        let prepare = check_prepare(&self.prepare)?;
         // the preparation's level filter is the linear method's: this one
         // estimates every level (it was ignored without a word)
         if let Some(level) = self.prepare.level {
@@ -658,7 +689,10 @@ impl Method for CocontractionRequest {
                 ),
             ));
         }
-        Ok(self.clone())
+        Ok(Valid {
+            derived: prepare,
+            request: self.clone(),
+        })
     }
 
     fn nesting() -> Option<(&'static str, Vec<String>)> {
@@ -672,10 +706,10 @@ impl Method for CocontractionRequest {
 
 impl Method for PlanarRequest {
     const COMMAND: &'static str = "estimate planar";
-    type Valid = PlanarRequest;
+    type Valid = ValidArm<PlanarRequest>;
 
-    fn check_settings(&self) -> Result<Self> {
-        check_arm(&self.arm)?;
+    fn check_settings(&self) -> Result<Self::Valid> {
+        let arm = check_arm(&self.arm)?;
         if let Some(ms) = self.window_ms {
             // finite too: an infinite window was stored as null and
             // refused by `rerun` (issue 56)
@@ -689,7 +723,10 @@ impl Method for PlanarRequest {
                 ));
             }
         }
-        Ok(self.clone())
+        Ok(Valid {
+            derived: arm,
+            request: self.clone(),
+        })
     }
 
     fn nesting() -> Option<(&'static str, Vec<String>)> {
@@ -703,14 +740,17 @@ impl Method for PlanarRequest {
 
 impl Method for SweepRequest {
     const COMMAND: &'static str = "window-sweep";
-    type Valid = SweepRequest;
+    type Valid = ValidArm<SweepRequest>;
 
-    fn check_settings(&self) -> Result<Self> {
-        check_arm(&self.arm)?;
+    fn check_settings(&self) -> Result<Self::Valid> {
+        let arm = check_arm(&self.arm)?;
         positive("from_ms", self.from_ms)?;
         positive("to_ms", self.to_ms)?;
         positive("step_ms", self.step_ms)?;
-        Ok(self.clone())
+        Ok(Valid {
+            derived: arm,
+            request: self.clone(),
+        })
     }
 
     fn nesting() -> Option<(&'static str, Vec<String>)> {

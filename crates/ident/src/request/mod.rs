@@ -26,7 +26,8 @@ mod options;
 
 pub use methods::{
     ArmRequest, Axis, CocontractionRequest, Frame, LinearRequest, PlanarRequest, PrepareRequest,
-    SegmentWindow, SpectraRequest, StochasticRequest, SweepRequest, DEFAULT_BAND_TEXT,
+    SegmentWindow, SpectraRequest, StochasticRequest, SweepRequest, Valid, ValidArm, ValidPrepared,
+    DEFAULT_BAND_TEXT,
 };
 pub use options::{boolean_names, boolean_options, field_names, from_options, nesting};
 
