@@ -24,6 +24,8 @@ pub struct Recording {
     time_index: usize,
     sample_rate: f64,
     first_row: usize,
+    /// Source rows between consecutive samples (1 unless [`Recording::every`] kept every n-th).
+    row_step: usize,
     warnings: Vec<String>,
 }
 
@@ -207,6 +209,7 @@ impl Recording {
             time_index,
             sample_rate,
             first_row,
+            row_step: 1,
             warnings,
         })
     }
@@ -247,7 +250,23 @@ impl Recording {
     }
     /// Row number of sample `i` in the source file, for messages.
     pub fn row_of(&self, i: usize) -> usize {
-        i + self.first_row
+        i * self.row_step + self.first_row
+    }
+
+    /// Every `step`-th sample from sample `phase`: what a sensor `step` times
+    /// slower than the logging measured (issue 58). Row numbers in messages
+    /// stay the source's.
+    pub fn every(&self, phase: usize, step: usize) -> Result<Recording> {
+        let step = step.max(1);
+        let columns = self
+            .columns
+            .iter()
+            .map(|c| c.iter().skip(phase).step_by(step).copied().collect())
+            .collect();
+        let mut kept = Recording::new(&self.path, self.names.clone(), columns, self.row_of(phase))?;
+        kept.row_step = self.row_step * step;
+        kept.warnings = self.warnings.clone();
+        Ok(kept)
     }
     /// A column by name.
     pub fn column(&self, name: &str) -> Option<&[f64]> {

@@ -454,6 +454,8 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
             &mut warnings,
         ),
     };
+    // positions cut back to their measured samples first (issue 58)
+    warnings.extend(data.measured_rate.as_ref().map(|m| m.warning()));
     distrust_derivatives_of_resampled_positions(data, &mut identifiable, &mut warnings);
     for (k, c) in data.coordinates.iter().enumerate() {
         if let Some(kind) = crate::units::Coordinate::of_name(c) {

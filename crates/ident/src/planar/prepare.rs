@@ -93,10 +93,23 @@ pub(crate) fn motion_lag(
 
 /// Convert, cut into trials, take baselines, filter and differentiate.
 pub fn prepare_planar(rec: &Recording, p: &PlanarPrepare) -> Result<PlanarData> {
-    let fs = rec.sample_rate();
     let arm = p.arm;
     check_arm(&arm)?;
     let from_endpoint = !rec.has("q1");
+    // positions logged faster than they were measured: their measured
+    // samples (issue 58; a planar estimate has no warnings yet to say so in,
+    // its sample rate in the result does)
+    let positions: Vec<String> = if from_endpoint {
+        ["x", "y"]
+    } else {
+        ["q1", "q2"]
+    }
+    .iter()
+    .map(|c| c.to_string())
+    .collect();
+    let (rec, _) = crate::prepare::at_measured_rate(std::borrow::Cow::Borrowed(rec), &positions)?;
+    let rec = rec.as_ref();
+    let fs = rec.sample_rate();
     if from_endpoint {
         refuse_out_of_plane(rec)?;
     }

@@ -42,6 +42,13 @@ struct Lengths {
 /// # Ok::<(), limpid_core::Error>(())
 /// ```
 pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstimate> {
+    position_and_torque(rec, p)?;
+    // a position logged faster than it was measured: its measured samples (issue 58)
+    let (rec, measured_rate) = crate::prepare::at_measured_rate(
+        std::borrow::Cow::Borrowed(rec),
+        std::slice::from_ref(&p.position),
+    )?;
+    let rec = rec.as_ref();
     let (q, tq) = position_and_torque(rec, p)?;
     let fs = rec.sample_rate();
     let Lengths { n, half, n_reflex } = lengths(rec, p, q.len())?;
@@ -58,7 +65,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         (1, Polarity::Negative)
     };
     let c = &cascades[best];
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<Warning> = measured_rate.iter().map(|m| m.warning()).collect();
 
     let dt = 1.0 / d.fs;
     // the fully parametric model, fitted jointly (I-B-K, delay, gain, low-pass)

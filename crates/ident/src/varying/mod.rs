@@ -305,6 +305,10 @@ pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<Varyi
             format!("at most 3 coordinates, found {}", coords.len()),
         ));
     }
+    // positions logged faster than they were measured: their measured samples (issue 58)
+    let (rec, measured_rate) =
+        crate::prepare::at_measured_rate(std::borrow::Cow::Borrowed(rec), &coords)?;
+    let rec = rec.as_ref();
     let cutoff = params
         .cutoff_hz
         .unwrap_or_else(|| crate::prepare::default_cutoff(rec.sample_rate()));
@@ -318,13 +322,17 @@ pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<Varyi
             ),
         ));
     }
-    if params.event.is_some() {
+    let mut estimate = if params.event.is_some() {
         gait::estimate(rec, params, coords, forces, cutoff)
     } else if params.schedule == TIME {
         ensemble::estimate(rec, params, coords, forces, cutoff)
     } else {
         scheduled::estimate(rec, params, coords, forces, cutoff)
-    }
+    }?;
+    estimate
+        .warnings
+        .extend(measured_rate.map(|m| m.warning().message));
+    Ok(estimate)
 }
 
 /// Standard errors with `share` of each value's magnitude added in quadrature.
