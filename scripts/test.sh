@@ -41,16 +41,27 @@ rm -rf "$LIMPID_TEST_EXAMPLES"
 # and compile half the workspace again)
 "$target_dir/$profile/limpid-test-examples" "$LIMPID_TEST_EXAMPLES"
 venv="$target_dir/venv-test"
-python3 -m venv --clear "$venv"
 # h5py/hdf5storage, ezc3d and npTDMS write the lab-file versions of a recording (test_lab_formats.py),
 # rosbags and mcap-ros2-support its ROS 2 bags (test_lab_bags.py);
 # pandas, xarray, matplotlib, nbclient/nbformat/ipykernel: results in a notebook and the tutorial (test_notebook.py)
-"$venv/bin/pip" install -q --disable-pip-version-check maturin numpy scipy pytest mypy "dask[distributed]" \
-  h5py hdf5storage ezc3d npTDMS rosbags mcap mcap-ros2-support pandas xarray matplotlib nbclient nbformat ipykernel
+packages=(maturin numpy scipy pytest mypy "dask[distributed]"
+  h5py hdf5storage ezc3d npTDMS rosbags mcap mcap-ros2-support pandas xarray matplotlib nbclient nbformat ipykernel)
+# the environment is kept between runs while the package list and Python
+# are the same, for at most a week (then made anew, with current releases):
+# installing it takes about 50 s of every run
+stamp="$(python3 --version) ${packages[*]}"
+if [ -f "$venv/.limpid-packages" ] && [ "$(cat "$venv/.limpid-packages")" = "$stamp" ] \
+  && [ -z "$(find "$venv/.limpid-packages" -mtime +7)" ] && "$venv/bin/python" -c "import numpy, scipy, pytest" 2>/dev/null; then
+  echo "scripts/test.sh: reusing the Python environment $venv"
+else
+  python3 -m venv --clear "$venv"
+  "$venv/bin/pip" install -q --disable-pip-version-check "${packages[@]}"
+  echo "$stamp" > "$venv/.limpid-packages"
+fi
 echo "scripts/test.sh: Python environment ready after $(( $(date +%s) - start )) s"
 rm -rf "$target_dir/wheels"
 "$venv/bin/maturin" build --profile "$profile" -q -m crates/python/Cargo.toml -o "$target_dir/wheels"
-"$venv/bin/pip" install -q --disable-pip-version-check --no-deps "$target_dir"/wheels/limpid-*.whl
+"$venv/bin/pip" install -q --disable-pip-version-check --no-deps --force-reinstall "$target_dir"/wheels/limpid-*.whl
 # the CLI the workspace tests built: the Python tests compare the requests both make
 export LIMPID_CLI="$target_dir/$profile/limpid"
 echo "scripts/test.sh: wheel installed after $(( $(date +%s) - start )) s"
