@@ -33,6 +33,14 @@ pub struct MatrixCalibration {
     pub elements: usize,
     /// Share of elements whose truth lies within ±2 reported SE (%).
     pub coverage_percent: f64,
+    /// The same against the SE without the method's fixed model-error floor
+    /// (`floor_percent` of each value, added in quadrature): what the
+    /// estimator's own error model achieves; none when the method has no floor.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverage_without_floor_percent: Option<f64>,
+    /// The floor, as a share of each value (%); none when there is none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor_percent: Option<f64>,
     /// Largest |estimate - truth| / SE over the elements.
     pub worst_abs_z: f64,
     /// Median relative Frobenius error of the matrix (%).
@@ -187,6 +195,7 @@ impl Calibration {
             "matrix",
             "elements",
             "within ±2 SE",
+            "without the SE floor",
             "largest abs z",
             "median error",
             "trusted",
@@ -208,6 +217,10 @@ impl Calibration {
                     format!("{} (tolerance {:.0} %)", c.matrix, c.tolerance_percent),
                     c.elements.to_string(),
                     format!("{:.1} %", c.coverage_percent),
+                    match (c.coverage_without_floor_percent, c.floor_percent) {
+                        (Some(cov), Some(floor)) => format!("{cov:.1} % (floor {floor} %)"),
+                        _ => "no floor".into(),
+                    },
                     format!("{:.1}", c.worst_abs_z),
                     format!("{:.2} %", c.median_error_percent),
                     format!("{} of {}", c.trusted, c.judged),

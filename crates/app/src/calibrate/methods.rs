@@ -182,7 +182,8 @@ pub(super) fn reflex(seed: u64) -> std::result::Result<Outcome, String> {
     let i = &est.intrinsic;
     let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
     let fit_ok = est.fit.vaf_parametric >= limpid_analysis::linear::VAF_FLOOR_PERCENT;
-    let mut o = Outcome::default();
+    let grid = limpid_ident::reflex::GRID_ERROR_FLOOR;
+    let mut o = Outcome::floored([grid.stiffness, grid.damping]);
     for (kind, k, v, se, truth) in [
         (
             0,
@@ -354,13 +355,19 @@ pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool),
     .check()
     .map_err(|e| e.to_string())?;
     let est = estimate_varying(&rec, &params).map_err(|e| e.to_string())?;
-    let mut o = Outcome::default();
+    let detected = est.reflex.as_ref().is_some_and(|r| r.detected);
+    // the pathway's model floor is in the SEs when the pathway is in the model
+    let floor = if detected {
+        limpid_ident::varying::scheduled::REFLEX_MODEL_FLOOR
+    } else {
+        0.0
+    };
+    let mut o = Outcome::floored([floor, floor]);
     let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
     add_varying(&mut o, &est, |s| {
         let [k, b, _] = subject.at(s);
         (one(k), one(b))
     });
-    let detected = est.reflex.as_ref().is_some_and(|r| r.detected);
     Ok((o, with_reflex, detected))
 }
 
@@ -411,7 +418,8 @@ pub(super) fn walking(seed: u64) -> std::result::Result<Outcome, String> {
     .map_err(|e| e.to_string())?;
     let mut est = estimate_varying(&rec, &params).map_err(|e| e.to_string())?;
     est.points.retain(|p| (0.05..=0.55).contains(&p.sigma));
-    let mut o = Outcome::default();
+    let floor = limpid_ident::varying::gait::WALKING_MODEL_FLOOR;
+    let mut o = Outcome::floored([floor, floor]);
     let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
     add_varying(&mut o, &est, |phase| {
         let [k, b] = ankle.at(phase);

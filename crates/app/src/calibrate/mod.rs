@@ -43,24 +43,52 @@ use limpid_analysis::result::calibration::{
 };
 
 /// What one recording contributes: per matrix kind (stiffness, damping), the
-/// |z| of every element, the relative error and the verdict.
+/// |z| of every element (against the reported SE, and against the SE
+/// without the method's fixed floor), the relative error and the verdict.
 #[derive(Default)]
 struct Outcome {
     z: [Vec<f64>; 2],
+    z_without_floor: [Vec<f64>; 2],
+    /// The share of each value the estimator added in quadrature to its SE
+    /// (a fixed model-error floor) for this recording, per matrix kind.
+    floors: [f64; 2],
     matrices: [Vec<(f64, bool)>; 2],
 }
 
+/// |estimate - truth| / se, infinite where undefined.
+fn abs_z(e: f64, t: f64, se: f64) -> f64 {
+    let z = (e - t).abs() / se;
+    if z.is_nan() {
+        f64::INFINITY
+    } else {
+        z
+    }
+}
+
 impl Outcome {
+    /// An outcome whose estimator floors its K and B standard errors at these shares.
+    fn floored(floors: [f64; 2]) -> Self {
+        Outcome {
+            floors,
+            ..Outcome::default()
+        }
+    }
+
     fn add(&mut self, kind: usize, est: &Matrix, se: &Matrix, truth: &Matrix, trusted: bool) {
+        let floor = self.floors[kind];
         for ((e, s), t) in est.iter().zip(se.iter()).zip(truth.iter()) {
-            let z = (e - t).abs() / s;
-            self.z[kind].push(if z.is_nan() { f64::INFINITY } else { z });
+            self.z[kind].push(abs_z(*e, *t, *s));
+            // every floor is added in quadrature, se = hypot(se0, floor |e|): undone exactly
+            let unfloored = (s * s - (floor * e).powi(2)).max(0.0).sqrt();
+            self.z_without_floor[kind].push(abs_z(*e, *t, unfloored));
         }
         let err = (&est.0 - &truth.0).norm() / truth.norm();
         self.matrices[kind].push((err, trusted));
     }
 
     fn add_linear(&mut self, r: &LinearResult, k: &Matrix, b: &Matrix) {
+        // the linear SEs of B (and M) carry the derivative-bias floor
+        self.floors = [0.0, limpid_ident::linear::DERIVATIVE_ERROR_FLOOR];
         let v = &r.criteria;
         self.add(
             0,
@@ -104,7 +132,9 @@ fn summarise_within(
             Ok(o) => {
                 for k in 0..2 {
                     all.z[k].extend(&o.z[k]);
+                    all.z_without_floor[k].extend(&o.z_without_floor[k]);
                     all.matrices[k].extend(&o.matrices[k]);
+                    all.floors[k] = all.floors[k].max(o.floors[k]);
                 }
             }
             Err(e) => {
@@ -130,6 +160,13 @@ fn summarise_within(
                 elements: z.len(),
                 coverage_percent: share(z.iter().filter(|v| **v <= 2.0).count(), z.len())
                     .unwrap_or(0.0),
+                coverage_without_floor_percent: (all.floors[k] > 0.0)
+                    .then(|| {
+                        let z = &all.z_without_floor[k];
+                        share(z.iter().filter(|v| **v <= 2.0).count(), z.len())
+                    })
+                    .flatten(),
+                floor_percent: (all.floors[k] > 0.0).then(|| 100.0 * all.floors[k]),
                 worst_abs_z: z.iter().copied().fold(0.0, f64::max),
                 median_error_percent: errors.get(errors.len() / 2).map_or(0.0, |e| 100.0 * e),
                 tolerance_percent: 100.0 * tol,

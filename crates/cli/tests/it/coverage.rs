@@ -220,12 +220,39 @@ fn calibrate_measures_coverage_and_wrong_verdicts_of_every_method() {
     assert_eq!(r["kind"], "calibration");
     let methods = r["methods"].as_array().unwrap();
     assert_eq!(methods.len(), limpid_app::calibrate::METHODS);
+    // the floors are reported where the methods have them: the parallel
+    // cascade's K and B (grid floors), none for the planar arm
+    let floor_of = |name: &str, matrix: usize| {
+        methods
+            .iter()
+            .find(|m| m["method"].as_str().unwrap().starts_with(name))
+            .unwrap()["matrices"][matrix]
+            .get("floor_percent")
+            .and_then(|f| f.as_f64())
+    };
+    assert_eq!(floor_of("ankle with reflex", 0), Some(0.25));
+    assert_eq!(floor_of("ankle with reflex", 1), Some(0.5));
+    assert_eq!(floor_of("planar arm", 0), None);
+    assert_eq!(floor_of("centre-out cubic", 1), Some(1.0));
     for m in methods {
         assert_eq!(m["refused"], 0, "{}", m["method"]);
         for c in m["matrices"].as_array().unwrap() {
             let cov = c["coverage_percent"].as_f64().unwrap();
             assert!((0.0..=100.0).contains(&cov), "{m}");
             // a trusted stiffness is never further than its tolerance in these subjects
+            // without a method's fixed SE floor (undone exactly) the truth
+            // is inside ±2 SE no more often (issue 58); a method without one says so by leaving it out
+            match (
+                c.get("coverage_without_floor_percent"),
+                c.get("floor_percent"),
+            ) {
+                (Some(without), Some(floor)) => {
+                    let (without, floor) = (without.as_f64().unwrap(), floor.as_f64().unwrap());
+                    assert!(without <= cov + 1e-9 && floor > 0.0, "{m}");
+                }
+                (None, None) => {}
+                _ => panic!("a floor and its coverage come together: {m}"),
+            }
             if c["matrix"] == "stiffness" {
                 let wrong = c["trusted_beyond_tolerance_percent"]
                     .as_f64()
