@@ -268,7 +268,17 @@ pub fn run_table(run: &limpid_analysis::result::Run) -> Table {
                 .modified_utc
                 .as_deref()
                 .map_or(String::new(), |m| format!(", modified {m}"));
-            vec!["input".into(), format!("{} ({size}{modified})", f.path)]
+            // what was read of a recording: its samples, rate and length
+            let read = match (f.samples, f.sample_rate_hz, f.duration_s) {
+                (Some(n), Some(fs), Some(d)) => {
+                    format!("; {n} samples at {} Hz, {} s", fmt(fs), fmt(d))
+                }
+                _ => String::new(),
+            };
+            vec![
+                "input".into(),
+                format!("{} ({size}{modified}{read})", f.path),
+            ]
         })
         .collect();
     rows.push(vec!["command".into(), run.command_line.clone()]);

@@ -76,6 +76,15 @@ fn reports_name_the_recording() {
     );
     let html = std::fs::read_to_string(&again).unwrap();
     assert!(html.contains("How this result was made") && html.contains(&kib));
+    // and what was read of the recording: samples, rate, length
+    let input = &doc["run"]["inputs"][0];
+    // (the rate as the report rounds it: 499.99999999999955 Hz reads 500 Hz)
+    let read = format!(
+        "{} samples at {} Hz",
+        input["samples"],
+        input["sample_rate_hz"].as_f64().unwrap().round()
+    );
+    assert!(html.contains(&read), "{read}");
     // results without a recording field are named after the file the command read
     let out = limpid(&[
         "window-sweep",
