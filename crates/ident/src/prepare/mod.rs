@@ -599,9 +599,11 @@ impl MeasuredRate {
 /// measurement interval and its velocity steps; an interpolated one carries
 /// noise measured at the slower rate, whose density below that rate's
 /// Nyquist the preparation for the logging rate misreads (held 4x on a
-/// 500 Hz centre-out recording: B 11 % low at 3 SE; interpolated: 48 %
-/// low). Positions resampled unlike each other are left as they are (the
-/// linear method then calls damping and inertia not identifiable).
+/// 500 Hz centre-out recording: B 11 % low at 3 SE; interpolated 4x, or
+/// held and put back on the full clock by straight lines, and estimated at
+/// the logging rate: about half the truth). Positions resampled unlike each
+/// other are left as they are (the linear method then calls damping and
+/// inertia not identifiable).
 pub fn at_measured_rate<'r>(
     rec: Cow<'r, Recording>,
     positions: &[String],
