@@ -42,8 +42,8 @@ struct Lengths {
 /// # Ok::<(), limpid_core::Error>(())
 /// ```
 pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstimate> {
-    position_and_torque(rec, p)?;
-    // a position logged faster than it was measured: its measured samples (issue 58)
+    // a position logged faster than it was measured: its measured samples
+    // (issue 58); a missing or bookkeeping column is refused just below
     let (rec, measured_rate) = crate::prepare::at_measured_rate(
         std::borrow::Cow::Borrowed(rec),
         std::slice::from_ref(&p.position),
