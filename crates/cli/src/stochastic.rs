@@ -190,8 +190,15 @@ fn periodic_summary(p: &limpid_ident::spectra::PeriodicResult) -> String {
                     .join(", ")
             };
             let e = &z.standard_errors;
-            let trust = if p.nonlinear() {
+            let trust = if p.distorts_excited_lines() {
                 "not trusted: the response is nonlinear, these are its best linear approximation at this amplitude".to_string()
+            } else if p.nonlinear() {
+                format!(
+                    "K {}; the distortion is even and stays off the odd excited lines",
+                    crate::table::verdict_flag(z.verdicts.stiffness)
+                        .trim()
+                        .trim_matches(['[', ']'])
+                )
             } else {
                 format!(
                     "K {}",

@@ -59,6 +59,9 @@ pub enum Truth {
     Reflex(ReflexTruth),
     /// Impedance that varies with time or a schedule.
     Varying(VaryingTruth),
+    /// A limb following a periodic command (issue 59): M, B, K about the
+    /// posture, with the elastic force's quadratic and cubic terms.
+    Periodic(PeriodicTruth),
 }
 
 /// Centre-out end-point truth (seed 000).
@@ -218,6 +221,34 @@ pub struct ReflexTruth {
     pub other: BTreeMap<String, Value>,
 }
 
+/// A limb following a periodic command: its linear impedance about the
+/// posture and the nonlinear terms of its elastic force, per coordinate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PeriodicTruth {
+    /// Family, case, seed, rate, notes.
+    #[serde(flatten)]
+    pub about: About,
+    /// The recording's position columns, in the matrices' order.
+    pub coordinates: Vec<String>,
+    /// M (kg, or kg m^2 at the posture for joints).
+    pub inertia: Matrix,
+    /// B (N s/m or N m s/rad).
+    pub damping: Matrix,
+    /// K (N/m or N m/rad), the slope at the posture.
+    pub stiffness: Matrix,
+    /// The posture the displacements are taken from (m or rad).
+    pub equilibrium: Vec<f64>,
+    /// k2 per coordinate (N/m^2 or N m/rad^2): the elastic force adds k2 d^2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quadratic: Option<Vec<f64>>,
+    /// k3 per coordinate (N/m^3 or N m/rad^3): the elastic force adds k3 d^3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cubic: Option<Vec<f64>>,
+    /// What else the generator recorded (the protocol, servo, noise, ...).
+    #[serde(flatten)]
+    pub other: BTreeMap<String, Value>,
+}
+
 /// One point of a varying truth.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct VaryingTruthPoint {
@@ -277,6 +308,7 @@ impl Truth {
             Truth::Stochastic(t) => Some(&t.stiffness),
             Truth::Reflex(t) => Some(&t.stiffness),
             Truth::Varying(t) => t.points.first().map(|p| &p.stiffness),
+            Truth::Periodic(t) => Some(&t.stiffness),
         }
     }
 
@@ -289,6 +321,7 @@ impl Truth {
             Truth::Stochastic(t) => &t.about,
             Truth::Reflex(t) => &t.about,
             Truth::Varying(t) => &t.about,
+            Truth::Periodic(t) => &t.about,
         }
     }
 

@@ -271,23 +271,45 @@ pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64
     if lines.len() < 2 {
         return phases;
     }
-    let forward = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+    let mut planner = RealFftPlanner::<f64>::new();
+    let forward = planner.plan_fft_forward(n);
+    let backward = planner.plan_fft_inverse(n);
     let rms = (amplitudes.iter().map(|a| a * a / 2.0).sum::<f64>()).sqrt();
-    // the normalised Lp norm and its gradient in the phases
-    let norm_and_gradient = |phases: &[f64], p: f64| -> (f64, Vec<f64>) {
-        let x = multisine(n, lines, amplitudes, phases);
-        let mut g: Vec<f64> = x
-            .iter()
-            .map(|v| {
-                let u = v / rms;
-                u.signum() * u.abs().powf(p - 1.0)
-            })
-            .collect();
-        let norm =
-            (x.iter().map(|v| (v / rms).abs().powf(p)).sum::<f64>() / n as f64).powf(1.0 / p);
-        let mut spectrum = forward.make_output_vec();
+    let mut spectrum = forward.make_output_vec();
+    let mut x = vec![0.0; n];
+    // the normalised Lp norm (p = 2^exponent) and its gradient in the phases
+    let mut norm_and_gradient = |phases: &[f64], exponent: u32| -> (f64, Vec<f64>) {
+        // the multisine, by one inverse FFT (as `multisine`, planned once)
+        spectrum
+            .iter_mut()
+            .for_each(|c| *c = Complex64::new(0.0, 0.0));
+        for ((&k, &a), &ph) in lines.iter().zip(amplitudes).zip(phases) {
+            if k < spectrum.len() {
+                spectrum[k] = Complex64::from_polar(a / (2.0 * rms), ph);
+            }
+        }
+        spectrum[0].im = 0.0;
+        if let Some(last) = spectrum.last_mut().filter(|_| n.is_multiple_of(2)) {
+            last.im = 0.0;
+        }
+        backward
+            .process(&mut spectrum, &mut x)
+            .expect("lengths agree with the plan");
+        // x is now u = signal / rms; |u|^p by squaring, |u|^(p-1) = |u|^p / |u|
+        let mut sum = 0.0;
+        for v in x.iter_mut() {
+            let a = v.abs();
+            let mut power = a;
+            for _ in 0..exponent {
+                power *= power;
+            }
+            sum += power;
+            *v = if a > 0.0 { v.signum() * power / a } else { 0.0 };
+        }
+        let p = f64::from(1u32 << exponent);
+        let norm = (sum / n as f64).powf(1.0 / p);
         forward
-            .process(&mut g, &mut spectrum)
+            .process(&mut x, &mut spectrum)
             .expect("lengths agree with the plan");
         // d/dφ_k Σ g_i x_i = -a_k Im(e^{jφ_k} conj(G_k))
         let gradient = lines
@@ -299,8 +321,7 @@ pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64
         (norm, gradient)
     };
     for exponent in 2..=9 {
-        let p = f64::from(1u32 << exponent);
-        let (mut value, mut gradient) = norm_and_gradient(&phases, p);
+        let (mut value, mut gradient) = norm_and_gradient(&phases, exponent);
         let mut step = 0.1;
         for _ in 0..150 {
             let length = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
@@ -314,7 +335,7 @@ pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64
                     .zip(&gradient)
                     .map(|(ph, g)| ph - step * g / length)
                     .collect();
-                let (v, g) = norm_and_gradient(&trial, p);
+                let (v, g) = norm_and_gradient(&trial, exponent);
                 if v < value {
                     (phases, value, gradient) = (trial, v, g);
                     step *= 1.5;

@@ -191,6 +191,13 @@ pub struct Distortion {
     pub noise_db: f64,
     /// Whether the detection lines rise above the noise (see the module docs).
     pub nonlinear: bool,
+    /// Whether the odd detection lines do: odd distortion, which also falls
+    /// on odd excited lines (the best linear approximation differs from the
+    /// linear part there).
+    pub odd_rises: bool,
+    /// Whether the even detection lines do: even distortion, which falls on
+    /// even lines only and leaves the response at odd excited lines alone.
+    pub even_rises: bool,
 }
 
 /// The periodic analysis of inputs and outputs.
@@ -387,6 +394,8 @@ fn distortion(
         even_db: even.map(|m| 10.0 * m.0.log10()),
         noise_db: db(noise),
         nonlinear: rises(odd) || rises(even),
+        odd_rises: rises(odd),
+        even_rises: rises(even),
     })
 }
 

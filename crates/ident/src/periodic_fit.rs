@@ -46,15 +46,16 @@ pub struct PeriodicImpedance {
     /// (a nonlinearity, an unmodelled resonance, drift).
     pub residual_ratio: f64,
     /// The verdicts on K, B and M by the rules every estimator uses; none is
-    /// trusted below the VAF floor or when the detection lines call the
-    /// response nonlinear (M, B, K are then the best linear approximation at
-    /// this amplitude).
+    /// trusted below the VAF floor or when the detection lines show
+    /// distortion that reaches the excited lines (M, B, K are then the best
+    /// linear approximation at this amplitude; even distortion under an odd
+    /// multisine does not reach them).
     pub verdicts: Verdicts,
 }
 
 /// Fit M, B, K to the excited lines of `analysis`: `spectra`'s first
 /// `inputs` signals are displacements, the next `inputs` forces; `nonlinear`:
-/// the detection lines of either show distortion. `None` with
+/// the detection lines of either show distortion that reaches the excited lines. `None` with
 /// fewer equations than twice the unknowns of a row.
 pub fn fit(
     spectra: &PeriodSpectra,
@@ -113,8 +114,8 @@ pub fn fit(
             sm[(o, j)] = (r.variance[2 * n + j] * scale).sqrt();
         }
     }
-    // a linear model of a response the detection lines call nonlinear is
-    // its best linear approximation at this amplitude, not the limb's impedance
+    // where the distortion reaches the excited lines a linear model is the
+    // response's best linear approximation at this amplitude, not the limb's impedance
     let fit_ok = fit_vaf >= VAF_FLOOR_PERCENT && !nonlinear;
     let verdicts = Verdicts {
         stiffness: judge_matrix(MatrixKind::Stiffness, &k, &sk, fit_ok),

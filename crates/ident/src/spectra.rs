@@ -79,6 +79,22 @@ impl PeriodicResult {
             .chain(&self.input_distortion)
             .any(|d| d.verdict == "nonlinear")
     }
+
+    /// The distortion reaches the excited lines, so the response there is
+    /// the best linear approximation rather than the linear part: odd
+    /// distortion always; even distortion only when an even line is excited
+    /// (an odd or random-odd multisine keeps it on the even lines). Of the
+    /// outputs or the inputs.
+    pub fn distorts_excited_lines(&self) -> bool {
+        let even_excited = self.lines.iter().any(|l| {
+            l.kind == "excited"
+                && ((l.frequency_hz * self.period_s).round() as u64).is_multiple_of(2)
+        });
+        self.distortion
+            .iter()
+            .chain(&self.input_distortion)
+            .any(|d| d.odd_above_noise || (d.even_above_noise && even_excited))
+    }
 }
 
 /// One line of a periodic analysis.
@@ -110,6 +126,14 @@ pub struct PeriodicDistortion {
     pub noise_db: f64,
     /// `linear` or `nonlinear` (detection lines above the noise; `limpid_dsp::periodic`).
     pub verdict: String,
+    /// The odd detection lines rise above the noise: odd distortion, which
+    /// also falls on odd excited lines.
+    #[serde(default)]
+    pub odd_above_noise: bool,
+    /// The even detection lines rise above the noise: even distortion, which
+    /// reaches excited lines only where an even line is excited.
+    #[serde(default)]
+    pub even_above_noise: bool,
 }
 
 /// The frequency response of one input-output pair at the input's excited lines.
@@ -384,12 +408,7 @@ pub fn periodic_spectra(
             message: e.to_string(),
         })?;
     let analysis = limpid_dsp::periodic::analyse(&analysed, inputs.len())?;
-    let welch = Welch {
-        nperseg: n,
-        noverlap: Some(0),
-        window: limpid_dsp::spectral::Window::Boxcar,
-        ..Welch::new(fs)
-    };
+    let welch = periodic_welch(n, periods, inputs.len(), fs);
     let mut result = spectra_of(rec, inputs, outputs, &used, &welch)?;
     let mut periodic = periodic_result(&analysis, inputs, outputs, period_s, periods, transient);
     // the inputs analysed as outputs of themselves: their detection lines
@@ -400,12 +419,40 @@ pub fn periodic_spectra(
         .and_then(|a| a.distortion);
     periodic.input_distortion = input_side.as_ref().map(distortion_of);
     if displacements_to_forces(inputs, outputs) {
-        let nonlinear = periodic.nonlinear();
+        let nonlinear = periodic.distorts_excited_lines();
         periodic.impedance =
             crate::periodic_fit::fit(&analysed, &analysis, n_in, period_s, nonlinear);
     }
     result.periodic = Some(periodic);
     Ok(result)
+}
+
+/// The Welch segments beside a periodic analysis: whole periods (boxcar,
+/// no overlap: no leakage) when there are enough of them for coherences
+/// ([`min_coherence_segments`]); else Hann segments of a whole fraction
+/// 1/m of a period with half overlap (2 m periods - 1 segments), the
+/// smallest m that gives enough. The periodic analysis itself needs only
+/// two periods; the coherences are an ordinary Welch estimate.
+fn periodic_welch(period: usize, periods: usize, inputs: usize, fs: f64) -> Welch {
+    let needed = min_coherence_segments(inputs);
+    if periods >= needed {
+        return Welch {
+            nperseg: period,
+            noverlap: Some(0),
+            window: limpid_dsp::spectral::Window::Boxcar,
+            ..Welch::new(fs)
+        };
+    }
+    let m = (1..=period / 4)
+        .find(|m| 2 * periods * m > needed)
+        .unwrap_or(1);
+    let nperseg = period / m;
+    Welch {
+        nperseg,
+        noverlap: Some(nperseg / 2),
+        window: limpid_dsp::spectral::Window::Hann,
+        ..Welch::new(fs)
+    }
 }
 
 /// The typed result of a periodic analysis.
@@ -479,6 +526,8 @@ fn distortion_of(d: &limpid_dsp::periodic::Distortion) -> PeriodicDistortion {
         even_db: d.even_db,
         noise_db: d.noise_db,
         verdict: if d.nonlinear { "nonlinear" } else { "linear" }.into(),
+        odd_above_noise: d.odd_rises,
+        even_above_noise: d.even_rises,
     }
 }
 

@@ -8,9 +8,10 @@
 //! `switch_s`, and the actuator follows it as a second-order system. The
 //! torque applied to the joint is
 //!
-//! `tau = I q'' + B q' + K q + G LP2(rect(q'(t - d))) + noise`,
+//! `tau = I q'' + B q' + K q + k2 q^2 + k3 q^3 + G LP2(rect(q'(t - d))) + noise`,
 //!
-//! the intrinsic pathway plus a reflex pathway: half-wave rectified velocity,
+//! the intrinsic pathway (k2 and k3 are 0 unless a subject sets `quadratic`
+//! or `cubic`) plus a reflex pathway: half-wave rectified velocity,
 //! delayed by `d`, scaled by the gain `G` (N m s/rad) and low-passed by a
 //! unit-DC second-order system. Defaults are of the order of the real ankle:
 //! I 0.015 kg m^2, B 0.8 N m s/rad, K 80 N m/rad, reflex delay 45 ms,
@@ -56,6 +57,18 @@ pub struct AnkleSubject {
     pub stiffness: f64,
     /// The reflex pathway, if any.
     pub reflex: Option<AnkleReflex>,
+    /// Quadratic stiffness k2 (N m/rad^2): the elastic torque adds k2 q^2,
+    /// an even nonlinearity (issue 59's nonlinear subjects); 0 by default.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub quadratic: f64,
+    /// Cubic stiffness k3 (N m/rad^3): the elastic torque adds k3 q^3, an
+    /// odd nonlinearity (a joint stiffening with the angle); 0 by default.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub cubic: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl Default for AnkleSubject {
@@ -71,6 +84,8 @@ impl Default for AnkleSubject {
                 damping_ratio: 0.7,
                 positive: true,
             }),
+            quadratic: 0.0,
+            cubic: 0.0,
         }
     }
 }
@@ -190,7 +205,10 @@ fn integrate(
         let qdd = wa * wa * (u - q) - 2.0 * za * wa * qd;
         let reflex = if s.reflex.is_some() { z } else { 0.0 };
         q_sum += q;
-        tau_sum += s.inertia * qdd + s.damping * qd + s.stiffness * q + reflex;
+        tau_sum += s.inertia * qdd
+            + s.damping * qd
+            + (s.stiffness + (s.quadratic + s.cubic * q) * q) * q
+            + reflex;
         if k % sub == sub - 1 {
             t_col.push((k / sub) as f64 / e.rate_hz);
             q_col.push(q_sum / sub as f64);

@@ -42,7 +42,7 @@ pub enum Design {
 }
 
 /// The preset names, by kind.
-pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold), ankle-multisine (multisine), ankle-prbs (prbs), walking-pulses, walking-continuous (walking)";
+pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold), ankle-multisine, planar-multisine, endpoint-multisine (multisine), ankle-prbs (prbs), walking-pulses, walking-continuous (walking)";
 
 impl Design {
     /// A preset: seed 000 (`artemiadis-3d`), seed 001 (`patel-cocontraction`),
@@ -58,6 +58,12 @@ impl Design {
             "ankle-ramp-and-hold" => Ok(Design::RampAndHold(Default::default())),
             "ankle-multisine" => Ok(Design::Periodic(
                 crate::periodic::PeriodicDesign::multisine_joint(),
+            )),
+            "planar-multisine" => Ok(Design::Periodic(
+                crate::periodic::PeriodicDesign::multisine_planar(),
+            )),
+            "endpoint-multisine" => Ok(Design::Periodic(
+                crate::periodic::PeriodicDesign::multisine_endpoint(),
             )),
             "ankle-prbs" => Ok(Design::Periodic(
                 crate::periodic::PeriodicDesign::prbs_joint(),

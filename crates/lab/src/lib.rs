@@ -12,6 +12,7 @@ pub mod ankle;
 pub mod cocontraction;
 pub mod design;
 pub mod export;
+pub mod follow;
 pub mod gravity;
 pub mod imbic;
 pub mod periodic;

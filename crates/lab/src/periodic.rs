@@ -253,6 +253,57 @@ impl PeriodicDesign {
         }
     }
 
+    /// A zippered random-odd multisine on the 3-D end point (x, y, z; 0.2-6
+    /// Hz, 20 s period, 2 mm RMS each), with the centre-out preset's limits
+    /// but for velocity (0.2 m/s) and acceleration (5 m/s²): inertia needs
+    /// the hand accelerated.
+    pub fn multisine_endpoint() -> Self {
+        PeriodicDesign {
+            name: "zippered random-odd multisine, 0.2-6 Hz, 20 s period, at the end point".into(),
+            coordinates: Coordinates::Endpoint,
+            channels: vec!["x".into(), "y".into(), "z".into()],
+            sample_rate_hz: 500.0,
+            periods: 6,
+            seed: 1,
+            signal: Signal::Multisine(MultisineSignal {
+                period_s: 20.0,
+                band_hz: [0.2, 6.0],
+                rms: vec![0.002; 3],
+                lines: "random-odd".into(),
+                phases: "optimised".into(),
+            }),
+            limits: PeriodicLimits {
+                max_displacement_m: Some(0.02),
+                max_velocity_m_s: Some(0.2),
+                max_acceleration_m_s2: Some(5.0),
+                max_force_n: Some(60.0),
+                nominal_stiffness_n_per_m: Some(1000.0),
+                ..PeriodicLimits::default()
+            },
+        }
+    }
+
+    /// A zippered random-odd multisine on the planar arm's two joints (q1,
+    /// q2; 0.5-10 Hz, 10 s period, 0.01 rad RMS each).
+    pub fn multisine_planar() -> Self {
+        PeriodicDesign {
+            name: "zippered random-odd multisine, 0.5-10 Hz, 10 s period, on the planar arm".into(),
+            coordinates: Coordinates::Joint,
+            channels: vec!["q1".into(), "q2".into()],
+            sample_rate_hz: 1000.0,
+            periods: 6,
+            seed: 1,
+            signal: Signal::Multisine(MultisineSignal {
+                period_s: 10.0,
+                band_hz: [0.5, 10.0],
+                rms: vec![0.01; 2],
+                lines: "random-odd".into(),
+                phases: "optimised".into(),
+            }),
+            limits: joint_limits(),
+        }
+    }
+
     /// The column names (the given ones, else `q1` or `x, y, z` for as many channels as amplitudes).
     pub fn channel_names(&self) -> Vec<String> {
         if !self.channels.is_empty() {

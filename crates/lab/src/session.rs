@@ -10,12 +10,20 @@
 //!   `damping`, `tau0` (2), optional `[reflex]` (`latency_s`, `stiffness_gain`,
 //!   `damping_gain`); default [`PlanarDesign::nominal_subject`];
 //! - stochastic (seed 004 eq. 10): `springs` (8 values, N/m, k1a..k4b); default
-//!   spring set SA3.
+//!   spring set SA3;
+//! - periodic (issue 59), by the protocol's coordinates: one joint channel
+//!   plays on the virtual ankle (`inertia`, `damping`, `stiffness`, optional
+//!   `[reflex]`, `quadratic`, `cubic`; [`crate::ankle::AnkleSubject`]), two
+//!   (`q1, q2`) on the planar arm ([`crate::follow::PlanarFollower`]), end-point
+//!   channels (`x`, `y`, `z`) on the 3-D end point
+//!   ([`crate::follow::EndpointFollower`]); the quadratic and cubic terms make
+//!   the elastic force nonlinear.
 
 use std::path::Path;
 
 use limpid_core::truth::{
-    other_keys, About, CartesianTruth, PlanarTruth, PlanarVariant, StochasticTruth, Truth,
+    other_keys, About, CartesianTruth, PeriodicTruth, PlanarTruth, PlanarVariant, StochasticTruth,
+    Truth,
 };
 use limpid_core::Matrix;
 use limpid_core::{Error, Recording, Result};
@@ -184,17 +192,210 @@ fn periodic(
     subject: Option<&SubjectText>,
     seed: u64,
 ) -> Result<Simulated> {
-    use crate::ankle::{simulate_ankle_following, AnkleExperiment, AnkleSubject};
+    use crate::periodic::Coordinates;
     let channels = p.channel_names();
-    if p.coordinates != crate::periodic::Coordinates::Joint || channels.len() != 1 {
-        return Err(Error::invalid(
+    match (p.coordinates, channels.len()) {
+        (Coordinates::Joint, 1) => periodic_ankle(p, subject, seed),
+        (Coordinates::Joint, 2) => periodic_planar(p, &channels, subject, seed),
+        (Coordinates::Endpoint, _) => periodic_endpoint(p, &channels, subject, seed),
+        _ => Err(Error::invalid(
             "protocol",
             format!(
-                "periodic protocols are simulated on the virtual ankle (one joint channel); this one commands {}: export it with `limpid protocol export` and play it on your rig or simulator",
+                "periodic joint protocols are simulated on the virtual ankle (one channel) or the planar arm (q1, q2); this one commands {}: export it with `limpid protocol export` and play it on your rig or simulator",
                 channels.join(", ")
             ),
-        ));
+        )),
     }
+}
+
+/// Each channel's place among `names` (`q1, q2` or `x, y, z`), each at most once.
+fn channel_places<const N: usize>(channels: &[String], names: [&str; N]) -> Result<Vec<usize>> {
+    let mut places = Vec::with_capacity(channels.len());
+    for c in channels {
+        let Some(i) = names.iter().position(|n| n == c) else {
+            return Err(Error::invalid(
+                "protocol",
+                format!(
+                    "channel {c:?}: the virtual subject's coordinates are {}",
+                    names.join(", ")
+                ),
+            ));
+        };
+        if places.contains(&i) {
+            return Err(Error::invalid(
+                "protocol",
+                format!("channel {c:?} is given twice"),
+            ));
+        }
+        places.push(i);
+    }
+    Ok(places)
+}
+
+/// The command per coordinate of the subject (0 for one the protocol does not command).
+fn command_by_place<const N: usize>(
+    command: &crate::periodic::Command,
+    places: &[usize],
+) -> [Vec<f64>; N] {
+    std::array::from_fn(|i| match places.iter().position(|&p| p == i) {
+        Some(c) => command.values[c].clone(),
+        None => vec![0.0; command.t.len()],
+    })
+}
+
+/// A periodic recording: `t`, positions, forces, `period`.
+fn periodic_recording(
+    source: &str,
+    command: &crate::periodic::Command,
+    positions: &[&str],
+    forces: &[&str],
+    followed: crate::follow::Followed,
+) -> Result<Recording> {
+    let names: Vec<String> = std::iter::once("t")
+        .chain(positions.iter().copied())
+        .chain(forces.iter().copied())
+        .chain(std::iter::once("period"))
+        .map(String::from)
+        .collect();
+    let columns: Vec<Vec<f64>> = std::iter::once(command.t.clone())
+        .chain(followed.position)
+        .chain(followed.force)
+        .chain(std::iter::once(
+            command.period.iter().map(|&i| i as f64).collect(),
+        ))
+        .collect();
+    Recording::new(source, names, columns, 2)
+}
+
+fn periodic_truth_notes(p: &crate::periodic::PeriodicDesign, model: &str) -> Vec<String> {
+    vec![
+        model.to_string(),
+        format!(
+            "following {} through a second-order position servo (damping ratio 0.7); samples are means over their sample period; period -1 marks the fade-in and fade-out",
+            p.name
+        ),
+        "made by limpid simulate".into(),
+    ]
+}
+
+fn periodic_planar(
+    p: &crate::periodic::PeriodicDesign,
+    channels: &[String],
+    subject: Option<&SubjectText>,
+    seed: u64,
+) -> Result<Simulated> {
+    use crate::follow::{follow_planar, PlanarFollower};
+    let places = channel_places(channels, ["q1", "q2"])?;
+    let s: PlanarFollower = match subject {
+        Some(text) => parse(text)?,
+        None => PlanarFollower::default(),
+    };
+    let command = p.command()?;
+    let followed = follow_planar(
+        &s,
+        &command_by_place(&command, &places),
+        p.sample_rate_hz,
+        seed,
+    )?;
+    let recording = periodic_recording(
+        "virtual planar arm",
+        &command,
+        &["q1", "q2"],
+        &["tau1", "tau2"],
+        followed,
+    )?;
+    let m = |a: &[[f64; 2]; 2]| Matrix::from_rows(&[a[0].to_vec(), a[1].to_vec()]).expect("2 x 2");
+    let truth = Truth::Periodic(PeriodicTruth {
+        about: About {
+            sample_rate: Some(p.sample_rate_hz),
+            seed: Some(seed),
+            notes: periodic_truth_notes(
+                p,
+                "tau = M(q) q'' + C(q,q') q' + D dq + K dq + k2 dq^2 + k3 dq^3 + tau0 + noise (Lakatos, Petit & van der Smagt 2011 eq. (9)); inertia is M(q0), the linearisation at the posture",
+            ),
+            ..About::default()
+        },
+        coordinates: vec!["q1".into(), "q2".into()],
+        inertia: Matrix::from(s.inertia_at_posture()),
+        damping: m(&s.damping),
+        stiffness: m(&s.stiffness),
+        equilibrium: s.q0.to_vec(),
+        quadratic: s.quadratic.map(|v| v.to_vec()),
+        cubic: s.cubic.map(|v| v.to_vec()),
+        other: other_keys([
+            ("inertial_parameters", json!(s.xi)),
+            ("tau0", json!(s.tau0)),
+            ("rig", to_value(&s.rig)),
+        ]),
+    });
+    Ok(Simulated {
+        label: None,
+        recording,
+        truth,
+    })
+}
+
+fn periodic_endpoint(
+    p: &crate::periodic::PeriodicDesign,
+    channels: &[String],
+    subject: Option<&SubjectText>,
+    seed: u64,
+) -> Result<Simulated> {
+    use crate::follow::{follow_endpoint, EndpointFollower};
+    let places = channel_places(channels, ["x", "y", "z"])?;
+    let s: EndpointFollower = match subject {
+        Some(text) => parse(text)?,
+        None => EndpointFollower::default(),
+    };
+    let command = p.command()?;
+    let followed = follow_endpoint(
+        &s,
+        &command_by_place(&command, &places),
+        p.sample_rate_hz,
+        seed,
+    )?;
+    let recording = periodic_recording(
+        "virtual end point",
+        &command,
+        &["x", "y", "z"],
+        &["fx", "fy", "fz"],
+        followed,
+    )?;
+    let m = |a: &[[f64; 3]; 3]| {
+        Matrix::from_rows(&a.iter().map(|r| r.to_vec()).collect::<Vec<_>>()).expect("3 x 3")
+    };
+    let truth = Truth::Periodic(PeriodicTruth {
+        about: About {
+            sample_rate: Some(p.sample_rate_hz),
+            seed: Some(seed),
+            notes: periodic_truth_notes(
+                p,
+                "f = M a + B v + K dx + k2 dx^2 + k3 dx^3 + noise, force applied to the limb",
+            ),
+            ..About::default()
+        },
+        coordinates: vec!["x".into(), "y".into(), "z".into()],
+        inertia: m(&s.inertia),
+        damping: m(&s.damping),
+        stiffness: m(&s.stiffness),
+        equilibrium: s.equilibrium.to_vec(),
+        quadratic: s.quadratic.map(|v| v.to_vec()),
+        cubic: s.cubic.map(|v| v.to_vec()),
+        other: other_keys([("rig", to_value(&s.rig))]),
+    });
+    Ok(Simulated {
+        label: None,
+        recording,
+        truth,
+    })
+}
+
+fn periodic_ankle(
+    p: &crate::periodic::PeriodicDesign,
+    subject: Option<&SubjectText>,
+    seed: u64,
+) -> Result<Simulated> {
+    use crate::ankle::{simulate_ankle_following, AnkleExperiment, AnkleSubject};
     let s: AnkleSubject = match subject {
         Some(text) => parse(text)?,
         None => AnkleSubject::default(),
@@ -244,6 +445,8 @@ fn periodic(
                 json!({"torque_white_std_Nm": experiment.torque_noise_nm}),
             ),
             ("actuator_hz", json!(experiment.actuator_hz)),
+            ("quadratic", json!([s.quadratic])),
+            ("cubic", json!([s.cubic])),
         ]),
     });
     Ok(Simulated {

@@ -171,6 +171,8 @@ pub(super) fn reflex(seed: u64) -> std::result::Result<Outcome, String> {
             damping_ratio: uniform(&mut rng, 0.5, 1.0),
             positive: rng.random::<bool>(),
         }),
+        quadratic: 0.0,
+        cubic: 0.0,
     };
     let experiment = AnkleExperiment {
         duration_s: 30.0,

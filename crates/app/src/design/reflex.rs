@@ -109,6 +109,7 @@ impl ReflexPrior {
                 damping: f.damping,
                 stiffness: f.stiffness,
                 reflex: Some(f.reflex),
+                ..AnkleSubject::default()
             },
             torque_noise_nm: noise,
         })

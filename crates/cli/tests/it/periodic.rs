@@ -566,3 +566,155 @@ fn a_periodic_result_whose_arrays_disagree_is_refused_by_the_report() {
         assert!(!out.stderr.contains("internal error"), "{}", out.stderr);
     }
 }
+
+/// `simulate` of a periodic protocol and `spectra --period` of what it wrote:
+/// each element of M, B and K against the truth written beside it.
+fn simulated_impedance(
+    dir: &Path,
+    protocol: &Path,
+    subject: Option<&str>,
+    name: &str,
+) -> (serde_json::Value, serde_json::Value) {
+    let rec = dir.join(format!("{name}.csv"));
+    let mut args = vec![
+        "simulate",
+        protocol.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+        "--seed",
+        "5",
+    ];
+    let subject_path = dir.join(format!("{name}.toml"));
+    if let Some(text) = subject {
+        std::fs::write(&subject_path, text).unwrap();
+        args.extend(["--subject", subject_path.to_str().unwrap()]);
+    }
+    let out = limpid(&args);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let truth: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join(format!("{name}.truth.json"))).unwrap(),
+    )
+    .unwrap();
+    let coordinates: Vec<String> = serde_json::from_value(truth["coordinates"].clone()).unwrap();
+    let forces: Vec<String> = coordinates
+        .iter()
+        .map(|c| match c.as_str() {
+            "x" | "y" | "z" => format!("f{c}"),
+            q => format!("tau{}", &q[1..]),
+        })
+        .collect();
+    let period = protocol_period(protocol);
+    let v = json(&[
+        "spectra",
+        rec.to_str().unwrap(),
+        "--inputs",
+        &coordinates.join(","),
+        "--outputs",
+        &forces.join(","),
+        "--period",
+        &period.to_string(),
+        "--json",
+    ]);
+    (v["periodic"].clone(), truth)
+}
+
+fn protocol_period(protocol: &Path) -> f64 {
+    let text = std::fs::read_to_string(protocol).unwrap();
+    let table: toml::Value = toml::from_str(&text).unwrap();
+    table["period_s"].as_float().unwrap()
+}
+
+/// The largest |estimate - truth| / SE over the elements of M, B and K.
+fn worst_z(periodic: &serde_json::Value, truth: &serde_json::Value) -> f64 {
+    let z = &periodic["impedance"];
+    let mut worst = 0.0f64;
+    for m in ["inertia", "damping", "stiffness"] {
+        let est: Vec<Vec<f64>> = serde_json::from_value(z[m].clone()).unwrap();
+        let se: Vec<Vec<f64>> = serde_json::from_value(z["standard_errors"][m].clone()).unwrap();
+        let want: Vec<Vec<f64>> = serde_json::from_value(truth[m].clone()).unwrap();
+        for i in 0..est.len() {
+            for j in 0..est.len() {
+                worst = worst.max((est[i][j] - want[i][j]).abs() / se[i][j]);
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn end_point_and_planar_multisines_play_on_their_virtual_subjects() {
+    let d = tempfile::tempdir().unwrap();
+    // the 3-D end point (seed 000, S1) under a zippered random-odd multisine
+    let endpoint = preset(d.path(), "endpoint-multisine");
+    let (p, truth) = simulated_impedance(d.path(), &endpoint, None, "linear");
+    assert_eq!(truth["method"], "periodic");
+    assert_eq!(p["distortion"]["verdict"], "linear", "{}", p["distortion"]);
+    assert_eq!(p["impedance"]["verdicts"]["stiffness"], "trusted");
+    let z = worst_z(&p, &truth);
+    assert!(z < 4.0, "worst element {z} SE from the truth");
+    // a stiffening spring along x: odd distortion, and the best linear
+    // approximation stiffer than the linear part, not trusted
+    let matrices = "inertia = [[0.4, 0.03, 0.02], [0.03, 0.35, 0.01], [0.02, 0.01, 0.19]]\n\
+                    damping = [[80.0, 22.0, 25.0], [22.0, 50.0, 47.0], [25.0, 47.0, 86.0]]\n\
+                    stiffness = [[1002.0, 12.0, 26.0], [12.0, 250.0, 94.0], [26.0, 94.0, 320.0]]\n";
+    let (p, truth) = simulated_impedance(
+        d.path(),
+        &endpoint,
+        Some(&format!("{matrices}cubic = [3e7, 0.0, 0.0]\n")),
+        "cubic",
+    );
+    assert_eq!(truth["cubic"][0], 3e7);
+    let dist = &p["distortion"];
+    assert_eq!(dist["verdict"], "nonlinear", "{dist}");
+    assert_eq!(dist["odd_above_noise"], true, "{dist}");
+    assert_ne!(p["impedance"]["verdicts"]["stiffness"], "trusted");
+    let kxx = p["impedance"]["stiffness"][0][0].as_f64().unwrap();
+    assert!(kxx > 1.1 * 1002.0, "best linear K_xx {kxx}");
+    // a quadratic term: even distortion, which an odd multisine keeps off
+    // its excited lines, so M, B, K stay the linear part's
+    let (p, truth) = simulated_impedance(
+        d.path(),
+        &endpoint,
+        Some(&format!("{matrices}quadratic = [3e5, 0.0, 0.0]\n")),
+        "quadratic",
+    );
+    let dist = &p["distortion"];
+    assert_eq!(dist["verdict"], "nonlinear", "{dist}");
+    assert_eq!(
+        (
+            dist["even_above_noise"].clone(),
+            dist["odd_above_noise"].clone()
+        ),
+        (true.into(), false.into()),
+        "{dist}"
+    );
+    assert_eq!(p["impedance"]["verdicts"]["stiffness"], "trusted");
+    let z = worst_z(&p, &truth);
+    assert!(z < 4.0, "worst element {z} SE from the truth");
+    // the planar arm: its Coriolis term is an even distortion; the joint
+    // impedance about the posture (inertia M(q0)) is found within its SEs
+    let planar = preset(d.path(), "planar-multisine");
+    let (p, truth) = simulated_impedance(d.path(), &planar, None, "planar");
+    assert_eq!(
+        p["distortion"]["even_above_noise"], true,
+        "{}",
+        p["distortion"]
+    );
+    assert_eq!(p["impedance"]["verdicts"]["stiffness"], "trusted");
+    let z = worst_z(&p, &truth);
+    assert!(z < 4.0, "worst element {z} SE from the truth");
+    // a joint protocol with channels the arm does not have is refused
+    let text = std::fs::read_to_string(&planar)
+        .unwrap()
+        .replace("\"q2\"", "\"q3\"");
+    let renamed = d.path().join("q3.toml");
+    std::fs::write(&renamed, text).unwrap();
+    let out = limpid(&[
+        "simulate",
+        renamed.to_str().unwrap(),
+        "-o",
+        d.path().join("q3.csv").to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("channel \"q3\""), "{}", out.stderr);
+}
