@@ -139,6 +139,9 @@ fn stochastic(s: &limpid_ident::stochastic::StochasticEstimate) -> Result<(), St
     ] {
         square(name, m, no)?;
     }
+    if let Some(p) = &s.periodic {
+        periodic(p, no)?;
+    }
     Ok(())
 }
 

@@ -77,10 +77,27 @@ pub fn stochastic_text(
             String::new()
         }
     );
-    println!(
-        "coordinates {} driven by {} | Welch: {} segments of {} samples (resolution {:.3} Hz), {} | fit band {}-{} Hz",
-        coords.join(", "), est.inputs.join(", "), c.segments, c.nperseg, c.frequency_resolution_hz, window_name(r.window), num(band.0), num(band.1)
-    );
+    match &est.periodic {
+        Some(p) => println!(
+            "coordinates {} driven by {} | periodic: {} periods of {} samples (resolution {:.3} Hz; {}) | fit band {}-{} Hz at {} excited lines",
+            coords.join(", "),
+            est.inputs.join(", "),
+            c.segments,
+            c.nperseg,
+            c.frequency_resolution_hz,
+            p.transient,
+            num(band.0),
+            num(band.1),
+            p.impedance.as_ref().map_or(0, |z| z.lines)
+        ),
+        None => println!(
+            "coordinates {} driven by {} | Welch: {} segments of {} samples (resolution {:.3} Hz), {} | fit band {}-{} Hz",
+            coords.join(", "), est.inputs.join(", "), c.segments, c.nperseg, c.frequency_resolution_hz, window_name(r.window), num(band.0), num(band.1)
+        ),
+    }
+    if let Some(p) = &est.periodic {
+        println!("{}", periodic_summary(p));
+    }
     if let Some(p) = &posture {
         println!(
             "shoulder joint space (Park & Chang 2011, eq. (3)), before estimation: q1 flexion, q2 abduction from the hand's X, Z (tau = J_h^T F){} | posture: flexion {} deg, abduction {} deg, rotation {} deg, elbow {} deg | angles in rad, torques in N m",
@@ -123,9 +140,21 @@ pub fn stochastic_text(
             println!("  {name:<6}{cells}");
         }
     }
+    let inputs = if est.periodic.is_some() {
+        if c.max_input_coherence < 1e-12 {
+            "the commands share no line".to_string()
+        } else {
+            format!(
+                "another command's power at a command's lines up to {} of its own",
+                limpid_core::significant(c.max_input_coherence, 2)
+            )
+        }
+    } else {
+        format!("input coherence max {:.3}", c.max_input_coherence)
+    };
     println!(
-        "quality ({}): multiple coherence mean {:.3}, min {:.3} in the band; input coherence max {:.3}; fit VAF {:.2} %; phi_T(Z vs fit) {}",
-        est.standard_errors.method, c.mean_multiple_coherence, c.min_multiple_coherence, c.max_input_coherence, c.fit_vaf, num(c.phi_t_vs_fit)
+        "quality ({}): multiple coherence mean {:.3}, min {:.3} in the band; {inputs}; fit VAF {:.2} %; phi_T(Z vs fit) {}",
+        est.standard_errors.method, c.mean_multiple_coherence, c.min_multiple_coherence, c.fit_vaf, num(c.phi_t_vs_fit)
     );
     if let Some(a) = &est.accuracy {
         let cells: Vec<String> = a

@@ -86,6 +86,78 @@ pub fn mls(order: usize) -> Result<Vec<f64>> {
     Ok(out)
 }
 
+/// Register orders of the ternary sequence [`prts`].
+pub const PRTS_ORDERS: std::ops::RangeInclusive<usize> = 2..=12;
+
+/// One period (3^order - 1 chips) of a maximum-length pseudo-random ternary
+/// sequence (PRTS), levels -1, 0, +1: the linear recurrence over GF(3)
+/// `a_k = -(c_1 a_(k-1) + ... + c_n a_(k-n)) mod 3` of a primitive
+/// polynomial, with 2 read as -1. Half a period on, the sequence is its own
+/// negative (α^((3^n - 1) / 2) = -1 in GF(3^n)), so its spectrum holds the
+/// odd harmonics of the period only and the even lines are left for even
+/// nonlinear distortion (Godfrey's inverse-repeat property). The
+/// polynomial is the first primitive one in lexicographic order of
+/// (c_1, ..., c_n), found by the recurrence's period.
+pub fn prts(order: usize) -> Result<Vec<f64>> {
+    if !PRTS_ORDERS.contains(&order) {
+        return Err(Error::invalid(
+            "order",
+            format!(
+                "a PRTS register order from {} to {}, found {order}",
+                PRTS_ORDERS.start(),
+                PRTS_ORDERS.end()
+            ),
+        ));
+    }
+    let len = 3usize.pow(order as u32) - 1;
+    // the recurrence from the state (1, 0, ..., 0); `None` unless its period is len
+    let run = |c: &[u8]| -> Option<Vec<u8>> {
+        let mut state = vec![0u8; order];
+        state[0] = 1;
+        let start = state.clone();
+        let mut out = Vec::with_capacity(len);
+        for k in 0..len {
+            out.push(state[0]);
+            let feedback = c.iter().zip(&state).map(|(&c, &a)| c * a).sum::<u8>() % 3;
+            let next = (3 - feedback) % 3;
+            state.rotate_left(1);
+            state[order - 1] = next;
+            if state == start && k + 1 < len {
+                return None;
+            }
+        }
+        (state == start).then_some(out)
+    };
+    // candidates (c_1, ..., c_n) in lexicographic order, c_n != 0
+    let mut c = vec![0u8; order];
+    for index in 0..3usize.pow(order as u32) {
+        let mut rest = index;
+        for digit in c.iter_mut().rev() {
+            *digit = (rest % 3) as u8;
+            rest /= 3;
+        }
+        if c[order - 1] == 0 {
+            continue;
+        }
+        // the state is (a_(k-n), ..., a_(k-1)): c_n pairs with the oldest
+        let taps: Vec<u8> = c.iter().rev().copied().collect();
+        if let Some(seq) = run(&taps) {
+            return Ok(seq
+                .into_iter()
+                .map(|a| match a {
+                    0 => 0.0,
+                    1 => 1.0,
+                    _ => -1.0,
+                })
+                .collect());
+        }
+    }
+    Err(Error::invalid(
+        "order",
+        format!("no primitive polynomial of order {order} over GF(3) was found"),
+    ))
+}
+
 /// Which lines of the band a multisine excites.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LineSet {
@@ -355,6 +427,36 @@ pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ternary_sequences_repeat_inverted_and_hold_odd_harmonics_only() {
+        for order in PRTS_ORDERS {
+            let s = prts(order).unwrap();
+            let n = s.len();
+            assert_eq!(n, 3usize.pow(order as u32) - 1);
+            // half a period on, the negative: only odd harmonics
+            for k in 0..n / 2 {
+                assert_eq!(s[k + n / 2], -s[k], "order {order}, chip {k}");
+            }
+            // balanced: 3^(n-1) of +1 and of -1, one zero fewer
+            let ones = s.iter().filter(|v| **v == 1.0).count();
+            let zeros = s.iter().filter(|v| **v == 0.0).count();
+            assert_eq!(ones, 3usize.pow(order as u32 - 1), "order {order}");
+            assert_eq!(zeros, 3usize.pow(order as u32 - 1) - 1, "order {order}");
+            if order <= 8 {
+                let spectrum = period_spectrum(&s);
+                let peak = spectrum.iter().map(|c| c.norm()).fold(0.0, f64::max);
+                for (k, c) in spectrum.iter().enumerate() {
+                    if k % 2 == 0 {
+                        assert!(c.norm() < 1e-9 * peak, "order {order}: line {k}");
+                    } else {
+                        assert!(c.norm() > 1e-3 * peak, "order {order}: odd line {k} empty");
+                    }
+                }
+            }
+        }
+        assert!(prts(13).is_err() && prts(1).is_err());
+    }
 
     #[test]
     fn maximum_length_sequences_have_their_period_and_balance() {

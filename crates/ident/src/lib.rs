@@ -19,6 +19,7 @@ pub mod linear;
 pub mod lsq;
 pub mod online;
 pub mod periodic_fit;
+pub mod periodic_stochastic;
 pub mod planar;
 pub mod prepare;
 pub mod reflex;

@@ -326,20 +326,31 @@ fn spectra_of(
     })
 }
 
-/// Spectra of a periodic excitation with period `period_s` (issue 59):
-/// Welch over whole periods (boxcar, no overlap, one segment a period),
-/// and the periodic analysis (`limpid_dsp::periodic`): the response at the
-/// excited lines with standard errors from the period-to-period scatter,
-/// and the output at the detection lines against the noise. A `period`
-/// column numbers the periods (-1 the transient, left out); without it the
-/// first period is left out.
-pub fn periodic_spectra(
-    rec: &Recording,
-    inputs: &[String],
-    outputs: &[String],
+/// The whole periods of a recording's columns after its transient, and
+/// their period-averaged spectra.
+pub(crate) struct Periods<'a> {
+    /// Each column's samples over the whole periods used.
+    pub used: Vec<&'a [f64]>,
+    /// Samples per period.
+    pub period: usize,
+    /// Whole periods used.
+    pub periods: usize,
+    /// How the transient was left out, in words.
+    pub transient: String,
+    /// The period-averaged spectra of `used`.
+    pub spectra: limpid_dsp::periodic::PeriodSpectra,
+}
+
+/// The columns `names` of `rec` cut into whole periods of `period_s`: a
+/// `period` column numbers the periods (-1 the transient, left out, and a
+/// fade-out after the last period); without it the first period is left
+/// out. Refuses a period that is not a whole number of samples, periods
+/// that are not contiguous, and fewer than two periods.
+pub(crate) fn whole_periods<'a>(
+    rec: &'a Recording,
+    names: &[String],
     period_s: f64,
-) -> Result<SpectraResult> {
-    check_columns(inputs, outputs)?;
+) -> Result<Periods<'a>> {
     let fs = rec.sample_rate();
     let exact = period_s * fs;
     let n = exact.round() as usize;
@@ -392,9 +403,8 @@ pub fn periodic_spectra(
             format!("the first period ({n} samples) left out as the transient"),
         ),
     };
-    let names: Vec<String> = inputs.iter().chain(outputs).cloned().collect();
     let mut signals: Vec<&[f64]> = Vec::with_capacity(names.len());
-    for name in &names {
+    for name in names {
         let x = rec.require(name, "named as an input or output")?;
         let end = end_of_periods.unwrap_or(x.len()).min(x.len());
         signals.push(&x[start.min(end)..end]);
@@ -407,6 +417,38 @@ pub fn periodic_spectra(
             path: rec.path().to_path_buf(),
             message: e.to_string(),
         })?;
+    Ok(Periods {
+        used,
+        period: n,
+        periods,
+        transient,
+        spectra: analysed,
+    })
+}
+
+/// Spectra of a periodic excitation with period `period_s` (issue 59):
+/// Welch over whole periods (boxcar, no overlap, one segment a period),
+/// and the periodic analysis (`limpid_dsp::periodic`): the response at the
+/// excited lines with standard errors from the period-to-period scatter,
+/// and the output at the detection lines against the noise. A `period`
+/// column numbers the periods (-1 the transient, left out); without it the
+/// first period is left out.
+pub fn periodic_spectra(
+    rec: &Recording,
+    inputs: &[String],
+    outputs: &[String],
+    period_s: f64,
+) -> Result<SpectraResult> {
+    check_columns(inputs, outputs)?;
+    let fs = rec.sample_rate();
+    let names: Vec<String> = inputs.iter().chain(outputs).cloned().collect();
+    let Periods {
+        used,
+        period: n,
+        periods,
+        transient,
+        spectra: analysed,
+    } = whole_periods(rec, &names, period_s)?;
     let analysis = limpid_dsp::periodic::analyse(&analysed, inputs.len())?;
     let welch = periodic_welch(n, periods, inputs.len(), fs);
     let mut result = spectra_of(rec, inputs, outputs, &used, &welch)?;
@@ -456,7 +498,7 @@ fn periodic_welch(period: usize, periods: usize, inputs: usize, fs: f64) -> Welc
 }
 
 /// The typed result of a periodic analysis.
-fn periodic_result(
+pub(crate) fn periodic_result(
     a: &limpid_dsp::periodic::PeriodicAnalysis,
     inputs: &[String],
     outputs: &[String],
@@ -520,7 +562,7 @@ fn periodic_result(
     }
 }
 
-fn distortion_of(d: &limpid_dsp::periodic::Distortion) -> PeriodicDistortion {
+pub(crate) fn distortion_of(d: &limpid_dsp::periodic::Distortion) -> PeriodicDistortion {
     PeriodicDistortion {
         odd_db: d.odd_db,
         even_db: d.even_db,

@@ -47,6 +47,9 @@ pub struct StochasticParams {
     pub welch: Option<Welch>,
     /// Band of the parametric fit and the accuracy measures (Hz).
     pub band_hz: (f64, f64),
+    /// The period of a periodic command (s): whole periods are averaged
+    /// instead of Welch segments ([`crate::periodic_stochastic`]).
+    pub period_s: Option<f64>,
 }
 
 impl Default for StochasticParams {
@@ -57,6 +60,7 @@ impl Default for StochasticParams {
                 crate::request::DEFAULT_BAND_HZ[0],
                 crate::request::DEFAULT_BAND_HZ[1],
             ),
+            period_s: None,
         }
     }
 }
@@ -113,6 +117,11 @@ pub struct StochasticEstimate {
     pub accuracy: Option<Accuracy>,
     /// What the reader should know about this estimate.
     pub warnings: Vec<Warning>,
+    /// With a period (`--period`): the periodic analysis (lines classified
+    /// by the commands, distortion, the FRF force per command, and the fit
+    /// the parametric M, B, K above come from).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic: Option<crate::spectra::PeriodicResult>,
 }
 
 /// Largest magnitude of an expected-model entry (kg, N s/m, N/m or their
@@ -215,7 +224,9 @@ pub struct StochasticCriteria {
     pub mean_multiple_coherence: f64,
     /// Smallest multiple coherence in the band.
     pub min_multiple_coherence: f64,
-    /// Largest ordinary coherence between two inputs in the band (seed 004 asks < 0.6).
+    /// Largest ordinary coherence between two inputs in the band (seed 004
+    /// asks < 0.6); periodic: the largest power of another command at a
+    /// command's excited line relative to that command's (0 for zippered lines).
     pub max_input_coherence: f64,
     /// phi_T of the non-parametric Z against the parametric fit (eq. (15)).
     pub phi_t_vs_fit: f64,
@@ -230,7 +241,7 @@ pub struct StochasticCriteria {
 /// Smallest mean multiple coherence over the band for any matrix to be trusted.
 pub const MIN_MEAN_COHERENCE: f64 = 0.5;
 
-fn input_name(coord: &str) -> String {
+pub(crate) fn input_name(coord: &str) -> String {
     match coord {
         "x" | "y" | "z" | "theta" => format!("u{coord}"),
         q => format!("u{}", q.trim_start_matches('q')),
@@ -278,6 +289,19 @@ pub fn estimate_stochastic_pooled(
     let Some(rec) = recs.first() else {
         return Err(Error::invalid("recordings", "no recording given"));
     };
+    if let Some(period_s) = params.period_s {
+        if recs.len() > 1 {
+            return Err(Error::invalid(
+                "period_s",
+                "a periodic analysis averages the periods of one recording: join the trials' periods into one recording",
+            ));
+        }
+        return crate::periodic_stochastic::estimate_stochastic_periodic(
+            rec,
+            period_s,
+            params.band_hz,
+        );
+    }
     let (coords, force_cols) = choose_coordinates(rec)?;
     let n = coords.len();
     let inputs: Vec<String> = coords.iter().map(|c| input_name(c)).collect();
@@ -383,11 +407,12 @@ pub fn estimate_stochastic_pooled(
         },
         accuracy: None,
         warnings,
+        periodic: None,
     })
 }
 
 /// The band of the fit, refused unless 0 < low < high < Nyquist.
-fn band_below_nyquist((lo, hi): (f64, f64), fs: f64) -> Result<(f64, f64)> {
+pub(crate) fn band_below_nyquist((lo, hi): (f64, f64), fs: f64) -> Result<(f64, f64)> {
     if !(lo > 0.0 && hi > lo && hi < fs / 2.0) {
         let nyquist = limpid_core::display_round(fs / 2.0);
         return Err(Error::invalid(
@@ -400,7 +425,7 @@ fn band_below_nyquist((lo, hi): (f64, f64), fs: f64) -> Result<(f64, f64)> {
 
 /// phi_T of the non-parametric Z against the parametric fit `[M, B, K]`:
 /// the mean over the band of the largest singular value of their difference.
-fn distance_to_fit(
+pub(crate) fn distance_to_fit(
     impedance: &[DMatrix<Complex64>],
     frequencies: &[f64],
     in_band: &[usize],
@@ -421,7 +446,7 @@ fn distance_to_fit(
 }
 
 /// A complex matrix as rows of `[re, im]` (the result's JSON form).
-fn re_im(z: &DMatrix<Complex64>) -> Vec<Vec<[f64; 2]>> {
+pub(crate) fn re_im(z: &DMatrix<Complex64>) -> Vec<Vec<[f64; 2]>> {
     (0..z.nrows())
         .map(|i| {
             (0..z.ncols())
@@ -542,7 +567,7 @@ fn jackknife_errors(
 }
 
 /// Warnings on the spectra's quality: low coherence, singular frequencies, correlated inputs.
-fn quality_warnings(
+pub(crate) fn quality_warnings(
     min_coh: f64,
     singular_in_band: usize,
     max_input_coherence: f64,

@@ -18,7 +18,8 @@
 //! `phases = "optimised" | "schroeder" | "random"`; several channels take
 //! every n-th line in turn (zippered), so that no line is excited by two
 //! inputs and their coherence is zero at every excited line. PRBS: `order`
-//! (period 2^order - 1 switching intervals), `switch_interval_s`,
+//! (period 2^order - 1 switching intervals; with `ternary = true` a
+//! pseudo-random ternary sequence of 3^order - 1, odd lines only), `switch_interval_s`,
 //! `amplitude = [...]` per channel (levels ± amplitude about the posture),
 //! `edge_s` (each level change a raised-cosine ramp of this length centred
 //! on the switching instant: the spectrum is the PRBS's times the ramp's,
@@ -36,8 +37,8 @@ use serde::{Deserialize, Serialize};
 
 use limpid_core::{Error, Result};
 use limpid_dsp::excitation::{
-    crest_factor, mls, multisine, multisine_lines, optimise_phases, period_spectrum, random_phases,
-    schroeder_phases, LineSet,
+    crest_factor, mls, multisine, multisine_lines, optimise_phases, period_spectrum, prts,
+    random_phases, schroeder_phases, LineSet, PRTS_ORDERS,
 };
 
 /// Joint or end-point coordinates.
@@ -136,8 +137,15 @@ fn default_phases() -> String {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PrbsSignal {
-    /// Register order: the period is 2^order - 1 switching intervals.
+    /// Register order: the period is 2^order - 1 switching intervals
+    /// (ternary: 3^order - 1).
     pub order: usize,
+    /// A pseudo-random ternary sequence (levels -amplitude, 0, +amplitude)
+    /// instead of a binary one: its second half-period is the first
+    /// inverted, so it excites the odd lines of its period only and the
+    /// even lines show even nonlinear distortion.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub ternary: bool,
     /// Switching interval (s).
     pub switch_interval_s: f64,
     /// Half-swing per channel (rad or m).
@@ -145,6 +153,18 @@ pub struct PrbsSignal {
     /// Raised-cosine edge length (s); default the shortest within the limits.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub edge_s: Option<f64>,
+}
+
+impl PrbsSignal {
+    /// Switching intervals in a period: 2^order - 1, or 3^order - 1 for a
+    /// ternary sequence (orders beyond the generators' saturate; `validate` refuses them).
+    pub fn chips(&self) -> usize {
+        if self.ternary {
+            3usize.pow(self.order.min(*PRTS_ORDERS.end()) as u32) - 1
+        } else {
+            (1usize << self.order.min(24)) - 1
+        }
+    }
 }
 
 /// A periodic protocol.
@@ -247,6 +267,7 @@ impl PeriodicDesign {
                 order: 7,
                 switch_interval_s: 0.15,
                 amplitude: vec![0.03],
+                ternary: false,
                 edge_s: None,
             }),
             limits: joint_limits(),
@@ -324,7 +345,7 @@ impl PeriodicDesign {
     pub fn period_samples(&self) -> usize {
         let period_s = match &self.signal {
             Signal::Multisine(m) => m.period_s,
-            Signal::Prbs(p) => p.switch_interval_s * ((1usize << p.order.min(24)) - 1) as f64,
+            Signal::Prbs(p) => p.switch_interval_s * p.chips() as f64,
         };
         (period_s * self.sample_rate_hz).round() as usize
     }
@@ -428,8 +449,19 @@ impl PeriodicDesign {
                     .map_err(|e| e.to_string())?;
             }
             Signal::Prbs(p) => {
-                if !(2..=16).contains(&p.order) {
-                    return Err(format!("order: expected 2 to 16, found {}", p.order));
+                let orders = if p.ternary { PRTS_ORDERS } else { 2..=16 };
+                if !orders.contains(&p.order) {
+                    return Err(format!(
+                        "order: expected {} to {}{}, found {}",
+                        orders.start(),
+                        orders.end(),
+                        if p.ternary {
+                            " for a ternary sequence"
+                        } else {
+                            ""
+                        },
+                        p.order
+                    ));
                 }
                 let chip = p.switch_interval_s * fs;
                 if !positive(p.switch_interval_s)
@@ -484,7 +516,11 @@ impl PeriodicDesign {
                     .collect())
             }
             Signal::Prbs(p) => {
-                let chips = mls(p.order)?;
+                let chips = if p.ternary {
+                    prts(p.order)?
+                } else {
+                    mls(p.order)?
+                };
                 let chip = (p.switch_interval_s * self.sample_rate_hz).round() as usize;
                 let edge = self.prbs_edge_samples(p)?;
                 Ok(p.amplitude
@@ -745,6 +781,34 @@ mod tests {
         }
         let e = tight.check().unwrap_err().to_string();
         assert!(e.contains("channel q1: peak velocity"), "{e}");
+    }
+
+    #[test]
+    fn a_ternary_sequence_switches_among_three_levels_and_excites_odd_lines_only() {
+        let mut d = PeriodicDesign::prbs_joint();
+        if let Signal::Prbs(p) = &mut d.signal {
+            (p.ternary, p.order, p.switch_interval_s) = (true, 4, 0.1);
+        }
+        let c = d.command().unwrap();
+        let n = c.period_samples;
+        assert_eq!(n, 80 * 100);
+        let x = &c.values[0][n..2 * n];
+        let levels: Vec<f64> = (0..80).map(|j| (x[j * 100 + 50] / 0.03).round()).collect();
+        assert_eq!(levels, prts(4).unwrap());
+        // the raised-cosine edges keep the inverse repeat: even lines empty
+        let spectrum = period_spectrum(x);
+        let peak = spectrum.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        for k in (2..n / 2).step_by(2) {
+            assert!(spectrum[k].norm() < 1e-9 * peak, "even line {k}");
+        }
+        let r = d.check().unwrap();
+        assert!(r.detection_lines > 0, "{r:?}");
+        // orders beyond the ternary generator are refused by name
+        if let Signal::Prbs(p) = &mut d.signal {
+            p.order = 13;
+        }
+        let e = d.check().unwrap_err().to_string();
+        assert!(e.contains("2 to 12 for a ternary sequence"), "{e}");
     }
 
     #[test]

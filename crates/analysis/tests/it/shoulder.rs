@@ -70,6 +70,7 @@ fn shoulder_impedance_estimated_in_joint_space_matches_the_truth_and_the_hand_es
     let params = StochasticParams {
         welch: None,
         band_hz: (0.5, 10.0),
+        period_s: None,
     };
     let est_joint = estimate_stochastic_pooled(&joint, &params).unwrap();
     assert_eq!(est_joint.coordinates, ["q1", "q2", "q3"]);

@@ -219,6 +219,7 @@ fn prbs(
             order,
             switch_interval_s: switch_s,
             amplitude: vec![amplitude],
+            ternary: false,
             edge_s: None,
         }),
         limits: req.limits.clone(),

@@ -186,6 +186,7 @@ fn simulate_and_estimate(seed: u64, welch: &Welch, band: (f64, f64)) -> Result<V
                 &StochasticParams {
                     welch: Some(welch.clone()),
                     band_hz: band,
+                    period_s: None,
                 },
             )?;
             let expected = ExpectedModel {

@@ -718,3 +718,144 @@ fn end_point_and_planar_multisines_play_on_their_virtual_subjects() {
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("channel \"q3\""), "{}", out.stderr);
 }
+
+#[test]
+fn the_stochastic_estimate_of_a_periodic_recording_averages_whole_periods() {
+    let d = tempfile::tempdir().unwrap();
+    let endpoint = preset(d.path(), "endpoint-multisine");
+    let rec = d.path().join("rec.csv");
+    let out = limpid(&[
+        "simulate",
+        endpoint.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+        "--seed",
+        "6",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("rec.truth.json")).unwrap())
+            .unwrap();
+    let estimate = |extra: &[&str]| {
+        let mut args = vec![
+            "estimate",
+            "stochastic",
+            rec.to_str().unwrap(),
+            "--period",
+            "20",
+            "--band",
+            "0.2,6",
+            "--json",
+        ];
+        args.extend(extra);
+        json(&args)
+    };
+    let r = estimate(&[]);
+    // the commands classify the lines; the fit is the periodic one
+    assert_eq!(r["inputs"], serde_json::json!(["ux", "uy", "uz"]));
+    assert_eq!(r["criteria"]["segments"], 6);
+    assert_eq!(r["periodic"]["distortion"]["verdict"], "linear");
+    assert_eq!(r["criteria"]["verdicts"]["stiffness"], "trusted");
+    // zippered: another command at a command's line is rounding only
+    assert!(r["criteria"]["max_input_coherence"].as_f64().unwrap() < 1e-12);
+    let mut worst = 0.0f64;
+    for m in ["inertia", "damping", "stiffness"] {
+        for i in 0..3 {
+            for j in 0..3 {
+                let est = r[m][i][j].as_f64().unwrap();
+                let se = r["standard_errors"][m][i][j].as_f64().unwrap();
+                let want = truth[m][i][j].as_f64().unwrap();
+                worst = worst.max((est - want).abs() / se);
+            }
+        }
+    }
+    assert!(worst < 4.0, "worst element {worst} SE from the truth");
+    // Z on groups of lines: within 3 % of the truth's K - w^2 M + j w B on the diagonal
+    let freqs: Vec<f64> = serde_json::from_value(r["frequencies"].clone()).unwrap();
+    assert!(freqs.len() >= 10, "{} groups", freqs.len());
+    let mat = |name: &str, i: usize, j: usize| truth[name][i][j].as_f64().unwrap();
+    for (k, f) in freqs.iter().enumerate() {
+        let w = 2.0 * PI * f;
+        for i in 0..3 {
+            let re = mat("stiffness", i, i) - w * w * mat("inertia", i, i);
+            let im = w * mat("damping", i, i);
+            let z = &r["impedance"][k][i][i];
+            let (zr, zi) = (z[0].as_f64().unwrap(), z[1].as_f64().unwrap());
+            let err = ((zr - re).powi(2) + (zi - im).powi(2)).sqrt() / (re * re + im * im).sqrt();
+            assert!(err < 0.03, "{f} Hz, Z[{i}][{i}] off by {err}");
+        }
+    }
+    let coherence: Vec<f64> =
+        serde_json::from_value(r["coherence"]["multiple"][3].clone()).unwrap();
+    assert!(coherence.iter().all(|c| *c > 0.9), "{coherence:?}");
+    // without the command columns the displacements classify the lines alike
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let keep: Vec<usize> = (0..header.len())
+        .filter(|&c| !header[c].starts_with('u'))
+        .collect();
+    let bare: String = text
+        .lines()
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            keep.iter().map(|&c| cells[c]).collect::<Vec<_>>().join(",") + "\n"
+        })
+        .collect();
+    let bare_path = d.path().join("bare.csv");
+    std::fs::write(&bare_path, bare).unwrap();
+    let b = json(&[
+        "estimate",
+        "stochastic",
+        bare_path.to_str().unwrap(),
+        "--period",
+        "20",
+        "--band",
+        "0.2,6",
+        "--json",
+    ]);
+    assert_eq!(b["inputs"], serde_json::json!(["x", "y", "z"]));
+    let (k, kb) = (
+        r["stiffness"][0][0].as_f64().unwrap(),
+        b["stiffness"][0][0].as_f64().unwrap(),
+    );
+    assert!((k - kb).abs() < 1e-9 * k, "{k} vs {kb}");
+    // a period with Welch segments, or pooled trials, is refused by name
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        rec.to_str().unwrap(),
+        "--period",
+        "20",
+        "--nfft",
+        "1024",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("--period"), "{}", out.stderr);
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        rec.to_str().unwrap(),
+        rec.to_str().unwrap(),
+        "--period",
+        "20",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("one recording"), "{}", out.stderr);
+    // the text names the periods and the report draws the lines
+    let html = d.path().join("r.html");
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        rec.to_str().unwrap(),
+        "--period",
+        "20",
+        "--band",
+        "0.2,6",
+        "--report",
+        html.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("periodic: 6 periods"), "{}", out.stdout);
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("Output at excited and detection lines"));
+}

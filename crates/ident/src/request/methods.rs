@@ -456,6 +456,14 @@ pub struct StochasticRequest {
     /// A truth or expected model (JSON with inertia, damping, stiffness): accuracy phi_T, phi_ij (eq. 15-16).
     #[cfg_attr(feature = "clap", arg(long, value_name = "FILE"))]
     pub expected: Option<String>,
+    /// Period (s) of a periodic command (multisine, PRBS): whole periods are
+    /// averaged instead of Welch segments (a `period` column numbers them,
+    /// -1 the transient; without it the first period is left out); M, B, K
+    /// are fitted at the excited lines with errors from the period-to-period
+    /// scatter, and Z on groups of lines holding every command.
+    #[cfg_attr(feature = "clap", arg(long = "period", value_name = "S"))]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period_s: Option<f64>,
 }
 
 impl Default for StochasticRequest {
@@ -467,6 +475,7 @@ impl Default for StochasticRequest {
             band_hz: DEFAULT_BAND_HZ,
             shoulder: None,
             expected: None,
+            period_s: None,
         }
     }
 }
@@ -477,6 +486,7 @@ impl StochasticRequest {
         StochasticParams {
             welch: Some(welch(self.nperseg, self.noverlap, self.window, n, fs)),
             band_hz: (self.band_hz[0], self.band_hz[1]),
+            period_s: self.period_s,
         }
     }
 }
@@ -769,10 +779,16 @@ impl Method for StochasticRequest {
     type Valid = StochasticRequest;
 
     fn check_settings(&self) -> Result<Self> {
-        crate::Estimator::check(&StochasticParams {
-            welch: None,
-            band_hz: (self.band_hz[0], self.band_hz[1]),
-        })?;
+        crate::Estimator::check(&self.params(0, 1.0))?;
+        if let Some(p) = self.period_s {
+            positive("period_s", p)?;
+            if self.nperseg.is_some() || self.noverlap.is_some() {
+                return Err(Error::invalid(
+                    "period_s",
+                    "a periodic analysis takes whole periods as its segments: leave out the segment length and overlap",
+                ));
+            }
+        }
         Ok(self.clone())
     }
 

@@ -188,6 +188,7 @@ def estimate_stochastic(
         expected: Optional[str] = None,
         noverlap: Optional[int] = None,
         nperseg: Optional[int] = None,
+        period_s: Optional[float] = None,
         shoulder: Optional[Sequence[float]] = None,
         window: Literal['hann', 'hamming', 'boxcar'] = 'hann',
 ) -> Result:
@@ -215,6 +216,12 @@ def estimate_stochastic(
         Overlapping samples [default: half a segment].
     nperseg : int or None, default None
         Samples per segment (= FFT length) [default: about 4 s, a power of two].
+    period_s : float or None, default None
+        Period (s) of a periodic command (multisine, PRBS): whole periods are averaged
+        instead of Welch segments (a `period` column numbers them, -1 the transient; without
+        it the first period is left out); M, B, K are fitted at the excited lines with
+        errors from the period-to-period scatter, and Z on groups of lines holding every
+        command.
     shoulder : sequence of 6 float or None, default None
         The shoulder's joint space before estimation (Park & Chang 2011 eq. (3)): upper arm
         (m), forearm (m), elbow, flexion, abduction, rotation (deg). Hand X, Z (with F and
@@ -232,7 +239,7 @@ def estimate_stochastic(
         ``damping``, ``stiffness`` with ``standard_errors``, ``criteria``, ``accuracy`` (with
         ``expected``), ``warnings``.
     """
-    options = {"band_hz": band_hz, "expected": expected, "noverlap": noverlap, "nperseg": nperseg, "shoulder": shoulder, "window": window}
+    options = {"band_hz": band_hz, "expected": expected, "noverlap": noverlap, "nperseg": nperseg, "period_s": period_s, "shoulder": shoulder, "window": window}
     return _estimate("stochastic", list(recording) if isinstance(recording, (list, tuple)) else [recording], options)
 
 

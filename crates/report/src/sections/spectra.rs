@@ -89,8 +89,29 @@ fn count(n: usize, noun: &str) -> String {
 
 /// The spectra section: PSDs, coherences and a table of the band means.
 pub(crate) fn spectra_section(name: &str, r: &SpectraResult) -> Section {
+    // with whole periods as segments, only the excited lines carry the
+    // inputs: the others would zig-zag between signal and noise
+    let resolution = r.frequencies.get(1).copied().unwrap_or(0.0);
+    let excited: Option<Vec<f64>> = r
+        .periodic
+        .as_ref()
+        .filter(|p| resolution > 0.0 && (resolution * p.period_s - 1.0).abs() < 1e-6)
+        .map(|p| {
+            p.lines
+                .iter()
+                .filter(|l| l.kind == "excited")
+                .map(|l| l.frequency_hz)
+                .collect()
+        });
     let positive: Vec<usize> = (0..r.frequencies.len())
         .filter(|&i| r.frequencies[i] > 0.0)
+        .filter(|&i| {
+            excited.as_ref().is_none_or(|lines| {
+                lines
+                    .iter()
+                    .any(|f| (f - r.frequencies[i]).abs() < 0.25 * resolution)
+            })
+        })
         .collect();
     let fx: Vec<f64> = positive.iter().map(|&i| r.frequencies[i]).collect();
     let psd = Figure {
@@ -229,7 +250,7 @@ pub(crate) fn spectra_section(name: &str, r: &SpectraResult) -> Section {
 /// at the excited lines, at the odd and even detection lines, and the noise
 /// of the period average, in dB relative to the excited lines; then |G| at
 /// each input's excited lines with its ±2 SE band.
-fn periodic_figures(p: &limpid_ident::spectra::PeriodicResult) -> Vec<Figure> {
+pub(crate) fn periodic_figures(p: &limpid_ident::spectra::PeriodicResult) -> Vec<Figure> {
     let points = |kind: &str, color: usize, name: &str| Series {
         name: name.into(),
         x: p.lines
@@ -325,7 +346,7 @@ fn periodic_figures(p: &limpid_ident::spectra::PeriodicResult) -> Vec<Figure> {
 }
 
 /// The distortion levels in a table.
-fn periodic_table(p: &limpid_ident::spectra::PeriodicResult) -> Table {
+pub(crate) fn periodic_table(p: &limpid_ident::spectra::PeriodicResult) -> Table {
     let db = |v: Option<f64>| v.map_or("no such line".to_string(), |v| format!("{v:.1}"));
     let excited = p.lines.iter().filter(|l| l.kind == "excited").count();
     let count = |kind: &str| p.lines.iter().filter(|l| l.kind == kind).count();

@@ -50,11 +50,19 @@ pub(crate) fn stochastic_criteria_table(v: &StochasticEstimate) -> Table {
             fmt(c.min_multiple_coherence),
             format!("over {band}"),
         ],
-        vec![
-            "largest input coherence".into(),
-            fmt(c.max_input_coherence),
-            "between two perturbation inputs; Park & Chang (2011) asks below 0.6".into(),
-        ],
+        if v.periodic.is_some() {
+            vec![
+                "commands at each other's lines".into(),
+                fmt(c.max_input_coherence),
+                "largest power of another command at a command's excited line, relative to its own (0: zippered)".into(),
+            ]
+        } else {
+            vec![
+                "largest input coherence".into(),
+                fmt(c.max_input_coherence),
+                "between two perturbation inputs; Park & Chang (2011) asks below 0.6".into(),
+            ]
+        },
         vec![
             "fit VAF".into(),
             format!("{} %", fmt(c.fit_vaf)),
@@ -69,8 +77,22 @@ pub(crate) fn stochastic_criteria_table(v: &StochasticEstimate) -> Table {
             "Park & Chang (2011) eq. (15)".into(),
         ],
         vec![
-            "Welch".into(),
-            format!("{} segments of {} samples", c.segments, c.nperseg),
+            if v.periodic.is_some() {
+                "periods"
+            } else {
+                "Welch"
+            }
+            .into(),
+            format!(
+                "{} {} of {} samples",
+                c.segments,
+                if v.periodic.is_some() {
+                    "whole periods"
+                } else {
+                    "segments"
+                },
+                c.nperseg
+            ),
             format!("resolution {} Hz", fmt(c.frequency_resolution_hz)),
         ],
     ]);
@@ -356,6 +378,11 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
     );
     let mut tables = vec![stochastic_criteria_table(v)];
     tables.extend(matrix_tables);
+    if let Some(p) = &v.periodic {
+        // the lines and distortion of the commands' periodic analysis
+        tables.push(super::spectra::periodic_table(p));
+        figures.extend(super::spectra::periodic_figures(p));
+    }
     Section {
         heading: format!("Stochastic estimate: {name}"),
         verdict,
