@@ -320,6 +320,28 @@ pub fn schroeder_phases(count: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Schroeder's phases for lines of the given amplitudes:
+/// `φ_k = -2π Σ_(l<k) (k - l) p_l`, p_l the line's share of the power
+/// (Schroeder 1970); equal amplitudes give [`schroeder_phases`].
+pub fn schroeder_phases_for(amplitudes: &[f64]) -> Vec<f64> {
+    let first = amplitudes.first().copied().unwrap_or(0.0);
+    if amplitudes.iter().all(|a| *a == first) {
+        return schroeder_phases(amplitudes.len());
+    }
+    let total: f64 = amplitudes.iter().map(|a| a * a).sum();
+    let shares: Vec<f64> = amplitudes.iter().map(|a| a * a / total).collect();
+    (0..amplitudes.len())
+        .map(|k| {
+            -2.0 * PI
+                * shares[..k]
+                    .iter()
+                    .enumerate()
+                    .map(|(l, p)| (k - l) as f64 * p)
+                    .sum::<f64>()
+        })
+        .collect()
+}
+
 /// Phases drawn uniformly in [0, 2π) from `seed` (xorshift: reproducible, no dependency).
 pub fn random_phases(count: usize, seed: u64) -> Vec<f64> {
     let mut state = seed ^ 0x5851_f42d_4c95_7f2d;
@@ -339,7 +361,7 @@ pub fn random_phases(count: usize, seed: u64) -> Vec<f64> {
 /// with one FFT of `sign(x)|x|^(p-1)`, grows after a success and halves
 /// after a failure.
 pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64> {
-    let mut phases = schroeder_phases(lines.len());
+    let mut phases = schroeder_phases_for(amplitudes);
     if lines.len() < 2 {
         return phases;
     }

@@ -15,7 +15,8 @@
 //! `max_acceleration_m_s2`, `max_force_n`, `nominal_stiffness_n_per_m`).
 //! Multisine: `period_s`, `band_hz = [lo, hi]`, `rms = [...]` per channel
 //! (rad or m over one period), `lines = "full" | "odd" | "random-odd"`,
-//! `phases = "optimised" | "schroeder" | "random"`; several channels take
+//! `phases = "optimised" | "schroeder" | "random"`, `amplitude_shape =
+//! "flat" | "1/f" | "1/f^2"` or `amplitude_points = [[hz, a], ...]`; several channels take
 //! every n-th line in turn (zippered), so that no line is excited by two
 //! inputs and their coherence is zero at every excited line. PRBS: `order`
 //! (period 2^order - 1 switching intervals; with `ternary = true` a
@@ -38,7 +39,7 @@ use serde::{Deserialize, Serialize};
 use limpid_core::{Error, Result};
 use limpid_dsp::excitation::{
     crest_factor, mls, multisine, multisine_lines, optimise_phases, period_spectrum, prts,
-    random_phases, schroeder_phases, LineSet, PRTS_ORDERS,
+    random_phases, schroeder_phases_for, LineSet, PRTS_ORDERS,
 };
 
 /// Joint or end-point coordinates.
@@ -124,6 +125,48 @@ pub struct MultisineSignal {
     /// `optimised`, `schroeder` or `random`.
     #[serde(default = "default_phases")]
     pub phases: String,
+    /// Amplitude across the lines: `flat` (the default), `1/f` (equal
+    /// velocity at every line) or `1/f^2` (equal acceleration).
+    #[serde(default = "default_shape", skip_serializing_if = "is_flat")]
+    pub amplitude_shape: String,
+    /// Relative amplitudes at frequencies, `[[hz, amplitude], ...]` in
+    /// increasing frequency, interpolated linearly in log-log between them
+    /// and held beyond the first and last: a spectrum given point by point
+    /// (one point per line gives every line its own); replaces the shape.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub amplitude_points: Vec<[f64; 2]>,
+}
+
+fn default_shape() -> String {
+    "flat".into()
+}
+
+fn is_flat(shape: &str) -> bool {
+    shape == "flat"
+}
+
+impl MultisineSignal {
+    /// The relative amplitude of a line at `hz` (the points, else the shape).
+    pub fn relative_amplitude(&self, hz: f64) -> f64 {
+        let p = &self.amplitude_points;
+        if let (Some(first), Some(last)) = (p.first(), p.last()) {
+            if hz <= first[0] {
+                return first[1];
+            }
+            if hz >= last[0] {
+                return last[1];
+            }
+            let k = p.iter().position(|q| q[0] > hz).unwrap_or(p.len() - 1);
+            let (a, b) = (p[k - 1], p[k]);
+            let t = (hz / a[0]).ln() / (b[0] / a[0]).ln();
+            return (a[1].ln() + t * (b[1] / a[1]).ln()).exp();
+        }
+        match self.amplitude_shape.as_str() {
+            "1/f" => 1.0 / hz,
+            "1/f^2" => 1.0 / (hz * hz),
+            _ => 1.0,
+        }
+    }
 }
 
 fn default_lines() -> String {
@@ -249,6 +292,8 @@ impl PeriodicDesign {
                 rms: vec![0.01],
                 lines: "random-odd".into(),
                 phases: "optimised".into(),
+                amplitude_shape: default_shape(),
+                amplitude_points: Vec::new(),
             }),
             limits: joint_limits(),
         }
@@ -292,6 +337,8 @@ impl PeriodicDesign {
                 rms: vec![0.002; 3],
                 lines: "random-odd".into(),
                 phases: "optimised".into(),
+                amplitude_shape: default_shape(),
+                amplitude_points: Vec::new(),
             }),
             limits: PeriodicLimits {
                 max_displacement_m: Some(0.02),
@@ -320,6 +367,8 @@ impl PeriodicDesign {
                 rms: vec![0.01; 2],
                 lines: "random-odd".into(),
                 phases: "optimised".into(),
+                amplitude_shape: default_shape(),
+                amplitude_points: Vec::new(),
             }),
             limits: joint_limits(),
         }
@@ -439,6 +488,20 @@ impl PeriodicDesign {
                     return Err("rms: expected positive values".into());
                 }
                 LineSet::parse(&m.lines).map_err(|e| e.to_string())?;
+                if !matches!(m.amplitude_shape.as_str(), "flat" | "1/f" | "1/f^2") {
+                    return Err(format!(
+                        "amplitude_shape: expected flat, 1/f or 1/f^2, found {:?}",
+                        m.amplitude_shape
+                    ));
+                }
+                let p = &m.amplitude_points;
+                if p.iter().any(|q| !(positive(q[0]) && positive(q[1])))
+                    || p.windows(2).any(|w| w[1][0] <= w[0][0])
+                {
+                    return Err(
+                        "amplitude_points: expected [hz, amplitude] pairs of positive numbers in increasing frequency".into(),
+                    );
+                }
                 if !matches!(m.phases.as_str(), "optimised" | "schroeder" | "random") {
                     return Err(format!(
                         "phases: expected optimised, schroeder or random, found {:?}",
@@ -503,9 +566,12 @@ impl PeriodicDesign {
                         // zippered: channel c takes every channels-th line from the c-th
                         let own: Vec<usize> =
                             lines.iter().copied().skip(c).step_by(channels).collect();
-                        let amplitudes = vec![1.0; own.len()];
+                        let amplitudes: Vec<f64> = own
+                            .iter()
+                            .map(|&k| m.relative_amplitude(k as f64 / m.period_s))
+                            .collect();
                         let phases = match m.phases.as_str() {
-                            "schroeder" => schroeder_phases(own.len()),
+                            "schroeder" => schroeder_phases_for(&amplitudes),
                             "random" => random_phases(own.len(), self.seed.wrapping_add(c as u64)),
                             _ => optimise_phases(n, &own, &amplitudes),
                         };
@@ -809,6 +875,53 @@ mod tests {
         }
         let e = d.check().unwrap_err().to_string();
         assert!(e.contains("2 to 12 for a ternary sequence"), "{e}");
+    }
+
+    #[test]
+    fn a_shaped_multisine_has_its_amplitude_at_every_line() {
+        let mut d = PeriodicDesign::multisine_joint();
+        if let Signal::Multisine(m) = &mut d.signal {
+            m.lines = "odd".into();
+            m.amplitude_shape = "1/f".into();
+        }
+        let c = d.command().unwrap();
+        let n = c.period_samples;
+        let spectrum = period_spectrum(&c.values[0][n..2 * n]);
+        // equal velocity: |X_k| k constant over the excited lines (0.5-20 Hz at 0.1 Hz)
+        let velocity: Vec<f64> = (5..=200)
+            .filter(|k| k % 2 == 1)
+            .map(|k| spectrum[k].norm() * k as f64)
+            .collect();
+        let (lo, hi) = velocity
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+        assert!(hi / lo - 1.0 < 1e-9, "{lo} .. {hi}");
+        // points: 1 at 1 Hz to 0.25 at 4 Hz, log-log: 0.5 at 2 Hz, held beyond
+        if let Signal::Multisine(m) = &mut d.signal {
+            m.amplitude_points = vec![[1.0, 1.0], [4.0, 0.25]];
+            assert!((m.relative_amplitude(2.0) - 0.5).abs() < 1e-12);
+            assert_eq!(m.relative_amplitude(0.5), 1.0);
+            assert_eq!(m.relative_amplitude(10.0), 0.25);
+        }
+        let c = d.command().unwrap();
+        let spectrum = period_spectrum(&c.values[0][n..2 * n]);
+        // line 5 (0.5 Hz) held at 1, line 41 (4.1 Hz) at 0.25, line 21 (2.1 Hz) at 1/2.1
+        let ratio = |k: usize| spectrum[k].norm() / spectrum[5].norm();
+        assert!((ratio(41) - 0.25).abs() < 1e-9, "{}", ratio(41));
+        assert!((ratio(21) - 1.0 / 2.1).abs() < 1e-9, "{}", ratio(21));
+        // bad shapes and points are refused by name
+        for (shape, points) in [
+            ("pink", vec![]),
+            ("flat", vec![[2.0, 1.0], [1.0, 1.0]]),
+            ("flat", vec![[1.0, -1.0]]),
+        ] {
+            if let Signal::Multisine(m) = &mut d.signal {
+                m.amplitude_shape = shape.into();
+                m.amplitude_points = points;
+            }
+            let e = d.check().unwrap_err().to_string();
+            assert!(e.contains("amplitude_"), "{e}");
+        }
     }
 
     #[test]
