@@ -155,6 +155,26 @@ def test_plot_periodic_draws_the_lines_and_each_pair(tmp_path):
         plot.periodic(limpid.spectra({"t": t, "drive": u, "response": y}, ["drive"], ["response"]))
 
 
+def test_a_periodic_end_point_recording_gives_a_stochastic_estimate_over_whole_periods():
+    """Issue 59: the end-point multisine preset simulated, estimated with
+    period_s, the periodic block drawn from the stochastic result."""
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from limpid import plot
+
+    ((columns, truth),) = limpid.simulate("endpoint-multisine", seed=2)
+    assert {"ux", "uy", "uz", "period"} <= set(columns)
+    assert truth["method"] == "periodic"
+    r = limpid.estimate_stochastic(columns, period_s=20.0, band_hz=[0.2, 6.0])
+    d = r.to_dict()
+    assert d["periodic"]["distortion"]["verdict"] == "linear"
+    k, se = np.asarray(d["stiffness"]), np.asarray(d["standard_errors"]["stiffness"])
+    assert np.all(np.abs(k - np.asarray(truth["stiffness"])) < 4 * se)
+    assert plot.periodic(r).axes.shape == (1 + 9, 1)
+
+
 def test_the_thread_count_is_the_callers_and_changes_no_number():
     """Issue 57: a caller-chosen pool size; the estimate is the same on one
     thread as on one a core (the reductions are ordered)."""

@@ -812,7 +812,8 @@ def simulate(
     ``subject`` is TOML text or a path to a TOML file (the CLI's ``--subject``
     format for the protocol's kind); without it the built-in subjects are used
     (centre-out: Artemiadis et al. 2010's subject 1; planar: the Lakatos et al. 2011 arm; stochastic:
-    spring set SA3). ``controller`` (stochastic protocols) is ``ideal``,
+    spring set SA3; periodic: the ankle, planar arm or 3-D end point by the protocol's channels,
+    each taking ``quadratic`` and ``cubic`` stiffness terms). ``controller`` (stochastic protocols) is ``ideal``,
     ``imbic`` or ``pd``: who holds the spring array."""
     text = protocol if "\n" in protocol or "=" in protocol else protocol_preset(protocol)
     subject_text = None

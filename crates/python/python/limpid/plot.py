@@ -392,16 +392,17 @@ def coherence(result: Any, ax: Any = None) -> Plot:
 
 
 def periodic(result: Any, ax: Any = None) -> Plot:
-    """A periodic analysis (``limpid.spectra(..., period_s=...)``): the output
-    at the excited, odd-detection and even-detection lines as distinct marks
-    and the noise of the period average (dB relative to the excited lines),
+    """A periodic analysis (``limpid.spectra(..., period_s=...)`` or
+    ``limpid.estimate_stochastic(..., period_s=...)``): the output at the
+    excited, odd-detection and even-detection lines as distinct marks and
+    the noise of the period average (dB relative to the excited lines),
     then |G| of each input-output pair at its excited lines with ±2 SE.
     ``ax``: 1 + pairs Axes in a column, or None."""
     d = _data(result)
-    _kind(d, "spectra")
+    _kind(d, "spectra", "stochastic")
     p = d.get("periodic")
     if not p:
-        raise ValueError("this spectra result has no periodic analysis: use period_s=")
+        raise ValueError(f"this {d.get('kind')} result has no periodic analysis: use period_s=")
     frf = p["frf"]
     fig, a, _ = _panels(ax, 1 + len(frf), 1, "plot.periodic", panel=(5.5, 2.1))
     axx = a[0, 0]
