@@ -79,9 +79,13 @@ pub fn stochastic_text(
     );
     match &est.periodic {
         Some(p) => println!(
-            "coordinates {} driven by {} | periodic: {} periods of {} samples (resolution {:.3} Hz; {}) | fit band {}-{} Hz at {} excited lines",
+            "coordinates {} {} | periodic: {} periods of {} samples (resolution {:.3} Hz; {}) | fit band {}-{} Hz at {} excited lines",
             coords.join(", "),
-            est.inputs.join(", "),
+            if &est.inputs == coords {
+                "(no commanded forces: the displacements classify the lines)".to_string()
+            } else {
+                format!("driven by {}", est.inputs.join(", "))
+            },
             c.segments,
             c.nperseg,
             c.frequency_resolution_hz,

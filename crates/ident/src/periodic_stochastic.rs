@@ -30,9 +30,11 @@
 //! - the lines are classified by the commands, and the `periodic` block
 //!   (excited and detection lines, distortion, the FRF force per command)
 //!   is the one `spectra --period` gives with the commands as inputs. A
-//!   recording without command columns has its displacements classify the
-//!   lines (`inputs` then names them): each line must still be excited
-//!   along one coordinate, as a position-controlled rig does.
+//!   recording without command columns (a position-controlled rig's, whose
+//!   command is the displacement itself; `u*` are commanded forces in the
+//!   format) has its displacements classify the lines (`inputs` then names
+//!   them, and the FRF is force per displacement): each line must still be
+//!   excited along one coordinate.
 
 use limpid_core::{Error, Recording, Result, Warning, WarningCode};
 use limpid_dsp::periodic::{analyse, PeriodSpectra, PeriodicAnalysis};

@@ -243,31 +243,25 @@ fn command_by_place<const N: usize>(
     })
 }
 
-/// A periodic recording: `t`, positions, forces, the commands (`u` and the
-/// coordinate's name or number: the format's commanded perturbations,
-/// displacement from the posture, 0 where the protocol commands nothing),
-/// `period`.
+/// A periodic recording: `t`, positions, forces, `period`. (The command is
+/// a displacement; the format's `u*` columns are commanded forces, so it is
+/// not written: `protocol export` gives it.)
 fn periodic_recording(
     source: &str,
     command: &crate::periodic::Command,
-    commands: Vec<Vec<f64>>,
     positions: &[&str],
     forces: &[&str],
     followed: crate::follow::Followed,
 ) -> Result<Recording> {
-    let command_names = positions
-        .iter()
-        .map(|p| format!("u{}", p.trim_start_matches('q')));
-    let names: Vec<String> = std::iter::once("t".to_string())
-        .chain(positions.iter().map(|s| s.to_string()))
-        .chain(forces.iter().map(|s| s.to_string()))
-        .chain(command_names)
-        .chain(std::iter::once("period".to_string()))
+    let names: Vec<String> = std::iter::once("t")
+        .chain(positions.iter().copied())
+        .chain(forces.iter().copied())
+        .chain(std::iter::once("period"))
+        .map(String::from)
         .collect();
     let columns: Vec<Vec<f64>> = std::iter::once(command.t.clone())
         .chain(followed.position)
         .chain(followed.force)
-        .chain(commands)
         .chain(std::iter::once(
             command.period.iter().map(|&i| i as f64).collect(),
         ))
@@ -304,7 +298,6 @@ fn periodic_planar(
     let recording = periodic_recording(
         "virtual planar arm",
         &command,
-        commands.to_vec(),
         &["q1", "q2"],
         &["tau1", "tau2"],
         followed,
@@ -358,7 +351,6 @@ fn periodic_endpoint(
     let recording = periodic_recording(
         "virtual end point",
         &command,
-        commands.to_vec(),
         &["x", "y", "z"],
         &["fx", "fy", "fz"],
         followed,
@@ -417,14 +409,8 @@ fn periodic_ankle(
     let period: Vec<f64> = command.period.iter().map(|&i| i as f64).collect();
     let recording = Recording::new(
         "virtual ankle",
-        vec![
-            "t".into(),
-            "q1".into(),
-            "tau1".into(),
-            "u1".into(),
-            "period".into(),
-        ],
-        vec![command.t.clone(), q, tau, command.values[0].clone(), period],
+        vec!["t".into(), "q1".into(), "tau1".into(), "period".into()],
+        vec![command.t.clone(), q, tau, period],
         2,
     )?;
     let one = |v: f64| Matrix::from_rows(&[vec![v]]).expect("1 x 1");

@@ -165,10 +165,11 @@ def test_a_periodic_end_point_recording_gives_a_stochastic_estimate_over_whole_p
     from limpid import plot
 
     ((columns, truth),) = limpid.simulate("endpoint-multisine", seed=2)
-    assert {"ux", "uy", "uz", "period"} <= set(columns)
+    assert {"x", "fx", "period"} <= set(columns) and "ux" not in columns
     assert truth["method"] == "periodic"
     r = limpid.estimate_stochastic(columns, period_s=20.0, band_hz=[0.2, 6.0])
     d = r.to_dict()
+    assert d["inputs"] == ["x", "y", "z"]
     assert d["periodic"]["distortion"]["verdict"] == "linear"
     k, se = np.asarray(d["stiffness"]), np.asarray(d["standard_errors"]["stiffness"])
     assert np.all(np.abs(k - np.asarray(truth["stiffness"])) < 4 * se)

@@ -751,13 +751,14 @@ fn the_stochastic_estimate_of_a_periodic_recording_averages_whole_periods() {
         json(&args)
     };
     let r = estimate(&[]);
-    // the commands classify the lines; the fit is the periodic one
-    assert_eq!(r["inputs"], serde_json::json!(["ux", "uy", "uz"]));
+    // a position-controlled rig's recording: the displacements classify
+    // the lines; the fit is the periodic one
+    assert_eq!(r["inputs"], serde_json::json!(["x", "y", "z"]));
     assert_eq!(r["criteria"]["segments"], 6);
     assert_eq!(r["periodic"]["distortion"]["verdict"], "linear");
     assert_eq!(r["criteria"]["verdicts"]["stiffness"], "trusted");
-    // zippered: another command at a command's line is rounding only
-    assert!(r["criteria"]["max_input_coherence"].as_f64().unwrap() < 1e-12);
+    // zippered: another coordinate at a coordinate's line is noise only
+    assert!(r["criteria"]["max_input_coherence"].as_f64().unwrap() < 1e-3);
     let mut worst = 0.0f64;
     for m in ["inertia", "damping", "stiffness"] {
         for i in 0..3 {
@@ -788,37 +789,56 @@ fn the_stochastic_estimate_of_a_periodic_recording_averages_whole_periods() {
     let coherence: Vec<f64> =
         serde_json::from_value(r["coherence"]["multiple"][3].clone()).unwrap();
     assert!(coherence.iter().all(|c| *c > 0.9), "{coherence:?}");
-    // without the command columns the displacements classify the lines alike
-    let text = std::fs::read_to_string(&rec).unwrap();
-    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
-    let keep: Vec<usize> = (0..header.len())
-        .filter(|&c| !header[c].starts_with('u'))
-        .collect();
-    let bare: String = text
+    // with commanded forces u* (the format's inputs; here 1000 N/m times the
+    // exported command) the commands classify the same lines: the same fit
+    let command = d.path().join("command.csv");
+    let out = limpid(&[
+        "protocol",
+        "export",
+        endpoint.to_str().unwrap(),
+        "-o",
+        command.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let commands = std::fs::read_to_string(&command).unwrap();
+    let recorded = std::fs::read_to_string(&rec).unwrap();
+    let merged: String = recorded
         .lines()
-        .map(|l| {
-            let cells: Vec<&str> = l.split(',').collect();
-            keep.iter().map(|&c| cells[c]).collect::<Vec<_>>().join(",") + "\n"
+        .zip(commands.lines())
+        .enumerate()
+        .map(|(row, (r, c))| {
+            let cells: Vec<&str> = c.split(',').collect();
+            let forces = if row == 0 {
+                "ux,uy,uz".to_string()
+            } else {
+                cells[1..4]
+                    .iter()
+                    .map(|v| (1000.0 * v.parse::<f64>().unwrap()).to_string())
+                    .collect::<Vec<_>>()
+                    .join(",")
+            };
+            format!("{r},{forces}\n")
         })
         .collect();
-    let bare_path = d.path().join("bare.csv");
-    std::fs::write(&bare_path, bare).unwrap();
-    let b = json(&[
+    let with_u = d.path().join("with_u.csv");
+    std::fs::write(&with_u, merged).unwrap();
+    let u = json(&[
         "estimate",
         "stochastic",
-        bare_path.to_str().unwrap(),
+        with_u.to_str().unwrap(),
         "--period",
         "20",
         "--band",
         "0.2,6",
         "--json",
     ]);
-    assert_eq!(b["inputs"], serde_json::json!(["x", "y", "z"]));
-    let (k, kb) = (
+    assert_eq!(u["inputs"], serde_json::json!(["ux", "uy", "uz"]));
+    assert!(u["criteria"]["max_input_coherence"].as_f64().unwrap() < 1e-12);
+    let (k, ku) = (
         r["stiffness"][0][0].as_f64().unwrap(),
-        b["stiffness"][0][0].as_f64().unwrap(),
+        u["stiffness"][0][0].as_f64().unwrap(),
     );
-    assert!((k - kb).abs() < 1e-9 * k, "{k} vs {kb}");
+    assert!((k - ku).abs() < 1e-9 * k, "{k} vs {ku}");
     // a period with Welch segments, or pooled trials, is refused by name
     let out = limpid(&[
         "estimate",

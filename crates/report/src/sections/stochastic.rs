@@ -353,13 +353,24 @@ pub(crate) fn stochastic_section(name: &str, v: &StochasticEstimate) -> Section 
         None,
     ));
     let c = &v.criteria;
+    let inputs = match &v.periodic {
+        Some(p) => format!(
+            "{} periods of {} s averaged; {}",
+            p.periods,
+            fmt(p.period_s),
+            p.distortion.as_ref().map_or_else(
+                || "no detection lines".to_string(),
+                |d| format!("the detection lines say {}", d.verdict)
+            )
+        ),
+        None => format!("largest input coherence {}", fmt(c.max_input_coherence)),
+    };
     let mut verdict = format!(
-        "mean multiple coherence {} (lowest {}) over {}-{} Hz; largest input coherence {}; parametric fit VAF {} %",
+        "mean multiple coherence {} (lowest {}) over {}-{} Hz; {inputs}; parametric fit VAF {} %",
         fmt(c.mean_multiple_coherence),
         fmt(c.min_multiple_coherence),
         fmt(band.0),
         fmt(band.1),
-        fmt(c.max_input_coherence),
         fmt(c.fit_vaf)
     );
     if let Some(a) = &v.accuracy {
