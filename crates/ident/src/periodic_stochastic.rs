@@ -122,14 +122,14 @@ pub fn estimate_stochastic_periodic(
         period_s,
         periodic.distorts_excited_lines(),
     )
-    .ok_or_else(|| Error::TooFewSamples {
+    .ok_or_else(|| Error::Format {
         path: rec.path().to_path_buf(),
-        what: format!(
-            "excited lines in the {lo}-{hi} Hz band (the fit of M, B, K needs at least {} per output)",
-            3 * n
+        message: format!(
+            "{} excited line(s) in the {lo}-{hi} Hz band: the fit of M, B and K needs at least {} ({} per coordinate); widen --band",
+            in_band.responses.len(),
+            3 * n,
+            3
         ),
-        needed: 3 * n,
-        found: in_band.responses.len(),
     })?;
     // the non-parametric Z on groups of lines up to the band's upper edge
     let up_to_band: Vec<(usize, usize)> = analysis

@@ -861,6 +861,17 @@ fn the_stochastic_estimate_of_a_periodic_recording_averages_whole_periods() {
     ]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("one recording"), "{}", out.stderr);
+    let out = limpid(&[
+        "estimate",
+        "stochastic",
+        rec.to_str().unwrap(),
+        "--period",
+        "20",
+        "--band",
+        "5.9,6",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("widen --band"), "{}", out.stderr);
     // the text names the periods and the report draws the lines
     let html = d.path().join("r.html");
     let out = limpid(&[
