@@ -146,6 +146,19 @@ fn is_flat(shape: &str) -> bool {
 }
 
 impl MultisineSignal {
+    /// A flat random-odd multisine with optimised phases (the presets').
+    pub fn random_odd(period_s: f64, band_hz: [f64; 2], rms: Vec<f64>) -> Self {
+        MultisineSignal {
+            period_s,
+            band_hz,
+            rms,
+            lines: "random-odd".into(),
+            phases: default_phases(),
+            amplitude_shape: default_shape(),
+            amplitude_points: Vec::new(),
+        }
+    }
+
     /// The relative amplitude of a line at `hz` (the points, else the shape).
     pub fn relative_amplitude(&self, hz: f64) -> f64 {
         let p = &self.amplitude_points;
@@ -286,15 +299,7 @@ impl PeriodicDesign {
             sample_rate_hz: 1000.0,
             periods: 6,
             seed: 1,
-            signal: Signal::Multisine(MultisineSignal {
-                period_s: 10.0,
-                band_hz: [0.5, 20.0],
-                rms: vec![0.01],
-                lines: "random-odd".into(),
-                phases: "optimised".into(),
-                amplitude_shape: default_shape(),
-                amplitude_points: Vec::new(),
-            }),
+            signal: Signal::Multisine(MultisineSignal::random_odd(10.0, [0.5, 20.0], vec![0.01])),
             limits: joint_limits(),
         }
     }
@@ -331,15 +336,11 @@ impl PeriodicDesign {
             sample_rate_hz: 500.0,
             periods: 6,
             seed: 1,
-            signal: Signal::Multisine(MultisineSignal {
-                period_s: 20.0,
-                band_hz: [0.2, 6.0],
-                rms: vec![0.002; 3],
-                lines: "random-odd".into(),
-                phases: "optimised".into(),
-                amplitude_shape: default_shape(),
-                amplitude_points: Vec::new(),
-            }),
+            signal: Signal::Multisine(MultisineSignal::random_odd(
+                20.0,
+                [0.2, 6.0],
+                vec![0.002; 3],
+            )),
             limits: PeriodicLimits {
                 max_displacement_m: Some(0.02),
                 max_velocity_m_s: Some(0.2),
@@ -361,15 +362,11 @@ impl PeriodicDesign {
             sample_rate_hz: 1000.0,
             periods: 6,
             seed: 1,
-            signal: Signal::Multisine(MultisineSignal {
-                period_s: 10.0,
-                band_hz: [0.5, 10.0],
-                rms: vec![0.01; 2],
-                lines: "random-odd".into(),
-                phases: "optimised".into(),
-                amplitude_shape: default_shape(),
-                amplitude_points: Vec::new(),
-            }),
+            signal: Signal::Multisine(MultisineSignal::random_odd(
+                10.0,
+                [0.5, 10.0],
+                vec![0.01; 2],
+            )),
             limits: joint_limits(),
         }
     }

@@ -568,6 +568,25 @@ impl SpectraRequest {
     }
 }
 
+/// A period (s) must be positive and comes without Welch segments: a
+/// periodic analysis takes whole periods as its segments.
+fn check_period(
+    period_s: Option<f64>,
+    nperseg: Option<usize>,
+    noverlap: Option<usize>,
+) -> Result<()> {
+    if let Some(p) = period_s {
+        positive("period_s", p)?;
+        if nperseg.is_some() || noverlap.is_some() {
+            return Err(Error::invalid(
+                "period_s",
+                "a periodic analysis takes whole periods as its segments: leave out the segment length and overlap",
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The checks shared by the methods that prepare a recording or a planar arm.
 fn finite(name: &str, v: f64) -> Result<()> {
     if v.is_finite() {
@@ -780,15 +799,7 @@ impl Method for StochasticRequest {
 
     fn check_settings(&self) -> Result<Self> {
         crate::Estimator::check(&self.params(0, 1.0))?;
-        if let Some(p) = self.period_s {
-            positive("period_s", p)?;
-            if self.nperseg.is_some() || self.noverlap.is_some() {
-                return Err(Error::invalid(
-                    "period_s",
-                    "a periodic analysis takes whole periods as its segments: leave out the segment length and overlap",
-                ));
-            }
-        }
+        check_period(self.period_s, self.nperseg, self.noverlap)?;
         Ok(self.clone())
     }
 
@@ -805,15 +816,7 @@ impl Method for SpectraRequest {
     // the segments are checked against the recording's length when it is read
     fn check_settings(&self) -> Result<Self> {
         crate::spectra::check_columns(&self.inputs, &self.outputs)?;
-        if let Some(p) = self.period_s {
-            positive("period_s", p)?;
-            if self.nperseg.is_some() || self.noverlap.is_some() {
-                return Err(Error::invalid(
-                    "period_s",
-                    "a periodic analysis takes whole periods as its segments: leave out the segment length and overlap",
-                ));
-            }
-        }
+        check_period(self.period_s, self.nperseg, self.noverlap)?;
         Ok(self.clone())
     }
 
