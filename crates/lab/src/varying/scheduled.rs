@@ -198,8 +198,9 @@ pub fn simulate_scheduled_ankle(
         let qdd = w * w * (sv + u - q) - 2.0 * ACTUATOR_DAMPING * w * qd;
         if k % SUBSTEPS == 0 {
             let [stiff, damp, _] = s.at(sv);
+            // the velocity at the sample's time (semi-implicit Euler's lags by h/2)
             let tau = s.inertia * qdd
-                + damp * qd
+                + damp * (qd + 0.5 * h * qdd)
                 + stiff * (q - sv)
                 + quadratic(&s.background, sv)
                 + z

@@ -52,9 +52,9 @@ pub(crate) fn stochastic_criteria_table(v: &StochasticEstimate) -> Table {
         ],
         if v.periodic.is_some() {
             vec![
-                "commands at each other's lines".into(),
+                "inputs at each other's lines".into(),
                 fmt(c.max_input_coherence),
-                "largest power of another command at a command's excited line, relative to its own (0: zippered)".into(),
+                "largest power of another input (command, or displacement without commands) at an input's excited line, relative to its own (0: zippered)".into(),
             ]
         } else {
             vec![
