@@ -223,22 +223,18 @@ fn periodic_summary(p: &limpid_ident::spectra::PeriodicResult) -> String {
                     .join(", ")
             };
             let e = &z.standard_errors;
+            let k = format!(
+                "K {}",
+                crate::table::verdict_flag(z.verdicts.stiffness)
+                    .trim()
+                    .trim_matches(['[', ']'])
+            );
             let trust = if p.distorts_excited_lines() {
                 "not trusted: the response is nonlinear, these are its best linear approximation at this amplitude".to_string()
             } else if p.nonlinear() {
-                format!(
-                    "K {}; the distortion is even and stays off the odd excited lines",
-                    crate::table::verdict_flag(z.verdicts.stiffness)
-                        .trim()
-                        .trim_matches(['[', ']'])
-                )
+                format!("{k}; the distortion is even and stays off the odd excited lines")
             } else {
-                format!(
-                    "K {}",
-                    crate::table::verdict_flag(z.verdicts.stiffness)
-                        .trim()
-                        .trim_matches(['[', ']'])
-                )
+                k
             };
             format!(
                 "; fitted at {} excited lines (VAF {:.1} %, residual ratio {}): diagonal K {}, B {}, M {} [{trust}]",

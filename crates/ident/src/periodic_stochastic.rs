@@ -139,8 +139,6 @@ pub fn estimate_stochastic_periodic(
         .map(|r| (r.line, r.input))
         .collect();
     let groups = line_groups(&up_to_band, n);
-    let repeat =
-        |s: usize, lines: &mut dyn Iterator<Item = usize>| repeatable_share(&spectra, s, lines);
     let mut frequencies = Vec::with_capacity(groups.len());
     let mut impedance = Vec::with_capacity(groups.len());
     let mut multiple: Vec<Vec<f64>> = vec![Vec::new(); 2 * n];
@@ -169,10 +167,10 @@ pub fn estimate_stochastic_periodic(
         impedance.push(z);
         for (o, m) in multiple.iter_mut().enumerate() {
             let s = n + o;
-            m.push(repeat(s, &mut group.iter().map(|(l, _)| *l)));
+            m.push(repeatable_share(&spectra, s, group.iter().map(|(l, _)| *l)));
             for (i, p) in partial[o].iter_mut().enumerate() {
-                let mut own = group.iter().filter(|(_, g)| *g == i).map(|(l, _)| *l);
-                p.push(repeat(s, &mut own));
+                let own = group.iter().filter(|(_, g)| *g == i).map(|(l, _)| *l);
+                p.push(repeatable_share(&spectra, s, own));
             }
         }
     }
@@ -313,11 +311,7 @@ fn group_impedance(
 /// period to period, `Σ S / Σ (S + N)` over the lines (module docs): the
 /// power-weighted coherence, so a line where the signal is only noise
 /// counts for its little power.
-fn repeatable_share(
-    spectra: &PeriodSpectra,
-    s: usize,
-    lines: &mut dyn Iterator<Item = usize>,
-) -> f64 {
+fn repeatable_share(spectra: &PeriodSpectra, s: usize, lines: impl Iterator<Item = usize>) -> f64 {
     let m = spectra.periods as f64;
     let (mut signal, mut total) = (0.0, 0.0);
     for line in lines {

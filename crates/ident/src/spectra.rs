@@ -567,7 +567,7 @@ pub(crate) fn distortion_of(d: &limpid_dsp::periodic::Distortion) -> PeriodicDis
         odd_db: d.odd_db,
         even_db: d.even_db,
         noise_db: d.noise_db,
-        verdict: if d.nonlinear { "nonlinear" } else { "linear" }.into(),
+        verdict: if d.nonlinear() { "nonlinear" } else { "linear" }.into(),
         odd_above_noise: d.odd_rises,
         even_above_noise: d.even_rises,
     }
