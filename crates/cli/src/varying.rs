@@ -91,6 +91,9 @@ pub fn varying_text(e: &VaryingEstimate, paths: &[PathBuf]) -> CliResult {
         }
     }
     println!("resolution: {}", e.resolution_note);
+    if let Some(angle) = &e.schedule.angle {
+        println!("angle: {angle}");
+    }
     let d = e.coordinates.len();
     let (mu, bu, ku) = limpid_ident::linear::units(&e.coordinates);
     let sched = if e.schedule.unit.is_empty() {

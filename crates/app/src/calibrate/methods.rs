@@ -315,8 +315,9 @@ pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool),
     };
     let mut rng = StdRng::seed_from_u64(seed);
     let with_reflex = rng.random::<bool>();
-    let subject = ScheduledAnkle {
+    let mut subject = ScheduledAnkle {
         inertia: uniform(&mut rng, 0.01, 0.025),
+        stiffness_growth: 0.0,
         stiffness: [
             uniform(&mut rng, 40.0, 120.0),
             uniform(&mut rng, 0.0, 120.0),
@@ -343,11 +344,20 @@ pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool),
             }
         }),
     };
-    let protocol = RampAndHold {
+    let mut protocol = RampAndHold {
         torque_noise_nm: uniform(&mut rng, 0.05, 0.3),
         keep_ramps: rng.random::<bool>(),
         ..RampAndHold::default()
     };
+    // issue 58: subjects unlike the first ones: half with a stiffness
+    // rising exponentially with the angle, swings up to ±0.04 rad, a third
+    // recorded as the angle's offset from sv (the schedule's meaning then
+    // unknown to the estimator, which widens K's SE)
+    if rng.random::<bool>() {
+        subject.stiffness_growth = uniform(&mut rng, 1.0, 4.0);
+    }
+    protocol.amplitude_rad = uniform(&mut rng, 0.01, 0.04);
+    protocol.offset_angle = rng.random::<f64>() < 1.0 / 3.0;
     let rec = simulate_scheduled_ankle(&subject, &protocol, seed).map_err(|e| e.to_string())?;
     let params = VaryingRequest {
         schedule: "sv".into(),

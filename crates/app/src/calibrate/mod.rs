@@ -293,7 +293,34 @@ pub fn calibrate(
         ),
     ];
     let mut methods = methods;
-    // the parameter-varying ankle also counts reflex claims
+    let (scheduled_method, varying_reflex) = calibrate_scheduled(recordings, seed, progress);
+    methods.push(scheduled_method);
+    debug_assert_eq!(methods.len(), METHODS);
+    let window_sweep = calibrate_sweeps(sweeps_for(recordings), seed, false, progress);
+    let window_sweep_varied = Some(calibrate_sweeps(
+        sweeps_for(recordings),
+        seed ^ 0x3737,
+        true,
+        progress,
+    ));
+    Ok(Calibration {
+        seed,
+        recordings_per_method: recordings,
+        methods,
+        window_sweep,
+        window_sweep_varied,
+        varying_reflex,
+        design: Some(calibrate_design(recordings, seed)?),
+    })
+}
+
+/// The parameter-varying ankle's part of the study (it also counts reflex
+/// claims): `recordings` scheduled ankles drawn at random.
+pub fn calibrate_scheduled(
+    recordings: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> (MethodCalibration, ReflexClaims) {
     let started = std::time::Instant::now();
     let scheduled_runs: Vec<_> = (0..recordings as u64)
         .into_par_iter()
@@ -319,28 +346,12 @@ pub fn calibrate(
             })
         })
         .collect();
-    methods.push(summarise(
+    let method = summarise(
         "parameter-varying ankle with --reflex (per operating angle)",
         outcomes,
         started.elapsed().as_secs_f64(),
-    ));
-    debug_assert_eq!(methods.len(), METHODS);
-    let window_sweep = calibrate_sweeps(sweeps_for(recordings), seed, false, progress);
-    let window_sweep_varied = Some(calibrate_sweeps(
-        sweeps_for(recordings),
-        seed ^ 0x3737,
-        true,
-        progress,
-    ));
-    Ok(Calibration {
-        seed,
-        recordings_per_method: recordings,
-        methods,
-        window_sweep,
-        window_sweep_varied,
-        varying_reflex,
-        design: Some(calibrate_design(recordings, seed)?),
-    })
+    );
+    (method, varying_reflex)
 }
 
 /// Stiffness and damping of the prior range's other end, relative to the

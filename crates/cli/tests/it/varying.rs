@@ -145,7 +145,34 @@ fn varying_refusals_name_what_is_wrong() {
     }
     std::fs::write(&rec, text).unwrap();
     let r = rec.to_str().unwrap();
+    // two joints on a varying schedule: the schedule is not one joint's angle
+    let two = dir.path().join("two.csv");
+    let mut text = String::from("t,q1,q2,tau1,tau2,sv\n");
+    for i in 0..20_000 {
+        let t = i as f64 / 1000.0;
+        let (a, b) = ((t * 9.0).sin(), (t * 7.0).cos());
+        text.push_str(&format!(
+            "{t},{},{},{a},{b},{}\n",
+            0.01 * a,
+            0.01 * b,
+            t / 20.0
+        ));
+    }
+    std::fs::write(&two, text).unwrap();
+    let two = two.to_str().unwrap();
     for (args, want) in [
+        (
+            vec![
+                "estimate",
+                "varying",
+                two,
+                "--schedule",
+                "sv",
+                "--schedule-angle",
+                "offset",
+            ],
+            "--schedule-angle",
+        ),
         (vec!["estimate", "varying", r], "trial"),
         (
             vec!["estimate", "varying", r, "--schedule", "sv"],

@@ -215,6 +215,7 @@ pub(super) fn estimate(
             name: "time since trial start".into(),
             unit: "s".into(),
             values: points.iter().map(|p| p.sigma).collect(),
+            angle: None,
         },
         coordinates: coords,
         forces,

@@ -20,7 +20,7 @@ pub mod gait;
 pub mod scheduled;
 mod settings;
 
-pub use settings::{VaryingParams, VaryingRequest};
+pub use settings::{ScheduleAngle, VaryingParams, VaryingRequest};
 
 use limpid_core::criteria::{
     matrix_criteria, matrix_verdict_within, tolerance, MatrixKind, MatrixVerdict, VAF_FLOOR_PERCENT,
@@ -56,6 +56,10 @@ pub struct ScheduleAxis {
     pub unit: String,
     /// The grid: one value per point.
     pub values: Vec<f64>,
+    /// Parameter-varying: what the schedule was read as to the coordinate's
+    /// angle, in words (`--schedule-angle`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle: Option<String>,
 }
 
 /// The reflex pathway at one point of the schedule.

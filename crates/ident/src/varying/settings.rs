@@ -15,6 +15,29 @@ use super::{MAX_BASIS_ORDER, TIME};
 use crate::estimator::positive;
 use crate::request::{boolean_names, Method};
 
+/// What a parameter-varying schedule is to the coordinate's angle (issue
+/// 58): where the stiffness varies with the angle itself, a perturbation of
+/// half-swing `a` sees the mean slope over `[σ - a, σ + a]`, which differs
+/// from the local slope K(σ) by about `K''(σ) E[x⁴] / (6 E[x²])` (+0.25 % on
+/// an exponential K with a ±0.038 rad perturbation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "snake_case")]
+pub enum ScheduleAngle {
+    /// `total` when the schedule is the coordinate or its slow part follows
+    /// the schedule; otherwise unknown: K is the mean slope over the
+    /// perturbation and its standard error allows for the `offset` reading.
+    #[default]
+    Auto,
+    /// The coordinate is the joint's whole angle; the schedule its operating angle.
+    Total,
+    /// The coordinate is the angle's offset from the schedule (the whole
+    /// angle is schedule + coordinate, as in REKLAB's parameter-varying recordings).
+    Offset,
+    /// The schedule is not the coordinate's angle: K multiplies the displacement.
+    None,
+}
+
 /// Impedance that varies with time (`schedule = "time"`, an ensemble of
 /// repetitions) or with a measured operating point (a column: parameter-varying).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -84,6 +107,9 @@ pub struct VaryingRequest {
     /// Parameter-varying: add a stretch-reflex pathway (rectified velocity, delay, low-pass) whose gain varies with the schedule.
     #[cfg_attr(feature = "clap", arg(long))]
     pub reflex: bool,
+    /// Parameter-varying: what the schedule is to the coordinate's angle: `total` (the coordinate is the whole angle, the schedule its operating angle) or `offset` (the coordinate is the angle's offset from the schedule) give K as the local slope at each operating angle; `none` (not an angle): K multiplies the displacement; `auto`: `total` when the coordinate's slow part follows the schedule, else unknown, K's SE allowing for either.
+    #[cfg_attr(feature = "clap", arg(long = "schedule-angle", value_enum, default_value_t = ScheduleAngle::Auto, value_name = "READING"))]
+    pub schedule_angle: ScheduleAngle,
     /// Largest reflex delay scanned (s).
     #[cfg_attr(feature = "clap", arg(long = "max-delay", default_value_t = VaryingRequest::default().max_delay_s, value_name = "S"))]
     pub max_delay_s: f64,
@@ -112,6 +138,7 @@ impl Default for VaryingRequest {
             slow_hz: 0.5,
             rate_hz: 200.0,
             reflex: false,
+            schedule_angle: ScheduleAngle::Auto,
             max_delay_s: 0.1,
         }
     }

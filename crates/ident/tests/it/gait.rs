@@ -213,7 +213,7 @@ fn missed_and_doubled_heel_strikes_are_reported_by_stride_number() {
 }
 
 /// The outside generator's truth: K and B on a phase grid, linearly interpolated.
-fn outside_truth(path: &std::path::Path) -> impl Fn(f64) -> (f64, f64) {
+pub(crate) fn outside_truth(path: &std::path::Path) -> impl Fn(f64) -> (f64, f64) {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let arr = |k: &str| -> Vec<f64> {

@@ -286,3 +286,163 @@ fn varying_on_real_ankle_recordings_agrees_with_per_file_fits() {
         }
     }
 }
+
+/// Issue 58: a stiffness that varies with the angle itself (the elastic
+/// torque integrates K over the angle swept) is estimated as its local slope
+/// K(σ) when the schedule is read as the operating angle, whichever way the
+/// angle is recorded; read as "not an angle", the estimate is the mean slope
+/// over the perturbation, high by about K''(σ) a² / 6 for a swing of ±a, and
+/// left to `auto` on an offset recording the standard errors carry that.
+#[test]
+fn a_stiffness_rising_with_the_angle_is_its_local_slope() {
+    use limpid_ident::varying::ScheduleAngle;
+    let growth = 3.0;
+    let s = ScheduledAnkle {
+        stiffness: [40.0, 0.0, 0.0],
+        stiffness_growth: growth,
+        reflex: None,
+        ..ScheduledAnkle::default()
+    };
+    let estimate = |offset_angle: bool, reading: ScheduleAngle| {
+        let p = RampAndHold {
+            amplitude_rad: 0.04,
+            torque_noise_nm: 0.01,
+            offset_angle,
+            ..RampAndHold::default()
+        };
+        let rec = simulate_scheduled_ankle(&s, &p, 7).unwrap();
+        let params = VaryingRequest {
+            schedule: "sv".into(),
+            schedule_angle: reading,
+            ..VaryingRequest::default()
+        }
+        .check()
+        .unwrap();
+        estimate_varying(&rec, &params).unwrap()
+    };
+    // median relative error of K over the identifiable points, and coverage
+    let judge = |e: &VaryingEstimate| {
+        let mut errors: Vec<f64> = e
+            .points
+            .iter()
+            .filter(|p| p.identifiable)
+            .map(|p| p.stiffness.as_ref().unwrap()[(0, 0)] / s.at(p.sigma)[0] - 1.0)
+            .collect();
+        errors.sort_by(f64::total_cmp);
+        let (_, covered, _) = within(
+            e,
+            |p| el(&p.stiffness, &p.stiffness_se, 0, 0),
+            |x| s.at(x)[0],
+            1.0,
+        );
+        (errors[errors.len() / 2], covered)
+    };
+    let whole = estimate(false, ScheduleAngle::Auto);
+    let (local, covered) = judge(&whole);
+    assert!(
+        whole
+            .schedule
+            .angle
+            .as_deref()
+            .unwrap()
+            .contains("whole angle"),
+        "{:?}",
+        whole.schedule.angle
+    );
+    let (mean_slope, _) = judge(&estimate(false, ScheduleAngle::None));
+    // the swing after the actuator, about 0.038 rad: K'' a² / (6 K) = g² a² / 6
+    let predicted = growth * growth * 0.038f64.powi(2) / 6.0;
+    assert!(local.abs() < 0.25 * predicted, "local slope off by {local}");
+    assert!(covered >= 0.8, "coverage {covered}");
+    assert!(
+        (mean_slope - local - predicted).abs() < 0.3 * predicted,
+        "the mean slope's excess {} vs predicted {predicted}",
+        mean_slope - local
+    );
+    // recorded as the offset from sv: the same estimate when told so (the
+    // whole angle's velocity and acceleration too, ramps included)
+    let (offset_local, _) = judge(&estimate(true, ScheduleAngle::Offset));
+    assert!(
+        (offset_local - local).abs() < 1e-9,
+        "{offset_local} vs {local}"
+    );
+    // and left to auto, the mean slope with standard errors that allow for it
+    let unknown = estimate(true, ScheduleAngle::Auto);
+    let (_, covered) = judge(&unknown);
+    assert!(covered >= 0.8, "coverage of the unknown reading {covered}");
+    assert!(
+        unknown
+            .warnings
+            .iter()
+            .any(|w| w.contains("schedule_angle")),
+        "{:?}",
+        unknown.warnings
+    );
+}
+
+/// Issue 58 on the outside parameter-varying ankle (K 16 -> 94 N m/rad,
+/// exponential in the whole angle; q1 recorded as the offset from sv): read
+/// as the offset from the operating angle, K is the local slope and ±2 SE
+/// cover it; left to `auto` the schedule's meaning is unknown and the SEs
+/// carry the difference; read as no angle, K is the mean slope over the
+/// ±0.038 rad perturbation, about 0.25 % high, which its SEs do not cover.
+#[test]
+fn outside_parameter_varying_ankle() {
+    use limpid_ident::varying::ScheduleAngle;
+    let Some(dir) = limpid_testkit::outside_examples("varying") else {
+        return;
+    };
+    let case = "ex_pv_ankle_noreflex";
+    let rec = limpid_io::read_recording(dir.join(format!("{case}.csv"))).unwrap();
+    let truth = crate::gait::outside_truth(&dir.join(format!("{case}.truth.json")));
+    for reflex in [false, true] {
+        for reading in [
+            ScheduleAngle::Offset,
+            ScheduleAngle::Auto,
+            ScheduleAngle::None,
+        ] {
+            let params = VaryingRequest {
+                schedule: "sv".into(),
+                schedule_angle: reading,
+                reflex,
+                ..VaryingRequest::default()
+            }
+            .check()
+            .unwrap();
+            let est = estimate_varying(&rec, &params).unwrap();
+            // the truth's grid spans -0.38..0.18
+            let inside =
+                |p: &limpid_ident::varying::VaryingPoint| (-0.38..=0.18).contains(&p.sigma);
+            let (mut n, mut kc, mut bc, mut worst) = (0, 0, 0, 0.0f64);
+            for p in est.points.iter().filter(|p| p.identifiable && inside(p)) {
+                let (kt, bt) = truth(p.sigma);
+                let (k, ks) = el(&p.stiffness, &p.stiffness_se, 0, 0).unwrap();
+                let (b, bs) = el(&p.damping, &p.damping_se, 0, 0).unwrap();
+                n += 1;
+                kc += usize::from((k - kt).abs() <= 2.0 * ks);
+                bc += usize::from((b - bt).abs() <= 2.0 * bs);
+                worst = worst.max((k - kt).abs() / kt);
+            }
+            let (kc, bc) = (kc as f64 / n as f64, bc as f64 / n as f64);
+            eprintln!(
+                "{reading:?} reflex {reflex}: {n} points, K covered {kc}, B {bc}, worst K {worst}"
+            );
+            assert!(n >= 15, "{reading:?}: {n} points");
+            assert!(worst < 0.02, "{reading:?}: K off by {worst}");
+            if reading == ScheduleAngle::None {
+                assert!(kc < 0.8, "the mean slope's bias no longer shows: {kc}");
+            } else {
+                assert!(
+                    kc >= 0.9 && bc >= 0.8,
+                    "{reading:?} reflex {reflex}: K {kc}, B {bc}"
+                );
+            }
+            assert_eq!(
+                reading == ScheduleAngle::Auto,
+                est.warnings.iter().any(|w| w.contains("schedule_angle")),
+                "{:?}",
+                est.warnings
+            );
+        }
+    }
+}

@@ -39,9 +39,13 @@ pub struct ScheduledReflex {
 pub struct ScheduledAnkle {
     /// I (kg m^2), constant.
     pub inertia: f64,
-    /// K(s) (N m/rad).
+    /// K(θ) (N m/rad) of the joint's angle θ, times `exp(stiffness_growth θ)`.
     pub stiffness: Quadratic,
-    /// B(s) (N m s/rad).
+    /// Exponential growth of K with the angle (1/rad; 0: K is the quadratic).
+    /// A real ankle's K rises roughly exponentially towards dorsiflexion.
+    #[serde(default)]
+    pub stiffness_growth: f64,
+    /// B(θ) (N m s/rad) of the joint's angle.
     pub damping: Quadratic,
     /// Passive torque holding the operating angle (N m).
     pub background: Quadratic,
@@ -56,6 +60,7 @@ impl Default for ScheduledAnkle {
         ScheduledAnkle {
             inertia: 0.015,
             stiffness: [70.0, 80.0, 100.0],
+            stiffness_growth: 0.0,
             damping: [0.8, 0.5, 0.0],
             background: [2.0, 10.0, 0.0],
             reflex: Some(ScheduledReflex {
@@ -69,13 +74,57 @@ impl Default for ScheduledAnkle {
 }
 
 impl ScheduledAnkle {
-    /// (K, B, G) at the operating angle `s`; G is 0 without a reflex.
+    /// (K, B, G) at the angle `s`; G is 0 without a reflex.
     pub fn at(&self, s: f64) -> [f64; 3] {
         [
-            quadratic(&self.stiffness, s),
+            self.stiffness_at(s),
             quadratic(&self.damping, s),
             self.reflex.map_or(0.0, |r| quadratic(&r.gain, s)),
         ]
+    }
+
+    /// Refuse a subject that cannot be simulated.
+    pub fn validate(&self) -> Result<()> {
+        let coefficients = self
+            .stiffness
+            .iter()
+            .chain(&self.damping)
+            .chain(&self.background)
+            .chain(self.reflex.iter().flat_map(|r| r.gain.iter()));
+        let finite = coefficients
+            .clone()
+            .all(|v| v.is_finite() && v.abs() <= 1e6);
+        if !(finite
+            && self.inertia.is_finite()
+            && self.inertia > 0.0
+            && self.inertia <= 1e3
+            && self.stiffness_growth.is_finite()
+            && self.stiffness_growth.abs() <= 20.0)
+        {
+            return Err(Error::invalid(
+                "scheduled ankle",
+                "coefficients finite and at most 1e6 in size, inertia in (0, 1000] kg m^2, stiffness_growth within ±20 per rad",
+            ));
+        }
+        Ok(())
+    }
+
+    fn stiffness_at(&self, angle: f64) -> f64 {
+        quadratic(&self.stiffness, angle) * (self.stiffness_growth * angle).exp()
+    }
+
+    /// The elastic torque from the operating angle `from` to the angle `to`:
+    /// ∫ K(θ) dθ (three-point Gauss-Legendre: exact for the quadratic, and
+    /// to about (growth (to - from))^6 with the exponential). K varies with
+    /// the angle itself, so a perturbation of swing `a` sees its mean slope
+    /// over `[s - a, s + a]`, not K(s): the truth is K(s), the local slope.
+    fn elastic_torque(&self, from: f64, to: f64) -> f64 {
+        let (middle, half) = (0.5 * (from + to), 0.5 * (to - from));
+        let node = (0.6f64).sqrt() * half;
+        half * (5.0 * self.stiffness_at(middle - node)
+            + 8.0 * self.stiffness_at(middle)
+            + 5.0 * self.stiffness_at(middle + node))
+            / 9.0
     }
 }
 
@@ -102,6 +151,9 @@ pub struct RampAndHold {
     pub torque_noise_nm: f64,
     /// Keep the ramps; false: only the holds, each its own `trial`, with gaps.
     pub keep_ramps: bool,
+    /// Write `q1` as the angle's offset from `sv` (REKLAB's parameter-varying
+    /// recordings) instead of the whole angle.
+    pub offset_angle: bool,
 }
 
 impl Default for RampAndHold {
@@ -118,6 +170,7 @@ impl Default for RampAndHold {
             rate_hz: 1000.0,
             torque_noise_nm: 0.1,
             keep_ramps: true,
+            offset_angle: false,
         }
     }
 }
@@ -175,6 +228,7 @@ pub fn simulate_scheduled_ankle(
     seed: u64,
 ) -> Result<Recording> {
     p.validate()?;
+    s.validate()?;
     let duration = p.duration_s();
     let n = (duration * p.rate_hz).round() as usize;
     let h = 1.0 / (p.rate_hz * SUBSTEPS as f64);
@@ -197,17 +251,18 @@ pub fn simulate_scheduled_ankle(
         let (sv, hold) = operating_angle(p, t);
         let qdd = w * w * (sv + u - q) - 2.0 * ACTUATOR_DAMPING * w * qd;
         if k % SUBSTEPS == 0 {
-            let [stiff, damp, _] = s.at(sv);
-            // the velocity at the sample's time (semi-implicit Euler's lags by h/2)
+            // K and B of the whole angle; the velocity at the sample's time
+            // (semi-implicit Euler's lags by h/2)
+            let damp = quadratic(&s.damping, q);
             let tau = s.inertia * qdd
                 + damp * (qd + 0.5 * h * qdd)
-                + stiff * (q - sv)
+                + s.elastic_torque(sv, q)
                 + quadratic(&s.background, sv)
                 + z
                 + noise.sample(&mut rng);
             if p.keep_ramps || hold.is_some() {
                 cols[0].push(t);
-                cols[1].push(q);
+                cols[1].push(if p.offset_angle { q - sv } else { q });
                 cols[2].push(tau);
                 cols[3].push(sv);
                 cols[4].push(hold.map_or(0.0, |i| (i + 1) as f64));

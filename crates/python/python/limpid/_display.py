@@ -588,6 +588,9 @@ def _varying_html(d: Dict[str, Any]) -> List[str]:
         parts.append(_list_table(["stride", "start (s)", "row", "duration (s)", "kind", "what was done"],
                                  _shortened(flawed, 6), f"Strides with flawed events ({len(flawed)})"))
     parts.append(_e(d.get("resolution_note", "")) and f"<p>{_e(d['resolution_note'])}</p>")
+    angle = (d.get("schedule") or {}).get("angle")
+    if angle:
+        parts.append(f"<p>{_e(angle)}</p>")
     parts.append(_fit_line(d))
     return parts
 

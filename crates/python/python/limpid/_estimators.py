@@ -319,6 +319,7 @@ def estimate_varying(
         rate_hz: float = 200.0,
         reflex: bool = False,
         refractory_ms: float = 250.0,
+        schedule_angle: Literal['auto', 'total', 'offset', 'none'] = 'auto',
         slow_hz: float = 0.5,
         stance_end: float = 0.6,
         step_ms: Optional[float] = None,
@@ -384,6 +385,13 @@ def estimate_varying(
     refractory_ms : float, default 250.0
         Walking: an event sooner than this after the one before is ignored (ms), and
         reported.
+    schedule_angle : {'auto', 'total', 'offset', 'none'}, default 'auto'
+        Parameter-varying: what the schedule is to the coordinate's angle: `total` (the
+        coordinate is the whole angle, the schedule its operating angle) or `offset` (the
+        coordinate is the angle's offset from the schedule) give K as the local slope at
+        each operating angle; `none` (not an angle): K multiplies the displacement; `auto`:
+        `total` when the coordinate's slow part follows the schedule, else unknown, K's SE
+        allowing for either.
     slow_hz : float, default 0.5
         Parameter-varying: the operating point is what varies slower than this (Hz);
         regression is on the deviations from it.
@@ -405,7 +413,7 @@ def estimate_varying(
         ``vaf``, ``reason`` when not identifiable), ``fit``, ``warnings``; walking adds
         ``gait`` (strides used, flawed ones by number).
     """
-    options = {"basis_order": basis_order, "bin": bin, "cutoff_hz": cutoff_hz, "event": event, "gait_method": gait_method, "grid_points": grid_points, "hysteresis": hysteresis, "max_delay_s": max_delay_s, "min_pulses": min_pulses, "min_repetitions": min_repetitions, "neighbours": neighbours, "pulse_window_ms": pulse_window_ms, "rate_hz": rate_hz, "reflex": reflex, "refractory_ms": refractory_ms, "slow_hz": slow_hz, "stance_end": stance_end, "step_ms": step_ms, "trigger": trigger, "window_ms": window_ms}
+    options = {"basis_order": basis_order, "bin": bin, "cutoff_hz": cutoff_hz, "event": event, "gait_method": gait_method, "grid_points": grid_points, "hysteresis": hysteresis, "max_delay_s": max_delay_s, "min_pulses": min_pulses, "min_repetitions": min_repetitions, "neighbours": neighbours, "pulse_window_ms": pulse_window_ms, "rate_hz": rate_hz, "reflex": reflex, "refractory_ms": refractory_ms, "schedule_angle": schedule_angle, "slow_hz": slow_hz, "stance_end": stance_end, "step_ms": step_ms, "trigger": trigger, "window_ms": window_ms}
     return _estimate("varying", [recording], dict(options, schedule=schedule))
 
 

@@ -270,6 +270,10 @@ fn verdict(v: &VaryingEstimate) -> String {
         significant(v.fit.cross_validated_vaf, 3),
         v.resolution_note
     );
+    if let Some(angle) = &v.schedule.angle {
+        verdict.push_str("; ");
+        verdict.push_str(angle);
+    }
     if let Some(r) = &v.reflex {
         verdict.push_str(&if r.detected {
             format!(

@@ -236,12 +236,14 @@ fn axis(phase: bool, event: &str) -> ScheduleAxis {
             name: format!("gait phase (from {column})"),
             unit: "fraction of the stride".into(),
             values: Vec::new(),
+            angle: None,
         }
     } else {
         ScheduleAxis {
             name: format!("time since {column}"),
             unit: "s".into(),
             values: Vec::new(),
+            angle: None,
         }
     }
 }

@@ -40,9 +40,10 @@ use super::{
     VaryingEstimate, VaryingFit, VaryingMethod, VaryingParams, VaryingPoint, VaryingReflex,
     MAX_BASIS_ORDER, REFLEX_MIN_GAIN_PERCENT,
 };
+use crate::varying::ScheduleAngle;
 use design::{fit, region_residuals, robust_covariances, total_ss, Design, Fitted};
 use reflex::{scan_reflex, ReflexChoice};
-use rows::{rows, Rows};
+use rows::{rows, AngleReading, Rows};
 const FILTER_ORDER: usize = 4;
 const SLOW_ORDER: usize = 2;
 const REFLEX_DAMPING: f64 = 0.7;
@@ -85,16 +86,21 @@ pub(super) fn estimate(
     let slow = LowPass::butterworth(SLOW_ORDER, params.slow_hz, fs)?;
     // one degree more than any order tried, for the offset c(σ)
     let top = params.basis_order.unwrap_or(MAX_BASIS_ORDER) + 1;
-    let (rows, dec, trim) = rows(
-        rec,
-        params,
-        &coords,
-        &forces,
-        cutoff,
-        top,
-        &slow,
-        &mut warnings,
-    )?;
+    let (reading, ambiguous) = angle_reading(rec, params, &coords, &slow)?;
+    let rows_read = |reading, warnings: &mut Vec<String>| {
+        rows(
+            rec, params, &coords, &forces, cutoff, top, &slow, reading, warnings,
+        )
+    };
+    let (rows, dec, trim) = rows_read(reading, &mut warnings)?;
+    // a schedule that may be the operating angle (the coordinate its offset)
+    // or another quantity: the offset reading's fit, whose difference the
+    // standard errors carry
+    let offset_rows = if ambiguous {
+        Some(rows_read(AngleReading::Integrated { offset: true }, &mut Vec::new())?.0)
+    } else {
+        None
+    };
     let (lo, span) = (rows.lo, rows.span);
     let reflex = if params.reflex {
         scan_reflex(
@@ -181,6 +187,12 @@ pub(super) fn estimate(
         (Some(d), Some(f), Some(c)) => Some((d, f, c.as_slice())),
         _ => None,
     };
+    let offset_design = offset_rows.as_ref().map(|r| Design {
+        rows: r,
+        order,
+        reflex: m_design.reflex,
+    });
+    let offset_fit = offset_design.as_ref().and_then(fit);
     let grid: Vec<f64> = (0..params.grid_points)
         .map(|g| lo + span * g as f64 / (params.grid_points - 1) as f64)
         .collect();
@@ -189,6 +201,7 @@ pub(super) fn estimate(
         design: m_design,
         fitted: m_fitted,
         neighbour,
+        other_reading: offset_design.as_ref().zip(offset_fit.as_ref()),
         cov: m_cov,
         gains: reflex.as_ref().map(|_| (&design, &fitted, cov.as_slice())),
         reflex: reflex_summary.as_ref(),
@@ -201,6 +214,15 @@ pub(super) fn estimate(
         .enumerate()
         .map(|(g, &sigma)| grid_fit.point(g, sigma))
         .collect();
+    if let Some(largest) = grid_fit.largest_reading_difference(&grid) {
+        warnings.push(format!(
+            "{} may be the operating angle of {} ({} its offset from it) or another quantity: K is the mean slope over the perturbation, which differs from the local slope at each angle by up to {:.2} % here; the standard errors allow for either; say which with schedule_angle (offset or none)",
+            params.schedule,
+            coords[0],
+            coords[0],
+            100.0 * largest
+        ));
+    }
     let missing = points.iter().filter(|p| !p.identifiable).count();
     if missing > 0 {
         warnings.push(format!(
@@ -217,6 +239,7 @@ pub(super) fn estimate(
             name: params.schedule.clone(),
             unit: limpid_core::recording::magnitude_limit(&params.schedule).1.into(),
             values: grid,
+            angle: Some(describe_reading(reading, ambiguous, &params.schedule, &coords[0])),
         },
         coordinates: coords,
         forces,
@@ -244,9 +267,94 @@ pub(super) fn estimate(
     })
 }
 
+/// How the stiffness columns read the schedule (see [`ScheduleAngle`]), and
+/// whether its meaning is unknown: `auto`, a schedule that neither is the
+/// coordinate nor follows its slow part, and a perturbation small beside the
+/// schedule's range (it may be an operating angle with the coordinate its
+/// offset, or a co-contraction level).
+fn angle_reading(
+    rec: &Recording,
+    params: &VaryingParams,
+    coords: &[String],
+    slow: &LowPass,
+) -> Result<(AngleReading, bool)> {
+    let linear = (AngleReading::Linear, false);
+    match params.schedule_angle {
+        ScheduleAngle::None => return Ok(linear),
+        ScheduleAngle::Total => return Ok((AngleReading::Integrated { offset: false }, false)),
+        ScheduleAngle::Offset => return Ok((AngleReading::Integrated { offset: true }, false)),
+        ScheduleAngle::Auto if coords.len() != 1 => return Ok(linear),
+        ScheduleAngle::Auto if coords[0] == params.schedule => {
+            return Ok((AngleReading::Integrated { offset: false }, false))
+        }
+        ScheduleAngle::Auto => {}
+    }
+    let x = rec.require(&coords[0], "the coordinate")?;
+    let sigma = rec.require(&params.schedule, "the schedule (--schedule)")?;
+    let operating = slow.filtfilt(x)?;
+    let n = x.len() as f64;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
+    let (ms, mo) = (mean(sigma), mean(&operating));
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for (s, o) in sigma.iter().zip(&operating) {
+        let (a, b) = (s - ms, o - mo);
+        sxx += a * a;
+        sxy += a * b;
+        syy += b * b;
+    }
+    if sxx <= 0.0 {
+        return Ok(linear);
+    }
+    // the coordinate's slow part follows the schedule one to one: the whole angle
+    let slope = sxy / sxx;
+    let unexplained = (syy - slope * sxy).max(0.0) / sxx;
+    if (slope - 1.0).abs() < 0.2 && unexplained < 0.04 {
+        return Ok((AngleReading::Integrated { offset: false }, false));
+    }
+    let swing = (x
+        .iter()
+        .zip(&operating)
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let range = sigma.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+        - sigma.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    Ok((AngleReading::Linear, swing < 0.25 * range))
+}
+
+/// The reading in words, for the result's schedule.
+fn describe_reading(reading: AngleReading, ambiguous: bool, schedule: &str, coord: &str) -> String {
+    match reading {
+        AngleReading::Integrated { offset: false } => format!(
+            "{coord} read as the whole angle and {schedule} as its operating angle: K is the local slope at each operating angle"
+        ),
+        AngleReading::Integrated { offset: true } => format!(
+            "{coord} read as the angle's offset from the operating angle {schedule}: K is the local slope at each operating angle"
+        ),
+        AngleReading::Linear if ambiguous => format!(
+            "{schedule} may or may not be the operating angle of {coord}: K is the mean slope over the perturbation, its standard error allowing for the local slope"
+        ),
+        AngleReading::Linear => format!(
+            "{schedule} read as not the angle of {coord}: K multiplies the displacement"
+        ),
+    }
+}
+
 /// Options that cannot be checked before the recording's coordinates and
 /// cut-off are known.
 fn check_options(params: &VaryingParams, d: usize, cutoff: f64) -> Result<()> {
+    if d != 1
+        && matches!(
+            params.schedule_angle,
+            ScheduleAngle::Total | ScheduleAngle::Offset
+        )
+    {
+        return Err(Error::invalid(
+            "schedule_angle",
+            format!("reads the schedule as one joint's angle; the recording has {d} coordinates"),
+        ));
+    }
     if params.reflex && d != 1 {
         return Err(Error::invalid(
             "reflex",
@@ -350,6 +458,9 @@ struct GridFit<'a> {
     fitted: &'a Fitted,
     /// The most flexible order's design, fit and covariance (the truncation error).
     neighbour: Option<(&'a Design<'a>, &'a Fitted, &'a [DMatrix<f64>])>,
+    /// A schedule of unknown meaning: the fit reading it as the operating
+    /// angle (the coordinate its offset), whose difference the SE carries.
+    other_reading: Option<(&'a Design<'a>, &'a Fitted)>,
     /// Coefficient covariance per output.
     cov: &'a [DMatrix<f64>],
     /// The fit with the reflex pathway (design, fit, covariance): its gains.
@@ -378,7 +489,10 @@ impl GridFit<'_> {
             let noise = (variance(design, &cov[j], &other, group) - var).max(0.0);
             (delta * delta - noise).max(0.0).sqrt()
         });
-        let se = var.max(0.0).sqrt();
+        let reading = self.other_reading.map_or(0.0, |(design, fitted)| {
+            evaluate(design, fitted, phi, group, j) - v
+        });
+        let se = var.max(0.0).sqrt().hypot(reading);
         // the reflex pathway's model error, which no block of the jackknife
         // sees (see REFLEX_MODEL_FLOOR)
         let floor = if self.design.reflex.is_some() {
@@ -387,6 +501,24 @@ impl GridFit<'_> {
             0.0
         };
         (v, se.hypot(floor).hypot(truncation))
+    }
+
+    /// The largest relative difference of K between the two readings of a
+    /// schedule of unknown meaning over the grid, when above 0.05 %.
+    fn largest_reading_difference(&self, grid: &[f64]) -> Option<f64> {
+        let (design, fitted) = self.other_reading?;
+        let k = 2 * self.design.rows.d;
+        let mut phi = vec![0.0; self.design.order + 1];
+        let largest = grid
+            .iter()
+            .map(|&sigma| {
+                self.design.rows.basis(sigma, self.design.order, &mut phi);
+                let v = evaluate(self.design, self.fitted, &phi, k, 0);
+                (evaluate(design, fitted, &phi, k, 0) - v).abs() / v.abs()
+            })
+            .filter(|r| r.is_finite())
+            .fold(0.0, f64::max);
+        (largest > 5e-4).then_some(largest)
     }
 
     fn point(&self, g: usize, sigma: f64) -> VaryingPoint {

@@ -8,7 +8,7 @@ use limpid_core::{Error, Recording, Result};
 use limpid_dsp::LowPass;
 
 use super::{VaryingParams, FILTER_ORDER, REFLEX_VELOCITY_HZ};
-use crate::varying::derivatives;
+use crate::varying::{derivatives, MAX_BASIS_ORDER};
 
 /// Full-rate signals of one contiguous segment.
 pub(super) struct Segment {
@@ -53,6 +53,35 @@ impl Rows {
     }
 }
 
+/// How the stiffness columns are formed (see [`crate::varying::ScheduleAngle`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum AngleReading {
+    /// `T_i(σ) x`: K multiplies the displacement.
+    Linear,
+    /// `∫ T_i(u(θ)) dθ` up to the whole angle θ (its lower end is slow and
+    /// detrends away): θ = x (`offset` false) or σ + x (`offset` true: the
+    /// schedule is added to the coordinate before anything else, so velocity
+    /// and acceleration are the whole angle's too, ramps included). A
+    /// stiffness that varies with the angle is then K(σ) at the operating
+    /// angle, not the mean slope over the angles the perturbation sweeps.
+    Integrated { offset: bool },
+}
+
+/// `∫_0^u T_i(s) ds` up to a constant: `u`, `u²/2`, then
+/// `T_{i+1}/(2(i+1)) - T_{i-1}/(2(i-1))`. Unclamped: the whole angle may
+/// leave the schedule's range by the perturbation's swing.
+fn chebyshev_integral(u: f64, i: usize) -> f64 {
+    match i {
+        0 => u,
+        1 => 0.5 * u * u,
+        _ => {
+            let mut t = [0.0; MAX_BASIS_ORDER + 3];
+            chebyshev(u, i + 1, &mut t);
+            t[i + 1] / (2.0 * (i + 1) as f64) - t[i - 1] / (2.0 * (i - 1) as f64)
+        }
+    }
+}
+
 pub(super) fn chebyshev(u: f64, p: usize, out: &mut [f64]) {
     out[0] = 1.0;
     if p >= 1 {
@@ -78,6 +107,7 @@ fn segments(
     forces: &[String],
     cutoff: f64,
     slow: &LowPass,
+    reading: AngleReading,
     warnings: &mut Vec<String>,
 ) -> Result<(Vec<Segment>, usize, usize)> {
     let fs = rec.sample_rate();
@@ -124,10 +154,15 @@ fn segments(
     }
     let min_len = 2 * trim + slow.padlen().max(lp.padlen()) + 2;
     let d = coords.len();
-    let (pos, frc) = (
+    let (mut pos, frc) = (
         crate::prepare::columns(rec, coords),
         crate::prepare::columns(rec, forces),
     );
+    let whole_angle: Vec<f64>;
+    if reading == (AngleReading::Integrated { offset: true }) {
+        whole_angle = pos[0].iter().zip(schedule).map(|(x, s)| x + s).collect();
+        pos[0] = &whole_angle;
+    }
     let mut segments = Vec::new();
     let mut skipped = 0usize;
     for seg in ranges {
@@ -180,9 +215,11 @@ pub(super) fn rows(
     cutoff: f64,
     top: usize,
     slow: &LowPass,
+    reading: AngleReading,
     warnings: &mut Vec<String>,
 ) -> Result<(Rows, usize, usize)> {
-    let (mut segments, dec, trim) = segments(rec, params, coords, forces, cutoff, slow, warnings)?;
+    let (mut segments, dec, trim) =
+        segments(rec, params, coords, forces, cutoff, slow, reading, warnings)?;
     let fs = rec.sample_rate();
     let d = coords.len();
     let n: usize = segments.iter().map(|s| s.kept.len()).sum();
@@ -253,6 +290,15 @@ pub(super) fn rows(
                 }
                 let product: Vec<f64> = if g == 3 * d {
                     basis[i].clone()
+                } else if matches!(reading, AngleReading::Integrated { .. }) && g == 2 * d {
+                    // the whole angle (the schedule already added to an offset)
+                    seg.signals[2 * d]
+                        .iter()
+                        .map(|theta| {
+                            let u = 2.0 * (theta - lo) / span - 1.0;
+                            0.5 * span * chebyshev_integral(u, i)
+                        })
+                        .collect()
                 } else {
                     seg.signals[g]
                         .iter()
@@ -285,4 +331,27 @@ pub(super) fn rows(
     }
     out.segments = segments;
     Ok((out, dec, trim))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_chebyshev_integral_differentiates_back_to_the_polynomial() {
+        let h = 1e-5;
+        for i in 0..=MAX_BASIS_ORDER + 1 {
+            for &u in &[-1.2, -0.7, 0.0, 0.3, 0.95, 1.1] {
+                let slope =
+                    (chebyshev_integral(u + h, i) - chebyshev_integral(u - h, i)) / (2.0 * h);
+                let mut t = [0.0; MAX_BASIS_ORDER + 3];
+                chebyshev(u, i, &mut t);
+                assert!(
+                    (slope - t[i]).abs() < 1e-6 * t[i].abs().max(1.0),
+                    "T_{i}({u}): {slope} vs {}",
+                    t[i]
+                );
+            }
+        }
+    }
 }
