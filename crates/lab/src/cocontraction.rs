@@ -137,19 +137,21 @@ pub fn simulate_cocontraction(
         let (s2, v2, a2) = Profile::Cubic.eval(t - back_start, protocol.move_s);
         (s1 - s2, v1 - v2, a1 - a2)
     };
+    let mut sensor = noise.force_sensor(fs);
     for (li, level) in protocol.levels.iter().enumerate() {
         let k = subject.stiffness(*level);
         for (di, dir) in protocol.directions.iter().enumerate() {
             let trial = li * protocol.directions.len() + di;
             let offset =
                 Vector3::from_fn(|_, _| noise.offset_per_trial_std_n * unit.sample(&mut rng));
+            let (k_factor, b_factor) = noise.trial_factors(&mut rng);
             for i in 0..per {
                 let idx = trial * per + i;
                 let t = i as f64 / fs;
                 let (s, sd, sdd) = motion(t);
                 let disp = dir * (protocol.radius_m * s);
                 let vel = dir * (protocol.radius_m * sd);
-                let intrinsic = subject.damping * vel + k * disp;
+                let intrinsic = subject.damping * vel * b_factor + k * disp * k_factor;
                 // stretch reflex: opposes the velocity of `delay` earlier
                 let reflex = subject.reflex.map_or(Vector3::zeros(), |r| {
                     let earlier = dir * (protocol.radius_m * motion(t - r.delay_s).1);
@@ -160,6 +162,7 @@ pub fn simulate_cocontraction(
                     + reflex
                     + offset
                     + subject_noise.force(idx, &intrinsic, &k);
+                let f = sensor.as_mut().map_or(f, |s| s.read(f));
                 cols[0].push(idx as f64 / fs);
                 for a in 0..3 {
                     cols[1 + a].push(

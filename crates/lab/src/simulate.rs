@@ -32,6 +32,10 @@ use limpid_dsp::LowPass;
 /// | `force_noise_hz` | 2 Hz | bandwidth of that noise (motor-unit and voluntary fluctuations, low-passed) |
 /// | `posture_drift_std_m` | 0 | the subject's equilibrium wanders by this s.d. (m), adding -K δ(t) to the force |
 /// | `posture_drift_hz` | 0.3 Hz | bandwidth of the posture drift |
+/// | `trial_impedance_std` | 0 | the subject changes from trial to trial: each trial's K and B are the posture's times 1 + this s.d. (fraction) x a unit normal, drawn per trial and matrix; the truth stays the posture's |
+/// | `tremor_std_n` | 0 | physiological tremor: force noise of this s.d. (N) in a band of ±2 Hz around `tremor_hz` |
+/// | `tremor_hz` | 10 Hz | the tremor's centre frequency |
+/// | `force_sensor_hz` | 0 | the force sensor's own first-order low-pass (Hz; its lag reads as less damping, K τ with τ = 1/(2π f)); 0: ideal |
 ///
 /// [`NoiseModel::realistic`] sets the last four to values that give seed
 /// 000's fit correlations (0.87-0.94).
@@ -60,6 +64,14 @@ pub struct NoiseModel {
     pub posture_drift_std_m: f64,
     /// Bandwidth of the posture drift (Hz).
     pub posture_drift_hz: f64,
+    /// Trial-to-trial change of the subject's K and B (relative s.d.).
+    pub trial_impedance_std: f64,
+    /// Tremor force noise (N, s.d.).
+    pub tremor_std_n: f64,
+    /// Tremor centre frequency (Hz).
+    pub tremor_hz: f64,
+    /// First-order low-pass of the force sensor (Hz); 0: ideal.
+    pub force_sensor_hz: f64,
 }
 
 impl Default for NoiseModel {
@@ -76,6 +88,10 @@ impl Default for NoiseModel {
             force_noise_hz: 2.0,
             posture_drift_std_m: 0.0,
             posture_drift_hz: 0.3,
+            trial_impedance_std: 0.0,
+            tremor_std_n: 0.0,
+            tremor_hz: 10.0,
+            force_sensor_hz: 0.0,
         }
     }
 }
@@ -104,6 +120,9 @@ impl NoiseModel {
             ("servo_bandwidth_hz", self.servo_bandwidth_hz),
             ("force_noise_fraction", self.force_noise_fraction),
             ("posture_drift_std_m", self.posture_drift_std_m),
+            ("trial_impedance_std", self.trial_impedance_std),
+            ("tremor_std_n", self.tremor_std_n),
+            ("force_sensor_hz", self.force_sensor_hz),
         ];
         for (name, v) in non_negative {
             if !(v >= 0.0 && v.is_finite()) {
@@ -114,6 +133,7 @@ impl NoiseModel {
             ("drift_lowpass_hz", self.drift_lowpass_hz),
             ("force_noise_hz", self.force_noise_hz),
             ("posture_drift_hz", self.posture_drift_hz),
+            ("tremor_hz", self.tremor_hz),
         ] {
             if !(v > 0.0 && v.is_finite()) {
                 return Err(format!("{name} = {v}: expected a positive bandwidth"));
@@ -160,8 +180,69 @@ impl NoiseModel {
         Ok(Disturbances {
             force_factor: slow_noise(n, fs, self.force_noise_hz, self.force_noise_fraction, rng)?,
             posture: slow_noise(n, fs, self.posture_drift_hz, self.posture_drift_std_m, rng)?,
+            tremor: band_noise(n, fs, self.tremor_hz, self.tremor_std_n, rng)?,
         })
     }
+
+    /// This trial's factors on K and B (1 without trial-to-trial change).
+    pub(crate) fn trial_factors(&self, rng: &mut StdRng) -> (f64, f64) {
+        if self.trial_impedance_std == 0.0 {
+            return (1.0, 1.0);
+        }
+        let unit = Normal::new(0.0, 1.0).expect("unit normal is valid");
+        let mut factor = || (1.0 + self.trial_impedance_std * unit.sample(rng)).max(0.1);
+        (factor(), factor())
+    }
+
+    /// The force sensor's first-order low-pass, one state per axis; `None`
+    /// for an ideal sensor.
+    pub(crate) fn force_sensor(&self, fs: f64) -> Option<ForceSensor> {
+        (self.force_sensor_hz > 0.0).then(|| ForceSensor {
+            alpha: 1.0 - (-2.0 * std::f64::consts::PI * self.force_sensor_hz / fs).exp(),
+            state: None,
+        })
+    }
+}
+
+/// A force sensor's first-order low-pass (see [`NoiseModel::force_sensor`]).
+pub(crate) struct ForceSensor {
+    alpha: f64,
+    state: Option<Vector3<f64>>,
+}
+
+impl ForceSensor {
+    /// The sensor's reading of the force `f` at the next sample.
+    pub(crate) fn read(&mut self, f: Vector3<f64>) -> Vector3<f64> {
+        let y = match self.state {
+            Some(y) => y + (f - y) * self.alpha,
+            None => f,
+        };
+        self.state = Some(y);
+        y
+    }
+}
+
+/// Three channels of noise in a band of ±2 Hz around `hz`, s.d. `std`
+/// (the difference of two zero-phase low-passes of the same white noise).
+fn band_noise(n: usize, fs: f64, hz: f64, std: f64, rng: &mut StdRng) -> Result<Vec<Vec<f64>>> {
+    if std == 0.0 || n < 16 {
+        return Ok(vec![vec![0.0; n]; 3]);
+    }
+    let (upper, lower) = (
+        LowPass::butterworth(2, (hz + 2.0).min(0.45 * fs), fs)?,
+        LowPass::butterworth(2, (hz - 2.0).max(0.1), fs)?,
+    );
+    (0..3)
+        .map(|_| {
+            let w: Vec<f64> = (0..n).map(|_| rng.random::<f64>() - 0.5).collect();
+            let (a, b) = (upper.filtfilt(&w)?, lower.filtfilt(&w)?);
+            let y: Vec<f64> = a.iter().zip(&b).map(|(a, b)| a - b).collect();
+            let sd = (y.iter().map(|v| v * v).sum::<f64>() / n as f64)
+                .sqrt()
+                .max(1e-300);
+            Ok(y.into_iter().map(|v| v * std / sd).collect())
+        })
+        .collect()
 }
 
 /// The centre-out part of a protocol.
@@ -246,8 +327,10 @@ pub fn simulate_centre_out(
         };
         (s1 - s2, v1 - v2, a1 - a2)
     };
+    let mut sensor = noise.force_sensor(protocol.sample_rate);
     for (trial, dir) in protocol.directions.iter().enumerate() {
         let offset = Vector3::from_fn(|_, _| noise.offset_per_trial_std_n * unit.sample(&mut rng));
+        let (k_factor, b_factor) = noise.trial_factors(&mut rng);
         // the servo's state: actual displacement along `dir` and its rate (starts at rest)
         let (mut servo_s, mut servo_v) = (0.0f64, 0.0f64);
         for i in 0..per {
@@ -278,8 +361,9 @@ pub fn simulate_centre_out(
             let disp = dir * (protocol.radius_m * s);
             let vel = dir * (protocol.radius_m * sd);
             let acc = dir * (protocol.radius_m * sdd);
-            let intrinsic = b * vel + k * disp;
+            let intrinsic = b * vel * b_factor + k * disp * k_factor;
             let f = m * acc + intrinsic + offset + subject_noise.force(idx, &intrinsic, &k);
+            let f = sensor.as_mut().map_or(f, |s| s.read(f));
             let x = posture.start + disp;
             cols[0].push(idx as f64 * dt);
             for a in 0..3 {
@@ -303,6 +387,8 @@ pub(crate) struct Disturbances {
     force_factor: Vec<Vec<f64>>,
     /// Equilibrium drift (m), per axis.
     posture: Vec<Vec<f64>>,
+    /// Tremor force (N), per axis.
+    tremor: Vec<Vec<f64>>,
 }
 
 impl Disturbances {
@@ -310,7 +396,8 @@ impl Disturbances {
     /// (stiffness and damping part) with stiffness `k`.
     pub(crate) fn force(&self, idx: usize, own: &Vector3<f64>, k: &Matrix3<f64>) -> Vector3<f64> {
         let delta = Vector3::from_fn(|a, _| self.posture[a][idx]);
-        Vector3::from_fn(|a, _| self.force_factor[a][idx] * own[a].abs()) - k * delta
+        Vector3::from_fn(|a, _| self.force_factor[a][idx] * own[a].abs() + self.tremor[a][idx])
+            - k * delta
     }
 }
 

@@ -45,8 +45,10 @@ pub(super) fn random_matrix3(rng: &mut StdRng, lo: f64, hi: f64) -> Matrix3<f64>
 /// drawn from wider ranges: white force noise 0.05-0.5 N, a force offset
 /// drifting within the trials (0-0.5 N below 0.2-2 Hz), force noise
 /// proportional to the force (0-5 %, coloured below 2 Hz), a coarser force
-/// resolution (1/160-1/20 N), position noise 5-50 µm and a posture drifting
-/// by 0-0.5 mm.
+/// resolution (1/160-1/20 N), position noise 5-50 µm, a posture drifting
+/// by 0-0.5 mm and (issue 58) K and B changing from trial to trial by 0-5 %,
+/// 0-0.3 N of 8-12 Hz tremor, and in half of them a force sensor low-passed
+/// at 200-1000 Hz.
 pub(super) fn sensors(rng: &mut StdRng) -> NoiseModel {
     let base = NoiseModel::default();
     if rng.random::<bool>() {
@@ -60,6 +62,16 @@ pub(super) fn sensors(rng: &mut StdRng) -> NoiseModel {
         force_quantum_n: 1.0 / uniform(rng, 20.0, 160.0),
         position_std_m: uniform(rng, 5e-6, 5e-5),
         posture_drift_std_m: uniform(rng, 0.0, 5e-4),
+        // issue 58: a subject that changes from trial to trial, tremor, a
+        // force sensor with its own low-pass
+        trial_impedance_std: uniform(rng, 0.0, 0.05),
+        tremor_std_n: uniform(rng, 0.0, 0.3),
+        tremor_hz: uniform(rng, 8.0, 12.0),
+        force_sensor_hz: if rng.random::<bool>() {
+            uniform(rng, 200.0, 1000.0)
+        } else {
+            0.0
+        },
         ..base
     }
 }

@@ -240,8 +240,9 @@ pub(crate) fn widen_for_what_the_regression_cannot_see(
 pub const FEW_TRIALS: usize = 10;
 
 /// The warning for an estimate from fewer than [`FEW_TRIALS`] trials: with
-/// a jackknife over g trials the SE itself has g - 1 degrees of freedom, so a
-/// 95 % interval is ±t SE, t from Student's t; with fewer trials than a
+/// a jackknife over g trials the SE itself has at most g - 1 degrees of
+/// freedom (the SEs are widened to Student's t on them, see
+/// `regression::small_sample_factors`); with fewer trials than a
 /// jackknife needs the SEs come from contiguous pieces or the residuals
 /// (`se_method` names which), which share each trial's offsets and drifts and
 /// may be too small.
@@ -255,7 +256,7 @@ pub(crate) fn few_trials_warning(trials: usize, se_method: &str) -> Option<Warni
         let df = (trials - 1) as f64;
         let t = StudentsT::new(0.0, 1.0, df).ok()?.inverse_cdf(0.975);
         format!(
-            "only {trials} trials: the standard errors come from a jackknife over them ({trials} - 1 degrees of freedom), so a 95 % interval is ±{t:.2} SE, not ±2 SE; record at least {FEW_TRIALS} trials"
+            "only {trials} trials: the standard errors come from a jackknife over them, widened to Student's t on its effective degrees of freedom (at most {trials} - 1: ±{t:.2} jackknife SE) so that ±2 SE is a 95 % interval, but they are themselves uncertain; record at least {FEW_TRIALS} trials"
         )
     } else {
         format!(

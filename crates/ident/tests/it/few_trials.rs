@@ -34,8 +34,11 @@ fn few_trials_are_named_with_the_interval_to_use() {
         six.contains("only 6 trials") && six.contains("(contiguous pieces)"),
         "{six}"
     );
-    // Student's t with 7 degrees of freedom: 2.36
+    // Student's t with 7 degrees of freedom: 2.36, already in the SEs
     let eight = warning_with(8).expect("8 trials are few");
-    assert!(eight.contains("±2.36 SE"), "{eight}");
+    assert!(
+        eight.contains("±2.36 jackknife SE") && eight.contains("±2 SE is a 95 % interval"),
+        "{eight}"
+    );
     assert_eq!(warning_with(16), None);
 }
