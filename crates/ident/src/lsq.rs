@@ -131,6 +131,55 @@ pub fn leave_one_out(tris: &[DMatrix<f64>], q: usize) -> Vec<DMatrix<f64>> {
         .collect()
 }
 
+/// Per coefficient of a delete-a-block jackknife over `blocks` (each a
+/// block's rows, or its triangle: only `X_i'X_i` of the first `p` columns
+/// counts): Student's t over the normal quantile (both at 0.975) for
+/// the jackknife's effective degrees of freedom, so that ±2 SE is a 95 %
+/// interval however few blocks inform the coefficient (issue 58). A
+/// delete-a-block jackknife is a sum of one square per block, block i
+/// weighing `h_i = a' X_i'X_i a` (a = (X'X)^-1 e_j: the block's share of the
+/// design for coefficient j); Welch–Satterthwaite gives `ν = (Σ h)² / Σ h²`
+/// blocks, times (g - 1)/g for the mean taken out (Bell & McCaffrey's
+/// degrees of freedom for cluster-robust errors). 16 trials in 16 directions
+/// inform K_xx through fewer than 16: on signal-dependent force noise ±2 SE
+/// covered 90 % of K's diagonal without it.
+pub(crate) fn small_sample_factors(blocks: &[DMatrix<f64>], p: usize) -> Vec<f64> {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    let g = blocks.len();
+    let grams: Vec<DMatrix<f64>> = blocks
+        .iter()
+        .map(|t| {
+            let x = t.columns(0, p);
+            x.transpose() * x
+        })
+        .collect();
+    let total = grams
+        .iter()
+        .fold(DMatrix::<f64>::zeros(p, p), |acc, gram| acc + gram);
+    let Some(inverse) = total.clone().try_inverse() else {
+        return vec![1.0; p];
+    };
+    let normal = 1.959_963_984_540_054;
+    (0..p)
+        .map(|j| {
+            let a = inverse.column(j);
+            let shares: Vec<f64> = grams
+                .iter()
+                .map(|gram| (a.transpose() * gram * a)[(0, 0)])
+                .collect();
+            let sum: f64 = shares.iter().sum();
+            let squares: f64 = shares.iter().map(|h| h * h).sum();
+            if g < 2 || !(sum > 0.0 && squares > 0.0) {
+                return 1.0;
+            }
+            let dof = (sum * sum / squares * (g as f64 - 1.0) / g as f64).max(1.0);
+            StudentsT::new(0.0, 1.0, dof)
+                .map(|t| t.inverse_cdf(0.975) / normal)
+                .unwrap_or(1.0)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

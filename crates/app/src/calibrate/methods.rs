@@ -55,13 +55,16 @@ pub(super) fn centre_out(profile: Profile, seed: u64) -> std::result::Result<Out
 pub(super) fn cocontraction(seed: u64) -> std::result::Result<Outcome, String> {
     let subject = &cocontraction_subject(seed);
     let mut rng = StdRng::seed_from_u64(seed ^ 0x5e45);
-    let (rec, mvc) = simulate_cocontraction(
-        subject,
-        &CocontractionProtocol::seed001(),
-        &sensors(&mut rng),
-        seed,
-    )
-    .map_err(|e| e.to_string())?;
+    // no tremor: seed 001's 50 ms rest is half a tremor period, too short to
+    // tell the onset from it (such trials are refused, "no rest before its
+    // perturbation onset")
+    let noise = NoiseModel {
+        tremor_std_n: 0.0,
+        ..sensors(&mut rng)
+    };
+    let (rec, mvc) =
+        simulate_cocontraction(subject, &CocontractionProtocol::seed001(), &noise, seed)
+            .map_err(|e| e.to_string())?;
     let r = estimate_cocontraction(&rec, &mvc, &PrepareParams::default(), &EmgParams::default())
         .map_err(|e| e.to_string())?;
     let mut o = Outcome::default();

@@ -242,7 +242,7 @@ pub const FEW_TRIALS: usize = 10;
 /// The warning for an estimate from fewer than [`FEW_TRIALS`] trials: with
 /// a jackknife over g trials the SE itself has at most g - 1 degrees of
 /// freedom (the SEs are widened to Student's t on them, see
-/// `regression::small_sample_factors`); with fewer trials than a
+/// `lsq::small_sample_factors`); with fewer trials than a
 /// jackknife needs the SEs come from contiguous pieces or the residuals
 /// (`se_method` names which), which share each trial's offsets and drifts and
 /// may be too small.

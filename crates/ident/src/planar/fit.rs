@@ -190,7 +190,9 @@ pub fn fit_planar(
         replicates: reps,
         ..
     } = solve_blocks(&blocks, &noise).map_err(numerical)?;
-    let se = jackknife_se(&reps, p);
+    // the jackknife's effective degrees of freedom (as the linear method's)
+    let widen = crate::lsq::small_sample_factors(&blocks, p);
+    let se = jackknife_se(&reps, p).component_mul(&DVector::from_vec(widen));
     let condition_number = unscaled_condition_number(&blocks, p);
     let off = if xi.is_some() { 0 } else { 3 };
     let (xi_hat, xi_se) = match xi {

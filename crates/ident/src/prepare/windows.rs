@@ -87,9 +87,15 @@ pub(super) fn make_windows(
             // coarse force sensor at rest: the motion decides)
             let lead_max = (FORCE_LEAD_S * rec.sample_rate()).round() as usize;
             let signals: Vec<&[f64]> = pos.iter().chain(frc).copied().collect();
-            let sigmas: Vec<f64> = position_noise.iter().chain(force_noise).copied().collect();
             let floors: Vec<f64> = signals.par_iter().map(|c| change_floors(&[c])[0]).collect();
             let mut windows = windows_from_trial_column(rec, trial_column)?;
+            let force_rest =
+                force_rest_spread(&windows, pos, frc, position_noise, &floors, min_rest);
+            let sigmas: Vec<f64> = position_noise
+                .iter()
+                .copied()
+                .chain(force_noise.iter().zip(&force_rest).map(|(a, b)| a.max(*b)))
+                .collect();
             // trials in parallel; the first trial without rest (in order) is the error
             let onsets: Vec<usize> = windows
                 .par_iter()
@@ -134,4 +140,57 @@ pub(super) fn make_windows(
             Ok(found)
         }
     }
+}
+
+/// Per force, the median over the trials of its standard deviation before
+/// the motion leaves rest (issue 58): a force at rest moves by more than its
+/// sensor's white noise — physiological tremor at 8-12 Hz, slow
+/// fluctuation — and second differences barely see an oscillation that slow
+/// (0.3 N of tremor put the onset 7 samples into a 25-sample rest). The
+/// first half of the samples before the motion is detected (the
+/// perturbation's force leads the displacement's detection); trials with
+/// fewer than `min_rest` samples there add nothing.
+fn force_rest_spread(
+    windows: &[Window],
+    pos: &[&[f64]],
+    frc: &[&[f64]],
+    position_noise: &[f64],
+    floors: &[f64],
+    min_rest: usize,
+) -> Vec<f64> {
+    let motion_onsets: Vec<Option<usize>> = windows
+        .par_iter()
+        .map(|w| {
+            limpid_core::trial::detect_onset(
+                pos,
+                w.range.clone(),
+                position_noise,
+                &floors[..pos.len()],
+            )
+        })
+        .collect();
+    frc.iter()
+        .map(|f| {
+            let mut spreads: Vec<f64> = windows
+                .iter()
+                .zip(&motion_onsets)
+                .filter_map(|(w, m)| {
+                    // the first half before the motion: the perturbation's
+                    // force leads the displacement's detection
+                    let end = w.range.start + ((*m)? - w.range.start) / 2;
+                    (end >= w.range.start + min_rest.max(4)).then(|| {
+                        let rest = &f[w.range.start..end];
+                        let mean = rest.iter().sum::<f64>() / rest.len() as f64;
+                        (rest.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / rest.len() as f64)
+                            .sqrt()
+                    })
+                })
+                .collect();
+            if spreads.is_empty() {
+                return 0.0;
+            }
+            spreads.sort_by(f64::total_cmp);
+            spreads[spreads.len() / 2]
+        })
+        .collect()
 }
