@@ -280,13 +280,15 @@ fn coherences_from_too_few_welch_segments_are_refused() {
 
 /// Rewrite the position columns of a CSV recording: each value held for
 /// `factor` samples (`held`) or linearly interpolated between values
-/// `factor` samples apart.
-fn resample_positions(from: &Path, to: &Path, factor: usize, held: bool) {
+/// `factor` samples apart; a `factor` that is not whole keeps the values at
+/// rows `round(j factor)` (a stream whose rate is not a whole fraction of
+/// the recording's: its knots fall 4 or 5 rows apart for 4.1).
+fn resample_positions(from: &Path, to: &Path, factor: f64, held: bool) {
     resample_columns(from, to, &["x", "y", "z"], factor, held);
 }
 
 /// [`resample_positions`] for the columns `names`.
-fn resample_columns(from: &Path, to: &Path, names: &[&str], factor: usize, held: bool) {
+fn resample_columns(from: &Path, to: &Path, names: &[&str], factor: f64, held: bool) {
     let text = std::fs::read_to_string(from).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -297,24 +299,38 @@ fn resample_columns(from: &Path, to: &Path, names: &[&str], factor: usize, held:
         .iter()
         .filter_map(|c| header.iter().position(|h| h == c))
         .collect();
-    let n = rows.len();
     let value = |i: usize, c: usize| rows[i][c].parse::<f64>().unwrap();
+    // the knots restart with each trial: the virtual lab's trials jump from
+    // the target back to the start, which a real stream never does
+    let trial = header.iter().position(|h| *h == "trial");
+    let mut starts = vec![0];
+    if let Some(t) = trial {
+        starts.extend((1..rows.len()).filter(|&i| rows[i][t] != rows[i - 1][t]));
+    }
+    starts.push(rows.len());
     let mut out = header.join(",") + "\n";
-    for (i, original) in rows.iter().enumerate() {
-        let mut row = original.clone();
-        let k = factor * (i / factor);
-        for &c in &cols {
-            let v = if held {
-                value(k, c)
-            } else {
-                let next = (k + factor).min(n - 1);
-                let f = (i - k) as f64 / factor as f64;
-                value(k, c) * (1.0 - f) + value(next, c) * f
-            };
-            row[c] = format!("{v:e}");
+    for piece in starts.windows(2) {
+        let (start, end) = (piece[0], piece[1]);
+        let knot = |j: usize| (start + (j as f64 * factor).round() as usize).min(end - 1);
+        let mut j = 0;
+        for (i, original) in rows.iter().enumerate().take(end).skip(start) {
+            while knot(j + 1) <= i && knot(j + 1) > knot(j) {
+                j += 1;
+            }
+            let (k, next) = (knot(j), knot(j + 1));
+            let mut row = original.clone();
+            for &c in &cols {
+                let v = if held || next == k {
+                    value(k, c)
+                } else {
+                    let f = (i - k) as f64 / (next - k) as f64;
+                    value(k, c) * (1.0 - f) + value(next, c) * f
+                };
+                row[c] = format!("{v:e}");
+            }
+            out.push_str(&row.join(","));
+            out.push('\n');
         }
-        out.push_str(&row.join(","));
-        out.push('\n');
     }
     std::fs::write(to, out).unwrap();
 }
@@ -331,9 +347,11 @@ fn held_or_interpolated_positions_give_the_native_rate_answer() {
             v["standard_errors"][m][i][i].as_f64().unwrap(),
         )
     };
-    for held in [true, false] {
-        let path = d.path().join(if held { "held.csv" } else { "lin.csv" });
-        resample_positions(&rec, &path, 4, held);
+    // held, interpolated, and interpolated from a stream at 1/4.1 of the
+    // rate (knots 4 or 5 rows apart: issue 58's irregular knots)
+    for (held, factor) in [(true, 4.0), (false, 4.0), (false, 4.1)] {
+        let path = d.path().join(format!("resampled-{held}-{factor}.csv"));
+        resample_positions(&rec, &path, factor, held);
         let v = json(&["estimate", "linear", s(&path), "--json"]);
         let message = v["warnings"]
             .as_array()
@@ -345,15 +363,19 @@ fn held_or_interpolated_positions_give_the_native_rate_answer() {
             .unwrap()
             .to_string();
         assert!(
-            message.contains(if held {
-                "held for 4 samples"
-            } else {
-                "interpolated between values 4 samples apart"
+            message.contains(match (held, factor == 4.0) {
+                (true, _) => "held for 4 samples",
+                (false, true) => "interpolated between values 4 samples apart",
+                (false, false) => "interpolated between values about 4 samples apart",
             }),
             "{message}"
         );
         assert!(
-            message.contains("estimated from the measured samples only, at 125 Hz"),
+            message.contains(if factor == 4.0 {
+                "estimated from the measured samples only, at 125 Hz"
+            } else {
+                "estimated from one sample in every second measured interval, at about 62.5 Hz"
+            }),
             "{message}"
         );
         // the native-rate answer (issue 58): K and B within their SEs of the
@@ -385,7 +407,7 @@ fn a_held_joint_angle_gives_the_reflex_estimate_of_its_measured_samples() {
     let d = tempfile::tempdir().unwrap();
     let ankle = examples("ankle").join("ex_ankle.csv");
     let held = d.path().join("held.csv");
-    resample_columns(&ankle, &held, &["q1"], 4, true);
+    resample_columns(&ankle, &held, &["q1"], 4.0, true);
     // the measured samples themselves, as a recording at the sensor's rate
     let text = std::fs::read_to_string(&ankle).unwrap();
     let measured: String = text

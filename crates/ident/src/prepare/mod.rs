@@ -577,14 +577,19 @@ impl MeasuredRate {
     /// The warning that says what was done.
     pub fn warning(&self) -> Warning {
         let r = &self.resampled;
+        let kept = if r.irregular {
+            "estimated from one sample in every second measured interval, at about"
+        } else {
+            "estimated from the measured samples only, at"
+        };
         Warning::new(
             WarningCode::ResampledSignal,
             format!(
-                "positions logged faster than they were measured: {} ({}); estimated from the measured samples only, at {} Hz (one sample in {} of the {} Hz log, from its sample {}), since holding delays a signal and interpolation puts noise measured at the slower rate on a faster clock; record at the sensor's own rate",
+                "positions logged faster than they were measured: {} ({}); {kept} {} Hz (one sample in {} of the {} Hz log, from its sample {}), since holding delays a signal and interpolation puts noise measured at the slower rate on a faster clock; record at the sensor's own rate",
                 self.columns.join(", "),
                 r.describe(),
-                limpid_core::short_number(self.logged_hz / r.factor as f64),
-                r.factor,
+                limpid_core::short_number(self.logged_hz / r.stride() as f64),
+                r.stride(),
                 limpid_core::short_number(self.logged_hz),
                 r.phase
             ),
@@ -621,7 +626,7 @@ pub fn at_measured_rate<'r>(
     if !found.iter().all(alike) {
         return Ok((rec, None));
     }
-    let kept = rec.every(first.phase, first.factor)?;
+    let kept = rec.every(first.phase, first.stride())?;
     let measured = MeasuredRate {
         resampled: first,
         logged_hz: rec.sample_rate(),
