@@ -7,14 +7,19 @@ use limpid_ident::{fit_linear, prepare, LinearParams, PrepareParams};
 use limpid_lab::{simulate_centre_out, CentreOut, NoiseModel, Posture, Profile};
 use nalgebra::{Matrix3, Vector3};
 
-fn warning_with(trials: usize) -> Option<String> {
-    let posture = Posture {
+/// The end point both tests perturb.
+fn posture() -> Posture {
+    Posture {
         name: "S".into(),
         start: Vector3::new(0.4, 0.0, 0.0),
         inertia: Matrix3::from_diagonal_element(1.0),
         damping: Matrix3::new(20.0, 2.0, 1.0, 2.0, 15.0, 0.5, 1.0, 0.5, 10.0),
         stiffness: Matrix3::new(600.0, 50.0, 20.0, 50.0, 400.0, 30.0, 20.0, 30.0, 250.0),
-    };
+    }
+}
+
+fn warning_with(trials: usize) -> Option<String> {
+    let posture = posture();
     let mut protocol = CentreOut::seed000(Profile::Cubic);
     protocol.directions = limpid_lab::sphere::even_directions(trials);
     let rec = simulate_centre_out(&posture, &protocol, &NoiseModel::default(), 1).unwrap();
@@ -49,13 +54,7 @@ fn few_trials_are_named_with_the_interval_to_use() {
 /// rest), not a tremor swing inside the rest.
 #[test]
 fn tremor_at_rest_does_not_move_the_onset() {
-    let posture = Posture {
-        name: "S".into(),
-        start: Vector3::new(0.4, 0.0, 0.0),
-        inertia: Matrix3::from_diagonal_element(1.0),
-        damping: Matrix3::new(20.0, 2.0, 1.0, 2.0, 15.0, 0.5, 1.0, 0.5, 10.0),
-        stiffness: Matrix3::new(600.0, 50.0, 20.0, 50.0, 400.0, 30.0, 20.0, 30.0, 250.0),
-    };
+    let posture = posture();
     let protocol = CentreOut::seed000(Profile::Cubic);
     let rest = |noise: &NoiseModel| -> Vec<usize> {
         let rec = simulate_centre_out(&posture, &protocol, noise, 3).unwrap();
