@@ -239,7 +239,9 @@ pub(super) fn estimate(
             name: params.schedule.clone(),
             unit: limpid_core::recording::magnitude_limit(&params.schedule).1.into(),
             values: grid,
-            angle: Some(describe_reading(reading, ambiguous, &params.schedule, &coords[0])),
+            // one joint's angle: several coordinates are read as no angle, unsaid
+            angle: (coords.len() == 1)
+                .then(|| describe_reading(reading, ambiguous, &params.schedule, &coords[0])),
         },
         coordinates: coords,
         forces,
