@@ -216,7 +216,7 @@ pub(super) fn estimate(
         .collect();
     if let Some(largest) = grid_fit.largest_reading_difference(&grid) {
         warnings.push(format!(
-            "{} may be the operating angle of {} ({} its offset from it) or another quantity: K is the mean slope over the perturbation, which differs from the local slope at each angle by up to {:.2} % here; the standard errors allow for either; say which with schedule_angle (offset or none)",
+            "{} may be the operating angle of {} ({} its offset from it) or another quantity: K is the mean slope over the perturbation, which differs from the local slope at each angle by up to {:.2} % here; the standard errors allow for either; say which with --schedule-angle offset or none (schedule_angle in Python)",
             params.schedule,
             coords[0],
             coords[0],
