@@ -64,8 +64,8 @@ pub struct Resampled {
     /// `irregular` the first one's.
     pub phase: usize,
     /// The measured values came at irregular times (a stream's own clock put
-    /// on another, as XDF and ROS readers do): `factor` is the mean spacing,
-    /// and every `factor`-th sample stands for one measured value.
+    /// on another, as XDF and ROS readers do): `factor` is the mean spacing
+    /// (the samples kept are [`Resampled::stride`] apart).
     pub irregular: bool,
 }
 
@@ -445,9 +445,6 @@ pub fn detect_windows(coords: &[&[f64]], min_rest: usize) -> Vec<Window> {
 mod tests {
     use super::*;
 
-    /// A force sensor that steps by its resolution at rest (a coarse or
-    /// drifting sensor) leads the motion by far more than a perturbation
-    /// can: the motion decides, and the force's own onset near it is kept.
     /// A slower stream at jittered times interpolated onto a 4x clock
     /// (issue 58): found as irregular, its noise read from every 8th sample.
     #[test]
@@ -487,6 +484,9 @@ mod tests {
         );
     }
 
+    /// A force sensor that steps by its resolution at rest (a coarse or
+    /// drifting sensor) leads the motion by far more than a perturbation
+    /// can: the motion decides, and the force's own onset near it is kept.
     #[test]
     fn a_force_leading_the_motion_by_far_does_not_mark_the_onset() {
         let n = 600;

@@ -125,10 +125,9 @@ pub fn estimate_stochastic_periodic(
     .ok_or_else(|| Error::Format {
         path: rec.path().to_path_buf(),
         message: format!(
-            "{} excited line(s) in the {lo}-{hi} Hz band: the fit of M, B and K needs at least {} ({} per coordinate); widen --band",
+            "{} excited line(s) in the {lo}-{hi} Hz band: the fit of M, B and K needs at least {} (3 per coordinate); widen --band",
             in_band.responses.len(),
-            3 * n,
-            3
+            3 * n
         ),
     })?;
     // the non-parametric Z on groups of lines up to the band's upper edge

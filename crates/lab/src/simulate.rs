@@ -232,17 +232,10 @@ fn band_noise(n: usize, fs: f64, hz: f64, std: f64, rng: &mut StdRng) -> Result<
         LowPass::butterworth(2, (hz + 2.0).min(0.45 * fs), fs)?,
         LowPass::butterworth(2, (hz - 2.0).max(0.1), fs)?,
     );
-    (0..3)
-        .map(|_| {
-            let w: Vec<f64> = (0..n).map(|_| rng.random::<f64>() - 0.5).collect();
-            let (a, b) = (upper.filtfilt(&w)?, lower.filtfilt(&w)?);
-            let y: Vec<f64> = a.iter().zip(&b).map(|(a, b)| a - b).collect();
-            let sd = (y.iter().map(|v| v * v).sum::<f64>() / n as f64)
-                .sqrt()
-                .max(1e-300);
-            Ok(y.into_iter().map(|v| v * std / sd).collect())
-        })
-        .collect()
+    filtered_noise(n, std, rng, |w| {
+        let (a, b) = (upper.filtfilt(w)?, lower.filtfilt(w)?);
+        Ok(a.iter().zip(&b).map(|(a, b)| a - b).collect())
+    })
 }
 
 /// The centre-out part of a protocol.
@@ -418,10 +411,21 @@ pub(crate) fn slow_noise(
         return Ok(vec![vec![0.0; n]; 3]);
     }
     let lp = LowPass::butterworth(2, hz, fs)?;
+    filtered_noise(n, std, rng, |w| lp.filtfilt(w))
+}
+
+/// Three channels of uniform white noise through `filter`, each scaled to
+/// s.d. `std`.
+fn filtered_noise(
+    n: usize,
+    std: f64,
+    rng: &mut StdRng,
+    filter: impl Fn(&[f64]) -> Result<Vec<f64>>,
+) -> Result<Vec<Vec<f64>>> {
     (0..3)
         .map(|_| {
             let w: Vec<f64> = (0..n).map(|_| rng.random::<f64>() - 0.5).collect();
-            let y = lp.filtfilt(&w)?;
+            let y = filter(&w)?;
             let sd = (y.iter().map(|v| v * v).sum::<f64>() / n as f64)
                 .sqrt()
                 .max(1e-300);

@@ -839,39 +839,22 @@ fn the_stochastic_estimate_of_a_periodic_recording_averages_whole_periods() {
         u["stiffness"][0][0].as_f64().unwrap(),
     );
     assert!((k - ku).abs() < 1e-9 * k, "{k} vs {ku}");
-    // a period with Welch segments, or pooled trials, is refused by name
-    let out = limpid(&[
-        "estimate",
-        "stochastic",
-        rec.to_str().unwrap(),
-        "--period",
-        "20",
-        "--nfft",
-        "1024",
-    ]);
-    assert_eq!(out.code, 2, "{}", out.stderr);
-    assert!(out.stderr.contains("--period"), "{}", out.stderr);
-    let out = limpid(&[
-        "estimate",
-        "stochastic",
-        rec.to_str().unwrap(),
-        rec.to_str().unwrap(),
-        "--period",
-        "20",
-    ]);
-    assert_eq!(out.code, 2, "{}", out.stderr);
-    assert!(out.stderr.contains("one recording"), "{}", out.stderr);
-    let out = limpid(&[
-        "estimate",
-        "stochastic",
-        rec.to_str().unwrap(),
-        "--period",
-        "20",
-        "--band",
-        "5.9,6",
-    ]);
-    assert_eq!(out.code, 2, "{}", out.stderr);
-    assert!(out.stderr.contains("widen --band"), "{}", out.stderr);
+    // a period with Welch segments, pooled trials or too narrow a band is refused by name
+    let path = rec.to_str().unwrap();
+    for (extra, want) in [
+        (vec![path, "--nfft", "1024"], "--period"),
+        (vec![path, path], "one recording"),
+        (vec![path, "--band", "5.9,6"], "widen --band"),
+    ] {
+        let args: Vec<&str> = ["estimate", "stochastic"]
+            .into_iter()
+            .chain(extra)
+            .chain(["--period", "20"])
+            .collect();
+        let out = limpid(&args);
+        assert_eq!(out.code, 2, "{args:?}: {}", out.stderr);
+        assert!(out.stderr.contains(want), "{args:?}: {}", out.stderr);
+    }
     // the text names the periods and the report draws the lines
     let html = d.path().join("r.html");
     let out = limpid(&[

@@ -554,25 +554,3 @@ impl Regression {
         se
     }
 }
-
-#[cfg(test)]
-mod small_sample_tests {
-    use crate::lsq::small_sample_factors;
-    use nalgebra::DMatrix;
-
-    #[test]
-    fn equal_blocks_give_students_t_on_g_minus_1_and_one_informative_block_one() {
-        // 16 blocks with the same design: t(15) / z = 2.131 / 1.960
-        let block = DMatrix::from_row_slice(2, 2, &[2.0, 0.5, 0.0, 1.0]);
-        let same = vec![block.clone(); 16];
-        let f = small_sample_factors(&same, 2);
-        assert!((f[0] - 2.1314 / 1.95996).abs() < 1e-3, "{f:?}");
-        // the second coefficient informed by one block only: one degree of freedom
-        let mut lone: Vec<DMatrix<f64>> =
-            vec![DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 0.0]); 15];
-        lone.push(DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 1.0]));
-        let f = small_sample_factors(&lone, 2);
-        assert!((f[1] - 12.706 / 1.95996).abs() < 1e-2, "{f:?}");
-        assert!(f[0] < 1.1, "{f:?}");
-    }
-}

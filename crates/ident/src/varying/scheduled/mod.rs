@@ -86,7 +86,7 @@ pub(super) fn estimate(
     let slow = LowPass::butterworth(SLOW_ORDER, params.slow_hz, fs)?;
     // one degree more than any order tried, for the offset c(σ)
     let top = params.basis_order.unwrap_or(MAX_BASIS_ORDER) + 1;
-    let (reading, ambiguous) = angle_reading(rec, params, &coords, &slow)?;
+    let reading = angle_reading(rec, params, &coords, &slow)?;
     let rows_read = |reading, warnings: &mut Vec<String>| {
         rows(
             rec, params, &coords, &forces, cutoff, top, &slow, reading, warnings,
@@ -96,7 +96,7 @@ pub(super) fn estimate(
     // a schedule that may be the operating angle (the coordinate its offset)
     // or another quantity: the offset reading's fit, whose difference the
     // standard errors carry
-    let offset_rows = if ambiguous {
+    let offset_rows = if reading == AngleReading::Unknown {
         Some(rows_read(AngleReading::Integrated { offset: true }, &mut Vec::new())?.0)
     } else {
         None
@@ -241,7 +241,7 @@ pub(super) fn estimate(
             values: grid,
             // one joint's angle: several coordinates are read as no angle, unsaid
             angle: (coords.len() == 1)
-                .then(|| describe_reading(reading, ambiguous, &params.schedule, &coords[0])),
+                .then(|| describe_reading(reading, &params.schedule, &coords[0])),
         },
         coordinates: coords,
         forces,
@@ -269,26 +269,24 @@ pub(super) fn estimate(
     })
 }
 
-/// How the stiffness columns read the schedule (see [`ScheduleAngle`]), and
-/// whether its meaning is unknown: `auto`, a schedule that neither is the
-/// coordinate nor follows its slow part, and a perturbation small beside the
-/// schedule's range (it may be an operating angle with the coordinate its
-/// offset, or a co-contraction level).
+/// How the stiffness columns read the schedule (see [`ScheduleAngle`]);
+/// `auto` finds its meaning unknown for a schedule that neither is the
+/// coordinate nor follows its slow part, with a perturbation small beside
+/// the schedule's range (it may be an operating angle with the coordinate
+/// its offset, or a co-contraction level).
 fn angle_reading(
     rec: &Recording,
     params: &VaryingParams,
     coords: &[String],
     slow: &LowPass,
-) -> Result<(AngleReading, bool)> {
-    let linear = (AngleReading::Linear, false);
+) -> Result<AngleReading> {
+    let whole = AngleReading::Integrated { offset: false };
     match params.schedule_angle {
-        ScheduleAngle::None => return Ok(linear),
-        ScheduleAngle::Total => return Ok((AngleReading::Integrated { offset: false }, false)),
-        ScheduleAngle::Offset => return Ok((AngleReading::Integrated { offset: true }, false)),
-        ScheduleAngle::Auto if coords.len() != 1 => return Ok(linear),
-        ScheduleAngle::Auto if coords[0] == params.schedule => {
-            return Ok((AngleReading::Integrated { offset: false }, false))
-        }
+        ScheduleAngle::None => return Ok(AngleReading::Linear),
+        ScheduleAngle::Total => return Ok(whole),
+        ScheduleAngle::Offset => return Ok(AngleReading::Integrated { offset: true }),
+        ScheduleAngle::Auto if coords.len() != 1 => return Ok(AngleReading::Linear),
+        ScheduleAngle::Auto if coords[0] == params.schedule => return Ok(whole),
         ScheduleAngle::Auto => {}
     }
     let x = rec.require(&coords[0], "the coordinate")?;
@@ -305,13 +303,13 @@ fn angle_reading(
         syy += b * b;
     }
     if sxx <= 0.0 {
-        return Ok(linear);
+        return Ok(AngleReading::Linear);
     }
     // the coordinate's slow part follows the schedule one to one: the whole angle
     let slope = sxy / sxx;
     let unexplained = (syy - slope * sxy).max(0.0) / sxx;
     if (slope - 1.0).abs() < 0.2 && unexplained < 0.04 {
-        return Ok((AngleReading::Integrated { offset: false }, false));
+        return Ok(whole);
     }
     let swing = (x
         .iter()
@@ -322,11 +320,15 @@ fn angle_reading(
         .sqrt();
     let range = sigma.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
         - sigma.iter().fold(f64::INFINITY, |a, &b| a.min(b));
-    Ok((AngleReading::Linear, swing < 0.25 * range))
+    Ok(if swing < 0.25 * range {
+        AngleReading::Unknown
+    } else {
+        AngleReading::Linear
+    })
 }
 
 /// The reading in words, for the result's schedule.
-fn describe_reading(reading: AngleReading, ambiguous: bool, schedule: &str, coord: &str) -> String {
+fn describe_reading(reading: AngleReading, schedule: &str, coord: &str) -> String {
     match reading {
         AngleReading::Integrated { offset: false } => format!(
             "{coord} read as the whole angle and {schedule} as its operating angle: K is the local slope at each operating angle"
@@ -334,7 +336,7 @@ fn describe_reading(reading: AngleReading, ambiguous: bool, schedule: &str, coor
         AngleReading::Integrated { offset: true } => format!(
             "{coord} read as the angle's offset from the operating angle {schedule}: K is the local slope at each operating angle"
         ),
-        AngleReading::Linear if ambiguous => format!(
+        AngleReading::Unknown => format!(
             "{schedule} may or may not be the operating angle of {coord}: K is the mean slope over the perturbation, its standard error allowing for the local slope"
         ),
         AngleReading::Linear => format!(

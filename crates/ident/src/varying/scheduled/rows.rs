@@ -65,6 +65,10 @@ pub(super) enum AngleReading {
     /// stiffness that varies with the angle is then K(σ) at the operating
     /// angle, not the mean slope over the angles the perturbation sweeps.
     Integrated { offset: bool },
+    /// A schedule that may or may not be the operating angle: formed as
+    /// `Linear`; the estimator fits the `offset` reading beside it and its
+    /// standard errors carry the difference.
+    Unknown,
 }
 
 /// `∫_0^u T_i(s) ds` up to a constant: `u`, `u²/2`, then
