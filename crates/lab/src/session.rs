@@ -171,6 +171,13 @@ pub fn simulate_design(
                 Some(text) => parse(text)?,
                 None => crate::varying::ScheduledAnkle::default(),
             };
+            // the subject's values are the subject file's, not the protocol's
+            if let (Err(e), Some(text)) = (s.validate(), subject) {
+                return Err(Error::Format {
+                    path: text.path.to_path_buf(),
+                    message: e.to_string(),
+                });
+            }
             let recording = crate::varying::simulate_scheduled_ankle(&s, p, seed)?;
             let truth = crate::varying::scheduled_truth(&s, p, 25);
             Ok(vec![Simulated {
@@ -459,7 +466,7 @@ fn centre_out(p: &Protocol, subject: Option<&SubjectText>, seed: u64) -> Result<
         .as_ref()
         .and_then(|s| s.noise.clone())
         .unwrap_or_default();
-    if let Err(message) = noise.check() {
+    if let Err(message) = noise.check_at(protocol.sample_rate) {
         return Err(Error::Format {
             path: subject.map_or_else(Default::default, |s| s.path.to_path_buf()),
             message: format!("[noise] {message}"),

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::profile::Profile;
 use crate::subject::Posture;
-use limpid_core::{Recording, Result};
+use limpid_core::{Error, Recording, Result};
 use limpid_dsp::LowPass;
 
 /// Noise added by the virtual sensors (defaults: those of the outside examples).
@@ -174,6 +174,17 @@ impl NoiseModel {
         }
     }
 
+    /// [`NoiseModel::check`] at the sample rate `fs` (Hz): a tremor, when
+    /// there is one, within the band the rate can hold.
+    pub fn check_at(&self, fs: f64) -> std::result::Result<(), String> {
+        self.check()?;
+        if self.tremor_std_n > 0.0 {
+            tremor_band_fits(self.tremor_hz, fs)
+                .map_err(|m| format!("tremor_hz = {}: {m}", self.tremor_hz))?;
+        }
+        Ok(())
+    }
+
     /// The subject's own slow disturbances over `n` samples: signal-dependent
     /// noise factors (unit s.d.) and posture drift (m), three axes each.
     pub(crate) fn disturbances(&self, n: usize, fs: f64, rng: &mut StdRng) -> Result<Disturbances> {
@@ -222,14 +233,27 @@ impl ForceSensor {
     }
 }
 
+/// The tremor's band (±2 Hz around `hz`) below 0.45 x the sample rate `fs`.
+fn tremor_band_fits(hz: f64, fs: f64) -> std::result::Result<(), String> {
+    if hz + 2.0 > 0.45 * fs {
+        return Err(format!(
+            "the tremor's band (±2 Hz around it) must lie below 0.45 x the {} Hz sample rate, found {} Hz",
+            limpid_core::error::Num(fs),
+            limpid_core::error::Num(hz)
+        ));
+    }
+    Ok(())
+}
+
 /// Three channels of noise in a band of ±2 Hz around `hz`, s.d. `std`
 /// (the difference of two zero-phase low-passes of the same white noise).
 fn band_noise(n: usize, fs: f64, hz: f64, std: f64, rng: &mut StdRng) -> Result<Vec<Vec<f64>>> {
     if std == 0.0 || n < 16 {
         return Ok(vec![vec![0.0; n]; 3]);
     }
+    tremor_band_fits(hz, fs).map_err(|message| Error::invalid("tremor_hz", message))?;
     let (upper, lower) = (
-        LowPass::butterworth(2, (hz + 2.0).min(0.45 * fs), fs)?,
+        LowPass::butterworth(2, hz + 2.0, fs)?,
         LowPass::butterworth(2, (hz - 2.0).max(0.1), fs)?,
     );
     filtered_noise(n, std, rng, |w| {

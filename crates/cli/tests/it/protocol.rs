@@ -590,3 +590,47 @@ fn a_subject_whose_noise_cannot_exist_is_refused() {
         assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
     }
 }
+
+/// Issue 58's subject fields beyond what can be simulated are refused
+/// naming the subject file, not the protocol: a scheduled ankle whose
+/// stiffness would overflow, a tremor above what the sample rate holds.
+#[test]
+fn subject_values_that_cannot_be_simulated_are_refused_naming_the_subject_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for (preset_name, subject, field) in [
+        (
+            "ankle-ramp-and-hold",
+            "inertia = 0.015\nstiffness = [70.0, 80.0, 100.0]\nstiffness_growth = 1e307\n\
+             damping = [0.8, 0.5, 0.0]\nbackground = [2.0, 10.0, 0.0]\n",
+            "stiffness_growth",
+        ),
+        (
+            "artemiadis-3d",
+            "inertia = [[1.5, 0.0, 0.0], [0.0, 1.8, 0.0], [0.0, 0.0, 2.0]]\n\
+             damping = [[12.0, 1.0, 0.0], [1.0, 9.0, 0.0], [0.0, 0.0, 7.0]]\n\
+             stiffness = [[900.0, 0.0, 0.0], [0.0, 500.0, 0.0], [0.0, 0.0, 350.0]]\n\
+             [noise]\ntremor_std_n = 0.3\ntremor_hz = 1000\n",
+            "tremor_hz",
+        ),
+    ] {
+        let protocol = preset(dir.path(), preset_name);
+        let file = dir.path().join(format!("{preset_name}.subject.toml"));
+        std::fs::write(&file, subject).unwrap();
+        let out = limpid(&[
+            "simulate",
+            protocol.to_str().unwrap(),
+            "--subject",
+            file.to_str().unwrap(),
+            "-o",
+            dir.path().join("r.csv").to_str().unwrap(),
+        ]);
+        assert_eq!(out.code, 2, "{}", out.stderr);
+        assert!(
+            out.stderr.contains(".subject.toml")
+                && out.stderr.contains(field)
+                && out.stderr.lines().count() == 1,
+            "{}",
+            out.stderr
+        );
+    }
+}
