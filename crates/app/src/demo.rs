@@ -76,8 +76,12 @@ fn designed_point(noise: &NoiseModel, posture: &Posture, seed: u64) -> Result<De
         noise,
         seed.wrapping_mul(1000),
     )?;
+    let limpid_analysis::result::design::DesignChoice::CentreOut(chosen) = designed.result.chosen
+    else {
+        unreachable!("the linear method's designs are centre-out")
+    };
     Ok(DemoDesigned {
-        chosen: designed.result.chosen,
+        chosen,
         budget_s,
         predicted_se_percent: designed.result.predicted.pooled.se_percent,
         point,

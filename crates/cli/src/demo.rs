@@ -202,15 +202,10 @@ fn print_demo(result: &limpid_analysis::result::demo::DemoResult) {
             }
         };
         println!(
-            "\nthe same minutes designed (limpid protocol design, objective K and B): at {} the seed's {:.1} s hold {} {} perturbations of {} mm, {} ms out, {} ms hold, {} ms back, within the same limits",
+            "\nthe same minutes designed (limpid protocol design, objective K and B): at {} the seed's {:.1} s hold {}, within the same limits",
             p.start_point,
             d.budget_s,
-            c.trials,
-            c.profile,
-            num(c.radius_m * 1e3),
-            num(c.motion_s * 1e3),
-            num(c.hold_s * 1e3),
-            num(c.motion_s * 1e3)
+            c.describe(num)
         );
         println!(
             "{:<6}{:<10}{:>30}{:>30}{:>10}{:>10}  inertia {}",

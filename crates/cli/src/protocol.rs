@@ -55,30 +55,36 @@ pub struct DesignArgs {
     /// `demo:S1` .. `demo:S6`: the demo's realistic subject at that start point.
     #[arg(long)]
     pub prior: String,
-    /// Take the limits, workspace and sample rate of this centre-out protocol (TOML).
+    /// Take the limits, workspace and sample rate of this protocol (TOML): centre-out (linear;
+    /// stochastic too, its displacement limit kept in the workspace), an end-point periodic
+    /// one (stochastic), a PRBS (reflex).
     #[arg(long, value_name = "P.toml")]
     pub limits_from: Option<PathBuf>,
-    /// The designed protocol's whole length (s): rests, motions, holds, returns and relaxation.
+    /// The designed protocol's whole length (s): rests, motions, holds, returns and relaxation
+    /// (a periodic protocol's fade-in and fade-out periods).
     #[arg(long, value_name = "S")]
     pub duration: f64,
     /// What matters: `stiffness,damping` or weights, `stiffness=2,damping=1,inertia=0.5`
-    /// (linear); the reflex method minimises the reflex gain's error (`gain`).
+    /// (linear, stochastic); the reflex method minimises the reflex gain's error (`gain`).
     #[arg(long, default_value = "stiffness,damping")]
     pub objective: String,
-    /// The family the protocol is chosen from: centre-out (linear), prbs (reflex) or any.
+    /// The family the protocol is chosen from: centre-out (linear), multisine (stochastic), prbs
+    /// (reflex) or any (the method's).
     #[arg(long, default_value = "any")]
     pub family: String,
-    /// The estimator the design is for: linear (a centre-out protocol for K, B, M) or reflex
+    /// The estimator the design is for: linear (a centre-out protocol for K, B, M), stochastic
+    /// (an end-point multisine for `estimate stochastic --period`; the same priors) or reflex
     /// (a PRBS for the stretch-reflex gain; --prior is an ankle: inertia, damping, stiffness,
     /// [reflex], torque_noise_nm, or demo:ankle; --limits-from a PRBS protocol).
     #[arg(long, default_value = "linear")]
     pub method: String,
-    /// The protocol it replaces (TOML; centre-out, or a PRBS for --method reflex): predicted on
-    /// the prior beside the design (a centre-out one at the prior's start point).
+    /// The protocol it replaces (TOML; centre-out, an end-point multisine for --method
+    /// stochastic, a PRBS for --method reflex): predicted on the prior beside the design (a
+    /// centre-out one at the prior's start point).
     #[arg(long, value_name = "P.toml")]
     pub baseline: Option<PathBuf>,
-    /// Linear method: simulate N recordings on subjects drawn from the prior and print predicted
-    /// against achieved spread.
+    /// Linear and stochastic methods: simulate N recordings on subjects drawn from the prior and
+    /// print predicted against achieved spread.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub verify: usize,
     /// Simulated recordings behind the prediction.
@@ -483,20 +489,24 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
     if let Some(out) = &args.output {
         limpid_core::files::refuse_overwriting_inputs(&[(out, "the output (-o)")], &inputs)?;
     }
+    let families = |method: &str| match method {
+        "linear" => "centre-out",
+        "stochastic" => "multisine",
+        _ => "prbs",
+    };
     match (args.method.as_str(), args.family.as_str()) {
-        ("linear", "centre-out" | "any") => {}
+        ("linear", "centre-out" | "any") | ("stochastic", "multisine" | "any") => {}
         ("reflex", "prbs" | "any") => return run_reflex_design(&args, demo, cx),
-        ("linear" | "reflex", family) => {
+        (method @ ("linear" | "stochastic" | "reflex"), family) => {
             return Err(format!(
-                "--family {family}: the {} method's designs are {} (other families are not written yet)",
-                args.method,
-                if args.method == "linear" { "centre-out" } else { "prbs" }
+                "--family {family}: the {method} method's designs are {} (a PRBS for the linear or stochastic method is not written yet)",
+                families(method)
             )
             .into())
         }
         (method, _) => {
             return Err(format!(
-                "--method {method}: designs are available for the linear and reflex methods (stochastic and planar designs are not written yet)"
+                "--method {method}: designs are available for the linear, stochastic and reflex methods (planar designs are not written yet)"
             )
             .into())
         }
@@ -507,27 +517,56 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         baseline: baseline_text,
     } = DesignTexts::read(&args, demo)?;
     let named = |e| design_error(cx, &args, e);
-    let request = request_from_texts(
-        (&prior_text, &prior_path),
+    let texts = (
+        (prior_text.as_str(), prior_path.as_path()),
         limits_text.as_deref().zip(args.limits_from.as_deref()),
         baseline_text.as_deref().zip(args.baseline.as_deref()),
-        args.duration,
-        &args.objective,
-        args.runs,
-        args.verify,
-        args.seed,
-    )
-    .map_err(named)?;
+    );
     if !args.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-        eprintln!("designing: every candidate is simulated and estimated on the prior (a few seconds) ...");
+        eprintln!(
+            "designing: every candidate is simulated and estimated on the prior (seconds) ..."
+        );
     }
-    let designed = design(&request).map_err(named)?;
+    let (toml, result) = if args.method == "stochastic" {
+        use limpid_app::design::stochastic::{design_stochastic, stochastic_request_from_texts};
+        let request = stochastic_request_from_texts(
+            texts.0,
+            texts.1,
+            texts.2,
+            args.duration,
+            &args.objective,
+            args.runs,
+            args.verify,
+            args.seed,
+        )
+        .map_err(named)?;
+        let designed = design_stochastic(&request).map_err(named)?;
+        (
+            limpid_lab::design::Design::Periodic(designed.protocol).to_toml(),
+            designed.result,
+        )
+    } else {
+        let request = request_from_texts(
+            texts.0,
+            texts.1,
+            texts.2,
+            args.duration,
+            &args.objective,
+            args.runs,
+            args.verify,
+            args.seed,
+        )
+        .map_err(named)?;
+        let designed = design(&request).map_err(named)?;
+        (
+            format!("kind = \"centre-out\"\n{}", designed.protocol.to_toml()),
+            designed.result,
+        )
+    };
     if let Some(out) = &args.output {
         let text = format!(
-            "# limpid protocol design (objective {}, budget {} s); units: m, rad, s, Hz, N\nkind = \"centre-out\"\n{}",
-            args.objective,
-            args.duration,
-            designed.protocol.to_toml()
+            "# limpid protocol design --method {} (objective {}, budget {} s); units: m, rad, s, Hz, N\n{toml}",
+            args.method, args.objective, args.duration,
         );
         limpid_core::files::write_file(out, text.as_bytes())?;
     }
@@ -535,7 +574,7 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         println!(
             "{}",
             limpid_analysis::result::Document::new(limpid_analysis::result::Estimate::Design(
-                designed.result
+                result
             ))
             .with_run(limpid_analysis::result::Run::of_this_process(
                 &inputs.iter().map(|(p, _)| *p).collect::<Vec<_>>()
@@ -544,7 +583,7 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         );
         return Ok(());
     }
-    print_design(&designed.result);
+    print_design(&result);
     match &args.output {
         Some(out) => println!("wrote {} (check it: limpid protocol check {0}; play it: limpid protocol export {0} -o command.csv)", out.display()),
         None => println!("protocol not written: add -o D.toml"),
@@ -552,24 +591,28 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
     Ok(())
 }
 
+/// Below this RMS displacement (m) a human arm's stiffness is its short-range
+/// stiffness, higher than at larger motions (a note, not a limit).
+const SHORT_RANGE_M: f64 = 1e-3;
+
 fn print_design(r: &limpid_analysis::result::design::DesignResult) {
-    let c = &r.chosen;
     println!(
-        "designed: {} {} perturbations of {} mm, {} ms out, {} ms hold, {} ms back; rest {} s, relax {} s: {:.1} s of {} s, at ({}, {}, {}) m",
-        c.trials,
-        c.profile,
-        num(c.radius_m * 1e3),
-        num(c.motion_s * 1e3),
-        num(c.hold_s * 1e3),
-        num(c.motion_s * 1e3),
-        num(c.rest_s),
-        num(c.relax_s),
-        c.duration_s,
+        "designed: {}: {:.1} s of {} s, at ({}, {}, {}) m",
+        r.chosen.describe(num),
+        r.chosen.duration_s(),
         num(r.budget_s),
         num(r.start_m[0]),
         num(r.start_m[1]),
         num(r.start_m[2])
     );
+    if let limpid_analysis::result::design::DesignChoice::Multisine(c) = &r.chosen {
+        if c.rms_m < SHORT_RANGE_M {
+            println!(
+                "note: {} mm RMS is within a human arm's short-range stiffness (about 1 mm), which the prior's linear impedance does not hold: K there may exceed K at larger motions",
+                num(c.rms_m * 1e3)
+            );
+        }
+    }
     println!(
         "predicted on the prior ({} simulated recordings each; SE: RMS element s.d., and relative to the RMS element):",
         r.predicted.runs
@@ -632,7 +675,7 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
 fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     use limpid_app::design::reflex::{design_reflex, reflex_request_from_texts};
     if args.verify > 0 {
-        return Err("--verify is for the linear method: the reflex design's prediction is already the spread over --runs simulated recordings".into());
+        return Err("--verify is for the linear and stochastic methods: the reflex design's prediction is already the spread over --runs simulated recordings".into());
     }
     if !matches!(
         args.objective.as_str(),

@@ -391,6 +391,87 @@ fn periodic_endpoint(
     })
 }
 
+/// A periodic end-point command played on a subject with M, B, K at its
+/// posture, with a human subject's noise ([`NoiseModel`]) instead of the
+/// follower's white noise: the prediction behind `limpid protocol design
+/// --method stochastic` (issue 60). The servo is the noise model's (`fs / 10`
+/// when it tracks ideally); the forces carry, as the centre-out simulation's
+/// do, one offset for the recording, slow drift, the subject's
+/// signal-dependent force fluctuation, posture drift and tremor, the force
+/// sensor's low-pass, white noise and the sensor's resolution (trial-to-trial
+/// change has no trials to act on here). `command` is `p.command()`, made
+/// once by the caller for many recordings.
+pub fn periodic_endpoint_noisy(
+    p: &crate::periodic::PeriodicDesign,
+    command: &crate::periodic::Command,
+    subject: &crate::follow::EndpointFollower,
+    noise: &NoiseModel,
+    seed: u64,
+) -> Result<Recording> {
+    use crate::follow::{follow_endpoint, EndpointFollower, Rig};
+    use nalgebra::Vector3;
+    use rand::{rngs::StdRng, SeedableRng};
+    use rand_distr::{Distribution, Normal};
+    let fs = p.sample_rate_hz;
+    noise.check_at(fs).map_err(|m| Error::invalid("noise", m))?;
+    let places = channel_places(&command.channels, ["x", "y", "z"])?;
+    let commands = command_by_place::<3>(command, &places);
+    let quiet = EndpointFollower {
+        rig: Rig {
+            servo_hz: if noise.servo_bandwidth_hz > 0.0 {
+                noise.servo_bandwidth_hz
+            } else {
+                fs / 10.0
+            },
+            force_noise_std: 0.0,
+            position_noise_std: 0.0,
+        },
+        ..subject.clone()
+    };
+    let whole = follow_endpoint(&quiet, &commands, fs, seed)?;
+    // the same motion without inertia: the subject's own force B v + K dx,
+    // which the signal-dependent fluctuation scales
+    let own = follow_endpoint(
+        &EndpointFollower {
+            inertia: [[0.0; 3]; 3],
+            ..quiet.clone()
+        },
+        &commands,
+        fs,
+        seed,
+    )?;
+    let n = command.t.len();
+    let mut rng = StdRng::seed_from_u64(seed);
+    let unit = Normal::new(0.0, 1.0).expect("the unit normal is valid");
+    let drift =
+        crate::simulate::slow_noise(n, fs, noise.drift_lowpass_hz, noise.drift_std_n, &mut rng)?;
+    let subject_noise = noise.disturbances(n, fs, &mut rng)?;
+    let offset = Vector3::from_fn(|_, _| noise.offset_per_trial_std_n * unit.sample(&mut rng));
+    let k = Matrix3::from_fn(|r, c| subject.stiffness[r][c]);
+    let mut sensor = noise.force_sensor(fs);
+    let mut position: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(n)).collect();
+    let mut force: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(n)).collect();
+    for i in 0..n {
+        let at = |v: &[Vec<f64>]| Vector3::from_fn(|a, _| v[a][i]);
+        let f = at(&whole.force) + offset + subject_noise.force(i, &at(&own.force), &k);
+        let f = sensor.as_mut().map_or(f, |s| s.read(f));
+        for a in 0..3 {
+            position[a].push(whole.position[a][i] + noise.position_std_m * unit.sample(&mut rng));
+            force[a]
+                .push(noise.quantise_force(
+                    f[a] + drift[a][i] + noise.white_std_n * unit.sample(&mut rng),
+                ));
+        }
+    }
+    periodic_recording(
+        "virtual end point (design)",
+        command,
+        &["x", "y", "z"],
+        &["fx", "fy", "fz"],
+        crate::follow::Followed { position, force },
+    )
+}
+
 fn periodic_ankle(
     p: &crate::periodic::PeriodicDesign,
     subject: Option<&SubjectText>,

@@ -537,7 +537,7 @@ fn design(
     use limpid_analysis::result::{Document, Estimate};
     if method == "reflex" {
         if verify > 0 {
-            return Err(value_err("verify is for the linear method: the reflex design's prediction is already the spread over `runs` simulated recordings".to_string()));
+            return Err(value_err("verify is for the linear and stochastic methods: the reflex design's prediction is already the spread over `runs` simulated recordings".to_string()));
         }
         let request = limpid_app::design::reflex::reflex_request_from_texts(
             (prior, Path::new(prior_name)),
@@ -554,9 +554,27 @@ fn design(
         let doc = Document::new(Estimate::ReflexDesign(designed.result));
         return Ok((toml, doc.to_json()));
     }
+    if method == "stochastic" {
+        use limpid_app::design::stochastic::{design_stochastic, stochastic_request_from_texts};
+        let request = stochastic_request_from_texts(
+            (prior, Path::new(prior_name)),
+            limits_from.map(|t| (t, Path::new("<limits_from>"))),
+            baseline.map(|t| (t, Path::new("<baseline>"))),
+            duration_s,
+            objective,
+            runs,
+            verify,
+            seed,
+        )
+        .map_err(err)?;
+        let designed = detached(py, || design_stochastic(&request)).map_err(err)?;
+        let toml = limpid_lab::design::Design::Periodic(designed.protocol).to_toml();
+        let doc = Document::new(Estimate::Design(designed.result));
+        return Ok((toml, doc.to_json()));
+    }
     if method != "linear" {
         return Err(value_err(format!(
-            "method: expected linear or reflex, found {method:?}"
+            "method: expected linear, stochastic or reflex, found {method:?}"
         )));
     }
     let request = limpid_app::design::request_from_texts(

@@ -496,6 +496,22 @@ def test_design_for_the_demo_subject_beats_the_seed_protocol_and_plots(tmp_path)
         limpid.design("demo:S7", 147.2, limits_from="artemiadis-3d")
 
 
+def test_stochastic_design_writes_a_multisine_its_check_accepts(tmp_path):
+    toml_text, r = limpid.design("demo:S1", 60.0, limits_from="endpoint-multisine", method="stochastic", runs=3)
+    assert (r.kind, r.method, r.family) == ("design", "stochastic", "multisine")
+    assert r.chosen.duration_s <= 60.0 and r.chosen.band_hz[0] < r.chosen.band_hz[1]
+    report = limpid.protocol_check(toml_text)
+    assert report.duration_s == pytest.approx(r.chosen.duration_s)
+    assert all(m["margin_percent"] >= 0 for m in r.limits)
+    assert "multisine" in r._repr_html_()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    limpid.plot.design(r).savefig(tmp_path / "design.png")
+    with pytest.raises(ValueError, match="end-point multisine"):
+        limpid.design("demo:S1", 60.0, limits_from="endpoint-multisine", method="stochastic", baseline="artemiadis-3d")
+
+
 def test_reflex_design_writes_a_prbs_its_check_accepts():
     toml_text, r = limpid.design("demo:ankle", 30.0, limits_from="ankle-prbs", method="reflex", runs=3)
     assert r.kind == "reflex_design"

@@ -10,9 +10,9 @@ use serde::{Deserialize, Serialize};
 /// A designed experiment.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct DesignResult {
-    /// The estimator the design is for (`linear`).
+    /// The estimator the design is for (`linear` or `stochastic`).
     pub method: String,
-    /// The family the protocol was chosen from (`centre-out`).
+    /// The family the protocol was chosen from (`centre-out` or `multisine`).
     pub family: String,
     /// Weights of the relative variances of K, B and M in the objective.
     pub objective: ObjectiveWeights,
@@ -21,7 +21,7 @@ pub struct DesignResult {
     /// The start point the design is for (m): the prior's posture.
     pub start_m: [f64; 3],
     /// The family's parameters that were chosen.
-    pub chosen: CentreOutChoice,
+    pub chosen: DesignChoice,
     /// Predicted on the prior subject (the nominal one; the worse end when the prior has a range).
     pub predicted: Prediction,
     /// The same for the protocol it replaces (`--baseline`), at the same start point.
@@ -40,7 +40,74 @@ pub struct DesignResult {
     pub spectrum: CommandSpectrum,
 }
 
-/// One perturbation (rest, out, hold, back, relax) along its direction.
+/// The parameters a design chose, by family.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum DesignChoice {
+    /// A centre-out protocol's (the linear method's).
+    CentreOut(CentreOutChoice),
+    /// A periodic multisine's (the stochastic method's).
+    Multisine(MultisineChoice),
+}
+
+impl DesignChoice {
+    /// Length of the whole protocol (s).
+    pub fn duration_s(&self) -> f64 {
+        match self {
+            DesignChoice::CentreOut(c) => c.duration_s,
+            DesignChoice::Multisine(c) => c.duration_s,
+        }
+    }
+
+    /// The protocol in words, numbers written by `num` (the caller's rounding):
+    /// the one description the CLI, the report and the demo print.
+    pub fn describe(&self, num: impl Fn(f64) -> String) -> String {
+        match self {
+            DesignChoice::CentreOut(c) => c.describe(num),
+            DesignChoice::Multisine(c) => format!(
+                "a zippered random-odd multisine at x, y, z over {}-{} Hz ({} amplitude), {} s period, {} recorded periods between a fade-in and a fade-out period, {} mm RMS per axis, {} lines each",
+                num(c.band_hz[0]),
+                num(c.band_hz[1]),
+                c.amplitude_shape,
+                num(c.period_s),
+                c.periods,
+                num(c.rms_m * 1e3),
+                c.lines_per_channel
+            ),
+        }
+    }
+
+    /// The centre-out parameters, when the family is centre-out.
+    pub fn centre_out(&self) -> Option<&CentreOutChoice> {
+        match self {
+            DesignChoice::CentreOut(c) => Some(c),
+            DesignChoice::Multisine(_) => None,
+        }
+    }
+}
+
+/// The parameters of an end-point multisine that the design chooses
+/// (zippered random-odd lines over x, y, z).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct MultisineChoice {
+    /// Excited band (Hz).
+    pub band_hz: [f64; 2],
+    /// Amplitude across the lines: `flat`, `1/f` or `1/f^2`.
+    pub amplitude_shape: String,
+    /// Period (s): the frequency resolution is its inverse.
+    pub period_s: f64,
+    /// Recorded periods (a fade-in and a fade-out period come on top).
+    pub periods: usize,
+    /// RMS displacement of each channel over a period (m).
+    pub rms_m: f64,
+    /// Excited lines per channel.
+    pub lines_per_channel: usize,
+    /// Length of the whole protocol (s).
+    pub duration_s: f64,
+}
+
+/// One perturbation (rest, out, hold, back, relax) along its direction, or
+/// one period of a multisine's first channel.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct CommandTrace {
     /// Time from the start of the trial (s).
@@ -56,7 +123,8 @@ pub struct CommandTrace {
 /// Amplitude of one perturbation's displacement by frequency: `2 |X(f)| / T`
 /// over the trial of length T (the amplitude a sine filling the trial would
 /// have), beside the largest sine amplitude the limits allow at that
-/// frequency, `min(d_max, v_max / ω, a_max / ω²)`.
+/// frequency, `min(d_max, v_max / ω, a_max / ω²)`. For a multisine: the
+/// amplitude of each excited line (of whichever channel excites it), no baseline.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct CommandSpectrum {
     /// Frequencies (Hz), log-spaced.
@@ -78,6 +146,23 @@ pub struct ObjectiveWeights {
     pub damping: f64,
     /// Of M's relative variance.
     pub inertia: f64,
+}
+
+impl CentreOutChoice {
+    /// The protocol in words (see [`DesignChoice::describe`]).
+    pub fn describe(&self, num: impl Fn(f64) -> String) -> String {
+        format!(
+            "{} {} perturbations of {} mm, {} ms out, {} ms hold, {} ms back; rest {} s, relax {} s",
+            self.trials,
+            self.profile,
+            num(self.radius_m * 1e3),
+            num(self.motion_s * 1e3),
+            num(self.hold_s * 1e3),
+            num(self.motion_s * 1e3),
+            num(self.rest_s),
+            num(self.relax_s)
+        )
+    }
 }
 
 /// The parameters of a centre-out protocol that the design chooses.

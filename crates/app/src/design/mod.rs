@@ -32,6 +32,7 @@
 //! from a fast cubic; the chosen one is then predicted on `runs` fresh seeds.
 
 pub mod reflex;
+pub mod stochastic;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -41,8 +42,8 @@ use rayon::prelude::*;
 use serde::Deserialize;
 
 use limpid_analysis::result::design::{
-    CentreOutChoice, CommandSpectrum, CommandTrace, DesignResult, LimitMargin, ObjectiveWeights,
-    Pooled, Prediction, SearchSummary, Verification,
+    CentreOutChoice, CommandSpectrum, CommandTrace, DesignChoice, DesignResult, LimitMargin,
+    ObjectiveWeights, Pooled, Prediction, SearchSummary, Verification,
 };
 use limpid_core::{Error, Matrix, Result};
 use limpid_ident::{fit_linear, prepare, LinearEstimate, LinearParams, PrepareParams};
@@ -357,6 +358,23 @@ pub struct DesignRequest {
 /// A file's text and its path (for errors).
 pub type Text<'a> = (&'a str, &'a Path);
 
+/// A prior from its text: `demo:S1` .. `demo:S6`, or a prior file's text.
+pub(crate) fn read_prior(prior: Text<'_>) -> Result<Prior> {
+    match prior.0.strip_prefix("demo:") {
+        Some(point) => {
+            let index = point
+                .strip_prefix('S')
+                .and_then(|i| i.parse::<usize>().ok())
+                .filter(|i| (1..=6).contains(i))
+                .ok_or_else(|| {
+                    Error::invalid("prior", format!("{}: expected demo:S1 .. demo:S6", prior.0))
+                })?;
+            Ok(Prior::demo(index - 1))
+        }
+        None => Prior::from_toml(prior.0, prior.1),
+    }
+}
+
 /// A design request from its texts, as the CLI and Python take it: the prior
 /// (`demo:S1` .. `demo:S6`, or a prior file's text), the limits from a
 /// centre-out protocol (else the prior's `[limits]`), the baseline protocol.
@@ -372,19 +390,7 @@ pub fn request_from_texts(
     verify: usize,
     seed: u64,
 ) -> Result<DesignRequest> {
-    let prior = match prior.0.strip_prefix("demo:") {
-        Some(point) => {
-            let index = point
-                .strip_prefix('S')
-                .and_then(|i| i.parse::<usize>().ok())
-                .filter(|i| (1..=6).contains(i))
-                .ok_or_else(|| {
-                    Error::invalid("prior", format!("{}: expected demo:S1 .. demo:S6", prior.0))
-                })?;
-            Prior::demo(index - 1)
-        }
-        None => Prior::from_toml(prior.0, prior.1)?,
-    };
+    let prior = read_prior(prior)?;
     let centre_out = |(text, path): Text<'_>, role: &str| -> Result<Protocol> {
         match limpid_lab::design::Design::from_toml(text, path)? {
             limpid_lab::design::Design::CentreOut(p) => Ok(p),
@@ -595,11 +601,25 @@ fn largest_radius(req: &DesignRequest) -> Result<f64> {
 }
 
 /// Errors of one recording's estimate against the truth, K, B, M.
-struct Run {
+pub(crate) struct Run {
     errors: [Matrix3<f64>; 3],
     /// Relative Frobenius error of K, B, M against the subject's own (percent).
     error_percent: [f64; 3],
     identifiable: [bool; 3],
+}
+
+impl Run {
+    /// An estimate's K, B, M (`Matrix`, SI) and whether each was identifiable, against `imp`.
+    pub(crate) fn new(estimate: [&Matrix; 3], identifiable: [bool; 3], imp: &Impedance) -> Run {
+        let m3 = |m: &Matrix| Matrix3::from_fn(|r, c| m.0[(r, c)]);
+        let truth = imp.matrices();
+        let errors: [Matrix3<f64>; 3] = std::array::from_fn(|m| m3(estimate[m]) - truth[m]);
+        Run {
+            error_percent: std::array::from_fn(|m| 100.0 * errors[m].norm() / truth[m].norm()),
+            errors,
+            identifiable,
+        }
+    }
 }
 
 fn run_once(p: &CentreOut, prior: &Prior, imp: &Impedance, seed: u64) -> Result<Run> {
@@ -607,31 +627,43 @@ fn run_once(p: &CentreOut, prior: &Prior, imp: &Impedance, seed: u64) -> Result<
     let rec = simulate_centre_out(&posture, p, &prior.noise, seed)?;
     let prepared = prepare(&rec, &PrepareParams::default())?;
     let est: LinearEstimate = fit_linear(&prepared, &LinearParams::default())?;
-    let m3 = |m: &Matrix| Matrix3::from_fn(|r, c| m.0[(r, c)]);
-    let errors = [
-        m3(&est.stiffness) - imp.stiffness,
-        m3(&est.damping) - imp.damping,
-        m3(&est.inertia) - imp.inertia,
-    ];
-    let truth = imp.matrices();
-    Ok(Run {
-        error_percent: std::array::from_fn(|m| 100.0 * errors[m].norm() / truth[m].norm()),
-        errors,
-        identifiable: [
+    Ok(Run::new(
+        [&est.stiffness, &est.damping, &est.inertia],
+        [
             est.identifiable.stiffness,
             est.identifiable.damping,
             est.identifiable.inertia,
         ],
-    })
+        imp,
+    ))
 }
 
-/// The directions are relaxed by repulsion (`even_directions`, O(n²) per
-/// step): a candidate's [`CentreOut`] is made once and shared by its recordings.
-fn runs(p: &CentreOut, prior: &Prior, imp: &Impedance, seeds: &[u64]) -> Result<Vec<Run>> {
-    seeds
-        .par_iter()
-        .map(|&s| run_once(p, prior, imp, s))
-        .collect()
+/// One simulated recording's errors on subject `imp` with noise seed `seed`:
+/// the family's simulation and the method's estimator.
+pub(crate) trait Runner: Fn(&Impedance, u64) -> Result<Run> + Sync {}
+impl<F: Fn(&Impedance, u64) -> Result<Run> + Sync> Runner for F {}
+
+/// Recordings of one subject, one per seed, in parallel.
+fn runs(run: &impl Runner, imp: &Impedance, seeds: &[u64]) -> Result<Vec<Run>> {
+    seeds.par_iter().map(|&s| run(imp, s)).collect()
+}
+
+/// The worse end's objective over the ranking seeds, or why the candidate is refused.
+pub(crate) fn rank(
+    run: &impl Runner,
+    prior: &Prior,
+    weights: [f64; 3],
+    seeds: &[u64],
+) -> std::result::Result<f64, String> {
+    let worst = prior.ends().iter().try_fold(0.0f64, |worst, imp| {
+        let rs = runs(run, imp, seeds)?;
+        Ok::<f64, Error>(worst.max(objective_value(&relative_mse(&rs, imp), weights)))
+    });
+    match worst {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) => Err(format!("objective {v}")),
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 /// Mean squared error of the nine elements relative to the RMS element, K, B, M (percent²).
@@ -670,10 +702,10 @@ fn pooled_se(se: &[Matrix3<f64>; 3]) -> [f64; 3] {
     std::array::from_fn(|m| (se[m].norm_squared() / 9.0).sqrt())
 }
 
-/// The prediction of protocol `p` with its trials `centre_out`.
-fn predict(
-    p: &Protocol,
-    centre_out: &CentreOut,
+/// The prediction of a protocol of `duration_s` whose recordings `run` makes.
+pub(crate) fn predict(
+    run: &impl Runner,
+    duration_s: f64,
     prior: &Prior,
     objective: &Objective,
     seeds: &[u64],
@@ -681,7 +713,7 @@ fn predict(
     // the worse end of the prior's range
     let mut worst: Option<(f64, Prediction)> = None;
     for imp in prior.ends() {
-        let rs = runs(centre_out, prior, &imp, seeds)?;
+        let rs = runs(run, &imp, seeds)?;
         let value = objective_value(&relative_mse(&rs, &imp), objective.weights());
         let se = spread(&rs);
         let pooled = pooled_se(&se);
@@ -699,7 +731,7 @@ fn predict(
                 }),
             },
             runs: rs.len(),
-            duration_s: protocol_duration(p),
+            duration_s,
             identifiable_share: std::array::from_fn(|m| {
                 rs.iter().filter(|r| r.identifiable[m]).count() as f64 / n
             }),
@@ -886,20 +918,12 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
                 Ok((_, p)) => {
                     // a candidate whose recordings the estimator refuses (or whose
                     // objective is not a number) is refused, with the reason kept
-                    let worst = req.prior.ends().iter().try_fold(0.0f64, |worst, imp| {
-                        let rs = runs(&p, &req.prior, imp, &ranking)?;
-                        Ok::<f64, Error>(worst.max(objective_value(&relative_mse(&rs, imp), w)))
-                    });
-                    match worst {
-                        Ok(v) if v.is_finite() => Some(v),
-                        Ok(v) => {
+                    let run = |imp: &Impedance, s: u64| run_once(&p, &req.prior, imp, s);
+                    match rank(&run, &req.prior, w, &ranking) {
+                        Ok(v) => Some(v),
+                        Err(why) => {
                             refused += 1;
-                            last_refusal = format!("objective {v}");
-                            None
-                        }
-                        Err(e) => {
-                            refused += 1;
-                            last_refusal = e.to_string();
+                            last_refusal = why;
                             None
                         }
                     }
@@ -955,7 +979,14 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
     // every limit with a margin on the continuous profile)
     protocol::check(&protocol)?;
     let final_seeds = seeds(req.seed, 10_000, req.runs);
-    let predicted = predict(&protocol, &trials, &req.prior, &req.objective, &final_seeds)?;
+    let run = |imp: &Impedance, s: u64| run_once(&trials, &req.prior, imp, s);
+    let predicted = predict(
+        &run,
+        protocol_duration(&protocol),
+        &req.prior,
+        &req.objective,
+        &final_seeds,
+    )?;
     let baseline = req
         .baseline
         .as_ref()
@@ -966,9 +997,11 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
                 centre_m: [0.0; 3],
                 radius_m: 0.0,
             };
+            let trials = b.centre_out();
+            let run = |imp: &Impedance, s: u64| run_once(&trials, &req.prior, imp, s);
             predict(
-                &b,
-                &b.centre_out(),
+                &run,
+                protocol_duration(&b),
                 &req.prior,
                 &req.objective,
                 &final_seeds,
@@ -976,7 +1009,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
         })
         .transpose()?;
     let verify = (req.verify > 0)
-        .then(|| verify(&trials, &req.prior, &predicted, req.verify, req.seed))
+        .then(|| verify(&run, &req.prior, &predicted, req.verify, req.seed))
         .transpose()?;
     let ph = &protocol.phases;
     let result = DesignResult {
@@ -989,7 +1022,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
         },
         budget_s: req.budget_s,
         start_m: req.prior.start().into(),
-        chosen: CentreOutChoice {
+        chosen: DesignChoice::CentreOut(CentreOutChoice {
             profile: format!("{:?}", ph.profile).to_lowercase(),
             radius_m: protocol.targets.radius_m,
             motion_s: ph.centre_out_s,
@@ -998,7 +1031,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             relax_s: ph.relax_s,
             trials: protocol.targets.count,
             duration_s: protocol_duration(&protocol),
-        },
+        }),
         predicted,
         baseline,
         protocol: serde_json::to_value(&protocol)
@@ -1098,8 +1131,8 @@ fn amplitude_spectrum(p: &Protocol) -> Vec<f64> {
 /// Run the design on `n` subjects drawn uniformly between the prior's ends
 /// (the nominal subject when it has no range) and compare the achieved
 /// spread of the errors with the prediction.
-fn verify(
-    centre_out: &CentreOut,
+pub(crate) fn verify(
+    run: &impl Runner,
     prior: &Prior,
     predicted: &Prediction,
     n: usize,
@@ -1120,7 +1153,7 @@ fn verify(
         .collect();
     let rs: Vec<Run> = subjects
         .par_iter()
-        .map(|(imp, s)| run_once(centre_out, prior, imp, *s))
+        .map(|(imp, s)| run(imp, *s))
         .collect::<Result<_>>()?;
     let achieved = pooled_se(&spread(&rs));
     let nf = n as f64;

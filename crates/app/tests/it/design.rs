@@ -26,7 +26,7 @@ fn the_design_identifies_damping_where_the_seed_protocol_cannot() {
     let r = &d.result;
     // within the limits at every sample and within the budget
     check(&d.protocol).unwrap();
-    assert!(r.chosen.duration_s <= 147.2, "{}", r.chosen.duration_s);
+    assert!(r.chosen.duration_s() <= 147.2, "{}", r.chosen.duration_s());
     assert!(
         r.limits.iter().all(|m| m.margin_percent >= 0.0),
         "{:?}",
@@ -165,4 +165,94 @@ fn a_designed_prbs_narrows_the_reflex_gain_of_a_noisy_ankle() {
     assert!(r.predicted.gain_se_information < 0.8 * base.gain_se_information);
     // and no bias for it: the period stays long enough for the cascade's IRFs
     assert!(r.predicted.gain_error_percent < 2.0, "{:?}", r.predicted);
+}
+
+/// The stochastic method's design (an end-point multisine) on the demo's
+/// realistic subject with the endpoint-multisine preset's limits.
+fn stochastic_request(
+    budget_s: f64,
+    runs: usize,
+    verify: usize,
+) -> limpid_app::design::stochastic::StochasticDesignRequest {
+    let preset = limpid_lab::periodic::PeriodicDesign::multisine_endpoint();
+    limpid_app::design::stochastic::StochasticDesignRequest {
+        prior: Prior::demo(0),
+        limits: preset.limits.clone(),
+        sample_rate_hz: preset.sample_rate_hz,
+        budget_s,
+        objective: Objective::default(),
+        runs,
+        baseline: Some(preset),
+        verify,
+        seed: 7,
+    }
+}
+
+#[test]
+fn a_designed_multisine_beats_the_preset_on_stiffness_and_predicts_its_own_spread() {
+    use limpid_analysis::result::design::DesignChoice;
+    let d = limpid_app::design::stochastic::design_stochastic(&stochastic_request(147.2, 12, 12))
+        .unwrap();
+    let r = &d.result;
+    let report = d.protocol.check().unwrap();
+    assert!(report.duration_s <= 147.2, "{}", report.duration_s);
+    let DesignChoice::Multisine(c) = &r.chosen else {
+        panic!("{:?}", r.chosen)
+    };
+    assert!(
+        c.periods >= limpid_app::design::stochastic::MIN_RECORDED_PERIODS,
+        "{c:?}"
+    );
+    assert!(
+        r.limits.iter().all(|m| m.margin_percent >= 0.0),
+        "{:?}",
+        r.limits
+    );
+    // at least one limit is reached: the amplitude is the largest allowed
+    assert!(
+        r.limits.iter().any(|m| m.margin_percent < 1.0),
+        "{:?}",
+        r.limits
+    );
+    // the preset (0.2-6 Hz flat, 2 mm RMS, 160 s) puts its power where the
+    // subject's slow force fluctuation is; the design does not
+    let base = r.baseline.as_ref().unwrap();
+    assert!(
+        r.predicted.pooled.se[0] < 0.75 * base.pooled.se[0],
+        "K: {:?} vs {:?}",
+        r.predicted.pooled,
+        base.pooled
+    );
+    assert!(
+        r.predicted.pooled.error_percent[0] < 5.0,
+        "{:?}",
+        r.predicted.pooled
+    );
+    assert!(
+        r.predicted.pooled.error_percent[1] < 5.0,
+        "{:?}",
+        r.predicted.pooled
+    );
+    assert_eq!(r.predicted.identifiable_share, [1.0; 3]);
+    let v = r.verify.as_ref().unwrap();
+    for m in 0..3 {
+        assert!(
+            (0.65..1.5).contains(&v.ratio[m]),
+            "ratio {m}: {:?}",
+            v.ratio
+        );
+    }
+    assert_eq!(v.within_tolerance_share, 1.0, "{v:?}");
+}
+
+#[test]
+fn a_stochastic_budget_too_short_for_its_periods_is_refused_with_the_reason() {
+    let e = limpid_app::design::stochastic::design_stochastic(&stochastic_request(20.0, 4, 0))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("recorded ones and the two fades are needed"),
+        "{e}"
+    );
 }

@@ -189,13 +189,24 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         s,
         "--duration",
     ];
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 12] = [
         (
             &["147", "--baseline", s, "-o", s],
             "would replace the input",
         ),
         (&["147", "--method", "reflex"], "demo prior is demo:ankle"),
-        (&["147", "--method", "planar"], "linear and reflex methods"),
+        (
+            &["147", "--method", "planar"],
+            "linear, stochastic and reflex methods",
+        ),
+        (
+            &["147", "--method", "stochastic", "--family", "prbs"],
+            "designs are multisine",
+        ),
+        (
+            &["147", "--method", "stochastic", "--baseline", s],
+            "the baseline must be an end-point multisine",
+        ),
         (&["147", "--family", "prbs"], "designs are centre-out"),
         (&["147", "--objective", "stifness"], "invalid --objective"),
         (&["-1"], "duration"),
@@ -293,7 +304,10 @@ fn a_reflex_design_writes_a_prbs_that_its_check_accepts() {
         "5",
     ]);
     assert!(
-        verify.code == 2 && verify.stderr.contains("--verify is for the linear method"),
+        verify.code == 2
+            && verify
+                .stderr
+                .contains("--verify is for the linear and stochastic methods"),
         "{}",
         verify.stderr
     );
@@ -354,4 +368,100 @@ fn a_design_result_whose_arrays_disagree_is_refused_by_the_report() {
         assert!(out.stderr.contains(says), "{edit}: {}", out.stderr);
         assert_eq!(out.stderr.trim_end().lines().count(), 1, "{}", out.stderr);
     }
+}
+
+#[test]
+fn a_stochastic_design_writes_a_multisine_that_plays_back_to_its_subject() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let limits = preset(dir.path(), "endpoint-multisine");
+    let d = dir.path().join("d.toml");
+    let v = json(&[
+        "protocol",
+        "design",
+        "--method",
+        "stochastic",
+        "--prior",
+        "demo:S1",
+        "--limits-from",
+        &s(&limits),
+        "--duration",
+        "60",
+        "--runs",
+        "4",
+        "-o",
+        &s(&d),
+        "--json",
+    ]);
+    assert_eq!(
+        (v["kind"].as_str(), v["method"].as_str()),
+        (Some("design"), Some("stochastic"))
+    );
+    let c = &v["chosen"];
+    let duration = c["duration_s"].as_f64().unwrap();
+    assert!(duration <= 60.0, "{c}");
+    assert!(
+        v["limits"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|m| m["margin_percent"].as_f64().unwrap() >= 0.0),
+        "{}",
+        v["limits"]
+    );
+    let check = limpid(&["protocol", "check", &s(&d)]);
+    assert_eq!(check.code, 0, "{}", check.stderr);
+    // played by limpid's end-point follower (white noise, not the design's
+    // noise model) on S1 and estimated as a user would
+    let subject = dir.path().join("s1.toml");
+    let prior = limpid_app::design::Prior::demo(0).nominal;
+    let rows = |m: &nalgebra::Matrix3<f64>| {
+        format!(
+            "[{}]",
+            (0..3)
+                .map(|r| format!("[{}, {}, {}]", m[(r, 0)], m[(r, 1)], m[(r, 2)]))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    std::fs::write(
+        &subject,
+        format!(
+            "inertia = {}\ndamping = {}\nstiffness = {}\n",
+            rows(&prior.inertia),
+            rows(&prior.damping),
+            rows(&prior.stiffness)
+        ),
+    )
+    .unwrap();
+    let rec = dir.path().join("r.csv");
+    let sim = limpid(&[
+        "simulate",
+        &s(&d),
+        "--subject",
+        &s(&subject),
+        "-o",
+        &s(&rec),
+        "--seed",
+        "5",
+    ]);
+    assert_eq!(sim.code, 0, "{}", sim.stderr);
+    let band = c["band_hz"].as_array().unwrap();
+    let est = json(&[
+        "estimate",
+        "stochastic",
+        &s(&rec),
+        "--period",
+        &c["period_s"].to_string(),
+        "--band",
+        &format!("{},{}", band[0], band[1]),
+        "--json",
+    ]);
+    let m = |key: &str| -> nalgebra::Matrix3<f64> {
+        let a = &est[key];
+        nalgebra::Matrix3::from_fn(|r, k| a[r][k].as_f64().unwrap())
+    };
+    let k_error = (m("stiffness") - prior.stiffness).norm() / prior.stiffness.norm();
+    let b_error = (m("damping") - prior.damping).norm() / prior.damping.norm();
+    assert!(k_error < 0.05 && b_error < 0.2, "K {k_error}, B {b_error}");
 }

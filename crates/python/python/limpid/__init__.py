@@ -767,6 +767,11 @@ def design(
     ``spectrum`` (for ``limpid.plot.design``) and, with ``verify`` > 0,
     ``verify`` (predicted against achieved spread).
 
+    ``method="stochastic"``: an end-point multisine for ``estimate_stochastic``
+    with ``period_s`` (``family`` ``multisine`` in the result); the same priors,
+    ``limits_from`` an end-point periodic protocol (``"endpoint-multisine"``) or
+    a centre-out one, ``baseline`` an end-point multisine.
+
     ``method="reflex"``: a PRBS for the stretch-reflex gain (``kind``
     ``reflex_design``); ``prior`` is ``"demo:ankle"``, an ankle's TOML text or
     file, ``limits_from`` and ``baseline`` PRBS protocols (``"ankle-prbs"``)."""
@@ -778,7 +783,7 @@ def design(
             return protocol_preset(value)
         return _text_or_file(value)[0]
 
-    _choice("method", method, ("linear", "reflex"))
+    _choice("method", method, ("linear", "stochastic", "reflex"))
     if isinstance(prior, str) and prior.startswith("demo:"):
         prior_text, prior_name = prior, "<prior>"
     else:

@@ -244,7 +244,11 @@ def _design(d: Dict[str, Any]) -> List[Record]:
 
 def _design_html(d: Dict[str, Any]) -> List[str]:
     c = d["chosen"]
-    if d["kind"] == "design":
+    if d["kind"] == "design" and d.get("family") == "multisine":
+        what = (f"a zippered random-odd multisine at x, y, z over {c['band_hz'][0]:.3g}-{c['band_hz'][1]:.3g} Hz "
+                f"({c['amplitude_shape']} amplitude), {c['period_s']:.3g} s period, {c['periods']} periods, "
+                f"{1e3 * c['rms_m']:.3g} mm RMS per axis")
+    elif d["kind"] == "design":
         what = (f"{c['trials']} {c['profile']} perturbations of {1e3 * c['radius_m']:.3g} mm in "
                 f"{c['motion_s']:.3g} s (hold {c['hold_s']:.3g} s, rest {c['rest_s']:.3g} s)")
     else:

@@ -592,8 +592,9 @@ def study(result: Any, ax: Any = None) -> Plot:
 
 
 def design(result: Any, ax: Any = None) -> Plot:
-    """A designed protocol (``limpid.design``): one perturbation's
-    displacement, velocity and acceleration, its amplitude by frequency
+    """A designed protocol (``limpid.design``): one perturbation's (a
+    multisine's: one period of x) displacement, velocity and acceleration, its
+    amplitude by frequency (a multisine's: at each excited line)
     (2|X(f)|/T) against the largest sine the limits allow (and the baseline's,
     when given), and the predicted relative standard errors of K, B and M for
     the design and the baseline. ``ax``: 1 x 3 Axes or None."""
@@ -610,12 +611,14 @@ def design(result: Any, ax: Any = None) -> Plot:
         y = np.asarray(cmd[key], dtype=float)
         peak = float(np.max(np.abs(y))) if y.size else 0.0
         a[0, 0].plot(t, y / peak if peak > 0 else y, style, label=f"{label} (peak {peak:.3g} {unit})")
-    a[0, 0].set_xlabel("time from the trial's start (s)")
+    periodic = d.get("family") == "multisine"
+    a[0, 0].set_xlabel("time from the period's start (s), x" if periodic else "time from the trial's start (s)")
     a[0, 0].set_ylabel("share of the peak")
     a[0, 0].legend(fontsize="small")
     sp = d["spectrum"]
     f = np.asarray(sp["frequency_hz"], dtype=float)
-    a[0, 1].loglog(f, np.asarray(sp["designed_m"], dtype=float), label="design")
+    # a multisine's spectrum is its excited lines: drawn as points
+    a[0, 1].loglog(f, np.asarray(sp["designed_m"], dtype=float), "." if periodic else "-", label="design")
     if sp.get("baseline_m") is not None:
         a[0, 1].loglog(f, np.asarray(sp["baseline_m"], dtype=float), label="baseline")
     a[0, 1].loglog(f, np.asarray(sp["limit_m"], dtype=float), "k--", label="limits")

@@ -86,13 +86,10 @@ pub(crate) fn demo_section(name: &str, v: &DemoResult) -> Section {
             .push(error_row(format!("{} designed", p.start_point), p));
         let c = &d.chosen;
         section.verdict += &format!(
-            ". In the same {} s at {} within the same limits, `limpid protocol design` chooses {} {} perturbations of {} mm, {} ms out and back (predicted K ± {:.1} %, B ± {:.1} %): row \"{} designed\"",
+            ". In the same {} s at {} within the same limits, `limpid protocol design` chooses {} (predicted K ± {:.1} %, B ± {:.1} %): row \"{} designed\"",
             fmt(d.budget_s),
             p.start_point,
-            c.trials,
-            c.profile,
-            fmt(c.radius_m * 1e3),
-            fmt(c.motion_s * 1e3),
+            c.describe(fmt),
             d.predicted_se_percent[0],
             d.predicted_se_percent[1],
             p.start_point

@@ -158,18 +158,10 @@ fn series(name: &str, x: &[f64], y: &[f64], stroke: Stroke, colour: usize) -> Se
 }
 
 pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
-    let c = &r.chosen;
     let mut verdict = format!(
-        "{} {} perturbations of {} mm, {} ms out, {} ms hold, {} ms back, rest {} s, relax {} s: {:.1} s of the {} s budget at ({}, {}, {}) m. Predicted on the prior ({} simulated recordings): K ± {:.1} %, B ± {:.1} %, M ± {:.1} % (RMS element s.d. relative to the RMS element).",
-        c.trials,
-        c.profile,
-        fmt(c.radius_m * 1e3),
-        fmt(c.motion_s * 1e3),
-        fmt(c.hold_s * 1e3),
-        fmt(c.motion_s * 1e3),
-        fmt(c.rest_s),
-        fmt(c.relax_s),
-        c.duration_s,
+        "{}: {:.1} s of the {} s budget at ({}, {}, {}) m. Predicted on the prior ({} simulated recordings): K ± {:.1} %, B ± {:.1} %, M ± {:.1} % (RMS element s.d. relative to the RMS element).",
+        r.chosen.describe(fmt),
+        r.chosen.duration_s(),
         fmt(r.budget_s),
         fmt(r.start_m[0]),
         fmt(r.start_m[1]),
@@ -213,8 +205,16 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
     let command = Figure {
         id: "design-command".into(),
         chart: Chart {
-            title: "One perturbation, relative to each peak".into(),
-            x_label: "time from the trial's start (s)".into(),
+            title: if r.family == "multisine" {
+                "One period of x, relative to each peak".into()
+            } else {
+                "One perturbation, relative to each peak".into()
+            },
+            x_label: if r.family == "multisine" {
+                "time from the period's start (s)".into()
+            } else {
+                "time from the trial's start (s)".into()
+            },
             y_label: "share of the peak".into(),
             x_log: false,
             y_log: false,
@@ -246,7 +246,18 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
     };
     let s = &r.spectrum;
     let mut lines = vec![
-        series("design", &s.frequency_hz, &s.designed_m, Stroke::Solid, 0),
+        series(
+            "design",
+            &s.frequency_hz,
+            &s.designed_m,
+            // a multisine's spectrum is its excited lines
+            if r.family == "multisine" {
+                Stroke::Points
+            } else {
+                Stroke::Solid
+            },
+            0,
+        ),
         series(
             "limits: min(d, v/ω, a/ω²)",
             &s.frequency_hz,
