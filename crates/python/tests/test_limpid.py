@@ -512,12 +512,20 @@ def test_stochastic_design_writes_a_multisine_its_check_accepts(tmp_path):
         limpid.design("demo:S1", 60.0, limits_from="endpoint-multisine", method="stochastic", baseline="artemiadis-3d")
 
 
-def test_reflex_design_writes_a_prbs_its_check_accepts():
-    toml_text, r = limpid.design("demo:ankle", 30.0, limits_from="ankle-prbs", method="reflex", runs=3)
+def test_reflex_design_writes_a_prbs_its_check_accepts(tmp_path):
+    toml_text, r = limpid.design("demo:ankle", 30.0, limits_from="ankle-prbs", method="reflex", runs=3,
+                                 baseline="ankle-prbs")
     assert r.kind == "reflex_design"
     assert r.chosen.duration_s <= 30.0
     report = limpid.protocol_check(toml_text)
     assert report.duration_s == pytest.approx(r.chosen.duration_s)
+    # the command and its lines, drawn (issue 60: the report and limpid.plot draw the designed command)
+    assert max(abs(v) for v in r.command["displacement_rad"]) == pytest.approx(r.chosen.amplitude_rad, rel=1e-6)
+    assert len(r.spectrum["baseline_rad"]) == len(r.spectrum["baseline_frequency_hz"])
+    import matplotlib
+
+    matplotlib.use("Agg")
+    limpid.plot.design(r).savefig(tmp_path / "reflex_design.png")
     with pytest.raises(ValueError, match="demo:ankle"):
         limpid.design("demo:S1", 30.0, limits_from="ankle-prbs", method="reflex")
     with pytest.raises(ValueError, match="method"):

@@ -279,6 +279,43 @@ pub struct ReflexDesignResult {
     pub limits: Vec<LimitMargin>,
     /// How the design was searched.
     pub search: SearchSummary,
+    /// The start of one period of the designed command, for plots.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub command: Option<JointCommandTrace>,
+    /// What one period of the design and of the baseline excite, against the limits.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spectrum: Option<JointLineSpectrum>,
+}
+
+/// The first seconds (at most 2000 samples) of one recorded period of a joint command.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct JointCommandTrace {
+    /// Time from the period's start (s).
+    pub t_s: Vec<f64>,
+    /// Displacement from the posture (rad).
+    pub displacement_rad: Vec<f64>,
+    /// Velocity (rad/s).
+    pub velocity_rad_s: Vec<f64>,
+    /// Acceleration (rad/s^2).
+    pub acceleration_rad_s2: Vec<f64>,
+}
+
+/// The amplitude of each line of one period, `2 |X_k| / n` (the amplitude
+/// of a sine at that line), for the design and the baseline (each at its
+/// own period's lines, up to 1.5 / switching interval), beside the largest
+/// sine the limits allow, `min(d, v / ω, a / ω²)`, at the design's lines.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct JointLineSpectrum {
+    /// The design's lines (Hz).
+    pub frequency_hz: Vec<f64>,
+    /// The design's amplitude per line (rad).
+    pub designed_rad: Vec<f64>,
+    /// The limits' envelope at the design's lines (rad).
+    pub limit_rad: Vec<f64>,
+    /// The baseline's lines (Hz), when there is one.
+    pub baseline_frequency_hz: Option<Vec<f64>>,
+    /// The baseline's amplitude per line (rad).
+    pub baseline_rad: Option<Vec<f64>>,
 }
 
 /// The PRBS parameters the design chooses.

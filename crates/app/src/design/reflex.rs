@@ -28,7 +28,8 @@ use rayon::prelude::*;
 use serde::Deserialize;
 
 use limpid_analysis::result::design::{
-    LimitMargin, PrbsChoice, ReflexDesignResult, ReflexPrediction, SearchSummary,
+    JointCommandTrace, JointLineSpectrum, LimitMargin, PrbsChoice, ReflexDesignResult,
+    ReflexPrediction, SearchSummary,
 };
 use limpid_core::{Error, Result};
 use limpid_ident::reflex::{estimate_reflex, ReflexParams};
@@ -495,6 +496,86 @@ pub fn design_reflex(req: &ReflexDesignRequest) -> Result<ReflexDesigned> {
             objective: 1e4 * objective * req.prior.torque_noise_nm.powi(2)
                 / req.prior.gain().powi(2),
         },
+        command: Some(command_trace(&protocol)?),
+        spectrum: Some(line_spectrum(
+            &protocol,
+            req.baseline.as_ref(),
+            s.switch_interval_s,
+        )?),
     };
     Ok(ReflexDesigned { protocol, result })
+}
+
+/// The first samples (at most 2000) of the first recorded period.
+fn command_trace(p: &PeriodicDesign) -> Result<JointCommandTrace> {
+    let command = p.command()?;
+    let fs = p.sample_rate_hz;
+    let n = command.period_samples;
+    let x = &command.values[0];
+    let shown = n.min(2000);
+    let at = |i: usize| x[n + i];
+    Ok(JointCommandTrace {
+        t_s: (0..shown).map(|i| i as f64 / fs).collect(),
+        displacement_rad: (0..shown).map(at).collect(),
+        velocity_rad_s: (0..shown).map(|i| (at(i + 1) - at(i)) * fs).collect(),
+        acceleration_rad_s2: (0..shown)
+            .map(|i| (at(i + 2) - 2.0 * at(i + 1) + at(i)) * fs * fs)
+            .collect(),
+    })
+}
+
+/// `2 |X_k| / n` at each excited line of one recorded period up to `1.5 / switch_s`.
+fn period_lines(p: &PeriodicDesign, switch_s: f64) -> Result<(Vec<f64>, Vec<f64>)> {
+    let command = p.command()?;
+    let n = command.period_samples;
+    let x = &command.values[0][n..2 * n];
+    let spectrum = limpid_dsp::excitation::period_spectrum(x);
+    let df = p.sample_rate_hz / n as f64;
+    let top = (1.5 / switch_s / df).floor() as usize;
+    let amplitude = |k: usize| 2.0 * spectrum[k].norm() / n as f64;
+    let peak = (1..spectrum.len()).map(amplitude).fold(0.0, f64::max);
+    // the sequence's nulls (multiples of 1 / switch_s) hold rounding only
+    let lines: Vec<usize> = (1..spectrum.len().min(top + 1))
+        .filter(|&k| amplitude(k) > 1e-3 * peak)
+        .collect();
+    Ok((
+        lines.iter().map(|&k| k as f64 * df).collect(),
+        lines.iter().map(|&k| amplitude(k)).collect(),
+    ))
+}
+
+fn line_spectrum(
+    p: &PeriodicDesign,
+    baseline: Option<&PeriodicDesign>,
+    switch_s: f64,
+) -> Result<JointLineSpectrum> {
+    let (frequency_hz, designed_rad) = period_lines(p, switch_s)?;
+    let l = &p.limits;
+    let limit = |v: Option<f64>| v.unwrap_or(f64::INFINITY);
+    let limit_rad = frequency_hz
+        .iter()
+        .map(|f| {
+            let w = std::f64::consts::TAU * f;
+            limit(l.max_joint_displacement_rad)
+                .min(limit(l.max_joint_velocity_rad_s) / w)
+                .min(limit(l.max_joint_acceleration_rad_s2) / (w * w))
+        })
+        .collect();
+    let base = baseline
+        .map(|b| {
+            let switch = match &b.signal {
+                Signal::Prbs(s) => s.switch_interval_s,
+                Signal::Multisine(_) => switch_s,
+            };
+            period_lines(b, switch)
+        })
+        .transpose()?;
+    let (baseline_frequency_hz, baseline_rad) = base.unzip();
+    Ok(JointLineSpectrum {
+        frequency_hz,
+        designed_rad,
+        limit_rad,
+        baseline_frequency_hz,
+        baseline_rad,
+    })
 }

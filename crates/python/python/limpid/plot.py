@@ -597,9 +597,13 @@ def design(result: Any, ax: Any = None) -> Plot:
     amplitude by frequency (a multisine's: at each excited line)
     (2|X(f)|/T) against the largest sine the limits allow (and the baseline's,
     when given), and the predicted relative standard errors of K, B and M for
-    the design and the baseline. ``ax``: 1 x 3 Axes or None."""
+    the design and the baseline. A reflex design (a PRBS): the start of one
+    period, the amplitude of each line of a period (the design's and the
+    baseline's) against the limits, and the predicted spread of the reflex
+    gain. ``ax``: 1 x 3 Axes or None."""
     d = _data(result)
-    _kind(d, "design")
+    if _kind(d, "design", "reflex_design") == "reflex_design":
+        return _reflex_design(d, ax)
     fig, a, _ = _panels(ax, 1, 3, "plot.design", panel=(3.6, 2.8))
     cmd = d["command"]
     t = np.asarray(cmd["t_s"], dtype=float)
@@ -651,4 +655,42 @@ def design(result: Any, ax: Any = None) -> Plot:
     a[0, 2].legend(fontsize="small")
     _log_ticks(a[0, 2].yaxis, np.concatenate([np.asarray(p["pooled"]["se_percent"], dtype=float)
                                               for p in (d["predicted"], base) if p is not None]))
+    return Plot(fig, a)
+
+
+def _reflex_design(d: Dict[str, Any], ax: Any) -> Plot:
+    """`design` for a PRBS designed for the reflex gain (joint units)."""
+    fig, a, _ = _panels(ax, 1, 3, "plot.design", panel=(3.6, 2.8))
+    cmd = d.get("command")
+    if cmd is not None:
+        t = np.asarray(cmd["t_s"], dtype=float)
+        for key, label, style, unit in (
+            ("displacement_rad", "displacement", "-", "rad"),
+            ("velocity_rad_s", "velocity", "--", "rad/s"),
+            ("acceleration_rad_s2", "acceleration", ":", "rad/s²"),
+        ):
+            y = np.asarray(cmd[key], dtype=float)
+            peak = float(np.max(np.abs(y))) if y.size else 0.0
+            a[0, 0].plot(t, y / peak if peak > 0 else y, style, label=f"{label} (peak {peak:.3g} {unit})")
+        a[0, 0].set_xlabel("time from the period's start (s)")
+        a[0, 0].set_ylabel("share of the peak")
+        a[0, 0].legend(fontsize="small")
+    sp = d.get("spectrum")
+    if sp is not None:
+        f = np.asarray(sp["frequency_hz"], dtype=float)
+        a[0, 1].loglog(f, np.asarray(sp["designed_rad"], dtype=float), ".", label="design")
+        if sp.get("baseline_rad") is not None:
+            a[0, 1].loglog(np.asarray(sp["baseline_frequency_hz"], dtype=float),
+                           np.asarray(sp["baseline_rad"], dtype=float), ".", label="baseline")
+        a[0, 1].loglog(f, np.asarray(sp["limit_rad"], dtype=float), "k--", label="limits")
+        a[0, 1].set_xlabel("frequency (Hz)")
+        a[0, 1].set_ylabel("amplitude per line (rad)")
+        a[0, 1].legend(fontsize="small")
+    rows = [("design", d["predicted"])] + ([("baseline", d["baseline"])] if d.get("baseline") else [])
+    sds = [float(p["gain_sd"]) for _, p in rows]
+    drawn = a[0, 2].bar([label for label, _ in rows], sds, 0.6)
+    for rect, v in zip(drawn, sds):
+        a[0, 2].annotate(f"{v:.3g}", (rect.get_x() + rect.get_width() / 2, v), ha="center", va="bottom",
+                         fontsize="small")
+    a[0, 2].set_ylabel("predicted reflex gain s.d. (N m s/rad)")
     return Plot(fig, a)

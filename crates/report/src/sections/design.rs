@@ -358,8 +358,96 @@ pub(crate) fn reflex_section(
             },
             margins_table(&r.limits),
         ],
-        figures: vec![],
+        figures: reflex_figures(r),
         ellipsoids: vec![],
         drawings: vec![],
     }
+}
+
+/// The PRBS's first seconds and its lines against the limits (results
+/// written before these were kept have neither).
+fn reflex_figures(r: &limpid_analysis::result::design::ReflexDesignResult) -> Vec<Figure> {
+    let mut figures = Vec::new();
+    if let Some(cmd) = &r.command {
+        let peak = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs())).max(1e-300);
+        let relative = |v: &[f64]| {
+            let p = peak(v);
+            (p, v.iter().map(|x| x / p).collect::<Vec<f64>>())
+        };
+        let (dp, d) = relative(&cmd.displacement_rad);
+        let (vp, v) = relative(&cmd.velocity_rad_s);
+        let (ap, a) = relative(&cmd.acceleration_rad_s2);
+        figures.push(Figure {
+            id: "reflex-design-command".into(),
+            chart: Chart {
+                title: "The start of one period, relative to each peak".into(),
+                x_label: "time from the period's start (s)".into(),
+                y_label: "share of the peak".into(),
+                x_log: false,
+                y_log: false,
+                y_range: Some((-1.05, 1.05)),
+                series: [
+                    (
+                        format!("displacement (peak {} rad)", fmt(dp)),
+                        d,
+                        Stroke::Solid,
+                    ),
+                    (
+                        format!("velocity (peak {} rad/s)", fmt(vp)),
+                        v,
+                        Stroke::Dashed,
+                    ),
+                    (
+                        format!("acceleration (peak {} rad/s²)", fmt(ap)),
+                        a,
+                        Stroke::Dotted,
+                    ),
+                ]
+                .into_iter()
+                .enumerate()
+                .map(|(k, (name, y, stroke))| Series {
+                    name,
+                    x: cmd.t_s.clone(),
+                    y,
+                    stroke,
+                    color: PALETTE[k].into(),
+                })
+                .collect(),
+            },
+        });
+    }
+    if let Some(s) = &r.spectrum {
+        let mut lines = vec![
+            series(
+                "design",
+                &s.frequency_hz,
+                &s.designed_rad,
+                Stroke::Points,
+                0,
+            ),
+            series(
+                "limits: min(d, v/ω, a/ω²)",
+                &s.frequency_hz,
+                &s.limit_rad,
+                Stroke::Dashed,
+                6,
+            ),
+        ];
+        if let (Some(f), Some(b)) = (&s.baseline_frequency_hz, &s.baseline_rad) {
+            lines.push(series("baseline", f, b, Stroke::Points, 1));
+        }
+        figures.push(Figure {
+            id: "reflex-design-spectrum".into(),
+            chart: Chart {
+                title: "Amplitude of each line of one period, 2|X_k|/n, and the limits".into(),
+                x_label: "frequency (Hz)".into(),
+                y_label: "amplitude (rad)".into(),
+                x_log: true,
+                y_log: true,
+                y_range: None,
+                series: lines,
+            },
+        });
+    }
+    figures
 }
