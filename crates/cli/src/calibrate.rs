@@ -75,9 +75,16 @@ pub fn run(args: CalibrateArgs) -> CliResult {
         "parameter-varying ankle: a reflex claimed in {} of {} subjects without one, detected in {} of {} with one",
         r.claimed_without, r.without_reflex, r.detected, r.with_reflex
     );
-    if let Some(d) = &result.design {
+    let designs = [
+        ("linear", &result.design),
+        ("stochastic", &result.stochastic_design),
+    ];
+    for (method, d) in designs
+        .iter()
+        .filter_map(|(m, d)| d.as_ref().map(|d| (m, d)))
+    {
         println!(
-            "protocol design (linear, {}): predicted/achieved spread K {:.2}, B {:.2}, M {:.2} over {} subjects; K within 5 % and B within 20 %, both identifiable: {:.0} % ({:.1} s)",
+            "protocol design ({method}, {}): predicted/achieved spread K {:.2}, B {:.2}, M {:.2} over {} subjects; K within 5 % and B within 20 %, both identifiable: {:.0} % ({:.1} s)",
             d.prior,
             d.ratio[0],
             d.ratio[1],

@@ -147,10 +147,14 @@ pub struct Calibration {
     /// `limpid protocol design` checked against what its design achieves.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub design: Option<DesignCalibration>,
+    /// The same for `--method stochastic` (an end-point multisine).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stochastic_design: Option<DesignCalibration>,
 }
 
-/// The linear design for the demo's S1 on a prior range, predicted at the
-/// range's worse end and run on subjects drawn uniformly from the range.
+/// A design (linear or stochastic) for the demo's S1 on a prior range,
+/// predicted at the range's worse end and run on subjects drawn uniformly
+/// from the range.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct DesignCalibration {
     /// The prior, in words.

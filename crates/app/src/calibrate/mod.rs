@@ -311,6 +311,7 @@ pub fn calibrate(
         window_sweep_varied,
         varying_reflex,
         design: Some(calibrate_design(recordings, seed)?),
+        stochastic_design: Some(calibrate_stochastic_design(recordings, seed)?),
     })
 }
 
@@ -358,18 +359,69 @@ pub fn calibrate_scheduled(
 /// demo's S1: subjects unlike the nominal one (a stiffer, less damped arm).
 const DESIGN_RANGE: (f64, f64) = (1.4, 0.7);
 
-/// `limpid protocol design` for the demo's S1 with a prior range (K x1.4,
-/// B x0.7 at its other end), predicted on `recordings` simulated recordings
-/// and verified on as many subjects drawn from the range.
-fn calibrate_design(recordings: usize, seed: u64) -> Result<DesignCalibration> {
-    use crate::design::{design, DesignRequest, Impedance, Objective, Prior};
-    let started = std::time::Instant::now();
-    let mut prior = Prior::demo(0);
-    prior.other_end = Some(Impedance {
+/// The demo's S1 with a prior range (K x1.4, B x0.7 at its other end).
+fn design_prior() -> crate::design::Prior {
+    let mut prior = crate::design::Prior::demo(0);
+    prior.other_end = Some(crate::design::Impedance {
         stiffness: prior.nominal.stiffness * DESIGN_RANGE.0,
         damping: prior.nominal.damping * DESIGN_RANGE.1,
         ..prior.nominal
     });
+    prior
+}
+
+/// A design's figures for calibrate, from its verification.
+fn design_calibration(
+    r: &limpid_analysis::result::design::DesignResult,
+    recordings: usize,
+    started: std::time::Instant,
+) -> DesignCalibration {
+    let v = r
+        .verify
+        .as_ref()
+        .expect("a design asked to verify carries its verification");
+    DesignCalibration {
+        prior: format!(
+            "the demo's S1 to K x{}, B x{} (predicted at the worse end, subjects drawn uniformly between)",
+            DESIGN_RANGE.0, DESIGN_RANGE.1
+        ),
+        recordings,
+        predicted_se: r.predicted.pooled.se,
+        achieved_se: v.achieved_se,
+        ratio: v.ratio,
+        within_tolerance_share: v.within_tolerance_share,
+        seconds: started.elapsed().as_secs_f64(),
+    }
+}
+
+/// `limpid protocol design --method stochastic` for the same prior range,
+/// with the endpoint-multisine preset's limits and the seed's time.
+fn calibrate_stochastic_design(recordings: usize, seed: u64) -> Result<DesignCalibration> {
+    use crate::design::stochastic::{design_stochastic, StochasticDesignRequest};
+    let started = std::time::Instant::now();
+    let preset = limpid_lab::periodic::PeriodicDesign::multisine_endpoint();
+    let request = StochasticDesignRequest {
+        prior: design_prior(),
+        limits: preset.limits.clone(),
+        sample_rate_hz: preset.sample_rate_hz,
+        budget_s: crate::design::protocol_duration(&limpid_lab::protocol::preset("artemiadis-3d")?),
+        objective: crate::design::Objective::default(),
+        runs: recordings,
+        baseline: None,
+        verify: recordings,
+        seed: seed ^ 0x6061,
+    };
+    let d = design_stochastic(&request)?;
+    Ok(design_calibration(&d.result, recordings, started))
+}
+
+/// `limpid protocol design` for the demo's S1 with a prior range (K x1.4,
+/// B x0.7 at its other end), predicted on `recordings` simulated recordings
+/// and verified on as many subjects drawn from the range.
+fn calibrate_design(recordings: usize, seed: u64) -> Result<DesignCalibration> {
+    use crate::design::{design, DesignRequest, Objective};
+    let started = std::time::Instant::now();
+    let prior = design_prior();
     let limits = limpid_lab::protocol::preset("artemiadis-3d")?;
     let request = DesignRequest {
         prior,
@@ -383,22 +435,7 @@ fn calibrate_design(recordings: usize, seed: u64) -> Result<DesignCalibration> {
         seed: seed ^ 0x6060,
     };
     let d = design(&request)?;
-    let v = d
-        .result
-        .verify
-        .expect("a design asked to verify carries its verification");
-    Ok(DesignCalibration {
-        prior: format!(
-            "the demo's S1 to K x{}, B x{} (predicted at the worse end, subjects drawn uniformly between)",
-            DESIGN_RANGE.0, DESIGN_RANGE.1
-        ),
-        recordings,
-        predicted_se: d.result.predicted.pooled.se,
-        achieved_se: v.achieved_se,
-        ratio: v.ratio,
-        within_tolerance_share: v.within_tolerance_share,
-        seconds: started.elapsed().as_secs_f64(),
-    })
+    Ok(design_calibration(&d.result, recordings, started))
 }
 
 /// The window sweep's part of [`calibrate`]: `sweeps` subjects, a third

@@ -264,12 +264,13 @@ fn calibrate_measures_coverage_and_wrong_verdicts_of_every_method() {
     let w = &r["window_sweep"];
     assert_eq!(w["trusted_but_wrong"], 0, "{w}");
     // the design, predicted at the prior range's worse end, is not optimistic about the subjects drawn from it
-    let d = &r["design"];
-    for m in 0..2 {
-        let ratio = d["ratio"][m].as_f64().unwrap();
-        assert!((0.75..2.5).contains(&ratio), "{d}");
+    for d in [&r["design"], &r["stochastic_design"]] {
+        for m in 0..2 {
+            let ratio = d["ratio"][m].as_f64().unwrap();
+            assert!((0.75..2.5).contains(&ratio), "{d}");
+        }
+        assert!(d["within_tolerance_share"].as_f64().unwrap() >= 0.75, "{d}");
     }
-    assert!(d["within_tolerance_share"].as_f64().unwrap() >= 0.75, "{d}");
     assert!(w["trusted_windows"].as_u64().unwrap() > 0, "{w}");
     // the varied subjects: end-point data among them, every sweep accounted
     // for, claims of a change counted apart for sweeps without and with a reflex

@@ -30,9 +30,13 @@ pub(crate) fn calibration_section(
     if let Some(w) = &v.window_sweep_varied {
         verdict += &sweep("varied subjects", w);
     }
-    if let Some(d) = &v.design {
+    let designs = [("linear", &v.design), ("stochastic", &v.stochastic_design)];
+    for (method, d) in designs
+        .iter()
+        .filter_map(|(m, d)| d.as_ref().map(|d| (m, d)))
+    {
         verdict += &format!(
-            "; protocol design for {}: predicted/achieved spread K {:.2}, B {:.2} over {} subjects, {:.0} % within K 5 % and B 20 %",
+            "; protocol design ({method}) for {}: predicted/achieved spread K {:.2}, B {:.2} over {} subjects, {:.0} % within K 5 % and B 20 %",
             d.prior,
             d.ratio[0],
             d.ratio[1],
