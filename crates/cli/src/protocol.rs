@@ -498,8 +498,15 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         ("linear", "centre-out" | "any") | ("stochastic", "multisine" | "any") => {}
         ("reflex", "prbs" | "any") => return run_reflex_design(&args, demo, cx),
         (method @ ("linear" | "stochastic" | "reflex"), family) => {
+            let instead = ["linear", "stochastic", "reflex"]
+                .into_iter()
+                .find(|m| families(m) == family)
+                .map_or_else(
+                    || "; a PRBS for the linear or stochastic method is not written yet".to_string(),
+                    |m| format!("; a {family} is designed by --method {m}"),
+                );
             return Err(format!(
-                "--family {family}: the {method} method's designs are {} (a PRBS for the linear or stochastic method is not written yet)",
+                "--family {family}: the {method} method's designs are {}{instead}",
                 families(method)
             )
             .into())

@@ -301,6 +301,16 @@ pub fn period_spectrum(x: &[f64]) -> Vec<Complex64> {
     out
 }
 
+/// The amplitude of each line of one period, `2 |X_k| / n` (a cosine of
+/// amplitude a reads a at its line; the mean reads twice itself at line 0).
+pub fn line_amplitudes(period: &[f64]) -> Vec<f64> {
+    let n = period.len().max(1) as f64;
+    period_spectrum(period)
+        .iter()
+        .map(|c| 2.0 * c.norm() / n)
+        .collect()
+}
+
 /// Peak over root mean square.
 pub fn crest_factor(x: &[f64]) -> f64 {
     let peak = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -449,6 +459,17 @@ pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_cosine_reads_its_amplitude_at_its_line() {
+        let n = 200;
+        let x: Vec<f64> = (0..n)
+            .map(|i| 0.3 * (std::f64::consts::TAU * 5.0 * i as f64 / n as f64 + 0.4).cos())
+            .collect();
+        let a = line_amplitudes(&x);
+        assert!((a[5] - 0.3).abs() < 1e-12, "{}", a[5]);
+        assert!(a.iter().enumerate().all(|(k, v)| k == 5 || *v < 1e-12));
+    }
 
     #[test]
     fn ternary_sequences_repeat_inverted_and_hold_odd_harmonics_only() {

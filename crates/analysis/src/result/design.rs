@@ -232,6 +232,19 @@ pub struct LimitMargin {
     pub margin_percent: f64,
 }
 
+impl LimitMargin {
+    /// The margin of `peak` to `limit` (same unit).
+    pub fn new(quantity: &str, unit: &str, peak: f64, limit: f64) -> Self {
+        LimitMargin {
+            quantity: quantity.into(),
+            unit: unit.into(),
+            peak,
+            limit,
+            margin_percent: 100.0 * (1.0 - peak / limit),
+        }
+    }
+}
+
 /// How the search went.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct SearchSummary {

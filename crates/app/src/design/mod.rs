@@ -390,6 +390,7 @@ pub fn request_from_texts(
     verify: usize,
     seed: u64,
 ) -> Result<DesignRequest> {
+    let prior_text = prior;
     let prior = read_prior(prior)?;
     let centre_out = |(text, path): Text<'_>, role: &str| -> Result<Protocol> {
         match limpid_lab::design::Design::from_toml(text, path)? {
@@ -432,7 +433,24 @@ pub fn request_from_texts(
         seed,
     };
     check_request(&request)?;
+    check_noise_at(&request.prior, prior_text, request.sample_rate_hz)?;
     Ok(request)
+}
+
+/// The prior's `[noise]` at the design's sample rate (a tremor the rate
+/// cannot hold), named to the prior file: found only when simulated, it
+/// refused every candidate and read as "no protocol fits".
+pub(crate) fn check_noise_at(prior: &Prior, text: Text<'_>, rate_hz: f64) -> Result<()> {
+    prior
+        .noise
+        .check_at(rate_hz)
+        .map_err(|message| match text.0 {
+            t if t.starts_with("demo:") => Error::invalid("prior", format!("[noise] {message}")),
+            _ => Error::Format {
+                path: text.1.to_path_buf(),
+                message: format!("[noise] {message}"),
+            },
+        })
 }
 
 /// The designed protocol and its result.
@@ -769,13 +787,7 @@ fn margins(p: &Protocol, centre_out: &CentreOut, prior: &Prior) -> Vec<LimitMarg
     let room = (0..3)
         .map(|i| (s[i] - l.workspace_min_m[i]).min(l.workspace_max_m[i] - s[i]))
         .fold(f64::INFINITY, f64::min);
-    let entry = |quantity: &str, unit: &str, peak: f64, limit: f64| LimitMargin {
-        quantity: quantity.into(),
-        unit: unit.into(),
-        peak,
-        limit,
-        margin_percent: 100.0 * (1.0 - peak / limit),
-    };
+    let entry = LimitMargin::new;
     vec![
         entry("displacement", "m", r, l.max_displacement_m),
         entry("velocity", "m/s", r * v, l.max_velocity_m_s),

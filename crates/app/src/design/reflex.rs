@@ -378,13 +378,7 @@ fn margins(p: &PeriodicDesign) -> Result<Vec<LimitMargin>> {
     let r = p.check()?;
     let l = &p.limits;
     let entry = |quantity: &str, unit: &str, peak: f64, limit: Option<f64>| {
-        limit.map(|limit| LimitMargin {
-            quantity: quantity.into(),
-            unit: unit.into(),
-            peak,
-            limit,
-            margin_percent: 100.0 * (1.0 - peak / limit),
-        })
+        limit.map(|limit| LimitMargin::new(quantity, unit, peak, limit))
     };
     Ok([
         entry(
@@ -529,11 +523,11 @@ fn period_lines(p: &PeriodicDesign, switch_s: f64) -> Result<(Vec<f64>, Vec<f64>
     let command = p.command()?;
     let n = command.period_samples;
     let x = &command.values[0][n..2 * n];
-    let spectrum = limpid_dsp::excitation::period_spectrum(x);
+    let spectrum = limpid_dsp::excitation::line_amplitudes(x);
     let df = p.sample_rate_hz / n as f64;
     let top = (1.5 / switch_s / df).floor() as usize;
-    let amplitude = |k: usize| 2.0 * spectrum[k].norm() / n as f64;
-    let peak = (1..spectrum.len()).map(amplitude).fold(0.0, f64::max);
+    let amplitude = |k: usize| spectrum[k];
+    let peak = spectrum.iter().skip(1).fold(0.0f64, |m, v| m.max(*v));
     // the sequence's nulls (multiples of 1 / switch_s) hold rounding only
     let lines: Vec<usize> = (1..spectrum.len().min(top + 1))
         .filter(|&k| amplitude(k) > 1e-3 * peak)

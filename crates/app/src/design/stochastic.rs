@@ -123,6 +123,7 @@ pub fn stochastic_request_from_texts(
     verify: usize,
     seed: u64,
 ) -> Result<StochasticDesignRequest> {
+    let prior_text = prior;
     let prior = super::read_prior(prior)?;
     let limits_from = limits_from
         .map(|(text, path)| -> Result<(PeriodicLimits, f64)> {
@@ -178,6 +179,7 @@ pub fn stochastic_request_from_texts(
         seed,
     };
     check_request(&request)?;
+    super::check_noise_at(&request.prior, prior_text, request.sample_rate_hz)?;
     Ok(request)
 }
 
@@ -607,13 +609,7 @@ fn margins(c: &Candidate, prior: &Prior) -> Vec<LimitMargin> {
     let p = peaks(&c.command, c.protocol.sample_rate_hz, prior);
     let l = &c.protocol.limits;
     let entry = |quantity: &str, unit: &str, peak: f64, limit: Option<f64>| {
-        limit.map(|limit| LimitMargin {
-            quantity: quantity.into(),
-            unit: unit.into(),
-            peak,
-            limit,
-            margin_percent: 100.0 * (1.0 - peak / limit),
-        })
+        limit.map(|limit| LimitMargin::new(quantity, unit, peak, limit))
     };
     [
         entry("displacement", "m", p.displacement, l.max_displacement_m),
@@ -661,12 +657,7 @@ fn line_spectrum(command: &Command, fs: f64, l: &PeriodicLimits) -> CommandSpect
     let spectra: Vec<Vec<f64>> = command
         .values
         .iter()
-        .map(|x| {
-            limpid_dsp::excitation::period_spectrum(&x[n..2 * n])
-                .iter()
-                .map(|c| 2.0 * c.norm() / n as f64)
-                .collect()
-        })
+        .map(|x| limpid_dsp::excitation::line_amplitudes(&x[n..2 * n]))
         .collect();
     let top = spectra
         .iter()

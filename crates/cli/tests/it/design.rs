@@ -189,7 +189,7 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         s,
         "--duration",
     ];
-    let cases: [(&[&str], &str); 12] = [
+    let cases: [(&[&str], &str); 13] = [
         (
             &["147", "--baseline", s, "-o", s],
             "would replace the input",
@@ -206,6 +206,10 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         (
             &["147", "--method", "stochastic", "--baseline", s],
             "the baseline must be an end-point multisine",
+        ),
+        (
+            &["147", "--family", "multisine"],
+            "a multisine is designed by --method stochastic",
         ),
         (&["147", "--family", "prbs"], "designs are centre-out"),
         (&["147", "--objective", "stifness"], "invalid --objective"),
@@ -256,6 +260,42 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         "{}",
         no_limits.stderr
     );
+}
+
+#[test]
+fn a_prior_whose_tremor_the_rate_cannot_hold_is_refused_naming_the_prior() {
+    let dir = tempfile::tempdir().unwrap();
+    let prior = dir.path().join("p.toml");
+    std::fs::write(
+        &prior,
+        "inertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\ndamping = [[20, 0, 0], [0, 20, 0], [0, 0, 20]]\nstiffness = [[300, 0, 0], [0, 300, 0], [0, 0, 300]]\n[noise]\ntremor_std_n = 0.3\ntremor_hz = 240\n",
+    )
+    .unwrap();
+    for (method, limits) in [
+        ("linear", "artemiadis-3d"),
+        ("stochastic", "endpoint-multisine"),
+    ] {
+        let limits = preset(dir.path(), limits);
+        let out = limpid(&[
+            "protocol",
+            "design",
+            "--method",
+            method,
+            "--prior",
+            prior.to_str().unwrap(),
+            "--limits-from",
+            limits.to_str().unwrap(),
+            "--duration",
+            "60",
+        ]);
+        assert_eq!(out.code, 2, "{method}: {}", out.stderr);
+        assert!(
+            out.stderr.contains("p.toml") && out.stderr.contains("tremor_hz"),
+            "{method}: {}",
+            out.stderr
+        );
+        assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
+    }
 }
 
 #[test]
