@@ -1,10 +1,13 @@
 //! Criterion benchmark of experiment design (issue 60: under 10 s for the
 //! 3-D linear method): `limpid protocol design --prior demo:S1 --limits-from
 //! artemiadis-3d --duration 147.2` with the default 40 recordings behind the
-//! prediction, and the reflex method's PRBS design on the virtual ankle.
+//! prediction, the stochastic method's end-point multisine (the
+//! endpoint-multisine preset's limits) and the reflex method's PRBS design on
+//! the virtual ankle.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use limpid_app::design::reflex::{design_reflex, ReflexDesignRequest, ReflexPrior};
+use limpid_app::design::stochastic::{design_stochastic, StochasticDesignRequest};
 use limpid_app::design::{design, DesignRequest, Objective, Prior};
 
 fn bench(c: &mut Criterion) {
@@ -13,6 +16,18 @@ fn bench(c: &mut Criterion) {
         prior: Prior::demo(0),
         limits: seed.limits.clone(),
         sample_rate_hz: seed.sample_rate_hz,
+        budget_s: 147.2,
+        objective: Objective::default(),
+        runs: 40,
+        baseline: None,
+        verify: 0,
+        seed: 1,
+    };
+    let multisine = limpid_lab::periodic::PeriodicDesign::multisine_endpoint();
+    let stochastic = StochasticDesignRequest {
+        prior: Prior::demo(0),
+        limits: multisine.limits.clone(),
+        sample_rate_hz: multisine.sample_rate_hz,
         budget_s: 147.2,
         objective: Objective::default(),
         runs: 40,
@@ -35,6 +50,9 @@ fn bench(c: &mut Criterion) {
     group.sample_size(10);
     group.bench_function("linear_s1_147s", |b| {
         b.iter(|| design(&linear).expect("design"))
+    });
+    group.bench_function("stochastic_multisine_s1_147s", |b| {
+        b.iter(|| design_stochastic(&stochastic).expect("design"))
     });
     group.bench_function("reflex_prbs_95s", |b| {
         b.iter(|| design_reflex(&reflex).expect("design"))

@@ -488,6 +488,10 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
     );
     if let Some(out) = &args.output {
         limpid_core::files::refuse_overwriting_inputs(&[(out, "the output (-o)")], &inputs)?;
+        // the output's folder before the seconds of designing, as `simulate` makes it
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            limpid_core::files::create_dir(dir)?;
+        }
     }
     let families = |method: &str| match method {
         "linear" => "centre-out",

@@ -62,6 +62,8 @@ const MIN_LINES_PER_CHANNEL: usize = 4;
 /// A line whose power is above this share of the strongest is excited (a
 /// `1/f^2` spectrum over 0.2-20 Hz spans 1e-8; lines not excited hold rounding only).
 const EXCITED_POWER: f64 = 1e-12;
+/// Smallest RMS displacement designed (m), whatever the prior's position noise.
+const LEAST_RMS_M: f64 = 1e-6;
 /// The channels, in the end point's order.
 const CHANNELS: [&str; 3] = ["x", "y", "z"];
 
@@ -389,6 +391,14 @@ fn candidate(
         return Err("the limits leave no amplitude".into());
     }
     let rms = unit_rms * scale;
+    // below the position noise the recorded displacement is the noise
+    let floor = req.prior.noise.position_std_m.max(LEAST_RMS_M);
+    if rms < floor {
+        return Err(format!(
+            "the limits leave {rms:.3e} m RMS per axis at {}-{} Hz {shape}, below the position noise's {floor:.1e} m",
+            band[0], band[1]
+        ));
+    }
     for v in command.values.iter_mut().flatten() {
         *v *= scale;
     }

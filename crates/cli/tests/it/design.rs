@@ -451,6 +451,39 @@ fn a_stochastic_design_writes_a_multisine_that_plays_back_to_its_subject() {
     );
     let check = limpid(&["protocol", "check", &s(&d)]);
     assert_eq!(check.code, 0, "{}", check.stderr);
+    // limits that leave no motion above the position noise are refused in one line
+    let still = dir.path().join("still.toml");
+    let text = std::fs::read_to_string(&limits).unwrap();
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("max_acceleration_m_s2") {
+                "max_acceleration_m_s2 = 1e-300".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&still, text).unwrap();
+    let out = limpid(&[
+        "protocol",
+        "design",
+        "--method",
+        "stochastic",
+        "--prior",
+        "demo:S1",
+        "--limits-from",
+        &s(&still),
+        "--duration",
+        "60",
+    ]);
+    assert!(
+        out.code == 2 && out.stderr.contains("below the position noise"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
     // played by limpid's end-point follower (white noise, not the design's
     // noise model) on S1 and estimated as a user would
     let subject = dir.path().join("s1.toml");
