@@ -332,13 +332,16 @@ impl Objective {
     }
 }
 
-/// A design request.
+/// A design request: the prior, the limits `L` and the baseline protocol
+/// `B` of the method's family (the linear method's by default: centre-out
+/// limits and protocol; [`stochastic::StochasticDesignRequest`] holds a
+/// periodic protocol's).
 #[derive(Debug, Clone)]
-pub struct DesignRequest {
+pub struct DesignRequest<L = Limits, B = Protocol> {
     /// The prior subject.
     pub prior: Prior,
     /// The limits.
-    pub limits: Limits,
+    pub limits: L,
     /// Sample rate of the designed protocol (Hz).
     pub sample_rate_hz: f64,
     /// The whole protocol's length (s).
@@ -347,12 +350,24 @@ pub struct DesignRequest {
     pub objective: Objective,
     /// Recordings simulated for the chosen design's prediction (and the baseline's).
     pub runs: usize,
-    /// The protocol it replaces, if any (its start points are replaced by the prior's).
-    pub baseline: Option<Protocol>,
+    /// The protocol it replaces, if any (a centre-out one's start points are replaced by the prior's).
+    pub baseline: Option<B>,
     /// Recordings on subjects drawn from the prior to check the prediction (0: none).
     pub verify: usize,
     /// Seed of the noise.
     pub seed: u64,
+}
+
+/// A periodic baseline is simulated `runs` times: at most [`MAX_DESIGN_SAMPLES`].
+pub(crate) fn check_periodic_baseline(b: &limpid_lab::periodic::PeriodicDesign) -> Result<()> {
+    let samples = b.check()?.samples as f64;
+    if samples > MAX_DESIGN_SAMPLES {
+        return Err(Error::invalid(
+            "baseline",
+            format!("{samples:.0} samples; a baseline is simulated `runs` times and may hold at most {MAX_DESIGN_SAMPLES:.0}"),
+        ));
+    }
+    Ok(())
 }
 
 /// A file's text and its path (for errors).

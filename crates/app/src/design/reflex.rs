@@ -420,15 +420,10 @@ pub fn design_reflex(req: &ReflexDesignRequest) -> Result<ReflexDesigned> {
         ));
     }
     super::check_budget(req.budget_s, req.sample_rate_hz)?;
-    if let Some(b) = &req.baseline {
-        let samples = b.check()?.samples as f64;
-        if samples > super::MAX_DESIGN_SAMPLES {
-            return Err(Error::invalid(
-                "baseline",
-                format!("{samples:.0} samples; a baseline is simulated `runs` times and may hold at most {:.0}", super::MAX_DESIGN_SAMPLES),
-            ));
-        }
-    }
+    req.baseline
+        .as_ref()
+        .map(super::check_periodic_baseline)
+        .transpose()?;
     super::check_runs("runs", req.runs, false)?;
     let amplitude = req
         .limits

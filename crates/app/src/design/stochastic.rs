@@ -67,28 +67,12 @@ const LEAST_RMS_M: f64 = 1e-6;
 /// The channels, in the end point's order.
 const CHANNELS: [&str; 3] = ["x", "y", "z"];
 
-/// A design request for the stochastic method.
-#[derive(Debug, Clone)]
-pub struct StochasticDesignRequest {
-    /// The prior subject (its posture is the follower's equilibrium).
-    pub prior: Prior,
-    /// End-point limits (displacement, velocity, acceleration, force, nominal stiffness).
-    pub limits: PeriodicLimits,
-    /// Sample rate (Hz).
-    pub sample_rate_hz: f64,
-    /// The whole command's length (s): fade-in, periods and fade-out.
-    pub budget_s: f64,
-    /// What matters.
-    pub objective: Objective,
-    /// Recordings behind the chosen design's prediction (and the baseline's).
-    pub runs: usize,
-    /// The multisine it replaces, if any.
-    pub baseline: Option<PeriodicDesign>,
-    /// Recordings on subjects drawn from the prior to check the prediction (0: none).
-    pub verify: usize,
-    /// Noise seed.
-    pub seed: u64,
-}
+/// A design request for the stochastic method: end-point limits
+/// (displacement, velocity, acceleration, force, nominal stiffness) and an
+/// end-point multisine as the baseline; the prior's posture is the
+/// follower's equilibrium, the budget the whole command (fade-in, periods,
+/// fade-out).
+pub type StochasticDesignRequest = super::DesignRequest<PeriodicLimits, PeriodicDesign>;
 
 /// A centre-out protocol's limits at the end point, the displacement within
 /// the workspace around `start` when there is one.
@@ -221,15 +205,10 @@ pub fn check_request(req: &StochasticDesignRequest) -> Result<()> {
         ));
     }
     check_budget(req.budget_s, req.sample_rate_hz)?;
-    if let Some(b) = &req.baseline {
-        let samples = b.check()?.samples as f64;
-        if samples > super::MAX_DESIGN_SAMPLES {
-            return Err(Error::invalid(
-                "baseline",
-                format!("{samples:.0} samples; a baseline is simulated `runs` times and may hold at most {:.0}", super::MAX_DESIGN_SAMPLES),
-            ));
-        }
-    }
+    req.baseline
+        .as_ref()
+        .map(super::check_periodic_baseline)
+        .transpose()?;
     check_runs("runs", req.runs, false)?;
     check_runs("verify", req.verify, true)?;
     Ok(())
