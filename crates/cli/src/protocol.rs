@@ -469,7 +469,6 @@ impl DesignTexts {
 }
 
 fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
-    use limpid_app::design::{design, request_from_texts};
     let mut inputs: Vec<(&Path, &str)> = Vec::new();
     let prior_path = PathBuf::from(&args.prior);
     let demo = args.prior.starts_with("demo:");
@@ -528,52 +527,23 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         baseline: baseline_text,
     } = DesignTexts::read(&args, demo)?;
     let named = |e| design_error(cx, &args, e);
-    let texts = (
-        (prior_text.as_str(), prior_path.as_path()),
-        limits_text.as_deref().zip(args.limits_from.as_deref()),
-        baseline_text.as_deref().zip(args.baseline.as_deref()),
-    );
     if !args.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         eprintln!(
             "designing: every candidate is simulated and estimated on the prior (seconds) ..."
         );
     }
-    let (toml, result) = if args.method == "stochastic" {
-        use limpid_app::design::stochastic::{design_stochastic, stochastic_request_from_texts};
-        let request = stochastic_request_from_texts(
-            texts.0,
-            texts.1,
-            texts.2,
-            args.duration,
-            &args.objective,
-            args.runs,
-            args.verify,
-            args.seed,
-        )
-        .map_err(named)?;
-        let designed = design_stochastic(&request).map_err(named)?;
-        (
-            limpid_lab::design::Design::Periodic(designed.protocol).to_toml(),
-            designed.result,
-        )
-    } else {
-        let request = request_from_texts(
-            texts.0,
-            texts.1,
-            texts.2,
-            args.duration,
-            &args.objective,
-            args.runs,
-            args.verify,
-            args.seed,
-        )
-        .map_err(named)?;
-        let designed = design(&request).map_err(named)?;
-        (
-            format!("kind = \"centre-out\"\n{}", designed.protocol.to_toml()),
-            designed.result,
-        )
-    };
+    let (toml, result) = limpid_app::design::design_from_texts(
+        &args.method,
+        (prior_text.as_str(), prior_path.as_path()),
+        limits_text.as_deref().zip(args.limits_from.as_deref()),
+        baseline_text.as_deref().zip(args.baseline.as_deref()),
+        args.duration,
+        &args.objective,
+        args.runs,
+        args.verify,
+        args.seed,
+    )
+    .map_err(named)?;
     if let Some(out) = &args.output {
         let text = format!(
             "# limpid protocol design --method {} (objective {}, budget {} s); units: m, rad, s, Hz, N\n{toml}",

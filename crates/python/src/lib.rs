@@ -554,9 +554,14 @@ fn design(
         let doc = Document::new(Estimate::ReflexDesign(designed.result));
         return Ok((toml, doc.to_json()));
     }
-    if method == "stochastic" {
-        use limpid_app::design::stochastic::{design_stochastic, stochastic_request_from_texts};
-        let request = stochastic_request_from_texts(
+    if !matches!(method, "linear" | "stochastic") {
+        return Err(value_err(format!(
+            "method: expected linear, stochastic or reflex, found {method:?}"
+        )));
+    }
+    let (toml, result) = detached(py, || {
+        limpid_app::design::design_from_texts(
+            method,
             (prior, Path::new(prior_name)),
             limits_from.map(|t| (t, Path::new("<limits_from>"))),
             baseline.map(|t| (t, Path::new("<baseline>"))),
@@ -566,32 +571,9 @@ fn design(
             verify,
             seed,
         )
-        .map_err(err)?;
-        let designed = detached(py, || design_stochastic(&request)).map_err(err)?;
-        let toml = limpid_lab::design::Design::Periodic(designed.protocol).to_toml();
-        let doc = Document::new(Estimate::Design(designed.result));
-        return Ok((toml, doc.to_json()));
-    }
-    if method != "linear" {
-        return Err(value_err(format!(
-            "method: expected linear, stochastic or reflex, found {method:?}"
-        )));
-    }
-    let request = limpid_app::design::request_from_texts(
-        (prior, Path::new(prior_name)),
-        limits_from.map(|t| (t, Path::new("<limits_from>"))),
-        baseline.map(|t| (t, Path::new("<baseline>"))),
-        duration_s,
-        objective,
-        runs,
-        verify,
-        seed,
-    )
+    })
     .map_err(err)?;
-    let designed = detached(py, || limpid_app::design::design(&request)).map_err(err)?;
-    let toml = format!("kind = \"centre-out\"\n{}", designed.protocol.to_toml());
-    let doc = Document::new(Estimate::Design(designed.result));
-    Ok((toml, doc.to_json()))
+    Ok((toml, Document::new(Estimate::Design(result)).to_json()))
 }
 
 /// Simulate a protocol (TOML text), as `limpid simulate`: on `subject` (TOML

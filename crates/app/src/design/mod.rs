@@ -452,6 +452,63 @@ pub fn request_from_texts(
     Ok(request)
 }
 
+/// A linear (centre-out) or stochastic (end-point multisine) design from
+/// its texts, as the CLI and Python take them: the designed protocol's TOML
+/// text, its `kind` first, and the result.
+#[allow(clippy::too_many_arguments)]
+pub fn design_from_texts(
+    method: &str,
+    prior: Text<'_>,
+    limits_from: Option<Text<'_>>,
+    baseline: Option<Text<'_>>,
+    budget_s: f64,
+    objective: &str,
+    runs: usize,
+    verify: usize,
+    seed: u64,
+) -> Result<(String, DesignResult)> {
+    match method {
+        "linear" => {
+            let request = request_from_texts(
+                prior,
+                limits_from,
+                baseline,
+                budget_s,
+                objective,
+                runs,
+                verify,
+                seed,
+            )?;
+            let designed = design(&request)?;
+            Ok((
+                format!("kind = \"centre-out\"\n{}", designed.protocol.to_toml()),
+                designed.result,
+            ))
+        }
+        "stochastic" => {
+            let request = stochastic::stochastic_request_from_texts(
+                prior,
+                limits_from,
+                baseline,
+                budget_s,
+                objective,
+                runs,
+                verify,
+                seed,
+            )?;
+            let designed = stochastic::design_stochastic(&request)?;
+            Ok((
+                limpid_lab::design::Design::Periodic(designed.protocol).to_toml(),
+                designed.result,
+            ))
+        }
+        other => Err(Error::invalid(
+            "method",
+            format!("{other:?}: expected linear or stochastic"),
+        )),
+    }
+}
+
 /// The prior's `[noise]` at the design's sample rate (a tremor the rate
 /// cannot hold), named to the prior file: found only when simulated, it
 /// refused every candidate and read as "no protocol fits".

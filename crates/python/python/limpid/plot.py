@@ -605,16 +605,7 @@ def design(result: Any, ax: Any = None) -> Plot:
     if _kind(d, "design", "reflex_design") == "reflex_design":
         return _reflex_design(d, ax)
     fig, a, _ = _panels(ax, 1, 3, "plot.design", panel=(3.6, 2.8))
-    cmd = d["command"]
-    t = np.asarray(cmd["t_s"], dtype=float)
-    for key, label, style, unit in (
-        ("displacement_m", "displacement", "-", "m"),
-        ("velocity_m_s", "velocity", "--", "m/s"),
-        ("acceleration_m_s2", "acceleration", ":", "m/s²"),
-    ):
-        y = np.asarray(cmd[key], dtype=float)
-        peak = float(np.max(np.abs(y))) if y.size else 0.0
-        a[0, 0].plot(t, y / peak if peak > 0 else y, style, label=f"{label} (peak {peak:.3g} {unit})")
+    _command_traces(a[0, 0], d["command"], (("m", "m"), ("m_s", "m/s"), ("m_s2", "m/s²")))
     periodic = d.get("family") == "multisine"
     a[0, 0].set_xlabel("time from the period's start (s), x" if periodic else "time from the trial's start (s)")
     a[0, 0].set_ylabel("share of the peak")
@@ -658,20 +649,22 @@ def design(result: Any, ax: Any = None) -> Plot:
     return Plot(fig, a)
 
 
+def _command_traces(axis: Any, cmd: Dict[str, Any], units: Tuple[Tuple[str, str], ...]) -> None:
+    """A designed command's displacement, velocity and acceleration, each
+    relative to its peak; `units`: each key's suffix and the unit shown."""
+    t = np.asarray(cmd["t_s"], dtype=float)
+    for name, style, (suffix, unit) in zip(("displacement", "velocity", "acceleration"), ("-", "--", ":"), units):
+        y = np.asarray(cmd[f"{name}_{suffix}"], dtype=float)
+        peak = float(np.max(np.abs(y))) if y.size else 0.0
+        axis.plot(t, y / peak if peak > 0 else y, style, label=f"{name} (peak {peak:.3g} {unit})")
+
+
 def _reflex_design(d: Dict[str, Any], ax: Any) -> Plot:
     """`design` for a PRBS designed for the reflex gain (joint units)."""
     fig, a, _ = _panels(ax, 1, 3, "plot.design", panel=(3.6, 2.8))
     cmd = d.get("command")
     if cmd is not None:
-        t = np.asarray(cmd["t_s"], dtype=float)
-        for key, label, style, unit in (
-            ("displacement_rad", "displacement", "-", "rad"),
-            ("velocity_rad_s", "velocity", "--", "rad/s"),
-            ("acceleration_rad_s2", "acceleration", ":", "rad/s²"),
-        ):
-            y = np.asarray(cmd[key], dtype=float)
-            peak = float(np.max(np.abs(y))) if y.size else 0.0
-            a[0, 0].plot(t, y / peak if peak > 0 else y, style, label=f"{label} (peak {peak:.3g} {unit})")
+        _command_traces(a[0, 0], cmd, (("rad", "rad"), ("rad_s", "rad/s"), ("rad_s2", "rad/s²")))
         a[0, 0].set_xlabel("time from the period's start (s)")
         a[0, 0].set_ylabel("share of the peak")
         a[0, 0].legend(fontsize="small")
