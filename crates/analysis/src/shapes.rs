@@ -32,59 +32,102 @@ pub fn check(e: &Estimate) -> Result<(), String> {
         Estimate::Design(d) => design(d),
         // scalars and a protocol: nothing to fit together
         Estimate::ReflexDesign(_) => Ok(()),
+        Estimate::PlanarDesign(d) => planar_design(d),
     }
 }
 
-/// A design's matrices are 3 x 3 (the prediction, the baseline's).
-fn design(d: &crate::result::design::DesignResult) -> Result<(), String> {
-    let mut predictions = vec![("predicted", &d.predicted)];
-    predictions.extend(d.baseline.as_ref().map(|b| ("baseline", b)));
-    for (name, p) in predictions {
-        for (field, m) in [
+/// A prediction's and its baseline's matrices have the method's `shapes`
+/// (rows, columns) of K, B (D), M (ξ).
+fn predictions(
+    predicted: &crate::result::design::Prediction,
+    baseline: Option<&crate::result::design::Prediction>,
+    shapes: [(usize, usize); 3],
+) -> Result<(), String> {
+    for (name, p) in
+        std::iter::once(("predicted", predicted)).chain(baseline.map(|b| ("baseline", b)))
+    {
+        for ((field, m), (rows, columns)) in [
             ("stiffness_se", &p.stiffness_se),
             ("damping_se", &p.damping_se),
             ("inertia_se", &p.inertia_se),
-        ] {
+        ]
+        .into_iter()
+        .zip(shapes)
+        {
             same(
                 &format!("{name}.{field} rows"),
                 m.0.nrows(),
-                3,
-                "coordinates",
+                rows,
+                "the method's rows",
             )?;
             same(
                 &format!("{name}.{field} columns"),
                 m.0.ncols(),
-                3,
-                "coordinates",
+                columns,
+                "the method's columns",
             )?;
         }
     }
-    // the command's traces span its times, the spectra its frequencies
-    let c = &d.command;
-    for (field, v) in [
-        ("command.displacement_m", &c.displacement_m),
-        ("command.velocity_m_s", &c.velocity_m_s),
-        ("command.acceleration_m_s2", &c.acceleration_m_s2),
-    ] {
-        same(field, v.len(), c.t_s.len(), "command.t_s")?;
-    }
-    let s = &d.spectrum;
-    let baseline = s.baseline_m.iter().map(|v| ("spectrum.baseline_m", v));
-    for (field, v) in [
-        ("spectrum.designed_m", &s.designed_m),
-        ("spectrum.limit_m", &s.limit_m),
-    ]
-    .into_iter()
-    .chain(baseline)
-    {
-        same(
-            field,
-            v.len(),
-            s.frequency_hz.len(),
-            "spectrum.frequency_hz",
-        )?;
+    Ok(())
+}
+
+/// Every trace spans its `times` (`what`), every spectrum its frequencies.
+fn spanning<'a>(
+    times: (&str, usize),
+    series: impl IntoIterator<Item = (&'a str, &'a Vec<f64>)>,
+) -> Result<(), String> {
+    for (field, v) in series {
+        same(field, v.len(), times.1, times.0)?;
     }
     Ok(())
+}
+
+/// A design's matrices are 3 x 3 (the prediction, the baseline's).
+fn design(d: &crate::result::design::DesignResult) -> Result<(), String> {
+    predictions(&d.predicted, d.baseline.as_ref(), [(3, 3); 3])?;
+    let c = &d.command;
+    spanning(
+        ("command.t_s", c.t_s.len()),
+        [
+            ("command.displacement_m", &c.displacement_m),
+            ("command.velocity_m_s", &c.velocity_m_s),
+            ("command.acceleration_m_s2", &c.acceleration_m_s2),
+        ],
+    )?;
+    let s = &d.spectrum;
+    spanning(
+        ("spectrum.frequency_hz", s.frequency_hz.len()),
+        [
+            ("spectrum.designed_m", &s.designed_m),
+            ("spectrum.limit_m", &s.limit_m),
+        ]
+        .into_iter()
+        .chain(s.baseline_m.iter().map(|v| ("spectrum.baseline_m", v))),
+    )
+}
+
+/// A planar design's K and D are 2 x 2, its ξ one row of 3.
+fn planar_design(d: &crate::result::design::PlanarDesignResult) -> Result<(), String> {
+    predictions(&d.predicted, d.baseline.as_ref(), [(2, 2), (2, 2), (1, 3)])?;
+    let c = &d.command;
+    spanning(
+        ("command.t_s", c.t_s.len()),
+        [
+            ("command.displacement_rad", &c.displacement_rad),
+            ("command.velocity_rad_s", &c.velocity_rad_s),
+            ("command.acceleration_rad_s2", &c.acceleration_rad_s2),
+        ],
+    )?;
+    let s = &d.spectrum;
+    spanning(
+        ("spectrum.frequency_hz", s.frequency_hz.len()),
+        [
+            ("spectrum.designed_rad", &s.designed_rad),
+            ("spectrum.limit_rad", &s.limit_rad),
+        ]
+        .into_iter()
+        .chain(s.baseline_rad.iter().map(|v| ("spectrum.baseline_rad", v))),
+    )
 }
 
 /// Every spectrum, coherence and matrix agrees with the frequencies, coordinates and inputs.

@@ -493,14 +493,15 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         }
     }
     let families = |method: &str| match method {
-        "linear" => "centre-out",
+        "linear" | "planar" => "centre-out",
         "stochastic" => "multisine",
         _ => "prbs",
     };
     match (args.method.as_str(), args.family.as_str()) {
         ("linear", "centre-out" | "any") | ("stochastic", "multisine" | "any") => {}
         ("reflex", "prbs" | "any") => return run_reflex_design(&args, demo, cx),
-        (method @ ("linear" | "stochastic" | "reflex"), family) => {
+        ("planar", "centre-out" | "any") => return run_planar_design(&args, demo, cx),
+        (method @ ("linear" | "stochastic" | "reflex" | "planar"), family) => {
             let instead = ["linear", "stochastic", "reflex"]
                 .into_iter()
                 .find(|m| families(m) == family)
@@ -516,7 +517,7 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         }
         (method, _) => {
             return Err(format!(
-                "--method {method}: designs are available for the linear, stochastic and reflex methods (planar designs are not written yet)"
+                "--method {method}: designs are available for the linear, stochastic, reflex and planar methods"
             )
             .into())
         }
@@ -594,13 +595,39 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
             );
         }
     }
-    println!(
-        "predicted on the prior ({} simulated recordings each; SE: RMS element s.d., and relative to the RMS element):",
-        r.predicted.runs
+    print_predictions(
+        &[("K", "N/m"), ("B", "N s/m"), ("M", "kg")],
+        "the prior",
+        &r.predicted,
+        r.baseline.as_ref(),
     );
+    print_margins(&r.limits);
+    print_verification(r.verify.as_ref(), ["K", "B", "M"], "subjects");
+    print_search(&r.search);
+}
+
+/// The predicted SEs of the three groups (`groups`: name and unit), the
+/// design's and the baseline's.
+fn print_predictions(
+    groups: &[(&str, &str); 3],
+    on: &str,
+    predicted: &limpid_analysis::result::design::Prediction,
+    baseline: Option<&limpid_analysis::result::design::Prediction>,
+) {
+    println!(
+        "predicted on {on} ({} simulated recordings each; SE: RMS element s.d., and relative to the RMS element):",
+        predicted.runs
+    );
+    let names = groups.map(|g| g.0);
     println!(
         "  {:<9} {:>22} {:>22} {:>22} {:>9} {:>9} {:>16}",
-        "", "K SE (N/m)", "B SE (N s/m)", "M SE (kg)", "K err %", "B err %", "identifiable K/B/M %"
+        "",
+        format!("{} SE ({})", groups[0].0, groups[0].1),
+        format!("{} SE ({})", groups[1].0, groups[1].1),
+        format!("{} SE ({})", groups[2].0, groups[2].1),
+        format!("{} err %", names[0]),
+        format!("{} err %", names[1]),
+        format!("identifiable {}/{}/{} %", names[0], names[1], names[2])
     );
     let row = |label: &str, p: &limpid_analysis::result::design::Prediction| {
         let cell = |m: usize| format!("{} ({:.1} %)", num(p.pooled.se[m]), p.pooled.se_percent[m]);
@@ -617,13 +644,16 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
             100.0 * p.identifiable_share[2]
         );
     };
-    row("design", &r.predicted);
-    if let Some(b) = &r.baseline {
+    row("design", predicted);
+    if let Some(b) = baseline {
         row("baseline", b);
-        println!("  (baseline: {:.1} s at this start point)", b.duration_s);
+        println!("  (baseline: {:.1} s)", b.duration_s);
     }
+}
+
+fn print_margins(limits: &[limpid_analysis::result::design::LimitMargin]) {
     println!("margins to the limits:");
-    for m in &r.limits {
+    for m in limits {
         println!(
             "  {:<40} {} of {} {} ({:.1} % to spare)",
             m.quantity,
@@ -633,23 +663,124 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
             m.margin_percent
         );
     }
-    if let Some(v) = &r.verify {
+}
+
+/// `--verify`'s line: `names` of the three groups, `who` was drawn from the prior.
+fn print_verification(
+    v: Option<&limpid_analysis::result::design::Verification>,
+    names: [&str; 3],
+    who: &str,
+) {
+    if let Some(v) = v {
         println!(
-            "verified on {} subjects drawn from the prior: achieved SE K {}, B {}, M {}; predicted/achieved {:.2}, {:.2}, {:.2}; K within 5 % and B within 20 % of the truth, both identifiable: {:.0} %",
+            "verified on {} {who} drawn from the prior: achieved SE {} {}, {} {}, {} {}; predicted/achieved {:.2}, {:.2}, {:.2}; {} within 5 % and {} within 20 % of the truth, both identifiable: {:.0} %",
             v.runs,
+            names[0],
             num(v.achieved_se[0]),
+            names[1],
             num(v.achieved_se[1]),
+            names[2],
             num(v.achieved_se[2]),
             v.ratio[0],
             v.ratio[1],
             v.ratio[2],
+            names[0],
+            names[1],
             100.0 * v.within_tolerance_share
         );
     }
+}
+
+fn print_search(s: &limpid_analysis::result::design::SearchSummary) {
     println!(
         "search: {} candidates on {} recordings each ({} refused by a limit or the budget)",
-        r.search.candidates, r.search.runs_per_candidate, r.search.refused
+        s.candidates, s.runs_per_candidate, s.refused
     );
+}
+
+/// `--method planar`: quintic joint perturbations for the planar method.
+fn run_planar_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
+    let prior_path = PathBuf::from(&args.prior);
+    let DesignTexts {
+        prior: prior_text,
+        limits: limits_text,
+        baseline: baseline_text,
+    } = DesignTexts::read(args, demo)?;
+    if !args.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        eprintln!(
+            "designing: every candidate is simulated and estimated on the prior (seconds) ..."
+        );
+    }
+    let (toml, r) = limpid_app::design::planar::planar_design_from_texts(
+        (&prior_text, &prior_path),
+        limits_text.as_deref().zip(args.limits_from.as_deref()),
+        baseline_text.as_deref().zip(args.baseline.as_deref()),
+        args.duration,
+        &args.objective,
+        args.runs,
+        args.verify,
+        args.seed,
+    )
+    .map_err(|e| design_error(cx, args, e))?;
+    if let Some(out) = &args.output {
+        let text = format!(
+            "# limpid protocol design --method planar (objective {}, budget {} s); units: m, rad, s, Hz, N m\n{toml}",
+            args.objective, args.duration,
+        );
+        limpid_core::files::write_file(out, text.as_bytes())?;
+    }
+    if args.json {
+        println!(
+            "{}",
+            limpid_analysis::result::Document::new(
+                limpid_analysis::result::Estimate::PlanarDesign(r)
+            )
+            .with_run(limpid_analysis::result::Run::of_this_process(&[]))
+            .to_json_pretty()
+        );
+        return Ok(());
+    }
+    let c = &r.chosen;
+    println!(
+        "designed: {} quintic perturbations of {} rad over {} ms in six joint directions, recorded {} ms before and {} ms after each onset (estimate with the whole window), random waits of {}-{} s: {:.1} s of {} s, at q0 = ({}, {}) rad",
+        c.trials,
+        num(c.amplitude_rad),
+        num(c.interpolation_s * 1e3),
+        num(c.rest_s * 1e3),
+        num(c.window_ms),
+        num(c.wait_s[0]),
+        num(c.wait_s[1]),
+        c.duration_s,
+        num(r.budget_s),
+        num(r.posture_rad[0]),
+        num(r.posture_rad[1])
+    );
+    print_predictions(
+        &[("K", "N m/rad"), ("D", "N m s/rad"), ("ξ", "kg m²")],
+        "the prior arm (errors against its intrinsic K and D)",
+        &r.predicted,
+        r.baseline.as_ref(),
+    );
+    print_margins(&r.limits);
+    print_verification(r.verify.as_ref(), ["K", "D", "ξ"], "arms");
+    print_search(&r.search);
+    match &args.output {
+        Some(out) => {
+            let links = r.protocol["link_lengths_m"]
+                .as_array()
+                .map(|l| {
+                    l.iter()
+                        .filter_map(|v| v.as_f64())
+                        .map(num)
+                        .collect::<Vec<_>>()
+                        .join(",")
+                })
+                .unwrap_or_default();
+            println!("wrote {} (check it: limpid protocol check {0}; simulate it: limpid simulate {0} -o rec.csv; estimate it with the whole window: limpid estimate planar rec.csv --link-lengths {links})", out.display())
+        }
+        None => println!("protocol not written: add -o D.toml"),
+    }
+    Ok(())
 }
 
 /// `--method reflex`: a PRBS for the reflex gain on a prior ankle.

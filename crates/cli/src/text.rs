@@ -33,12 +33,15 @@ pub fn print(e: &Estimated, request: &Request, paths: &[PathBuf], csv: bool) -> 
         Estimate::Demo(_)
         | Estimate::Calibration(_)
         | Estimate::Design(_)
-        | Estimate::ReflexDesign(_) => Err(format!(
+        | Estimate::ReflexDesign(_)
+        | Estimate::PlanarDesign(_) => Err(format!(
             "a {} result is printed by its own command (`limpid {}`), not by an estimate",
             e.document.estimate.kind(),
             match e.document.estimate {
                 Estimate::Demo(_) => "demo",
-                Estimate::Design(_) | Estimate::ReflexDesign(_) => "protocol design",
+                Estimate::Design(_) | Estimate::ReflexDesign(_) | Estimate::PlanarDesign(_) => {
+                    "protocol design"
+                }
                 _ => "calibrate",
             }
         )

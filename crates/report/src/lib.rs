@@ -139,6 +139,7 @@ pub fn build(inputs: &[(String, Estimate)]) -> Report {
             Estimate::Calibration(r) => calibration_section(name, r),
             Estimate::Design(r) => design::section(name, r),
             Estimate::ReflexDesign(r) => design::reflex_section(name, r),
+            Estimate::PlanarDesign(r) => design::planar_section(name, r),
             Estimate::Varying(r) => varying::section(name, r),
         })
         .collect();

@@ -366,3 +366,73 @@ pub struct ReflexPrediction {
     /// Length of the protocol (s).
     pub duration_s: f64,
 }
+
+/// A perturbation protocol designed for the planar method (`limpid protocol
+/// design --method planar`, seed 003): quintic joint-space displacements in
+/// six directions from one posture.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct PlanarDesignResult {
+    /// Weights of the relative variances of K, D and ξ in the objective.
+    pub objective: ObjectiveWeights,
+    /// The time budget (s): waits, perturbations and recorded holds counted.
+    pub budget_s: f64,
+    /// The posture q0 the design is for (shoulder, relative elbow; rad).
+    pub posture_rad: [f64; 2],
+    /// What was chosen.
+    pub chosen: PlanarChoice,
+    /// Predicted on the prior arm (the worse end when it has a range):
+    /// `stiffness_se` K (N m/rad, 2 x 2), `damping_se` D (N m s/rad, 2 x 2),
+    /// `inertia_se` ξ1..ξ3 (kg m², one row); errors against the arm's
+    /// intrinsic K and D (before any reflex).
+    pub predicted: Prediction,
+    /// The same for the protocol it replaces (`--baseline`), at the same posture.
+    pub baseline: Option<Prediction>,
+    /// The designed protocol (`kind = "planar"`, as JSON).
+    pub protocol: serde_json::Value,
+    /// Largest value reached against each limit.
+    pub limits: Vec<LimitMargin>,
+    /// How the design was searched.
+    pub search: SearchSummary,
+    /// With `--verify N`: the design run on arms drawn from the prior (K, D, ξ).
+    pub verify: Option<Verification>,
+    /// One recorded trial of the first (shoulder) direction, for plots.
+    pub command: JointCommandTrace,
+    /// What one recorded trial excites, against the limits.
+    pub spectrum: JointCommandSpectrum,
+}
+
+/// The planar protocol's parameters a design chose.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct PlanarChoice {
+    /// Displacement of each joint that moves (rad): directions (±a, 0), (0, ±a), ±(a, -a).
+    pub amplitude_rad: f64,
+    /// Interpolation interval T_k of the quintic (s).
+    pub interpolation_s: f64,
+    /// Recorded hold after the motion (s).
+    pub hold_s: f64,
+    /// Recorded rest before each onset (s): the posture and baseline torque are its means.
+    pub rest_s: f64,
+    /// The observation window after each onset the estimate uses (ms): T_k and the hold.
+    pub window_ms: f64,
+    /// The random wait before each perturbation (s), the limits' protocol's.
+    pub wait_s: [f64; 2],
+    /// Perturbations.
+    pub trials: usize,
+    /// Length of the whole session, waits included (s).
+    pub duration_s: f64,
+}
+
+/// Amplitude of one recorded trial's displacement by frequency, `2 |X(f)| /
+/// T` over the trial of length T, beside the largest sine amplitude the
+/// limits allow at that frequency, `min(d_max, v_max / ω, a_max / ω²)`.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct JointCommandSpectrum {
+    /// Frequencies (Hz), log-spaced.
+    pub frequency_hz: Vec<f64>,
+    /// The design's (rad).
+    pub designed_rad: Vec<f64>,
+    /// The baseline's, when there is one (rad).
+    pub baseline_rad: Option<Vec<f64>>,
+    /// The limits' envelope (rad).
+    pub limit_rad: Vec<f64>,
+}

@@ -64,6 +64,8 @@ pub enum Estimate {
     Design(crate::result::design::DesignResult),
     /// A PRBS designed for the reflex method (`limpid protocol design --method reflex`).
     ReflexDesign(crate::result::design::ReflexDesignResult),
+    /// Quintic joint perturbations designed for the planar method (`limpid protocol design --method planar`).
+    PlanarDesign(crate::result::design::PlanarDesignResult),
 }
 
 impl Estimate {
@@ -83,6 +85,7 @@ impl Estimate {
             Estimate::Calibration(_) => "calibration",
             Estimate::Design(_) => "design",
             Estimate::ReflexDesign(_) => "reflex_design",
+            Estimate::PlanarDesign(_) => "planar_design",
         }
     }
 

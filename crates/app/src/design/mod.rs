@@ -31,13 +31,14 @@
 //! (common random numbers), by coordinate descent over the five parameters
 //! from a fast cubic; the chosen one is then predicted on `runs` fresh seeds.
 
+pub mod planar;
 pub mod reflex;
 pub mod stochastic;
 
 use std::collections::HashMap;
 use std::path::Path;
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
 use serde::Deserialize;
 
@@ -102,6 +103,27 @@ impl Impedance {
 
     fn matrices(&self) -> [Matrix3<f64>; 3] {
         [self.stiffness, self.damping, self.inertia]
+    }
+}
+
+/// What a design's errors are taken against: three groups of parameters
+/// (K, B, M; the planar method's K, D and ξ) and the line between the two
+/// ends of a prior's range.
+pub(crate) trait Truth: Sync {
+    /// K, B (or D), M (or ξ, one row).
+    fn groups(&self) -> [DMatrix<f64>; 3];
+    /// The subject a share `t` of the way to `other`.
+    fn blend(&self, other: &Self, t: f64) -> Self;
+}
+
+impl Truth for Impedance {
+    fn groups(&self) -> [DMatrix<f64>; 3] {
+        self.matrices()
+            .map(|m| DMatrix::from_column_slice(3, 3, m.as_slice()))
+    }
+
+    fn blend(&self, other: &Impedance, t: f64) -> Impedance {
+        Impedance::blend(self, other, t)
     }
 }
 
@@ -251,6 +273,11 @@ impl Prior {
             .collect()
     }
 
+    /// The nominal subject and the other end of the range, if any.
+    fn range(&self) -> (&Impedance, Option<&Impedance>) {
+        (&self.nominal, self.other_end.as_ref())
+    }
+
     fn posture(&self, imp: &Impedance) -> Posture {
         Posture {
             name: "S1".into(),
@@ -332,14 +359,15 @@ impl Objective {
     }
 }
 
-/// A design request: the prior, the limits `L` and the baseline protocol
-/// `B` of the method's family (the linear method's by default: centre-out
-/// limits and protocol; [`stochastic::StochasticDesignRequest`] holds a
-/// periodic protocol's).
+/// A design request: the prior `P`, the limits `L` and the baseline
+/// protocol `B` of the method's family (the linear method's by default: an
+/// end-point prior, centre-out limits and protocol;
+/// [`stochastic::StochasticDesignRequest`] holds a periodic protocol's,
+/// [`planar::PlanarDesignRequest`] a planar arm's).
 #[derive(Debug, Clone)]
-pub struct DesignRequest<L = Limits, B = Protocol> {
+pub struct DesignRequest<L = Limits, B = Protocol, P = Prior> {
     /// The prior subject.
-    pub prior: Prior,
+    pub prior: P,
     /// The limits.
     pub limits: L,
     /// Sample rate of the designed protocol (Hz).
@@ -690,20 +718,20 @@ fn largest_radius(req: &DesignRequest) -> Result<f64> {
     Ok(radius)
 }
 
-/// Errors of one recording's estimate against the truth, K, B, M.
+/// Errors of one recording's estimate against the truth, K, B, M (planar: K, D, ξ).
 pub(crate) struct Run {
-    errors: [Matrix3<f64>; 3],
-    /// Relative Frobenius error of K, B, M against the subject's own (percent).
+    errors: [DMatrix<f64>; 3],
+    /// Relative Frobenius error of each group against the subject's own (percent).
     error_percent: [f64; 3],
     identifiable: [bool; 3],
 }
 
 impl Run {
-    /// An estimate's K, B, M (`Matrix`, SI) and whether each was identifiable, against `imp`.
-    pub(crate) fn new(estimate: [&Matrix; 3], identifiable: [bool; 3], imp: &Impedance) -> Run {
-        let m3 = |m: &Matrix| Matrix3::from_fn(|r, c| m.0[(r, c)]);
-        let truth = imp.matrices();
-        let errors: [Matrix3<f64>; 3] = std::array::from_fn(|m| m3(estimate[m]) - truth[m]);
+    /// An estimate's three groups (`Matrix`, SI, shaped as `truth`'s) and
+    /// whether each was identifiable, against `truth`.
+    pub(crate) fn new(estimate: [&Matrix; 3], identifiable: [bool; 3], truth: &impl Truth) -> Run {
+        let truth = truth.groups();
+        let errors: [DMatrix<f64>; 3] = std::array::from_fn(|m| &estimate[m].0 - &truth[m]);
         Run {
             error_percent: std::array::from_fn(|m| 100.0 * errors[m].norm() / truth[m].norm()),
             errors,
@@ -728,26 +756,26 @@ fn run_once(p: &CentreOut, prior: &Prior, imp: &Impedance, seed: u64) -> Result<
     ))
 }
 
-/// One simulated recording's errors on subject `imp` with noise seed `seed`:
+/// One simulated recording's errors on subject `S` with noise seed `seed`:
 /// the family's simulation and the method's estimator.
-pub(crate) trait Runner: Fn(&Impedance, u64) -> Result<Run> + Sync {}
-impl<F: Fn(&Impedance, u64) -> Result<Run> + Sync> Runner for F {}
+pub(crate) trait Runner<S>: Fn(&S, u64) -> Result<Run> + Sync {}
+impl<S, F: Fn(&S, u64) -> Result<Run> + Sync> Runner<S> for F {}
 
 /// Recordings of one subject, one per seed, in parallel.
-fn runs(run: &impl Runner, imp: &Impedance, seeds: &[u64]) -> Result<Vec<Run>> {
-    seeds.par_iter().map(|&s| run(imp, s)).collect()
+fn runs<S: Truth>(run: &impl Runner<S>, subject: &S, seeds: &[u64]) -> Result<Vec<Run>> {
+    seeds.par_iter().map(|&s| run(subject, s)).collect()
 }
 
 /// The worse end's objective over the ranking seeds, or why the candidate is refused.
-pub(crate) fn rank(
-    run: &impl Runner,
-    prior: &Prior,
+pub(crate) fn rank<S: Truth>(
+    run: &impl Runner<S>,
+    ends: &[S],
     weights: [f64; 3],
     seeds: &[u64],
 ) -> std::result::Result<f64, String> {
-    let worst = prior.ends().iter().try_fold(0.0f64, |worst, imp| {
-        let rs = runs(run, imp, seeds)?;
-        Ok::<f64, Error>(worst.max(objective_value(&relative_mse(&rs, imp), weights)))
+    let worst = ends.iter().try_fold(0.0f64, |worst, subject| {
+        let rs = runs(run, subject, seeds)?;
+        Ok::<f64, Error>(worst.max(objective_value(&relative_mse(&rs, subject), weights)))
     });
     match worst {
         Ok(v) if v.is_finite() => Ok(v),
@@ -756,14 +784,14 @@ pub(crate) fn rank(
     }
 }
 
-/// Mean squared error of the nine elements relative to the RMS element, K, B, M (percent²).
-fn relative_mse(runs: &[Run], imp: &Impedance) -> [f64; 3] {
-    let truth = imp.matrices();
+/// Mean squared error of each group's elements relative to its RMS element (percent²).
+fn relative_mse(runs: &[Run], subject: &impl Truth) -> [f64; 3] {
+    let truth = subject.groups();
     std::array::from_fn(|m| {
-        let scale = truth[m].norm_squared() / 9.0;
+        let scale = truth[m].norm_squared() / truth[m].len() as f64;
         let mse = runs
             .iter()
-            .map(|r| r.errors[m].norm_squared() / 9.0)
+            .map(|r| r.errors[m].norm_squared() / truth[m].len() as f64)
             .sum::<f64>()
             / runs.len() as f64;
         1e4 * mse / scale
@@ -774,48 +802,53 @@ fn objective_value(rel: &[f64; 3], w: [f64; 3]) -> f64 {
     (0..3).map(|m| w[m] * rel[m]).sum()
 }
 
-/// Element-wise s.d. over runs, K, B, M.
-fn spread(runs: &[Run]) -> [Matrix3<f64>; 3] {
+/// Element-wise s.d. over runs of each group.
+fn spread(runs: &[Run]) -> [DMatrix<f64>; 3] {
     let n = runs.len() as f64;
     std::array::from_fn(|m| {
-        let mean = runs.iter().map(|r| r.errors[m]).sum::<Matrix3<f64>>() / n;
+        let shape = runs[0].errors[m].shape();
+        let zero = DMatrix::<f64>::zeros(shape.0, shape.1);
+        let mean = runs.iter().fold(zero.clone(), |a, r| a + &r.errors[m]) / n;
         let var = runs
             .iter()
-            .map(|r| (r.errors[m] - mean).map(|v| v * v))
-            .sum::<Matrix3<f64>>()
+            .fold(zero, |a, r| a + (&r.errors[m] - &mean).map(|v| v * v))
             / (n - 1.0).max(1.0);
         var.map(f64::sqrt)
     })
 }
 
-fn pooled_se(se: &[Matrix3<f64>; 3]) -> [f64; 3] {
-    std::array::from_fn(|m| (se[m].norm_squared() / 9.0).sqrt())
+/// RMS of each group's element s.d.
+fn pooled_se(se: &[DMatrix<f64>; 3]) -> [f64; 3] {
+    std::array::from_fn(|m| (se[m].norm_squared() / se[m].len() as f64).sqrt())
 }
 
-/// The prediction of a protocol of `duration_s` whose recordings `run` makes.
-pub(crate) fn predict(
-    run: &impl Runner,
+/// The prediction of a protocol of `duration_s` whose recordings `run`
+/// makes: the worse of the prior's `ends` by the objective's `weights`.
+pub(crate) fn predict<S: Truth>(
+    run: &impl Runner<S>,
     duration_s: f64,
-    prior: &Prior,
-    objective: &Objective,
+    ends: &[S],
+    weights: [f64; 3],
     seeds: &[u64],
 ) -> Result<Prediction> {
-    // the worse end of the prior's range
     let mut worst: Option<(f64, Prediction)> = None;
-    for imp in prior.ends() {
-        let rs = runs(run, &imp, seeds)?;
-        let value = objective_value(&relative_mse(&rs, &imp), objective.weights());
+    for subject in ends {
+        let rs = runs(run, subject, seeds)?;
+        let value = objective_value(&relative_mse(&rs, subject), weights);
         let se = spread(&rs);
         let pooled = pooled_se(&se);
-        let truth = imp.matrices();
+        let truth = subject.groups();
         let n = rs.len() as f64;
+        let [stiffness_se, damping_se, inertia_se] = se.map(Matrix);
         let prediction = Prediction {
-            stiffness_se: Matrix::from(se[0]),
-            damping_se: Matrix::from(se[1]),
-            inertia_se: Matrix::from(se[2]),
+            stiffness_se,
+            damping_se,
+            inertia_se,
             pooled: Pooled {
                 se: pooled,
-                se_percent: std::array::from_fn(|m| 100.0 * pooled[m] / (truth[m].norm() / 3.0)),
+                se_percent: std::array::from_fn(|m| {
+                    100.0 * pooled[m] / (truth[m].norm() / (truth[m].len() as f64).sqrt())
+                }),
                 error_percent: std::array::from_fn(|m| {
                     rs.iter().map(|r| r.error_percent[m]).sum::<f64>() / n
                 }),
@@ -830,7 +863,80 @@ pub(crate) fn predict(
             worst = Some((value, prediction));
         }
     }
-    Ok(worst.expect("a prior has a nominal end").1)
+    worst
+        .map(|w| w.1)
+        .ok_or_else(|| Error::invalid("prior", "no subject to predict on"))
+}
+
+/// A grid search's outcome.
+pub(crate) struct Searched<const D: usize> {
+    /// The chosen index in every dimension.
+    pub(crate) best: [usize; D],
+    /// Its objective.
+    pub(crate) objective: f64,
+    /// Candidates evaluated.
+    pub(crate) candidates: usize,
+    /// Candidates refused (a limit, the budget, the estimator).
+    pub(crate) refused: usize,
+}
+
+/// Coordinate descent over the grid `sizes` from `start`: at most four
+/// sweeps, each trying every value of every dimension around the best so
+/// far. `evaluate` gives a candidate's objective or why it is refused;
+/// `family` names what is searched when nothing fits.
+pub(crate) fn coordinate_descent<const D: usize>(
+    start: [usize; D],
+    sizes: [usize; D],
+    family: &str,
+    mut evaluate: impl FnMut(&[usize; D]) -> std::result::Result<f64, String>,
+) -> Result<Searched<D>> {
+    let mut seen: HashMap<[usize; D], Option<f64>> = HashMap::new();
+    let (mut refused, mut last_refusal) = (0usize, String::new());
+    let mut value_of = |c: [usize; D], seen: &mut HashMap<[usize; D], Option<f64>>| {
+        *seen.entry(c).or_insert_with(|| match evaluate(&c) {
+            Ok(v) => Some(v),
+            Err(why) => {
+                refused += 1;
+                last_refusal = why;
+                None
+            }
+        })
+    };
+    let mut best = start;
+    let mut best_value = value_of(best, &mut seen);
+    for _sweep in 0..4 {
+        let before = best;
+        for dim in 0..D {
+            for value in 0..sizes[dim] {
+                let mut c = best;
+                c[dim] = value;
+                if c == best {
+                    continue;
+                }
+                if let Some(v) = value_of(c, &mut seen) {
+                    if best_value.is_none_or(|b| v < b) {
+                        best = c;
+                        best_value = Some(v);
+                    }
+                }
+            }
+        }
+        if best == before {
+            break;
+        }
+    }
+    match best_value {
+        Some(objective) => Ok(Searched {
+            best,
+            objective,
+            candidates: seen.len(),
+            refused,
+        }),
+        None => Err(Error::invalid(
+            "design",
+            format!("no {family} fits the limits and the budget: {last_refusal}"),
+        )),
+    }
 }
 
 /// Length of a centre-out protocol at one start point (s), every phase counted.
@@ -1003,7 +1109,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
                     // a candidate whose recordings the estimator refuses (or whose
                     // objective is not a number) is refused, with the reason kept
                     let run = |imp: &Impedance, s: u64| run_once(&p, &req.prior, imp, s);
-                    match rank(&run, &req.prior, w, &ranking) {
+                    match rank(&run, &req.prior.ends(), w, &ranking) {
                         Ok(v) => Some(v),
                         Err(why) => {
                             refused += 1;
@@ -1067,8 +1173,8 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
     let predicted = predict(
         &run,
         protocol_duration(&protocol),
-        &req.prior,
-        &req.objective,
+        &req.prior.ends(),
+        w,
         &final_seeds,
     )?;
     let baseline = req
@@ -1086,14 +1192,14 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             predict(
                 &run,
                 protocol_duration(&b),
-                &req.prior,
-                &req.objective,
+                &req.prior.ends(),
+                w,
                 &final_seeds,
             )
         })
         .transpose()?;
     let verify = (req.verify > 0)
-        .then(|| verify(&run, &req.prior, &predicted, req.verify, req.seed))
+        .then(|| verify(&run, req.prior.range(), &predicted, req.verify, req.seed))
         .transpose()?;
     let ph = &protocol.phases;
     let result = DesignResult {
@@ -1133,16 +1239,11 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             frequency_hz: SPECTRUM_HZ.to_vec(),
             designed_m: amplitude_spectrum(&protocol),
             baseline_m: req.baseline.as_ref().map(amplitude_spectrum),
-            limit_m: SPECTRUM_HZ
-                .iter()
-                .map(|f| {
-                    let w = std::f64::consts::TAU * f;
-                    let l = &protocol.limits;
-                    l.max_displacement_m
-                        .min(l.max_velocity_m_s / w)
-                        .min(l.max_acceleration_m_s2 / (w * w))
-                })
-                .collect(),
+            limit_m: limit_envelope(
+                protocol.limits.max_displacement_m,
+                protocol.limits.max_velocity_m_s,
+                protocol.limits.max_acceleration_m_s2,
+            ),
         },
     };
     Ok(Designed { protocol, result })
@@ -1199,6 +1300,12 @@ fn amplitude_spectrum(p: &Protocol) -> Vec<f64> {
     let n = ((length * p.sample_rate_hz).round() as usize).max(2);
     let dt = length / n as f64;
     let x: Vec<f64> = (0..n).map(|i| trial_path(p, i as f64 * dt).0).collect();
+    sine_amplitudes(&x, dt)
+}
+
+/// `2 |X(f)| / n` of the samples `x`, `dt` apart, at [`SPECTRUM_HZ`]: the
+/// amplitude a sine filling them would have.
+pub(crate) fn sine_amplitudes(x: &[f64], dt: f64) -> Vec<f64> {
     SPECTRUM_HZ
         .iter()
         .map(|f| {
@@ -1207,37 +1314,54 @@ fn amplitude_spectrum(p: &Protocol) -> Vec<f64> {
                 let phase = w * i as f64;
                 (re + v * phase.cos(), im - v * phase.sin())
             });
-            2.0 * re.hypot(im) / n as f64
+            2.0 * re.hypot(im) / x.len() as f64
         })
         .collect()
+}
+
+/// The largest sine amplitude a displacement, velocity and acceleration
+/// limit allow at each of [`SPECTRUM_HZ`]: `min(d, v / ω, a / ω²)`.
+pub(crate) fn limit_envelope(displacement: f64, velocity: f64, acceleration: f64) -> Vec<f64> {
+    SPECTRUM_HZ
+        .iter()
+        .map(|f| {
+            let w = std::f64::consts::TAU * f;
+            displacement.min(velocity / w).min(acceleration / (w * w))
+        })
+        .collect()
+}
+
+/// The frequencies of [`sine_amplitudes`] and [`limit_envelope`] (Hz).
+pub(crate) fn spectrum_hz() -> Vec<f64> {
+    SPECTRUM_HZ.to_vec()
 }
 
 /// Run the design on `n` subjects drawn uniformly between the prior's ends
 /// (the nominal subject when it has no range) and compare the achieved
 /// spread of the errors with the prediction.
-pub(crate) fn verify(
-    run: &impl Runner,
-    prior: &Prior,
+pub(crate) fn verify<S: Truth + Clone + Send>(
+    run: &impl Runner<S>,
+    (nominal, other_end): (&S, Option<&S>),
     predicted: &Prediction,
     n: usize,
     seed: u64,
 ) -> Result<Verification> {
     use rand::{rngs::StdRng, Rng, SeedableRng};
     let mut rng = StdRng::seed_from_u64(seed ^ 0x5eed_0060);
-    let subjects: Vec<(Impedance, u64)> = seeds(seed, 50_000, n)
+    let subjects: Vec<(S, u64)> = seeds(seed, 50_000, n)
         .into_iter()
         .map(|s| {
             let t: f64 = rng.random();
-            let imp = match &prior.other_end {
-                Some(o) => prior.nominal.blend(o, t),
-                None => prior.nominal,
+            let subject = match other_end {
+                Some(o) => nominal.blend(o, t),
+                None => nominal.clone(),
             };
-            (imp, s)
+            (subject, s)
         })
         .collect();
     let rs: Vec<Run> = subjects
         .par_iter()
-        .map(|(imp, s)| run(imp, *s))
+        .map(|(subject, s)| run(subject, *s))
         .collect::<Result<_>>()?;
     let achieved = pooled_se(&spread(&rs));
     let nf = n as f64;

@@ -471,7 +471,7 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
         }
         let value = candidate(req, &c, "schroeder").and_then(|cand| {
             let run = |imp: &Impedance, s: u64| run_once(&cand, &req.prior, imp, s);
-            rank(&run, &req.prior, w, &ranking)
+            rank(&run, &req.prior.ends(), w, &ranking)
         });
         let value = match value {
             Ok(v) => Some(v),
@@ -523,13 +523,7 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
     let report = chosen.protocol.check()?;
     let final_seeds = seeds(req.seed, 10_000, req.runs);
     let run = |imp: &Impedance, s: u64| run_once(&chosen, &req.prior, imp, s);
-    let predicted = predict(
-        &run,
-        report.duration_s,
-        &req.prior,
-        &req.objective,
-        &final_seeds,
-    )?;
+    let predicted = predict(&run, report.duration_s, &req.prior.ends(), w, &final_seeds)?;
     let baseline = req
         .baseline
         .as_ref()
@@ -542,14 +536,14 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
             predict(
                 &run,
                 base.command.t.len() as f64 / b.sample_rate_hz,
-                &req.prior,
-                &req.objective,
+                &req.prior.ends(),
+                w,
                 &final_seeds,
             )
         })
         .transpose()?;
     let verify = (req.verify > 0)
-        .then(|| verify(&run, &req.prior, &predicted, req.verify, req.seed))
+        .then(|| verify(&run, req.prior.range(), &predicted, req.verify, req.seed))
         .transpose()?;
     let Signal::Multisine(m) = &chosen.protocol.signal else {
         unreachable!("the candidates are multisines")

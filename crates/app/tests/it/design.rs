@@ -256,3 +256,158 @@ fn a_stochastic_budget_too_short_for_its_periods_is_refused_with_the_reason() {
         "{e}"
     );
 }
+
+/// The seed 003 arm holding a load, without a reflex (a prior file's text).
+const PLANAR_ARM: &str = "xi = [0.356, 0.143, 0.147]\nstiffness = [[37.95, 9.31], [9.31, 10.14]]\ndamping = [[1.854, 0.590], [0.590, 1.435]]\nposture_rad = [0.08, 1.0]\ntau0 = [0.37, 0.41]\n";
+
+fn planar_request(
+    prior: &str,
+    limits: &str,
+    runs: usize,
+    verify: usize,
+) -> limpid_core::Result<limpid_app::design::planar::PlanarDesignRequest> {
+    let seed = limpid_lab::design::Design::preset("lakatos-planar")
+        .unwrap()
+        .to_toml();
+    limpid_app::design::planar::planar_request_from_texts(
+        (prior, std::path::Path::new("arm.toml")),
+        Some((limits, std::path::Path::new("limits.toml"))),
+        Some((&seed, std::path::Path::new("lakatos.toml"))),
+        72.0,
+        "stiffness,damping",
+        runs,
+        verify,
+        3,
+    )
+}
+
+/// Seed 003's protocol (0.05 rad over 200 ms, 450 ms windows) on an arm
+/// whose torque fluctuates slowly: the design moves faster and records
+/// shorter windows, beats it on K and D, and predicts its own spread.
+#[test]
+fn a_planar_design_beats_the_seed_protocol_and_predicts_its_own_spread() {
+    let seed = limpid_lab::design::Design::preset("lakatos-planar")
+        .unwrap()
+        .to_toml();
+    let req = planar_request(PLANAR_ARM, &seed, 16, 16).unwrap();
+    let d = limpid_app::design::planar::design_planar(&req).unwrap();
+    let r = &d.result;
+    let report =
+        limpid_lab::design::check(&limpid_lab::design::Design::Planar(d.protocol.clone())).unwrap();
+    let limpid_lab::design::DesignReport::Planar(p) = report else {
+        panic!("not a planar report")
+    };
+    assert!(p.session_s <= 72.0, "{}", p.session_s);
+    assert!((r.chosen.duration_s - p.session_s).abs() < 1e-9);
+    assert!(
+        r.limits.iter().all(|m| m.margin_percent >= 0.0),
+        "{:?}",
+        r.limits
+    );
+    let base = r.baseline.as_ref().unwrap();
+    // K a little, D by more than half (seed 3: 0.81 and 0.32 of the seed's)
+    for (m, share) in [(0, 0.95), (1, 0.5)] {
+        assert!(
+            r.predicted.pooled.se[m] < share * base.pooled.se[m],
+            "{m}: {:?} vs {:?}",
+            r.predicted.pooled,
+            base.pooled
+        );
+    }
+    assert!(r.chosen.window_ms < 400.0, "{:?}", r.chosen);
+    let v = r.verify.as_ref().unwrap();
+    for m in 0..3 {
+        assert!(
+            (0.65..1.5).contains(&v.ratio[m]),
+            "ratio {m}: {:?}",
+            v.ratio
+        );
+    }
+    assert_eq!(v.within_tolerance_share, 1.0, "{v:?}");
+}
+
+/// With a reflex 90 ms after the onset (`demo:planar`) every window past it
+/// biases K; under limits that allow fast motions the design ends its window
+/// near the latency and K's error drops to a fraction of the seed protocol's.
+#[test]
+fn a_reflex_in_the_prior_keeps_the_planar_window_near_its_latency() {
+    let fast = limpid_lab::design::Design::preset("lakatos-planar")
+        .unwrap()
+        .to_toml()
+        .replace(
+            "max_joint_acceleration_rad_s2 = 15.0",
+            "max_joint_acceleration_rad_s2 = 60.0",
+        )
+        .replace(
+            "max_joint_velocity_rad_s = 1.0",
+            "max_joint_velocity_rad_s = 2.0",
+        );
+    let req = planar_request("demo:planar", &fast, 12, 0).unwrap();
+    let r = limpid_app::design::planar::design_planar(&req)
+        .unwrap()
+        .result;
+    assert!(r.chosen.window_ms < 130.0, "{:?}", r.chosen);
+    let base = r.baseline.as_ref().unwrap();
+    assert!(base.pooled.error_percent[0] > 20.0, "{:?}", base.pooled);
+    assert!(
+        r.predicted.pooled.error_percent[0] < 0.5 * base.pooled.error_percent[0],
+        "{:?} vs {:?}",
+        r.predicted.pooled,
+        base.pooled
+    );
+}
+
+#[test]
+fn a_planar_prior_and_its_limits_are_checked_with_the_file_named() {
+    let seed = limpid_lab::design::Design::preset("lakatos-planar")
+        .unwrap()
+        .to_toml();
+    let e = |prior: &str, limits: &str| {
+        planar_request(prior, limits, 4, 0)
+            .and_then(|r| limpid_app::design::planar::design_planar(&r).map(|_| ()))
+            .err()
+            .unwrap()
+            .to_string()
+    };
+    let negative = PLANAR_ARM.replace("damping = [[1.854", "damping = [[-1.854");
+    let msg = e(&negative, &seed);
+    assert!(
+        msg.contains("arm.toml") && msg.contains("damping[0][0]"),
+        "{msg}"
+    );
+    let msg = e(&PLANAR_ARM.replace("xi = [0.356", "xi = [1e308"), &seed);
+    assert!(msg.contains("arm.toml") && msg.contains("xi"), "{msg}");
+    let msg = e(
+        &format!(
+            "{PLANAR_ARM}[reflex]\nlatency_s = 5.0\nstiffness_gain = 0.3\ndamping_gain = 0.3\n"
+        ),
+        &seed,
+    );
+    assert!(
+        msg.contains("arm.toml") && msg.contains("latency_s = 5"),
+        "{msg}"
+    );
+    let msg = e(
+        &format!("{PLANAR_ARM}[noise]\nfluctuation_below_hz = 900\n"),
+        &seed,
+    );
+    assert!(
+        msg.contains("arm.toml") && msg.contains("fluctuation_below_hz"),
+        "{msg}"
+    );
+    let msg = e("demo:S1", &seed);
+    assert!(msg.contains("demo:planar"), "{msg}");
+    let centre_out = limpid_lab::design::Design::preset("artemiadis-3d")
+        .unwrap()
+        .to_toml();
+    let msg = e(PLANAR_ARM, &centre_out);
+    assert!(
+        msg.contains("limits.toml") && msg.contains("planar protocol"),
+        "{msg}"
+    );
+    let msg = e(
+        PLANAR_ARM,
+        &seed.replace("max_torque_nm = 20.0", "max_torque_nm = 1e-9"),
+    );
+    assert!(msg.contains("nothing below"), "{msg}");
+}

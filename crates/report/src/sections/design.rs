@@ -9,14 +9,17 @@ use std::fmt::Write as _;
 use crate::svg::{escape, Chart, Series, Stroke, PALETTE};
 use crate::{fmt, Drawing, Figure, Section, Table};
 
+/// The end-point methods' three matrices and their units.
 const MATRICES: [(&str, &str); 3] = [("K", "N/m"), ("B", "N s/m"), ("M", "kg")];
+/// The planar method's joint K and D and inertial parameters ξ.
+const JOINT_GROUPS: [(&str, &str); 3] = [("K", "N m/rad"), ("D", "N m s/rad"), ("ξ", "kg m²")];
 
-fn prediction_rows(label: &str, p: &Prediction) -> Vec<Vec<String>> {
+fn prediction_rows(label: &str, p: &Prediction, groups: &[(&str, &str); 3]) -> Vec<Vec<String>> {
     (0..3)
         .map(|m| {
             vec![
                 label.to_string(),
-                format!("{} ({})", MATRICES[m].0, MATRICES[m].1),
+                format!("{} ({})", groups[m].0, groups[m].1),
                 fmt(p.pooled.se[m]),
                 format!("{:.1}", p.pooled.se_percent[m]),
                 format!("{:.1}", p.pooled.error_percent[m]),
@@ -49,9 +52,10 @@ fn margins_table(limits: &[LimitMargin]) -> Table {
     }
 }
 
-/// Predicted relative SEs of K, B and M as bars, the design's beside the
-/// baseline's, on a log scale (percent of the RMS element).
-fn se_bars(design: &Prediction, baseline: Option<&Prediction>) -> String {
+/// Predicted relative SEs of the three groups (`names`: K, B, M) as bars,
+/// the design's beside the baseline's, on a log scale (percent of the RMS
+/// element).
+fn se_bars(design: &Prediction, baseline: Option<&Prediction>, names: [&str; 3]) -> String {
     let (width, height, left, bottom, top) = (460.0, 240.0, 60.0, 40.0, 36.0);
     let values: Vec<f64> = design
         .pooled
@@ -74,12 +78,15 @@ fn se_bars(design: &Prediction, baseline: Option<&Prediction>) -> String {
         .min(hi - 1.0);
     let y =
         |v: f64| top + (height - top - bottom) * (hi - v.max(10f64.powf(lo)).log10()) / (hi - lo);
-    let title = "Predicted SE of K, B and M (% of the RMS element; n/i: mostly not identifiable)";
+    let title = format!(
+        "Predicted SE of {}, {} and {} (% of the RMS element; n/i: mostly not identifiable)",
+        names[0], names[1], names[2]
+    );
     let mut s = format!(
         r##"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="12"><title>{}</title><rect width="{width}" height="{height}" fill="#fff"/><text x="{}" y="18" text-anchor="middle" font-weight="bold">{}</text>"##,
-        escape(title),
+        escape(&title),
         width / 2.0,
-        escape(title)
+        escape(&title)
     );
     let mut decade = lo;
     while decade <= hi + 1e-9 {
@@ -99,7 +106,7 @@ fn se_bars(design: &Prediction, baseline: Option<&Prediction>) -> String {
         .chain(baseline.map(|b| ("baseline", b, PALETTE[1])))
         .collect();
     let bar = group * 0.7 / bars.len() as f64;
-    for (m, name) in ["K", "B", "M"].iter().enumerate() {
+    for (m, name) in names.iter().enumerate() {
         let x0 = left + group * m as f64 + group * 0.15;
         for (k, (label, p, colour)) in bars.iter().enumerate() {
             let v = p.pooled.se_percent[m];
@@ -183,9 +190,9 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
             v.runs, v.ratio[0], v.ratio[1], v.ratio[2], 100.0 * v.within_tolerance_share
         );
     }
-    let mut rows = prediction_rows("design", &r.predicted);
+    let mut rows = prediction_rows("design", &r.predicted, &MATRICES);
     if let Some(b) = &r.baseline {
-        rows.extend(prediction_rows("baseline", b));
+        rows.extend(prediction_rows("baseline", b, &MATRICES));
     }
     let precision = Table {
         caption: "Predicted precision on the prior subject: RMS standard error of the nine elements, relative to the RMS element, mean relative Frobenius error and share of recordings called identifiable".into(),
@@ -290,7 +297,7 @@ pub(crate) fn section(name: &str, r: &DesignResult) -> Section {
         ellipsoids: vec![],
         drawings: vec![Drawing {
             id: "design-se".into(),
-            svg: se_bars(&r.predicted, r.baseline.as_ref()),
+            svg: se_bars(&r.predicted, r.baseline.as_ref(), ["K", "B", "M"]),
         }],
     }
 }
@@ -369,52 +376,12 @@ pub(crate) fn reflex_section(
 fn reflex_figures(r: &limpid_analysis::result::design::ReflexDesignResult) -> Vec<Figure> {
     let mut figures = Vec::new();
     if let Some(cmd) = &r.command {
-        let peak = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs())).max(1e-300);
-        let relative = |v: &[f64]| {
-            let p = peak(v);
-            (p, v.iter().map(|x| x / p).collect::<Vec<f64>>())
-        };
-        let (dp, d) = relative(&cmd.displacement_rad);
-        let (vp, v) = relative(&cmd.velocity_rad_s);
-        let (ap, a) = relative(&cmd.acceleration_rad_s2);
-        figures.push(Figure {
-            id: "reflex-design-command".into(),
-            chart: Chart {
-                title: "The start of one period, relative to each peak".into(),
-                x_label: "time from the period's start (s)".into(),
-                y_label: "share of the peak".into(),
-                x_log: false,
-                y_log: false,
-                y_range: Some((-1.05, 1.05)),
-                series: [
-                    (
-                        format!("displacement (peak {} rad)", fmt(dp)),
-                        d,
-                        Stroke::Solid,
-                    ),
-                    (
-                        format!("velocity (peak {} rad/s)", fmt(vp)),
-                        v,
-                        Stroke::Dashed,
-                    ),
-                    (
-                        format!("acceleration (peak {} rad/s²)", fmt(ap)),
-                        a,
-                        Stroke::Dotted,
-                    ),
-                ]
-                .into_iter()
-                .enumerate()
-                .map(|(k, (name, y, stroke))| Series {
-                    name,
-                    x: cmd.t_s.clone(),
-                    y,
-                    stroke,
-                    color: PALETTE[k].into(),
-                })
-                .collect(),
-            },
-        });
+        figures.push(joint_command_figure(
+            "reflex-design-command",
+            "The start of one period, relative to each peak",
+            "time from the period's start (s)",
+            cmd,
+        ));
     }
     if let Some(s) = &r.spectrum {
         let mut lines = vec![
@@ -450,4 +417,156 @@ fn reflex_figures(r: &limpid_analysis::result::design::ReflexDesignResult) -> Ve
         });
     }
     figures
+}
+
+/// A joint command's displacement, velocity and acceleration, each relative to its peak.
+fn joint_command_figure(
+    id: &str,
+    title: &str,
+    x_label: &str,
+    cmd: &limpid_analysis::result::design::JointCommandTrace,
+) -> Figure {
+    let peak = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs())).max(1e-300);
+    let relative = |v: &[f64]| {
+        let p = peak(v);
+        (p, v.iter().map(|x| x / p).collect::<Vec<f64>>())
+    };
+    let (dp, d) = relative(&cmd.displacement_rad);
+    let (vp, v) = relative(&cmd.velocity_rad_s);
+    let (ap, a) = relative(&cmd.acceleration_rad_s2);
+    Figure {
+        id: id.into(),
+        chart: Chart {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: "share of the peak".into(),
+            x_log: false,
+            y_log: false,
+            y_range: Some((-1.05, 1.05)),
+            series: [
+                (
+                    format!("displacement (peak {} rad)", fmt(dp)),
+                    d,
+                    Stroke::Solid,
+                ),
+                (
+                    format!("velocity (peak {} rad/s)", fmt(vp)),
+                    v,
+                    Stroke::Dashed,
+                ),
+                (
+                    format!("acceleration (peak {} rad/s²)", fmt(ap)),
+                    a,
+                    Stroke::Dotted,
+                ),
+            ]
+            .into_iter()
+            .enumerate()
+            .map(|(k, (name, y, stroke))| Series {
+                name,
+                x: cmd.t_s.clone(),
+                y,
+                stroke,
+                color: PALETTE[k].into(),
+            })
+            .collect(),
+        },
+    }
+}
+
+/// The section of quintic joint perturbations designed for the planar method.
+pub(crate) fn planar_section(
+    name: &str,
+    r: &limpid_analysis::result::design::PlanarDesignResult,
+) -> Section {
+    let c = &r.chosen;
+    let p = &r.predicted.pooled;
+    let mut verdict = format!(
+        "{} quintic perturbations of {} rad over {} ms in six joint directions, recorded {} ms before and {} ms after each onset (the observation window), after random waits of {}-{} s: {:.1} s of the {} s budget at q0 = ({}, {}) rad. Predicted on the prior arm ({} simulated recordings, errors against its intrinsic K and D): K ± {:.1} %, D ± {:.1} %, ξ ± {:.1} % (RMS element s.d. relative to the RMS element).",
+        c.trials,
+        fmt(c.amplitude_rad),
+        fmt(c.interpolation_s * 1e3),
+        fmt(c.rest_s * 1e3),
+        fmt(c.window_ms),
+        fmt(c.wait_s[0]),
+        fmt(c.wait_s[1]),
+        c.duration_s,
+        fmt(r.budget_s),
+        fmt(r.posture_rad[0]),
+        fmt(r.posture_rad[1]),
+        r.predicted.runs,
+        p.se_percent[0],
+        p.se_percent[1],
+        p.se_percent[2],
+    );
+    if let Some(b) = &r.baseline {
+        verdict += &format!(
+            " The protocol it replaces: K ± {:.1} %, D ± {:.1} %, ξ ± {:.1} % in {:.1} s.",
+            b.pooled.se_percent[0], b.pooled.se_percent[1], b.pooled.se_percent[2], b.duration_s
+        );
+    }
+    if let Some(v) = &r.verify {
+        verdict += &format!(
+            " Checked on {} arms drawn from the prior: predicted/achieved spread K {:.2}, D {:.2}, ξ {:.2}; K within 5 % and D within 20 %, both identifiable, in {:.0} % of them.",
+            v.runs, v.ratio[0], v.ratio[1], v.ratio[2], 100.0 * v.within_tolerance_share
+        );
+    }
+    let mut rows = prediction_rows("design", &r.predicted, &JOINT_GROUPS);
+    if let Some(b) = &r.baseline {
+        rows.extend(prediction_rows("baseline", b, &JOINT_GROUPS));
+    }
+    let s = &r.spectrum;
+    let mut lines = vec![
+        series("design", &s.frequency_hz, &s.designed_rad, Stroke::Solid, 0),
+        series(
+            "limits: min(d, v/ω, a/ω²)",
+            &s.frequency_hz,
+            &s.limit_rad,
+            Stroke::Dashed,
+            6,
+        ),
+    ];
+    if let Some(b) = &s.baseline_rad {
+        lines.push(series("baseline", &s.frequency_hz, b, Stroke::Solid, 1));
+    }
+    Section {
+        heading: format!("Designed planar perturbations: {name}"),
+        verdict,
+        warnings: vec![],
+        tables: vec![
+            Table {
+                caption: "Predicted precision on the prior arm: RMS standard error of the elements of joint K, D and of ξ1..ξ3, relative to the RMS element, mean relative error and share of recordings called identifiable".into(),
+                header: ["protocol", "parameters", "SE", "SE %", "error %", "identifiable %", "duration (s)"]
+                    .map(String::from)
+                    .to_vec(),
+                rows,
+            },
+            margins_table(&r.limits),
+        ],
+        figures: vec![
+            joint_command_figure(
+                "planar-design-command",
+                "One recorded trial (the shoulder direction), relative to each peak",
+                "time from the trial's start (s)",
+                &r.command,
+            ),
+            Figure {
+                id: "planar-design-spectrum".into(),
+                chart: Chart {
+                    title: "Amplitude 2|X(f)|/T of one recorded trial and the limits".into(),
+                    x_label: "frequency (Hz)".into(),
+                    y_label: "amplitude (rad)".into(),
+                    x_log: true,
+                    y_log: true,
+                    y_range: None,
+                    series: lines,
+                },
+            },
+        ],
+        ellipsoids: vec![],
+        drawings: vec![Drawing {
+            id: "planar-design-se".into(),
+            svg: se_bars(&r.predicted, r.baseline.as_ref(), ["K", "D", "ξ"]),
+        }],
+    }
 }
