@@ -52,12 +52,16 @@ pub struct DesignArgs {
     /// Prior subject (TOML): 3 x 3 `inertia`, `damping`, `stiffness` (SI), optional `start_m`
     /// (the posture), `[other_end]` (the same matrices at the other end of its range: the
     /// design is for the worse end), `[noise]` (default: a human subject's) and `[limits]`.
-    /// `demo:S1` .. `demo:S6`: the demo's realistic subject at that start point.
+    /// `demo:S1` .. `demo:S6`: the demo's realistic subject at that start point. Planar
+    /// method: an arm, `xi` (3), 2 x 2 joint `stiffness`, `damping`, optional `posture_rad`,
+    /// `tau0`, `[other_end]`, `[reflex]`, `[noise]`, `[limits]`; `demo:planar`: seed 003's
+    /// arm holding a load, with a reflex at 90 ms.
     #[arg(long)]
     pub prior: String,
     /// Take the limits, workspace and sample rate of this protocol (TOML): centre-out (linear;
     /// stochastic too, its displacement limit kept in the workspace), an end-point periodic
-    /// one (stochastic), a PRBS (reflex).
+    /// one (stochastic), a PRBS (reflex), a planar one (planar: its links, posture and waits
+    /// too; default lakatos-planar's).
     #[arg(long, value_name = "P.toml")]
     pub limits_from: Option<PathBuf>,
     /// The designed protocol's whole length (s): rests, motions, holds, returns and relaxation
@@ -68,23 +72,24 @@ pub struct DesignArgs {
     /// (linear, stochastic); the reflex method minimises the reflex gain's error (`gain`).
     #[arg(long, default_value = "stiffness,damping")]
     pub objective: String,
-    /// The family the protocol is chosen from: centre-out (linear), multisine (stochastic), prbs
-    /// (reflex) or any (the method's).
+    /// The family the protocol is chosen from: centre-out (linear; planar: quintic joint steps
+    /// out from the posture), multisine (stochastic), prbs (reflex) or any (the method's).
     #[arg(long, default_value = "any")]
     pub family: String,
     /// The estimator the design is for: linear (a centre-out protocol for K, B, M), stochastic
     /// (an end-point multisine for `estimate stochastic --period`; the same priors) or reflex
     /// (a PRBS for the stretch-reflex gain; --prior is an ankle: inertia, damping, stiffness,
-    /// [reflex], torque_noise_nm, or demo:ankle; --limits-from a PRBS protocol).
+    /// [reflex], torque_noise_nm, or demo:ankle; --limits-from a PRBS protocol) or planar
+    /// (quintic joint perturbations for `estimate planar`; --prior an arm or demo:planar).
     #[arg(long, default_value = "linear")]
     pub method: String,
     /// The protocol it replaces (TOML; centre-out, an end-point multisine for --method
-    /// stochastic, a PRBS for --method reflex): predicted on the prior beside the design (a
-    /// centre-out one at the prior's start point).
+    /// stochastic, a PRBS for --method reflex, a planar one for --method planar): predicted on
+    /// the prior beside the design (a centre-out or planar one at the prior's posture).
     #[arg(long, value_name = "P.toml")]
     pub baseline: Option<PathBuf>,
-    /// Linear and stochastic methods: simulate N recordings on subjects drawn from the prior and
-    /// print predicted against achieved spread.
+    /// Linear, stochastic and planar methods: simulate N recordings on subjects drawn from the
+    /// prior and print predicted against achieved spread.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub verify: usize,
     /// Simulated recordings behind the prediction.
@@ -96,7 +101,8 @@ pub struct DesignArgs {
     /// Write the designed protocol (TOML) here.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Print the result as JSON (`kind: design`; `reflex_design` for --method reflex).
+    /// Print the result as JSON (`kind: design`; `reflex_design` for --method reflex,
+    /// `planar_design` for --method planar).
     #[arg(long)]
     pub json: bool,
 }
@@ -597,7 +603,7 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
     }
     print_predictions(
         &[("K", "N/m"), ("B", "N s/m"), ("M", "kg")],
-        "the prior",
+        ("the prior", "at this start point"),
         &r.predicted,
         r.baseline.as_ref(),
     );
@@ -607,10 +613,10 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
 }
 
 /// The predicted SEs of the three groups (`groups`: name and unit), the
-/// design's and the baseline's.
+/// design's and the baseline's; `on` the prior, the baseline `at` its posture.
 fn print_predictions(
     groups: &[(&str, &str); 3],
-    on: &str,
+    (on, at): (&str, &str),
     predicted: &limpid_analysis::result::design::Prediction,
     baseline: Option<&limpid_analysis::result::design::Prediction>,
 ) {
@@ -647,7 +653,7 @@ fn print_predictions(
     row("design", predicted);
     if let Some(b) = baseline {
         row("baseline", b);
-        println!("  (baseline: {:.1} s)", b.duration_s);
+        println!("  (baseline: {:.1} s {at})", b.duration_s);
     }
 }
 
@@ -757,7 +763,10 @@ fn run_planar_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     );
     print_predictions(
         &[("K", "N m/rad"), ("D", "N m s/rad"), ("ξ", "kg m²")],
-        "the prior arm (errors against its intrinsic K and D)",
+        (
+            "the prior arm (errors against its intrinsic K and D)",
+            "at this posture",
+        ),
         &r.predicted,
         r.baseline.as_ref(),
     );
@@ -787,7 +796,7 @@ fn run_planar_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
 fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     use limpid_app::design::reflex::{design_reflex, reflex_request_from_texts};
     if args.verify > 0 {
-        return Err("--verify is for the linear and stochastic methods: the reflex design's prediction is already the spread over --runs simulated recordings".into());
+        return Err("--verify is for the linear, stochastic and planar methods: the reflex design's prediction is already the spread over --runs simulated recordings".into());
     }
     if !matches!(
         args.objective.as_str(),

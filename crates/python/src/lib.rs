@@ -537,7 +537,7 @@ fn design(
     use limpid_analysis::result::{Document, Estimate};
     if method == "reflex" {
         if verify > 0 {
-            return Err(value_err("verify is for the linear and stochastic methods: the reflex design's prediction is already the spread over `runs` simulated recordings".to_string()));
+            return Err(value_err("verify is for the linear, stochastic and planar methods: the reflex design's prediction is already the spread over `runs` simulated recordings".to_string()));
         }
         let request = limpid_app::design::reflex::reflex_request_from_texts(
             (prior, Path::new(prior_name)),
@@ -554,9 +554,28 @@ fn design(
         let doc = Document::new(Estimate::ReflexDesign(designed.result));
         return Ok((toml, doc.to_json()));
     }
+    if method == "planar" {
+        let (toml, result) = detached(py, || {
+            limpid_app::design::planar::planar_design_from_texts(
+                (prior, Path::new(prior_name)),
+                limits_from.map(|t| (t, Path::new("<limits_from>"))),
+                baseline.map(|t| (t, Path::new("<baseline>"))),
+                duration_s,
+                objective,
+                runs,
+                verify,
+                seed,
+            )
+        })
+        .map_err(err)?;
+        return Ok((
+            toml,
+            Document::new(Estimate::PlanarDesign(result)).to_json(),
+        ));
+    }
     if !matches!(method, "linear" | "stochastic") {
         return Err(value_err(format!(
-            "method: expected linear, stochastic or reflex, found {method:?}"
+            "method: expected linear, stochastic, reflex or planar, found {method:?}"
         )));
     }
     let (toml, result) = detached(py, || {

@@ -529,7 +529,27 @@ def test_reflex_design_writes_a_prbs_its_check_accepts(tmp_path):
     with pytest.raises(ValueError, match="demo:ankle"):
         limpid.design("demo:S1", 30.0, limits_from="ankle-prbs", method="reflex")
     with pytest.raises(ValueError, match="method"):
-        limpid.design("demo:S1", 30.0, limits_from="artemiadis-3d", method="planar")
+        limpid.design("demo:S1", 30.0, limits_from="artemiadis-3d", method="walking")
+
+
+def test_planar_design_writes_joint_perturbations_its_check_accepts(tmp_path):
+    toml_text, r = limpid.design("demo:planar", 40.0, limits_from="lakatos-planar", baseline="lakatos-planar",
+                                 method="planar", runs=4)
+    assert r.kind == "planar_design"
+    report = limpid.protocol_check(toml_text)
+    assert report.trials == r.chosen.trials and r.chosen.duration_s <= 40.0
+    assert all(m["margin_percent"] >= 0 for m in r.limits)
+    # K and D are 2 x 2 joint matrices, ξ one row; tabled with their units
+    assert len(r.predicted.stiffness_se) == 2 and len(r.predicted.inertia_se[0]) == 3
+    df = r.to_pandas()
+    assert list(df[df.protocol == "design"].unit) == ["N m/rad", "N m s/rad", "kg m²"]
+    assert "quintic joint perturbations" in r._repr_html_()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    limpid.plot.design(r).savefig(tmp_path / "planar_design.png")
+    with pytest.raises(ValueError, match="demo:planar"):
+        limpid.design("demo:S1", 40.0, method="planar")
 
 
 def test_walking_from_the_virtual_lab_to_the_figure(tmp_path):

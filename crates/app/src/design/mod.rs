@@ -570,8 +570,8 @@ struct Choice {
     rest: usize,
 }
 
-impl Choice {
-    const SIZES: [usize; 5] = [
+impl Grid for Choice {
+    const SIZES: &'static [usize] = &[
         PROFILES.len(),
         RADIUS_SHARES.len(),
         SLOWNESS.len(),
@@ -868,10 +868,18 @@ pub(crate) fn predict<S: Truth>(
         .ok_or_else(|| Error::invalid("prior", "no subject to predict on"))
 }
 
+/// A point of a family's grid of choices: an index into each dimension's list.
+pub(crate) trait Grid: Copy + Eq + std::hash::Hash {
+    /// Each dimension's number of values.
+    const SIZES: &'static [usize];
+    /// This point with dimension `dim` set to `value`.
+    fn with(&self, dim: usize, value: usize) -> Self;
+}
+
 /// A grid search's outcome.
-pub(crate) struct Searched<const D: usize> {
-    /// The chosen index in every dimension.
-    pub(crate) best: [usize; D],
+pub(crate) struct Searched<C> {
+    /// The chosen point.
+    pub(crate) best: C,
     /// Its objective.
     pub(crate) objective: f64,
     /// Candidates evaluated.
@@ -880,19 +888,18 @@ pub(crate) struct Searched<const D: usize> {
     pub(crate) refused: usize,
 }
 
-/// Coordinate descent over the grid `sizes` from `start`: at most four
+/// Coordinate descent over a family's grid from `start`: at most four
 /// sweeps, each trying every value of every dimension around the best so
 /// far. `evaluate` gives a candidate's objective or why it is refused;
 /// `family` names what is searched when nothing fits.
-pub(crate) fn coordinate_descent<const D: usize>(
-    start: [usize; D],
-    sizes: [usize; D],
+pub(crate) fn coordinate_descent<C: Grid>(
+    start: C,
     family: &str,
-    mut evaluate: impl FnMut(&[usize; D]) -> std::result::Result<f64, String>,
-) -> Result<Searched<D>> {
-    let mut seen: HashMap<[usize; D], Option<f64>> = HashMap::new();
+    mut evaluate: impl FnMut(&C) -> std::result::Result<f64, String>,
+) -> Result<Searched<C>> {
+    let mut seen: HashMap<C, Option<f64>> = HashMap::new();
     let (mut refused, mut last_refusal) = (0usize, String::new());
-    let mut value_of = |c: [usize; D], seen: &mut HashMap<[usize; D], Option<f64>>| {
+    let mut value_of = |c: C, seen: &mut HashMap<C, Option<f64>>| {
         *seen.entry(c).or_insert_with(|| match evaluate(&c) {
             Ok(v) => Some(v),
             Err(why) => {
@@ -906,10 +913,9 @@ pub(crate) fn coordinate_descent<const D: usize>(
     let mut best_value = value_of(best, &mut seen);
     for _sweep in 0..4 {
         let before = best;
-        for dim in 0..D {
-            for value in 0..sizes[dim] {
-                let mut c = best;
-                c[dim] = value;
+        for (dim, &size) in C::SIZES.iter().enumerate() {
+            for value in 0..size {
+                let c = best.with(dim, value);
                 if c == best {
                     continue;
                 }
@@ -1096,72 +1102,22 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
     };
     let ranking = seeds(req.seed, 0, RANKING_RUNS);
     let w = req.objective.weights();
-    let mut seen: HashMap<Choice, Option<f64>> = HashMap::new();
-    let mut refused = 0usize;
-    let mut last_refusal = String::new();
-    let mut evaluate =
-        |c: Choice, seen: &mut HashMap<Choice, Option<f64>>| -> Result<Option<f64>> {
-            if let Some(v) = seen.get(&c) {
-                return Ok(*v);
-            }
-            let value = match space.protocol(&c) {
-                Ok((_, p)) => {
-                    // a candidate whose recordings the estimator refuses (or whose
-                    // objective is not a number) is refused, with the reason kept
-                    let run = |imp: &Impedance, s: u64| run_once(&p, &req.prior, imp, s);
-                    match rank(&run, &req.prior.ends(), w, &ranking) {
-                        Ok(v) => Some(v),
-                        Err(why) => {
-                            refused += 1;
-                            last_refusal = why;
-                            None
-                        }
-                    }
-                }
-                Err(why) => {
-                    refused += 1;
-                    last_refusal = why;
-                    None
-                }
-            };
-            seen.insert(c, value);
-            Ok(value)
-        };
     // start: the fastest cubic at 70 % of the largest radius, short hold, 0.4 s rest
-    let mut best = Choice {
+    let start = Choice {
         profile: 0,
         radius: 3,
         slowness: 0,
         hold: 1,
         rest: 1,
     };
-    let mut best_value = evaluate(best, &mut seen)?;
-    for _sweep in 0..4 {
-        let before = best;
-        for dim in 0..5 {
-            for value in 0..Choice::SIZES[dim] {
-                let c = best.with(dim, value);
-                if c == best {
-                    continue;
-                }
-                if let Some(v) = evaluate(c, &mut seen)? {
-                    if best_value.is_none_or(|b| v < b) {
-                        best = c;
-                        best_value = Some(v);
-                    }
-                }
-            }
-        }
-        if best == before {
-            break;
-        }
-    }
-    let Some(objective) = best_value else {
-        return Err(Error::invalid(
-            "design",
-            format!("no protocol of the family fits the limits and the budget: {last_refusal}"),
-        ));
-    };
+    let searched = coordinate_descent(start, "centre-out protocol", |c| {
+        let (_, p) = space.protocol(c)?;
+        // a candidate whose recordings the estimator refuses (or whose
+        // objective is not a number) is refused, with the reason kept
+        let run = |imp: &Impedance, s: u64| run_once(&p, &req.prior, imp, s);
+        rank(&run, &req.prior.ends(), w, &ranking)
+    })?;
+    let (best, objective) = (searched.best, searched.objective);
     let (protocol, trials) = space
         .protocol(&best)
         .map_err(|why| Error::invalid("design", why))?;
@@ -1228,9 +1184,9 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             .map_err(|e| Error::invalid("protocol", e.to_string()))?,
         limits: margins(&protocol, &trials, &req.prior),
         search: SearchSummary {
-            candidates: seen.len(),
+            candidates: searched.candidates,
             runs_per_candidate: RANKING_RUNS,
-            refused,
+            refused: searched.refused,
             objective,
         },
         verify,

@@ -49,8 +49,8 @@ use limpid_lab::Profile;
 
 use super::{
     check_budget, check_runs, coordinate_descent, limit_envelope, predict, rank, seeds,
-    sine_amplitudes, spectrum_hz, verify, DesignRequest, Objective, Run, Text, Truth, LIMIT_MARGIN,
-    MIN_TRIALS, RANKING_RUNS,
+    sine_amplitudes, spectrum_hz, verify, DesignRequest, Grid, Objective, Run, Text, Truth,
+    LIMIT_MARGIN, MIN_TRIALS, RANKING_RUNS,
 };
 
 /// Amplitude as a share of the largest the limits allow.
@@ -303,6 +303,19 @@ impl PlanarPrior {
                 });
             }
         }
+        if let Some(q) = f
+            .posture_rad
+            .filter(|q| q.iter().any(|v| v.abs() > std::f64::consts::TAU))
+        {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "posture_rad = [{}, {}]: joint angles within ±2π rad",
+                    limpid_core::error::Num(q[0]),
+                    limpid_core::error::Num(q[1])
+                ),
+            });
+        }
         Ok(PlanarPrior {
             nominal,
             other_end,
@@ -523,7 +536,36 @@ fn report_session(r: &limpid_lab::design::DesignReport) -> f64 {
     }
 }
 
-/// A candidate: the protocol, its simulation and the largest torque it needs on the prior.
+/// Indices into the four lists of choices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct Choice {
+    amplitude: usize,
+    slowness: usize,
+    hold: usize,
+    rest: usize,
+}
+
+impl Grid for Choice {
+    const SIZES: &'static [usize] = &[
+        AMPLITUDE_SHARES.len(),
+        SLOWNESS.len(),
+        HOLDS_S.len(),
+        RESTS_S.len(),
+    ];
+
+    fn with(&self, dim: usize, value: usize) -> Choice {
+        let mut c = *self;
+        match dim {
+            0 => c.amplitude = value,
+            1 => c.slowness = value,
+            2 => c.hold = value,
+            _ => c.rest = value,
+        }
+        c
+    }
+}
+
+/// A candidate: the protocol and its simulation.
 struct Candidate {
     design: PlanarDesign,
     simulation: PlanarProtocol,
@@ -591,18 +633,18 @@ fn peak_torque(d: &PlanarDesign, prior: &PlanarPrior) -> f64 {
 }
 
 impl Space<'_> {
-    /// The protocol of a choice (amplitude, slowness, hold, rest), or why it is refused.
-    fn candidate(&self, c: &[usize; 4]) -> std::result::Result<Candidate, String> {
+    /// The protocol of a choice, or why it is refused.
+    fn candidate(&self, c: &Choice) -> std::result::Result<Candidate, String> {
         let req = self.req;
         let frame = &req.limits;
         let l = &frame.limits;
-        let amplitude = AMPLITUDE_SHARES[c[0]] * self.largest_amplitude;
+        let amplitude = AMPLITUDE_SHARES[c.amplitude] * self.largest_amplitude;
         let (_, v_peak, a_peak) = Profile::Quintic.peaks(1.0);
         let shortest = (amplitude * v_peak / (LIMIT_MARGIN * l.max_joint_velocity_rad_s))
             .max((amplitude * a_peak / (LIMIT_MARGIN * l.max_joint_acceleration_rad_s2)).sqrt());
         // a motion of at least 10 samples, so that the quintic is sampled
-        let tk = (shortest * SLOWNESS[c[1]]).max(10.0 / req.sample_rate_hz);
-        let (hold, rest) = (HOLDS_S[c[2]], RESTS_S[c[3]]);
+        let tk = (shortest * SLOWNESS[c.slowness]).max(10.0 / req.sample_rate_hz);
+        let (hold, rest) = (HOLDS_S[c.hold], RESTS_S[c.rest]);
         if rest > frame.wait_s[0] {
             return Err(format!(
                 "a recorded rest of {rest} s is longer than the shortest wait, {} s",
@@ -737,21 +779,17 @@ pub fn design_planar(req: &PlanarDesignRequest) -> Result<PlanarDesigned> {
     let w = req.objective.weights();
     let ends = req.prior.ends();
     // start: 35 % of the largest amplitude, the fastest motion, 80 ms hold, 0.2 s rest
-    let searched = coordinate_descent(
-        [3, 0, 4, 1],
-        [
-            AMPLITUDE_SHARES.len(),
-            SLOWNESS.len(),
-            HOLDS_S.len(),
-            RESTS_S.len(),
-        ],
-        "planar perturbation",
-        |c| {
-            let cand = space.candidate(c)?;
-            let run = |arm: &ArmImpedance, s: u64| run_once(&cand, req, arm, s);
-            rank(&run, &ends, w, &ranking)
-        },
-    )?;
+    let start = Choice {
+        amplitude: 3,
+        slowness: 0,
+        hold: 4,
+        rest: 1,
+    };
+    let searched = coordinate_descent(start, "planar perturbation", |c| {
+        let cand = space.candidate(c)?;
+        let run = |arm: &ArmImpedance, s: u64| run_once(&cand, req, arm, s);
+        rank(&run, &ends, w, &ranking)
+    })?;
     let chosen = space
         .candidate(&searched.best)
         .map_err(|why| Error::invalid("design", why))?;

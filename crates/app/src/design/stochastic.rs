@@ -25,8 +25,6 @@
 //! candidate saved); the chosen one gets optimised phases, is rescaled to the
 //! limits and predicted on `runs` fresh seeds.
 
-use std::collections::HashMap;
-
 use limpid_analysis::result::design::{
     CommandSpectrum, CommandTrace, DesignChoice, DesignResult, LimitMargin, MultisineChoice,
     ObjectiveWeights, SearchSummary,
@@ -43,8 +41,8 @@ use limpid_lab::protocol::Limits;
 use nalgebra::Vector3;
 
 use super::{
-    check_budget, check_runs, predict, rank, seeds, verify, Impedance, Objective, Prior, Run, Text,
-    LIMIT_MARGIN, RANKING_RUNS,
+    check_budget, check_runs, coordinate_descent, predict, rank, seeds, verify, Grid, Impedance,
+    Objective, Prior, Run, Text, LIMIT_MARGIN, RANKING_RUNS,
 };
 
 /// Periods tried (s).
@@ -223,8 +221,8 @@ struct Choice {
     shape: usize,
 }
 
-impl Choice {
-    const SIZES: [usize; 4] = [
+impl Grid for Choice {
+    const SIZES: &'static [usize] = &[
         PERIODS_S.len(),
         BAND_LOW_HZ.len(),
         BAND_HIGH_HZ.len(),
@@ -463,61 +461,19 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
     check_request(req)?;
     let ranking = seeds(req.seed, 0, RANKING_RUNS);
     let w = req.objective.weights();
-    let mut seen: HashMap<Choice, Option<f64>> = HashMap::new();
-    let (mut refused, mut last_refusal) = (0usize, String::new());
-    let mut evaluate = |c: Choice, seen: &mut HashMap<Choice, Option<f64>>| -> Option<f64> {
-        if let Some(v) = seen.get(&c) {
-            return *v;
-        }
-        let value = candidate(req, &c, "schroeder").and_then(|cand| {
-            let run = |imp: &Impedance, s: u64| run_once(&cand, &req.prior, imp, s);
-            rank(&run, &req.prior.ends(), w, &ranking)
-        });
-        let value = match value {
-            Ok(v) => Some(v),
-            Err(why) => {
-                refused += 1;
-                last_refusal = why;
-                None
-            }
-        };
-        seen.insert(c, value);
-        value
-    };
     // start: the endpoint-multisine preset's shape (10 s, 0.5-5 Hz, flat)
-    let mut best = Choice {
+    let start = Choice {
         period: 1,
         low: 1,
         high: 1,
         shape: 0,
     };
-    let mut best_value = evaluate(best, &mut seen);
-    for _sweep in 0..4 {
-        let before = best;
-        for dim in 0..4 {
-            for value in 0..Choice::SIZES[dim] {
-                let c = best.with(dim, value);
-                if c == best {
-                    continue;
-                }
-                if let Some(v) = evaluate(c, &mut seen) {
-                    if best_value.is_none_or(|b| v < b) {
-                        best = c;
-                        best_value = Some(v);
-                    }
-                }
-            }
-        }
-        if best == before {
-            break;
-        }
-    }
-    let Some(objective) = best_value else {
-        return Err(Error::invalid(
-            "design",
-            format!("no multisine fits the limits and the budget: {last_refusal}"),
-        ));
-    };
+    let searched = coordinate_descent(start, "multisine", |c| {
+        let cand = candidate(req, c, "schroeder")?;
+        let run = |imp: &Impedance, s: u64| run_once(&cand, &req.prior, imp, s);
+        rank(&run, &req.prior.ends(), w, &ranking)
+    })?;
+    let (best, objective) = (searched.best, searched.objective);
     let chosen = candidate(req, &best, "optimised").map_err(|why| Error::invalid("design", why))?;
     // the sample-by-sample check `limpid protocol check` makes
     let report = chosen.protocol.check()?;
@@ -573,9 +529,9 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
             .map_err(|e| Error::invalid("protocol", e.to_string()))?,
         limits: margins(&chosen, &req.prior),
         search: SearchSummary {
-            candidates: seen.len(),
+            candidates: searched.candidates,
             runs_per_candidate: RANKING_RUNS,
-            refused,
+            refused: searched.refused,
             objective,
         },
         verify,

@@ -395,6 +395,14 @@ fn a_planar_prior_and_its_limits_are_checked_with_the_file_named() {
         msg.contains("arm.toml") && msg.contains("fluctuation_below_hz"),
         "{msg}"
     );
+    let msg = e(
+        &PLANAR_ARM.replace("posture_rad = [0.08", "posture_rad = [1e300"),
+        &seed,
+    );
+    assert!(
+        msg.contains("arm.toml") && msg.contains("posture_rad"),
+        "{msg}"
+    );
     let msg = e("demo:S1", &seed);
     assert!(msg.contains("demo:planar"), "{msg}");
     let centre_out = limpid_lab::design::Design::preset("artemiadis-3d")

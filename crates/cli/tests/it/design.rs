@@ -189,15 +189,20 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         s,
         "--duration",
     ];
-    let cases: [(&[&str], &str); 13] = [
+    let cases: [(&[&str], &str); 15] = [
         (
             &["147", "--baseline", s, "-o", s],
             "would replace the input",
         ),
         (&["147", "--method", "reflex"], "demo prior is demo:ankle"),
+        (&["147", "--method", "planar"], "demo prior is demo:planar"),
         (
-            &["147", "--method", "planar"],
-            "linear, stochastic and reflex methods",
+            &["147", "--method", "planar", "--family", "multisine"],
+            "the planar method's designs are centre-out",
+        ),
+        (
+            &["147", "--method", "walking"],
+            "linear, stochastic, reflex and planar",
         ),
         (
             &["147", "--method", "stochastic", "--family", "prbs"],
@@ -347,7 +352,7 @@ fn a_reflex_design_writes_a_prbs_that_its_check_accepts() {
         verify.code == 2
             && verify
                 .stderr
-                .contains("--verify is for the linear and stochastic methods"),
+                .contains("--verify is for the linear, stochastic and planar methods"),
         "{}",
         verify.stderr
     );
@@ -537,4 +542,93 @@ fn a_stochastic_design_writes_a_multisine_that_plays_back_to_its_subject() {
     let k_error = (m("stiffness") - prior.stiffness).norm() / prior.stiffness.norm();
     let b_error = (m("damping") - prior.damping).norm() / prior.damping.norm();
     assert!(k_error < 0.05 && b_error < 0.2, "K {k_error}, B {b_error}");
+}
+
+/// `--method planar`: the designed perturbations pass `protocol check`, play
+/// back on `limpid simulate`'s seed 003 arm and estimate K and D there; the
+/// JSON is `planar_design` and the report draws it.
+#[test]
+fn a_planar_design_writes_perturbations_that_estimate_their_arm() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let limits = preset(dir.path(), "lakatos-planar");
+    let prior = dir.path().join("arm.toml");
+    std::fs::write(
+        &prior,
+        "xi = [0.356, 0.143, 0.147]\nstiffness = [[37.95, 9.31], [9.31, 10.14]]\ndamping = [[1.854, 0.590], [0.590, 1.435]]\ntau0 = [0.37, 0.41]\n",
+    )
+    .unwrap();
+    let d = dir.path().join("d.toml");
+    let v = json(&[
+        "protocol",
+        "design",
+        "--method",
+        "planar",
+        "--prior",
+        &s(&prior),
+        "--limits-from",
+        &s(&limits),
+        "--baseline",
+        &s(&limits),
+        "--duration",
+        "72",
+        "--runs",
+        "8",
+        "-o",
+        &s(&d),
+        "--json",
+    ]);
+    assert_eq!(v["kind"].as_str(), Some("planar_design"), "{v}");
+    assert!(v["chosen"]["duration_s"].as_f64().unwrap() <= 72.0);
+    assert_eq!(v["predicted"]["inertia_se"].as_array().unwrap().len(), 1);
+    let check = limpid(&["protocol", "check", &s(&d)]);
+    assert_eq!(check.code, 0, "{}", check.stderr);
+    let rec = dir.path().join("r.csv");
+    let sim = limpid(&["simulate", &s(&d), "-o", &s(&rec), "--seed", "4"]);
+    assert_eq!(sim.code, 0, "{}", sim.stderr);
+    let est = json(&[
+        "estimate",
+        "planar",
+        &s(&rec),
+        "--link-lengths",
+        "0.3,0.33",
+        "--json",
+    ]);
+    let k = mat(&est["stiffness"]);
+    let b = mat(&est["damping"]);
+    let ek = rel_err(&k, &mat(&serde_json::json!([[37.95, 9.31], [9.31, 10.14]])));
+    let eb = rel_err(
+        &b,
+        &mat(&serde_json::json!([[1.854, 0.590], [0.590, 1.435]])),
+    );
+    assert!(ek < 0.05 && eb < 0.20, "K {ek:.3}, D {eb:.3}");
+    assert_eq!(est["criteria"]["trusted"], true, "{}", est["criteria"]);
+    let file = dir.path().join("d.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let html = dir.path().join("d.html");
+    let out = limpid(&["report", &s(&file), "-o", &s(&html)]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("Designed planar perturbations") && page.contains("N m/rad"));
+    // a centre-out protocol's limits are not a planar arm's
+    let centre_out = preset(dir.path(), "artemiadis-3d");
+    let out = limpid(&[
+        "protocol",
+        "design",
+        "--method",
+        "planar",
+        "--prior",
+        &s(&prior),
+        "--limits-from",
+        &s(&centre_out),
+        "--duration",
+        "72",
+    ]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("artemiadis-3d") && out.stderr.contains("planar protocol"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
 }

@@ -774,7 +774,15 @@ def design(
 
     ``method="reflex"``: a PRBS for the stretch-reflex gain (``kind``
     ``reflex_design``); ``prior`` is ``"demo:ankle"``, an ankle's TOML text or
-    file, ``limits_from`` and ``baseline`` PRBS protocols (``"ankle-prbs"``)."""
+    file, ``limits_from`` and ``baseline`` PRBS protocols (``"ankle-prbs"``).
+
+    ``method="planar"``: quintic joint perturbations for ``estimate_planar``
+    (``kind`` ``planar_design``; predicted K, D and ξ); ``prior`` is
+    ``"demo:planar"`` (seed 003's arm holding a load, with a reflex at 90 ms)
+    or an arm's TOML text or file (``xi``, 2 x 2 joint ``stiffness`` and
+    ``damping``, optional ``posture_rad``, ``tau0``, ``[other_end]``,
+    ``[reflex]``, ``[noise]``, ``[limits]``), ``limits_from`` and
+    ``baseline`` planar protocols (``"lakatos-planar"``, the default limits)."""
 
     def protocol_text(value: Optional[Union[str, "os.PathLike[str]"]]) -> Optional[str]:
         if value is None:
@@ -783,7 +791,7 @@ def design(
             return protocol_preset(value)
         return _text_or_file(value)[0]
 
-    _choice("method", method, ("linear", "stochastic", "reflex"))
+    _choice("method", method, ("linear", "stochastic", "reflex", "planar"))
     if isinstance(prior, str) and prior.startswith("demo:"):
         prior_text, prior_name = prior, "<prior>"
     else:

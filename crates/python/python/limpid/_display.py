@@ -16,6 +16,10 @@ from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
 
 from . import _limpid
 
+# the kinds of a designed protocol's result
+DESIGN_KINDS = ("design", "reflex_design", "planar_design")
+# the planar design's three groups: joint K and D, inertial parameters ξ
+PLANAR_GROUPS = (("stiffness", "K", "N m/rad"), ("damping", "D", "N m s/rad"), ("inertial_parameters", "ξ", "kg m²"))
 MATRICES = ("stiffness", "damping", "inertia")
 SYMBOL = {"stiffness": "K", "damping": "B", "inertia": "M"}
 PLANAR_SYMBOL = {"stiffness": "K", "damping": "D", "inertia": "M"}
@@ -126,7 +130,7 @@ def records(d: Dict[str, Any], table: str = "parameters") -> List[Record]:
             raise ValueError(f"table 'flawed' is for walking results (estimate_varying with event=), this one is {kind!r}")
         return [dict(f) for f in d["gait"]["flawed"]]
     if table == "limits":
-        if kind not in ("design", "reflex_design"):
+        if kind not in DESIGN_KINDS:
             raise ValueError(f"table 'limits' is for design results, this one is {kind!r}")
         return [dict(r) for r in d["limits"]]
     if table in ("lines", "frf"):
@@ -144,7 +148,7 @@ def records(d: Dict[str, Any], table: str = "parameters") -> List[Record]:
         raise ValueError(
             f"table: expected 'parameters', 'impedance', 'coherence', 'psd', 'rotation', 'flawed', 'limits', "
             f"'lines' or 'frf', found {table!r}")
-    if kind in ("design", "reflex_design"):
+    if kind in DESIGN_KINDS:
         return _design(d)
     if kind == "linear":
         return _linear(d)
@@ -227,7 +231,14 @@ def _design(d: Dict[str, Any]) -> List[Record]:
         p = d.get(which)
         if not p:
             continue
-        if d["kind"] == "design":
+        if d["kind"] == "planar_design":
+            pooled = p["pooled"]
+            for i, (q, symbol, unit) in enumerate(PLANAR_GROUPS):
+                out.append(dict(protocol=label, quantity=q, element=symbol, se=_float(pooled["se"][i]),
+                                unit=unit, se_percent=_float(pooled["se_percent"][i]),
+                                error_percent=_float(pooled["error_percent"][i]),
+                                identifiable_share=_float(p["identifiable_share"][i]), runs=p["runs"]))
+        elif d["kind"] == "design":
             pooled = p["pooled"]
             for i, q in enumerate(MATRICES):
                 out.append(dict(protocol=label, quantity=q, element=SYMBOL[q], se=_float(pooled["se"][i]),
@@ -251,6 +262,10 @@ def _design_html(d: Dict[str, Any]) -> List[str]:
     elif d["kind"] == "design":
         what = (f"{c['trials']} {c['profile']} perturbations of {1e3 * c['radius_m']:.3g} mm in "
                 f"{c['motion_s']:.3g} s (hold {c['hold_s']:.3g} s, rest {c['rest_s']:.3g} s)")
+    elif d["kind"] == "planar_design":
+        what = (f"{c['trials']} quintic joint perturbations of {c['amplitude_rad']:.3g} rad over "
+                f"{1e3 * c['interpolation_s']:.3g} ms, a {c['window_ms']:.3g} ms window after each onset "
+                f"(rest {1e3 * c['rest_s']:.3g} ms, waits {c['wait_s'][0]:.3g}-{c['wait_s'][1]:.3g} s)")
     else:
         what = (f"a PRBS of {c['amplitude_rad']:.3g} rad, switching every {1e3 * c['switch_interval_s']:.3g} ms, "
                 f"order {c['order']}, {c['periods']} periods")
@@ -421,7 +436,7 @@ def summary(d: Dict[str, Any]) -> str:
             body = f"{len(d['points'])} start points, stiffness within {worst:.1f} % of the truth"
         elif kind == "study":
             body = f"{d.get('name')!r}: {len(d['recordings'])} recordings, {len(d['failures'])} failed"
-        elif kind in ("design", "reflex_design"):
+        elif kind in DESIGN_KINDS:
             recs = _design(d)
             design = [r for r in recs if r["protocol"] == "design"]
             body = f"{d['chosen']['duration_s']:.4g} s of {d['budget_s']:.4g} s; predicted " + ", ".join(
@@ -715,7 +730,7 @@ def to_html(d: Dict[str, Any]) -> str:
                 + ["" if r.get(k) is None else f"{r[k]:.4g}" for k in ("cocontraction_index", "kxx", "kyy", "kzz")]
                 for r in d["levels"]]
         parts.append(_list_table(header, rows, "Mean over subjects (stiffness in N/m)"))
-    elif kind in ("design", "reflex_design"):
+    elif kind in DESIGN_KINDS:
         parts.extend(_design_html(d))
     elif kind == "spectra":
         if d.get("periodic"):

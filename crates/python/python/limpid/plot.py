@@ -597,15 +597,22 @@ def design(result: Any, ax: Any = None) -> Plot:
     amplitude by frequency (a multisine's: at each excited line)
     (2|X(f)|/T) against the largest sine the limits allow (and the baseline's,
     when given), and the predicted relative standard errors of K, B and M for
-    the design and the baseline. A reflex design (a PRBS): the start of one
+    the design and the baseline (a planar design: one recorded trial in joint
+    angles, K, D and ξ). A reflex design (a PRBS): the start of one
     period, the amplitude of each line of a period (the design's and the
     baseline's) against the limits, and the predicted spread of the reflex
     gain. ``ax``: 1 x 3 Axes or None."""
     d = _data(result)
-    if _kind(d, "design", "reflex_design") == "reflex_design":
+    kind = _kind(d, "design", "reflex_design", "planar_design")
+    if kind == "reflex_design":
         return _reflex_design(d, ax)
+    # a planar design's command and spectrum are joint angles; its groups K, D and ξ
+    planar = kind == "planar_design"
+    unit = "rad" if planar else "m"
     fig, a, _ = _panels(ax, 1, 3, "plot.design", panel=(3.6, 2.8))
-    _command_traces(a[0, 0], d["command"], (("m", "m"), ("m_s", "m/s"), ("m_s2", "m/s²")))
+    _command_traces(a[0, 0], d["command"],
+                    (("rad", "rad"), ("rad_s", "rad/s"), ("rad_s2", "rad/s²")) if planar
+                    else (("m", "m"), ("m_s", "m/s"), ("m_s2", "m/s²")))
     periodic = d.get("family") == "multisine"
     a[0, 0].set_xlabel("time from the period's start (s), x" if periodic else "time from the trial's start (s)")
     a[0, 0].set_ylabel("share of the peak")
@@ -613,16 +620,17 @@ def design(result: Any, ax: Any = None) -> Plot:
     sp = d["spectrum"]
     f = np.asarray(sp["frequency_hz"], dtype=float)
     # a multisine's spectrum is its excited lines: drawn as points
-    a[0, 1].loglog(f, np.asarray(sp["designed_m"], dtype=float), "." if periodic else "-", label="design")
-    if sp.get("baseline_m") is not None:
-        a[0, 1].loglog(f, np.asarray(sp["baseline_m"], dtype=float), label="baseline")
-    a[0, 1].loglog(f, np.asarray(sp["limit_m"], dtype=float), "k--", label="limits")
+    a[0, 1].loglog(f, np.asarray(sp[f"designed_{unit}"], dtype=float), "." if periodic else "-", label="design")
+    if sp.get(f"baseline_{unit}") is not None:
+        a[0, 1].loglog(f, np.asarray(sp[f"baseline_{unit}"], dtype=float), label="baseline")
+    a[0, 1].loglog(f, np.asarray(sp[f"limit_{unit}"], dtype=float), "k--", label="limits")
     a[0, 1].set_xlabel("frequency (Hz)")
-    a[0, 1].set_ylabel("amplitude (m)")
+    a[0, 1].set_ylabel(f"amplitude ({unit})")
     a[0, 1].legend(fontsize="small")
     _log_ticks(a[0, 1].xaxis, f)
-    _log_ticks(a[0, 1].yaxis, np.concatenate([np.asarray(sp[k], dtype=float) for k in ("designed_m", "limit_m")]))
-    names = ["K", "B", "M"]
+    _log_ticks(a[0, 1].yaxis, np.concatenate([np.asarray(sp[k], dtype=float)
+                                              for k in (f"designed_{unit}", f"limit_{unit}")]))
+    names = ["K", "D", "ξ"] if planar else ["K", "B", "M"]
     x = np.arange(3)
     base = d.get("baseline")
     width = 0.4 if base is not None else 0.6
