@@ -358,7 +358,10 @@ fn export_planar(p: &PlanarDesign, output: &Path) -> CliResult {
     let rec = limpid_lab::export::planar_schedule(p, output)?;
     limpid_io::write_recording(&rec, output)?;
     let schedule = p.schedule();
-    let end = schedule.last().map(|s| s.0 + p.after_s).unwrap_or(0.0);
+    let end = schedule
+        .last()
+        .map(|s| s.0 + p.after_s + p.interpolation_s)
+        .unwrap_or(0.0);
     println!(
         "wrote {}: {} samples ({:.1} s) of joint angles for {} perturbations",
         output.display(),
@@ -504,9 +507,8 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         _ => "prbs",
     };
     match (args.method.as_str(), args.family.as_str()) {
-        ("linear", "centre-out" | "any") | ("stochastic", "multisine" | "any") => {}
+        ("linear" | "planar", "centre-out" | "any") | ("stochastic", "multisine" | "any") => {}
         ("reflex", "prbs" | "any") => return run_reflex_design(&args, demo, cx),
-        ("planar", "centre-out" | "any") => return run_planar_design(&args, demo, cx),
         (method @ ("linear" | "stochastic" | "reflex" | "planar"), family) => {
             let instead = ["linear", "stochastic", "reflex"]
                 .into_iter()
@@ -539,21 +541,26 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
             "designing: every candidate is simulated and estimated on the prior (seconds) ..."
         );
     }
-    let (toml, result) = limpid_app::design::design_from_texts(
-        &args.method,
-        (prior_text.as_str(), prior_path.as_path()),
-        limits_text.as_deref().zip(args.limits_from.as_deref()),
-        baseline_text.as_deref().zip(args.baseline.as_deref()),
-        args.duration,
-        &args.objective,
-        args.runs,
-        args.verify,
-        args.seed,
-    )
-    .map_err(named)?;
+    let inputs_read = limpid_app::design::DesignInputs {
+        prior: (prior_text.as_str(), prior_path.as_path()),
+        limits_from: limits_text.as_deref().zip(args.limits_from.as_deref()),
+        baseline: baseline_text.as_deref().zip(args.baseline.as_deref()),
+        budget_s: args.duration,
+        objective: &args.objective,
+        runs: args.runs,
+        verify: args.verify,
+        seed: args.seed,
+    };
+    let (toml, result) =
+        limpid_app::design::design_from_texts(&args.method, &inputs_read).map_err(named)?;
     if let Some(out) = &args.output {
+        let units = if args.method == "planar" {
+            "m, rad, s, Hz, N m"
+        } else {
+            "m, rad, s, Hz, N"
+        };
         let text = format!(
-            "# limpid protocol design --method {} (objective {}, budget {} s); units: m, rad, s, Hz, N\n{toml}",
+            "# limpid protocol design --method {} (objective {}, budget {} s); units: {units}\n{toml}",
             args.method, args.objective, args.duration,
         );
         limpid_core::files::write_file(out, text.as_bytes())?;
@@ -561,19 +568,45 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
     if args.json {
         println!(
             "{}",
-            limpid_analysis::result::Document::new(limpid_analysis::result::Estimate::Design(
-                result
-            ))
-            .with_run(limpid_analysis::result::Run::of_this_process(
-                &inputs.iter().map(|(p, _)| *p).collect::<Vec<_>>()
-            ))
-            .to_json_pretty()
+            limpid_analysis::result::Document::new(result)
+                .with_run(limpid_analysis::result::Run::of_this_process(
+                    &inputs.iter().map(|(p, _)| *p).collect::<Vec<_>>()
+                ))
+                .to_json_pretty()
         );
         return Ok(());
     }
-    print_design(&result);
+    match &result {
+        limpid_analysis::result::Estimate::Design(r) => print_design(r),
+        limpid_analysis::result::Estimate::PlanarDesign(r) => print_planar_design(r),
+        other => unreachable!("a design method gave a {} result", other.kind()),
+    }
     match &args.output {
-        Some(out) => println!("wrote {} (check it: limpid protocol check {0}; play it: limpid protocol export {0} -o command.csv)", out.display()),
+        Some(out) => {
+            let play = match &result {
+                limpid_analysis::result::Estimate::PlanarDesign(r) => {
+                    let links = r.protocol["link_lengths_m"]
+                        .as_array()
+                        .map(|l| {
+                            l.iter()
+                                .filter_map(|v| v.as_f64())
+                                .map(num)
+                                .collect::<Vec<_>>()
+                                .join(",")
+                        })
+                        .unwrap_or_default();
+                    format!("simulate it: limpid simulate {0} -o rec.csv; estimate it with the whole window: limpid estimate planar rec.csv --link-lengths {links}", out.display())
+                }
+                _ => format!(
+                    "play it: limpid protocol export {} -o command.csv",
+                    out.display()
+                ),
+            };
+            println!(
+                "wrote {0} (check it: limpid protocol check {0}; {play})",
+                out.display()
+            )
+        }
         None => println!("protocol not written: add -o D.toml"),
     }
     Ok(())
@@ -704,48 +737,8 @@ fn print_search(s: &limpid_analysis::result::design::SearchSummary) {
     );
 }
 
-/// `--method planar`: quintic joint perturbations for the planar method.
-fn run_planar_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
-    let prior_path = PathBuf::from(&args.prior);
-    let DesignTexts {
-        prior: prior_text,
-        limits: limits_text,
-        baseline: baseline_text,
-    } = DesignTexts::read(args, demo)?;
-    if !args.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-        eprintln!(
-            "designing: every candidate is simulated and estimated on the prior (seconds) ..."
-        );
-    }
-    let (toml, r) = limpid_app::design::planar::planar_design_from_texts(
-        (&prior_text, &prior_path),
-        limits_text.as_deref().zip(args.limits_from.as_deref()),
-        baseline_text.as_deref().zip(args.baseline.as_deref()),
-        args.duration,
-        &args.objective,
-        args.runs,
-        args.verify,
-        args.seed,
-    )
-    .map_err(|e| design_error(cx, args, e))?;
-    if let Some(out) = &args.output {
-        let text = format!(
-            "# limpid protocol design --method planar (objective {}, budget {} s); units: m, rad, s, Hz, N m\n{toml}",
-            args.objective, args.duration,
-        );
-        limpid_core::files::write_file(out, text.as_bytes())?;
-    }
-    if args.json {
-        println!(
-            "{}",
-            limpid_analysis::result::Document::new(
-                limpid_analysis::result::Estimate::PlanarDesign(r)
-            )
-            .with_run(limpid_analysis::result::Run::of_this_process(&[]))
-            .to_json_pretty()
-        );
-        return Ok(());
-    }
+/// `--method planar`'s design: quintic joint perturbations for the planar method.
+fn print_planar_design(r: &limpid_analysis::result::design::PlanarDesignResult) {
     let c = &r.chosen;
     println!(
         "designed: {} quintic perturbations of {} rad over {} ms in six joint directions, recorded {} ms before and {} ms after each onset (estimate with the whole window), random waits of {}-{} s: {:.1} s of {} s, at q0 = ({}, {}) rad",
@@ -773,23 +766,6 @@ fn run_planar_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     print_margins(&r.limits);
     print_verification(r.verify.as_ref(), ["K", "D", "ξ"], "arms");
     print_search(&r.search);
-    match &args.output {
-        Some(out) => {
-            let links = r.protocol["link_lengths_m"]
-                .as_array()
-                .map(|l| {
-                    l.iter()
-                        .filter_map(|v| v.as_f64())
-                        .map(num)
-                        .collect::<Vec<_>>()
-                        .join(",")
-                })
-                .unwrap_or_default();
-            println!("wrote {} (check it: limpid protocol check {0}; simulate it: limpid simulate {0} -o rec.csv; estimate it with the whole window: limpid estimate planar rec.csv --link-lengths {links})", out.display())
-        }
-        None => println!("protocol not written: add -o D.toml"),
-    }
-    Ok(())
 }
 
 /// `--method reflex`: a PRBS for the reflex gain on a prior ankle.

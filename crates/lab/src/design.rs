@@ -343,10 +343,14 @@ impl PlanarDesign {
                 crate::validate::MAX_TARGETS
             ));
         }
-        if !(self.wait_s[0] >= self.rest_s && self.wait_s[1] >= self.wait_s[0]) {
+        // each wait holds the return from the last perturbation (over T_k) and the next rest
+        if !(self.wait_s[0] >= self.rest_s + self.interpolation_s
+            && self.wait_s[1] >= self.wait_s[0])
+        {
             return Err(format!(
-                "wait_s = {:?} must be an interval starting at or after rest_s = {}",
-                self.wait_s, self.rest_s
+                "wait_s = {:?} must be an interval starting at or after rest_s + interpolation_s = {} s (the return to the posture, then the recorded rest)",
+                self.wait_s,
+                self.rest_s + self.interpolation_s
             ));
         }
         Ok(())
@@ -539,7 +543,7 @@ pub struct VaryingReport {
 pub struct PlanarReport {
     /// Perturbations.
     pub trials: usize,
-    /// Duration of the session, waits included (s).
+    /// Duration of the session, waits and the last return included (s).
     pub session_s: f64,
     /// Largest joint displacement (rad).
     pub peak_joint_displacement_rad: f64,
@@ -611,7 +615,11 @@ fn check_planar(p: &PlanarDesign) -> Result<PlanarReport> {
     let schedule = p.schedule();
     let mut r = PlanarReport {
         trials: p.trials,
-        session_s: schedule.last().map(|s| s.0 + p.after_s).unwrap_or(0.0),
+        // the last return to the posture ends the session
+        session_s: schedule
+            .last()
+            .map(|s| s.0 + p.after_s + p.interpolation_s)
+            .unwrap_or(0.0),
         peak_joint_displacement_rad: 0.0,
         peak_joint_velocity_rad_s: 0.0,
         peak_joint_acceleration_rad_s2: 0.0,

@@ -141,12 +141,15 @@ pub fn centre_out_schedule(
 }
 
 /// Seed 003's session: the posture held through random waits, each followed
-/// by a quintic displacement held for `after_s`; `trial` is 0 during waits.
-/// Columns t, trial, q1, q2.
+/// by a quintic displacement held for `after_s`, then a quintic back to the
+/// posture over the same interval (at the start of the next wait, unrecorded:
+/// `trial` is 0 during waits and returns). Columns t, trial, q1, q2.
 pub fn planar_schedule(p: &PlanarDesign, output: &Path) -> Result<Recording> {
     let fs = p.sample_rate_hz;
     let schedule = p.schedule();
-    let end = schedule.last().map(|s| s.0 + p.after_s).unwrap_or(0.0);
+    let tk = p.interpolation_s;
+    // the last return is part of the session
+    let end = schedule.last().map(|s| s.0 + p.after_s + tk).unwrap_or(0.0);
     let n = (end * fs).round() as usize + 1;
     let mut cols: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(n)).collect();
     let mut next = 0;
@@ -157,12 +160,10 @@ pub fn planar_schedule(p: &PlanarDesign, output: &Path) -> Result<Recording> {
         }
         let (onset, d) = schedule[next];
         let in_trial = t >= onset - 1e-12 && t < onset + p.after_s;
-        let s = if t >= onset - 1e-12 {
-            crate::Profile::Quintic.eval(t - onset, p.interpolation_s).0
-        } else {
-            0.0
-        };
-        let s = if in_trial { s } else { 0.0 };
+        // out over T_k from the onset, back over T_k from the window's end
+        let out = crate::Profile::Quintic.eval(t - onset, tk).0;
+        let back = crate::Profile::Quintic.eval(t - onset - p.after_s, tk).0;
+        let s = if t >= onset - 1e-12 { out - back } else { 0.0 };
         let dq = p.displacements_rad[d];
         cols[0].push(t);
         cols[1].push(if in_trial { (next + 1) as f64 } else { 0.0 });

@@ -554,45 +554,26 @@ fn design(
         let doc = Document::new(Estimate::ReflexDesign(designed.result));
         return Ok((toml, doc.to_json()));
     }
-    if method == "planar" {
-        let (toml, result) = detached(py, || {
-            limpid_app::design::planar::planar_design_from_texts(
-                (prior, Path::new(prior_name)),
-                limits_from.map(|t| (t, Path::new("<limits_from>"))),
-                baseline.map(|t| (t, Path::new("<baseline>"))),
-                duration_s,
-                objective,
-                runs,
-                verify,
-                seed,
-            )
-        })
-        .map_err(err)?;
-        return Ok((
-            toml,
-            Document::new(Estimate::PlanarDesign(result)).to_json(),
-        ));
-    }
-    if !matches!(method, "linear" | "stochastic") {
+    if !matches!(method, "linear" | "stochastic" | "planar") {
         return Err(value_err(format!(
             "method: expected linear, stochastic, reflex or planar, found {method:?}"
         )));
     }
+    let inputs = limpid_app::design::DesignInputs {
+        prior: (prior, Path::new(prior_name)),
+        limits_from: limits_from.map(|t| (t, Path::new("<limits_from>"))),
+        baseline: baseline.map(|t| (t, Path::new("<baseline>"))),
+        budget_s: duration_s,
+        objective,
+        runs,
+        verify,
+        seed,
+    };
     let (toml, result) = detached(py, || {
-        limpid_app::design::design_from_texts(
-            method,
-            (prior, Path::new(prior_name)),
-            limits_from.map(|t| (t, Path::new("<limits_from>"))),
-            baseline.map(|t| (t, Path::new("<baseline>"))),
-            duration_s,
-            objective,
-            runs,
-            verify,
-            seed,
-        )
+        limpid_app::design::design_from_texts(method, &inputs)
     })
     .map_err(err)?;
-    Ok((toml, Document::new(Estimate::Design(result)).to_json()))
+    Ok((toml, Document::new(result).to_json()))
 }
 
 /// Simulate a protocol (TOML text), as `limpid simulate`: on `subject` (TOML

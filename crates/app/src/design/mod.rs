@@ -401,6 +401,29 @@ pub(crate) fn check_periodic_baseline(b: &limpid_lab::periodic::PeriodicDesign) 
 /// A file's text and its path (for errors).
 pub type Text<'a> = (&'a str, &'a Path);
 
+/// What a linear, stochastic or planar design is asked, as the CLI's flags
+/// and Python's arguments give it: texts, to be read by the method's own
+/// request.
+#[derive(Debug, Clone, Copy)]
+pub struct DesignInputs<'a> {
+    /// The prior: `demo:...`, or a prior file's text.
+    pub prior: Text<'a>,
+    /// The protocol whose limits are taken, if any.
+    pub limits_from: Option<Text<'a>>,
+    /// The protocol the design replaces, if any.
+    pub baseline: Option<Text<'a>>,
+    /// The whole protocol's length (s).
+    pub budget_s: f64,
+    /// What matters: `stiffness,damping` or weights.
+    pub objective: &'a str,
+    /// Recordings behind the prediction.
+    pub runs: usize,
+    /// Recordings on subjects drawn from the prior to check it (0: none).
+    pub verify: usize,
+    /// Seed of the noise.
+    pub seed: u64,
+}
+
 /// A prior from its text: `demo:S1` .. `demo:S6`, or a prior file's text.
 pub(crate) fn read_prior(prior: Text<'_>) -> Result<Prior> {
     match prior.0.strip_prefix("demo:") {
@@ -422,17 +445,17 @@ pub(crate) fn read_prior(prior: Text<'_>) -> Result<Prior> {
 /// (`demo:S1` .. `demo:S6`, or a prior file's text), the limits from a
 /// centre-out protocol (else the prior's `[limits]`), the baseline protocol.
 /// The sample rate is the limits protocol's, else the baseline's, else 500 Hz.
-#[allow(clippy::too_many_arguments)]
-pub fn request_from_texts(
-    prior: Text<'_>,
-    limits_from: Option<Text<'_>>,
-    baseline: Option<Text<'_>>,
-    budget_s: f64,
-    objective: &str,
-    runs: usize,
-    verify: usize,
-    seed: u64,
-) -> Result<DesignRequest> {
+pub fn request_from_texts(inputs: &DesignInputs<'_>) -> Result<DesignRequest> {
+    let DesignInputs {
+        prior,
+        limits_from,
+        baseline,
+        budget_s,
+        objective,
+        runs,
+        verify,
+        seed,
+    } = *inputs;
     let prior_text = prior;
     let prior = read_prior(prior)?;
     let centre_out = |(text, path): Text<'_>, role: &str| -> Result<Protocol> {
@@ -480,59 +503,41 @@ pub fn request_from_texts(
     Ok(request)
 }
 
-/// A linear (centre-out) or stochastic (end-point multisine) design from
-/// its texts, as the CLI and Python take them: the designed protocol's TOML
-/// text, its `kind` first, and the result.
-#[allow(clippy::too_many_arguments)]
+/// A linear (centre-out), stochastic (end-point multisine) or planar
+/// (quintic joint steps) design from its texts, as the CLI and Python take
+/// them: the designed protocol's TOML text, its `kind` first, and the result
+/// (`design`, or `planar_design`).
 pub fn design_from_texts(
     method: &str,
-    prior: Text<'_>,
-    limits_from: Option<Text<'_>>,
-    baseline: Option<Text<'_>>,
-    budget_s: f64,
-    objective: &str,
-    runs: usize,
-    verify: usize,
-    seed: u64,
-) -> Result<(String, DesignResult)> {
+    inputs: &DesignInputs<'_>,
+) -> Result<(String, limpid_analysis::result::Estimate)> {
+    use limpid_analysis::result::Estimate;
     match method {
         "linear" => {
-            let request = request_from_texts(
-                prior,
-                limits_from,
-                baseline,
-                budget_s,
-                objective,
-                runs,
-                verify,
-                seed,
-            )?;
-            let designed = design(&request)?;
+            let designed = design(&request_from_texts(inputs)?)?;
             Ok((
                 format!("kind = \"centre-out\"\n{}", designed.protocol.to_toml()),
-                designed.result,
+                Estimate::Design(designed.result),
             ))
         }
         "stochastic" => {
-            let request = stochastic::stochastic_request_from_texts(
-                prior,
-                limits_from,
-                baseline,
-                budget_s,
-                objective,
-                runs,
-                verify,
-                seed,
-            )?;
+            let request = stochastic::stochastic_request_from_texts(inputs)?;
             let designed = stochastic::design_stochastic(&request)?;
             Ok((
                 limpid_lab::design::Design::Periodic(designed.protocol).to_toml(),
-                designed.result,
+                Estimate::Design(designed.result),
+            ))
+        }
+        "planar" => {
+            let designed = planar::design_planar(&planar::planar_request_from_texts(inputs)?)?;
+            Ok((
+                limpid_lab::design::Design::Planar(designed.protocol).to_toml(),
+                Estimate::PlanarDesign(designed.result),
             ))
         }
         other => Err(Error::invalid(
             "method",
-            format!("{other:?}: expected linear or stochastic"),
+            format!("{other:?}: expected linear, stochastic or planar"),
         )),
     }
 }

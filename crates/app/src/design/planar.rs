@@ -49,8 +49,8 @@ use limpid_lab::Profile;
 
 use super::{
     check_budget, check_runs, coordinate_descent, limit_envelope, predict, rank, seeds,
-    sine_amplitudes, spectrum_hz, verify, DesignRequest, Grid, Objective, Run, Text, Truth,
-    LIMIT_MARGIN, MIN_TRIALS, RANKING_RUNS,
+    sine_amplitudes, spectrum_hz, verify, DesignInputs, DesignRequest, Grid, Objective, Run, Text,
+    Truth, LIMIT_MARGIN, MIN_TRIALS, RANKING_RUNS,
 };
 
 /// Amplitude as a share of the largest the limits allow.
@@ -392,17 +392,17 @@ pub type PlanarDesignRequest = DesignRequest<PlanarFrame, PlanarDesign, PlanarPr
 /// protocol whose limits, links, posture, waits and sample rate are taken
 /// (else the seed's, `lakatos-planar`, with the prior's `[limits]`), the
 /// baseline protocol.
-#[allow(clippy::too_many_arguments)]
-pub fn planar_request_from_texts(
-    prior: Text<'_>,
-    limits_from: Option<Text<'_>>,
-    baseline: Option<Text<'_>>,
-    budget_s: f64,
-    objective: &str,
-    runs: usize,
-    verify: usize,
-    seed: u64,
-) -> Result<PlanarDesignRequest> {
+pub fn planar_request_from_texts(inputs: &DesignInputs<'_>) -> Result<PlanarDesignRequest> {
+    let DesignInputs {
+        prior,
+        limits_from,
+        baseline,
+        budget_s,
+        objective,
+        runs,
+        verify,
+        seed,
+    } = *inputs;
     let (prior_text, prior_path) = prior;
     let prior = match prior_text {
         "demo:planar" => PlanarPrior::demo(),
@@ -645,9 +645,10 @@ impl Space<'_> {
         // a motion of at least 10 samples, so that the quintic is sampled
         let tk = (shortest * SLOWNESS[c.slowness]).max(10.0 / req.sample_rate_hz);
         let (hold, rest) = (HOLDS_S[c.hold], RESTS_S[c.rest]);
-        if rest > frame.wait_s[0] {
+        // the return to the posture (over T_k) and the recorded rest fit in every wait
+        if rest + tk > frame.wait_s[0] {
             return Err(format!(
-                "a recorded rest of {rest} s is longer than the shortest wait, {} s",
+                "a return over {tk:.3} s and a recorded rest of {rest} s do not fit in the shortest wait, {} s",
                 frame.wait_s[0]
             ));
         }
@@ -674,11 +675,11 @@ impl Space<'_> {
         let trials = design
             .schedule()
             .iter()
-            .take_while(|(onset, _)| onset + after <= req.budget_s)
+            .take_while(|(onset, _)| onset + after + tk <= req.budget_s)
             .count();
         if trials < MIN_TRIALS {
             return Err(format!(
-                "{trials} perturbations of {after:.3} s after random waits of {:?} s fit in {} s; at least {MIN_TRIALS} are needed",
+                "{trials} perturbations of {after:.3} s (and a return) after random waits of {:?} s fit in {} s; at least {MIN_TRIALS} are needed",
                 frame.wait_s, req.budget_s
             ));
         }
@@ -761,11 +762,12 @@ pub struct PlanarDesigned {
     pub result: PlanarDesignResult,
 }
 
-/// Length of a planar session (s): the schedule's waits and recorded windows.
+/// Length of a planar session (s): the schedule's waits, recorded windows
+/// and the last return (as `protocol check` and `protocol export` count it).
 fn session_s(d: &PlanarDesign) -> f64 {
     d.schedule()
         .last()
-        .map_or(0.0, |(onset, _)| onset + d.after_s)
+        .map_or(0.0, |(onset, _)| onset + d.after_s + d.interpolation_s)
 }
 
 /// Choose the perturbations. Deterministic for a given request (seeded noise).
@@ -934,32 +936,4 @@ fn trial_spectrum(d: &PlanarDesign) -> Vec<f64> {
     let dt = length / n as f64;
     let x: Vec<f64> = (0..n).map(|i| trial_path(d, i as f64 * dt).0).collect();
     sine_amplitudes(&x, dt)
-}
-
-/// A planar design from its texts, as the CLI and Python take them (see
-/// [`planar_request_from_texts`]): the designed protocol's TOML text, its
-/// `kind` first, and the result.
-#[allow(clippy::too_many_arguments)]
-pub fn planar_design_from_texts(
-    prior: Text<'_>,
-    limits_from: Option<Text<'_>>,
-    baseline: Option<Text<'_>>,
-    budget_s: f64,
-    objective: &str,
-    runs: usize,
-    verify: usize,
-    seed: u64,
-) -> Result<(String, PlanarDesignResult)> {
-    let request = planar_request_from_texts(
-        prior,
-        limits_from,
-        baseline,
-        budget_s,
-        objective,
-        runs,
-        verify,
-        seed,
-    )?;
-    let designed = design_planar(&request)?;
-    Ok((Design::Planar(designed.protocol).to_toml(), designed.result))
 }

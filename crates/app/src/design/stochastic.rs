@@ -41,8 +41,8 @@ use limpid_lab::protocol::Limits;
 use nalgebra::Vector3;
 
 use super::{
-    check_budget, check_runs, coordinate_descent, predict, rank, seeds, verify, Grid, Impedance,
-    Objective, Prior, Run, Text, LIMIT_MARGIN, RANKING_RUNS,
+    check_budget, check_runs, coordinate_descent, predict, rank, seeds, verify, DesignInputs, Grid,
+    Impedance, Objective, Prior, Run, LIMIT_MARGIN, RANKING_RUNS,
 };
 
 /// Periods tried (s).
@@ -96,17 +96,17 @@ fn endpoint_limits(l: &Limits, start: Option<Vector3<f64>>) -> PeriodicLimits {
 /// the workspace around the prior's posture; else the prior's `[limits]`),
 /// the baseline end-point multisine. The sample rate is the limits
 /// protocol's, else the baseline's, else 500 Hz.
-#[allow(clippy::too_many_arguments)]
-pub fn stochastic_request_from_texts(
-    prior: Text<'_>,
-    limits_from: Option<Text<'_>>,
-    baseline: Option<Text<'_>>,
-    budget_s: f64,
-    objective: &str,
-    runs: usize,
-    verify: usize,
-    seed: u64,
-) -> Result<StochasticDesignRequest> {
+pub fn stochastic_request_from_texts(inputs: &DesignInputs<'_>) -> Result<StochasticDesignRequest> {
+    let DesignInputs {
+        prior,
+        limits_from,
+        baseline,
+        budget_s,
+        objective,
+        runs,
+        verify,
+        seed,
+    } = *inputs;
     let prior_text = prior;
     let prior = super::read_prior(prior)?;
     let limits_from = limits_from

@@ -269,16 +269,16 @@ fn planar_request(
     let seed = limpid_lab::design::Design::preset("lakatos-planar")
         .unwrap()
         .to_toml();
-    limpid_app::design::planar::planar_request_from_texts(
-        (prior, std::path::Path::new("arm.toml")),
-        Some((limits, std::path::Path::new("limits.toml"))),
-        Some((&seed, std::path::Path::new("lakatos.toml"))),
-        72.0,
-        "stiffness,damping",
+    limpid_app::design::planar::planar_request_from_texts(&limpid_app::design::DesignInputs {
+        prior: (prior, std::path::Path::new("arm.toml")),
+        limits_from: Some((limits, std::path::Path::new("limits.toml"))),
+        baseline: Some((&seed, std::path::Path::new("lakatos.toml"))),
+        budget_s: 72.0,
+        objective: "stiffness,damping",
         runs,
         verify,
-        3,
-    )
+        seed: 3,
+    })
 }
 
 /// Seed 003's protocol (0.05 rad over 200 ms, 450 ms windows) on an arm

@@ -311,6 +311,22 @@ fn planar_preset_checks_exports_simulates_and_estimates_back_to_its_truth() {
         }
     }
     assert_eq!(onsets, 30);
+    // every step of the command within the velocity limit (1 rad/s), the
+    // returns included, and the session ends at rest at the posture
+    for (name, q0) in [("q1", 0.08), ("q2", 1.0)] {
+        let q = rec.column(name).unwrap();
+        let fastest = q
+            .windows(2)
+            .zip(t.windows(2))
+            .map(|(q, t)| (q[1] - q[0]).abs() / (t[1] - t[0]))
+            .fold(0.0f64, f64::max);
+        assert!(fastest <= 1.0, "{name}: {fastest} rad/s");
+        assert!(
+            (q[q.len() - 1] - q0).abs() < 1e-12,
+            "{name} ends at {}",
+            q[q.len() - 1]
+        );
+    }
 
     let sim = dir.path().join("planar.csv");
     let out = limpid(&[
