@@ -76,15 +76,16 @@ pub fn run(args: CalibrateArgs) -> CliResult {
         r.claimed_without, r.without_reflex, r.detected, r.with_reflex
     );
     let designs = [
-        ("linear", &result.design),
-        ("stochastic", &result.stochastic_design),
+        ("linear", &result.design, ["K", "B", "M"]),
+        ("stochastic", &result.stochastic_design, ["K", "B", "M"]),
+        ("planar", &result.planar_design, ["K", "D", "ξ"]),
     ];
-    for (method, d) in designs
+    for (method, d, [k, b, m]) in designs
         .iter()
-        .filter_map(|(m, d)| d.as_ref().map(|d| (m, d)))
+        .filter_map(|(method, d, names)| d.as_ref().map(|d| (method, d, names)))
     {
         println!(
-            "protocol design ({method}, {}): predicted/achieved spread K {:.2}, B {:.2}, M {:.2} over {} subjects; K within 5 % and B within 20 %, both identifiable: {:.0} % ({:.1} s)",
+            "protocol design ({method}, {}): predicted/achieved spread {k} {:.2}, {b} {:.2}, {m} {:.2} over {} subjects; {k} within 5 % and {b} within 20 %, both identifiable: {:.0} % ({:.1} s)",
             d.prior,
             d.ratio[0],
             d.ratio[1],

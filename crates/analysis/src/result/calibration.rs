@@ -150,24 +150,28 @@ pub struct Calibration {
     /// The same for `--method stochastic` (an end-point multisine).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stochastic_design: Option<DesignCalibration>,
+    /// The same for `--method planar` (seed 003's arm; K, D and ξ).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planar_design: Option<DesignCalibration>,
 }
 
-/// A design (linear or stochastic) for the demo's S1 on a prior range,
-/// predicted at the range's worse end and run on subjects drawn uniformly
-/// from the range.
+/// A design (linear or stochastic for the demo's S1, planar for seed 003's
+/// arm) on a prior range, predicted at the range's worse end and run on
+/// subjects drawn uniformly from the range.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct DesignCalibration {
     /// The prior, in words.
     pub prior: String,
     /// Subjects drawn from the prior (and recordings behind the prediction).
     pub recordings: usize,
-    /// Predicted pooled SE of K (N/m), B (N s/m), M (kg).
+    /// Predicted pooled SE of K (N/m), B (N s/m), M (kg); planar: joint K
+    /// (N m/rad), D (N m s/rad), ξ (kg m²).
     pub predicted_se: [f64; 3],
     /// Achieved pooled s.d. of the errors.
     pub achieved_se: [f64; 3],
     /// Predicted over achieved.
     pub ratio: [f64; 3],
-    /// Share with K within 5 % and B within 20 % of the truth, both identifiable.
+    /// Share with K within 5 % and B (D) within 20 % of the truth, both identifiable.
     pub within_tolerance_share: f64,
     /// Wall time (s).
     pub seconds: f64,

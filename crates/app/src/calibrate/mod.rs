@@ -312,6 +312,7 @@ pub fn calibrate(
         varying_reflex,
         design: Some(calibrate_design(recordings, seed)?),
         stochastic_design: Some(calibrate_stochastic_design(recordings, seed)?),
+        planar_design: Some(calibrate_planar_design(recordings, seed)?),
     })
 }
 
@@ -370,28 +371,75 @@ fn design_prior() -> crate::design::Prior {
     prior
 }
 
-/// A design's figures for calibrate, from its verification.
+/// A design's figures for calibrate, from its verification; `prior` in words.
 fn design_calibration(
-    r: &limpid_analysis::result::design::DesignResult,
+    prior: String,
+    predicted: &limpid_analysis::result::design::Prediction,
+    verify: Option<&limpid_analysis::result::design::Verification>,
     recordings: usize,
     started: std::time::Instant,
 ) -> DesignCalibration {
-    let v = r
-        .verify
-        .as_ref()
-        .expect("a design asked to verify carries its verification");
+    let v = verify.expect("a design asked to verify carries its verification");
     DesignCalibration {
-        prior: format!(
-            "the demo's S1 to K x{}, B x{} (predicted at the worse end, subjects drawn uniformly between)",
-            DESIGN_RANGE.0, DESIGN_RANGE.1
-        ),
+        prior,
         recordings,
-        predicted_se: r.predicted.pooled.se,
+        predicted_se: predicted.pooled.se,
         achieved_se: v.achieved_se,
         ratio: v.ratio,
         within_tolerance_share: v.within_tolerance_share,
         seconds: started.elapsed().as_secs_f64(),
     }
+}
+
+/// The demo's S1 prior range in words.
+fn design_prior_words() -> String {
+    format!(
+        "the demo's S1 to K x{}, B x{} (predicted at the worse end, subjects drawn uniformly between)",
+        DESIGN_RANGE.0, DESIGN_RANGE.1
+    )
+}
+
+/// `limpid protocol design --method planar` for seed 003's arm holding a
+/// load (no reflex) to K x1.4, D x0.7, with lakatos-planar's limits and a
+/// 72 s budget (the seed protocol's session).
+fn calibrate_planar_design(recordings: usize, seed: u64) -> Result<DesignCalibration> {
+    use crate::design::planar::{design_planar, ArmImpedance, PlanarDesignRequest, PlanarFrame};
+    let started = std::time::Instant::now();
+    let mut prior = crate::design::planar::PlanarPrior::demo();
+    prior.reflex = None;
+    prior.other_end = Some(ArmImpedance {
+        stiffness: prior.nominal.stiffness * DESIGN_RANGE.0,
+        damping: prior.nominal.damping * DESIGN_RANGE.1,
+        ..prior.nominal
+    });
+    let seed003 = limpid_lab::design::PlanarDesign::seed003();
+    let request = PlanarDesignRequest {
+        limits: PlanarFrame {
+            limits: seed003.limits.clone(),
+            link_lengths_m: seed003.link_lengths_m,
+            posture_rad: seed003.posture_rad,
+            wait_s: seed003.wait_s,
+        },
+        prior,
+        sample_rate_hz: seed003.sample_rate_hz,
+        budget_s: 72.0,
+        objective: crate::design::Objective::default(),
+        runs: recordings,
+        baseline: None,
+        verify: recordings,
+        seed: seed ^ 0x6062,
+    };
+    let d = design_planar(&request)?;
+    Ok(design_calibration(
+        format!(
+            "seed 003's arm holding a load, no reflex, to K x{}, D x{} (predicted at the worse end, arms drawn uniformly between)",
+            DESIGN_RANGE.0, DESIGN_RANGE.1
+        ),
+        &d.result.predicted,
+        d.result.verify.as_ref(),
+        recordings,
+        started,
+    ))
 }
 
 /// `limpid protocol design --method stochastic` for the same prior range,
@@ -412,7 +460,13 @@ fn calibrate_stochastic_design(recordings: usize, seed: u64) -> Result<DesignCal
         seed: seed ^ 0x6061,
     };
     let d = design_stochastic(&request)?;
-    Ok(design_calibration(&d.result, recordings, started))
+    Ok(design_calibration(
+        design_prior_words(),
+        &d.result.predicted,
+        d.result.verify.as_ref(),
+        recordings,
+        started,
+    ))
 }
 
 /// `limpid protocol design` for the demo's S1 with a prior range (K x1.4,
@@ -435,7 +489,13 @@ fn calibrate_design(recordings: usize, seed: u64) -> Result<DesignCalibration> {
         seed: seed ^ 0x6060,
     };
     let d = design(&request)?;
-    Ok(design_calibration(&d.result, recordings, started))
+    Ok(design_calibration(
+        design_prior_words(),
+        &d.result.predicted,
+        d.result.verify.as_ref(),
+        recordings,
+        started,
+    ))
 }
 
 /// The window sweep's part of [`calibrate`]: `sweeps` subjects, a third

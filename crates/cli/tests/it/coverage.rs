@@ -264,7 +264,7 @@ fn calibrate_measures_coverage_and_wrong_verdicts_of_every_method() {
     let w = &r["window_sweep"];
     assert_eq!(w["trusted_but_wrong"], 0, "{w}");
     // the design, predicted at the prior range's worse end, is not optimistic about the subjects drawn from it
-    for d in [&r["design"], &r["stochastic_design"]] {
+    for d in [&r["design"], &r["stochastic_design"], &r["planar_design"]] {
         for m in 0..2 {
             let ratio = d["ratio"][m].as_f64().unwrap();
             assert!((0.75..2.5).contains(&ratio), "{d}");

@@ -30,13 +30,17 @@ pub(crate) fn calibration_section(
     if let Some(w) = &v.window_sweep_varied {
         verdict += &sweep("varied subjects", w);
     }
-    let designs = [("linear", &v.design), ("stochastic", &v.stochastic_design)];
-    for (method, d) in designs
+    let designs = [
+        ("linear", &v.design, "B"),
+        ("stochastic", &v.stochastic_design, "B"),
+        ("planar", &v.planar_design, "D"),
+    ];
+    for (method, d, b) in designs
         .iter()
-        .filter_map(|(m, d)| d.as_ref().map(|d| (m, d)))
+        .filter_map(|(m, d, b)| d.as_ref().map(|d| (m, d, b)))
     {
         verdict += &format!(
-            "; protocol design ({method}) for {}: predicted/achieved spread K {:.2}, B {:.2} over {} subjects, {:.0} % within K 5 % and B 20 %",
+            "; protocol design ({method}) for {}: predicted/achieved spread K {:.2}, {b} {:.2} over {} subjects, {:.0} % within K 5 % and {b} 20 %",
             d.prior,
             d.ratio[0],
             d.ratio[1],
