@@ -76,6 +76,11 @@ const MOST_JOINT_STIFFNESS: f64 = 1e5;
 const MOST_JOINT_DAMPING: f64 = 1e4;
 /// Smallest amplitude worth designing (rad): below it the angle noise is the signal.
 const LEAST_AMPLITUDE_RAD: f64 = 1e-4;
+/// Slowest torque fluctuation a prior may give (Hz): within a trial of a
+/// second, anything slower is a constant the rest's mean removes.
+const LEAST_FLUCTUATION_HZ: f64 = 0.01;
+/// Largest baseline joint torque a prior may give (N m): a human arm's are tens.
+const MOST_BASELINE_TORQUE_NM: f64 = 1e3;
 /// Most perturbations a planar design holds.
 const MOST_TRIALS: usize = 2000;
 
@@ -172,9 +177,9 @@ impl PlanarNoise {
             }
         }
         let f = self.fluctuation_below_hz;
-        if !(f > 0.0 && f < 0.5 * rate_hz) {
+        if !(f >= LEAST_FLUCTUATION_HZ && f < 0.5 * rate_hz) {
             return Err(format!(
-                "fluctuation_below_hz = {f}: expected a frequency between 0 and half the sample rate ({} Hz)",
+                "fluctuation_below_hz = {f}: expected a frequency from {LEAST_FLUCTUATION_HZ} Hz (slower is an offset within a trial) to half the sample rate ({} Hz)",
                 0.5 * rate_hz
             ));
         }
@@ -302,6 +307,17 @@ impl PlanarPrior {
                     ),
                 });
             }
+        }
+        if let Some(i) =
+            (0..2).find(|&i| f.tau0[i].is_nan() || f.tau0[i].abs() > MOST_BASELINE_TORQUE_NM)
+        {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "tau0[{i}] = {}: an arm's baseline joint torque is below {MOST_BASELINE_TORQUE_NM:e} N m in magnitude",
+                    limpid_core::error::Num(f.tau0[i])
+                ),
+            });
         }
         if let Some(q) = f
             .posture_rad

@@ -403,6 +403,16 @@ fn a_planar_prior_and_its_limits_are_checked_with_the_file_named() {
         msg.contains("arm.toml") && msg.contains("posture_rad"),
         "{msg}"
     );
+    let msg = e(&PLANAR_ARM.replace("tau0 = [0.37", "tau0 = [1e300"), &seed);
+    assert!(msg.contains("arm.toml") && msg.contains("tau0[0]"), "{msg}");
+    let msg = e(
+        &format!("{PLANAR_ARM}[noise]\nfluctuation_below_hz = 1e-9\ntorque_fluctuation_nm = 0.1\n"),
+        &seed,
+    );
+    assert!(
+        msg.contains("arm.toml") && msg.contains("fluctuation_below_hz"),
+        "{msg}"
+    );
     let msg = e("demo:S1", &seed);
     assert!(msg.contains("demo:planar"), "{msg}");
     let centre_out = limpid_lab::design::Design::preset("artemiadis-3d")
