@@ -510,13 +510,21 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         ("linear" | "planar", "centre-out" | "any") | ("stochastic", "multisine" | "any") => {}
         ("reflex", "prbs" | "any") => return run_reflex_design(&args, demo, cx),
         (method @ ("linear" | "stochastic" | "reflex" | "planar"), family) => {
-            let instead = ["linear", "stochastic", "reflex"]
-                .into_iter()
-                .find(|m| families(m) == family)
-                .map_or_else(
-                    || "; a PRBS for the linear or stochastic method is not written yet".to_string(),
-                    |m| format!("; a {family} is designed by --method {m}"),
-                );
+            if !["centre-out", "multisine", "prbs", "any"].contains(&family) {
+                return Err(format!(
+                    "--family {family}: expected centre-out, multisine, prbs or any"
+                )
+                .into());
+            }
+            let instead = match (method, family) {
+                ("stochastic", "prbs") => "; a PRBS on three axes excites every line from every axis, which one recording's MIMO estimate cannot separate: the zippered multisine gives each axis its own lines (a PRBS is designed for the reflex method)".to_string(),
+                _ => ["linear", "stochastic", "reflex"]
+                    .into_iter()
+                    .find(|m| families(m) == family)
+                    .map_or_else(String::new, |m| {
+                        format!("; a {family} is designed by --method {m}")
+                    }),
+            };
             return Err(format!(
                 "--family {family}: the {method} method's designs are {}{instead}",
                 families(method)

@@ -189,7 +189,7 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         s,
         "--duration",
     ];
-    let cases: [(&[&str], &str); 15] = [
+    let cases: [(&[&str], &str); 16] = [
         (
             &["147", "--baseline", s, "-o", s],
             "would replace the input",
@@ -206,7 +206,7 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         ),
         (
             &["147", "--method", "stochastic", "--family", "prbs"],
-            "designs are multisine",
+            "designs are multisine; a PRBS on three axes excites every line from every axis",
         ),
         (
             &["147", "--method", "stochastic", "--baseline", s],
@@ -217,6 +217,10 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
             "a multisine is designed by --method stochastic",
         ),
         (&["147", "--family", "prbs"], "designs are centre-out"),
+        (
+            &["147", "--family", "sweep"],
+            "expected centre-out, multisine, prbs or any",
+        ),
         (&["147", "--objective", "stifness"], "invalid --objective"),
         (&["-1"], "duration"),
         (&["3"], "at least 6 are needed"),
