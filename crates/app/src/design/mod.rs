@@ -386,6 +386,30 @@ pub struct DesignRequest<L = Limits, B = Protocol, P = Prior> {
     pub seed: u64,
 }
 
+impl DesignInputs<'_> {
+    /// A method's request from its prior, limits, sample rate and baseline;
+    /// the budget, objective (parsed), runs, verification and seed are these inputs'.
+    pub(crate) fn request<L, B, P>(
+        &self,
+        prior: P,
+        (limits, sample_rate_hz): (L, f64),
+        baseline: Option<B>,
+    ) -> Result<DesignRequest<L, B, P>> {
+        Ok(DesignRequest {
+            prior,
+            limits,
+            sample_rate_hz,
+            budget_s: self.budget_s,
+            objective: Objective::parse(self.objective)
+                .map_err(|e| Error::invalid("objective", e))?,
+            runs: self.runs,
+            baseline,
+            verify: self.verify,
+            seed: self.seed,
+        })
+    }
+}
+
 /// A periodic baseline is simulated `runs` times: at most [`MAX_DESIGN_SAMPLES`].
 pub(crate) fn check_periodic_baseline(b: &limpid_lab::periodic::PeriodicDesign) -> Result<()> {
     let samples = b.check()?.samples as f64;
@@ -450,11 +474,7 @@ pub fn request_from_texts(inputs: &DesignInputs<'_>) -> Result<DesignRequest> {
         prior,
         limits_from,
         baseline,
-        budget_s,
-        objective,
-        runs,
-        verify,
-        seed,
+        ..
     } = *inputs;
     let prior_text = prior;
     let prior = read_prior(prior)?;
@@ -486,18 +506,7 @@ pub fn request_from_texts(inputs: &DesignInputs<'_>) -> Result<DesignRequest> {
             "no limits: take them from a centre-out protocol or give a [limits] table in the prior",
         )),
     };
-    let objective = Objective::parse(objective).map_err(|e| Error::invalid("objective", e))?;
-    let request = DesignRequest {
-        prior,
-        limits,
-        sample_rate_hz,
-        budget_s,
-        objective,
-        runs,
-        baseline,
-        verify,
-        seed,
-    };
+    let request = inputs.request(prior, (limits, sample_rate_hz), baseline)?;
     check_request(&request)?;
     check_noise_at(&request.prior, prior_text, request.sample_rate_hz)?;
     Ok(request)

@@ -49,8 +49,8 @@ use limpid_lab::Profile;
 
 use super::{
     check_budget, check_runs, coordinate_descent, limit_envelope, predict, rank, seeds,
-    sine_amplitudes, spectrum_hz, verify, DesignInputs, DesignRequest, Grid, Objective, Run, Text,
-    Truth, LIMIT_MARGIN, MIN_TRIALS, RANKING_RUNS,
+    sine_amplitudes, spectrum_hz, verify, DesignInputs, DesignRequest, Grid, Run, Text, Truth,
+    LIMIT_MARGIN, MIN_TRIALS, RANKING_RUNS,
 };
 
 /// Amplitude as a share of the largest the limits allow.
@@ -413,11 +413,7 @@ pub fn planar_request_from_texts(inputs: &DesignInputs<'_>) -> Result<PlanarDesi
         prior,
         limits_from,
         baseline,
-        budget_s,
-        objective,
-        runs,
-        verify,
-        seed,
+        ..
     } = *inputs;
     let (prior_text, prior_path) = prior;
     let prior = match prior_text {
@@ -468,18 +464,7 @@ pub fn planar_request_from_texts(inputs: &DesignInputs<'_>) -> Result<PlanarDesi
         posture_rad: prior.posture_rad.unwrap_or(frame_of.posture_rad),
         wait_s: frame_of.wait_s,
     };
-    let objective = Objective::parse(objective).map_err(|e| Error::invalid("objective", e))?;
-    let request = PlanarDesignRequest {
-        sample_rate_hz: frame_of.sample_rate_hz,
-        prior,
-        limits: frame,
-        budget_s,
-        objective,
-        runs,
-        baseline,
-        verify,
-        seed,
-    };
+    let request = inputs.request(prior, (frame, frame_of.sample_rate_hz), baseline)?;
     check_planar_request(&request)?;
     Ok(request)
 }

@@ -42,7 +42,7 @@ use nalgebra::Vector3;
 
 use super::{
     check_budget, check_runs, coordinate_descent, predict, rank, seeds, verify, DesignInputs, Grid,
-    Impedance, Objective, Prior, Run, LIMIT_MARGIN, RANKING_RUNS,
+    Impedance, Prior, Run, LIMIT_MARGIN, RANKING_RUNS,
 };
 
 /// Periods tried (s).
@@ -101,11 +101,7 @@ pub fn stochastic_request_from_texts(inputs: &DesignInputs<'_>) -> Result<Stocha
         prior,
         limits_from,
         baseline,
-        budget_s,
-        objective,
-        runs,
-        verify,
-        seed,
+        ..
     } = *inputs;
     let prior_text = prior;
     let prior = super::read_prior(prior)?;
@@ -150,18 +146,7 @@ pub fn stochastic_request_from_texts(inputs: &DesignInputs<'_>) -> Result<Stocha
             ))
         }
     };
-    let objective = Objective::parse(objective).map_err(|e| Error::invalid("objective", e))?;
-    let request = StochasticDesignRequest {
-        prior,
-        limits,
-        sample_rate_hz,
-        budget_s,
-        objective,
-        runs,
-        baseline,
-        verify,
-        seed,
-    };
+    let request = inputs.request(prior, (limits, sample_rate_hz), baseline)?;
     check_request(&request)?;
     super::check_noise_at(&request.prior, prior_text, request.sample_rate_hz)?;
     Ok(request)
