@@ -513,10 +513,10 @@ fn protocol_check(py: Python<'_>, toml_text: &str) -> PyResult<String> {
     serde_json::to_string(&r).map_err(value_err)
 }
 
-/// Design a centre-out protocol for the linear method, as `limpid protocol
-/// design`: the prior (`demo:S1` .. `demo:S6` or a prior file's text, named
-/// `prior_name` in errors), the limits from a centre-out protocol's text (else
-/// the prior's `[limits]`), the baseline's text. Returns (the designed
+/// Design a protocol for `method` (linear, stochastic, reflex or planar), as
+/// `limpid protocol design`: the prior (`demo:...` or a prior file's text,
+/// named `prior_name` in errors), the limits from the method's protocol text
+/// (else the prior's `[limits]`), the baseline's text. Returns (the designed
 /// protocol as TOML, the result document as JSON).
 #[pyfunction]
 #[pyo3(signature = (prior, duration_s, limits_from=None, objective="stiffness,damping", baseline=None, verify=0, runs=40, seed=1, prior_name="<prior>", method="linear"))]
