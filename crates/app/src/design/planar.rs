@@ -448,6 +448,41 @@ pub fn planar_request_from_texts(inputs: &DesignInputs<'_>) -> Result<PlanarDesi
         (None, None) => PlanarDesign::seed003().limits,
     };
     let frame_of = limits_from.unwrap_or_else(PlanarDesign::seed003);
+    // the arm and posture the design simulates, named to the protocol they come from
+    let links = frame_of.link_lengths_m;
+    let posture = prior.posture_rad.unwrap_or(frame_of.posture_rad);
+    let unfit = if !links
+        .iter()
+        .all(|l| (limpid_ident::planar::MIN_LINK_M..=limpid_ident::planar::MAX_LINK_M).contains(l))
+    {
+        Some(format!(
+            "link_lengths_m = [{}, {}]: an arm's links are {} to {} m",
+            limpid_core::error::Num(links[0]),
+            limpid_core::error::Num(links[1]),
+            limpid_ident::planar::MIN_LINK_M,
+            limpid_ident::planar::MAX_LINK_M
+        ))
+    } else if posture
+        .iter()
+        .any(|q| q.is_nan() || q.abs() > std::f64::consts::TAU)
+    {
+        Some(format!(
+            "posture_rad = [{}, {}]: joint angles within ±2π rad",
+            limpid_core::error::Num(posture[0]),
+            limpid_core::error::Num(posture[1])
+        ))
+    } else {
+        None
+    };
+    if let Some(message) = unfit {
+        return Err(match inputs.limits_from {
+            Some((_, path)) => Error::Format {
+                path: path.to_path_buf(),
+                message,
+            },
+            None => Error::invalid("limits_from", message),
+        });
+    }
     prior
         .noise
         .check(frame_of.sample_rate_hz)
@@ -460,8 +495,8 @@ pub fn planar_request_from_texts(inputs: &DesignInputs<'_>) -> Result<PlanarDesi
         })?;
     let frame = PlanarFrame {
         limits,
-        link_lengths_m: frame_of.link_lengths_m,
-        posture_rad: prior.posture_rad.unwrap_or(frame_of.posture_rad),
+        link_lengths_m: links,
+        posture_rad: posture,
         wait_s: frame_of.wait_s,
     };
     let request = inputs.request(prior, (frame, frame_of.sample_rate_hz), baseline)?;

@@ -413,6 +413,17 @@ fn a_planar_prior_and_its_limits_are_checked_with_the_file_named() {
         msg.contains("arm.toml") && msg.contains("fluctuation_below_hz"),
         "{msg}"
     );
+    let msg = e(
+        "demo:planar",
+        &seed.replace(
+            "link_lengths_m = [0.3, 0.33]",
+            "link_lengths_m = [1e-9, 0.33]",
+        ),
+    );
+    assert!(
+        msg.contains("limits.toml") && msg.contains("link_lengths_m"),
+        "{msg}"
+    );
     let msg = e("demo:S1", &seed);
     assert!(msg.contains("demo:planar"), "{msg}");
     let centre_out = limpid_lab::design::Design::preset("artemiadis-3d")
