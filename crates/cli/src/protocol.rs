@@ -72,6 +72,11 @@ pub struct DesignArgs {
     /// (linear, stochastic); the reflex method minimises the reflex gain's error (`gain`).
     #[arg(long, default_value = "stiffness,damping")]
     pub objective: String,
+    /// Over the prior's range (`[other_end]`): `worst` (the worse end; the prediction is
+    /// conservative for the subjects between) or `expected` (the mean over its ends and
+    /// midpoint; the prediction is the range's average). Linear, stochastic and planar methods.
+    #[arg(long, default_value = "worst", value_name = "worst|expected")]
+    pub robust: String,
     /// The family the protocol is chosen from: centre-out (linear; planar: quintic joint steps
     /// out from the posture), multisine (stochastic), prbs (reflex) or any (the method's).
     #[arg(long, default_value = "any")]
@@ -555,6 +560,7 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         baseline: baseline_text.as_deref().zip(args.baseline.as_deref()),
         budget_s: args.duration,
         objective: &args.objective,
+        robust: &args.robust,
         runs: args.runs,
         verify: args.verify,
         seed: args.seed,
@@ -642,9 +648,13 @@ fn print_design(r: &limpid_analysis::result::design::DesignResult) {
             );
         }
     }
+    let on = match r.objective.robust.as_str() {
+        "expected" => "the prior (the mean over its range's ends and midpoint)",
+        _ => "the prior",
+    };
     print_predictions(
         &[("K", "N/m"), ("B", "N s/m"), ("M", "kg")],
-        ("the prior", "at this start point"),
+        (on, "at this start point"),
         &r.predicted,
         r.baseline.as_ref(),
     );
@@ -765,7 +775,10 @@ fn print_planar_design(r: &limpid_analysis::result::design::PlanarDesignResult) 
     print_predictions(
         &[("K", "N m/rad"), ("D", "N m s/rad"), ("ξ", "kg m²")],
         (
-            "the prior arm (errors against its intrinsic K and D)",
+            match r.objective.robust.as_str() {
+                "expected" => "the prior arm (errors against its intrinsic K and D; the mean over its range's ends and midpoint)",
+                _ => "the prior arm (errors against its intrinsic K and D)",
+            },
             "at this posture",
         ),
         &r.predicted,
@@ -781,6 +794,9 @@ fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     use limpid_app::design::reflex::{design_reflex, reflex_request_from_texts};
     if args.verify > 0 {
         return Err("--verify is for the linear, stochastic and planar methods: the reflex design's prediction is already the spread over --runs simulated recordings".into());
+    }
+    if args.robust != "worst" {
+        return Err("--robust is for the linear, stochastic and planar methods: a reflex prior has no range".into());
     }
     if !matches!(
         args.objective.as_str(),

@@ -519,7 +519,7 @@ fn protocol_check(py: Python<'_>, toml_text: &str) -> PyResult<String> {
 /// (else the prior's `[limits]`), the baseline's text. Returns (the designed
 /// protocol as TOML, the result document as JSON).
 #[pyfunction]
-#[pyo3(signature = (prior, duration_s, limits_from=None, objective="stiffness,damping", baseline=None, verify=0, runs=40, seed=1, prior_name="<prior>", method="linear"))]
+#[pyo3(signature = (prior, duration_s, limits_from=None, objective="stiffness,damping", baseline=None, verify=0, runs=40, seed=1, prior_name="<prior>", method="linear", robust="worst"))]
 #[allow(clippy::too_many_arguments)]
 fn design(
     py: Python<'_>,
@@ -533,11 +533,17 @@ fn design(
     seed: u64,
     prior_name: &str,
     method: &str,
+    robust: &str,
 ) -> PyResult<(String, String)> {
     use limpid_analysis::result::{Document, Estimate};
     if method == "reflex" {
         if verify > 0 {
             return Err(value_err("verify is for the linear, stochastic and planar methods: the reflex design's prediction is already the spread over `runs` simulated recordings".to_string()));
+        }
+        if robust != "worst" {
+            return Err(value_err(
+                "robust is for the linear, stochastic and planar methods: a reflex prior has no range",
+            ));
         }
         let request = limpid_app::design::reflex::reflex_request_from_texts(
             (prior, Path::new(prior_name)),
@@ -565,6 +571,7 @@ fn design(
         baseline: baseline.map(|t| (t, Path::new("<baseline>"))),
         budget_s: duration_s,
         objective,
+        robust,
         runs,
         verify,
         seed,

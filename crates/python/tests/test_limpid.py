@@ -550,6 +550,8 @@ def test_planar_design_writes_joint_perturbations_its_check_accepts(tmp_path):
     limpid.plot.design(r).savefig(tmp_path / "planar_design.png")
     with pytest.raises(ValueError, match="demo:planar"):
         limpid.design("demo:S1", 40.0, method="planar")
+    with pytest.raises(ValueError, match="robust"):
+        limpid.design("demo:planar", 40.0, method="planar", robust="best")
 
 
 def test_walking_from_the_virtual_lab_to_the_figure(tmp_path):

@@ -138,7 +138,7 @@ pub struct CommandSpectrum {
 }
 
 /// Weights of the objective.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct ObjectiveWeights {
     /// Of K's relative variance.
     pub stiffness: f64,
@@ -146,6 +146,14 @@ pub struct ObjectiveWeights {
     pub damping: f64,
     /// Of M's relative variance.
     pub inertia: f64,
+    /// Over the prior's range: `worst-case` (the worse end) or `expected`
+    /// (the mean over its ends and midpoint).
+    #[serde(default = "worst_case")]
+    pub robust: String,
+}
+
+fn worst_case() -> String {
+    "worst-case".into()
 }
 
 impl CentreOutChoice {

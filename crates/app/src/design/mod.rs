@@ -293,7 +293,54 @@ fn workspace_centre(l: &Limits) -> Vector3<f64> {
     Vector3::from_fn(|i, _| 0.5 * (l.workspace_min_m[i] + l.workspace_max_m[i]))
 }
 
-/// Weights of K, B, M in the objective.
+/// How a design is robust to the prior's range (`[other_end]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Robustness {
+    /// The worse of the range's two ends (minimax): the prediction is the
+    /// worse end's, conservative for the subjects between.
+    #[default]
+    WorstCase,
+    /// The mean over the range (its ends and midpoint, equally weighted):
+    /// the prediction is the range's average.
+    Expected,
+}
+
+impl Robustness {
+    /// `worst` or `expected`.
+    pub fn parse(text: &str) -> std::result::Result<Robustness, String> {
+        match text {
+            "worst" | "worst-case" => Ok(Robustness::WorstCase),
+            "expected" => Ok(Robustness::Expected),
+            other => Err(format!("{other:?}: expected worst or expected")),
+        }
+    }
+
+    /// The name a result records.
+    pub fn name(self) -> &'static str {
+        match self {
+            Robustness::WorstCase => "worst-case",
+            Robustness::Expected => "expected",
+        }
+    }
+}
+
+/// The subjects a design is ranked and predicted on: the prior's ends for
+/// the worst case, its ends and midpoint for the expectation.
+pub(crate) fn range_subjects<S: Truth + Clone>(
+    nominal: &S,
+    other_end: Option<&S>,
+    robust: Robustness,
+) -> Vec<S> {
+    match (other_end, robust) {
+        (None, _) => vec![nominal.clone()],
+        (Some(o), Robustness::WorstCase) => vec![nominal.clone(), o.clone()],
+        (Some(o), Robustness::Expected) => {
+            vec![nominal.clone(), nominal.blend(o, 0.5), o.clone()]
+        }
+    }
+}
+
+/// Weights of K, B, M in the objective, and how it meets the prior's range.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Objective {
     /// Of K.
@@ -302,6 +349,8 @@ pub struct Objective {
     pub damping: f64,
     /// Of M.
     pub inertia: f64,
+    /// Worst case or expectation over the prior's range.
+    pub robust: Robustness,
 }
 
 impl Default for Objective {
@@ -311,6 +360,7 @@ impl Default for Objective {
             stiffness: 1.0,
             damping: 1.0,
             inertia: 0.0,
+            robust: Robustness::WorstCase,
         }
     }
 }
@@ -322,6 +372,7 @@ impl Objective {
             stiffness: 0.0,
             damping: 0.0,
             inertia: 0.0,
+            robust: Robustness::WorstCase,
         };
         for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             let (name, weight) = match part.split_once('=') {
@@ -356,6 +407,16 @@ impl Objective {
 
     fn weights(&self) -> [f64; 3] {
         [self.stiffness, self.damping, self.inertia]
+    }
+
+    /// As a result records it.
+    pub(crate) fn recorded(&self) -> ObjectiveWeights {
+        ObjectiveWeights {
+            stiffness: self.stiffness,
+            damping: self.damping,
+            inertia: self.inertia,
+            robust: self.robust.name().into(),
+        }
     }
 }
 
@@ -400,8 +461,10 @@ impl DesignInputs<'_> {
             limits,
             sample_rate_hz,
             budget_s: self.budget_s,
-            objective: Objective::parse(self.objective)
-                .map_err(|e| Error::invalid("objective", e))?,
+            objective: Objective {
+                robust: Robustness::parse(self.robust).map_err(|e| Error::invalid("robust", e))?,
+                ..Objective::parse(self.objective).map_err(|e| Error::invalid("objective", e))?
+            },
             runs: self.runs,
             baseline,
             verify: self.verify,
@@ -440,6 +503,8 @@ pub struct DesignInputs<'a> {
     pub budget_s: f64,
     /// What matters: `stiffness,damping` or weights.
     pub objective: &'a str,
+    /// Over the prior's range: `worst` or `expected`.
+    pub robust: &'a str,
     /// Recordings behind the prediction.
     pub runs: usize,
     /// Recordings on subjects drawn from the prior to check it (0: none).
@@ -780,18 +845,29 @@ fn runs<S: Truth>(run: &impl Runner<S>, subject: &S, seeds: &[u64]) -> Result<Ve
     seeds.par_iter().map(|&s| run(subject, s)).collect()
 }
 
-/// The worse end's objective over the ranking seeds, or why the candidate is refused.
+/// The objective over the ranking seeds on `subjects` (the worse one's, or
+/// their mean: `objective.robust`), or why the candidate is refused.
 pub(crate) fn rank<S: Truth>(
     run: &impl Runner<S>,
-    ends: &[S],
-    weights: [f64; 3],
+    subjects: &[S],
+    objective: &Objective,
     seeds: &[u64],
 ) -> std::result::Result<f64, String> {
-    let worst = ends.iter().try_fold(0.0f64, |worst, subject| {
-        let rs = runs(run, subject, seeds)?;
-        Ok::<f64, Error>(worst.max(objective_value(&relative_mse(&rs, subject), weights)))
+    let values = subjects
+        .iter()
+        .map(|subject| {
+            let rs = runs(run, subject, seeds)?;
+            Ok(objective_value(
+                &relative_mse(&rs, subject),
+                objective.weights(),
+            ))
+        })
+        .collect::<Result<Vec<f64>>>();
+    let value = values.map(|v| match objective.robust {
+        Robustness::WorstCase => v.iter().fold(0.0f64, |a, b| a.max(*b)),
+        Robustness::Expected => v.iter().sum::<f64>() / v.len().max(1) as f64,
     });
-    match worst {
+    match value {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(v) => Err(format!("objective {v}")),
         Err(e) => Err(e.to_string()),
@@ -800,7 +876,11 @@ pub(crate) fn rank<S: Truth>(
 
 /// Mean squared error of each group's elements relative to its RMS element (percent²).
 fn relative_mse(runs: &[Run], subject: &impl Truth) -> [f64; 3] {
-    let truth = subject.groups();
+    relative_mse_of(runs, &subject.groups())
+}
+
+/// [`relative_mse`] against the groups `truth`.
+fn relative_mse_of(runs: &[Run], truth: &[DMatrix<f64>; 3]) -> [f64; 3] {
     std::array::from_fn(|m| {
         let scale = truth[m].norm_squared() / truth[m].len() as f64;
         let mse = runs
@@ -837,49 +917,79 @@ fn pooled_se(se: &[DMatrix<f64>; 3]) -> [f64; 3] {
 }
 
 /// The prediction of a protocol of `duration_s` whose recordings `run`
-/// makes: the worse of the prior's `ends` by the objective's `weights`.
+/// makes on `subjects`: the worse one's by the objective, or (`Expected`)
+/// the range's average: element variances, errors and shares averaged over
+/// the subjects, relative figures against their mean RMS element.
 pub(crate) fn predict<S: Truth>(
     run: &impl Runner<S>,
     duration_s: f64,
-    ends: &[S],
-    weights: [f64; 3],
+    subjects: &[S],
+    objective: &Objective,
     seeds: &[u64],
 ) -> Result<Prediction> {
-    let mut worst: Option<(f64, Prediction)> = None;
-    for subject in ends {
-        let rs = runs(run, subject, seeds)?;
-        let value = objective_value(&relative_mse(&rs, subject), weights);
-        let se = spread(&rs);
-        let pooled = pooled_se(&se);
-        let truth = subject.groups();
-        let n = rs.len() as f64;
-        let [stiffness_se, damping_se, inertia_se] = se.map(Matrix);
-        let prediction = Prediction {
-            stiffness_se,
-            damping_se,
-            inertia_se,
-            pooled: Pooled {
-                se: pooled,
-                se_percent: std::array::from_fn(|m| {
-                    100.0 * pooled[m] / (truth[m].norm() / (truth[m].len() as f64).sqrt())
-                }),
-                error_percent: std::array::from_fn(|m| {
-                    rs.iter().map(|r| r.error_percent[m]).sum::<f64>() / n
-                }),
-            },
-            runs: rs.len(),
-            duration_s,
-            identifiable_share: std::array::from_fn(|m| {
-                rs.iter().filter(|r| r.identifiable[m]).count() as f64 / n
-            }),
-        };
-        if worst.as_ref().is_none_or(|(v, _)| value > *v) {
-            worst = Some((value, prediction));
+    let per_subject: Vec<(Vec<Run>, [DMatrix<f64>; 3])> = subjects
+        .iter()
+        .map(|s| runs(run, s, seeds).map(|rs| (rs, s.groups())))
+        .collect::<Result<_>>()?;
+    let pick: Vec<&(Vec<Run>, [DMatrix<f64>; 3])> = match objective.robust {
+        Robustness::Expected => per_subject.iter().collect(),
+        Robustness::WorstCase => {
+            let value = |(rs, truth): &(Vec<Run>, [DMatrix<f64>; 3])| {
+                objective_value(&relative_mse_of(rs, truth), objective.weights())
+            };
+            per_subject
+                .iter()
+                .fold(
+                    None::<&(Vec<Run>, [DMatrix<f64>; 3])>,
+                    |worst, p| match worst {
+                        Some(w) if value(w) >= value(p) => Some(w),
+                        _ => Some(p),
+                    },
+                )
+                .into_iter()
+                .collect()
         }
+    };
+    if pick.is_empty() {
+        return Err(Error::invalid("prior", "no subject to predict on"));
     }
-    worst
-        .map(|w| w.1)
-        .ok_or_else(|| Error::invalid("prior", "no subject to predict on"))
+    let k = pick.len() as f64;
+    // element variances averaged over the subjects picked
+    let se: [DMatrix<f64>; 3] = std::array::from_fn(|m| {
+        let var = pick
+            .iter()
+            .map(|(rs, _)| spread(rs)[m].map(|v| v * v))
+            .reduce(|a, b| a + b)
+            .expect("at least one subject");
+        (var / k).map(f64::sqrt)
+    });
+    let pooled = pooled_se(&se);
+    let rms: [f64; 3] = std::array::from_fn(|m| {
+        pick.iter()
+            .map(|(_, t)| t[m].norm() / (t[m].len() as f64).sqrt())
+            .sum::<f64>()
+            / k
+    });
+    let all: Vec<&Run> = pick.iter().flat_map(|(rs, _)| rs.iter()).collect();
+    let n = all.len() as f64;
+    let [stiffness_se, damping_se, inertia_se] = se.map(Matrix);
+    Ok(Prediction {
+        stiffness_se,
+        damping_se,
+        inertia_se,
+        pooled: Pooled {
+            se: pooled,
+            se_percent: std::array::from_fn(|m| 100.0 * pooled[m] / rms[m]),
+            error_percent: std::array::from_fn(|m| {
+                all.iter().map(|r| r.error_percent[m]).sum::<f64>() / n
+            }),
+        },
+        runs: seeds.len(),
+        duration_s,
+        identifiable_share: std::array::from_fn(|m| {
+            all.iter().filter(|r| r.identifiable[m]).count() as f64 / n
+        }),
+    })
 }
 
 /// A point of a family's grid of choices: an index into each dimension's list.
@@ -1115,7 +1225,11 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
         largest_radius: largest_radius(req)?,
     };
     let ranking = seeds(req.seed, 0, RANKING_RUNS);
-    let w = req.objective.weights();
+    let subjects = range_subjects(
+        &req.prior.nominal,
+        req.prior.other_end.as_ref(),
+        req.objective.robust,
+    );
     // start: the fastest cubic at 70 % of the largest radius, short hold, 0.4 s rest
     let start = Choice {
         profile: 0,
@@ -1129,7 +1243,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
         // a candidate whose recordings the estimator refuses (or whose
         // objective is not a number) is refused, with the reason kept
         let run = |imp: &Impedance, s: u64| run_once(&p, &req.prior, imp, s);
-        rank(&run, &req.prior.ends(), w, &ranking)
+        rank(&run, &subjects, &req.objective, &ranking)
     })?;
     let (best, objective) = (searched.best, searched.objective);
     let (protocol, trials) = space
@@ -1143,8 +1257,8 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
     let predicted = predict(
         &run,
         protocol_duration(&protocol),
-        &req.prior.ends(),
-        w,
+        &subjects,
+        &req.objective,
         &final_seeds,
     )?;
     let baseline = req
@@ -1162,8 +1276,8 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
             predict(
                 &run,
                 protocol_duration(&b),
-                &req.prior.ends(),
-                w,
+                &subjects,
+                &req.objective,
                 &final_seeds,
             )
         })
@@ -1175,11 +1289,7 @@ pub fn design(req: &DesignRequest) -> Result<Designed> {
     let result = DesignResult {
         method: "linear".into(),
         family: "centre-out".into(),
-        objective: ObjectiveWeights {
-            stiffness: w[0],
-            damping: w[1],
-            inertia: w[2],
-        },
+        objective: req.objective.recorded(),
         budget_s: req.budget_s,
         start_m: req.prior.start().into(),
         chosen: DesignChoice::CentreOut(CentreOutChoice {

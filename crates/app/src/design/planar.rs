@@ -35,8 +35,8 @@ use nalgebra::{DMatrix, Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 
 use limpid_analysis::result::design::{
-    JointCommandSpectrum, JointCommandTrace, LimitMargin, ObjectiveWeights, PlanarChoice,
-    PlanarDesignResult, SearchSummary,
+    JointCommandSpectrum, JointCommandTrace, LimitMargin, PlanarChoice, PlanarDesignResult,
+    SearchSummary,
 };
 use limpid_core::criteria::MatrixVerdict;
 use limpid_core::{Error, Matrix, Result};
@@ -814,8 +814,11 @@ pub fn design_planar(req: &PlanarDesignRequest) -> Result<PlanarDesigned> {
         largest_amplitude: largest_amplitude(req)?,
     };
     let ranking = seeds(req.seed, 0, RANKING_RUNS);
-    let w = req.objective.weights();
-    let ends = req.prior.ends();
+    let subjects = super::range_subjects(
+        &req.prior.nominal,
+        req.prior.other_end.as_ref(),
+        req.objective.robust,
+    );
     // start: 35 % of the largest amplitude, the fastest motion, 80 ms hold, 0.2 s rest
     let start = Choice {
         amplitude: 3,
@@ -826,7 +829,7 @@ pub fn design_planar(req: &PlanarDesignRequest) -> Result<PlanarDesigned> {
     let searched = coordinate_descent(start, "planar perturbation", |c| {
         let cand = space.candidate(c)?;
         let run = |arm: &ArmImpedance, s: u64| run_once(&cand, req, arm, s);
-        rank(&run, &ends, w, &ranking)
+        rank(&run, &subjects, &req.objective, &ranking)
     })?;
     let chosen = space
         .candidate(&searched.best)
@@ -835,7 +838,13 @@ pub fn design_planar(req: &PlanarDesignRequest) -> Result<PlanarDesigned> {
     limpid_lab::design::check(&Design::Planar(chosen.design.clone()))?;
     let final_seeds = seeds(req.seed, 10_000, req.runs);
     let run = |arm: &ArmImpedance, s: u64| run_once(&chosen, req, arm, s);
-    let predicted = predict(&run, session_s(&chosen.design), &ends, w, &final_seeds)?;
+    let predicted = predict(
+        &run,
+        session_s(&chosen.design),
+        &subjects,
+        &req.objective,
+        &final_seeds,
+    )?;
     let baseline = req
         .baseline
         .as_ref()
@@ -847,7 +856,13 @@ pub fn design_planar(req: &PlanarDesignRequest) -> Result<PlanarDesigned> {
                 design: b,
             };
             let run = |arm: &ArmImpedance, s: u64| run_once(&base, req, arm, s);
-            predict(&run, session_s(&base.design), &ends, w, &final_seeds)
+            predict(
+                &run,
+                session_s(&base.design),
+                &subjects,
+                &req.objective,
+                &final_seeds,
+            )
         })
         .transpose()?;
     let verify = (req.verify > 0)
@@ -866,11 +881,7 @@ pub fn design_planar(req: &PlanarDesignRequest) -> Result<PlanarDesigned> {
     let amplitude = d.displacements_rad[0][0].abs();
     let (_, v, a) = Profile::Quintic.peaks(d.interpolation_s);
     let result = PlanarDesignResult {
-        objective: ObjectiveWeights {
-            stiffness: w[0],
-            damping: w[1],
-            inertia: w[2],
-        },
+        objective: req.objective.recorded(),
         budget_s: req.budget_s,
         posture_rad: d.posture_rad,
         chosen: PlanarChoice {

@@ -27,7 +27,7 @@
 
 use limpid_analysis::result::design::{
     CommandSpectrum, CommandTrace, DesignChoice, DesignResult, LimitMargin, MultisineChoice,
-    ObjectiveWeights, SearchSummary,
+    SearchSummary,
 };
 use limpid_core::criteria::MatrixVerdict;
 use limpid_core::{Error, Result};
@@ -445,7 +445,11 @@ pub struct StochasticDesigned {
 pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesigned> {
     check_request(req)?;
     let ranking = seeds(req.seed, 0, RANKING_RUNS);
-    let w = req.objective.weights();
+    let subjects = super::range_subjects(
+        &req.prior.nominal,
+        req.prior.other_end.as_ref(),
+        req.objective.robust,
+    );
     // start: the endpoint-multisine preset's shape (10 s, 0.5-5 Hz, flat)
     let start = Choice {
         period: 1,
@@ -456,7 +460,7 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
     let searched = coordinate_descent(start, "multisine", |c| {
         let cand = candidate(req, c, "schroeder")?;
         let run = |imp: &Impedance, s: u64| run_once(&cand, &req.prior, imp, s);
-        rank(&run, &req.prior.ends(), w, &ranking)
+        rank(&run, &subjects, &req.objective, &ranking)
     })?;
     let (best, objective) = (searched.best, searched.objective);
     let chosen = candidate(req, &best, "optimised").map_err(|why| Error::invalid("design", why))?;
@@ -464,7 +468,13 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
     let report = chosen.protocol.check()?;
     let final_seeds = seeds(req.seed, 10_000, req.runs);
     let run = |imp: &Impedance, s: u64| run_once(&chosen, &req.prior, imp, s);
-    let predicted = predict(&run, report.duration_s, &req.prior.ends(), w, &final_seeds)?;
+    let predicted = predict(
+        &run,
+        report.duration_s,
+        &subjects,
+        &req.objective,
+        &final_seeds,
+    )?;
     let baseline = req
         .baseline
         .as_ref()
@@ -477,8 +487,8 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
             predict(
                 &run,
                 base.command.t.len() as f64 / b.sample_rate_hz,
-                &req.prior.ends(),
-                w,
+                &subjects,
+                &req.objective,
                 &final_seeds,
             )
         })
@@ -492,11 +502,7 @@ pub fn design_stochastic(req: &StochasticDesignRequest) -> Result<StochasticDesi
     let result = DesignResult {
         method: "stochastic".into(),
         family: "multisine".into(),
-        objective: ObjectiveWeights {
-            stiffness: w[0],
-            damping: w[1],
-            inertia: w[2],
-        },
+        objective: req.objective.recorded(),
         budget_s: req.budget_s,
         start_m: req.prior.start().into(),
         chosen: DesignChoice::Multisine(MultisineChoice {

@@ -275,6 +275,7 @@ fn planar_request(
         baseline: Some((&seed, std::path::Path::new("lakatos.toml"))),
         budget_s: 72.0,
         objective: "stiffness,damping",
+        robust: "worst",
         runs,
         verify,
         seed: 3,
@@ -439,4 +440,32 @@ fn a_planar_prior_and_its_limits_are_checked_with_the_file_named() {
         &seed.replace("max_torque_nm = 20.0", "max_torque_nm = 1e-9"),
     );
     assert!(msg.contains("nothing below"), "{msg}");
+}
+
+/// `Robustness::Expected`: a prior range is ranked and predicted on its ends
+/// and midpoint, the result says so, and the prediction holds on subjects
+/// drawn from the range.
+#[test]
+fn an_expected_design_predicts_the_range_it_is_run_on() {
+    use limpid_app::design::{Impedance, Robustness};
+    assert_eq!(Robustness::parse("expected"), Ok(Robustness::Expected));
+    assert!(Robustness::parse("best").is_err());
+    let mut req = request(147.2, 12, 12, false);
+    let nominal = req.prior.nominal;
+    req.prior.other_end = Some(Impedance {
+        stiffness: nominal.stiffness * 1.4,
+        damping: nominal.damping * 0.7,
+        ..nominal
+    });
+    req.objective.robust = Robustness::Expected;
+    let r = design(&req).unwrap().result;
+    assert_eq!(r.objective.robust, "expected");
+    let v = r.verify.as_ref().unwrap();
+    for m in 0..2 {
+        assert!(
+            (0.65..1.5).contains(&v.ratio[m]),
+            "ratio {m}: {:?}",
+            v.ratio
+        );
+    }
 }

@@ -189,7 +189,7 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
         s,
         "--duration",
     ];
-    let cases: [(&[&str], &str); 16] = [
+    let cases: [(&[&str], &str); 17] = [
         (
             &["147", "--baseline", s, "-o", s],
             "would replace the input",
@@ -222,6 +222,7 @@ fn design_requests_that_cannot_be_met_are_refused_in_one_line() {
             "expected centre-out, multisine, prbs or any",
         ),
         (&["147", "--objective", "stifness"], "invalid --objective"),
+        (&["147", "--robust", "best"], "expected worst or expected"),
         (&["-1"], "duration"),
         (&["3"], "at least 6 are needed"),
         (&["147", "--runs", "1"], "at least 2 recordings"),

@@ -753,6 +753,7 @@ def design(
     runs: int = 40,
     seed: int = 1,
     method: str = "linear",
+    robust: str = "worst",
 ) -> Tuple[str, Result]:
     """Design a centre-out protocol for the linear method, as ``limpid
     protocol design``: (the protocol as TOML text, the result).
@@ -782,7 +783,11 @@ def design(
     or an arm's TOML text or file (``xi``, 2 x 2 joint ``stiffness`` and
     ``damping``, optional ``posture_rad``, ``tau0``, ``[other_end]``,
     ``[reflex]``, ``[noise]``, ``[limits]``), ``limits_from`` and
-    ``baseline`` planar protocols (``"lakatos-planar"``, the default limits)."""
+    ``baseline`` planar protocols (``"lakatos-planar"``, the default limits).
+
+    ``robust``: over a prior's range (``[other_end]``), ``"worst"`` (the
+    worse end; conservative for the subjects between) or ``"expected"`` (the
+    mean over its ends and midpoint). Not for the reflex method."""
 
     def protocol_text(value: Optional[Union[str, "os.PathLike[str]"]]) -> Optional[str]:
         if value is None:
@@ -792,6 +797,7 @@ def design(
         return _text_or_file(value)[0]
 
     _choice("method", method, ("linear", "stochastic", "reflex", "planar"))
+    _choice("robust", robust, ("worst", "expected"))
     if isinstance(prior, str) and prior.startswith("demo:"):
         prior_text, prior_name = prior, "<prior>"
     else:
@@ -808,6 +814,7 @@ def design(
         _integer("seed", seed, minimum=0),
         prior_name,
         method,
+        robust,
     )
     return toml_text, Result(json.loads(doc))
 
