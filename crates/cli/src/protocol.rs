@@ -759,14 +759,8 @@ fn print_search(s: &limpid_analysis::result::design::SearchSummary) {
 fn print_planar_design(r: &limpid_analysis::result::design::PlanarDesignResult) {
     let c = &r.chosen;
     println!(
-        "designed: {} quintic perturbations of {} rad over {} ms in six joint directions, recorded {} ms before and {} ms after each onset (estimate with the whole window), random waits of {}-{} s: {:.1} s of {} s, at q0 = ({}, {}) rad",
-        c.trials,
-        num(c.amplitude_rad),
-        num(c.interpolation_s * 1e3),
-        num(c.rest_s * 1e3),
-        num(c.window_ms),
-        num(c.wait_s[0]),
-        num(c.wait_s[1]),
+        "designed: {}: {:.1} s of {} s, at q0 = ({}, {}) rad",
+        c.describe(num),
         c.duration_s,
         num(r.budget_s),
         num(r.posture_rad[0]),

@@ -409,6 +409,23 @@ pub struct PlanarDesignResult {
     pub spectrum: JointCommandSpectrum,
 }
 
+impl PlanarChoice {
+    /// The perturbations in words, numbers written by `num` (the caller's
+    /// rounding): the one description the CLI and the report print.
+    pub fn describe(&self, num: impl Fn(f64) -> String) -> String {
+        format!(
+            "{} quintic perturbations of {} rad over {} ms in six joint directions, recorded {} ms before and {} ms after each onset (the observation window), after random waits of {}-{} s",
+            self.trials,
+            num(self.amplitude_rad),
+            num(self.interpolation_s * 1e3),
+            num(self.rest_s * 1e3),
+            num(self.window_ms),
+            num(self.wait_s[0]),
+            num(self.wait_s[1])
+        )
+    }
+}
+
 /// The planar protocol's parameters a design chose.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 pub struct PlanarChoice {

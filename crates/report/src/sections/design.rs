@@ -482,14 +482,8 @@ pub(crate) fn planar_section(
     let c = &r.chosen;
     let p = &r.predicted.pooled;
     let mut verdict = format!(
-        "{} quintic perturbations of {} rad over {} ms in six joint directions, recorded {} ms before and {} ms after each onset (the observation window), after random waits of {}-{} s: {:.1} s of the {} s budget at q0 = ({}, {}) rad. Predicted on the prior arm ({} simulated recordings, errors against its intrinsic K and D): K ± {:.1} %, D ± {:.1} %, ξ ± {:.1} % (RMS element s.d. relative to the RMS element).",
-        c.trials,
-        fmt(c.amplitude_rad),
-        fmt(c.interpolation_s * 1e3),
-        fmt(c.rest_s * 1e3),
-        fmt(c.window_ms),
-        fmt(c.wait_s[0]),
-        fmt(c.wait_s[1]),
+        "{}: {:.1} s of the {} s budget at q0 = ({}, {}) rad. Predicted on the prior arm ({} simulated recordings, errors against its intrinsic K and D): K ± {:.1} %, D ± {:.1} %, ξ ± {:.1} % (RMS element s.d. relative to the RMS element).",
+        c.describe(fmt),
         c.duration_s,
         fmt(r.budget_s),
         fmt(r.posture_rad[0]),
