@@ -845,6 +845,35 @@ fn runs<S: Truth>(run: &impl Runner<S>, subject: &S, seeds: &[u64]) -> Result<Ve
     seeds.par_iter().map(|&s| run(subject, s)).collect()
 }
 
+/// One subject's recordings, its parameter groups and the objective's value on them.
+struct Evaluated {
+    runs: Vec<Run>,
+    truth: [DMatrix<f64>; 3],
+    value: f64,
+}
+
+/// Every subject's recordings on `seeds`, each judged by the objective once.
+fn evaluate<S: Truth>(
+    run: &impl Runner<S>,
+    subjects: &[S],
+    objective: &Objective,
+    seeds: &[u64],
+) -> Result<Vec<Evaluated>> {
+    subjects
+        .iter()
+        .map(|subject| {
+            let rs = runs(run, subject, seeds)?;
+            let truth = subject.groups();
+            let value = objective_value(&relative_mse(&rs, &truth), objective.weights());
+            Ok(Evaluated {
+                runs: rs,
+                truth,
+                value,
+            })
+        })
+        .collect()
+}
+
 /// The objective over the ranking seeds on `subjects` (the worse one's, or
 /// their mean: `objective.robust`), or why the candidate is refused.
 pub(crate) fn rank<S: Truth>(
@@ -853,19 +882,9 @@ pub(crate) fn rank<S: Truth>(
     objective: &Objective,
     seeds: &[u64],
 ) -> std::result::Result<f64, String> {
-    let values = subjects
-        .iter()
-        .map(|subject| {
-            let rs = runs(run, subject, seeds)?;
-            Ok(objective_value(
-                &relative_mse(&rs, subject),
-                objective.weights(),
-            ))
-        })
-        .collect::<Result<Vec<f64>>>();
-    let value = values.map(|v| match objective.robust {
-        Robustness::WorstCase => v.iter().fold(0.0f64, |a, b| a.max(*b)),
-        Robustness::Expected => v.iter().sum::<f64>() / v.len().max(1) as f64,
+    let value = evaluate(run, subjects, objective, seeds).map(|e| match objective.robust {
+        Robustness::WorstCase => e.iter().fold(0.0f64, |a, b| a.max(b.value)),
+        Robustness::Expected => e.iter().map(|b| b.value).sum::<f64>() / e.len().max(1) as f64,
     });
     match value {
         Ok(v) if v.is_finite() => Ok(v),
@@ -874,13 +893,9 @@ pub(crate) fn rank<S: Truth>(
     }
 }
 
-/// Mean squared error of each group's elements relative to its RMS element (percent²).
-fn relative_mse(runs: &[Run], subject: &impl Truth) -> [f64; 3] {
-    relative_mse_of(runs, &subject.groups())
-}
-
-/// [`relative_mse`] against the groups `truth`.
-fn relative_mse_of(runs: &[Run], truth: &[DMatrix<f64>; 3]) -> [f64; 3] {
+/// Mean squared error of each group's elements relative to its RMS element
+/// in `truth` (percent²).
+fn relative_mse(runs: &[Run], truth: &[DMatrix<f64>; 3]) -> [f64; 3] {
     std::array::from_fn(|m| {
         let scale = truth[m].norm_squared() / truth[m].len() as f64;
         let mse = runs
@@ -927,38 +942,29 @@ pub(crate) fn predict<S: Truth>(
     objective: &Objective,
     seeds: &[u64],
 ) -> Result<Prediction> {
-    let per_subject: Vec<(Vec<Run>, [DMatrix<f64>; 3])> = subjects
-        .iter()
-        .map(|s| runs(run, s, seeds).map(|rs| (rs, s.groups())))
-        .collect::<Result<_>>()?;
-    let pick: Vec<&(Vec<Run>, [DMatrix<f64>; 3])> = match objective.robust {
-        Robustness::Expected => per_subject.iter().collect(),
-        Robustness::WorstCase => {
-            let value = |(rs, truth): &(Vec<Run>, [DMatrix<f64>; 3])| {
-                objective_value(&relative_mse_of(rs, truth), objective.weights())
-            };
-            per_subject
-                .iter()
-                .fold(
-                    None::<&(Vec<Run>, [DMatrix<f64>; 3])>,
-                    |worst, p| match worst {
-                        Some(w) if value(w) >= value(p) => Some(w),
-                        _ => Some(p),
-                    },
-                )
-                .into_iter()
-                .collect()
-        }
+    let evaluated = evaluate(run, subjects, objective, seeds)?;
+    let pick: Vec<&Evaluated> = match objective.robust {
+        Robustness::Expected => evaluated.iter().collect(),
+        // the worse subject; the first of equals
+        Robustness::WorstCase => evaluated
+            .iter()
+            .fold(None::<&Evaluated>, |worst, e| match worst {
+                Some(w) if w.value >= e.value => Some(w),
+                _ => Some(e),
+            })
+            .into_iter()
+            .collect(),
     };
     if pick.is_empty() {
         return Err(Error::invalid("prior", "no subject to predict on"));
     }
     let k = pick.len() as f64;
     // element variances averaged over the subjects picked
+    let spreads: Vec<[DMatrix<f64>; 3]> = pick.iter().map(|e| spread(&e.runs)).collect();
     let se: [DMatrix<f64>; 3] = std::array::from_fn(|m| {
-        let var = pick
+        let var = spreads
             .iter()
-            .map(|(rs, _)| spread(rs)[m].map(|v| v * v))
+            .map(|s| s[m].map(|v| v * v))
             .reduce(|a, b| a + b)
             .expect("at least one subject");
         (var / k).map(f64::sqrt)
@@ -966,11 +972,11 @@ pub(crate) fn predict<S: Truth>(
     let pooled = pooled_se(&se);
     let rms: [f64; 3] = std::array::from_fn(|m| {
         pick.iter()
-            .map(|(_, t)| t[m].norm() / (t[m].len() as f64).sqrt())
+            .map(|e| e.truth[m].norm() / (e.truth[m].len() as f64).sqrt())
             .sum::<f64>()
             / k
     });
-    let all: Vec<&Run> = pick.iter().flat_map(|(rs, _)| rs.iter()).collect();
+    let all: Vec<&Run> = pick.iter().flat_map(|e| e.runs.iter()).collect();
     let n = all.len() as f64;
     let [stiffness_se, damping_se, inertia_se] = se.map(Matrix);
     Ok(Prediction {
