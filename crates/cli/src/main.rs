@@ -251,11 +251,16 @@ fn stdout_was_closed() -> bool {
 
 /// Run the command on a pool of `--threads` threads, else on rayon's global pool.
 fn in_thread_pool(cli: Cli) -> CliResult {
-    let Some(n) = cli.threads else {
-        return run(cli);
+    let n = match cli.threads {
+        Some(n) => limpid_core::threads::check_thread_count(n.get() as u128, "--threads")?,
+        None => {
+            // rayon's global pool reads the same variable: checked here first
+            limpid_core::threads::environment_thread_count()?;
+            return run(cli);
+        }
     };
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(n.get())
+        .num_threads(n)
         .build()
         .map_err(|e| format!("--threads {n}: cannot start the threads: {e}"))?;
     pool.install(|| run(cli))

@@ -409,7 +409,14 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
             .as_deref()
             .map(|p| (p, "the subject (--subject)")),
     );
-    limpid_core::files::refuse_overwriting_inputs(&[(&args.output, "the output (-o)")], &inputs)?;
+    let truth = args.output.with_extension("truth.json");
+    limpid_core::files::refuse_overwriting_inputs(
+        &[
+            (&args.output, "the output (-o)"),
+            (&truth, "the truth file simulate writes beside -o"),
+        ],
+        &inputs,
+    )?;
     if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         limpid_core::files::create_dir(dir)?;
     }
@@ -434,13 +441,32 @@ pub fn run_simulate(args: SimulateArgs) -> CliResult {
             }
             other => other.to_string(),
         })?;
-    for run in runs {
-        let out = match &run.label {
-            Some(label) => with_suffix(&args.output, &format!("_{label}")),
-            None => args.output.clone(),
-        };
-        limpid_io::write_recording(&run.recording, &out)?;
-        write_truth(&out, run.recording.len(), &run.truth)?;
+    // every file the runs derive (recordings `_S1`.., their truth files),
+    // by any name or link, before the first is written
+    let outputs: Vec<(PathBuf, PathBuf)> = runs
+        .iter()
+        .map(|run| {
+            let out = match &run.label {
+                Some(label) => with_suffix(&args.output, &format!("_{label}")),
+                None => args.output.clone(),
+            };
+            let truth = out.with_extension("truth.json");
+            (out, truth)
+        })
+        .collect();
+    let named: Vec<(&Path, &str)> = outputs
+        .iter()
+        .flat_map(|(out, truth)| {
+            [
+                (out.as_path(), "a recording simulate writes (-o)"),
+                (truth.as_path(), "a truth file simulate writes beside -o"),
+            ]
+        })
+        .collect();
+    limpid_core::files::refuse_overwriting_inputs(&named, &inputs)?;
+    for (run, (out, _)) in runs.into_iter().zip(&outputs) {
+        limpid_io::write_recording(&run.recording, out)?;
+        write_truth(out, run.recording.len(), &run.truth)?;
     }
     Ok(())
 }

@@ -16,6 +16,7 @@ pub mod linalg;
 pub mod matrix;
 pub mod payload;
 pub mod recording;
+pub mod threads;
 pub mod trial;
 pub mod truth;
 pub mod warning;

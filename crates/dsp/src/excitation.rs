@@ -365,16 +365,24 @@ pub fn random_phases(count: usize, seed: u64) -> Vec<f64> {
         .collect()
 }
 
+/// Samples of signal the phase optimisation may compute (evaluations x
+/// period): about a second or two on one core. A period of 10^7 samples
+/// took 518 s and a sample rate of 65535 Hz 57 s before (issue 76); the
+/// presets' periods of 10^4 samples finish well within it.
+pub const PHASE_WORK_SAMPLES: usize = 200_000_000;
+
 /// Phases of the lines that make the period's crest factor low: descent on
 /// the Lp norm of the signal (normalised by its RMS) for p doubling from 4
 /// to 512, from Schroeder's phases; each step along the gradient, computed
 /// with one FFT of `sign(x)|x|^(p-1)`, grows after a success and halves
-/// after a failure.
+/// after a failure. The work is bounded ([`PHASE_WORK_SAMPLES`]): a long
+/// period stops early with the best phases found (Schroeder's at worst).
 pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64> {
     let mut phases = schroeder_phases_for(amplitudes);
     if lines.len() < 2 {
         return phases;
     }
+    let mut evaluations_left = PHASE_WORK_SAMPLES / n.max(1);
     let mut planner = RealFftPlanner::<f64>::new();
     let forward = planner.plan_fft_forward(n);
     let backward = planner.plan_fft_inverse(n);
@@ -425,6 +433,10 @@ pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64
         (norm, gradient)
     };
     for exponent in 2..=9 {
+        if evaluations_left == 0 {
+            break;
+        }
+        evaluations_left -= 1;
         let (mut value, mut gradient) = norm_and_gradient(&phases, exponent);
         let mut step = 0.1;
         for _ in 0..150 {
@@ -433,7 +445,8 @@ pub fn optimise_phases(n: usize, lines: &[usize], amplitudes: &[f64]) -> Vec<f64
                 break;
             }
             let mut improved = false;
-            while step > 1e-6 {
+            while step > 1e-6 && evaluations_left > 0 {
+                evaluations_left -= 1;
                 let trial: Vec<f64> = phases
                     .iter()
                     .zip(&gradient)

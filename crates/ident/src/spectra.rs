@@ -391,6 +391,7 @@ pub(crate) fn whole_periods<'a>(
                     ),
                 });
             }
+            period_column_agrees(rec, &index[first..end], n, period_s)?;
             let left_out = index.len() - (end - first);
             end_of_periods = Some(end);
             (
@@ -412,6 +413,20 @@ pub(crate) fn whole_periods<'a>(
     let available = signals.iter().map(|s| s.len()).min().unwrap_or(0);
     let periods = available / n;
     let used: Vec<&[f64]> = signals.iter().map(|s| &s[..periods * n]).collect();
+    for (name, x) in names.iter().zip(&used) {
+        if x.len() > 1 && x.iter().all(|v| *v == x[0]) {
+            return Err(Error::Format {
+                path: rec.path().to_path_buf(),
+                message: format!(
+                    "column {name}: holds one value ({}) over the periods used: nothing varies to identify from",
+                    limpid_core::error::Num(x[0])
+                ),
+            });
+        }
+    }
+    if let Some(input) = used.first() {
+        repeats_with_the_period(rec, &names[0], input, n, period_s)?;
+    }
     let analysed =
         limpid_dsp::periodic::PeriodSpectra::new(&used, n).map_err(|e| Error::Format {
             path: rec.path().to_path_buf(),
@@ -424,6 +439,71 @@ pub(crate) fn whole_periods<'a>(
         transient,
         spectra: analysed,
     })
+}
+
+/// A `period` column's periods (their runs of one index) must last the
+/// period given: `--period 7.9` on periods of 8 s leaked into the noise
+/// floor and turned a nonlinear verdict linear (issue 76).
+fn period_column_agrees(rec: &Recording, index: &[f64], n: usize, period_s: f64) -> Result<()> {
+    let mut runs: Vec<usize> = Vec::new();
+    let mut start = 0;
+    for i in 1..=index.len() {
+        if i == index.len() || index[i] != index[start] {
+            runs.push(i - start);
+            start = i;
+        }
+    }
+    // the last period may be cut short by the recording's end
+    let whole = &runs[..runs.len().saturating_sub(1).max(1)];
+    let mut sorted = whole.to_vec();
+    sorted.sort_unstable();
+    let typical = sorted[sorted.len() / 2];
+    if typical != n {
+        let fs = rec.sample_rate();
+        return Err(Error::invalid(
+            "period_s",
+            format!(
+                "{} s is {n} samples, but the period column's periods last {typical} samples ({} s): give the period the recording was made with",
+                limpid_core::error::Num(period_s),
+                limpid_core::error::Num(typical as f64 / fs)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The first input must repeat from period to period: consecutive periods
+/// that differ by more than 0.7 of its RMS are not periods of it (a wrong
+/// period on a multisine differs by about 1.4).
+fn repeats_with_the_period(
+    rec: &Recording,
+    name: &str,
+    x: &[f64],
+    n: usize,
+    period_s: f64,
+) -> Result<()> {
+    let periods = x.len() / n;
+    if periods < 2 {
+        return Ok(());
+    }
+    let mean = x.iter().sum::<f64>() / x.len() as f64;
+    let power = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / x.len() as f64;
+    let difference = (0..(periods - 1) * n)
+        .map(|i| (x[i + n] - x[i]).powi(2))
+        .sum::<f64>()
+        / ((periods - 1) * n) as f64;
+    if power > 0.0 && difference > 0.49 * power {
+        return Err(Error::invalid(
+            "period_s",
+            format!(
+                "{}: column {name} does not repeat every {} s: consecutive periods differ by {} % of its RMS; is the period right, and is the excitation periodic?",
+                rec.path().display(),
+                limpid_core::error::Num(period_s),
+                limpid_core::error::Num((100.0 * (difference / power).sqrt()).round())
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Spectra of a periodic excitation with period `period_s` (issue 59):

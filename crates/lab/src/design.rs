@@ -125,29 +125,34 @@ impl Design {
             "centre-out" => Design::CentreOut(Protocol::from_toml(&body, path)?),
             "planar" => {
                 let d: PlanarDesign = toml::from_str(&body).map_err(|e| located(&body, e))?;
+                crate::validate::refuse_extra_elements::<PlanarDesign>(&body, path)?;
                 d.validate().map_err(fail)?;
                 Design::Planar(d)
             }
             "stochastic" => {
                 let d: StochasticDesign = toml::from_str(&body).map_err(|e| located(&body, e))?;
+                crate::validate::refuse_extra_elements::<StochasticDesign>(&body, path)?;
                 d.validate().map_err(fail)?;
                 Design::Stochastic(d)
             }
             "ensemble" => {
                 let d: crate::varying::EnsembleExperiment =
                     toml::from_str(&body).map_err(|e| located(&body, e))?;
+                crate::validate::refuse_extra_elements::<crate::varying::EnsembleExperiment>(&body, path)?;
                 d.validate().map_err(|e| fail(e.to_string()))?;
                 Design::Ensemble(d)
             }
             "ramp-and-hold" => {
                 let d: crate::varying::RampAndHold =
                     toml::from_str(&body).map_err(|e| located(&body, e))?;
+                crate::validate::refuse_extra_elements::<crate::varying::RampAndHold>(&body, path)?;
                 d.validate().map_err(|e| fail(e.to_string()))?;
                 Design::RampAndHold(d)
             }
             "walking" => {
                 let d: crate::varying::WalkingExperiment =
                     toml::from_str(&body).map_err(|e| located(&body, e))?;
+                crate::validate::refuse_extra_elements::<crate::varying::WalkingExperiment>(&body, path)?;
                 d.validate().map_err(|e| fail(e.to_string()))?;
                 Design::Walking(d)
             }
@@ -156,6 +161,9 @@ impl Design {
                     let hint = "; a multisine needs period_s, band_hz and rms, a prbs order, switch_interval_s and amplitude, both coordinates, sample_rate_hz, periods and [limits]";
                     Error::settings(path, &body, e.span(), &format!("{}{hint}", e.message()))
                 })?;
+                crate::validate::refuse_extra_elements::<crate::periodic::PeriodicDesign>(
+                    &body, path,
+                )?;
                 let is_prbs = matches!(d.signal, crate::periodic::Signal::Prbs(_));
                 if is_prbs != (kind == "prbs") {
                     return Err(fail(format!(

@@ -137,6 +137,13 @@ pub struct MultisineSignal {
     pub amplitude_points: Vec<[f64; 2]>,
 }
 
+/// A name a recording's column can have: a letter, then letters, digits and `_`.
+fn is_column_name(name: &str) -> bool {
+    let mut chars = name.chars();
+    chars.next().is_some_and(|c| c.is_ascii_alphabetic())
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
 fn default_shape() -> String {
     "flat".into()
 }
@@ -157,6 +164,18 @@ impl MultisineSignal {
             amplitude_shape: default_shape(),
             amplitude_points: Vec::new(),
         }
+    }
+
+    /// The relative amplitudes of `lines` (indices of 1 / period), the
+    /// largest 1: points of 1e155 or 1e-170 overflowed or underflowed the
+    /// RMS into an all-zero or infinite command (issue 76).
+    pub fn line_amplitudes(&self, lines: &[usize]) -> Vec<f64> {
+        let raw: Vec<f64> = lines
+            .iter()
+            .map(|&k| self.relative_amplitude(k as f64 / self.period_s))
+            .collect();
+        let top = raw.iter().copied().fold(0.0f64, f64::max);
+        raw.iter().map(|a| a / top).collect()
     }
 
     /// The relative amplitude of a line at `hz` (the points, else the shape).
@@ -453,6 +472,21 @@ impl PeriodicDesign {
             Signal::Multisine(m) => m.rms.len(),
             Signal::Prbs(p) => p.amplitude.len(),
         };
+        if let Some(bad) = channels.iter().find(|c| !is_column_name(c)) {
+            return Err(format!(
+                "channels: {bad:?} is not a column name (letters, digits and _, starting with a letter)"
+            ));
+        }
+        if let Some((i, c)) = channels
+            .iter()
+            .enumerate()
+            .find(|(i, c)| channels[..*i].contains(c))
+        {
+            return Err(format!(
+                "channels: {c:?} is named twice (channel {})",
+                i + 1
+            ));
+        }
         if count == 0 || count > 3 || channels.len() != count {
             return Err(format!(
                 "expected 1 to 3 channels with one {} each, found {count} for channels [{}]",
@@ -498,6 +532,16 @@ impl PeriodicDesign {
                     return Err(
                         "amplitude_points: expected [hz, amplitude] pairs of positive numbers in increasing frequency".into(),
                     );
+                }
+                let (low, high) = p.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), q| {
+                    (lo.min(q[1]), hi.max(q[1]))
+                });
+                if !p.is_empty() && high / low > 1e6 {
+                    return Err(format!(
+                        "amplitude_points: the amplitudes span {} to {}, more than 10^6 (the weakest lines would be below the command's resolution)",
+                        limpid_core::error::Num(low),
+                        limpid_core::error::Num(high)
+                    ));
                 }
                 if !matches!(m.phases.as_str(), "optimised" | "schroeder" | "random") {
                     return Err(format!(
@@ -563,10 +607,7 @@ impl PeriodicDesign {
                         // zippered: channel c takes every channels-th line from the c-th
                         let own: Vec<usize> =
                             lines.iter().copied().skip(c).step_by(channels).collect();
-                        let amplitudes: Vec<f64> = own
-                            .iter()
-                            .map(|&k| m.relative_amplitude(k as f64 / m.period_s))
-                            .collect();
+                        let amplitudes = m.line_amplitudes(&own);
                         let phases = match m.phases.as_str() {
                             "schroeder" => schroeder_phases_for(&amplitudes),
                             "random" => random_phases(own.len(), self.seed.wrapping_add(c as u64)),
@@ -624,6 +665,66 @@ impl PeriodicDesign {
         }
     }
 
+    /// A multisine whose RMS displacement, velocity, acceleration or force
+    /// (from its lines' amplitudes, before any phase is chosen) exceeds a
+    /// limit cannot pass, whatever the phases: refused before the phase
+    /// optimisation (a period of 10^4 s optimised for 518 s, then was
+    /// refused; issue 76). A peak is at least the RMS.
+    fn rms_within_limits(&self) -> Result<()> {
+        let Signal::Multisine(m) = &self.signal else {
+            return Ok(());
+        };
+        let l = self.limits().map_err(|e| Error::invalid("limits", e))?;
+        let set = LineSet::parse(&m.lines)?;
+        let lines = multisine_lines(m.period_s, m.band_hz, set, self.seed)?;
+        let names = self.channel_names();
+        let channels = m.rms.len();
+        for (c, name) in names.iter().enumerate().take(channels) {
+            let own: Vec<usize> = lines.iter().copied().skip(c).step_by(channels).collect();
+            let a = m.line_amplitudes(&own);
+            // the gain of the sampled derivative `check` takes, at most 2πf
+            let n = self.period_samples() as f64;
+            let fs = self.sample_rate_hz;
+            let power = |order: i32| -> f64 {
+                own.iter()
+                    .zip(&a)
+                    .map(|(&k, &a)| a * a * (2.0 * fs * (PI * k as f64 / n).sin()).powi(2 * order))
+                    .sum()
+            };
+            let total = power(0);
+            if !(total > 0.0) {
+                continue;
+            }
+            let rms = m.rms[c];
+            for (what, value, limit) in [
+                ("displacement", rms, l.displacement),
+                ("velocity", rms * (power(1) / total).sqrt(), l.velocity),
+                (
+                    "acceleration",
+                    rms * (power(2) / total).sqrt(),
+                    l.acceleration,
+                ),
+                (
+                    "force or torque (nominal stiffness x displacement)",
+                    l.stiffness * rms,
+                    l.force,
+                ),
+            ] {
+                if value > limit {
+                    return Err(Error::invalid(
+                        "protocol",
+                        format!(
+                            "channel {name}: its RMS {what} {} already exceeds the limit {} (a peak is at least the RMS): lower rms or the band",
+                            limpid_core::error::Num(value),
+                            limpid_core::error::Num(limit)
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The ramp length of a PRBS edge in samples: the given one, else the
     /// shortest whose peak velocity (π Δ / 2T) and acceleration (π² Δ / 2T²),
     /// for a step Δ of twice the amplitude, are within the limits.
@@ -644,6 +745,7 @@ impl PeriodicDesign {
     /// period (period index -1 for both), each channel's displacement from the posture.
     pub fn command(&self) -> Result<Command> {
         self.validate().map_err(|m| Error::invalid("protocol", m))?;
+        self.rms_within_limits()?;
         let n = self.period_samples();
         let one = self.one_period()?;
         let total = n * (self.periods + 2);

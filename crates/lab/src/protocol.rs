@@ -177,8 +177,7 @@ impl Protocol {
     /// Parse and check the structure of a TOML protocol.
     pub fn from_toml(text: &str, path: &std::path::Path) -> Result<Self> {
         crate::validate::check_numbers(text, path)?;
-        let p: Protocol =
-            toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
+        let p: Protocol = crate::validate::parse_settings(text, path)?;
         if p.start_points.points.len() > crate::validate::MAX_TARGETS as usize
             || p.targets.count > crate::validate::MAX_TARGETS as usize
         {

@@ -112,8 +112,7 @@ struct RigSubjectFile {
 fn parse<T: for<'de> Deserialize<'de>>(subject: &SubjectText) -> Result<T> {
     // finite numbers only (a nan stiffness would simulate a recording of NaN)
     crate::validate::check_numbers(subject.text, subject.path)?;
-    toml::from_str(subject.text)
-        .map_err(|e| Error::settings(subject.path, subject.text, e.span(), e.message()))
+    crate::validate::parse_settings(subject.text, subject.path)
 }
 
 /// A value as JSON (the lab's types always serialise).

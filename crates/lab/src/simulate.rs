@@ -111,22 +111,30 @@ impl NoiseModel {
     /// a negative deviation or servo bandwidth simulated (issue 36).
     /// `Err` names the first field that is not.
     pub fn check(&self) -> std::result::Result<(), String> {
+        // each at most a value no rig or subject comes near: beyond them the
+        // simulation overflowed and its errors named a row of the recording
+        // instead of this field (drift 3e5 N; issue 76)
         let non_negative = [
-            ("position_std_m", self.position_std_m),
-            ("offset_per_trial_std_n", self.offset_per_trial_std_n),
-            ("white_std_n", self.white_std_n),
-            ("drift_std_n", self.drift_std_n),
-            ("force_quantum_n", self.force_quantum_n),
-            ("servo_bandwidth_hz", self.servo_bandwidth_hz),
-            ("force_noise_fraction", self.force_noise_fraction),
-            ("posture_drift_std_m", self.posture_drift_std_m),
-            ("trial_impedance_std", self.trial_impedance_std),
-            ("tremor_std_n", self.tremor_std_n),
-            ("force_sensor_hz", self.force_sensor_hz),
+            ("position_std_m", self.position_std_m, 0.1),
+            ("offset_per_trial_std_n", self.offset_per_trial_std_n, 1e4),
+            ("white_std_n", self.white_std_n, 1e4),
+            ("drift_std_n", self.drift_std_n, 1e4),
+            ("force_quantum_n", self.force_quantum_n, 1e3),
+            ("servo_bandwidth_hz", self.servo_bandwidth_hz, 1e5),
+            ("force_noise_fraction", self.force_noise_fraction, 10.0),
+            ("posture_drift_std_m", self.posture_drift_std_m, 0.1),
+            ("trial_impedance_std", self.trial_impedance_std, 1.0),
+            ("tremor_std_n", self.tremor_std_n, 1e4),
+            ("force_sensor_hz", self.force_sensor_hz, 1e5),
         ];
-        for (name, v) in non_negative {
-            if !(v >= 0.0 && v.is_finite()) {
-                return Err(format!("{name} = {v}: expected zero or a positive number"));
+        let num = limpid_core::error::Num;
+        for (name, v, most) in non_negative {
+            if !(v >= 0.0 && v <= most) {
+                return Err(format!(
+                    "{name} = {}: expected zero or a positive number up to {}",
+                    num(v),
+                    num(most)
+                ));
             }
         }
         for (name, v) in [
@@ -135,8 +143,11 @@ impl NoiseModel {
             ("posture_drift_hz", self.posture_drift_hz),
             ("tremor_hz", self.tremor_hz),
         ] {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(format!("{name} = {v}: expected a positive bandwidth"));
+            if !(1e-3..=1e5).contains(&v) {
+                return Err(format!(
+                    "{name} = {}: expected a bandwidth of 0.001 to 1e5 Hz",
+                    num(v)
+                ));
             }
         }
         Ok(())
@@ -178,6 +189,19 @@ impl NoiseModel {
     /// there is one, within the band the rate can hold.
     pub fn check_at(&self, fs: f64) -> std::result::Result<(), String> {
         self.check()?;
+        for (name, v) in [
+            ("drift_lowpass_hz", self.drift_lowpass_hz),
+            ("force_noise_hz", self.force_noise_hz),
+            ("posture_drift_hz", self.posture_drift_hz),
+        ] {
+            if v >= 0.5 * fs {
+                return Err(format!(
+                    "{name} = {}: at or above half the sample rate of {} Hz",
+                    limpid_core::error::Num(v),
+                    limpid_core::error::Num(fs)
+                ));
+            }
+        }
         if self.tremor_std_n > 0.0 {
             tremor_band_fits(self.tremor_hz, fs)
                 .map_err(|m| format!("tremor_hz = {}: {m}", self.tremor_hz))?;

@@ -137,6 +137,46 @@ fn check_value(
     Ok(())
 }
 
+/// Parse a settings file into `T`: errors at their line and key, and an
+/// array longer than its field refused ([`refuse_extra_elements`]).
+pub fn parse_settings<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
+    let typed: T =
+        toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
+    refuse_extra_elements::<T>(text, path)?;
+    Ok(typed)
+}
+
+/// The TOML parser fills a fixed-size field (`[[f64; 2]; 2]`, `[f64; 2]`)
+/// from the first elements of a longer array and drops the rest in silence
+/// (`stiffness = [[37.95, 9.31, 99, 99, 99], [9.31, 10.14]]` read as 2 x 2;
+/// issue 76). Its generic value counts what is left: a second reading
+/// through it names the array with elements to spare, by key and line.
+pub fn refuse_extra_elements<T: serde::de::DeserializeOwned>(
+    text: &str,
+    path: &Path,
+) -> Result<()> {
+    let Ok(table) = toml::from_str::<toml::Table>(text) else {
+        return Ok(()); // the typed reading has said what is wrong
+    };
+    let Err(e) = serde_path_to_error::deserialize::<_, T>(toml::Value::Table(table)) else {
+        return Ok(());
+    };
+    if !e.inner().to_string().contains("fewer elements in array") {
+        return Ok(()); // the typed reading accepted it; only lengths are ours
+    }
+    let key = e.path().to_string();
+    // `a.b[1]` -> table `a`, key `b` for the line
+    let bare = key.split('[').next().unwrap_or(&key);
+    let (parent, name) = bare.rsplit_once('.').unwrap_or(("", bare));
+    Err(Error::Format {
+        path: path.to_path_buf(),
+        message: format!(
+            "{}key {key}: more elements than it takes (the extra ones would be dropped); give exactly the elements it takes",
+            line_of(text, parent, name).map_or(String::new(), |l| format!("line {l}, "))
+        ),
+    })
+}
+
 /// The line of `key = ...` inside the table `parent` of `text`, if found.
 fn line_of(text: &str, parent: &str, key: &str) -> Option<usize> {
     let mut table = String::new();
@@ -169,6 +209,27 @@ fn line_of(text: &str, parent: &str, key: &str) -> Option<usize> {
         }
     }
     fallback
+}
+
+/// Each `(field, value, least, most)` within its range, the first that is
+/// not named with its range: one rule per field (a negative `actuator_hz`
+/// listed every rule and named none; issue 76).
+pub fn fields_within(what: &str, fields: &[(&str, f64, f64, f64)]) -> Result<()> {
+    for &(name, v, least, most) in fields {
+        if !(least..=most).contains(&v) {
+            let num = limpid_core::error::Num;
+            return Err(Error::invalid(
+                what,
+                format!(
+                    "{name} = {}: expected {} to {}",
+                    num(v),
+                    num(least),
+                    num(most)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Refuse a protocol that asks for more than [`MAX_SAMPLES`] samples.

@@ -35,7 +35,15 @@ fn err(e: Error) -> PyErr {
 fn pool() -> Result<std::sync::Arc<rayon::ThreadPool>, rayon::ThreadPoolBuildError> {
     use std::sync::Arc;
     let pid = std::process::id();
-    let threads = THREADS.load(std::sync::atomic::Ordering::Relaxed);
+    let threads = match THREADS.load(std::sync::atomic::Ordering::Relaxed) {
+        // rayon would read RAYON_NUM_THREADS: beyond the cap, one a core
+        0 => match limpid_core::threads::environment_thread_count() {
+            Ok(Some(n)) => n,
+            Ok(None) => 0,
+            Err(_) => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        },
+        n => n,
+    };
     let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
     if let Some((owner, size, pool)) = slot.as_ref() {
         if *owner == pid && *size == threads {
@@ -67,13 +75,18 @@ static THREADS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize:
 /// How many threads limpid's estimators use (None: one a core).
 #[pyfunction]
 #[pyo3(signature = (threads=None))]
-fn set_threads(threads: Option<usize>) -> PyResult<()> {
+fn set_threads(threads: Option<u128>) -> PyResult<()> {
     if threads == Some(0) {
         return Err(PyValueError::new_err(
             "invalid threads: expected at least 1, or None for one a core",
         ));
     }
-    THREADS.store(threads.unwrap_or(0), std::sync::atomic::Ordering::Relaxed);
+    let threads = match threads {
+        Some(n) => limpid_core::threads::check_thread_count(n, "invalid threads")
+            .map_err(PyValueError::new_err)?,
+        None => 0,
+    };
+    THREADS.store(threads, std::sync::atomic::Ordering::Relaxed);
     Ok(())
 }
 

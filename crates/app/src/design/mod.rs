@@ -57,6 +57,11 @@ const MOST_INERTIA_KG: f64 = 1e3;
 const MOST_DAMPING_N_S_PER_M: f64 = 1e5;
 /// Of a stiffness element (N/m).
 const MOST_STIFFNESS_N_PER_M: f64 = 1e7;
+/// Least eigenvalue of the symmetric part of a prior's inertia (kg),
+/// damping (N s/m) and stiffness (N/m): a limb's, far below any arm's, far
+/// above where the design's SEs and objective overflow (inertia 1e-300
+/// printed "inf %" and wrote a result limpid could not read back; issue 76).
+const LEAST_END_POINT: [f64; 3] = [1e-2, 1e-1, 1.0];
 /// Smallest radius worth designing (m): below it position noise is the signal.
 const LEAST_RADIUS_M: f64 = 1e-4;
 
@@ -179,11 +184,14 @@ fn impedance(
         damping: m3(b),
         stiffness: m3(k),
     };
-    for (name, mat, most) in [
+    for ((name, mat, most), least) in [
         ("inertia", imp.inertia, MOST_INERTIA_KG),
         ("damping", imp.damping, MOST_DAMPING_N_S_PER_M),
         ("stiffness", imp.stiffness, MOST_STIFFNESS_N_PER_M),
-    ] {
+    ]
+    .into_iter()
+    .zip(LEAST_END_POINT)
+    {
         if let Some((r, c)) = (0..9)
             .map(|k| (k / 3, k % 3))
             .find(|&(r, c)| mat[(r, c)].abs() > most)
@@ -201,12 +209,42 @@ fn impedance(
                 path: path.to_path_buf(),
                 message: format!(
                     "{table}{name}[{i}][{i}] = {}: a prior's diagonal must be positive",
-                    mat[(i, i)]
+                    limpid_core::error::Num(mat[(i, i)])
                 ),
             });
         }
+        let dynamic = DMatrix::from_fn(3, 3, |r, c| mat[(r, c)]);
+        check_least_eigenvalue(&dynamic, least, path, &format!("{table}{name}"))?;
     }
     Ok(imp)
+}
+
+/// A prior's matrix must be a limb's: its symmetric part positive definite
+/// with every eigenvalue at least `least` (SI); the error names the file and
+/// the key.
+pub(crate) fn check_least_eigenvalue(
+    m: &DMatrix<f64>,
+    least: f64,
+    path: &Path,
+    key: &str,
+) -> Result<()> {
+    let eigenvalues = limpid_core::criteria::symmetric_part_eigenvalues(m);
+    let smallest = eigenvalues.iter().copied().fold(f64::INFINITY, f64::min);
+    if smallest >= least {
+        return Ok(());
+    }
+    let why = if smallest > 0.0 {
+        format!("below a limb's floor of {}", limpid_core::error::Num(least))
+    } else {
+        "not positive definite (indefinite or negative: not a passive limb)".into()
+    };
+    Err(Error::Format {
+        path: path.to_path_buf(),
+        message: format!(
+            "{key}: the smallest eigenvalue of its symmetric part is {}: {why}",
+            limpid_core::error::Num(smallest)
+        ),
+    })
 }
 
 impl Prior {
@@ -216,8 +254,7 @@ impl Prior {
     /// `[limits]` (the centre-out protocol's limits table).
     pub fn from_toml(text: &str, path: &Path) -> Result<Prior> {
         limpid_lab::validate::check_numbers(text, path)?;
-        let f: PriorFile =
-            toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
+        let f: PriorFile = limpid_lab::validate::parse_settings(text, path)?;
         let nominal = impedance(&f.inertia, &f.damping, &f.stiffness, path, "")?;
         let other_end = f
             .other_end

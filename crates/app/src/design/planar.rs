@@ -74,6 +74,9 @@ const DIRECTIONS: [[f64; 2]; 6] = [
 const MOST_JOINT_STIFFNESS: f64 = 1e5;
 /// Of a joint damping element (N m s/rad).
 const MOST_JOINT_DAMPING: f64 = 1e4;
+/// Least eigenvalue of the symmetric part of a prior's joint stiffness
+/// (N m/rad) and damping (N m s/rad): an arm's floor.
+const LEAST_JOINT: [f64; 2] = [0.1, 0.01];
 /// Smallest amplitude worth designing (rad): below it the angle noise is the signal.
 const LEAST_AMPLITUDE_RAD: f64 = 1e-4;
 /// Slowest torque fluctuation a prior may give (Hz): within a trial of a
@@ -241,10 +244,13 @@ fn arm_impedance(f: &ArmFile, path: &Path, table: &str) -> Result<ArmImpedance> 
     };
     limpid_ident::planar::check_inertial_parameters(&f.xi)
         .map_err(|e| fail(format!("{table}xi: {e}")))?;
-    for (name, m, most) in [
+    for ((name, m, most), least) in [
         ("stiffness", &f.stiffness, MOST_JOINT_STIFFNESS),
         ("damping", &f.damping, MOST_JOINT_DAMPING),
-    ] {
+    ]
+    .into_iter()
+    .zip(LEAST_JOINT)
+    {
         if let Some((r, c)) = (0..4)
             .map(|k| (k / 2, k % 2))
             .find(|&(r, c)| m[r][c].abs().is_nan() || m[r][c].abs() > most)
@@ -257,9 +263,11 @@ fn arm_impedance(f: &ArmFile, path: &Path, table: &str) -> Result<ArmImpedance> 
         if let Some(i) = (0..2).find(|&i| m[i][i] <= 0.0) {
             return Err(fail(format!(
                 "{table}{name}[{i}][{i}] = {}: a prior's diagonal must be positive",
-                m[i][i]
+                limpid_core::error::Num(m[i][i])
             )));
         }
+        let dynamic = nalgebra::DMatrix::from_fn(2, 2, |r, c| m[r][c]);
+        super::check_least_eigenvalue(&dynamic, least, path, &format!("{table}{name}"))?;
     }
     let m2 = |a: &[[f64; 2]; 2]| Matrix2::new(a[0][0], a[0][1], a[1][0], a[1][1]);
     Ok(ArmImpedance {
@@ -277,8 +285,7 @@ impl PlanarPrior {
     /// `[limits]` (a planar protocol's limits table).
     pub fn from_toml(text: &str, path: &Path) -> Result<PlanarPrior> {
         limpid_lab::validate::check_numbers(text, path)?;
-        let f: PlanarPriorFile =
-            toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
+        let f: PlanarPriorFile = limpid_lab::validate::parse_settings(text, path)?;
         let nominal = arm_impedance(
             &ArmFile {
                 xi: f.xi,

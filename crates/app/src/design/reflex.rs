@@ -81,11 +81,13 @@ impl ReflexPrior {
     /// and optionally `torque_noise_nm` (default 0.1).
     pub fn from_toml(text: &str, path: &Path) -> Result<ReflexPrior> {
         limpid_lab::validate::check_numbers(text, path)?;
-        let f: ReflexPriorFile =
-            toml::from_str(text).map_err(|e| Error::settings(path, text, e.span(), e.message()))?;
+        let f: ReflexPriorFile = limpid_lab::validate::parse_settings(text, path)?;
         let bad = |name: &str, v: f64| Error::Format {
             path: path.to_path_buf(),
-            message: format!("{name} = {v}: expected a positive number"),
+            message: format!(
+                "{name} = {}: expected a positive number",
+                limpid_core::error::Num(v)
+            ),
         };
         for (name, v) in [
             ("inertia", f.inertia),
@@ -100,8 +102,31 @@ impl ReflexPrior {
                 return Err(bad(name, v));
             }
         }
+        // an ankle's floors and a reflex's range: a gain of 1e-300 or a
+        // delay of 10 s was designed for (issue 76)
+        for (name, v, least, most) in [
+            ("inertia", f.inertia, 1e-4, 10.0),
+            ("damping", f.damping, 1e-3, 1e3),
+            ("stiffness", f.stiffness, 1e-1, 1e5),
+            ("reflex.gain", f.reflex.gain, 1e-3, 1e3),
+            ("reflex.delay_s", f.reflex.delay_s, 1e-3, 0.5),
+            ("reflex.natural_hz", f.reflex.natural_hz, 0.1, 100.0),
+            ("reflex.damping_ratio", f.reflex.damping_ratio, 0.05, 10.0),
+        ] {
+            if !(least..=most).contains(&v) {
+                return Err(Error::Format {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "{name} = {}: an ankle's is between {} and {}",
+                        limpid_core::error::Num(v),
+                        limpid_core::error::Num(least),
+                        limpid_core::error::Num(most)
+                    ),
+                });
+            }
+        }
         let noise = f.torque_noise_nm.unwrap_or(0.1);
-        if noise < 0.0 {
+        if !(0.0..=1e3).contains(&noise) {
             return Err(bad("torque_noise_nm", noise));
         }
         Ok(ReflexPrior {

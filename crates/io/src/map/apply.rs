@@ -605,9 +605,19 @@ pub(crate) fn gap_in_base(
     }) else {
         return Ok(());
     };
+    let new_trial = |i: usize| trial.is_some_and(|tr| tr[i] != tr[i - 1]);
+    if let Some(i) = (1..t.len()).find(|&i| t[i] == t[i - 1] && !new_trial(i)) {
+        let repeated = (1..t.len()).filter(|&i| t[i] == t[i - 1]).count();
+        return Err(source.error(format!(
+            "{}, sample {} of the recording (t = {:.6} s): {repeated} samples carry the time stamp of the sample before them (duplicated stamps: messages stored twice, or a clock too coarse for the rate); limpid does not order samples with one stamp",
+            base.label(),
+            i + 1,
+            t[i],
+        )));
+    }
     for i in 1..t.len() {
         let gap = t[i] - t[i - 1];
-        let new_trial = trial.is_some_and(|tr| tr[i] != tr[i - 1]);
+        let new_trial = new_trial(i);
         if gap > 1.5 * step && !new_trial {
             return Err(source.error(format!(
                 "{}, sample {} of the recording (t = {:.6} s): a gap of {:.6} s where samples come every {:.6} s (dropped samples in the time-base stream); limpid does not interpolate the time base",

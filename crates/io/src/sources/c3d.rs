@@ -78,6 +78,9 @@ struct Layout {
     data_bytes: usize,
     /// POINT:RATE, when the file has it.
     point_rate: Option<f64>,
+    /// The header's point count (word 2) and frame rate (words 11-12).
+    header_points: usize,
+    header_rate: f64,
 }
 
 /// One parameter's values: integers (as read, 16-bit), floats, or bytes.
@@ -259,6 +262,8 @@ fn layout(bytes: &[u8]) -> std::result::Result<Layout, String> {
         value_bytes: if scale < 0.0 { 4 } else { 2 },
         data_bytes: bytes.len().saturating_sub((data_start - 1) * 512),
         point_rate,
+        header_points: word(1),
+        header_rate: f64::from(processor.f32(bytes[20..24].try_into().expect("4 bytes"))),
     })
 }
 
@@ -267,6 +272,24 @@ fn layout(bytes: &[u8]) -> std::result::Result<Layout, String> {
 /// much of it is there (the decoder would read the frames present in silence).
 fn check_layout(bytes: &[u8]) -> std::result::Result<(), String> {
     let l = layout(bytes)?;
+    // the decoder sizes its point grid by the header's count (65535 for 3
+    // asked for 7.9 GB; issue 76): both counts must agree
+    if l.header_points != l.points {
+        return Err(format!(
+            "the header declares {} points but POINT:USED is {} (corrupt header or parameters?)",
+            l.header_points, l.points
+        ));
+    }
+    if let Some(rate) = l.point_rate {
+        let agree = (l.header_rate - rate).abs() <= 1e-3 * rate.abs().max(1.0);
+        if l.points > 0 && rate.is_finite() && l.header_rate.is_finite() && !agree {
+            return Err(format!(
+                "the header's frame rate {} Hz disagrees with POINT:RATE {} Hz (corrupt header or parameters?)",
+                limpid_core::error::Num(l.header_rate),
+                limpid_core::error::Num(rate)
+            ));
+        }
+    }
     let channel_samples = l.analog_used.saturating_mul(l.analog_per_channel);
     if l.analog_used > 0 && channel_samples != l.analog_per_frame {
         return Err(format!(

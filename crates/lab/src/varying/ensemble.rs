@@ -299,22 +299,26 @@ impl EnsembleExperiment {
 }
 
 fn check_experiment(e: &EnsembleExperiment) -> Result<()> {
-    let ok = |v: f64| v.is_finite() && v > 0.0;
-    let noise_ok = |v: f64| v.is_finite() && v >= 0.0;
-    if !(e.repetitions >= 1
-        && ok(e.duration_s)
-        && ok(e.rate_hz)
-        && ok(e.amplitude_rad)
-        && ok(e.switch_s)
-        && ok(e.actuator_hz)
-        && noise_ok(e.torque_noise_nm)
-        && noise_ok(e.position_noise))
-    {
+    if e.repetitions < 1 {
         return Err(Error::invalid(
             "ensemble experiment",
-            "repetitions, duration, rate, amplitude, switching interval and actuator bandwidth must be positive, noise not negative",
+            "repetitions = 0: expected at least 1",
         ));
     }
+    // a rate that holds the actuator's motion and a switch several samples
+    // long (rate_hz = 1 simulated one sample a second; issue 76)
+    crate::validate::fields_within(
+        "ensemble experiment",
+        &[
+            ("rate_hz", e.rate_hz, 50.0, 1e5),
+            ("duration_s", e.duration_s, 4.0 / e.rate_hz, 1e4),
+            ("amplitude_rad", e.amplitude_rad, 1e-6, 1.0),
+            ("actuator_hz", e.actuator_hz, 0.1, e.rate_hz / 4.0),
+            ("switch_s", e.switch_s, 2.0 / e.rate_hz, 1e3),
+            ("torque_noise_nm", e.torque_noise_nm, 0.0, 1e3),
+            ("position_noise", e.position_noise, 0.0, 0.1),
+        ],
+    )?;
     crate::validate::check_size(
         e.repetitions as f64 * e.duration_s * e.rate_hz,
         "ensemble recording",

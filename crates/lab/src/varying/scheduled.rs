@@ -179,24 +179,38 @@ impl RampAndHold {
     /// Refuse settings that cannot be simulated.
     pub fn validate(&self) -> Result<()> {
         let p = self;
-        let ok = |v: f64| v.is_finite() && v > 0.0;
-        if p.angles_rad.is_empty()
-            || p.angles_rad.iter().any(|a| !a.is_finite() || a.abs() > 3.2)
-            || !(ok(p.hold_s)
-                && p.ramp_s.is_finite()
-                && p.ramp_s >= 0.0
-                && ok(p.amplitude_rad)
-                && ok(p.switch_s)
-                && ok(p.actuator_hz)
-                && ok(p.rate_hz)
-                && p.torque_noise_nm.is_finite()
-                && p.torque_noise_nm >= 0.0)
+        if let Some(a) = p
+            .angles_rad
+            .iter()
+            .find(|a| !a.is_finite() || a.abs() > 3.2)
         {
             return Err(Error::invalid(
                 "ramp-and-hold schedule",
-                "angles within ±3.2 rad; hold, amplitude, switching, actuator and rate positive; ramp and noise not negative",
+                format!(
+                    "angles_rad: {} is not within ±3.2 rad",
+                    limpid_core::error::Num(*a)
+                ),
             ));
         }
+        if p.angles_rad.is_empty() {
+            return Err(Error::invalid(
+                "ramp-and-hold schedule",
+                "angles_rad: expected at least one angle",
+            ));
+        }
+        // an actuator of 1e-300 Hz never moved (q1 held at -0.1 rad; issue 76)
+        crate::validate::fields_within(
+            "ramp-and-hold schedule",
+            &[
+                ("rate_hz", p.rate_hz, 50.0, 1e5),
+                ("actuator_hz", p.actuator_hz, 0.1, p.rate_hz / 4.0),
+                ("hold_s", p.hold_s, 4.0 / p.rate_hz, 1e4),
+                ("ramp_s", p.ramp_s, 0.0, 1e4),
+                ("amplitude_rad", p.amplitude_rad, 1e-6, 1.0),
+                ("switch_s", p.switch_s, 2.0 / p.rate_hz, 1e3),
+                ("torque_noise_nm", p.torque_noise_nm, 0.0, 1e3),
+            ],
+        )?;
         crate::validate::check_size(self.duration_s() * p.rate_hz, "scheduled ankle recording")
     }
 

@@ -222,8 +222,25 @@ pub(super) fn estimate(
             ),
         );
     }
+    if let Some(why) = strides.doubt() {
+        warnings.push(why);
+        distrust(&mut est.points);
+    }
     est.warnings.extend(warnings);
     Ok(est)
+}
+
+/// Every trusted matrix of `points` demoted to imprecise: its standard
+/// error does not carry what the data's flaws may add.
+fn distrust(points: &mut [super::VaryingPoint]) {
+    use limpid_core::criteria::MatrixVerdict;
+    for v in points.iter_mut().filter_map(|p| p.verdicts.as_mut()) {
+        for m in [&mut v.stiffness, &mut v.damping, &mut v.inertia] {
+            if *m == MatrixVerdict::Trusted {
+                *m = MatrixVerdict::Imprecise;
+            }
+        }
+    }
 }
 
 /// The schedule axis of a walking estimate.

@@ -292,6 +292,7 @@ pub(super) fn estimate(
     } else {
         kept.iter().map(|r| r.len()).max().unwrap_or(0) as f64 / fs
     };
+    check_bin(&pulses, strides.median_len(), width, top, phase, fs)?;
     let fitted = fit_knots(&pulses, d, width, top, params.min_pulses);
     let points = fitted.points;
     let (rss, tss, press, press_tss) = fitted.sums;
@@ -382,6 +383,56 @@ impl Knots {
 const MIN_FITTED: usize = 3;
 /// Share of a window's displacement weight on a knot for the window to count there.
 const MIN_SHARE: f64 = 0.05;
+
+/// Most knots a fit may have (a knot every 1e-12 of a stride asked for
+/// 8 TB; issue 76).
+const MAX_KNOTS: f64 = 2000.0;
+
+/// A bin no shorter than one sample (in the schedule's unit: a fraction of
+/// the median stride, or seconds) and at most [`MAX_KNOTS`] knots over the
+/// windows' span; the error names `bin`.
+fn check_bin(
+    pulses: &[Pulse],
+    median_stride: usize,
+    width: f64,
+    top: f64,
+    phase: bool,
+    fs: f64,
+) -> Result<()> {
+    let sample = if phase {
+        1.0 / median_stride.max(1) as f64
+    } else {
+        1.0 / fs
+    };
+    let unit = if phase { " of the stride" } else { " s" };
+    if width < sample {
+        return Err(Error::invalid(
+            "bin",
+            format!(
+                "a bin of {}{unit} is shorter than one sample ({}{unit}): knots closer than the samples cannot be fitted",
+                limpid_core::error::Num(width),
+                limpid_core::error::Num(sample)
+            ),
+        ));
+    }
+    let (lo, hi) = pulses
+        .iter()
+        .flat_map(|p| p.sigma.iter())
+        .fold((0.0_f64, top), |(lo, hi), &s| (lo.min(s), hi.max(s)));
+    let knots = (hi - lo) / width + 2.0;
+    if knots > MAX_KNOTS {
+        return Err(Error::invalid(
+            "bin",
+            format!(
+                "a bin of {}{unit} puts {} knots over the windows' span of {}{unit}: at most {MAX_KNOTS}; widen the bin",
+                limpid_core::error::Num(width),
+                limpid_core::error::Num(knots.ceil()),
+                limpid_core::error::Num(hi - lo)
+            ),
+        ));
+    }
+    Ok(())
+}
 
 fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) -> KnotFit {
     let lo = pulses

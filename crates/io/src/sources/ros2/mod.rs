@@ -49,6 +49,24 @@ pub const MAX_SHAPES: usize = 8;
 /// Header stamps further than this from the log times are on another clock (ns).
 const OTHER_CLOCK_NS: i64 = 60 * 1_000_000_000;
 
+/// Most numbers (values and two stamps a message; 8 bytes of text count
+/// as one) kept from one bag file: 1 GiB of f64, an hour of a 1 kHz
+/// JointState of 7 joints with room to spare.
+pub const MAX_DECODED_NUMBERS: u64 = 1 << 27;
+
+/// Most bytes of numbers kept per byte of a bag file. Recorded signals
+/// compress a few times over; a chunk of millions of equal messages is a
+/// compression bomb (368 KB became 1.5 GB; issue 76).
+pub const MAX_DECODED_RATIO: u64 = 256;
+
+/// The numbers a file may yield: its ratio's worth, at least 2^20 (8 MiB:
+/// a small file harms nobody), at most [`MAX_DECODED_NUMBERS`].
+fn decoded_budget(file_bytes: usize) -> u64 {
+    (file_bytes as u64)
+        .saturating_mul(MAX_DECODED_RATIO / 8)
+        .clamp(1 << 20, MAX_DECODED_NUMBERS)
+}
+
 /// One shape of a topic's messages: their columns.
 struct Group {
     shape: Vec<u64>,
@@ -86,6 +104,11 @@ pub(crate) struct Collector {
     by_name: HashMap<String, usize>,
     scratch: cdr::Decoded,
     notes: Vec<String>,
+    /// The file being read, the numbers kept from it and its budget.
+    file: PathBuf,
+    file_bytes: usize,
+    kept: u64,
+    budget: u64,
 }
 
 impl Collector {
@@ -96,7 +119,37 @@ impl Collector {
             by_name: HashMap::new(),
             scratch: cdr::Decoded::default(),
             notes: Vec::new(),
+            file: PathBuf::new(),
+            file_bytes: 0,
+            kept: 0,
+            budget: MAX_DECODED_NUMBERS,
         }
+    }
+
+    /// A bag file of `bytes` bytes starts: its budget of numbers.
+    pub(crate) fn start_file(&mut self, path: &Path, bytes: usize) {
+        self.file = path.to_path_buf();
+        self.file_bytes = bytes;
+        self.kept = 0;
+        self.budget = decoded_budget(bytes);
+    }
+
+    /// Refuse the file once the messages kept from it exceed its budget.
+    pub(crate) fn check_budget(&self) -> Result<()> {
+        if self.kept <= self.budget {
+            return Ok(());
+        }
+        let mib = |numbers: u64| numbers * 8 >> 20;
+        Err(Error::Format {
+            path: self.file.clone(),
+            message: format!(
+                "its messages decode to more than {} MiB of numbers from {} bytes (at most {} times the file's size and {} MiB per file): a compression bomb, or a bag to split (ros2 bag convert)",
+                mib(self.budget),
+                self.file_bytes,
+                MAX_DECODED_RATIO,
+                mib(MAX_DECODED_NUMBERS)
+            ),
+        })
     }
 
     /// A definition stored in the bag (`ros2msg` text) for `type_name`.
@@ -195,6 +248,7 @@ impl Collector {
         match &mut topic.content {
             Content::Markers(m) => {
                 if let Some(text) = out.text.take() {
+                    self.kept += 2 + text.len() as u64 / 8;
                     m.push((stamp, log_ns, text));
                 }
             }
@@ -225,6 +279,7 @@ impl Collector {
                     topic.failed.0 += 1;
                     return;
                 }
+                self.kept += 2 + out.values.len() as u64;
                 for (column, v) in group.columns.iter_mut().zip(&out.values) {
                     column.push(*v);
                 }
@@ -361,6 +416,17 @@ impl Collector {
                             g.stamps_ns = order.iter().map(|&i| g.stamps_ns[i]).collect();
                             g.log_ns = order.iter().map(|&i| g.log_ns[i]).collect();
                         }
+                        let (dropped, clashing) = drop_repeated_messages(&mut g);
+                        if dropped > 0 {
+                            notes.push(format!(
+                                "{name}: {dropped} messages repeat the one before (same stamp, same values: stored twice?) and were dropped"
+                            ));
+                        }
+                        if clashing > 0 {
+                            notes.push(format!(
+                                "{name}: {clashing} messages carry the stamp of the one before with other values; the stamps do not order them"
+                            ));
+                        }
                         let full = |leaf: &str| format!("{}.{leaf}", t.name);
                         let aliases = g
                             .names
@@ -438,6 +504,49 @@ impl Collector {
             scalars: Vec::new(),
         })
     }
+}
+
+/// Drop each message that repeats the one before it (same stamp, same
+/// values: a bag that stored every message twice read as 1000.5 Hz, then as
+/// gaps "where samples come every 0 s"; issue 76). Returns the messages
+/// dropped and those left that share a stamp with other values.
+fn drop_repeated_messages(g: &mut Group) -> (usize, usize) {
+    let n = g.stamps_ns.len();
+    let repeats = |i: usize, j: usize| {
+        g.stamps_ns[i] == g.stamps_ns[j]
+            && g.columns.iter().all(|c| c[i].to_bits() == c[j].to_bits())
+    };
+    let mut keep = vec![true; n];
+    let mut last = 0;
+    for i in 1..n {
+        if repeats(i, last) {
+            keep[i] = false;
+        } else {
+            last = i;
+        }
+    }
+    let dropped = keep.iter().filter(|k| !**k).count();
+    if dropped > 0 {
+        let kept = |v: &[i64]| -> Vec<i64> {
+            v.iter()
+                .zip(&keep)
+                .filter(|(_, k)| **k)
+                .map(|(x, _)| *x)
+                .collect()
+        };
+        g.stamps_ns = kept(&g.stamps_ns);
+        g.log_ns = kept(&g.log_ns);
+        for c in &mut g.columns {
+            *c = c
+                .iter()
+                .zip(&keep)
+                .filter(|(_, k)| **k)
+                .map(|(x, _)| *x)
+                .collect();
+        }
+    }
+    let clashing = g.stamps_ns.windows(2).filter(|w| w[0] == w[1]).count();
+    (dropped, clashing)
 }
 
 fn stream_name(topic: &str, k: usize) -> String {
