@@ -519,7 +519,18 @@ fn tabular(v: &mut Variable) {
     let texts = |p: Option<&Variable>| -> Option<Vec<String>> {
         p?.cells.iter().map(|c| c.text.clone()).collect()
     };
-    let (Some(data), Some(names)) = (get(&["data"]), texts(get(&["varnames", "varNames"]))) else {
+    // MATLAB 2026b (save version 8) keeps names over 63 characters whole in
+    // varNames2048, the truncated ones in varNames
+    let long_names = get(&["useVarNames2048"])
+        .and_then(scalar)
+        .is_some_and(|u| u != 0.0);
+    let names = if long_names {
+        texts(get(&["varNames2048"]))
+    } else {
+        None
+    }
+    .or_else(|| texts(get(&["varnames", "varNames"])));
+    let (Some(data), Some(names)) = (get(&["data"]), names) else {
         return;
     };
     if data.cells.len() != names.len() {
@@ -549,7 +560,16 @@ fn tabular(v: &mut Variable) {
         let time_name = texts(get(&["dimNames", "dimnames"]))
             .and_then(|d| d.into_iter().next())
             .unwrap_or_else(|| "Time".into());
-        if let Some(times) = get(&["rowTimes"]).and_then(row_seconds) {
+        let rows = data
+            .cells
+            .first()
+            .map_or(0, |c| c.dims.first().copied().unwrap_or(0));
+        let rows = get(&["numRows"])
+            .and_then(scalar)
+            .map_or(rows, |n| n as usize);
+        if let Some(times) =
+            get(&["rowTimes"]).and_then(|r| row_seconds(r).or_else(|| regular_row_times(r, rows)))
+        {
             // text variables (strings, categoricals, cellstr): events at the row times
             for f in &mut fields {
                 if let Some(texts) = texts_of(f).filter(|t| t.len() == times.len()) {
@@ -570,6 +590,131 @@ fn tabular(v: &mut Variable) {
     }
     v.fields = fields;
     v.events = events;
+}
+
+/// The one number of a 1 x 1 numeric (or logical) array.
+fn scalar(v: &Variable) -> Option<f64> {
+    match (&v.real, &v.words) {
+        (Some(r), _) if r.len() == 1 => Some(r[0]),
+        (_, Some(w)) if w.len() == 1 => Some(w[0] as f64),
+        _ => None,
+    }
+}
+
+/// The row times a timetable does not store (made with `SampleRate` or
+/// `TimeStep`): its `rowTimes` is then a struct of `origin` (a duration or
+/// datetime), `specifiedAsRate`, `sampleRate` (Hz) and `stepSize` (a
+/// duration, or a calendarDuration of months, days and milliseconds).
+/// Seconds as for stored row times: a duration origin as it is, a datetime
+/// origin counted from the first row; row k at k / rate (no drift from a
+/// rounded step), at k steps, or at k calendar months from the origin's date.
+fn regular_row_times(r: &Variable, rows: usize) -> Option<Vec<f64>> {
+    let field = |n: &str| r.fields.iter().find(|f| f.name == n);
+    let origin = field("origin")?;
+    let origin_field = |n: &str| origin.fields.iter().find(|f| f.name == n);
+    let (start_s, epoch_ms) = match origin.object_class.as_deref() {
+        Some("duration") => (scalar(origin_field("millis")?)? / 1000.0, None),
+        Some("datetime") => {
+            let data = origin_field("data")?;
+            let ms = match (&data.real, &data.complex_parts) {
+                (Some(re), _) if re.len() == 1 => re[0],
+                (None, Some((re, im))) if re.len() == 1 => re[0] + im[0],
+                _ => return None,
+            };
+            (0.0, Some(ms))
+        }
+        _ => return None,
+    };
+    if field("specifiedAsRate")
+        .and_then(scalar)
+        .is_some_and(|a| a != 0.0)
+    {
+        let fs = scalar(field("sampleRate")?)?;
+        if !(fs.is_finite() && fs > 0.0) {
+            return None;
+        }
+        return Some((0..rows).map(|k| start_s + k as f64 / fs).collect());
+    }
+    let step = field("stepSize")?;
+    let step_field = |n: &str| step.fields.iter().find(|f| f.name == n);
+    let step_s = match step.object_class.as_deref() {
+        Some("duration") => scalar(step_field("millis")?)? / 1000.0,
+        Some("calendarDuration") => {
+            let parts = step_field("components")?;
+            let part = |n: &str| {
+                parts
+                    .fields
+                    .iter()
+                    .find(|f| f.name == n)
+                    .and_then(scalar)
+                    .unwrap_or(0.0)
+            };
+            let (months, days, millis) = (part("months"), part("days"), part("millis"));
+            if months != 0.0 {
+                // calendar months are of unequal length: from the origin's date
+                let origin_ms = epoch_ms?;
+                if days != 0.0 || millis != 0.0 || months.fract() != 0.0 {
+                    return None;
+                }
+                return Some(
+                    (0..rows)
+                        .map(|k| {
+                            (add_months(origin_ms, months as i64 * k as i64) - origin_ms) / 1000.0
+                        })
+                        .collect(),
+                );
+            }
+            days * 86_400.0 + millis / 1000.0
+        }
+        _ => return None,
+    };
+    if !(step_s.is_finite() && step_s > 0.0) {
+        return None;
+    }
+    Some((0..rows).map(|k| start_s + k as f64 * step_s).collect())
+}
+
+/// `ms` since 1970-01-01 (UTC, proleptic Gregorian) moved by `months`
+/// calendar months, the day of the month and the time of day kept.
+fn add_months(ms: f64, months: i64) -> f64 {
+    const DAY_MS: f64 = 86_400_000.0;
+    let days = (ms / DAY_MS).floor();
+    let time_of_day = ms - days * DAY_MS;
+    let (y, m, d) = civil_from_days(days as i64);
+    let total = y * 12 + (m - 1) + months;
+    let (y, m) = (total.div_euclid(12), total.rem_euclid(12) + 1);
+    days_from_civil(y, m, d) as f64 * DAY_MS + time_of_day
+}
+
+/// Days since 1970-01-01 of a proleptic Gregorian date (the civil-calendar
+/// algorithm in eras of 400 years).
+fn days_from_civil(y: i64, m: i64, d: i64) -> i64 {
+    let y = if m <= 2 { y - 1 } else { y };
+    let era = y.div_euclid(400);
+    let year_of_era = y - era * 400;
+    let month_from_march = (m + 9) % 12;
+    let day_of_year = (153 * month_from_march + 2) / 5 + d - 1;
+    let day_of_era = year_of_era * 365 + year_of_era / 4 - year_of_era / 100 + day_of_year;
+    era * 146_097 + day_of_era - 719_468
+}
+
+/// The date of `days` since 1970-01-01 (inverse of [`days_from_civil`]).
+fn civil_from_days(days: i64) -> (i64, i64, i64) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let day_of_era = z - era * 146_097;
+    let year_of_era =
+        (day_of_era - day_of_era / 1460 + day_of_era / 36_524 - day_of_era / 146_096) / 365;
+    let day_of_year = day_of_era - (365 * year_of_era + year_of_era / 4 - year_of_era / 100);
+    let month_from_march = (5 * day_of_year + 2) / 153;
+    let d = day_of_year - (153 * month_from_march + 2) / 5 + 1;
+    let m = if month_from_march < 10 {
+        month_from_march + 3
+    } else {
+        month_from_march - 9
+    };
+    let y = year_of_era + era * 400 + i64::from(m <= 2);
+    (y, m, d)
 }
 
 /// A timetable's row times in seconds: a duration's `millis`, or a

@@ -745,7 +745,6 @@ impl PeriodicDesign {
     /// period (period index -1 for both), each channel's displacement from the posture.
     pub fn command(&self) -> Result<Command> {
         self.validate().map_err(|m| Error::invalid("protocol", m))?;
-        self.rms_within_limits()?;
         let n = self.period_samples();
         let one = self.one_period()?;
         let total = n * (self.periods + 2);
@@ -785,6 +784,8 @@ impl PeriodicDesign {
 
     /// Every sample against every limit, and what the signal excites.
     pub fn check(&self) -> Result<PeriodicReport> {
+        self.validate().map_err(|m| Error::invalid("protocol", m))?;
+        self.rms_within_limits()?;
         let command = self.command()?;
         let l = self.limits().map_err(|m| Error::invalid("limits", m))?;
         let fs = self.sample_rate_hz;

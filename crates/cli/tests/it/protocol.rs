@@ -584,7 +584,7 @@ fn a_subject_whose_noise_cannot_exist_is_refused() {
         ),
         (
             "drift_lowpass_hz = 0.0",
-            "[noise] drift_lowpass_hz = 0: expected a positive bandwidth",
+            "[noise] drift_lowpass_hz = 0: expected a bandwidth of 0.001 to 1e5 Hz",
         ),
     ] {
         let subject = dir.path().join("bad.subject.toml");

@@ -460,3 +460,228 @@ fn dejitter_recovers_a_regular_clock_piece_by_piece() {
         );
     }
 }
+
+/// CDR of a std_msgs/Float64 as ROS 2 writes it: the encapsulation header,
+/// then the value (aligned from the end of the header: no padding).
+fn float64_cdr(v: f64) -> Vec<u8> {
+    let mut b = vec![0, 1, 0, 0];
+    b.extend(v.to_le_bytes());
+    b
+}
+
+/// Issue 76: one chunk of millions of equal messages is a compression
+/// bomb (368 KB decoded to 1.5 GB, 40 chunks aborted at 5.7 GB): the
+/// numbers kept from one file are budgeted by its size, and the file is
+/// refused in one line once they exceed it.
+#[test]
+fn a_compression_bomb_is_refused_by_the_numbers_it_would_decode() {
+    let mut w = mcap::Writer::with_options(
+        Cursor::new(Vec::new()),
+        mcap::WriteOptions::new()
+            .chunk_size(Some(1 << 30))
+            .emit_message_indexes(false),
+    )
+    .unwrap();
+    let schema = w
+        .add_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
+        .unwrap();
+    let channel = w
+        .add_channel(schema, "/x", "cdr", &BTreeMap::new())
+        .unwrap();
+    let data = float64_cdr(0.5);
+    for _ in 0..1_000_000u64 {
+        w.write_to_known_channel(
+            &MessageHeader {
+                channel_id: channel,
+                sequence: 0,
+                log_time: 1_000_000_000,
+                publish_time: 1_000_000_000,
+            },
+            &data,
+        )
+        .unwrap();
+    }
+    w.finish().unwrap();
+    let bytes = w.into_inner().into_inner();
+    assert!(bytes.len() < 200_000, "{} bytes", bytes.len());
+    let e = read_bag(&bytes).unwrap_err().to_string();
+    assert!(
+        e.contains("hostile.mcap") && e.contains("compression bomb") && e.lines().count() == 1,
+        "{e}"
+    );
+}
+
+/// Issue 76: a flipped bit inside a chunk was converted in silence (q1
+/// 0.0109 -> 1.67e-7); the chunk's CRC now refuses it, naming the byte.
+#[test]
+fn a_chunk_whose_crc_disagrees_is_refused() {
+    let mut w = mcap::Writer::with_options(
+        Cursor::new(Vec::new()),
+        mcap::WriteOptions::new().compression(None),
+    )
+    .unwrap();
+    let schema = w
+        .add_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
+        .unwrap();
+    let channel = w
+        .add_channel(schema, "/x", "cdr", &BTreeMap::new())
+        .unwrap();
+    for k in 0..50u64 {
+        w.write_to_known_channel(
+            &MessageHeader {
+                channel_id: channel,
+                sequence: k as u32,
+                log_time: 1_000_000_000 + k * 2_000_000,
+                publish_time: 1_000_000_000 + k * 2_000_000,
+            },
+            &float64_cdr(0.0109 + k as f64),
+        )
+        .unwrap();
+    }
+    w.finish().unwrap();
+    let mut bytes = w.into_inner().into_inner();
+    assert!(read_bag(&bytes).is_ok());
+    let value = (0.0109f64 + 7.0).to_le_bytes();
+    let at = bytes
+        .windows(8)
+        .position(|b| b == value)
+        .expect("the value is stored uncompressed");
+    bytes[at + 6] ^= 0x10;
+    let e = read_bag(&bytes).unwrap_err().to_string();
+    assert!(
+        e.contains("hostile.mcap") && e.contains("is corrupt: its CRC") && e.lines().count() == 1,
+        "{e}"
+    );
+}
+
+/// Issue 76: an Attachment record whose body leaves no room for its CRC
+/// panicked inside the mcap crate ("slice index starts at 34 but ends at
+/// 32"); records limpid does not read are not parsed.
+#[test]
+fn an_attachment_too_short_for_its_crc_is_no_panic() {
+    let mut bytes = b"\x89MCAP0\r\n".to_vec();
+    let record = |bytes: &mut Vec<u8>, opcode: u8, body: &[u8]| {
+        bytes.push(opcode);
+        bytes.extend((body.len() as u64).to_le_bytes());
+        bytes.extend(body);
+    };
+    // header: profile "ros2", library ""
+    let mut header = 4u32.to_le_bytes().to_vec();
+    header.extend(b"ros2");
+    header.extend(0u32.to_le_bytes());
+    record(&mut bytes, 0x01, &header);
+    // attachment: log and create times, empty name and media type, data length 0, no CRC
+    let mut attachment = vec![0u8; 16];
+    attachment.extend(0u32.to_le_bytes());
+    attachment.extend(0u32.to_le_bytes());
+    attachment.extend(0u64.to_le_bytes());
+    attachment.extend([0u8; 2]);
+    record(&mut bytes, 0x09, &attachment);
+    let e = read_bag(&bytes).unwrap_err().to_string();
+    assert!(
+        e.contains("hostile.mcap") && !e.contains("panic") && e.lines().count() == 1,
+        "{e}"
+    );
+    // and a good bag with such an attachment after its messages reads
+    let good = write_mcap(&[good_topic()]);
+    assert!(read_bag(&good).is_ok());
+}
+
+/// A rosbag2 SQLite bag of `n` std_msgs/Float64 messages at 500 Hz, each
+/// written `copies` times, in the journal mode given; returns the folder
+/// holding `bag.db3` (and, in WAL mode with `keep_log`, `bag.db3-wal`
+/// copied while the writer was open, so its last transactions live there).
+fn write_db3(dir: &Path, wal: bool, keep_log: bool, copies: usize) -> std::path::PathBuf {
+    let work = dir.join("writing");
+    std::fs::create_dir_all(&work).unwrap();
+    let db_path = work.join("bag.db3");
+    let db = rusqlite::Connection::open(&db_path).unwrap();
+    if wal {
+        db.query_row("PRAGMA journal_mode=WAL", [], |_| Ok(()))
+            .unwrap();
+        db.execute_batch("PRAGMA wal_autocheckpoint=0").unwrap();
+    }
+    db.execute_batch(
+        "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, serialization_format TEXT, offered_qos_profiles TEXT);
+         CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, timestamp INTEGER, data BLOB);
+         INSERT INTO topics VALUES (1, '/x', 'std_msgs/msg/Float64', 'cdr', '');",
+    )
+    .unwrap();
+    for k in 0..200i64 {
+        for _ in 0..copies {
+            db.execute(
+                "INSERT INTO messages(topic_id, timestamp, data) VALUES (1, ?1, ?2)",
+                rusqlite::params![1_000_000_000 + k * 2_000_000, float64_cdr(k as f64 * 0.001)],
+            )
+            .unwrap();
+        }
+    }
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    if !keep_log {
+        drop(db); // closing checkpoints the log into the file
+        std::fs::copy(&db_path, out.join("bag.db3")).unwrap();
+        return out.join("bag.db3");
+    }
+    std::fs::copy(&db_path, out.join("bag.db3")).unwrap();
+    {
+        let mut log = db_path.clone().into_os_string();
+        log.push("-wal");
+        let log = std::path::PathBuf::from(log);
+        assert!(
+            std::fs::metadata(&log).unwrap().len() > 32,
+            "the log holds frames"
+        );
+        std::fs::copy(&log, out.join("bag.db3-wal")).unwrap();
+    }
+    drop(db);
+    out.join("bag.db3")
+}
+
+/// Issue 76: a bag in WAL journal mode (rosbag2's `resilient` preset) was
+/// "unable to open database file"; it is read, with the transactions its
+/// log holds, and without a log.
+#[test]
+fn a_wal_mode_sqlite_bag_is_read_with_its_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let with_log = write_db3(&dir.path().join("a"), true, true, 1);
+    let source = read_source(&with_log).unwrap();
+    let x = &source.streams[0].channels[0].values;
+    assert_eq!(x.len(), 200, "every message, those in the log too");
+    assert_eq!(x[199], 0.199);
+    // the bag's folder is left as it was (SQLite worked on a copy)
+    let names: Vec<_> = std::fs::read_dir(with_log.parent().unwrap())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+    // checkpointed (closed) and read from memory: the header still says WAL
+    let closed = write_db3(&dir.path().join("b"), true, false, 1);
+    let bytes = std::fs::read(&closed).unwrap();
+    assert_eq!(bytes[18], 2, "a WAL-mode header");
+    let source = read_source(&closed).unwrap();
+    assert_eq!(source.streams[0].channels[0].values.len(), 200);
+}
+
+/// Issue 76: every message stored twice read as "effective 1000.5 Hz", then
+/// "a gap ... where samples come every 0 s"; repeats are dropped and said.
+#[test]
+fn messages_stored_twice_are_dropped_and_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let twice = write_db3(dir.path(), false, false, 2);
+    let source = read_source(&twice).unwrap();
+    assert_eq!(source.streams[0].channels[0].values.len(), 200);
+    let notes = source.notes.join("\n");
+    assert!(
+        notes.contains("200 messages repeat the one before") && notes.contains("stored twice"),
+        "{notes}"
+    );
+    let map = ChannelMap::parse("[time]\nstream = \"/x\"\n[columns]\nq1 = \"/x.data\"\n").unwrap();
+    let rec = limpid_io::read_recording_mapped(&twice, Some(&map)).unwrap();
+    assert_eq!(rec.len(), 200);
+    assert!(
+        (rec.sample_rate() - 500.0).abs() < 1e-6,
+        "{}",
+        rec.sample_rate()
+    );
+}

@@ -598,6 +598,21 @@ fn c3d_sizes_are_checked_before_anything_is_allocated() {
         e.contains("half.c3d") && e.contains("cut short") && e.contains("declares 50 frames"),
         "{e}"
     );
+    // issue 76: the header's point count (word 2), by which the decoder
+    // sizes its grid (65535 for 3 asked for 7.9 GB), against POINT:USED
+    let (_d, p) = patched("rig.c3d", 2, &65535u16.to_le_bytes());
+    let e = limpid_io::sources::read_source(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("declares 65535 points but POINT:USED is") && e.lines().count() == 1,
+        "{e}"
+    );
+    // and its frame rate (words 11-12) against POINT:RATE
+    let (_d, p) = patched("rig.c3d", 20, &89.5f32.to_le_bytes());
+    let e = limpid_io::sources::read_source(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("frame rate 89.5 Hz disagrees with POINT:RATE"),
+        "{e}"
+    );
     // the file itself reads whole
     assert_eq!(
         limpid_io::sources::read_source(&fixture("rig.c3d"))

@@ -325,6 +325,79 @@ mod objects {
             .contains("categoryNames = {'high', 'low'}"));
     }
 
+    /// Issue 76: timetables made with `SampleRate` or `TimeStep` store no
+    /// row times (mat-io's test data, saved by MATLAB): they are made from
+    /// the origin and the rate or step (calendar months from the origin's
+    /// date); a name over 63 characters is read whole from varNames2048.
+    #[test]
+    fn timetables_without_stored_row_times_get_them_from_their_rate_or_step() {
+        for version in ["v7", "v73"] {
+            let source =
+                read_source(&matlab(&format!("test_timetable_steps_{version}.mat"))).unwrap();
+            let time = |name: &str| -> Vec<f64> {
+                source
+                    .streams
+                    .iter()
+                    .flat_map(|s| &s.channels)
+                    .find(|c| c.name == format!("{name}.Time"))
+                    .unwrap_or_else(|| panic!("{version}: no {name}.Time"))
+                    .values
+                    .clone()
+            };
+            let close = |a: &[f64], b: &[f64]| {
+                a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6)
+            };
+            let year = 365.2425 * 86_400.0;
+            for (name, expected) in [
+                ("timetable_step_millis", vec![0.0, 0.01, 0.02]),
+                ("timetable_step_start_offset", vec![0.0, 1.0, 2.0]),
+                ("timetable_step_years", vec![0.0, year, 2.0 * year]),
+                ("timetable_step_caldays", vec![0.0, 86_400.0, 172_800.0]),
+                // 2020-01-15, 02-15 (31 days later), 03-15 (29 more: a leap year)
+                (
+                    "timetable_step_calmonths",
+                    vec![0.0, 31.0 * 86_400.0, 60.0 * 86_400.0],
+                ),
+            ] {
+                let t = time(name);
+                assert!(close(&t, &expected), "{version} {name}: {t:?}");
+            }
+            // the 4-row timetable at 3 Hz is not of the file's one length:
+            // listed with its made row times
+            let notes = source.notes.join("\n");
+            assert!(
+                notes.contains(
+                    "timetable_sample_rate: a timetable object; properties Time (4 x 1, double)"
+                ),
+                "{version}: {notes}"
+            );
+            // a map naming the synthesised time converts
+            let map = ChannelMap::parse(
+                "[columns]\nt = \"timetable_step_millis.Time\"\nq1 = \"timetable_step_millis.data1\"\n",
+            )
+            .unwrap();
+            let rec = limpid_io::read_recording_mapped(
+                matlab(&format!("test_timetable_steps_{version}.mat")),
+                Some(&map),
+            )
+            .unwrap();
+            assert!((rec.sample_rate() - 100.0).abs() < 1e-6, "{version}");
+            let long = read_source(&matlab(&format!("test_timetablev8_{version}.mat"))).unwrap();
+            let name = format!("timetable_v8_long_varname.{}", "A".repeat(100));
+            assert_eq!(channel_anywhere(&long, &name), [1.0, 2.0, 3.0], "{version}");
+        }
+    }
+
+    fn channel_anywhere<'a>(source: &'a limpid_io::sources::Source, name: &str) -> &'a [f64] {
+        &source
+            .streams
+            .iter()
+            .flat_map(|s| &s.channels)
+            .find(|c| c.name == name)
+            .unwrap_or_else(|| panic!("no channel {name}"))
+            .values
+    }
+
     #[test]
     fn a_timetables_text_variables_are_marker_streams_at_its_row_times() {
         let source = read_source(&fixture("tt_events.mat")).unwrap();
