@@ -166,5 +166,10 @@ pub fn run_convert(args: ConvertArgs, cx: &Context) -> CliResult {
             println!("note: {n}");
         }
     }
+    // what the reader left out of the file (messages of an undeclared
+    // topic, ones that did not decode) is said, not only recorded
+    for w in rec.warnings() {
+        eprintln!("limpid: warning: {}: {w}", args.file.display());
+    }
     Ok(())
 }

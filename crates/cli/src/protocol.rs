@@ -163,7 +163,10 @@ pub fn run(cmd: ProtocolCommand, cx: &Context) -> CliResult {
                 Design::preset(&name)?.to_toml()
             );
             match output {
-                Some(p) => limpid_core::files::write_file(&p, text.as_bytes())?,
+                Some(p) => {
+                    toml_output(&p)?;
+                    limpid_core::files::write_file(&p, text.as_bytes())?
+                }
                 None => print!("{text}"),
             }
             Ok(())
@@ -180,12 +183,15 @@ pub fn run(cmd: ProtocolCommand, cx: &Context) -> CliResult {
             match (read_design(&protocol)?.0, robot) {
             (Design::CentreOut(p), Some(robot)) => export(&p, &robot, &protocol, &output),
             (Design::CentreOut(p), None) => export_command(&p, &protocol, &output),
-            (Design::Planar(p), _) => export_planar(&p, &output),
+            (Design::Planar(_) | Design::Stochastic(_), Some(_)) => Err(
+                "--robot: a planar or stochastic protocol is exported as its own commands (joint angles; commanded inputs), not through a robot: leave out --robot".into(),
+            ),
+            (Design::Planar(p), None) => export_planar(&p, &output),
             (Design::Periodic(p), None) => export_periodic(&p, &output),
             (Design::Periodic(_), Some(_)) => Err(
                 "a multisine or PRBS is exported in its own coordinates (t, the channels, period): leave out --robot".into(),
             ),
-            (Design::Stochastic(p), _) => export_stochastic(&p, &output),
+            (Design::Stochastic(p), None) => export_stochastic(&p, &output),
             (Design::Ensemble(_) | Design::RampAndHold(_) | Design::Walking(_), _) => Err(
                 "ensemble, ramp-and-hold and walking protocols are for `limpid simulate`; exporting them to a robot is not supported yet".into(),
             ),
@@ -347,6 +353,24 @@ fn export_command(p: &Protocol, protocol: &Path, output: &Path) -> CliResult {
         rec.len() as f64 / p.sample_rate_hz
     );
     Ok(())
+}
+
+/// A protocol is written as TOML: an output named otherwise (`-o x.xlsx`
+/// wrote TOML into a spreadsheet's name; issue 76) is refused.
+fn toml_output(path: &Path) -> CliResult {
+    let toml = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if toml {
+        Ok(())
+    } else {
+        Err(format!(
+            "{}: a protocol is written as TOML: name the output NAME.toml",
+            path.display()
+        )
+        .into())
+    }
 }
 
 fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
@@ -526,6 +550,7 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
             .map(|p| (p, "the baseline (--baseline)")),
     );
     if let Some(out) = &args.output {
+        toml_output(out)?;
         limpid_core::files::refuse_overwriting_inputs(&[(out, "the output (-o)")], &inputs)?;
         // the output's folder before the seconds of designing, as `simulate` makes it
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -134,6 +134,38 @@ pub fn simulate_design(
     controller: RigController,
     seed: u64,
 ) -> Result<Vec<Simulated>> {
+    simulate_on(design, subject, controller, seed).map_err(|e| blame_the_subject(e, subject))
+}
+
+/// An error from inside the simulation (a recording of implausible values,
+/// a filter its noise cannot have) is the subject file's when one was given:
+/// "virtual ankle: row 2, column tau1: implausible value 3.65e286" named
+/// no file a user wrote (subject stiffness 1e12; issue 76).
+fn blame_the_subject(e: Error, subject: Option<&SubjectText>) -> Error {
+    let Some(s) = subject else {
+        return e;
+    };
+    let text = e.to_string();
+    let inside = text.starts_with("virtual")
+        || matches!(&e, Error::InvalidParameter { name, .. } if name == "cutoff_hz");
+    if !inside {
+        return e;
+    }
+    Error::Format {
+        path: s.path.to_path_buf(),
+        message: format!(
+            "simulating this subject gives what no limb and rig can ({}): check its values (stiffness, inertia, noise)",
+            limpid_core::error::tidy_numbers(&text)
+        ),
+    }
+}
+
+fn simulate_on(
+    design: &Design,
+    subject: Option<&SubjectText>,
+    controller: RigController,
+    seed: u64,
+) -> Result<Vec<Simulated>> {
     match design {
         Design::CentreOut(p) => centre_out(p, subject, seed),
         Design::Planar(p) => planar(p, subject, seed).map(|s| vec![s]),

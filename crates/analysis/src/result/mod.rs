@@ -291,12 +291,71 @@ impl Document {
             }
         }
         let doc: Document =
-            serde_json::from_value(v).map_err(|e| format!("{name}: not a limpid result: {e}"))?;
+            serde_json::from_value(v.clone()).map_err(|e| {
+                match offending_field(&v, &e.to_string()) {
+                    Some(path) => format!("{name}: not a limpid result: field {path}: {e}"),
+                    None => format!("{name}: not a limpid result: {e}"),
+                }
+            })?;
         // fields that must agree with each other, before anything indexes them
         crate::shapes::check(&doc.estimate)
             .map_err(|e| format!("{name}: not a consistent limpid result: {e}"))?;
         Ok(doc)
     }
+}
+
+/// Where a hand-edited document holds the value serde could not take
+/// (`invalid type: string "high", expected f64`): the result kinds are
+/// read through a tagged, flattened enum, whose errors carry no path, so
+/// the value the error names is looked for in the document
+/// (`fit.vaf[1]`); the first of several is named. None when the error
+/// names no value (a missing field names itself).
+pub fn offending_field(v: &serde_json::Value, error: &str) -> Option<String> {
+    use serde_json::Value;
+    let found = error.strip_prefix("invalid type: ")?;
+    let found = found.split(", expected").next()?;
+    let matches = |x: &Value| -> bool {
+        match x {
+            Value::Null => found == "null",
+            Value::Bool(b) => found == format!("boolean `{b}`"),
+            Value::String(t) => found == format!("string {t:?}"),
+            Value::Number(n) => {
+                found == format!("integer `{n}`") || found == format!("floating point `{n}`")
+            }
+            Value::Array(_) => found == "sequence",
+            Value::Object(_) => found == "map",
+        }
+    };
+    fn walk(
+        x: &serde_json::Value,
+        path: &mut String,
+        matches: &dyn Fn(&serde_json::Value) -> bool,
+    ) -> Option<String> {
+        if matches(x) && !path.is_empty() {
+            return Some(path.clone());
+        }
+        let len = path.len();
+        let found = match x {
+            serde_json::Value::Object(map) => map.iter().find_map(|(k, child)| {
+                if !path.is_empty() {
+                    path.push('.');
+                }
+                path.push_str(k);
+                let r = walk(child, path, matches);
+                path.truncate(len);
+                r
+            }),
+            serde_json::Value::Array(items) => items.iter().enumerate().find_map(|(i, child)| {
+                path.push_str(&format!("[{i}]"));
+                let r = walk(child, path, matches);
+                path.truncate(len);
+                r
+            }),
+            _ => None,
+        };
+        found
+    }
+    walk(v, &mut String::new(), &matches)
 }
 
 impl From<Estimate> for Document {

@@ -512,6 +512,25 @@ impl DesignInputs<'_> {
 
 /// A periodic baseline is simulated `runs` times: at most [`MAX_DESIGN_SAMPLES`].
 pub(crate) fn check_periodic_baseline(b: &limpid_lab::periodic::PeriodicDesign) -> Result<()> {
+    // its size from its fields before any sample is made (a period of 2000 s
+    // was generated and simulated for 31 s before a refusal; issue 76)
+    b.validate().map_err(|m| Error::invalid("baseline", m))?;
+    let declared = (b.period_samples() * (b.periods + 2)) as f64;
+    if declared > MAX_DESIGN_SAMPLES {
+        return Err(Error::invalid(
+            "baseline",
+            format!("{declared:.0} samples; a baseline is simulated `runs` times and may hold at most {MAX_DESIGN_SAMPLES:.0}"),
+        ));
+    }
+    if b.periods < 2 {
+        return Err(Error::invalid(
+            "baseline",
+            format!(
+                "{} period: the period-to-period scatter its prediction rests on needs at least 2",
+                b.periods
+            ),
+        ));
+    }
     let samples = b.check()?.samples as f64;
     if samples > MAX_DESIGN_SAMPLES {
         return Err(Error::invalid(

@@ -22,6 +22,7 @@ mod report_documents;
 mod reproduce;
 mod rerun;
 mod robustness;
+mod robustness4;
 mod settings;
 mod stochastic;
 mod varying;

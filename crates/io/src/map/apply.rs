@@ -619,13 +619,26 @@ pub(crate) fn gap_in_base(
         let gap = t[i] - t[i - 1];
         let new_trial = new_trial(i);
         if gap > 1.5 * step && !new_trial {
+            // messages the reader left out (an undeclared topic id) are the
+            // likely cause: said with the gap, not lost behind it
+            let left_out: Vec<&str> = source
+                .notes
+                .iter()
+                .filter(|n| n.contains("left out"))
+                .map(String::as_str)
+                .collect();
             return Err(source.error(format!(
-                "{}, sample {} of the recording (t = {:.6} s): a gap of {:.6} s where samples come every {:.6} s (dropped samples in the time-base stream); limpid does not interpolate the time base",
+                "{}, sample {} of the recording (t = {:.6} s): a gap of {:.6} s where samples come every {:.6} s (dropped samples in the time-base stream); limpid does not interpolate the time base{}",
                 base.label(),
                 i + 1,
                 t[i],
                 gap,
-                step
+                step,
+                if left_out.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (the reader left messages out: {})", left_out.join("; "))
+                }
             )));
         }
     }
