@@ -73,6 +73,7 @@ fn kind(name: &str) -> &str {
 pub fn execute(name: &str, bytes: &[u8]) -> Outcome {
     let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match kind(name) {
         "toml" if name.starts_with("map-") => channel_map(bytes),
+        "toml" if name.starts_with("prior-") => design_prior(name, bytes),
         "toml" => protocol(name, bytes),
         "paths" => output_paths(bytes),
         "wire" => datagrams(bytes),
@@ -271,6 +272,8 @@ fn request_recordings(request: &limpid_ident::request::Request) -> Vec<&'static 
     let csv: &'static [u8] = match request {
         Request::Linear(_) => include_bytes!("../corpus/seeds/linear3d.csv"),
         Request::Cocontraction(_) => include_bytes!("../corpus/seeds/cocontraction.csv"),
+        // walking: a recording of 40 strides with heel strikes and pulses
+        Request::Varying(v) if v.event.is_some() => include_bytes!("../corpus/seeds/walk.csv"),
         Request::Planar(_) | Request::WindowSweep(_) | Request::Varying(_) => {
             include_bytes!("../corpus/seeds/joint2.csv")
         }
@@ -420,6 +423,27 @@ fn estimate_all(rec: &limpid_core::Recording) -> (Vec<String>, bool) {
         }
     }
     (findings, any)
+}
+
+/// A design prior (`prior-endpoint-*`, `prior-planar-*`, `prior-ankle-*`):
+/// read and checked as `protocol design` reads it, before any design runs
+/// (a design takes seconds; the prior's refusals are what is fuzzed).
+fn design_prior(name: &str, bytes: &[u8]) -> Outcome {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return Outcome::Refused;
+    };
+    let path = Path::new(name);
+    let read = if name.starts_with("prior-planar") {
+        limpid_app::design::planar::PlanarPrior::from_toml(text, path).map(|_| ())
+    } else if name.starts_with("prior-ankle") {
+        limpid_app::design::reflex::ReflexPrior::from_toml(text, path).map(|_| ())
+    } else {
+        limpid_app::design::Prior::from_toml(text, path).map(|_| ())
+    };
+    match read {
+        Ok(()) => Outcome::Accepted,
+        Err(_) => Outcome::Refused,
+    }
 }
 
 fn protocol(name: &str, bytes: &[u8]) -> Outcome {

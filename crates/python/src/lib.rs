@@ -694,6 +694,15 @@ fn report(py: Python<'_>, results: Vec<String>, path: std::path::PathBuf) -> PyR
         .map_err(|e| PyOSError::new_err(e.to_string()))
 }
 
+/// Check a result document (JSON text) as `limpid report` reads one: its
+/// kind's fields, types and shapes; the error names the field.
+#[pyfunction]
+fn check_result(text: &str) -> PyResult<()> {
+    Document::from_json("result", text)
+        .map(|_| ())
+        .map_err(value_err)
+}
+
 /// A result as the JSON document of `limpid_analysis::result`.
 fn document(e: Estimate) -> String {
     Document::new(e).to_json()
@@ -720,6 +729,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(report, m)?)?;
+    m.add_function(wrap_pyfunction!(check_result, m)?)?;
     m.add_function(wrap_pyfunction!(with_standard_error, m)?)?;
     m.add_function(wrap_pyfunction!(matrix_element_unit, m)?)?;
     m.add_function(wrap_pyfunction!(set_threads, m)?)?;

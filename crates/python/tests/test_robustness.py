@@ -191,3 +191,44 @@ def test_the_thread_count_is_the_callers_and_changes_no_number():
         limpid.set_threads(0)
     with pytest.raises(ValueError, match="set_threads: expected an int or None"):
         limpid.set_threads(2.5)
+
+
+def test_thread_counts_beyond_any_machine_are_refused():
+    """Issue 76: set_threads(10**6) started a minute of threads, 2**63 was taken."""
+    for n in (10**6, 2**63):
+        with pytest.raises(ValueError, match="at most 1024"):
+            limpid.set_threads(n)
+    limpid.set_threads(None)
+
+
+def test_a_design_duration_is_a_number_and_an_edited_design_names_its_field():
+    """Issue 76: design(..., "10") took text for a duration; a design whose
+    pooled list was shortened raised IndexError from to_pandas."""
+    with pytest.raises(ValueError, match="duration_s: expected a number"):
+        limpid.design("demo:S1", "10", limits_from="artemiadis-3d")
+    _, r = limpid.design("demo:S1", 60.0, limits_from="artemiadis-3d", runs=3)
+    d = r.to_dict()
+    assert len(r.to_pandas()) == 6
+    d["predicted"]["pooled"]["se"] = d["predicted"]["pooled"]["se"][:1]
+    with pytest.raises(ValueError, match="length"):
+        limpid.Result.from_dict(d)
+
+
+def test_a_2d_plot_on_3d_axes_names_the_axes_it_wants():
+    """Issue 76: plot.coherence(ax=<3-D axes>) raised matplotlib's own error."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from limpid import plot
+
+    t = np.arange(4096) / 100.0
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(t.size)
+    y = np.convolve(u, [0.5, 0.3, 0.1], mode="same") + 0.1 * rng.standard_normal(t.size)
+    r = limpid.spectra({"t": t, "u": u, "y": y}, ["u"], ["y"], nperseg=256)
+    fig = plt.figure()
+    ax3 = fig.add_subplot(projection="3d")
+    with pytest.raises(ValueError, match="2-D Axes"):
+        plot.coherence(r, ax=np.array([[ax3]]))
+    plt.close(fig)

@@ -136,8 +136,17 @@ class Result:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Result":
-        """A Result from a plain dict (as ``to_dict()`` or the CLI's ``--json`` give); the dict is copied."""
-        return cls(copy.deepcopy(dict(data)))
+        """A Result from a plain dict (as ``to_dict()`` or the CLI's ``--json`` give); the dict is copied.
+        A result document (with its ``schema`` key) is checked as ``limpid report``
+        reads one: a field of the wrong type or length is a ValueError naming it."""
+        d = copy.deepcopy(dict(data))
+        if "schema" in d:
+            try:
+                text = json.dumps(d, allow_nan=False)
+            except (TypeError, ValueError) as e:
+                raise ValueError(f"result: not a limpid result: {e}") from None
+            _limpid.check_result(text)
+        return cls(d)
 
     def __getattr__(self, name: str) -> Any:
         # private and dunder names are never fields (pickle and copy probe them)
@@ -802,7 +811,7 @@ def design(
         prior_text, prior_name = prior, "<prior>"
     else:
         prior_text, prior_name = _text_or_file(prior)
-    duration = float(duration_s)
+    duration = _number("duration_s", duration_s)
     toml_text, doc = _limpid.design(
         prior_text,
         duration,

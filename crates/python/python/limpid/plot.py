@@ -135,6 +135,9 @@ def _panels(ax: Any, rows: int, cols: int, what: str, panel: Tuple[float, float]
             raise ValueError(f"{what}: ax= takes matplotlib Axes, got {type(x).__name__}")
         if projection == "3d" and not hasattr(x, "get_zlim"):
             raise ValueError(f"{what} needs a 3-D Axes: fig.add_subplot(projection='3d')")
+        if projection is None and hasattr(x, "get_zlim"):
+            # a 3-D Axes draws a 2-D figure only with matplotlib's own error
+            raise ValueError(f"{what} draws on 2-D Axes: ax= takes plt.subplots(...)[1], not a 3-D Axes")
     return a.flat[0].figure, a, False
 
 

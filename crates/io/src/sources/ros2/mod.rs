@@ -143,7 +143,7 @@ impl Collector {
         Err(Error::Format {
             path: self.file.clone(),
             message: format!(
-                "its messages decode to more than {} MiB of numbers from {} bytes (at most {} times the file's size and {} MiB per file): a compression bomb, or a bag to split (ros2 bag convert)",
+                "its messages decode to more than {} MiB of numbers from a file of {} bytes (limpid keeps {} bytes of numbers per byte of a bag file, at least 8 MiB, at most {} MiB): a compression bomb, or a bag to split (ros2 bag convert)",
                 mib(self.budget),
                 self.file_bytes,
                 MAX_DECODED_RATIO,
