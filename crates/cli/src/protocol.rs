@@ -357,12 +357,14 @@ fn export_command(p: &Protocol, protocol: &Path, output: &Path) -> CliResult {
 
 /// A protocol is written as TOML: an output named otherwise (`-o x.xlsx`
 /// wrote TOML into a spreadsheet's name; issue 76) is refused.
+/// A device or FIFO (`-o /dev/null`, a pipe) is written through as it is.
 fn toml_output(path: &Path) -> CliResult {
     let toml = path
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if toml {
+    let stream = std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    if toml || stream {
         Ok(())
     } else {
         Err(format!(
