@@ -685,3 +685,37 @@ fn messages_stored_twice_are_dropped_and_said() {
         rec.sample_rate()
     );
 }
+
+/// A bomb of messages on a topic that is never read (no definition) is
+/// refused by the same budget: each message costs its decompression.
+#[test]
+fn a_bomb_of_unread_messages_is_refused_too() {
+    let mut w = mcap::Writer::with_options(
+        Cursor::new(Vec::new()),
+        mcap::WriteOptions::new()
+            .chunk_size(Some(1 << 30))
+            .emit_message_indexes(false),
+    )
+    .unwrap();
+    let schema = w.add_schema("my_msgs/msg/Unknown", "ros2msg", b"").unwrap();
+    let channel = w
+        .add_channel(schema, "/unknown", "cdr", &BTreeMap::new())
+        .unwrap();
+    for _ in 0..1_500_000u64 {
+        w.write_to_known_channel(
+            &MessageHeader {
+                channel_id: channel,
+                sequence: 0,
+                log_time: 1_000_000_000,
+                publish_time: 1_000_000_000,
+            },
+            &[0, 1, 0, 0],
+        )
+        .unwrap();
+    }
+    w.finish().unwrap();
+    let e = read_bag(&w.into_inner().into_inner())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("compression bomb"), "{e}");
+}

@@ -181,7 +181,11 @@ fn read_mcap(path: &Path, bytes: &[u8], c: &mut Collector) -> Result<()> {
                             c.message(k, clamp_ns(header.log_time), &data);
                             c.check_budget()?;
                         }
-                        None => unknown_channel += 1,
+                        None => {
+                            unknown_channel += 1;
+                            c.count_unkept();
+                            c.check_budget()?;
+                        }
                     },
                     _ => {}
                 }
@@ -318,7 +322,11 @@ fn read_db3(path: &Path, bytes: &[u8], c: &mut Collector) -> Result<()> {
                 c.message(k, time, bytes);
                 c.check_budget()?;
             }
-            None => orphans += 1,
+            None => {
+                orphans += 1;
+                c.count_unkept();
+                c.check_budget()?;
+            }
         }
     }
     if orphans > 0 {

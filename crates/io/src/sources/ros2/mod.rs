@@ -49,8 +49,8 @@ pub const MAX_SHAPES: usize = 8;
 /// Header stamps further than this from the log times are on another clock (ns).
 const OTHER_CLOCK_NS: i64 = 60 * 1_000_000_000;
 
-/// Most numbers (values and two stamps a message; 8 bytes of text count
-/// as one) kept from one bag file: 1 GiB of f64, an hour of a 1 kHz
+/// Most numbers (values and two stamps a message, one for a message not
+/// kept; 8 bytes of text count as one) kept from one bag file: 1 GiB of f64, an hour of a 1 kHz
 /// JointState of 7 joints with room to spare.
 pub const MAX_DECODED_NUMBERS: u64 = 1 << 27;
 
@@ -134,6 +134,11 @@ impl Collector {
         self.budget = decoded_budget(bytes);
     }
 
+    /// A message of no declared topic: it counts against the budget too.
+    pub(crate) fn count_unkept(&mut self) {
+        self.kept += 1;
+    }
+
     /// Refuse the file once the messages kept from it exceed its budget.
     pub(crate) fn check_budget(&self) -> Result<()> {
         if self.kept <= self.budget {
@@ -190,6 +195,9 @@ impl Collector {
 
     /// One message of topic `k`, logged at `log_ns`.
     pub(crate) fn message(&mut self, k: usize, log_ns: i64, data: &[u8]) {
+        // every message counts once, kept or not: millions of messages of a
+        // topic that is not read still cost their decompression
+        self.kept += 1;
         let topic = &mut self.topics[k];
         topic.messages += 1;
         if matches!(topic.content, Content::Unread(_)) {
@@ -248,7 +256,7 @@ impl Collector {
         match &mut topic.content {
             Content::Markers(m) => {
                 if let Some(text) = out.text.take() {
-                    self.kept += 2 + text.len() as u64 / 8;
+                    self.kept += 1 + text.len() as u64 / 8;
                     m.push((stamp, log_ns, text));
                 }
             }
@@ -279,7 +287,7 @@ impl Collector {
                     topic.failed.0 += 1;
                     return;
                 }
-                self.kept += 2 + out.values.len() as u64;
+                self.kept += 1 + out.values.len() as u64;
                 for (column, v) in group.columns.iter_mut().zip(&out.values) {
                     column.push(*v);
                 }
