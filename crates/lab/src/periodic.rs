@@ -692,7 +692,7 @@ impl PeriodicDesign {
                     .sum()
             };
             let total = power(0);
-            if !(total > 0.0) {
+            if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                 continue;
             }
             let rms = m.rms[c];

@@ -686,7 +686,31 @@ fn stochastic(
     seed: u64,
 ) -> Result<Simulated> {
     let springs: Springs = match subject {
-        Some(text) => parse::<RigSubjectFile>(text)?.springs,
+        Some(text) => {
+            let springs = parse::<RigSubjectFile>(text)?.springs;
+            // a spring array of real springs: none negative (not passive)
+            // or beyond a rig's (issue 76: negative springs simulated)
+            if let Some((i, k)) = springs
+                .iter()
+                .enumerate()
+                .find(|(_, k)| !(0.0..=1e6).contains(*k))
+            {
+                return Err(Error::Format {
+                    path: text.path.to_path_buf(),
+                    message: format!(
+                        "springs[{i}] = {}: a spring's stiffness is 0 (absent) to 1e6 N/m",
+                        limpid_core::error::Num(*k)
+                    ),
+                });
+            }
+            if springs.iter().all(|k| *k == 0.0) {
+                return Err(Error::Format {
+                    path: text.path.to_path_buf(),
+                    message: "springs: every spring is 0: nothing holds the end point".into(),
+                });
+            }
+            springs
+        }
         None => SPRING_SET_SA3,
     };
     let e = p.rig_experiment(&springs)?;

@@ -250,7 +250,7 @@ fn design_priors_below_a_limbs_floor_or_not_passive_are_refused_by_key() {
         ("gain", "gain = 1e-300", "reflex.gain = 1e-300"),
         ("delay", "delay_s = 10.0", "reflex.delay_s = 10"),
     ] {
-        let mut reflex = vec![
+        let mut reflex = [
             "gain = 8.0",
             "delay_s = 0.04",
             "natural_hz = 3.0",
@@ -372,6 +372,24 @@ fn subject_and_noise_values_beyond_a_limbs_name_the_subject_file() {
         &format!("{MATRICES}stiffness = [[1e12, 0, 0], [0, 300, 0], [0, 0, 300]]\n"),
     );
     refused(&simulate(&stiff), &["stiff.toml", "check its values"]);
+    // a spring array with a negative spring
+    let rig = preset(d.path(), "park-stochastic");
+    let springs = write(
+        d.path(),
+        "springs.toml",
+        "springs = [-38, 38, 38, 38, 0, 0, 0, 66]\n",
+    );
+    refused(
+        &limpid(&[
+            "simulate",
+            s(&rig),
+            "--subject",
+            s(&springs),
+            "-o",
+            s(&d.path().join("st.csv")),
+        ]),
+        &["springs.toml", "springs[0] = -38"],
+    );
 }
 
 #[test]

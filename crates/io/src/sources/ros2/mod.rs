@@ -144,7 +144,7 @@ impl Collector {
         if self.kept <= self.budget {
             return Ok(());
         }
-        let mib = |numbers: u64| numbers * 8 >> 20;
+        let mib = |numbers: u64| (numbers * 8) >> 20;
         Err(Error::Format {
             path: self.file.clone(),
             message: format!(
@@ -526,9 +526,9 @@ fn drop_repeated_messages(g: &mut Group) -> (usize, usize) {
     };
     let mut keep = vec![true; n];
     let mut last = 0;
-    for i in 1..n {
+    for (i, kept) in keep.iter_mut().enumerate().skip(1) {
         if repeats(i, last) {
-            keep[i] = false;
+            *kept = false;
         } else {
             last = i;
         }
