@@ -25,6 +25,16 @@ fn refused(out: &Output, says: &[&str]) {
     }
 }
 
+/// A preset's protocol with each `(from, to)` text replaced, written as `name`.
+fn preset_with(dir: &Path, name_of_preset: &str, edits: &[(&str, &str)], name: &str) -> PathBuf {
+    let mut text = std::fs::read_to_string(preset(dir, name_of_preset)).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "{name_of_preset}: no {from}");
+        text = text.replace(from, to);
+    }
+    write(dir, name, &text)
+}
+
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
@@ -434,23 +444,30 @@ fn degenerate_periodic_and_scheduled_protocols_are_refused_by_field() {
     );
     // a period of 10^4 s: refused by its limits (its phases are optimised
     // within a bounded work, not for minutes)
-    let p = preset(d.path(), "ankle-multisine");
-    let text = std::fs::read_to_string(&p)
-        .unwrap()
-        .replace("period_s = 10.0", "period_s = 10000.0")
-        .replace("periods = 6", "periods = 1");
-    let long = write(d.path(), "long.toml", &text);
+    let long = preset_with(
+        d.path(),
+        "ankle-multisine",
+        &[
+            ("period_s = 10.0", "period_s = 10000.0"),
+            ("periods = 6", "periods = 1"),
+        ],
+        "long.toml",
+    );
     refused(
         &limpid(&["protocol", "check", s(&long)]),
         &["long.toml", "exceeds the limit"],
     );
     // a stochastic design's baseline of one 2000 s period: refused at once
     let em = preset(d.path(), "endpoint-multisine");
-    let text = std::fs::read_to_string(&em)
-        .unwrap()
-        .replace("period_s = 20.0", "period_s = 2000.0")
-        .replace("periods = 6", "periods = 1");
-    let baseline = write(d.path(), "b2000.toml", &text);
+    let baseline = preset_with(
+        d.path(),
+        "endpoint-multisine",
+        &[
+            ("period_s = 20.0", "period_s = 2000.0"),
+            ("periods = 6", "periods = 1"),
+        ],
+        "b2000.toml",
+    );
     refused(
         &limpid(&[
             "protocol",

@@ -469,40 +469,57 @@ fn float64_cdr(v: f64) -> Vec<u8> {
     b
 }
 
-/// Issue 76: one chunk of millions of equal messages is a compression
-/// bomb (368 KB decoded to 1.5 GB, 40 chunks aborted at 5.7 GB): the
-/// numbers kept from one file are budgeted by its size, and the file is
-/// refused in one line once they exceed it.
-#[test]
-fn a_compression_bomb_is_refused_by_the_numbers_it_would_decode() {
+/// An MCAP of one topic whose messages (log time, CDR bytes) all sit in one
+/// chunk of the compression given, without message indexes (which would
+/// add 16 bytes a message outside the chunk).
+fn one_chunk(
+    type_name: &str,
+    definition: &[u8],
+    compression: Option<mcap::Compression>,
+    messages: impl Iterator<Item = (u64, Vec<u8>)>,
+) -> Vec<u8> {
     let mut w = mcap::Writer::with_options(
         Cursor::new(Vec::new()),
         mcap::WriteOptions::new()
             .chunk_size(Some(1 << 30))
+            .compression(compression)
             .emit_message_indexes(false),
     )
     .unwrap();
-    let schema = w
-        .add_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
-        .unwrap();
+    let schema = w.add_schema(type_name, "ros2msg", definition).unwrap();
     let channel = w
         .add_channel(schema, "/x", "cdr", &BTreeMap::new())
         .unwrap();
-    let data = float64_cdr(0.5);
-    for _ in 0..1_000_000u64 {
+    for (log_time, data) in messages {
+        // sequence numbers are not read; one value keeps a bomb small
         w.write_to_known_channel(
             &MessageHeader {
                 channel_id: channel,
                 sequence: 0,
-                log_time: 1_000_000_000,
-                publish_time: 1_000_000_000,
+                log_time,
+                publish_time: log_time,
             },
             &data,
         )
         .unwrap();
     }
     w.finish().unwrap();
-    let bytes = w.into_inner().into_inner();
+    w.into_inner().into_inner()
+}
+
+/// Issue 76: one chunk of millions of equal messages is a compression
+/// bomb (368 KB decoded to 1.5 GB, 40 chunks aborted at 5.7 GB): the
+/// numbers kept from one file are budgeted by its size, and the file is
+/// refused in one line once they exceed it.
+#[test]
+fn a_compression_bomb_is_refused_by_the_numbers_it_would_decode() {
+    // equal messages at one time compress to a few bytes each
+    let bytes = one_chunk(
+        "std_msgs/msg/Float64",
+        b"float64 data",
+        Some(mcap::Compression::Zstd),
+        std::iter::repeat_n((1_000_000_000, float64_cdr(0.5)), 1_000_000),
+    );
     assert!(bytes.len() < 200_000, "{} bytes", bytes.len());
     let e = read_bag(&bytes).unwrap_err().to_string();
     assert!(
@@ -515,31 +532,17 @@ fn a_compression_bomb_is_refused_by_the_numbers_it_would_decode() {
 /// 0.0109 -> 1.67e-7); the chunk's CRC now refuses it, naming the byte.
 #[test]
 fn a_chunk_whose_crc_disagrees_is_refused() {
-    let mut w = mcap::Writer::with_options(
-        Cursor::new(Vec::new()),
-        mcap::WriteOptions::new().compression(None),
-    )
-    .unwrap();
-    let schema = w
-        .add_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
-        .unwrap();
-    let channel = w
-        .add_channel(schema, "/x", "cdr", &BTreeMap::new())
-        .unwrap();
-    for k in 0..50u64 {
-        w.write_to_known_channel(
-            &MessageHeader {
-                channel_id: channel,
-                sequence: k as u32,
-                log_time: 1_000_000_000 + k * 2_000_000,
-                publish_time: 1_000_000_000 + k * 2_000_000,
-            },
-            &float64_cdr(0.0109 + k as f64),
-        )
-        .unwrap();
-    }
-    w.finish().unwrap();
-    let mut bytes = w.into_inner().into_inner();
+    let mut bytes = one_chunk(
+        "std_msgs/msg/Float64",
+        b"float64 data",
+        None,
+        (0..50u64).map(|k| {
+            (
+                1_000_000_000 + k * 2_000_000,
+                float64_cdr(0.0109 + k as f64),
+            )
+        }),
+    );
     assert!(read_bag(&bytes).is_ok());
     let value = (0.0109f64 + 7.0).to_le_bytes();
     let at = bytes
@@ -690,32 +693,12 @@ fn messages_stored_twice_are_dropped_and_said() {
 /// refused by the same budget: each message costs its decompression.
 #[test]
 fn a_bomb_of_unread_messages_is_refused_too() {
-    let mut w = mcap::Writer::with_options(
-        Cursor::new(Vec::new()),
-        mcap::WriteOptions::new()
-            .chunk_size(Some(1 << 30))
-            .emit_message_indexes(false),
-    )
-    .unwrap();
-    let schema = w.add_schema("my_msgs/msg/Unknown", "ros2msg", b"").unwrap();
-    let channel = w
-        .add_channel(schema, "/unknown", "cdr", &BTreeMap::new())
-        .unwrap();
-    for _ in 0..1_500_000u64 {
-        w.write_to_known_channel(
-            &MessageHeader {
-                channel_id: channel,
-                sequence: 0,
-                log_time: 1_000_000_000,
-                publish_time: 1_000_000_000,
-            },
-            &[0, 1, 0, 0],
-        )
-        .unwrap();
-    }
-    w.finish().unwrap();
-    let e = read_bag(&w.into_inner().into_inner())
-        .unwrap_err()
-        .to_string();
+    let bytes = one_chunk(
+        "my_msgs/msg/Unknown",
+        b"",
+        Some(mcap::Compression::Zstd),
+        std::iter::repeat_n((1_000_000_000, vec![0, 1, 0, 0]), 1_500_000),
+    );
+    let e = read_bag(&bytes).unwrap_err().to_string();
     assert!(e.contains("compression bomb"), "{e}");
 }
