@@ -105,55 +105,29 @@ fn walking(dir: &Path) -> PathBuf {
 fn walking_bins_below_a_sample_and_refractory_times_over_a_stride_are_refused() {
     let d = tempfile::tempdir().unwrap();
     let rec = walking(d.path());
+    let walk = |extra: &[&str]| {
+        let mut args = vec!["estimate", "varying", s(&rec), "--event", "heel_strike"];
+        args.extend_from_slice(extra);
+        limpid(&args)
+    };
     for bin in ["1e-12", "1e-7", "1e-300", "1e-6"] {
         refused(
-            &limpid(&[
-                "estimate",
-                "varying",
-                s(&rec),
-                "--event",
-                "heel_strike",
-                "--bin",
-                bin,
-            ]),
+            &walk(&["--bin", bin]),
             &["--bin", "shorter than one sample"],
         );
     }
     refused(
-        &limpid(&[
-            "estimate",
-            "varying",
-            s(&rec),
-            "--event",
-            "heel_strike",
-            "--schedule",
-            "time-since-event",
-            "--bin",
-            "1e-9",
-        ]),
+        &walk(&["--schedule", "time-since-event", "--bin", "1e-9"]),
         &["--bin", "shorter than one sample"],
     );
     refused(
-        &limpid(&[
-            "estimate",
-            "varying",
-            s(&rec),
-            "--event",
-            "heel_strike",
-            "--refractory",
-            "2000",
-        ]),
+        &walk(&["--refractory", "2000"]),
         &["--refractory", "longer than a stride"],
     );
     // the default still estimates, some point trusted
-    let v = json(&[
-        "estimate",
-        "varying",
-        s(&rec),
-        "--event",
-        "heel_strike",
-        "--json",
-    ]);
+    let out = walk(&["--json"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
     assert!(trusted_points(&v) > 0);
 }
 
