@@ -620,6 +620,16 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
     };
     let (toml, result) =
         limpid_app::design::design_from_texts(&args.method, &inputs_read).map_err(named)?;
+    // the result is read back before anything is written
+    let document = limpid_analysis::result::Document::new(result).with_run(
+        limpid_analysis::result::Run::of_this_process(
+            &inputs.iter().map(|(p, _)| *p).collect::<Vec<_>>(),
+        ),
+    );
+    let json = document
+        .to_readable_json_pretty()
+        .map_err(|e| format!("the design's result would not read back, nothing written: {e}"))?;
+    let result = document.estimate;
     if let Some(out) = &args.output {
         let units = if args.method == "planar" {
             "m, rad, s, Hz, N m"
@@ -633,14 +643,7 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         limpid_core::files::write_file(out, text.as_bytes())?;
     }
     if args.json {
-        println!(
-            "{}",
-            limpid_analysis::result::Document::new(result)
-                .with_run(limpid_analysis::result::Run::of_this_process(
-                    &inputs.iter().map(|(p, _)| *p).collect::<Vec<_>>()
-                ))
-                .to_json_pretty()
-        );
+        println!("{json}");
         return Ok(());
     }
     match &result {
@@ -872,6 +875,12 @@ fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     .map_err(|e| design_error(cx, args, e))?;
 
     let designed = design_reflex(&request).map_err(|e| design_error(cx, args, e))?;
+    let json = limpid_analysis::result::Document::new(
+        limpid_analysis::result::Estimate::ReflexDesign(designed.result.clone()),
+    )
+    .with_run(limpid_analysis::result::Run::of_this_process(&[]))
+    .to_readable_json_pretty()
+    .map_err(|e| format!("the design's result would not read back, nothing written: {e}"))?;
 
     if let Some(out) = &args.output {
         let text = format!(
@@ -883,14 +892,7 @@ fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     }
     let r = designed.result;
     if args.json {
-        println!(
-            "{}",
-            limpid_analysis::result::Document::new(
-                limpid_analysis::result::Estimate::ReflexDesign(r)
-            )
-            .with_run(limpid_analysis::result::Run::of_this_process(&[]))
-            .to_json_pretty()
-        );
+        println!("{json}");
         return Ok(());
     }
     let c = &r.chosen;

@@ -261,6 +261,16 @@ impl Document {
         serde_json::to_string_pretty(self).expect("results serialise (no map has non-string keys)")
     }
 
+    /// The document as pretty JSON, read back before it is given out: a
+    /// number that serialises as `null` (a design's SE of a prior at 1e-300
+    /// printed "inf %" and wrote a result `report` refused; issue 76) is an
+    /// error naming the field, not a file limpid cannot read.
+    pub fn to_readable_json_pretty(&self) -> Result<String, String> {
+        let text = self.to_json_pretty();
+        Document::from_json("the result", &text)?;
+        Ok(text)
+    }
+
     /// The document as compact JSON.
     pub fn to_json(&self) -> String {
         serde_json::to_string(self).expect("results serialise (no map has non-string keys)")
