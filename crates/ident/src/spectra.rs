@@ -486,10 +486,16 @@ fn repeats_with_the_period(
     if periods < 2 {
         return Ok(());
     }
-    let mean = x.iter().sum::<f64>() / x.len() as f64;
-    let power = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / x.len() as f64;
+    // each period about its own mean: a slow drift of the posture moves
+    // whole periods, it does not make them differ in shape
+    let means: Vec<f64> = x
+        .chunks_exact(n)
+        .map(|p| p.iter().sum::<f64>() / n as f64)
+        .collect();
+    let at = |i: usize| x[i] - means[i / n];
+    let power = (0..periods * n).map(|i| at(i).powi(2)).sum::<f64>() / (periods * n) as f64;
     let difference = (0..(periods - 1) * n)
-        .map(|i| (x[i + n] - x[i]).powi(2))
+        .map(|i| (at(i + n) - at(i)).powi(2))
         .sum::<f64>()
         / ((periods - 1) * n) as f64;
     if power > 0.0 && difference > 0.49 * power {
