@@ -138,6 +138,9 @@ pub struct Strides {
     pub found: usize,
     /// What was left out or ignored.
     pub flaws: Vec<StrideFlaw>,
+    /// Of the flaws, the events ignored within the refractory time (a
+    /// detector's bounce: harmless, not a repair of the strides).
+    pub bounces: usize,
 }
 
 impl Strides {
@@ -190,6 +193,7 @@ pub fn strides(
         ));
     }
     refractory_within_a_stride(&events, &raw, refractory, refractory_s)?;
+    let bounces = flaws.len();
     let mut bounds: Vec<(usize, usize)> = events.windows(2).map(|w| (w[0], w[1])).collect();
     let found = bounds.len();
     join_split_strides(rec, &mut bounds, &mut flaws);
@@ -266,6 +270,7 @@ pub fn strides(
             .collect(),
         found,
         flaws,
+        bounces,
     })
 }
 
@@ -344,10 +349,10 @@ impl Strides {
                 "the strides used are of mixed lengths: {long} of {n} at 1.6 times the median stride or more and {short} at 1/1.6 or less (runs of missed or extra events?): one gait cycle cannot be assumed, no point is trusted"
             ));
         }
-        if 2 * self.flaws.len() > n + self.flaws.len() {
+        let repaired = self.flaws.len() - self.bounces;
+        if repaired > n {
             return Some(format!(
-                "{} strides needed repair beside {n} used as found: most of the event column is flawed, no point is trusted",
-                self.flaws.len()
+                "{repaired} strides needed repair beside {n} used as found: most of the event column is flawed, no point is trusted"
             ));
         }
         None
@@ -508,6 +513,34 @@ mod tests {
         assert_eq!(s.numbers[8], 11, "{:?}", s.numbers);
         assert_eq!(s.kept.len(), 17);
         assert!(s.kept.iter().all(|r| r.len() == 100));
+    }
+
+    /// Issue 76: a bounce after every heel strike (within the refractory
+    /// time) is harmless; an extra event splitting most strides is a
+    /// repair of most of the walk, and no point is trusted.
+    #[test]
+    fn bounces_are_no_doubt_but_most_strides_repaired_are() {
+        let steady: Vec<usize> = (0..40).map(|k| 10 + 100 * k).collect();
+        let mut bouncy = steady.clone();
+        bouncy.extend(steady.iter().map(|e| e + 3));
+        bouncy.sort_unstable();
+        let column = EventRule::Column("heel_strike".into());
+        let s = strides(&record(&bouncy, 4100), &column, None, 0.2).unwrap();
+        assert_eq!((s.bounces, s.flaws.len()), (40, 40));
+        assert_eq!(s.doubt(), None);
+        // an extra event 40 samples into 25 of the 39 strides
+        let mut split = steady.clone();
+        split.extend(steady.iter().take(25).map(|e| e + 40));
+        split.sort_unstable();
+        // (split this often, the parts are the local median's and the whole
+        // strides look like missed events: mixed lengths, said either way)
+        let s = strides(&record(&split, 4100), &column, None, 0.2).unwrap();
+        assert_eq!(s.bounces, 0);
+        let why = s.doubt().expect("most strides flawed");
+        assert!(why.contains("no point is trusted"), "{why}");
+        // the walk as found: no doubt
+        let s = strides(&record(&steady, 4100), &column, None, 0.2).unwrap();
+        assert_eq!(s.doubt(), None);
     }
 
     #[test]
