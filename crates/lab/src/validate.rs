@@ -211,25 +211,30 @@ fn line_of(text: &str, parent: &str, key: &str) -> Option<usize> {
     fallback
 }
 
-/// Each `(field, value, least, most)` within its range, the first that is
-/// not named with its range: one rule per field (a negative `actuator_hz`
-/// listed every rule and named none; issue 76).
+/// The first `(field, value, least, most)` outside its range, named with
+/// its range: one rule per field (a negative `actuator_hz` listed every
+/// rule and named none; issue 76). NaN is outside every range.
+pub fn field_out_of_range(fields: &[(&str, f64, f64, f64)]) -> Option<String> {
+    let num = limpid_core::error::Num;
+    fields
+        .iter()
+        .find(|(_, v, least, most)| !(*least..=*most).contains(v))
+        .map(|&(name, v, least, most)| {
+            format!(
+                "{name} = {}: expected {} to {}",
+                num(v),
+                num(least),
+                num(most)
+            )
+        })
+}
+
+/// [`field_out_of_range`] as the error of the settings `what`.
 pub fn fields_within(what: &str, fields: &[(&str, f64, f64, f64)]) -> Result<()> {
-    for &(name, v, least, most) in fields {
-        if !(least..=most).contains(&v) {
-            let num = limpid_core::error::Num;
-            return Err(Error::invalid(
-                what,
-                format!(
-                    "{name} = {}: expected {} to {}",
-                    num(v),
-                    num(least),
-                    num(most)
-                ),
-            ));
-        }
+    match field_out_of_range(fields) {
+        Some(message) => Err(Error::invalid(what, message)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Refuse a protocol that asks for more than [`MAX_SAMPLES`] samples.

@@ -345,7 +345,7 @@ pub fn offending_field(v: &serde_json::Value, error: &str) -> Option<String> {
             return Some(path.clone());
         }
         let len = path.len();
-        let found = match x {
+        match x {
             serde_json::Value::Object(map) => map.iter().find_map(|(k, child)| {
                 if !path.is_empty() {
                     path.push('.');
@@ -362,8 +362,7 @@ pub fn offending_field(v: &serde_json::Value, error: &str) -> Option<String> {
                 r
             }),
             _ => None,
-        };
-        found
+        }
     }
     walk(v, &mut String::new(), &matches)
 }

@@ -82,29 +82,10 @@ impl ReflexPrior {
     pub fn from_toml(text: &str, path: &Path) -> Result<ReflexPrior> {
         limpid_lab::validate::check_numbers(text, path)?;
         let f: ReflexPriorFile = limpid_lab::validate::parse_settings(text, path)?;
-        let bad = |name: &str, v: f64| Error::Format {
-            path: path.to_path_buf(),
-            message: format!(
-                "{name} = {}: expected a positive number",
-                limpid_core::error::Num(v)
-            ),
-        };
-        for (name, v) in [
-            ("inertia", f.inertia),
-            ("damping", f.damping),
-            ("stiffness", f.stiffness),
-            ("reflex.gain", f.reflex.gain),
-            ("reflex.delay_s", f.reflex.delay_s),
-            ("reflex.natural_hz", f.reflex.natural_hz),
-            ("reflex.damping_ratio", f.reflex.damping_ratio),
-        ] {
-            if v <= 0.0 {
-                return Err(bad(name, v));
-            }
-        }
-        // an ankle's floors and a reflex's range: a gain of 1e-300 or a
-        // delay of 10 s was designed for (issue 76)
-        for (name, v, least, most) in [
+        let noise = f.torque_noise_nm.unwrap_or(0.1);
+        // an ankle's floors and a reflex's range (all positive): a gain of
+        // 1e-300 or a delay of 10 s was designed for (issue 76)
+        if let Some(message) = limpid_lab::validate::field_out_of_range(&[
             ("inertia", f.inertia, 1e-4, 10.0),
             ("damping", f.damping, 1e-3, 1e3),
             ("stiffness", f.stiffness, 1e-1, 1e5),
@@ -112,22 +93,12 @@ impl ReflexPrior {
             ("reflex.delay_s", f.reflex.delay_s, 1e-3, 0.5),
             ("reflex.natural_hz", f.reflex.natural_hz, 0.1, 100.0),
             ("reflex.damping_ratio", f.reflex.damping_ratio, 0.05, 10.0),
-        ] {
-            if !(least..=most).contains(&v) {
-                return Err(Error::Format {
-                    path: path.to_path_buf(),
-                    message: format!(
-                        "{name} = {}: an ankle's is between {} and {}",
-                        limpid_core::error::Num(v),
-                        limpid_core::error::Num(least),
-                        limpid_core::error::Num(most)
-                    ),
-                });
-            }
-        }
-        let noise = f.torque_noise_nm.unwrap_or(0.1);
-        if !(0.0..=1e3).contains(&noise) {
-            return Err(bad("torque_noise_nm", noise));
+            ("torque_noise_nm", noise, 0.0, 1e3),
+        ]) {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message,
+            });
         }
         Ok(ReflexPrior {
             subject: AnkleSubject {

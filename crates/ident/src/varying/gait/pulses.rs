@@ -415,10 +415,7 @@ fn check_bin(
             ),
         ));
     }
-    let (lo, hi) = pulses
-        .iter()
-        .flat_map(|p| p.sigma.iter())
-        .fold((0.0_f64, top), |(lo, hi), &s| (lo.min(s), hi.max(s)));
+    let (lo, hi) = knot_span(pulses, top);
     let knots = (hi - lo) / width + 2.0;
     if knots > MAX_KNOTS {
         return Err(Error::invalid(
@@ -434,20 +431,19 @@ fn check_bin(
     Ok(())
 }
 
+/// Where the knots lie: over the whole stride, 0 to `top` (the figures show
+/// where nothing was perturbed), and over every window's schedule values.
+fn knot_span(pulses: &[Pulse], top: f64) -> (f64, f64) {
+    pulses
+        .iter()
+        .flat_map(|p| p.sigma.iter())
+        .fold((0.0_f64, top), |(lo, hi), &s| (lo.min(s), hi.max(s)))
+}
+
 fn fit_knots(pulses: &[Pulse], d: usize, h: f64, top: f64, min_pulses: usize) -> KnotFit {
-    let lo = pulses
-        .iter()
-        .flat_map(|p| p.sigma.iter())
-        .copied()
-        .fold(f64::INFINITY, f64::min);
-    let hi = pulses
-        .iter()
-        .flat_map(|p| p.sigma.iter())
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max);
-    // knots over the whole stride (the figures show where nothing was perturbed) and the windows
-    let first = (lo.min(0.0) / h).floor() as i64;
-    let last = (hi.max(top) / h).ceil() as i64;
+    let (lo, hi) = knot_span(pulses, top);
+    let first = (lo / h).floor() as i64;
+    let last = (hi / h).ceil() as i64;
     let knots = Knots {
         at: (first..=last).map(|i| i as f64 * h).collect(),
         h,

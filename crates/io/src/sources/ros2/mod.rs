@@ -76,6 +76,20 @@ struct Group {
     log_ns: Vec<i64>,
 }
 
+impl Group {
+    /// Keep the messages `rows`, in that order (a reordering or a selection).
+    fn select(&mut self, rows: &[usize]) {
+        fn pick<T: Copy>(v: &[T], rows: &[usize]) -> Vec<T> {
+            rows.iter().map(|&i| v[i]).collect()
+        }
+        for c in &mut self.columns {
+            *c = pick(c, rows);
+        }
+        self.stamps_ns = pick(&self.stamps_ns, rows);
+        self.log_ns = pick(&self.log_ns, rows);
+    }
+}
+
 enum Content {
     /// Not decided: no message yet.
     Empty,
@@ -416,13 +430,7 @@ impl Collector {
                             order.sort_by_key(|&i| g.stamps_ns[i]);
                             let moved = order.iter().enumerate().filter(|(a, b)| a != *b).count();
                             reordered.push(format!("{name} ({moved} messages)"));
-                            let permute =
-                                |v: &[f64]| order.iter().map(|&i| v[i]).collect::<Vec<f64>>();
-                            for c in &mut g.columns {
-                                *c = permute(c);
-                            }
-                            g.stamps_ns = order.iter().map(|&i| g.stamps_ns[i]).collect();
-                            g.log_ns = order.iter().map(|&i| g.log_ns[i]).collect();
+                            g.select(&order);
                         }
                         let (dropped, clashing) = drop_repeated_messages(&mut g);
                         if dropped > 0 {
@@ -524,34 +532,16 @@ fn drop_repeated_messages(g: &mut Group) -> (usize, usize) {
         g.stamps_ns[i] == g.stamps_ns[j]
             && g.columns.iter().all(|c| c[i].to_bits() == c[j].to_bits())
     };
-    let mut keep = vec![true; n];
-    let mut last = 0;
-    for (i, kept) in keep.iter_mut().enumerate().skip(1) {
-        if repeats(i, last) {
-            *kept = false;
-        } else {
-            last = i;
+    // each message compared with the last one kept
+    let mut kept: Vec<usize> = Vec::with_capacity(n);
+    for i in 0..n {
+        if kept.last().is_none_or(|&last| !repeats(i, last)) {
+            kept.push(i);
         }
     }
-    let dropped = keep.iter().filter(|k| !**k).count();
+    let dropped = n - kept.len();
     if dropped > 0 {
-        let kept = |v: &[i64]| -> Vec<i64> {
-            v.iter()
-                .zip(&keep)
-                .filter(|(_, k)| **k)
-                .map(|(x, _)| *x)
-                .collect()
-        };
-        g.stamps_ns = kept(&g.stamps_ns);
-        g.log_ns = kept(&g.log_ns);
-        for c in &mut g.columns {
-            *c = c
-                .iter()
-                .zip(&keep)
-                .filter(|(_, k)| **k)
-                .map(|(x, _)| *x)
-                .collect();
-        }
+        g.select(&kept);
     }
     let clashing = g.stamps_ns.windows(2).filter(|w| w[0] == w[1]).count();
     (dropped, clashing)
