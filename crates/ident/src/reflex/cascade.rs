@@ -5,6 +5,10 @@ use limpid_core::Result;
 use limpid_dsp::LowPass;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use std::ops::Range;
+
+use super::segments::gather;
+
 pub(crate) fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }
@@ -17,6 +21,17 @@ pub(crate) fn variance(x: &[f64]) -> f64 {
 pub(crate) fn centre(x: &mut [f64]) {
     let m = mean(x);
     x.iter_mut().for_each(|v| *v -= m);
+}
+
+/// `100 (1 - var(y - yhat) / var(y))` over every segment's samples past its
+/// first `skip` (the rows whose prediction has its input history).
+pub(crate) fn vaf_in(y: &[f64], yhat: &[f64], skip: usize, segments: &[Range<usize>]) -> f64 {
+    if let [whole] = segments {
+        return vaf(&y[whole.clone()], &yhat[whole.clone()], skip);
+    }
+    let y = gather(y, segments, skip);
+    let yhat = gather(yhat, segments, skip);
+    vaf(&y, &yhat, 0)
 }
 
 /// `100 (1 - var(y - yhat) / var(y))` over `y[skip..]`.
@@ -75,6 +90,7 @@ pub(crate) fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Resu
     let with = |[positive, negative]: [Vec<f64>; 2]| Decimated {
         fs: fsd,
         ratio,
+        segments: vec![0..q.len().div_ceil(ratio)],
         position: pick(&filtered[0]),
         velocity: pick(&filtered[2]),
         acceleration: pick(&filtered[3]),
@@ -91,8 +107,25 @@ pub(crate) fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Resu
 
 /// `sum_t a[t] b[t + k] / n`.
 pub(crate) fn correlation(a: &[f64], b: &[f64], k: isize) -> f64 {
+    lagged_sum(a, b, k) / a.len() as f64
+}
+
+/// [`correlation`] over the pairs inside one segment: never across a cut.
+pub(crate) fn correlation_in(a: &[f64], b: &[f64], k: isize, segments: &[Range<usize>]) -> f64 {
+    if let [whole] = segments {
+        return correlation(&a[whole.clone()], &b[whole.clone()], k);
+    }
+    let s: f64 = segments
+        .iter()
+        .map(|r| lagged_sum(&a[r.clone()], &b[r.clone()], k))
+        .sum();
+    s / segments.iter().map(|r| r.len()).sum::<usize>().max(1) as f64
+}
+
+/// `sum_t a[t] b[t + k]`.
+fn lagged_sum(a: &[f64], b: &[f64], k: isize) -> f64 {
     let n = a.len();
-    let s: f64 = if k >= 0 {
+    if k >= 0 {
         let k = k as usize;
         a[..n - k.min(n)]
             .iter()
@@ -106,18 +139,25 @@ pub(crate) fn correlation(a: &[f64], b: &[f64], k: isize) -> f64 {
             .zip(&b[..n - k.min(n)])
             .map(|(x, y)| x * y)
             .sum()
-    };
-    s / n as f64
+    }
 }
 
 /// IRF with lags `first..first + lags` from `u` to `y` by the Toeplitz
 /// pseudo-inverse; modes kept in order of output variance, their number by
 /// minimum description length. Returns the per-sample IRF and the order.
-pub(crate) fn irf_pinv(u: &[f64], y: &[f64], first: isize, lags: usize) -> (Vec<f64>, usize) {
-    let n = u.len() as f64;
-    let auto: Vec<f64> = (0..lags).map(|k| correlation(u, u, k as isize)).collect();
+/// Correlations are taken inside each segment only.
+pub(crate) fn irf_pinv(
+    u: &[f64],
+    y: &[f64],
+    (first, lags): (isize, usize),
+    segments: &[Range<usize>],
+) -> (Vec<f64>, usize) {
+    let n = segments.iter().map(|r| r.len()).sum::<usize>() as f64;
+    let auto: Vec<f64> = (0..lags)
+        .map(|k| correlation_in(u, u, k as isize, segments))
+        .collect();
     let cross: Vec<f64> = (0..lags)
-        .map(|j| correlation(u, y, first + j as isize))
+        .map(|j| correlation_in(u, y, first + j as isize, segments))
         .collect();
     let toeplitz = DMatrix::from_fn(lags, lags, |i, j| auto[i.abs_diff(j)]);
     let Some(eig) = limpid_core::linalg::symmetric_eigen(toeplitz) else {
@@ -130,7 +170,7 @@ pub(crate) fn irf_pinv(u: &[f64], y: &[f64], first: isize, lags: usize) -> (Vec<
         .map(|i| (i, c[i] * c[i] / eig.eigenvalues[i]))
         .collect();
     modes.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let yy = correlation(y, y, 0);
+    let yy = correlation_in(y, y, 0, segments);
     let mut explained = 0.0;
     let mut order = 0;
     let mut best = yy;
@@ -150,6 +190,15 @@ pub(crate) fn irf_pinv(u: &[f64], y: &[f64], first: isize, lags: usize) -> (Vec<
         }
     }
     (h, order)
+}
+
+/// [`apply`] to each segment on its own: zero input outside the segment.
+pub(crate) fn apply_in(h: &[f64], first: isize, u: &[f64], segments: &[Range<usize>]) -> Vec<f64> {
+    let mut y = vec![0.0; u.len()];
+    for r in segments {
+        y[r.clone()].copy_from_slice(&apply(h, first, &u[r.clone()]));
+    }
+    y
 }
 
 /// `y[t] = sum_j h[j] u[t - (first + j)]`, zero input outside the record.
@@ -177,14 +226,13 @@ pub(crate) struct Cascade {
     pub(crate) iterations: usize,
 }
 
-/// Alternate the two pathways, each on the other's residual (Kearney et al. 1997).
+/// Alternate the two pathways, each on the other's residual (Kearney et al.
+/// 1997), inside each segment; `skip` samples of each segment's start lack
+/// input history and are left out of the VAF.
 pub(crate) fn cascade(
-    position: &[f64],
-    rectified: &[f64],
-    torque: &[f64],
-    half: usize,
-    n_reflex: usize,
-    skip: usize,
+    [position, rectified, torque]: [&[f64]; 3],
+    (half, n_reflex, skip): (usize, usize, usize),
+    segments: &[Range<usize>],
 ) -> Cascade {
     let mut reflex_torque = vec![0.0; torque.len()];
     let mut best: Option<Cascade> = None;
@@ -194,21 +242,26 @@ pub(crate) fn cascade(
             .zip(&reflex_torque)
             .map(|(t, r)| t - r)
             .collect();
-        let (hi, oi) = irf_pinv(position, &target, -(half as isize), 2 * half + 1);
-        let intrinsic_torque = apply(&hi, -(half as isize), position);
+        let (hi, oi) = irf_pinv(
+            position,
+            &target,
+            (-(half as isize), 2 * half + 1),
+            segments,
+        );
+        let intrinsic_torque = apply_in(&hi, -(half as isize), position, segments);
         let target: Vec<f64> = torque
             .iter()
             .zip(&intrinsic_torque)
             .map(|(t, i)| t - i)
             .collect();
-        let (hr, or) = irf_pinv(rectified, &target, 0, n_reflex);
-        reflex_torque = apply(&hr, 0, rectified);
+        let (hr, or) = irf_pinv(rectified, &target, (0, n_reflex), segments);
+        reflex_torque = apply_in(&hr, 0, rectified, segments);
         let total: Vec<f64> = intrinsic_torque
             .iter()
             .zip(&reflex_torque)
             .map(|(a, b)| a + b)
             .collect();
-        let v = vaf(torque, &total, skip);
+        let v = vaf_in(torque, &total, skip, segments);
         let previous = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.vaf_total);
         let done = v - previous < super::TOLERANCE_VAF;
         if v >= previous {

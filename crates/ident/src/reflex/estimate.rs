@@ -3,8 +3,9 @@
 //! other rectifier order), add the model-error floors to the standard
 //! errors, cross-validate, and say what cannot be trusted.
 
-use super::cascade::{apply, cascade, decimate, vaf, variance, Cascade};
+use super::cascade::{apply_in, cascade, decimate, vaf_in, variance, Cascade};
 use super::parametric::{ibk_fit, parametric_intrinsic, reflex_parametric, Parametric};
+use super::segments::{self, gather, Layout, SegmentUse};
 use super::{
     Decimated, DelayScan, Ibk, IntrinsicPathway, Irf, OtherOrder, Polarity, ReflexEstimate,
     ReflexFreeFit, ReflexParams, ReflexPathway, ReflexTraces, VafSplit, DELAY_INTERVAL_MAX_S,
@@ -12,15 +13,7 @@ use super::{
 };
 use limpid_core::{Error, Recording, Result, Warning, WarningCode};
 use rayon::prelude::*;
-/// Lengths in decimated samples.
-struct Lengths {
-    /// Decimated samples.
-    n: usize,
-    /// Half-width of the two-sided intrinsic IRF.
-    half: usize,
-    /// Length of the reflex IRF (also the samples left out at the start).
-    n_reflex: usize,
-}
+use std::ops::Range;
 
 /// The parallel-cascade estimate of `rec`.
 ///
@@ -51,9 +44,21 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     let rec = rec.as_ref();
     let (q, tq) = position_and_torque(rec, p)?;
     let fs = rec.sample_rate();
-    let Lengths { n, half, n_reflex } = lengths(rec, p, q.len())?;
-    let [d, other_decimation] = decimate(q, tq, fs, p)?;
-    debug_assert_eq!(d.position.len(), n);
+    let mut warnings: Vec<Warning> = measured_rate.iter().map(|m| m.warning()).collect();
+    let cuts = segments::recorded(rec)?;
+    let (layout, [d, other_decimation], segment_use) = if cuts.len() > 1 {
+        check_rate(rec, p)?;
+        let (layout, d, used) = segments::prepare(rec, (q, tq), p, &cuts, &mut warnings)?;
+        (layout, d, Some(used))
+    } else {
+        let layout = lengths(rec, p, q.len())?;
+        (layout, decimate(q, tq, fs, p)?, None)
+    };
+    let Layout {
+        half,
+        n_reflex,
+        fit_skip,
+    } = layout;
     for (name, raw) in [(&p.position, q), (&p.torque, tq)] {
         check_varies(rec, name, raw)?;
     }
@@ -65,11 +70,10 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         (1, Polarity::Negative)
     };
     let c = &cascades[best];
-    let mut warnings: Vec<Warning> = measured_rate.iter().map(|m| m.warning()).collect();
 
     let dt = 1.0 / d.fs;
     // the fully parametric model, fitted jointly (I-B-K, delay, gain, low-pass)
-    let Some(mut param) = reflex_parametric(&d, best, skip, p, fs) else {
+    let Some(mut param) = reflex_parametric(&d, best, fit_skip, p, fs) else {
         return Err(Error::invalid(
             rec.path().display().to_string(),
             "position, velocity and acceleration are collinear: I, B and K cannot be separated",
@@ -80,7 +84,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     // with Kearney et al.'s order (after anti-aliasing) the difference is
     // that order's error, and it goes into the standard errors and the
     // delay interval.
-    let other_order = reflex_parametric(&other_decimation, best, skip, p, fs);
+    let other_order = reflex_parametric(&other_decimation, best, fit_skip, p, fs);
     let order_warning = other_order
         .as_ref()
         .filter(|_| !p.rectify_first)
@@ -88,25 +92,29 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     add_error_floors(&mut param);
     let fit = VafSplit {
         vaf_total: c.vaf_total,
-        vaf_intrinsic: vaf(&d.torque, &c.intrinsic_torque, skip),
-        vaf_reflex: vaf(&d.torque, &c.reflex_torque, skip),
+        vaf_intrinsic: vaf_in(&d.torque, &c.intrinsic_torque, skip, &d.segments),
+        vaf_reflex: vaf_in(&d.torque, &c.reflex_torque, skip, &d.segments),
         vaf_parametric: param.total_vaf,
-        vaf_parametric_intrinsic: vaf(&d.torque, &parametric_intrinsic(&d, &param.intrinsic), skip),
+        vaf_parametric_intrinsic: vaf_in(
+            &d.torque,
+            &parametric_intrinsic(&d, &param.intrinsic),
+            skip,
+            &d.segments,
+        ),
     };
     let cross_validated_vaf = cross_validated_vaf(&d, best, half, n_reflex);
 
     // intrinsic I-B-K from the joint parametric model; for comparison, the
     // fit of the torque the nonparametric reflex leaves, and the reflex-free fit
-    let regressors = [&d.acceleration[..], &d.velocity[..], &d.position[..]];
     let intrinsic_target: Vec<f64> = d
         .torque
         .iter()
         .zip(&c.reflex_torque)
         .map(|(t, r)| t - r)
         .collect();
-    let (irf_fit, _, _) = ibk_fit(&regressors, &intrinsic_target, skip);
+    let (irf_fit, _, _) = ibk_fit_in(&d, &intrinsic_target, skip);
     let ibk = param.intrinsic;
-    let (plain, _, plain_vaf) = ibk_fit(&regressors, &d.torque, skip);
+    let (plain, _, plain_vaf) = ibk_fit_in(&d, &d.torque, skip);
     warnings.extend(order_warning);
     let delay_identifiable = delay_warnings(&param, fs, &mut warnings);
     let reflex_gain_points = param.total_vaf - param.intrinsic_only_vaf;
@@ -114,6 +122,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     fit_warnings(&ibk, &fit, cross_validated_vaf, &mut warnings);
 
     let other_polarity_vaf = cascades[1 - best].vaf_total;
+    let start_left_out = param.start_left_out;
     let (intrinsic, reflex) = pathways(
         c,
         param,
@@ -160,7 +169,11 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             gain: o.gain,
             delay_s: o.delay_s,
         }),
-        traces: traces(&d, c, skip, n),
+        traces: traces(&d, c, skip),
+        segments: segment_use.map(|u| SegmentUse {
+            start_left_out_s: start_left_out as f64 / d.fs,
+            ..u
+        }),
         warnings,
     };
     if !all_finite(&est) {
@@ -224,19 +237,9 @@ fn pathways(
 /// recording's and a recording too short for 5 reflex-IRF lengths. The
 /// length check comes before decimation, whose zero-phase filter would
 /// refuse a short recording without naming it.
-fn lengths(rec: &Recording, p: &ReflexParams, samples: usize) -> Result<Lengths> {
+fn lengths(rec: &Recording, p: &ReflexParams, samples: usize) -> Result<Layout> {
+    check_rate(rec, p)?;
     let fs = rec.sample_rate();
-    if p.rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE) {
-        return Err(Error::invalid(
-            "rate_hz",
-            format!(
-                "the decimated rate, {} Hz, is above the recording's {} Hz ({}); limpid decimates, it does not interpolate",
-                limpid_core::short_number(p.rate_hz),
-                limpid_core::short_number(fs),
-                rec.path().display()
-            ),
-        ));
-    }
     let ratio = ((fs / p.rate_hz).round() as usize).max(1);
     let fsd = fs / ratio as f64;
     let n = samples.div_ceil(ratio);
@@ -257,7 +260,29 @@ fn lengths(rec: &Recording, p: &ReflexParams, samples: usize) -> Result<Lengths>
             found: samples,
         });
     }
-    Ok(Lengths { n, half, n_reflex })
+    // a continuous record leaves out one reflex-IRF length, for both fits
+    Ok(Layout {
+        half,
+        n_reflex,
+        fit_skip: n_reflex,
+    })
+}
+
+/// Refuses a decimated rate above the recording's.
+fn check_rate(rec: &Recording, p: &ReflexParams) -> Result<()> {
+    let fs = rec.sample_rate();
+    if p.rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE) {
+        return Err(Error::invalid(
+            "rate_hz",
+            format!(
+                "the decimated rate, {} Hz, is above the recording's {} Hz ({}); limpid decimates, it does not interpolate",
+                limpid_core::short_number(p.rate_hz),
+                limpid_core::short_number(fs),
+                rec.path().display()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Refuses a column that does not vary, or varies outside the range where
@@ -352,23 +377,51 @@ fn add_error_floors(param: &mut Parametric) {
     floor(&mut param.gain_se, param.gain, g.gain);
 }
 
-/// The cascade fitted on the first two thirds, its VAF on the last third.
+/// The cascade fitted on the first two thirds, its VAF on the last third
+/// (split between segments when there are several).
 fn cross_validated_vaf(d: &Decimated, best: usize, half: usize, n_reflex: usize) -> f64 {
-    let split = 2 * d.position.len() / 3;
+    let (fitted, held_out): (Vec<Range<usize>>, Vec<Range<usize>>) = match d.segments.as_slice() {
+        [whole] => {
+            let split = 2 * whole.len() / 3;
+            (vec![0..split], vec![split..whole.end])
+        }
+        many => {
+            let split = (2 * many.len() / 3).max(1);
+            (many[..split].to_vec(), many[split..].to_vec())
+        }
+    };
     let cv = cascade(
-        &d.position[..split],
-        &d.rectified[best][..split],
-        &d.torque[..split],
-        half,
-        n_reflex,
-        n_reflex,
+        [&d.position, &d.rectified[best], &d.torque],
+        (half, n_reflex, n_reflex),
+        &fitted,
     );
-    let predicted: Vec<f64> = apply(&cv.intrinsic, -(half as isize), &d.position)
+    let predicted: Vec<f64> = apply_in(&cv.intrinsic, -(half as isize), &d.position, &d.segments)
         .iter()
-        .zip(apply(&cv.reflex, 0, &d.rectified[best]))
+        .zip(apply_in(&cv.reflex, 0, &d.rectified[best], &d.segments))
         .map(|(a, b)| a + b)
         .collect();
-    vaf(&d.torque[split..], &predicted[split..], 0)
+    // a continuous record's held-out third continues its fitted part: no start left out
+    let skip = if d.segments.len() == 1 { 0 } else { n_reflex };
+    vaf_in(&d.torque, &predicted, skip, &held_out)
+}
+
+/// I-B-K with jackknife errors and VAF (see [`ibk_fit`]) over each
+/// segment's samples past its first `skip`, each segment with its own constant.
+fn ibk_fit_in(d: &Decimated, y: &[f64], skip: usize) -> (Ibk, Ibk, f64) {
+    let regressors = [&d.acceleration[..], &d.velocity[..], &d.position[..]];
+    if d.segments.len() == 1 {
+        return ibk_fit(&regressors, y, skip);
+    }
+    let groups = segments::groups(&d.segments, skip);
+    let centred = |x: &[f64]| {
+        let mut c = gather(x, &d.segments, skip).into_owned();
+        for g in &groups {
+            super::cascade::centre(&mut c[g.clone()]);
+        }
+        c
+    };
+    let [a, v, q] = regressors.map(centred);
+    ibk_fit(&[&a, &v, &q], &centred(y), 0)
 }
 
 /// Whether the reflex delay is identifiable; a warning says why not (too
@@ -444,15 +497,22 @@ fn fit_warnings(ibk: &Ibk, fit: &VafSplit, cross_validated_vaf: f64, warnings: &
 }
 
 /// A 10 s stretch after the left-out first reflex-IRF length, every
-/// decimated sample: a whole record at this scale is unreadable.
-fn traces(d: &Decimated, c: &Cascade, skip: usize, n: usize) -> ReflexTraces {
+/// decimated sample: a whole record at this scale is unreadable. Segments
+/// are shown end to end past their starts (the time runs on across a cut).
+fn traces(d: &Decimated, c: &Cascade, skip: usize) -> ReflexTraces {
     let dt = 1.0 / d.fs;
-    let shown = skip..(skip + (10.0 * d.fs).round() as usize).min(n);
+    let shown: Vec<usize> = segments::rows(&d.segments, skip)
+        .take((10.0 * d.fs).round() as usize)
+        .collect();
+    let pick = |x: &[f64]| shown.iter().map(|&i| x[i]).collect();
     ReflexTraces {
-        t_s: shown.clone().map(|i| i as f64 * dt).collect(),
-        measured: d.torque[shown.clone()].to_vec(),
-        intrinsic: c.intrinsic_torque[shown.clone()].to_vec(),
-        reflex: c.reflex_torque[shown].to_vec(),
+        t_s: match d.segments.as_slice() {
+            [_] => shown.iter().map(|&i| i as f64 * dt).collect(),
+            _ => (0..shown.len()).map(|k| (skip + k) as f64 * dt).collect(),
+        },
+        measured: pick(&d.torque),
+        intrinsic: pick(&c.intrinsic_torque),
+        reflex: pick(&c.reflex_torque),
     }
 }
 
@@ -518,12 +578,9 @@ fn both_polarities(d: &Decimated, (half, n_reflex, skip): (usize, usize, usize))
         .par_iter()
         .map(|&k| {
             cascade(
-                &d.position,
-                &d.rectified[k],
-                &d.torque,
-                half,
-                n_reflex,
-                skip,
+                [&d.position, &d.rectified[k], &d.torque],
+                (half, n_reflex, skip),
+                &d.segments,
             )
         })
         .collect()

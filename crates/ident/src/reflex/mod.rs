@@ -51,11 +51,13 @@ use serde::{Deserialize, Serialize};
 mod cascade;
 mod estimate;
 mod parametric;
+mod segments;
 mod settings;
 
 pub use cascade::vaf;
 pub use estimate::estimate_reflex;
 pub(crate) use parametric::low_pass;
+pub use segments::SegmentUse;
 pub use settings::{ReflexParams, ReflexRequest, MAX_ITERATIONS, TOLERANCE_VAF};
 
 /// A discrete impulse response: `torque(t) = sum values[i] * input(t - lags_s[i]) * dt`.
@@ -230,6 +232,10 @@ pub struct ReflexEstimate {
     pub other_rectifier_order: Option<OtherOrder>,
     /// Torque traces.
     pub traces: ReflexTraces,
+    /// How a recording of short segments (several `trial` windows) was
+    /// used; absent for one continuous record.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segments: Option<SegmentUse>,
     /// What the reader should know.
     pub warnings: Vec<Warning>,
 }
@@ -243,6 +249,8 @@ pub const DELAY_INTERVAL_MAX_S: f64 = 0.03;
 pub(crate) struct Decimated {
     pub(crate) fs: f64,
     pub(crate) ratio: usize,
+    /// Decimated samples of each segment (one range for a continuous record).
+    pub(crate) segments: Vec<std::ops::Range<usize>>,
     pub(crate) position: Vec<f64>,
     pub(crate) velocity: Vec<f64>,
     pub(crate) acceleration: Vec<f64>,
@@ -301,7 +309,7 @@ mod tests {
             })
             .collect();
         let y = apply(&[0.5, 2.0, -1.0], -1, &u);
-        let (h, order) = irf_pinv(&u, &y, -2, 5);
+        let (h, order) = irf_pinv(&u, &y, (-2, 5), &[0..u.len()]);
         let want = [0.0, 0.5, 2.0, -1.0, 0.0];
         for (a, b) in h.iter().zip(want) {
             assert!((a - b).abs() < 2e-3, "{h:?}");

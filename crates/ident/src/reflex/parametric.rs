@@ -1,9 +1,12 @@
 //! The parametric models of the pathways: intrinsic I, B, K by least squares, the reflex (rectified velocity, delay, gain, second-order low-pass) fitted jointly over delays, with jackknife standard errors inflated for autocorrelated residuals.
 
 use super::cascade::{centre, correlation, mean, vaf, variance};
+use super::segments::{gather, groups};
 use super::{Decimated, Ibk, ReflexParams};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use std::borrow::Cow;
+use std::ops::Range;
 /// The torque of the intrinsic I-B-K model (centred).
 pub(crate) fn parametric_intrinsic(d: &Decimated, p: &Ibk) -> Vec<f64> {
     (0..d.torque.len())
@@ -90,14 +93,44 @@ pub(crate) fn ibk_fit(regressors: &[&[f64]; 3], y: &[f64], skip: usize) -> (Ibk,
     )
 }
 
-/// Unit-DC second-order low-pass by the bilinear transform, prewarped at its natural frequency.
-pub(crate) fn low_pass(x: &[f64], natural_hz: f64, zeta: f64, fs: f64) -> Vec<f64> {
+/// The bilinear transform's coefficients `(b, a1, a2)` of [`low_pass`].
+fn low_pass_coefficients(natural_hz: f64, zeta: f64, fs: f64) -> ([f64; 3], f64, f64) {
     let w = 2.0 * std::f64::consts::PI * natural_hz;
     let k = w / (w / (2.0 * fs)).tan();
     let a0 = k * k + 2.0 * zeta * w * k + w * w;
     let b = [w * w / a0, 2.0 * w * w / a0, w * w / a0];
     let a1 = (2.0 * w * w - 2.0 * k * k) / a0;
     let a2 = (k * k - 2.0 * zeta * w * k + w * w) / a0;
+    (b, a1, a2)
+}
+
+/// The low-pass's two free responses (no input, unit output one and two
+/// samples before) in each segment from its start: the reflex in flight at
+/// a cut, answering motion before it, adds a combination of them.
+fn free_responses(
+    (natural_hz, zeta, fs): (f64, f64, f64),
+    segments: &[Range<usize>],
+    len: usize,
+) -> [Vec<f64>; 2] {
+    let (_, a1, a2) = low_pass_coefficients(natural_hz, zeta, fs);
+    let mut out = [vec![0.0; len], vec![0.0; len]];
+    for (h, before) in out.iter_mut().zip([(1.0, 0.0), (0.0, 1.0)]) {
+        for s in segments {
+            let (mut p1, mut p2) = before;
+            for v in &mut h[s.clone()] {
+                let y = -a1 * p1 - a2 * p2;
+                p2 = p1;
+                p1 = y;
+                *v = y;
+            }
+        }
+    }
+    out
+}
+
+/// Unit-DC second-order low-pass by the bilinear transform, prewarped at its natural frequency.
+pub(crate) fn low_pass(x: &[f64], natural_hz: f64, zeta: f64, fs: f64) -> Vec<f64> {
+    let (b, a1, a2) = low_pass_coefficients(natural_hz, zeta, fs);
     let mut y = vec![0.0; x.len()];
     // start in the steady state of the first sample (unit DC gain)
     let x0 = x.first().copied().unwrap_or(0.0);
@@ -128,11 +161,15 @@ pub(crate) struct Parametric {
     pub(crate) intrinsic_only_vaf: f64,
     pub(crate) scan_delays_s: Vec<f64>,
     pub(crate) scan_vaf: Vec<f64>,
+    /// Decimated samples left out at each segment's start by the fit of I, B, K, G.
+    pub(crate) start_left_out: usize,
 }
 
-/// The I-B-K regressors over the fitted rows, centred, with their Gram
-/// matrix inverse, the I-B-K-only solution and its residual.
+/// The I-B-K regressors over the fitted rows, centred (per segment), with
+/// their Gram matrix inverse, the I-B-K-only solution and its residual.
 pub(crate) struct Fixed {
+    /// Each segment's rows among the fitted rows (one group for a continuous record).
+    pub(crate) groups: Vec<Range<usize>>,
     pub(crate) columns: [Vec<f64>; 3],
     pub(crate) gram_inv: nalgebra::Matrix3<f64>,
     pub(crate) theta: nalgebra::Vector3<f64>,
@@ -142,9 +179,12 @@ pub(crate) struct Fixed {
 }
 
 pub(crate) fn fixed_fit(d: &Decimated, skip: usize) -> Option<Fixed> {
+    let groups = groups(&d.segments, skip);
     let centred = |x: &[f64]| {
-        let mut c = x[skip..].to_vec();
-        centre(&mut c);
+        let mut c = gather(x, &d.segments, skip).into_owned();
+        for g in &groups {
+            centre(&mut c[g.clone()]);
+        }
         c
     };
     let columns = [
@@ -152,7 +192,11 @@ pub(crate) fn fixed_fit(d: &Decimated, skip: usize) -> Option<Fixed> {
         centred(&d.velocity),
         centred(&d.position),
     ];
-    let y = centred(&d.torque);
+    fixed_from(columns, centred(&d.torque), groups)
+}
+
+/// [`Fixed`] of centred columns and torque.
+fn fixed_from(columns: [Vec<f64>; 3], y: Vec<f64>, groups: Vec<Range<usize>>) -> Option<Fixed> {
     let mut g = nalgebra::Matrix3::<f64>::zeros();
     let mut r = nalgebra::Vector3::<f64>::zeros();
     for i in 0..3 {
@@ -169,6 +213,7 @@ pub(crate) fn fixed_fit(d: &Decimated, skip: usize) -> Option<Fixed> {
         })
         .collect();
     Some(Fixed {
+        groups,
         rss: dot(&residual, &residual),
         total_ss: dot(&y, &y),
         columns,
@@ -183,22 +228,36 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Residual sum of squares and `[I, B, K, G]` of the joint model
-/// `tq = I q'' + B q' + K q + G x + c` for one reflex regressor `x` (over the fitted rows).
+/// `tq = I q'' + B q' + K q + G x + c` (a constant `c` per segment) for one
+/// reflex regressor `x` (over the fitted rows).
 pub(crate) fn joint_fit(f: &Fixed, x: &[f64]) -> (f64, [f64; 4]) {
-    let m = x.len() as f64;
     let [c0, c1, c2] = &f.columns;
-    let (mut sx, mut xx, mut xe, mut b0, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    // one pass over memory: the six sums the Schur complement needs
-    for ((((&xv, &e), &a0), &a1), &a2) in x.iter().zip(&f.residual).zip(c0).zip(c1).zip(c2) {
-        sx += xv;
-        xx += xv * xv;
-        xe += xv * e;
-        b0 += xv * a0;
-        b1 += xv * a1;
-        b2 += xv * a2;
+    let (mut xx, mut xe, mut b0, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    // the segments' constants: sum over segments of (sum of x)^2 / rows
+    let mut between = 0.0;
+    for g in &f.groups {
+        let m = g.len() as f64;
+        let mut sx = 0.0;
+        let g = g.clone();
+        // one pass over memory: the six sums the Schur complement needs
+        for ((((&xv, &e), &a0), &a1), &a2) in x[g.clone()]
+            .iter()
+            .zip(&f.residual[g.clone()])
+            .zip(&c0[g.clone()])
+            .zip(&c1[g.clone()])
+            .zip(&c2[g])
+        {
+            sx += xv;
+            xx += xv * xv;
+            xe += xv * e;
+            b0 += xv * a0;
+            b1 += xv * a1;
+            b2 += xv * a2;
+        }
+        between += sx * sx / m;
     }
     let b = nalgebra::Vector3::new(b0, b1, b2);
-    let xx_resid = xx - sx * sx / m - (b.transpose() * f.gram_inv * b)[0];
+    let xx_resid = xx - between - (b.transpose() * f.gram_inv * b)[0];
     if xx_resid <= 1e-12 * xx {
         return (f.rss, [f.theta[0], f.theta[1], f.theta[2], 0.0]);
     }
@@ -224,17 +283,45 @@ pub(crate) fn phases(y: &[f64], ratio: usize, n: usize) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The reflex regressor over the fitted rows `skip..n` for a delay of
-/// `delay` recorded samples: a slice of one decimation phase.
-pub(crate) fn delayed(
-    phases: &[Vec<f64>],
+/// The reflex regressor over the fitted rows (each segment's past its first
+/// `skip`) for a delay of `delay` recorded samples: one decimation phase,
+/// a slice of it for a continuous record.
+pub(crate) fn delayed<'a>(
+    phases: &'a [Vec<f64>],
     ratio: usize,
     delay: usize,
     skip: usize,
-    n: usize,
-) -> &[f64] {
+    segments: &[Range<usize>],
+) -> Cow<'a, [f64]> {
     let (m, r) = (delay / ratio, delay % ratio);
-    &phases[r][skip - m..n - m]
+    match segments {
+        [whole] if whole.start == 0 => Cow::Borrowed(&phases[r][skip - m..whole.end - m]),
+        _ => Cow::Owned(
+            segments
+                .iter()
+                .flat_map(|s| (s.start + skip).min(s.end) - m..s.end - m)
+                .map(|k| phases[r][k])
+                .collect(),
+        ),
+    }
+}
+
+/// [`low_pass`] of each segment on its own (full-rate ranges).
+pub(crate) fn low_pass_in(
+    x: &[f64],
+    (natural_hz, zeta, fs): (f64, f64, f64),
+    segments: &[Range<usize>],
+) -> Vec<f64> {
+    match segments {
+        [whole] if *whole == (0..x.len()) => low_pass(x, natural_hz, zeta, fs),
+        _ => {
+            let mut y = vec![0.0; x.len()];
+            for s in segments {
+                y[s.clone()].copy_from_slice(&low_pass(&x[s.clone()], natural_hz, zeta, fs));
+            }
+            y
+        }
+    }
 }
 
 /// The fully parametric model, fitted jointly: intrinsic I-B-K plus
@@ -251,9 +338,21 @@ pub(crate) fn reflex_parametric(
     let f = fixed_fit(d, skip)?;
     let n = d.torque.len();
     let full = &d.rectified_full[polarity];
+    let full_segments = match d.segments.as_slice() {
+        [_] => vec![0..full.len()],
+        many => super::segments::full_rate(many, d.ratio),
+    };
     let max_delay = (p.max_delay_s * fs).round() as usize;
     let delays = max_delay + 1;
-    let Scan { combos, fits } = scan_low_pass_and_delay(d, &f, full, max_delay, (skip, fs))?;
+    // several segments: every fit with the reflex in flight at each cut
+    let rows = (d.segments.len() > 1).then(|| SegmentRows::new(d, skip));
+    let Scan { combos, fits } = scan_low_pass_and_delay(
+        d,
+        (&f, rows.as_ref()),
+        (full, &full_segments),
+        max_delay,
+        (skip, fs),
+    )?;
     let (rss_min, ci, delay) = best(&fits);
     let (w, z) = combos[ci];
     let profile: Vec<f64> = (0..delays)
@@ -265,28 +364,32 @@ pub(crate) fn reflex_parametric(
         .collect();
 
     // the joint fit at the optimum, its residual and jackknife errors
-    let ph = phases(&low_pass(full, w, z, fs), d.ratio, n);
-    let x = delayed(&ph, d.ratio, delay, skip, n);
+    let ph = phases(&low_pass_in(full, (w, z, fs), &full_segments), d.ratio, n);
+    let x = delayed(&ph, d.ratio, delay, skip, &d.segments);
     let at_best = fits[ci][delay].1;
-    let gain = at_best[3];
-    let xm = mean(x);
-    let theta = nalgebra::Vector3::new(at_best[0], at_best[1], at_best[2]);
-    let resid: Vec<f64> = (0..x.len())
-        .map(|t| {
-            f.residual[t] - gain * (x[t] - xm)
-                + (f.theta - theta).dot(&nalgebra::Vector3::new(
-                    f.columns[0][t],
-                    f.columns[1][t],
-                    f.columns[2][t],
-                ))
-        })
-        .collect();
+    let free = SegmentRows::free_phases(d, (w, z, fs), &full_segments);
+    let resid = match &rows {
+        None => joint_residual(&f, &x, at_best),
+        Some(rows) => {
+            let (g, x) = rows.fit(d, (&ph, &free), delay)?;
+            joint_residual(&g, &x, at_best)
+        }
+    };
     let inflation = autocorrelation_inflation(&resid);
     let m = x.len() as f64;
     let n_eff = (m / inflation).max(5.0);
     let threshold = rss_min * (1.0 + 3.84 / n_eff);
     let (lo, hi, contiguous) = delay_interval(&profile, threshold, delay);
-    let mut se = joint_jackknife(&f, x);
+    let (params, mut se, start_left_out) = if d.segments.len() == 1 {
+        (at_best, joint_jackknife(&f, &x), skip)
+    } else {
+        // the scan left out every segment's start up to the longest delay
+        // scanned; the fit at the optimum needs it left out only up to the
+        // delay interval's end
+        let settled = super::segments::start_up(hi, d.ratio).min(skip);
+        let (g, x) = SegmentRows::new(d, settled).fit(d, (&ph, &free), delay)?;
+        (joint_fit(&g, &x).1, joint_jackknife(&g, &x), settled)
+    };
     // the jackknife holds the delay and low-pass fixed: add what they move
     let shift = profile_region_shift(&fits, threshold, at_best);
     for (e, s) in se.iter_mut().zip(shift) {
@@ -294,16 +397,16 @@ pub(crate) fn reflex_parametric(
     }
     Some(Parametric {
         intrinsic: Ibk {
-            inertia: theta[0],
-            damping: theta[1],
-            stiffness: theta[2],
+            inertia: params[0],
+            damping: params[1],
+            stiffness: params[2],
         },
         intrinsic_se: Ibk {
             inertia: se[0],
             damping: se[1],
             stiffness: se[2],
         },
-        gain,
+        gain: params[3],
         gain_se: se[3],
         delay_s: delay as f64 / fs,
         interval: [lo as f64 / fs, hi as f64 / fs],
@@ -318,7 +421,116 @@ pub(crate) fn reflex_parametric(
             .iter()
             .map(|r| 100.0 * (1.0 - r / f.total_ss))
             .collect(),
+        start_left_out,
     })
+}
+
+/// The joint model's residual at `[I, B, K, G]`, from the I-B-K-only fit's
+/// (each segment's constant refitted).
+fn joint_residual(f: &Fixed, x: &[f64], [i, b, k, gain]: [f64; 4]) -> Vec<f64> {
+    let theta = nalgebra::Vector3::new(i, b, k);
+    let mut resid = Vec::with_capacity(x.len());
+    for g in &f.groups {
+        let xm = mean(&x[g.clone()]);
+        resid.extend(g.clone().map(|t| {
+            f.residual[t] - gain * (x[t] - xm)
+                + (f.theta - theta).dot(&nalgebra::Vector3::new(
+                    f.columns[0][t],
+                    f.columns[1][t],
+                    f.columns[2][t],
+                ))
+        }));
+    }
+    resid
+}
+
+/// The I-B-K columns and the torque at each segment's rows past its first
+/// `skip`, gathered once for the many fits of a scan.
+pub(crate) struct SegmentRows {
+    columns: [Vec<f64>; 4],
+    groups: Vec<Range<usize>>,
+    skip: usize,
+}
+
+/// The low-pass's free responses (see [`free_responses`]) in decimation phases.
+pub(crate) type FreePhases = [Vec<Vec<f64>>; 2];
+
+impl SegmentRows {
+    pub(crate) fn new(d: &Decimated, skip: usize) -> Self {
+        SegmentRows {
+            columns: [&d.acceleration, &d.velocity, &d.position, &d.torque]
+                .map(|c| gather(c, &d.segments, skip).into_owned()),
+            groups: groups(&d.segments, skip),
+            skip,
+        }
+    }
+
+    /// The free responses of the low-pass `(natural Hz, damping ratio, fs)`
+    /// from each segment's start, in decimation phases.
+    pub(crate) fn free_phases(
+        d: &Decimated,
+        low_pass: (f64, f64, f64),
+        full_segments: &[Range<usize>],
+    ) -> FreePhases {
+        let full_len = full_segments.last().map_or(0, |s| s.end);
+        free_responses(low_pass, full_segments, full_len)
+            .map(|h| phases(&h, d.ratio, d.torque.len()))
+    }
+
+    /// The joint model for the reflex regressor in phases `ph` at `delay`,
+    /// with each segment's constant and the low-pass's two free responses
+    /// (the reflex in flight at its cut) projected out inside the segment:
+    /// the fit of the projected columns and the projected regressor.
+    pub(crate) fn fit(
+        &self,
+        d: &Decimated,
+        (ph, free): (&[Vec<f64>], &FreePhases),
+        delay: usize,
+    ) -> Option<(Fixed, Vec<f64>)> {
+        let nuisance = free
+            .each_ref()
+            .map(|h| delayed(h, d.ratio, delay, self.skip, &d.segments));
+        let mut columns = self.columns.clone();
+        let mut x = delayed(ph, d.ratio, delay, self.skip, &d.segments).into_owned();
+        for g in &self.groups {
+            let basis = orthonormal(&[
+                vec![1.0; g.len()],
+                nuisance[0][g.clone()].to_vec(),
+                nuisance[1][g.clone()].to_vec(),
+            ]);
+            for c in columns.iter_mut().chain(std::iter::once(&mut x)) {
+                let c = &mut c[g.clone()];
+                for b in &basis {
+                    let k = dot(c, b);
+                    c.iter_mut().zip(b).for_each(|(v, bv)| *v -= k * bv);
+                }
+            }
+        }
+        let [a, v, q, y] = columns;
+        Some((fixed_from([a, v, q], y, self.groups.clone())?, x))
+    }
+}
+
+/// An orthonormal basis of the vectors' span (Gram-Schmidt, twice, leaving
+/// out a vector the others nearly span).
+fn orthonormal(vectors: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    for v in vectors {
+        let norm0 = dot(v, v).sqrt();
+        let mut u = v.clone();
+        for _ in 0..2 {
+            for b in &basis {
+                let k = dot(&u, b);
+                u.iter_mut().zip(b).for_each(|(x, bx)| *x -= k * bx);
+            }
+        }
+        let norm = dot(&u, &u).sqrt();
+        if norm > 1e-8 * norm0 && norm > 0.0 {
+            u.iter_mut().for_each(|x| *x /= norm);
+            basis.push(u);
+        }
+    }
+    basis
 }
 
 /// RSS and `[I, B, K, G]` per low-pass (row) and delay (column); delays a
@@ -350,8 +562,8 @@ fn best(fits: &[Vec<(f64, [f64; 4])>]) -> (f64, usize, usize) {
 /// None when no low-pass of the grid lies below the decimated Nyquist frequency.
 fn scan_low_pass_and_delay(
     d: &Decimated,
-    f: &Fixed,
-    full: &[f64],
+    (f, rows): (&Fixed, Option<&SegmentRows>),
+    (full, full_segments): (&[f64], &[Range<usize>]),
     max_delay: usize,
     (skip, fs): (usize, f64),
 ) -> Option<Scan> {
@@ -364,14 +576,15 @@ fn scan_low_pass_and_delay(
         combos
             .par_iter()
             .map(|&(w, z)| {
-                let ph = phases(&low_pass(full, w, z, fs), d.ratio, n);
+                let ph = phases(&low_pass_in(full, (w, z, fs), full_segments), d.ratio, n);
+                let free = rows.map(|_| SegmentRows::free_phases(d, (w, z, fs), full_segments));
                 (0..delays)
-                    .map(|dl| {
-                        if near.contains(&dl) {
-                            joint_fit(f, delayed(&ph, d.ratio, dl, skip, n))
-                        } else {
-                            (f64::INFINITY, [0.0; 4])
-                        }
+                    .map(|dl| match (near.contains(&dl), rows.zip(free.as_ref())) {
+                        (false, _) => (f64::INFINITY, [0.0; 4]),
+                        (true, None) => joint_fit(f, &delayed(&ph, d.ratio, dl, skip, &d.segments)),
+                        (true, Some((rows, free))) => rows
+                            .fit(d, (&ph, free), dl)
+                            .map_or((f64::INFINITY, [0.0; 4]), |(g, x)| joint_fit(&g, &x)),
                     })
                     .collect::<Vec<_>>()
             })
@@ -445,6 +658,22 @@ fn profile_region_shift(fits: &ScanFits, threshold: f64, at_best: [f64; 4]) -> [
     shift
 }
 
+/// The jackknife's blocks of rows: whole segments when there are as many
+/// segments as blocks (each segment's constant is fitted inside it, and
+/// neighbouring samples share their noise), else equal runs of rows.
+fn jackknife_blocks(groups: &[Range<usize>], m: usize, blocks: usize) -> Vec<Range<usize>> {
+    if groups.len() >= blocks {
+        let g = groups.len();
+        (0..blocks)
+            .map(|b| groups[b * g / blocks].start..groups[(b + 1) * g / blocks - 1].end)
+            .collect()
+    } else {
+        (0..blocks)
+            .map(|b| b * m / blocks..(b + 1) * m / blocks)
+            .collect()
+    }
+}
+
 /// 10-block delete-one jackknife standard errors of (I, B, K, G) of the joint model.
 pub(crate) fn joint_jackknife(f: &Fixed, x: &[f64]) -> [f64; 4] {
     let blocks = 10;
@@ -482,9 +711,9 @@ pub(crate) fn joint_jackknife(f: &Fixed, x: &[f64]) -> [f64; 4] {
         );
         blocks
     ];
-    for (b, (g, r)) in grams.iter_mut().enumerate() {
+    for ((g, r), rows) in grams.iter_mut().zip(jackknife_blocks(&f.groups, m, blocks)) {
         #[allow(clippy::needless_range_loop)] // row(t) reads five columns at t
-        for t in b * m / blocks..(b + 1) * m / blocks {
+        for t in rows {
             let v = nalgebra::SVector::<f64, 5>::from(row(t));
             *g += v * v.transpose();
             *r += v * y[t];
