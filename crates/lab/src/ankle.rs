@@ -252,6 +252,61 @@ fn integrate(
     )
 }
 
+/// Short segments of a long recording, as an experiment that keeps only
+/// stretches of a session (Ludvig & Perreault 2012): stretches of
+/// `shortest_s..longest_s` (uniform) separated by gaps of 0.2-2 s, each its
+/// own `trial` (1, 2, ...) keeping its time, with a background torque of
+/// 2-6 N m added per segment (the operating point changes between them).
+/// No stretch spans a gap of the recording's own.
+pub fn cut_into_segments(
+    rec: &Recording,
+    (shortest_s, longest_s): (f64, f64),
+    seed: u64,
+) -> Result<Recording> {
+    if !(shortest_s > 0.0 && longest_s >= shortest_s && longest_s.is_finite()) {
+        return Err(Error::invalid(
+            "segments",
+            format!("expected 0 < shortest <= longest, found {shortest_s} and {longest_s} s"),
+        ));
+    }
+    let fs = rec.sample_rate();
+    let mut rng = StdRng::seed_from_u64(seed);
+    // the recording's own trial ids give way to the segments'
+    let mut names: Vec<String> = rec
+        .names()
+        .iter()
+        .filter(|n| *n != "trial")
+        .cloned()
+        .collect();
+    let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len() + 1];
+    let torque = names.iter().position(|n| n.starts_with("tau"));
+    let mut at = (rng.random_range(0.2..2.0) * fs) as usize;
+    let mut trial = 0.0;
+    loop {
+        let len = (rng.random_range(shortest_s..=longest_s) * fs).round() as usize;
+        if at + len > rec.len() {
+            break;
+        }
+        // a stretch holds no gap of the recording's own
+        let t = rec.t();
+        if let Some(gap) = (at + 1..at + len).find(|&i| t[i] - t[i - 1] > 1.5 / fs) {
+            at = gap;
+            continue;
+        }
+        trial += 1.0;
+        let background = rng.random_range(2.0..6.0);
+        for (k, name) in names.iter().enumerate() {
+            let column = rec.column(name).expect("a named column");
+            let offset = if Some(k) == torque { background } else { 0.0 };
+            columns[k].extend(column[at..at + len].iter().map(|v| v + offset));
+        }
+        columns[names.len()].extend(std::iter::repeat_n(trial, len));
+        at += len + (rng.random_range(0.2..2.0) * fs) as usize;
+    }
+    names.push("trial".into());
+    Recording::new(rec.path(), names, columns, 2)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

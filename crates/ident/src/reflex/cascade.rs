@@ -90,7 +90,7 @@ pub(crate) fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Resu
     let with = |[positive, negative]: [Vec<f64>; 2]| Decimated {
         fs: fsd,
         ratio,
-        segments: vec![0..q.len().div_ceil(ratio)],
+        segments: std::iter::once(0..q.len().div_ceil(ratio)).collect(),
         position: pick(&filtered[0]),
         velocity: pick(&filtered[2]),
         acceleration: pick(&filtered[3]),

@@ -383,7 +383,10 @@ fn cross_validated_vaf(d: &Decimated, best: usize, half: usize, n_reflex: usize)
     let (fitted, held_out): (Vec<Range<usize>>, Vec<Range<usize>>) = match d.segments.as_slice() {
         [whole] => {
             let split = 2 * whole.len() / 3;
-            (vec![0..split], vec![split..whole.end])
+            (
+                std::iter::once(0..split).collect(),
+                std::iter::once(split..whole.end).collect(),
+            )
         }
         many => {
             let split = (2 * many.len() / 3).max(1);

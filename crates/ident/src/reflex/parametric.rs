@@ -339,7 +339,7 @@ pub(crate) fn reflex_parametric(
     let n = d.torque.len();
     let full = &d.rectified_full[polarity];
     let full_segments = match d.segments.as_slice() {
-        [_] => vec![0..full.len()],
+        [_] => std::iter::once(0..full.len()).collect(),
         many => super::segments::full_rate(many, d.ratio),
     };
     let max_delay = (p.max_delay_s * fs).round() as usize;

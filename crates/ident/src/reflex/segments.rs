@@ -200,7 +200,7 @@ pub(crate) fn groups(segments: &[Range<usize>], skip: usize) -> Vec<Range<usize>
 /// column). A trial change is a cut, even where the time runs on.
 pub(crate) fn recorded(rec: &Recording) -> Result<Vec<Range<usize>>> {
     if !rec.has("trial") {
-        return Ok(vec![0..rec.len()]);
+        return Ok(std::iter::once(0..rec.len()).collect());
     }
     Ok(limpid_core::trial::windows_from_trial_column(rec, "trial")?
         .into_iter()

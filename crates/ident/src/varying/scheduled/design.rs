@@ -19,7 +19,9 @@ impl Design<'_> {
     /// K; its constant detrends to zero), the reflex gain (0..=order).
     pub(super) fn columns(&self) -> usize {
         let p1 = self.order + 1;
-        3 * self.rows.d * p1 + p1 + usize::from(self.reflex.is_some()) * p1
+        3 * self.rows.d * p1
+            + usize::from(self.rows.offset) * p1
+            + usize::from(self.reflex.is_some()) * p1
     }
 
     pub(super) fn row(&self, n: usize, out: &mut [f64]) {
@@ -30,8 +32,10 @@ impl Design<'_> {
             out[c..c + p1].copy_from_slice(&x[g * top1..g * top1 + p1]);
             c += p1;
         }
-        out[c..c + p1].copy_from_slice(&x[3 * d * top1 + 1..3 * d * top1 + p1 + 1]);
-        c += p1;
+        if self.rows.offset {
+            out[c..c + p1].copy_from_slice(&x[3 * d * top1 + 1..3 * d * top1 + p1 + 1]);
+            c += p1;
+        }
         if let Some(r) = self.reflex {
             out[c..c + p1].copy_from_slice(&r[n * top1..n * top1 + p1]);
         }
@@ -39,7 +43,7 @@ impl Design<'_> {
 
     /// The first column of the reflex gains.
     pub(super) fn reflex_start(&self) -> usize {
-        3 * self.rows.d * (self.order + 1) + self.order + 1
+        (3 * self.rows.d + usize::from(self.rows.offset)) * (self.order + 1)
     }
 
     /// Over the rows `range`: Gram matrix, regressor-force products, Σ f² per output.

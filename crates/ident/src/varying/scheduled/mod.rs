@@ -291,7 +291,7 @@ fn angle_reading(
     }
     let x = rec.require(&coords[0], "the coordinate")?;
     let sigma = rec.require(&params.schedule, "the schedule (--schedule)")?;
-    let operating = slow.filtfilt(x)?;
+    let operating = operating_point(rec, x, slow)?;
     let n = x.len() as f64;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
     let (ms, mo) = (mean(sigma), mean(&operating));
@@ -325,6 +325,31 @@ fn angle_reading(
     } else {
         AngleReading::Linear
     })
+}
+
+/// The slow part of `x` in each segment (a `trial` window, or the whole
+/// record): its zero-phase low-pass, or its straight line where the segment
+/// is too short for the low-pass; never across a gap.
+fn operating_point(rec: &Recording, x: &[f64], slow: &LowPass) -> Result<Vec<f64>> {
+    let ranges: Vec<std::ops::Range<usize>> = if rec.has("trial") {
+        limpid_core::trial::windows_from_trial_column(rec, "trial")?
+            .into_iter()
+            .map(|w| w.range)
+            .collect()
+    } else {
+        std::iter::once(0..x.len()).collect()
+    };
+    let mut out = Vec::with_capacity(x.len());
+    for r in ranges {
+        let part = &x[r];
+        if part.len() > 4 * slow.padlen() {
+            out.extend(slow.filtfilt(part)?);
+        } else {
+            let line = rows::remove_line(part);
+            out.extend(part.iter().zip(line).map(|(v, l)| v - l));
+        }
+    }
+    Ok(out)
 }
 
 /// The reading in words, for the result's schedule.

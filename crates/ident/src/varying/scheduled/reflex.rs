@@ -8,7 +8,7 @@ use limpid_core::Result;
 use limpid_dsp::LowPass;
 
 use super::design::Design;
-use super::rows::{detrend, Rows};
+use super::rows::Rows;
 use super::{solve_scaled, VaryingParams, REFLEX_DAMPING, REFLEX_NATURAL_HZ};
 
 /// Reflex columns at the kept rows (`top + 1` per row): each degree's
@@ -23,7 +23,7 @@ pub(super) fn reflex_columns(
     let mut row0 = 0;
     for (seg, degrees) in rows.segments.iter().zip(drives) {
         for (i, drive) in degrees.iter().enumerate().take(p1) {
-            let col = detrend(slow, drive)?;
+            let col = seg.detrend(slow, drive)?;
             for (k, &t) in seg.kept.iter().enumerate() {
                 out[(row0 + k) * p1 + i] = col[t];
             }
@@ -225,7 +225,8 @@ pub(super) fn scan_reflex(
     let products = |hz: f64, zeta: f64, positive: bool| -> Result<Products> {
         reflex_drives(rows, (hz, zeta, positive), order, 0, fs)
             .iter()
-            .map(|degrees| degrees.iter().map(|d| detrend(slow, d)).collect())
+            .zip(&rows.segments)
+            .map(|(degrees, seg)| degrees.iter().map(|d| seg.detrend(slow, d)).collect())
             .collect()
     };
     let candidates: Vec<(f64, bool)> = REFLEX_NATURAL_HZ

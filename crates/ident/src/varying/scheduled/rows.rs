@@ -24,6 +24,49 @@ pub(super) struct Segment {
     pub(super) kept: Vec<usize>,
     /// `T_i(σ)` at every sample, degrees `0..=top` (filled once the range is known).
     pub(super) basis: Vec<Vec<f64>>,
+    /// Samples left out at each end.
+    pub(super) trim: usize,
+    /// How the operating point is taken out of this segment.
+    pub(super) trend: Trend,
+}
+
+/// The operating point of a segment, removed from every column of it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Trend {
+    /// What varies slower than `slow_hz` (a zero-phase low-pass).
+    Slow,
+    /// A straight line (least squares): a segment too short for the slow
+    /// low-pass (Ludvig & Perreault's short segments), whose operating point
+    /// is constant or drifts slowly within it.
+    Line,
+}
+
+impl Segment {
+    /// `x` minus its operating point (see [`Trend`]).
+    pub(super) fn detrend(&self, slow: &LowPass, x: &[f64]) -> Result<Vec<f64>> {
+        match self.trend {
+            Trend::Slow => detrend(slow, x),
+            Trend::Line => Ok(remove_line(x)),
+        }
+    }
+}
+
+/// `x` minus its least-squares straight line.
+pub(super) fn remove_line(x: &[f64]) -> Vec<f64> {
+    let n = x.len() as f64;
+    let centre = (n - 1.0) / 2.0;
+    let mean = x.iter().sum::<f64>() / n;
+    let (mut stt, mut sxt) = (0.0, 0.0);
+    for (t, v) in x.iter().enumerate() {
+        let u = t as f64 - centre;
+        stt += u * u;
+        sxt += u * v;
+    }
+    let slope = if stt > 0.0 { sxt / stt } else { 0.0 };
+    x.iter()
+        .enumerate()
+        .map(|(t, v)| v - mean - slope * (t as f64 - centre))
+        .collect()
 }
 
 /// The design at the highest order: per kept sample, every product column
@@ -40,6 +83,10 @@ pub(super) struct Rows {
     pub(super) lo: f64,
     pub(super) span: f64,
     pub(super) segments: Vec<Segment>,
+    /// Whether the offset `c(σ)` is fitted: not when every segment's
+    /// straight line (its operating point) already holds it (a schedule
+    /// constant or linear within each short segment).
+    pub(super) offset: bool,
 }
 
 impl Rows {
@@ -131,13 +178,11 @@ fn segments(
     } else {
         std::iter::once(0..rec.len()).collect()
     };
-    let trim = [
-        (fs / (4.0 * params.slow_hz)).ceil(),
-        (params.max_delay_s * fs).ceil() + 1.0,
-        (fs / cutoff).ceil(),
-    ]
-    .into_iter()
-    .fold(0.0f64, f64::max) as usize;
+    // a segment too short for the slow low-pass's ends takes a straight line
+    // as its operating point, and leaves out only what the delay and the
+    // low-pass need
+    let short_trim = ((params.max_delay_s * fs).ceil() + 1.0).max((fs / cutoff).ceil()) as usize;
+    let slow_trim = ((fs / (4.0 * params.slow_hz)).ceil() as usize).max(short_trim);
     // as close to rate_hz as the low-pass allows (cutoff at most half the decimated rate)
     let dec = (fs / params.rate_hz)
         .min(0.5 * fs / cutoff)
@@ -156,7 +201,8 @@ fn segments(
             limpid_core::error::Num(cutoff)
         ));
     }
-    let min_len = 2 * trim + slow.padlen().max(lp.padlen()) + 2;
+    let min_slow = 2 * slow_trim + slow.padlen().max(lp.padlen()) + 2;
+    let min_len = 2 * short_trim + lp.padlen() + 2;
     let d = coords.len();
     let (mut pos, frc) = (
         crate::prepare::columns(rec, coords),
@@ -187,10 +233,22 @@ fn segments(
             Some(w) => derivatives(&w.filtfilt(&pos[0][seg.clone()])?, dt).0,
             None => derivatives(&pos[0][seg.clone()], dt).0,
         };
-        let sigma = if schedule_is_coordinate {
-            slow.filtfilt(&schedule[seg.clone()])?
+        let (trend, trim) = if seg.len() >= min_slow {
+            (Trend::Slow, slow_trim)
         } else {
-            schedule[seg.clone()].to_vec()
+            (Trend::Line, short_trim)
+        };
+        let sigma = match (schedule_is_coordinate, trend) {
+            (true, Trend::Slow) => slow.filtfilt(&schedule[seg.clone()])?,
+            (true, Trend::Line) => {
+                let line = remove_line(&schedule[seg.clone()]);
+                schedule[seg.clone()]
+                    .iter()
+                    .zip(line)
+                    .map(|(s, l)| s - l)
+                    .collect()
+            }
+            (false, _) => schedule[seg.clone()].to_vec(),
         };
         let kept = (trim..seg.len() - trim).step_by(dec).collect();
         segments.push(Segment {
@@ -199,6 +257,8 @@ fn segments(
             sigma,
             kept,
             basis: Vec::new(),
+            trim,
+            trend,
         });
     }
     if skipped > 0 {
@@ -206,6 +266,16 @@ fn segments(
             "{skipped} segment(s) left out: shorter than {min_len} samples, what filtering and the reflex delay need"
         ));
     }
+    let lines = segments.iter().filter(|s| s.trend == Trend::Line).count();
+    if lines > 0 {
+        warnings.push(format!(
+            "{lines} of {} segment(s) shorter than {:.2} s, too short for the {} Hz slow low-pass: each takes a straight line as its operating point (and the schedule's line as its value)",
+            segments.len(),
+            min_slow as f64 / fs,
+            limpid_core::error::Num(params.slow_hz)
+        ));
+    }
+    let trim = segments.iter().map(|s| s.trim).min().unwrap_or(slow_trim);
     Ok((segments, dec, trim))
 }
 
@@ -268,6 +338,7 @@ pub(super) fn rows(
         lo,
         span,
         segments: Vec::new(),
+        offset: true,
     };
     let block_len = (fs.round() as usize).max(1);
     let (mut row0, mut block) = (0usize, 0usize);
@@ -310,7 +381,7 @@ pub(super) fn rows(
                         .map(|(s, b)| s * b)
                         .collect()
                 };
-                Some(detrend(slow, &product).map(|v| (c, v)))
+                Some(seg.detrend(slow, &product).map(|v| (c, v)))
             })
             .collect::<Result<Vec<_>>>()?
             .into_iter()
@@ -321,18 +392,25 @@ pub(super) fn rows(
             }
         }
         for k in 0..d {
-            let f = detrend(slow, &seg.signals[3 * d + k])?;
+            let f = seg.detrend(slow, &seg.signals[3 * d + k])?;
             for (r, &i) in seg.kept.iter().enumerate() {
                 out.f[(row0 + r) * d + k] = f[i];
             }
         }
         for &i in &seg.kept {
             out.sigma.push(seg.sigma[i]);
-            out.block.push(block + (i - trim) / block_len);
+            out.block.push(block + (i - seg.trim) / block_len);
         }
         row0 += seg.kept.len();
         block += len / block_len + 1;
     }
+    // the offset's columns are what the segments' trends leave of T_i(σ)
+    out.offset = segments.iter().any(|s| s.trend == Trend::Slow) || {
+        let energy = |c: usize| (0..n).map(|r| out.x[r * width + c].powi(2)).sum::<f64>();
+        let column = |i: usize| 3 * d * p1 + i;
+        let sigma_ss: f64 = out.sigma.iter().map(|s| ((s - lo) / span).powi(2)).sum();
+        (1..p1).any(|i| energy(column(i)) > 1e-6 * sigma_ss)
+    };
     out.segments = segments;
     Ok((out, dec, trim))
 }
