@@ -309,7 +309,8 @@ mod tests {
             })
             .collect();
         let y = apply(&[0.5, 2.0, -1.0], -1, &u);
-        let (h, order) = irf_pinv(&u, &y, (-2, 5), &[0..u.len()]);
+        let whole: Vec<_> = std::iter::once(0..u.len()).collect();
+        let (h, order) = irf_pinv(&u, &y, (-2, 5), &whole);
         let want = [0.0, 0.5, 2.0, -1.0, 0.0];
         for (a, b) in h.iter().zip(want) {
             assert!((a - b).abs() < 2e-3, "{h:?}");
