@@ -537,7 +537,7 @@ fn outside_segmented_ankle_at_five_angles() {
         "order {pairs:?}"
     );
     assert!(
-        covered * 100 >= 85 * judged / 1,
+        covered * 100 >= 85 * judged,
         "±2 SE covered {covered} of {judged}"
     );
 }
