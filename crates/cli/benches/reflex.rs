@@ -2,7 +2,9 @@
 //! one 60 s, 1 kHz ankle recording: the real `pf.csv` of Kearney's laboratory
 //! under `$LIMPID_REAL_DATA/reklab_ankle` when set, else limpid's virtual ankle,
 //! from the loaded recording to the estimate (decimation, alternating IRFs,
-//! cross-validation, joint parametric delay scan, jackknife).
+//! cross-validation, joint parametric delay scan, jackknife); and 40
+//! segments of 1 s of the virtual ankle (issue 80: each segment with its own
+//! start, the reflex in flight at each cut fitted in every scan step).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use limpid_ident::reflex::{estimate_reflex, ReflexParams};
@@ -16,6 +18,28 @@ fn bench(c: &mut Criterion) {
     group.sample_size(20);
     group.bench_function("parallel_cascade_60s_1kHz", |b| {
         b.iter(|| estimate_reflex(&rec, &ReflexParams::default()).expect("estimate"))
+    });
+    let ankle = limpid_lab::ankle::AnkleSubject::default();
+    let session = limpid_lab::ankle::AnkleExperiment {
+        duration_s: 100.0,
+        ..Default::default()
+    };
+    let long = limpid_lab::ankle::simulate_ankle(&ankle, &session, 1).expect("ankle");
+    let cut = limpid_lab::ankle::cut_into_segments(&long, (1.0, 1.0), 1).expect("segments");
+    let ids = cut.column("trial").expect("trial");
+    let forty = ids.iter().position(|&id| id > 40.0).unwrap_or(ids.len());
+    let cut = limpid_core::Recording::new(
+        "forty segments",
+        cut.names().to_vec(),
+        cut.names()
+            .iter()
+            .map(|n| cut.column(n).expect("column")[..forty].to_vec())
+            .collect(),
+        2,
+    )
+    .expect("forty segments");
+    group.bench_function("segments_40x1s_1kHz", |b| {
+        b.iter(|| estimate_reflex(&cut, &ReflexParams::default()).expect("estimate"))
     });
     group.finish();
 }

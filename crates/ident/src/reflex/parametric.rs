@@ -346,9 +346,10 @@ pub(crate) fn reflex_parametric(
     let delays = max_delay + 1;
     // several segments: every fit with the reflex in flight at each cut
     let rows = (d.segments.len() > 1).then(|| SegmentRows::new(d, skip));
+    let sums = rows.as_ref().map(SegmentRows::sums);
     let Scan { combos, fits } = scan_low_pass_and_delay(
         d,
-        (&f, rows.as_ref()),
+        (&f, rows.as_ref().zip(sums.as_deref())),
         (full, &full_segments),
         max_delay,
         (skip, fs),
@@ -511,6 +512,144 @@ impl SegmentRows {
     }
 }
 
+/// The cross products of `[a, v, q, y]` over one segment's fitted rows.
+pub(crate) struct GroupSums {
+    ww: [[f64; 4]; 4],
+    sums: [f64; 4],
+}
+
+impl SegmentRows {
+    /// Each segment's fixed cross products, once per scan.
+    pub(crate) fn sums(&self) -> Vec<GroupSums> {
+        self.groups
+            .iter()
+            .map(|g| {
+                let mut ww = [[0.0; 4]; 4];
+                let mut sums = [0.0; 4];
+                for t in g.clone() {
+                    let w = self.columns.each_ref().map(|c| c[t]);
+                    for i in 0..4 {
+                        sums[i] += w[i];
+                        for j in 0..4 {
+                            ww[i][j] += w[i] * w[j];
+                        }
+                    }
+                }
+                GroupSums { ww, sums }
+            })
+            .collect()
+    }
+
+    /// [`SegmentRows::fit`]'s RSS and `[I, B, K, G]` from cross products
+    /// (Frisch-Waugh per segment on the sums): what the scan needs, without
+    /// copying a column.
+    pub(crate) fn scan_fit(
+        &self,
+        sums: &[GroupSums],
+        d: &Decimated,
+        (ph, free): (&[Vec<f64>], &FreePhases),
+        delay: usize,
+    ) -> (f64, [f64; 4]) {
+        let (m, r) = (delay / d.ratio, delay % d.ratio);
+        let (x, n1, n2) = (&ph[r], &free[0][r], &free[1][r]);
+        // W = [a, v, q, y, x]; N = [1, n1, n2]
+        let mut total = [[0.0f64; 5]; 5];
+        let fitted = d.segments.iter().filter(|s| s.len() > self.skip);
+        for ((seg, g), gs) in fitted.zip(&self.groups).zip(sums) {
+            let mut ww = [[0.0f64; 5]; 5];
+            let mut nw = [[0.0f64; 5]; 3];
+            let mut nn = [[0.0f64; 3]; 3];
+            for i in 0..4 {
+                ww[i][..4].copy_from_slice(&gs.ww[i]);
+                nw[0][i] = gs.sums[i];
+            }
+            nn[0][0] = g.len() as f64;
+            let first = seg.start + self.skip - m;
+            for (k, t) in (first..seg.end - m).zip(g.clone()) {
+                let (xv, a, b) = (x[k], n1[k], n2[k]);
+                for (i, c) in self.columns.iter().enumerate() {
+                    let w = c[t];
+                    ww[4][i] += xv * w;
+                    nw[1][i] += a * w;
+                    nw[2][i] += b * w;
+                }
+                ww[4][4] += xv * xv;
+                nw[0][4] += xv;
+                nw[1][4] += a * xv;
+                nw[2][4] += b * xv;
+                nn[0][1] += a;
+                nn[0][2] += b;
+                nn[1][1] += a * a;
+                nn[1][2] += a * b;
+                nn[2][2] += b * b;
+            }
+            for i in 0..4 {
+                ww[i][4] = ww[4][i];
+            }
+            nn[1][0] = nn[0][1];
+            nn[2][0] = nn[0][2];
+            nn[2][1] = nn[1][2];
+            // W'W - (N'W)' (N'N)^+ (N'W), by Cholesky of N'N dropping a
+            // pivot the earlier columns nearly span
+            let mut l = [[0.0f64; 3]; 3];
+            let mut kept = [false; 3];
+            for j in 0..3 {
+                let mut dj = nn[j][j];
+                for p in 0..j {
+                    dj -= l[j][p] * l[j][p];
+                }
+                if dj > 1e-10 * nn[j][j] && dj > 0.0 {
+                    kept[j] = true;
+                    let s = dj.sqrt();
+                    l[j][j] = s;
+                    for i in j + 1..3 {
+                        let mut v = nn[i][j];
+                        for p in 0..j {
+                            v -= l[i][p] * l[j][p];
+                        }
+                        l[i][j] = v / s;
+                    }
+                }
+            }
+            // C = L^-1 N'W, rows of dropped pivots left out
+            let mut c = [[0.0f64; 5]; 3];
+            for j in 0..3 {
+                if !kept[j] {
+                    continue;
+                }
+                for col in 0..5 {
+                    let mut v = nw[j][col];
+                    for p in 0..j {
+                        v -= l[j][p] * c[p][col];
+                    }
+                    c[j][col] = v / l[j][j];
+                }
+            }
+            for i in 0..5 {
+                for j in 0..5 {
+                    total[i][j] += ww[i][j] - (0..3).map(|p| c[p][i] * c[p][j]).sum::<f64>();
+                }
+            }
+        }
+        solve_joint(&total)
+    }
+}
+
+/// RSS and `[I, B, K, G]` of `y` (index 3) on `a, v, q, x` (0, 1, 2, 4)
+/// from their projected cross products (Jacobi-scaled Cholesky).
+fn solve_joint(total: &[[f64; 5]; 5]) -> (f64, [f64; 4]) {
+    let idx = [0, 1, 2, 4];
+    let scale = idx.map(|i| 1.0 / total[i][i].max(f64::MIN_POSITIVE).sqrt());
+    let g = nalgebra::Matrix4::from_fn(|i, j| total[idx[i]][idx[j]] * scale[i] * scale[j]);
+    let h = nalgebra::Vector4::from_fn(|i, _| total[idx[i]][3] * scale[i]);
+    let Some(chol) = g.cholesky() else {
+        return (f64::INFINITY, [0.0; 4]);
+    };
+    let th = chol.solve(&h);
+    let rss = (total[3][3] - th.dot(&h)).max(0.0);
+    (rss, [0, 1, 2, 3].map(|i| th[i] * scale[i]))
+}
+
 /// An orthonormal basis of the vectors' span (Gram-Schmidt, twice, leaving
 /// out a vector the others nearly span).
 fn orthonormal(vectors: &[Vec<f64>]) -> Vec<Vec<f64>> {
@@ -562,7 +701,7 @@ fn best(fits: &[Vec<(f64, [f64; 4])>]) -> (f64, usize, usize) {
 /// None when no low-pass of the grid lies below the decimated Nyquist frequency.
 fn scan_low_pass_and_delay(
     d: &Decimated,
-    (f, rows): (&Fixed, Option<&SegmentRows>),
+    (f, rows): (&Fixed, Option<(&SegmentRows, &[GroupSums])>),
     (full, full_segments): (&[f64], &[Range<usize>]),
     max_delay: usize,
     (skip, fs): (usize, f64),
@@ -582,9 +721,9 @@ fn scan_low_pass_and_delay(
                     .map(|dl| match (near.contains(&dl), rows.zip(free.as_ref())) {
                         (false, _) => (f64::INFINITY, [0.0; 4]),
                         (true, None) => joint_fit(f, &delayed(&ph, d.ratio, dl, skip, &d.segments)),
-                        (true, Some((rows, free))) => rows
-                            .fit(d, (&ph, free), dl)
-                            .map_or((f64::INFINITY, [0.0; 4]), |(g, x)| joint_fit(&g, &x)),
+                        (true, Some(((rows, sums), free))) => {
+                            rows.scan_fit(sums, d, (&ph, free), dl)
+                        }
                     })
                     .collect::<Vec<_>>()
             })
@@ -757,4 +896,57 @@ pub(crate) fn autocorrelation_inflation(e: &[f64]) -> f64 {
         s += 2.0 * r;
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scan's fit from cross products is the row-wise fit with each
+    /// segment's constant and free responses projected out.
+    #[test]
+    fn scan_fit_from_sums_equals_the_projected_row_fit() {
+        let mut seed = 7u64;
+        let mut noise = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (ratio, n) = (4, 90);
+        let segments = vec![0..30, 30..55, 55..90];
+        let full: Vec<f64> = (0..n * ratio).map(|_| noise().max(0.0)).collect();
+        let column = |noise: &mut dyn FnMut() -> f64| (0..n).map(|_| noise()).collect::<Vec<f64>>();
+        let d = Decimated {
+            fs: 250.0,
+            ratio,
+            segments: segments.clone(),
+            position: column(&mut noise),
+            velocity: column(&mut noise),
+            acceleration: column(&mut noise),
+            torque: column(&mut noise),
+            rectified: [column(&mut noise), column(&mut noise)],
+            rectified_full: [full.clone(), full.clone()],
+        };
+        let fs = 1000.0;
+        let full_segments = super::super::segments::full_rate(&segments, ratio);
+        let ph = phases(
+            &low_pass_in(&full, (3.0, 0.8, fs), &full_segments),
+            ratio,
+            n,
+        );
+        let free = SegmentRows::free_phases(&d, (3.0, 0.8, fs), &full_segments);
+        let rows = SegmentRows::new(&d, 6);
+        let sums = rows.sums();
+        for delay in [0, 5, 13, 22] {
+            let (g, x) = rows.fit(&d, (&ph, &free), delay).expect("fit");
+            let (rss, params) = joint_fit(&g, &x);
+            let (rss2, params2) = rows.scan_fit(&sums, &d, (&ph, &free), delay);
+            assert!((rss - rss2).abs() < 1e-9 * rss, "{rss} vs {rss2}");
+            for (a, b) in params.iter().zip(params2) {
+                assert!(
+                    (a - b).abs() < 1e-8 * a.abs().max(1.0),
+                    "{params:?} vs {params2:?}"
+                );
+            }
+        }
+    }
 }
