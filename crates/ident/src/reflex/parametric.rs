@@ -520,6 +520,7 @@ pub(crate) struct GroupSums {
 
 impl SegmentRows {
     /// Each segment's fixed cross products, once per scan.
+    #[allow(clippy::needless_range_loop)] // small matrices read best by index
     pub(crate) fn sums(&self) -> Vec<GroupSums> {
         self.groups
             .iter()
@@ -543,6 +544,7 @@ impl SegmentRows {
     /// [`SegmentRows::fit`]'s RSS and `[I, B, K, G]` from cross products
     /// (Frisch-Waugh per segment on the sums): what the scan needs, without
     /// copying a column.
+    #[allow(clippy::needless_range_loop)] // small matrices read best by index
     pub(crate) fn scan_fit(
         &self,
         sums: &[GroupSums],
