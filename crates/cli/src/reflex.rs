@@ -48,6 +48,18 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
         num(e.decimated_rate_hz),
         e.iterations
     );
+    if let Some(s) = &e.segments {
+        println!(
+            "{} of {} segments (trials) of {}-{} s (median {} s), each from its own start: its first {} s left out of I, B, K and the gain (the reflex in flight at the cut fitted), reflex IRF {} s",
+            s.used,
+            s.count,
+            num(s.durations_s[0]),
+            num(s.durations_s[2]),
+            num(s.durations_s[1]),
+            num(s.start_left_out_s),
+            num(s.reflex_irf_s)
+        );
+    }
     println!("intrinsic pathway (joint parametric model, +- standard error):");
     println!(
         "  I = {} +- {} {}   B = {} +- {} {}   K = {} +- {} {}",
