@@ -257,3 +257,101 @@ fn outside_segmented_ankle_gives_its_intrinsic_stiffness() {
     assert!((e.reflex.gain - g).abs() < 0.1 * g, "G {}", e.reflex.gain);
     assert_eq!(e.segments.as_ref().map(|s| s.used), Some(28));
 }
+
+/// The first `count` trials of `rec`.
+fn first_trials(rec: &limpid_core::Recording, count: usize) -> limpid_core::Recording {
+    let ids = rec.column("trial").unwrap();
+    let end = ids
+        .iter()
+        .position(|&id| id > count as f64)
+        .unwrap_or(ids.len());
+    let columns = rec
+        .names()
+        .iter()
+        .map(|n| rec.column(n).unwrap()[..end].to_vec())
+        .collect();
+    limpid_core::Recording::new(rec.path(), rec.names().to_vec(), columns, 2).unwrap()
+}
+
+/// Issue 80 on real data: 20 segments of 0.5-1 s of Kearney's laboratory's
+/// `pf` (each with a background torque added) give the whole record's K
+/// within their joint standard error (joined as one record they gave +49 %).
+#[test]
+fn twenty_short_segments_of_a_real_ankle_agree_with_the_whole_record() {
+    let Some(dir) = limpid_testkit::real_data("reklab_ankle") else {
+        return;
+    };
+    let rec = limpid_io::read_recording(dir.join("pf.csv")).unwrap();
+    let whole = estimate_reflex(&rec, &ReflexParams::default()).unwrap();
+    for seed in [1u64, 2, 3] {
+        let cut = limpid_lab::ankle::cut_into_segments(&rec, (0.5, 1.0), seed).unwrap();
+        let twenty = first_trials(&cut, 20);
+        let e = estimate_reflex(&twenty, &ReflexParams::default()).unwrap();
+        let (k, kw) = (e.intrinsic.stiffness, whole.intrinsic.stiffness);
+        let se = e
+            .intrinsic
+            .standard_errors
+            .stiffness
+            .hypot(whole.intrinsic.standard_errors.stiffness);
+        eprintln!(
+            "seed {seed}: K {k:.1} ± {:.1} vs whole {kw:.1}",
+            e.intrinsic.standard_errors.stiffness
+        );
+        assert_eq!(e.segments.as_ref().map(|s| s.used), Some(20));
+        assert!((k - kw).abs() <= 2.0 * se, "K {k} vs {kw} (joint SE {se})");
+    }
+}
+
+/// Segments of an ankle without a reflex claim none, and long segments
+/// (3-5 s, the issue's control) give what short ones give.
+#[test]
+fn segments_without_a_reflex_claim_none_and_long_segments_agree() {
+    use limpid_lab::ankle::cut_into_segments;
+    for (seed, reflex, lengths) in [
+        (5u64, false, (0.3, 0.6)),
+        (6, false, (0.5, 1.0)),
+        (7, true, (3.0, 5.0)),
+    ] {
+        let mut s = AnkleSubject::default();
+        if !reflex {
+            s.reflex = None;
+        }
+        let experiment = AnkleExperiment {
+            duration_s: 90.0,
+            ..AnkleExperiment::default()
+        };
+        let rec = simulate_ankle(&s, &experiment, seed).unwrap();
+        let cut = cut_into_segments(&rec, lengths, seed).unwrap();
+        let e = estimate_reflex(&cut, &ReflexParams::default()).unwrap();
+        let i = &e.intrinsic;
+        let se = &i.standard_errors;
+        eprintln!(
+            "seed {seed} reflex {reflex} {lengths:?}: K {:.2} ({:.1} SE) B {:.4} ({:.1} SE) G {:.2} identifiable {} vaf gain {:.2} warnings {:?}",
+            i.stiffness,
+            (i.stiffness - s.stiffness) / se.stiffness,
+            i.damping,
+            (i.damping - s.damping) / se.damping,
+            e.reflex.gain,
+            e.reflex.delay_identifiable,
+            e.fit.vaf_parametric - e.fit.vaf_parametric_intrinsic,
+            e.warnings
+        );
+        assert!(
+            (i.stiffness - s.stiffness).abs() < 0.07 * s.stiffness,
+            "K {}",
+            i.stiffness
+        );
+        assert!(
+            (i.damping - s.damping).abs() < 0.2 * s.damping,
+            "B {}",
+            i.damping
+        );
+        assert!(
+            (i.stiffness - s.stiffness).abs() <= 2.0 * se.stiffness,
+            "K {} ± {}",
+            i.stiffness,
+            se.stiffness
+        );
+        assert_eq!(e.reflex.delay_identifiable, reflex, "{:?}", e.warnings);
+    }
+}
