@@ -160,30 +160,64 @@ pub(super) fn stochastic(seed: u64) -> std::result::Result<Outcome, String> {
 /// A virtual ankle with a stretch reflex (Kearney et al. 1997): random
 /// intrinsic I-B-K, reflex delay, gain, low-pass and polarity; 30 s at 1 kHz.
 pub(super) fn reflex(seed: u64) -> std::result::Result<Outcome, String> {
-    use limpid_ident::reflex::{estimate_reflex, ReflexParams};
-    use limpid_lab::ankle::{simulate_ankle, AnkleExperiment, AnkleReflex, AnkleSubject};
+    use limpid_lab::ankle::{simulate_ankle, AnkleExperiment};
     let mut rng = StdRng::seed_from_u64(seed);
-    let subject = AnkleSubject {
-        inertia: uniform(&mut rng, 0.01, 0.025),
-        damping: uniform(&mut rng, 0.4, 1.5),
-        stiffness: uniform(&mut rng, 40.0, 180.0),
-        reflex: Some(AnkleReflex {
-            gain: uniform(&mut rng, 5.0, 45.0),
-            delay_s: uniform(&mut rng, 0.03, 0.07),
-            natural_hz: uniform(&mut rng, 1.5, 4.0),
-            damping_ratio: uniform(&mut rng, 0.5, 1.0),
-            positive: rng.random::<bool>(),
-        }),
-        quadratic: 0.0,
-        cubic: 0.0,
-    };
+    let subject = reflex_subject(&mut rng);
     let experiment = AnkleExperiment {
         duration_s: 30.0,
         torque_noise_nm: uniform(&mut rng, 0.05, 0.4),
         ..AnkleExperiment::default()
     };
     let rec = simulate_ankle(&subject, &experiment, seed).map_err(|e| e.to_string())?;
-    let est = estimate_reflex(&rec, &ReflexParams::default()).map_err(|e| e.to_string())?;
+    reflex_outcome(&rec, &subject)
+}
+
+/// The parallel cascade on short segments (issue 80; Ludvig & Perreault
+/// 2012): a 90 s session of an ankle with a reflex cut into stretches of
+/// 0.3-1.5 s (the shortest 0.3-0.6 s, the longest up to 1.5 s), each its own
+/// trial with its own background torque of 2-6 N m.
+pub(super) fn reflex_segments(seed: u64) -> std::result::Result<Outcome, String> {
+    use limpid_lab::ankle::{cut_into_segments, simulate_ankle, AnkleExperiment};
+    let mut rng = StdRng::seed_from_u64(seed);
+    let subject = reflex_subject(&mut rng);
+    let experiment = AnkleExperiment {
+        duration_s: 90.0,
+        torque_noise_nm: uniform(&mut rng, 0.05, 0.4),
+        ..AnkleExperiment::default()
+    };
+    let shortest = uniform(&mut rng, 0.3, 0.6);
+    let longest = uniform(&mut rng, shortest, 1.5);
+    let rec = simulate_ankle(&subject, &experiment, seed).map_err(|e| e.to_string())?;
+    let cut = cut_into_segments(&rec, (shortest, longest), seed).map_err(|e| e.to_string())?;
+    reflex_outcome(&cut, &subject)
+}
+
+/// An ankle with a reflex drawn from the calibration's ranges.
+fn reflex_subject(rng: &mut StdRng) -> limpid_lab::ankle::AnkleSubject {
+    use limpid_lab::ankle::{AnkleReflex, AnkleSubject};
+    AnkleSubject {
+        inertia: uniform(rng, 0.01, 0.025),
+        damping: uniform(rng, 0.4, 1.5),
+        stiffness: uniform(rng, 40.0, 180.0),
+        reflex: Some(AnkleReflex {
+            gain: uniform(rng, 5.0, 45.0),
+            delay_s: uniform(rng, 0.03, 0.07),
+            natural_hz: uniform(rng, 1.5, 4.0),
+            damping_ratio: uniform(rng, 0.5, 1.0),
+            positive: rng.random::<bool>(),
+        }),
+        quadratic: 0.0,
+        cubic: 0.0,
+    }
+}
+
+/// The parallel cascade's K and B against the subject's.
+fn reflex_outcome(
+    rec: &limpid_core::Recording,
+    subject: &limpid_lab::ankle::AnkleSubject,
+) -> std::result::Result<Outcome, String> {
+    use limpid_ident::reflex::{estimate_reflex, ReflexParams};
+    let est = estimate_reflex(rec, &ReflexParams::default()).map_err(|e| e.to_string())?;
     let i = &est.intrinsic;
     let one = |v: f64| Matrix::from(nalgebra::DMatrix::from_element(1, 1, v));
     let fit_ok = est.fit.vaf_parametric >= limpid_analysis::linear::VAF_FLOOR_PERCENT;

@@ -31,8 +31,8 @@ mod methods;
 mod subjects;
 mod sweeps;
 use methods::{
-    centre_out, cocontraction, ensemble, planar, planar_session, reflex, scheduled, stochastic,
-    walking,
+    centre_out, cocontraction, ensemble, planar, planar_session, reflex, reflex_segments,
+    scheduled, stochastic, walking,
 };
 use subjects::{planar_subject, random_matrix2, random_matrix3, sensors, uniform, PLANAR_NOISE};
 use sweeps::{sweep, sweep_session, SweepOutcome};
@@ -207,7 +207,7 @@ pub(crate) fn cocontraction_subject(seed: u64) -> CocontractionSubject {
 }
 
 /// Methods of the study (each `recordings` virtual recordings).
-pub const METHODS: usize = 10;
+pub const METHODS: usize = 11;
 
 /// Sets of window sweeps: seed 003's session, and the varied subjects.
 pub const SWEEP_SETS: usize = 2;
@@ -277,6 +277,11 @@ pub fn calibrate(
             6,
         ),
         run("ankle with reflex, parallel cascade", &reflex, 8),
+        run(
+            "ankle with reflex, short segments of 0.3-1.5 s (Ludvig & Perreault 2012)",
+            &reflex_segments,
+            11,
+        ),
         run(
             "time-varying ensemble, joint and planar (per instant)",
             &ensemble,
