@@ -56,7 +56,7 @@ mod settings;
 
 pub use cascade::vaf;
 pub use estimate::estimate_reflex;
-pub(crate) use parametric::low_pass;
+pub(crate) use parametric::{free_responses, low_pass};
 pub use segments::SegmentUse;
 pub use settings::{ReflexParams, ReflexRequest, MAX_ITERATIONS, TOLERANCE_VAF};
 

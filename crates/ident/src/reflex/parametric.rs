@@ -107,7 +107,7 @@ fn low_pass_coefficients(natural_hz: f64, zeta: f64, fs: f64) -> ([f64; 3], f64,
 /// The low-pass's two free responses (no input, unit output one and two
 /// samples before) in each segment from its start: the reflex in flight at
 /// a cut, answering motion before it, adds a combination of them.
-fn free_responses(
+pub(crate) fn free_responses(
     (natural_hz, zeta, fs): (f64, f64, f64),
     segments: &[Range<usize>],
     len: usize,

@@ -42,7 +42,7 @@ use super::{
 };
 use crate::varying::ScheduleAngle;
 use design::{fit, region_residuals, robust_covariances, total_ss, Design, Fitted};
-use reflex::{scan_reflex, ReflexChoice};
+use reflex::{free_drives, project_transients, scan_reflex, ReflexChoice};
 use rows::{rows, AngleReading, Rows};
 const FILTER_ORDER: usize = 4;
 const SLOW_ORDER: usize = 2;
@@ -92,17 +92,17 @@ pub(super) fn estimate(
             rec, params, &coords, &forces, cutoff, top, &slow, reading, warnings,
         )
     };
-    let (rows, dec, trim) = rows_read(reading, &mut warnings)?;
+    let (mut rows, dec, trim) = rows_read(reading, &mut warnings)?;
     // a schedule that may be the operating angle (the coordinate its offset)
     // or another quantity: the offset reading's fit, whose difference the
     // standard errors carry
-    let offset_rows = if reading == AngleReading::Unknown {
+    let mut offset_rows = if reading == AngleReading::Unknown {
         Some(rows_read(AngleReading::Integrated { offset: true }, &mut Vec::new())?.0)
     } else {
         None
     };
     let (lo, span) = (rows.lo, rows.span);
-    let reflex = if params.reflex {
+    let mut reflex = if params.reflex {
         scan_reflex(
             &rows,
             params.basis_order.unwrap_or(2),
@@ -114,6 +114,22 @@ pub(super) fn estimate(
     } else {
         None
     };
+    // short segments: the reflex in flight at each cut, two free
+    // coefficients per segment, projected out of every fit that follows
+    if let Some(choice) = reflex.as_mut() {
+        let free = free_drives(&rows, (choice.natural_hz, choice.damping_ratio), fs);
+        if free.iter().any(Option::is_some) {
+            let p1 = rows.top + 1;
+            let mut others: Vec<&mut Rows> = offset_rows.iter_mut().collect();
+            project_transients(
+                &mut rows,
+                &mut others,
+                &mut choice.columns,
+                p1,
+                (&free, choice.delay),
+            );
+        }
+    }
     let design_at = |order: usize, with_reflex: bool| Design {
         rows: &rows,
         order,

@@ -8,7 +8,7 @@ use limpid_core::Result;
 use limpid_dsp::LowPass;
 
 use super::design::Design;
-use super::rows::Rows;
+use super::rows::{remove_line, Rows, Trend};
 use super::{solve_scaled, VaryingParams, REFLEX_DAMPING, REFLEX_NATURAL_HZ};
 
 /// Reflex columns at the kept rows (`top + 1` per row): each degree's
@@ -114,6 +114,96 @@ struct BorderedFit<'a> {
 /// A reflex drive per segment and degree, detrended, full rate.
 type Products = Vec<Vec<Vec<f64>>>;
 
+/// Per segment, the low-pass's two free responses from its start (full
+/// rate, each segment's straight line removed), for the segments whose
+/// operating point is a line (too short for the slow low-pass): the reflex
+/// in flight at the cut, answering motion before it (Ludvig & Perreault
+/// 2012's transient terms). `None` for a long segment, whose first 0.5 s are
+/// left out instead.
+pub(super) type Free = Vec<Option<[Vec<f64>; 2]>>;
+
+/// A candidate pathway's drives and its transients.
+type Drives = (Products, Free);
+
+/// [`Free`] of the low-pass `(natural Hz, damping ratio)`.
+pub(super) fn free_drives(rows: &Rows, (natural_hz, zeta): (f64, f64), fs: f64) -> Free {
+    rows.segments
+        .iter()
+        .map(|seg| {
+            (seg.trend == Trend::Line).then(|| {
+                let n = seg.sigma.len();
+                let whole: Vec<std::ops::Range<usize>> = std::iter::once(0..n).collect();
+                crate::reflex::free_responses((natural_hz, zeta, fs), &whole, n)
+                    .map(|h| remove_line(&h))
+            })
+        })
+        .collect()
+}
+
+/// The free responses of `free` delayed by `delay` quarter samples at a
+/// segment's kept rows (then its line removed there), orthonormalised.
+fn transients(seg: &super::rows::Segment, free: &[Vec<f64>; 2], delay: usize) -> Vec<Vec<f64>> {
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    for h in free {
+        let shifted: Vec<f64> = (0..h.len()).map(|t| delayed(h, t, delay)).collect();
+        let line = remove_line(&shifted);
+        let mut u: Vec<f64> = seg.kept.iter().map(|&t| line[t]).collect();
+        let norm0 = u.iter().map(|v| v * v).sum::<f64>().sqrt();
+        for _ in 0..2 {
+            for b in &basis {
+                let k: f64 = u.iter().zip(b).map(|(x, y)| x * y).sum();
+                u.iter_mut().zip(b).for_each(|(x, y)| *x -= k * y);
+            }
+        }
+        let norm = u.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm > 1e-8 * norm0 && norm > 0.0 {
+            u.iter_mut().for_each(|x| *x /= norm);
+            basis.push(u);
+        }
+    }
+    basis
+}
+
+/// Projects the reflex in flight at each short segment's cut (see [`Free`])
+/// out of the rows' products and forces and the reflex columns (`p1` per
+/// row), in place: the fit then carries two free coefficients per segment.
+pub(super) fn project_transients(
+    rows: &mut Rows,
+    others: &mut [&mut Rows],
+    columns: &mut [f64],
+    p1: usize,
+    (free, delay): (&Free, usize),
+) {
+    let mut row0 = 0;
+    for (s, seg_free) in free.iter().enumerate() {
+        let kept = rows.segments[s].kept.len();
+        if let Some(h) = seg_free {
+            let basis = transients(&rows.segments[s], h, delay);
+            let project = |data: &mut [f64], stride: usize| {
+                for c in 0..stride {
+                    for b in &basis {
+                        let k: f64 = (0..kept)
+                            .map(|r| data[(row0 + r) * stride + c] * b[r])
+                            .sum();
+                        for (r, bv) in b.iter().enumerate() {
+                            data[(row0 + r) * stride + c] -= k * bv;
+                        }
+                    }
+                }
+            };
+            let (width, d) = (rows.width, rows.d);
+            project(&mut rows.x, width);
+            project(&mut rows.f, d);
+            project(columns, p1);
+            for other in others.iter_mut() {
+                project(&mut other.x, width);
+                project(&mut other.f, d);
+            }
+        }
+        row0 += kept;
+    }
+}
+
 impl<'a> BorderedFit<'a> {
     fn new(rows: &'a Rows, order: usize) -> Self {
         let base = Design {
@@ -139,15 +229,41 @@ impl<'a> BorderedFit<'a> {
     }
 
     /// Residual sum of squares with the reflex drives `prod` delayed by
-    /// `delay` quarter samples; `None` if the design is singular.
-    fn rss(&self, prod: &Products, delay: usize) -> Option<f64> {
+    /// `delay` quarter samples (and, in short segments, the low-pass's free
+    /// responses `free` projected out); `None` if the design is singular.
+    fn rss(&self, (prod, free): &Drives, delay: usize) -> Option<f64> {
         let (qa, p1) = (self.intrinsic, self.reflex);
         let mut c = DMatrix::<f64>::zeros(qa, p1);
         let mut dd = DMatrix::<f64>::zeros(p1, p1);
         let mut e = DMatrix::<f64>::zeros(p1, 1);
         let mut rv = vec![0.0; p1];
         let mut row0 = 0;
-        for (seg, pr) in self.rows.segments.iter().zip(prod) {
+        // what the segments' transients take from the augmented Gram matrix [X R y]
+        let q = qa + p1;
+        let mut taken = DMatrix::<f64>::zeros(q + 1, q + 1);
+        for ((seg, pr), seg_free) in self.rows.segments.iter().zip(prod).zip(free) {
+            if let Some(h) = seg_free {
+                // Frisch-Waugh per segment: Z'W with Z the orthonormal transients
+                for b in transients(seg, h, delay) {
+                    let mut zw = vec![0.0; q + 1];
+                    for (k, &t) in seg.kept.iter().enumerate() {
+                        let r = row0 + k;
+                        let bv = b[k];
+                        for (m, &x) in self.regressors[r * qa..(r + 1) * qa].iter().enumerate() {
+                            zw[m] += bv * x;
+                        }
+                        for (i, p) in pr.iter().enumerate() {
+                            zw[qa + i] += bv * delayed(p, t, delay);
+                        }
+                        zw[q] += bv * self.rows.f[r];
+                    }
+                    for i in 0..=q {
+                        for j in 0..=q {
+                            taken[(i, j)] += zw[i] * zw[j];
+                        }
+                    }
+                }
+            }
             for (k, &t) in seg.kept.iter().enumerate() {
                 let r = row0 + k;
                 for (i, p) in pr.iter().enumerate() {
@@ -168,28 +284,32 @@ impl<'a> BorderedFit<'a> {
             }
             row0 += seg.kept.len();
         }
-        let q = qa + p1;
-        let g = DMatrix::from_fn(q, q, |i, j| match (i < qa, j < qa) {
-            (true, true) => self.gram[(i, j)],
-            (true, false) => c[(i, j - qa)],
-            (false, true) => c[(j, i - qa)],
-            (false, false) => dd[((i - qa).min(j - qa), (i - qa).max(j - qa))],
+        let g = DMatrix::from_fn(q, q, |i, j| {
+            let v = match (i < qa, j < qa) {
+                (true, true) => self.gram[(i, j)],
+                (true, false) => c[(i, j - qa)],
+                (false, true) => c[(j, i - qa)],
+                (false, false) => dd[((i - qa).min(j - qa), (i - qa).max(j - qa))],
+            };
+            v - taken[(i, j)]
         });
         let h = DMatrix::from_fn(q, 1, |i, _| {
-            if i < qa {
+            let v = if i < qa {
                 self.moment[(i, 0)]
             } else {
                 e[(i - qa, 0)]
-            }
+            };
+            v - taken[(i, q)]
         });
-        solve_scaled(&g, &h).map(|t| self.force_ss - (t.transpose() * &h)[(0, 0)])
+        let force_ss = self.force_ss - taken[(q, q)];
+        solve_scaled(&g, &h).map(|t| force_ss - (t.transpose() * &h)[(0, 0)])
     }
 
     /// The delay of least residual among `delays` (quarter samples), with
     /// that residual; the first of equals.
     fn best_delay(
         &self,
-        prod: &Products,
+        prod: &Drives,
         delays: impl IntoIterator<Item = usize>,
     ) -> Option<(usize, f64)> {
         let delays: Vec<usize> = delays.into_iter().collect();
@@ -222,20 +342,21 @@ pub(super) fn scan_reflex(
     let step = 4 * ((0.005 * fs).round() as usize).max(1);
     let fit = BorderedFit::new(rows, order);
     // each degree's drive, detrended, full rate, per segment
-    let products = |hz: f64, zeta: f64, positive: bool| -> Result<Products> {
-        reflex_drives(rows, (hz, zeta, positive), order, 0, fs)
+    let products = |hz: f64, zeta: f64, positive: bool| -> Result<Drives> {
+        let prod = reflex_drives(rows, (hz, zeta, positive), order, 0, fs)
             .iter()
             .zip(&rows.segments)
             .map(|(degrees, seg)| degrees.iter().map(|d| seg.detrend(slow, d)).collect())
-            .collect()
+            .collect::<Result<Products>>()?;
+        Ok((prod, free_drives(rows, (hz, zeta), fs)))
     };
     let candidates: Vec<(f64, bool)> = REFLEX_NATURAL_HZ
         .iter()
         .filter(|&&hz| hz < 0.45 * fs)
         .flat_map(|&hz| [(hz, true), (hz, false)])
         .collect();
-    // (rss, natural frequency, polarity, delay, products)
-    let mut best: Option<(f64, f64, bool, usize, Products)> = None;
+    // (rss, natural frequency, polarity, delay, drives)
+    let mut best: Option<(f64, f64, bool, usize, Drives)> = None;
     for &(natural_hz, positive) in &candidates {
         let prod = products(natural_hz, REFLEX_DAMPING, positive)?;
         if let Some((delay, rss)) = fit.best_delay(&prod, (0..=max_delay).step_by(step)) {
@@ -287,11 +408,11 @@ fn pattern_search(
     start_rss: f64,
     max_hz: f64,
     max_delay: usize,
-    products: &(dyn Fn(f64, f64) -> Result<Products> + Sync),
+    products: &(dyn Fn(f64, f64) -> Result<Drives> + Sync),
     fit: &BorderedFit<'_>,
 ) -> Result<(f64, f64, usize)> {
     // within 2 samples every other quarter, then the quarters beside the best
-    let near_best = |prod: &Products, around: usize| -> Option<(usize, f64)> {
+    let near_best = |prod: &Drives, around: usize| -> Option<(usize, f64)> {
         let lo = around.saturating_sub(8);
         let coarse = fit.best_delay(prod, (lo..=(around + 8).min(max_delay)).step_by(2))?;
         fit.best_delay(
