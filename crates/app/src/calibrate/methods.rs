@@ -346,6 +346,21 @@ pub(super) fn ensemble(seed: u64) -> std::result::Result<Outcome, String> {
 /// schedule with or without the ramps recorded. Returns the outcome and,
 /// for the reflex claims, (had a reflex, a reflex was detected).
 pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool), String> {
+    scheduled_within(seed, false)
+}
+
+/// The scheduled ankles of [`scheduled`] seen through short segments (issue
+/// 80): their sessions cut into stretches of 0.3-1.5 s (the shortest
+/// 0.3-0.6 s), each its own trial with its own background torque, at
+/// operating angles that change between them.
+pub(super) fn scheduled_segments(seed: u64) -> std::result::Result<Outcome, String> {
+    scheduled_within(seed, true).map(|(o, _, _)| o)
+}
+
+fn scheduled_within(
+    seed: u64,
+    segments: bool,
+) -> std::result::Result<(Outcome, bool, bool), String> {
     use limpid_ident::varying::{estimate_varying, VaryingRequest};
     use limpid_lab::varying::{
         simulate_scheduled_ankle, RampAndHold, ScheduledAnkle, ScheduledReflex,
@@ -395,7 +410,13 @@ pub(super) fn scheduled(seed: u64) -> std::result::Result<(Outcome, bool, bool),
     }
     protocol.amplitude_rad = uniform(&mut rng, 0.01, 0.04);
     protocol.offset_angle = rng.random::<f64>() < 1.0 / 3.0;
-    let rec = simulate_scheduled_ankle(&subject, &protocol, seed).map_err(|e| e.to_string())?;
+    let mut rec = simulate_scheduled_ankle(&subject, &protocol, seed).map_err(|e| e.to_string())?;
+    if segments {
+        let shortest = uniform(&mut rng, 0.3, 0.6);
+        let longest = uniform(&mut rng, shortest, 1.5);
+        rec = limpid_lab::ankle::cut_into_segments(&rec, (shortest, longest), seed)
+            .map_err(|e| e.to_string())?;
+    }
     let params = VaryingRequest {
         schedule: "sv".into(),
         reflex: true,
