@@ -46,14 +46,18 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     let fs = rec.sample_rate();
     let mut warnings: Vec<Warning> = measured_rate.iter().map(|m| m.warning()).collect();
     let cuts = segments::recorded(rec)?;
+    let shortened: Option<ReflexParams>;
     let (layout, [d, other_decimation], segment_use) = if cuts.len() > 1 {
         check_rate(rec, p)?;
-        let (layout, d, used) = segments::prepare(rec, (q, tq), p, &cuts, &mut warnings)?;
+        let (layout, d, used, short) = segments::prepare(rec, (q, tq), p, &cuts, &mut warnings)?;
+        shortened = short;
         (layout, d, Some(used))
     } else {
+        shortened = None;
         let layout = lengths(rec, p, q.len())?;
         (layout, decimate(q, tq, fs, p)?, None)
     };
+    let p = shortened.as_ref().unwrap_or(p);
     let Layout {
         half,
         n_reflex,

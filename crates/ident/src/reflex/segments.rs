@@ -59,6 +59,44 @@ pub(crate) struct Layout {
 /// Rows a segment must keep past its start-up to be fitted.
 const MIN_ROWS: usize = 5;
 
+/// The shortest delay scan (s) limpid shortens to for short segments: no
+/// stretch reflex of a limb is faster.
+const MIN_SCANNED_DELAY_S: f64 = 0.02;
+
+/// The settings for these segments: when fewer than half of them are long
+/// enough for the delay scan asked, the scan ends where the median segment
+/// still holds rows (not below [`MIN_SCANNED_DELAY_S`]), with a warning.
+fn fit_to_segments(
+    p: &ReflexParams,
+    cuts: &[Range<usize>],
+    (fs, ratio): (f64, usize),
+    warnings: &mut Vec<Warning>,
+) -> Option<ReflexParams> {
+    let min_len = |max_delay: usize| (start_up(max_delay, ratio) + MIN_ROWS) * ratio;
+    let asked = (p.max_delay_s * fs).round() as usize;
+    let usable = cuts.iter().filter(|c| c.len() >= min_len(asked)).count();
+    if 2 * usable >= cuts.len() {
+        return None;
+    }
+    let mut lengths: Vec<usize> = cuts.iter().map(|c| c.len()).collect();
+    lengths.sort_unstable();
+    let median = lengths[lengths.len() / 2];
+    let delay = (0..asked).rev().find(|&d| min_len(d) <= median)?;
+    if (delay as f64) < MIN_SCANNED_DELAY_S * fs {
+        return None;
+    }
+    warnings.push(Warning::new(
+        WarningCode::NotIdentifiable,
+        format!(
+            "reflex delays scanned up to {} ms, not the {} ms asked (max_delay_s): the segments (median {:.3} s) are too short for longer ones; a longer reflex delay cannot be identified from them, and a best delay at the end of this scan is called not identifiable",
+            limpid_core::short_number(delay as f64 / fs * 1e3),
+            limpid_core::short_number(p.max_delay_s * 1e3),
+            median as f64 / fs
+        ),
+    ));
+    Some(p.with_max_delay(delay as f64 / fs))
+}
+
 /// The usable segments decimated and laid end to end, their layout and
 /// use; segments too short for one row of the delay scan are left out
 /// with a warning.
@@ -68,9 +106,11 @@ pub(crate) fn prepare(
     p: &ReflexParams,
     cuts: &[Range<usize>],
     warnings: &mut Vec<Warning>,
-) -> Result<(Layout, [Decimated; 2], SegmentUse)> {
+) -> Result<(Layout, [Decimated; 2], SegmentUse, Option<ReflexParams>)> {
     let fs = rec.sample_rate();
     let ratio = ((fs / p.rate_hz).round() as usize).max(1);
+    let shortened = fit_to_segments(p, cuts, (fs, ratio), warnings);
+    let p = shortened.as_ref().unwrap_or(p);
     let fsd = fs / ratio as f64;
     let lag = |s: f64| (s * fsd).round() as usize;
     let half = lag(p.intrinsic_lags_s).max(1);
@@ -165,6 +205,7 @@ pub(crate) fn prepare(
         },
         decimated,
         segment_use,
+        shortened,
     ))
 }
 

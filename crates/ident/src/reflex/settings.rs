@@ -98,6 +98,16 @@ impl Default for ReflexParams {
     }
 }
 
+impl ReflexParams {
+    /// These settings with the delay scan ending at `max_delay_s` (never
+    /// beyond the one checked): what segments too short for it allow.
+    pub(crate) fn with_max_delay(&self, max_delay_s: f64) -> ReflexParams {
+        let mut request = self.request.clone();
+        request.max_delay_s = max_delay_s.min(self.request.max_delay_s);
+        ReflexParams { request }
+    }
+}
+
 impl ReflexRequest {
     /// What the position column is: as the request says, else as its
     /// recording-format name says, else (the method is a joint's) an angle;

@@ -355,3 +355,45 @@ fn segments_without_a_reflex_claim_none_and_long_segments_agree() {
         assert_eq!(e.reflex.delay_identifiable, reflex, "{:?}", e.warnings);
     }
 }
+
+/// Segments too short for the delay scan asked (0.15-0.3 s against 0.26 s
+/// for 150 ms): the scan ends where the median segment still holds rows,
+/// and the result says so.
+#[test]
+fn very_short_segments_shorten_the_delay_scan_and_say_so() {
+    let s = AnkleSubject::default();
+    let experiment = AnkleExperiment {
+        duration_s: 120.0,
+        ..AnkleExperiment::default()
+    };
+    let rec = simulate_ankle(&s, &experiment, 8).unwrap();
+    let cut = limpid_lab::ankle::cut_into_segments(&rec, (0.15, 0.3), 8).unwrap();
+    let e = estimate_reflex(&cut, &ReflexParams::default()).unwrap();
+    let i = &e.intrinsic;
+    eprintln!(
+        "K {:.2} ± {:.2}, B {:.4} ± {:.4}, delay {} ({:?}), used {:?}; {:?}",
+        i.stiffness,
+        i.standard_errors.stiffness,
+        i.damping,
+        i.standard_errors.damping,
+        e.reflex.delay_s,
+        e.reflex.delay_identifiable,
+        e.segments.as_ref().map(|u| (u.used, u.count)),
+        e.warnings
+    );
+    assert!(e
+        .warnings
+        .iter()
+        .any(|w| w.message.contains("reflex delays scanned up to")));
+    assert!(*e.reflex.delay_scan.delays_s.last().unwrap() < 0.15);
+    assert!(
+        (i.stiffness - s.stiffness).abs() < 0.07 * s.stiffness,
+        "K {}",
+        i.stiffness
+    );
+    assert!(
+        (i.damping - s.damping).abs() < 0.2 * s.damping,
+        "B {}",
+        i.damping
+    );
+}

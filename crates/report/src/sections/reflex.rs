@@ -17,6 +17,17 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
             fmt(v.cross_validated_vaf)
         )
     };
+    // short segments (issue 80): said where the verdict is read
+    let verdict = match &v.segments {
+        Some(s) => format!(
+            "{verdict}; from {} of {} short segments of {}-{} s, each fitted from its own start",
+            s.used,
+            s.count,
+            fmt(s.durations_s[0]),
+            fmt(s.durations_s[2])
+        ),
+        None => verdict,
+    };
     let tables = parameter_tables(v);
     let figures = figures(v);
     Section {
