@@ -260,3 +260,57 @@ fn reflex_refuses_columns_it_cannot_square() {
         out.stderr
     );
 }
+
+/// Issue 80: a recording of short segments (trials with gaps in time) is
+/// estimated segment by segment, and says so in its JSON and its text; a
+/// continuous one carries no `segments`; segments too short for anything
+/// are refused in one line naming the length needed.
+#[test]
+fn reflex_on_short_segments_says_how_they_were_used() {
+    let ankle = examples("ankle").join("ex_ankle.csv");
+    let text = std::fs::read_to_string(&ankle).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<&str> = lines.collect();
+    let dir = tempfile::tempdir().unwrap();
+    // 0.7 s kept, 0.3 s dropped, each kept stretch its own trial
+    let mut cut = format!("{header},trial\n");
+    for (k, chunk) in rows.chunks(1000).enumerate() {
+        for row in chunk.iter().take(700) {
+            cut.push_str(&format!("{row},{}\n", k + 1));
+        }
+    }
+    let segmented = dir.path().join("segmented.csv");
+    std::fs::write(&segmented, cut).unwrap();
+    let r = json(&["estimate", "reflex", segmented.to_str().unwrap(), "--json"]);
+    let used = &r["segments"];
+    assert_eq!(used["count"], used["used"], "{used}");
+    assert!(used["count"].as_u64().unwrap() >= 20, "{used}");
+    assert!(used["start_left_out_s"].as_f64().unwrap() < 0.2, "{used}");
+    let whole = json(&["estimate", "reflex", ankle.to_str().unwrap(), "--json"]);
+    assert!(whole.get("segments").is_none());
+    // the segments' K agrees with the whole record's within their joint SE
+    let k = |v: &serde_json::Value| {
+        let i = &v["intrinsic"];
+        (
+            i["stiffness"].as_f64().unwrap(),
+            i["standard_errors"]["stiffness"].as_f64().unwrap(),
+        )
+    };
+    let ((ks, ses), (kw, sew)) = (k(&r), k(&whole));
+    assert!((ks - kw).abs() <= 2.0 * ses.hypot(sew), "{ks} ± {ses} vs {kw} ± {sew}");
+    let out = limpid(&["estimate", "reflex", segmented.to_str().unwrap()]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("segments (trials)"), "{}", out.stdout);
+    // every row its own trial: nothing to fit, said in one line
+    let mut each = format!("{header},trial\n");
+    for (k, row) in rows.iter().take(5000).enumerate() {
+        each.push_str(&format!("{row},{}\n", k % 2));
+    }
+    let each_row = dir.path().join("each_row.csv");
+    std::fs::write(&each_row, each).unwrap();
+    let out = limpid(&["estimate", "reflex", each_row.to_str().unwrap()]);
+    assert_eq!(out.code, 2, "{}", out.stdout);
+    assert_eq!(out.stderr.trim_end().lines().count(), 1, "{}", out.stderr);
+    assert!(out.stderr.contains("no segment (trial) is"), "{}", out.stderr);
+}
