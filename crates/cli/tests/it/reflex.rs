@@ -298,7 +298,10 @@ fn reflex_on_short_segments_says_how_they_were_used() {
         )
     };
     let ((ks, ses), (kw, sew)) = (k(&r), k(&whole));
-    assert!((ks - kw).abs() <= 2.0 * ses.hypot(sew), "{ks} ± {ses} vs {kw} ± {sew}");
+    assert!(
+        (ks - kw).abs() <= 2.0 * ses.hypot(sew),
+        "{ks} ± {ses} vs {kw} ± {sew}"
+    );
     let out = limpid(&["estimate", "reflex", segmented.to_str().unwrap()]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     assert!(out.stdout.contains("segments (trials)"), "{}", out.stdout);
@@ -312,5 +315,9 @@ fn reflex_on_short_segments_says_how_they_were_used() {
     let out = limpid(&["estimate", "reflex", each_row.to_str().unwrap()]);
     assert_eq!(out.code, 2, "{}", out.stdout);
     assert_eq!(out.stderr.trim_end().lines().count(), 1, "{}", out.stderr);
-    assert!(out.stderr.contains("no segment (trial) is"), "{}", out.stderr);
+    assert!(
+        out.stderr.contains("no segment (trial) is"),
+        "{}",
+        out.stderr
+    );
 }
