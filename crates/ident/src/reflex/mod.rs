@@ -53,12 +53,14 @@ mod estimate;
 mod parametric;
 mod segments;
 mod settings;
+mod transients;
 
 pub use cascade::vaf;
 pub use estimate::estimate_reflex;
-pub(crate) use parametric::{free_responses, low_pass};
+pub(crate) use parametric::low_pass;
 pub use segments::SegmentUse;
 pub use settings::{ReflexParams, ReflexRequest, MAX_ITERATIONS, TOLERANCE_VAF};
+pub(crate) use transients::free_responses;
 
 /// A discrete impulse response: `torque(t) = sum values[i] * input(t - lags_s[i]) * dt`.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
