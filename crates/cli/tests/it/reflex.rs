@@ -305,6 +305,25 @@ fn reflex_on_short_segments_says_how_they_were_used() {
     let out = limpid(&["estimate", "reflex", segmented.to_str().unwrap()]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     assert!(out.stdout.contains("segments (trials)"), "{}", out.stdout);
+    // a delay scan longer than any segment (issue 80's hostile case: it once
+    // overflowed into an internal error): shortened to what they hold, said
+    let r = json(&[
+        "estimate",
+        "reflex",
+        segmented.to_str().unwrap(),
+        "--json",
+        "--reflex-lags",
+        "1e300",
+        "--max-delay",
+        "1e299",
+    ]);
+    let said = r["warnings"].as_array().unwrap().iter().any(|w| {
+        w["message"]
+            .as_str()
+            .unwrap()
+            .contains("reflex delays scanned up to")
+    });
+    assert!(said, "{}", r["warnings"]);
     // a trial every 3 rows: nothing to fit, said in one line
     let mut each = format!("{header},trial\n");
     for (k, row) in rows.iter().take(5000).enumerate() {

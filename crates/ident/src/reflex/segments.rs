@@ -72,7 +72,9 @@ fn fit_to_segments(
     (fs, ratio): (f64, usize),
     warnings: &mut Vec<Warning>,
 ) -> Option<ReflexParams> {
-    let min_len = |max_delay: usize| (start_up(max_delay, ratio) + MIN_ROWS) * ratio;
+    let min_len = |max_delay: usize| {
+        (start_up(max_delay, ratio).saturating_add(MIN_ROWS)).saturating_mul(ratio)
+    };
     let asked = (p.max_delay_s * fs).round() as usize;
     let usable = cuts.iter().filter(|c| c.len() >= min_len(asked)).count();
     if 2 * usable >= cuts.len() {
@@ -81,7 +83,12 @@ fn fit_to_segments(
     let mut lengths: Vec<usize> = cuts.iter().map(|c| c.len()).collect();
     lengths.sort_unstable();
     let median = lengths[lengths.len() / 2];
-    let delay = (0..asked).rev().find(|&d| min_len(d) <= median)?;
+    // the longest delay whose start-up leaves the median segment MIN_ROWS rows
+    let rows = (median / ratio).checked_sub(MIN_ROWS)?;
+    let delay = (rows * ratio)
+        .checked_sub(settling(ratio))?
+        .min(asked.saturating_sub(1));
+    debug_assert!(min_len(delay) <= median);
     if (delay as f64) < MIN_SCANNED_DELAY_S * fs {
         return None;
     }
@@ -116,7 +123,9 @@ pub(crate) fn prepare(
     let half = lag(p.intrinsic_lags_s).max(1);
     let fit_skip = start_up((p.max_delay_s * fs).round() as usize, ratio);
     // the zero-phase filter's odd extension needs more samples than its padding
-    let min_len = ((fit_skip + MIN_ROWS) * ratio).max(if ratio > 1 { 3 * 9 + 1 } else { 0 });
+    let min_len = (fit_skip.saturating_add(MIN_ROWS))
+        .saturating_mul(ratio)
+        .max(if ratio > 1 { 3 * 9 + 1 } else { 0 });
     let used: Vec<Range<usize>> = cuts
         .iter()
         .filter(|c| c.len() >= min_len)
@@ -156,9 +165,9 @@ pub(crate) fn prepare(
         warnings.push(Warning::new(
             WarningCode::NotIdentifiable,
             format!(
-                "the nonparametric reflex IRF spans {:.2} s, not the {:.2} s asked: the segments (median {:.2} s) hold no longer input history; the parametric reflex pathway (delay, gain, low-pass) is the estimate, and the nonparametric VAF split leaves out each segment's first {:.2} s",
+                "the nonparametric reflex IRF spans {:.2} s, not the {} s asked: the segments (median {:.2} s) hold no longer input history; the parametric reflex pathway (delay, gain, low-pass) is the estimate, and the nonparametric VAF split leaves out each segment's first {:.2} s",
                 n_reflex as f64 / fsd,
-                asked as f64 / fsd,
+                limpid_core::short_number(p.reflex_lags_s),
                 median as f64 / fsd,
                 n_reflex as f64 / fsd
             ),
@@ -296,14 +305,21 @@ pub(crate) fn decimate_each(
     Ok([join(0), join(1)])
 }
 
+/// Recorded samples the filters need to settle at a segment's start: two
+/// periods of the anti-alias filter's cut-off (0.4 of the decimated rate:
+/// five decimated samples), and the derivatives' one-sided first sample.
+fn settling(ratio: usize) -> usize {
+    if ratio > 1 {
+        5 * ratio + 1
+    } else {
+        1
+    }
+}
+
 /// Decimated samples left out at a segment's start for a reflex delay of
-/// `delay` recorded samples: the delay, two periods of the anti-alias
-/// filter's cut-off (0.4 of the decimated rate: five decimated samples) for
-/// the filter to settle on the segment's own samples, and the derivatives'
-/// one-sided first sample.
+/// `delay` recorded samples: the delay and the filters' settling.
 pub(crate) fn start_up(delay: usize, ratio: usize) -> usize {
-    let settle = if ratio > 1 { 5 * ratio } else { 0 } + 1;
-    (delay + settle).div_ceil(ratio)
+    delay.saturating_add(settling(ratio)).div_ceil(ratio)
 }
 
 /// The full-rate ranges of decimated segments.
