@@ -64,8 +64,9 @@ const MIN_ROWS: usize = 5;
 const MIN_SCANNED_DELAY_S: f64 = 0.02;
 
 /// The settings for these segments: when fewer than half of them are long
-/// enough for the delay scan asked, the scan ends where the median segment
-/// still holds rows (not below [`MIN_SCANNED_DELAY_S`]), with a warning.
+/// enough for the delay scan asked, the scan ends where it leaves half the
+/// median segment to the fit (not below [`MIN_SCANNED_DELAY_S`]), with a
+/// warning.
 fn fit_to_segments(
     p: &ReflexParams,
     cuts: &[Range<usize>],
@@ -83,8 +84,13 @@ fn fit_to_segments(
     let mut lengths: Vec<usize> = cuts.iter().map(|c| c.len()).collect();
     lengths.sort_unstable();
     let median = lengths[lengths.len() / 2];
-    // the longest delay whose start-up leaves the median segment MIN_ROWS rows
-    let rows = (median / ratio).checked_sub(MIN_ROWS)?;
+    // the longest delay whose start-up leaves half the median segment (at
+    // least MIN_ROWS rows) to the scan: with only a few rows a segment the
+    // low-pass is not determined (K 159 for 85 on the outside example with
+    // 5 rows, 83 with half)
+    let rows = (median / ratio / 2)
+        .max(MIN_ROWS)
+        .min((median / ratio).checked_sub(MIN_ROWS)?);
     let delay = (rows * ratio)
         .checked_sub(settling(ratio))?
         .min(asked.saturating_sub(1));
