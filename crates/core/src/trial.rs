@@ -261,6 +261,18 @@ pub fn change_floors(signals: &[&[f64]]) -> Vec<f64> {
         .collect()
 }
 
+/// The sample ranges of a recording's contiguous segments: its `trial`
+/// windows, or the whole record without the column.
+pub fn segment_ranges(rec: &Recording) -> Result<Vec<Range<usize>>> {
+    if !rec.has("trial") {
+        return Ok(std::iter::once(0..rec.len()).collect());
+    }
+    Ok(windows_from_trial_column(rec, "trial")?
+        .into_iter()
+        .map(|w| w.range)
+        .collect())
+}
+
 /// Split the recording by its integer `trial` column into consecutive runs.
 pub fn windows_from_trial_column(rec: &Recording, column: &str) -> Result<Vec<Window>> {
     let ids = rec.require(column, "trial ids")?;

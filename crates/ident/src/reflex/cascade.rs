@@ -47,11 +47,22 @@ pub fn vaf(y: &[f64], yhat: &[f64], skip: usize) -> f64 {
     }
 }
 
+/// The decimation step: every `ratio`-th recorded sample is kept.
+pub(crate) fn decimation_ratio(fs: f64, p: &ReflexParams) -> usize {
+    ((fs / p.rate_hz).round() as usize).max(1)
+}
+
+/// The zero-phase anti-alias filter before keeping every `ratio`-th sample:
+/// 8th-order Butterworth at 0.8 of the new Nyquist frequency.
+pub(crate) fn anti_alias(fs: f64, ratio: usize) -> Result<LowPass> {
+    LowPass::butterworth(8, 0.8 * (fs / ratio as f64) / 2.0, fs)
+}
+
 /// Anti-alias and decimate angle, torque, velocity and acceleration, with the
 /// rectified velocity in both orders: `[p.rectify_first's order, the other]`
 /// (the two share every filtered column but the rectified ones).
 pub(crate) fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Result<[Decimated; 2]> {
-    let ratio = ((fs / p.rate_hz).round() as usize).max(1);
+    let ratio = decimation_ratio(fs, p);
     let fsd = fs / ratio as f64;
     let velocity = limpid_dsp::central_first(q, 1.0 / fs);
     let acceleration = limpid_dsp::central_second(q, 1.0 / fs);
@@ -68,7 +79,7 @@ pub(crate) fn decimate(q: &[f64], tq: &[f64], fs: f64, p: &ReflexParams) -> Resu
         neg_raw,
     ];
     let mut filtered: Vec<Vec<f64>> = if ratio > 1 {
-        let lp = LowPass::butterworth(8, 0.8 * fsd / 2.0, fs)?;
+        let lp = anti_alias(fs, ratio)?;
         columns
             .par_iter()
             .map(|x| lp.filtfilt(x))

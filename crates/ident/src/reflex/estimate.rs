@@ -3,7 +3,7 @@
 //! other rectifier order), add the model-error floors to the standard
 //! errors, cross-validate, and say what cannot be trusted.
 
-use super::cascade::{apply_in, cascade, decimate, vaf_in, variance, Cascade};
+use super::cascade::{apply_in, cascade, decimate, decimation_ratio, vaf_in, variance, Cascade};
 use super::parametric::{ibk_fit, parametric_intrinsic, reflex_parametric, Parametric};
 use super::segments::{self, gather, Layout, SegmentUse};
 use super::{
@@ -45,7 +45,8 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     let (q, tq) = position_and_torque(rec, p)?;
     let fs = rec.sample_rate();
     let mut warnings: Vec<Warning> = measured_rate.iter().map(|m| m.warning()).collect();
-    let cuts = segments::recorded(rec)?;
+    // a trial change is a cut, even where the time runs on
+    let cuts = limpid_core::trial::segment_ranges(rec)?;
     let shortened: Option<ReflexParams>;
     let (layout, [d, other_decimation], segment_use) = if cuts.len() > 1 {
         check_rate(rec, p)?;
@@ -244,7 +245,7 @@ fn pathways(
 fn lengths(rec: &Recording, p: &ReflexParams, samples: usize) -> Result<Layout> {
     check_rate(rec, p)?;
     let fs = rec.sample_rate();
-    let ratio = ((fs / p.rate_hz).round() as usize).max(1);
+    let ratio = decimation_ratio(fs, p);
     let fsd = fs / ratio as f64;
     let n = samples.div_ceil(ratio);
     let lag = |s: f64| (s * fsd).round() as usize;

@@ -60,7 +60,7 @@ pub use estimate::estimate_reflex;
 pub(crate) use parametric::low_pass;
 pub use segments::SegmentUse;
 pub use settings::{ReflexParams, ReflexRequest, MAX_ITERATIONS, TOLERANCE_VAF};
-pub(crate) use transients::free_responses;
+pub(crate) use transients::{free_responses, orthonormal};
 
 /// A discrete impulse response: `torque(t) = sum values[i] * input(t - lags_s[i]) * dt`.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]

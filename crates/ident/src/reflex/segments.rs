@@ -21,7 +21,7 @@ use limpid_core::{Error, Recording, Result, Warning, WarningCode};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::cascade::decimate;
+use super::cascade::{anti_alias, decimate, decimation_ratio};
 use super::{Decimated, ReflexParams};
 
 /// How a recording of short segments was used.
@@ -121,7 +121,7 @@ pub(crate) fn prepare(
     warnings: &mut Vec<Warning>,
 ) -> Result<(Layout, [Decimated; 2], SegmentUse, Option<ReflexParams>)> {
     let fs = rec.sample_rate();
-    let ratio = ((fs / p.rate_hz).round() as usize).max(1);
+    let ratio = decimation_ratio(fs, p);
     let shortened = fit_to_segments(p, cuts, (fs, ratio), warnings);
     let p = shortened.as_ref().unwrap_or(p);
     let fsd = fs / ratio as f64;
@@ -129,9 +129,14 @@ pub(crate) fn prepare(
     let half = lag(p.intrinsic_lags_s).max(1);
     let fit_skip = start_up((p.max_delay_s * fs).round() as usize, ratio);
     // the zero-phase filter's odd extension needs more samples than its padding
+    let padding = if ratio > 1 {
+        anti_alias(fs, ratio)?.padlen() + 1
+    } else {
+        0
+    };
     let min_len = (fit_skip.saturating_add(MIN_ROWS))
         .saturating_mul(ratio)
-        .max(if ratio > 1 { 3 * 9 + 1 } else { 0 });
+        .max(padding);
     let used: Vec<Range<usize>> = cuts
         .iter()
         .filter(|c| c.len() >= min_len)
@@ -252,18 +257,6 @@ pub(crate) fn groups(segments: &[Range<usize>], skip: usize) -> Vec<Range<usize>
         .collect()
 }
 
-/// The recording's segments: its `trial` windows (one segment without the
-/// column). A trial change is a cut, even where the time runs on.
-pub(crate) fn recorded(rec: &Recording) -> Result<Vec<Range<usize>>> {
-    if !rec.has("trial") {
-        return Ok(std::iter::once(0..rec.len()).collect());
-    }
-    Ok(limpid_core::trial::windows_from_trial_column(rec, "trial")?
-        .into_iter()
-        .map(|w| w.range)
-        .collect())
-}
-
 /// The segments decimated one by one and laid end to end. Each segment is
 /// cut to a whole number of decimation steps, so that decimated sample `k`
 /// is recorded sample `k * ratio` of the concatenation (the delayed reflex
@@ -275,7 +268,7 @@ pub(crate) fn decimate_each(
     p: &ReflexParams,
     segments: &[Range<usize>],
 ) -> Result<[Decimated; 2]> {
-    let ratio = ((fs / p.rate_hz).round() as usize).max(1);
+    let ratio = decimation_ratio(fs, p);
     let mut parts: Vec<[Decimated; 2]> = Vec::with_capacity(segments.len());
     for s in segments {
         let end = s.start + s.len() / ratio * ratio;

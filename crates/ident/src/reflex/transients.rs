@@ -246,7 +246,7 @@ fn solve_joint(total: &[[f64; 5]; 5]) -> (f64, [f64; 4]) {
 
 /// An orthonormal basis of the vectors' span (Gram-Schmidt, twice, leaving
 /// out a vector the others nearly span).
-fn orthonormal(vectors: &[Vec<f64>]) -> Vec<Vec<f64>> {
+pub(crate) fn orthonormal(vectors: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let mut basis: Vec<Vec<f64>> = Vec::new();
     for v in vectors {
         let norm0 = dot(v, v).sqrt();

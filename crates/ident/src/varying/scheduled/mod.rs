@@ -86,7 +86,8 @@ pub(super) fn estimate(
     let slow = LowPass::butterworth(SLOW_ORDER, params.slow_hz, fs)?;
     // one degree more than any order tried, for the offset c(σ)
     let top = params.basis_order.unwrap_or(MAX_BASIS_ORDER) + 1;
-    let reading = angle_reading(rec, params, &coords, &slow)?;
+    let shortest_slow = rows::shortest_slow_segment(params, (fs, cutoff), &slow)?;
+    let reading = angle_reading(rec, params, &coords, (&slow, shortest_slow))?;
     let rows_read = |reading, warnings: &mut Vec<String>| {
         rows(
             rec, params, &coords, &forces, cutoff, top, &slow, reading, warnings,
@@ -294,7 +295,7 @@ fn angle_reading(
     rec: &Recording,
     params: &VaryingParams,
     coords: &[String],
-    slow: &LowPass,
+    slow: (&LowPass, usize),
 ) -> Result<AngleReading> {
     let whole = AngleReading::Integrated { offset: false };
     match params.schedule_angle {
@@ -345,20 +346,17 @@ fn angle_reading(
 
 /// The slow part of `x` in each segment (a `trial` window, or the whole
 /// record): its zero-phase low-pass, or its straight line where the segment
-/// is too short for the low-pass; never across a gap.
-fn operating_point(rec: &Recording, x: &[f64], slow: &LowPass) -> Result<Vec<f64>> {
-    let ranges: Vec<std::ops::Range<usize>> = if rec.has("trial") {
-        limpid_core::trial::windows_from_trial_column(rec, "trial")?
-            .into_iter()
-            .map(|w| w.range)
-            .collect()
-    } else {
-        std::iter::once(0..x.len()).collect()
-    };
+/// is shorter than `shortest` (as the fit's rows take it); never across a
+/// gap.
+fn operating_point(
+    rec: &Recording,
+    x: &[f64],
+    (slow, shortest): (&LowPass, usize),
+) -> Result<Vec<f64>> {
     let mut out = Vec::with_capacity(x.len());
-    for r in ranges {
+    for r in limpid_core::trial::segment_ranges(rec)? {
         let part = &x[r];
-        if part.len() > 4 * slow.padlen() {
+        if part.len() >= shortest {
             out.extend(slow.filtfilt(part)?);
         } else {
             let line = rows::remove_line(part);

@@ -143,25 +143,12 @@ pub(super) fn free_drives(rows: &Rows, (natural_hz, zeta): (f64, f64), fs: f64) 
 /// The free responses of `free` delayed by `delay` quarter samples at a
 /// segment's kept rows (then its line removed there), orthonormalised.
 fn transients(seg: &super::rows::Segment, free: &[Vec<f64>; 2], delay: usize) -> Vec<Vec<f64>> {
-    let mut basis: Vec<Vec<f64>> = Vec::new();
-    for h in free {
+    let at_kept = |h: &Vec<f64>| -> Vec<f64> {
         let shifted: Vec<f64> = (0..h.len()).map(|t| delayed(h, t, delay)).collect();
         let line = remove_line(&shifted);
-        let mut u: Vec<f64> = seg.kept.iter().map(|&t| line[t]).collect();
-        let norm0 = u.iter().map(|v| v * v).sum::<f64>().sqrt();
-        for _ in 0..2 {
-            for b in &basis {
-                let k: f64 = u.iter().zip(b).map(|(x, y)| x * y).sum();
-                u.iter_mut().zip(b).for_each(|(x, y)| *x -= k * y);
-            }
-        }
-        let norm = u.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if norm > 1e-8 * norm0 && norm > 0.0 {
-            u.iter_mut().for_each(|x| *x /= norm);
-            basis.push(u);
-        }
-    }
-    basis
+        seg.kept.iter().map(|&t| line[t]).collect()
+    };
+    crate::reflex::orthonormal(&free.each_ref().map(at_kept))
 }
 
 /// Projects the reflex in flight at each short segment's cut (see [`Free`])

@@ -3,7 +3,6 @@
 
 use rayon::prelude::*;
 
-use limpid_core::trial::windows_from_trial_column;
 use limpid_core::{Error, Recording, Result};
 use limpid_dsp::LowPass;
 
@@ -148,6 +147,28 @@ pub(super) fn detrend(slow: &LowPass, x: &[f64]) -> Result<Vec<f64>> {
     Ok(x.iter().zip(&s).map(|(a, b)| a - b).collect())
 }
 
+/// Samples left out at each end of a segment: `(short, slow)`. A segment too
+/// short for the slow low-pass's ends takes a straight line as its
+/// operating point, and leaves out only what the delay and the low-pass
+/// need (`short`).
+fn trims(params: &VaryingParams, fs: f64, cutoff: f64) -> (usize, usize) {
+    let short = ((params.max_delay_s * fs).ceil() + 1.0).max((fs / cutoff).ceil()) as usize;
+    let slow = ((fs / (4.0 * params.slow_hz)).ceil() as usize).max(short);
+    (short, slow)
+}
+
+/// The shortest segment (samples) whose operating point is the slow
+/// low-pass (its trims at both ends and the filters' padding); a shorter one
+/// takes a straight line ([`Trend::Line`]).
+pub(super) fn shortest_slow_segment(
+    params: &VaryingParams,
+    (fs, cutoff): (f64, f64),
+    slow: &LowPass,
+) -> Result<usize> {
+    let lp = LowPass::butterworth(FILTER_ORDER, cutoff, fs)?;
+    Ok(2 * trims(params, fs, cutoff).1 + slow.padlen().max(lp.padlen()) + 2)
+}
+
 /// The filtered segments that are long enough, the decimation and the trim
 /// (samples left out at each end of a segment).
 #[allow(clippy::too_many_arguments)]
@@ -170,19 +191,8 @@ fn segments(
         .transpose()?;
     let schedule = rec.require(&params.schedule, "the schedule (--schedule)")?;
     let schedule_is_coordinate = coords.contains(&params.schedule);
-    let ranges: Vec<std::ops::Range<usize>> = if rec.has("trial") {
-        windows_from_trial_column(rec, "trial")?
-            .into_iter()
-            .map(|w| w.range)
-            .collect()
-    } else {
-        std::iter::once(0..rec.len()).collect()
-    };
-    // a segment too short for the slow low-pass's ends takes a straight line
-    // as its operating point, and leaves out only what the delay and the
-    // low-pass need
-    let short_trim = ((params.max_delay_s * fs).ceil() + 1.0).max((fs / cutoff).ceil()) as usize;
-    let slow_trim = ((fs / (4.0 * params.slow_hz)).ceil() as usize).max(short_trim);
+    let ranges = limpid_core::trial::segment_ranges(rec)?;
+    let (short_trim, slow_trim) = trims(params, fs, cutoff);
     // as close to rate_hz as the low-pass allows (cutoff at most half the decimated rate)
     let dec = (fs / params.rate_hz)
         .min(0.5 * fs / cutoff)
@@ -201,7 +211,7 @@ fn segments(
             limpid_core::error::Num(cutoff)
         ));
     }
-    let min_slow = 2 * slow_trim + slow.padlen().max(lp.padlen()) + 2;
+    let min_slow = shortest_slow_segment(params, (fs, cutoff), slow)?;
     let min_len = 2 * short_trim + lp.padlen() + 2;
     let d = coords.len();
     let (mut pos, frc) = (
