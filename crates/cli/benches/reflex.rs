@@ -26,18 +26,7 @@ fn bench(c: &mut Criterion) {
     };
     let long = limpid_lab::ankle::simulate_ankle(&ankle, &session, 1).expect("ankle");
     let cut = limpid_lab::ankle::cut_into_segments(&long, (1.0, 1.0), 1).expect("segments");
-    let ids = cut.column("trial").expect("trial");
-    let forty = ids.iter().position(|&id| id > 40.0).unwrap_or(ids.len());
-    let cut = limpid_core::Recording::new(
-        "forty segments",
-        cut.names().to_vec(),
-        cut.names()
-            .iter()
-            .map(|n| cut.column(n).expect("column")[..forty].to_vec())
-            .collect(),
-        2,
-    )
-    .expect("forty segments");
+    let cut = limpid_lab::ankle::first_segments(&cut, 40).expect("forty segments");
     group.bench_function("segments_40x1s_1kHz", |b| {
         b.iter(|| estimate_reflex(&cut, &ReflexParams::default()).expect("estimate"))
     });

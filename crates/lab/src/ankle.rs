@@ -307,6 +307,22 @@ pub fn cut_into_segments(
     Recording::new(rec.path(), names, columns, 2)
 }
 
+/// The first `count` segments of a recording [`cut_into_segments`] made
+/// (its trials 1 to `count`).
+pub fn first_segments(rec: &Recording, count: usize) -> Result<Recording> {
+    let ids = rec.require("trial", "the segments' trial ids")?;
+    let end = ids
+        .iter()
+        .position(|&id| id > count as f64)
+        .unwrap_or(ids.len());
+    let columns = rec
+        .names()
+        .iter()
+        .map(|n| rec.column(n).map_or_else(Vec::new, |c| c[..end].to_vec()))
+        .collect();
+    Recording::new(rec.path(), rec.names().to_vec(), columns, 2)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

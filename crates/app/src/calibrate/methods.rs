@@ -160,15 +160,8 @@ pub(super) fn stochastic(seed: u64) -> std::result::Result<Outcome, String> {
 /// A virtual ankle with a stretch reflex (Kearney et al. 1997): random
 /// intrinsic I-B-K, reflex delay, gain, low-pass and polarity; 30 s at 1 kHz.
 pub(super) fn reflex(seed: u64) -> std::result::Result<Outcome, String> {
-    use limpid_lab::ankle::{simulate_ankle, AnkleExperiment};
     let mut rng = StdRng::seed_from_u64(seed);
-    let subject = reflex_subject(&mut rng);
-    let experiment = AnkleExperiment {
-        duration_s: 30.0,
-        torque_noise_nm: uniform(&mut rng, 0.05, 0.4),
-        ..AnkleExperiment::default()
-    };
-    let rec = simulate_ankle(&subject, &experiment, seed).map_err(|e| e.to_string())?;
+    let (subject, rec) = reflex_session(&mut rng, 30.0, seed)?;
     reflex_outcome(&rec, &subject)
 }
 
@@ -177,19 +170,31 @@ pub(super) fn reflex(seed: u64) -> std::result::Result<Outcome, String> {
 /// 0.3-1.5 s (the shortest 0.3-0.6 s, the longest up to 1.5 s), each its own
 /// trial with its own background torque of 2-6 N m.
 pub(super) fn reflex_segments(seed: u64) -> std::result::Result<Outcome, String> {
-    use limpid_lab::ankle::{cut_into_segments, simulate_ankle, AnkleExperiment};
     let mut rng = StdRng::seed_from_u64(seed);
-    let subject = reflex_subject(&mut rng);
-    let experiment = AnkleExperiment {
-        duration_s: 90.0,
-        torque_noise_nm: uniform(&mut rng, 0.05, 0.4),
-        ..AnkleExperiment::default()
-    };
+    let (subject, rec) = reflex_session(&mut rng, 90.0, seed)?;
     let shortest = uniform(&mut rng, 0.3, 0.6);
     let longest = uniform(&mut rng, shortest, 1.5);
-    let rec = simulate_ankle(&subject, &experiment, seed).map_err(|e| e.to_string())?;
-    let cut = cut_into_segments(&rec, (shortest, longest), seed).map_err(|e| e.to_string())?;
+    let cut = limpid_lab::ankle::cut_into_segments(&rec, (shortest, longest), seed)
+        .map_err(|e| e.to_string())?;
     reflex_outcome(&cut, &subject)
+}
+
+/// A session of `seconds` of an ankle with a reflex ([`reflex_subject`]),
+/// its torque noise drawn too.
+fn reflex_session(
+    rng: &mut StdRng,
+    seconds: f64,
+    seed: u64,
+) -> std::result::Result<(limpid_lab::ankle::AnkleSubject, limpid_core::Recording), String> {
+    use limpid_lab::ankle::{simulate_ankle, AnkleExperiment};
+    let subject = reflex_subject(rng);
+    let experiment = AnkleExperiment {
+        duration_s: seconds,
+        torque_noise_nm: uniform(rng, 0.05, 0.4),
+        ..AnkleExperiment::default()
+    };
+    let rec = simulate_ankle(&subject, &experiment, seed).map_err(|e| e.to_string())?;
+    Ok((subject, rec))
 }
 
 /// An ankle with a reflex drawn from the calibration's ranges.
