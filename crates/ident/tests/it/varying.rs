@@ -35,6 +35,48 @@ fn el(
     Some((m.as_ref()?[(j, k)], s.as_ref()?[(j, k)]))
 }
 
+/// [`within`] for K and B of a scheduled ankle's first joint at tolerances
+/// `(k, b)`: `(K within, K covered, points, B within, B covered)`.
+fn scheduled_within(
+    est: &VaryingEstimate,
+    s: &ScheduledAnkle,
+    (k, b): (f64, f64),
+) -> (f64, f64, usize, f64, f64) {
+    let (kok, kcov, n) = within(
+        est,
+        |p| el(&p.stiffness, &p.stiffness_se, 0, 0),
+        |x| s.at(x)[0],
+        k,
+    );
+    let (bok, bcov, _) = within(
+        est,
+        |p| el(&p.damping, &p.damping_se, 0, 0),
+        |x| s.at(x)[1],
+        b,
+    );
+    (kok, kcov, n, bok, bcov)
+}
+
+/// `s` simulated over ramp-and-hold holds (no ramps), cut into segments of
+/// 0.5-1 s, each its own trial with its own background torque; estimated
+/// on `sv`, with the reflex pathway when `reflex`.
+fn segmented_scheduled(s: &ScheduledAnkle, seed: u64, reflex: bool) -> VaryingEstimate {
+    let p = RampAndHold {
+        keep_ramps: false,
+        ..RampAndHold::default()
+    };
+    let rec = simulate_scheduled_ankle(s, &p, seed).unwrap();
+    let cut = limpid_lab::ankle::cut_into_segments(&rec, (0.5, 1.0), seed).unwrap();
+    let params = VaryingRequest {
+        schedule: "sv".into(),
+        reflex,
+        ..VaryingRequest::default()
+    }
+    .check()
+    .unwrap();
+    estimate_varying(&cut, &params).unwrap()
+}
+
 #[test]
 fn ensemble_follows_a_150_ms_stiffness_change_of_one_joint() {
     let s = EnsembleSubject::joint();
@@ -153,18 +195,7 @@ fn scheduled_ankle_recovers_stiffness_and_reflex_gain_against_the_operating_angl
     .check()
     .unwrap();
     let est = estimate_varying(&rec, &params).unwrap();
-    let (kok, kcov, n) = within(
-        &est,
-        |p| el(&p.stiffness, &p.stiffness_se, 0, 0),
-        |x| s.at(x)[0],
-        0.15,
-    );
-    let (bok, _, _) = within(
-        &est,
-        |p| el(&p.damping, &p.damping_se, 0, 0),
-        |x| s.at(x)[1],
-        0.30,
-    );
+    let (kok, kcov, n, bok, _) = scheduled_within(&est, &s, (0.15, 0.30));
     assert!(n >= 15, "identifiable {n}");
     assert!(
         kok >= 0.9 && bok >= 0.8,
@@ -213,18 +244,7 @@ fn scheduled_ankle_without_reflex_claims_none() {
     .unwrap();
     let est = estimate_varying(&rec, &params).unwrap();
     assert!(!est.reflex.as_ref().unwrap().detected, "{:?}", est.reflex);
-    let (kok, kcov, _) = within(
-        &est,
-        |p| el(&p.stiffness, &p.stiffness_se, 0, 0),
-        |x| s.at(x)[0],
-        0.15,
-    );
-    let (bok, bcov, _) = within(
-        &est,
-        |p| el(&p.damping, &p.damping_se, 0, 0),
-        |x| s.at(x)[1],
-        0.30,
-    );
+    let (kok, kcov, _, bok, bcov) = scheduled_within(&est, &s, (0.15, 0.30));
     assert!(kok >= 0.9 && bok >= 0.8, "K {kok} B {bok}");
     assert!(kcov >= 0.8 && bcov >= 0.8, "coverage K {kcov} B {bcov}");
 }
@@ -457,31 +477,8 @@ fn scheduled_ankle_from_short_segments_recovers_stiffness() {
         reflex: None,
         ..ScheduledAnkle::default()
     };
-    let p = RampAndHold {
-        keep_ramps: false,
-        ..RampAndHold::default()
-    };
-    let rec = simulate_scheduled_ankle(&s, &p, 5).unwrap();
-    let cut = limpid_lab::ankle::cut_into_segments(&rec, (0.5, 1.0), 5).unwrap();
-    let params = VaryingRequest {
-        schedule: "sv".into(),
-        ..VaryingRequest::default()
-    }
-    .check()
-    .unwrap();
-    let est = estimate_varying(&cut, &params).unwrap();
-    let (kok, kcov, _) = within(
-        &est,
-        |p| el(&p.stiffness, &p.stiffness_se, 0, 0),
-        |x| s.at(x)[0],
-        0.12,
-    );
-    let (bok, bcov, _) = within(
-        &est,
-        |p| el(&p.damping, &p.damping_se, 0, 0),
-        |x| s.at(x)[1],
-        0.2,
-    );
+    let est = segmented_scheduled(&s, 5, false);
+    let (kok, kcov, _, bok, bcov) = scheduled_within(&est, &s, (0.12, 0.2));
     eprintln!("K within 12 %: {kok}, covered {kcov}; B within 20 %: {bok}, covered {bcov}");
     assert!(kok >= 0.8 && bok >= 0.8, "K {kok} B {bok}");
     assert!(kcov >= 0.85 && bcov >= 0.85, "coverage K {kcov} B {bcov}");
@@ -547,32 +544,8 @@ fn outside_segmented_ankle_at_five_angles() {
 #[test]
 fn scheduled_ankle_with_a_reflex_from_short_segments() {
     let s = ScheduledAnkle::default();
-    let p = RampAndHold {
-        keep_ramps: false,
-        ..RampAndHold::default()
-    };
-    let rec = simulate_scheduled_ankle(&s, &p, 6).unwrap();
-    let cut = limpid_lab::ankle::cut_into_segments(&rec, (0.5, 1.0), 6).unwrap();
-    let params = VaryingRequest {
-        schedule: "sv".into(),
-        reflex: true,
-        ..VaryingRequest::default()
-    }
-    .check()
-    .unwrap();
-    let est = estimate_varying(&cut, &params).unwrap();
-    let (kok, kcov, n) = within(
-        &est,
-        |p| el(&p.stiffness, &p.stiffness_se, 0, 0),
-        |x| s.at(x)[0],
-        0.12,
-    );
-    let (bok, bcov, _) = within(
-        &est,
-        |p| el(&p.damping, &p.damping_se, 0, 0),
-        |x| s.at(x)[1],
-        0.2,
-    );
+    let est = segmented_scheduled(&s, 6, true);
+    let (kok, kcov, n, bok, bcov) = scheduled_within(&est, &s, (0.12, 0.2));
     let r = est.reflex.as_ref().unwrap();
     let pts: Vec<_> = est.points.iter().filter(|p| p.identifiable).collect();
     let g = |p: &&limpid_ident::varying::VaryingPoint| p.reflex.as_ref().unwrap().gain;
