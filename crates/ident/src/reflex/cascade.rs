@@ -205,6 +205,11 @@ pub(crate) fn irf_pinv(
 
 /// [`apply`] to each segment on its own: zero input outside the segment.
 pub(crate) fn apply_in(h: &[f64], first: isize, u: &[f64], segments: &[Range<usize>]) -> Vec<f64> {
+    if let [whole] = segments {
+        if *whole == (0..u.len()) {
+            return apply(h, first, u);
+        }
+    }
     let mut y = vec![0.0; u.len()];
     for r in segments {
         y[r.clone()].copy_from_slice(&apply(h, first, &u[r.clone()]));

@@ -349,11 +349,14 @@ pub(crate) fn reflex_parametric(
     let ph = phases(&low_pass_in(full, (w, z, fs), &full_segments), d.ratio, n);
     let x = delayed(&ph, d.ratio, delay, skip, &d.segments);
     let at_best = fits[ci][delay].1;
-    let free = SegmentRows::free_phases(d, (w, z, fs), &full_segments);
-    let resid = match &rows {
+    // the low-pass's free responses: only short segments fit them
+    let free = rows
+        .as_ref()
+        .map(|_| SegmentRows::free_phases(d, (w, z, fs), &full_segments));
+    let resid = match rows.as_ref().zip(free.as_ref()) {
         None => joint_residual(&f, &x, at_best),
-        Some(rows) => {
-            let (g, x) = rows.fit(d, (&ph, &free), delay)?;
+        Some((rows, free)) => {
+            let (g, x) = rows.fit(d, (&ph, free), delay)?;
             joint_residual(&g, &x, at_best)
         }
     };
@@ -362,15 +365,16 @@ pub(crate) fn reflex_parametric(
     let n_eff = (m / inflation).max(5.0);
     let threshold = rss_min * (1.0 + 3.84 / n_eff);
     let (lo, hi, contiguous) = delay_interval(&profile, threshold, delay);
-    let (params, mut se, start_left_out) = if d.segments.len() == 1 {
-        (at_best, joint_jackknife(&f, &x), skip)
-    } else {
-        // the scan left out every segment's start up to the longest delay
-        // scanned; the fit at the optimum needs it left out only up to the
-        // delay interval's end
-        let settled = super::segments::start_up(hi, d.ratio).min(skip);
-        let (g, x) = SegmentRows::new(d, settled).fit(d, (&ph, &free), delay)?;
-        (joint_fit(&g, &x).1, joint_jackknife(&g, &x), settled)
+    let (params, mut se, start_left_out) = match &free {
+        None => (at_best, joint_jackknife(&f, &x), skip),
+        Some(free) => {
+            // the scan left out every segment's start up to the longest
+            // delay scanned; the fit at the optimum needs it left out only
+            // up to the delay interval's end
+            let settled = super::segments::start_up(hi, d.ratio).min(skip);
+            let (g, x) = SegmentRows::new(d, settled).fit(d, (&ph, free), delay)?;
+            (joint_fit(&g, &x).1, joint_jackknife(&g, &x), settled)
+        }
     };
     // the jackknife holds the delay and low-pass fixed: add what they move
     let shift = profile_region_shift(&fits, threshold, at_best);
