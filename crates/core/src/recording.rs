@@ -8,6 +8,7 @@
 //! suspicious (a `t` that looks like milliseconds, a column name that looks
 //! like a FORMAT.md name in another alphabet) is kept in [`Recording::warnings`].
 
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
@@ -123,20 +124,25 @@ impl Recording {
         if n == 0 {
             return Err(Error::HeaderOnly { path });
         }
-        for (name, col) in names.iter().zip(&columns) {
-            if col.len() != n {
-                return Err(Error::Format {
-                    path,
-                    message: format!(
-                        "column {name} has {} samples, column {} has {n}",
-                        col.len(),
-                        names[0]
-                    ),
-                });
-            }
+        if let Some((name, col)) = names.iter().zip(&columns).find(|(_, c)| c.len() != n) {
+            return Err(Error::Format {
+                path,
+                message: format!(
+                    "column {name} has {} samples, column {} has {n}",
+                    col.len(),
+                    names[0]
+                ),
+            });
+        }
+        // columns in parallel, the first offending one in file order reported
+        let offending: Vec<Option<usize>> = names
+            .par_iter()
+            .zip(&columns)
+            .map(|(name, col)| first_out_of_range(col, magnitude_limit(name).0))
+            .collect();
+        for ((name, col), bad) in names.iter().zip(&columns).zip(offending) {
             let (limit, unit) = magnitude_limit(name);
-            // one pass over the column for both checks
-            if let Some(i) = col.iter().position(|v| !v.is_finite() || v.abs() > limit) {
+            if let Some(i) = bad {
                 if !col[i].is_finite() {
                     return Err(Error::NotFinite {
                         path,
@@ -329,31 +335,28 @@ fn check_time(path: &Path, t: &[f64], trial: Option<&[f64]>, first_row: usize) -
             found: t.len(),
         });
     }
-    for i in 1..t.len() {
-        if t[i] <= t[i - 1] {
-            return Err(Error::TimeNotIncreasing {
-                path: path.to_path_buf(),
-                row: i + first_row,
-                previous: t[i - 1],
-                found: t[i],
-            });
-        }
+    if let Some(i) = (1..t.len()).find(|&i| t[i] <= t[i - 1]) {
+        return Err(Error::TimeNotIncreasing {
+            path: path.to_path_buf(),
+            row: i + first_row,
+            previous: t[i - 1],
+            found: t[i],
+        });
     }
     let boundary = |i: usize| trial.is_some_and(|id| id[i] != id[i - 1]);
-    let mut dt: Vec<f64> = (1..t.len())
-        .filter(|&i| !boundary(i))
-        .map(|i| t[i] - t[i - 1])
-        .collect();
-    if dt.is_empty() {
+    let intervals = || {
+        (1..t.len())
+            .filter(move |&i| !boundary(i))
+            .map(|i| t[i] - t[i - 1])
+    };
+    let Some(median) = median_interval(intervals) else {
         return Err(Error::TooFewSamples {
             path: path.to_path_buf(),
             what: "deriving the sample rate (two samples of one trial)".into(),
             needed: 2,
             found: 1,
         });
-    }
-    let mid = dt.len() / 2;
-    let median = *dt.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
+    };
     for i in 1..t.len() {
         let d = t[i] - t[i - 1];
         let gap_allowed = boundary(i) && d > median;
@@ -383,6 +386,65 @@ fn check_time(path: &Path, t: &[f64], trial: Option<&[f64]>, first_row: usize) -
     Ok(rate)
 }
 
+/// The median (the element of rank len/2) of the sampling intervals, `None`
+/// when there is none. A clock's intervals take a handful of distinct values
+/// (one step and its rounding): counted, they give the median exactly
+/// without a copy of the 1.8 M intervals and a selection (issue 82); more
+/// than 64 distinct values (a jittered clock) are copied and selected.
+fn median_interval<I: Iterator<Item = f64>>(intervals: impl Fn() -> I) -> Option<f64> {
+    const MOST_DISTINCT: usize = 64;
+    let mut counts: Vec<(u64, usize)> = Vec::with_capacity(MOST_DISTINCT);
+    let mut total = 0usize;
+    let mut few = true;
+    // the value seen last is the likeliest next
+    let mut last = 0;
+    for d in intervals() {
+        total += 1;
+        let bits = d.to_bits();
+        if counts.get(last).is_some_and(|(b, _)| *b == bits) {
+            counts[last].1 += 1;
+            continue;
+        }
+        match counts.iter().position(|(b, _)| *b == bits) {
+            Some(k) => {
+                counts[k].1 += 1;
+                last = k;
+            }
+            None if counts.len() < MOST_DISTINCT => {
+                last = counts.len();
+                counts.push((bits, 1));
+            }
+            None => {
+                few = false;
+                break;
+            }
+        }
+    }
+    if !few {
+        let mut dt: Vec<f64> = intervals().collect();
+        let mid = dt.len() / 2;
+        return Some(*dt.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1);
+    }
+    let mut below = 0;
+    counts.sort_by(|a, b| f64::from_bits(a.0).total_cmp(&f64::from_bits(b.0)));
+    counts.into_iter().find_map(|(bits, c)| {
+        below += c;
+        (below > total / 2).then(|| f64::from_bits(bits))
+    })
+}
+
+/// The first sample of `col` that is not finite or exceeds `limit` in
+/// magnitude. Blocks are checked without branches first (vectorised: 8
+/// columns of 1.8 M samples in 3 ms instead of 12, issue 82).
+fn first_out_of_range(col: &[f64], limit: f64) -> Option<usize> {
+    const BLOCK: usize = 1024;
+    col.chunks(BLOCK).enumerate().find_map(|(b, block)| {
+        // NaN compares false: `!(|v| <= limit)` holds for NaN, ±inf and too large
+        let any = block.iter().fold(false, |bad, v| bad | !(v.abs() <= limit));
+        any.then(|| b * BLOCK + block.iter().position(|v| !(v.abs() <= limit)).unwrap_or(0))
+    })
+}
+
 /// "milliseconds" or "microseconds" when the sample rate in s would be below
 /// 2 Hz (no impedance recording is sampled so slowly) but sensible in that unit.
 fn time_unit_hint(rate: f64) -> Option<&'static str> {
@@ -410,6 +472,43 @@ mod tests {
             vec![t, vec![0.0; n]],
             2,
         )
+    }
+
+    #[test]
+    fn median_interval_counts_or_selects_the_same_rank() {
+        let by_sorting = |v: &[f64]| {
+            let mut s = v.to_vec();
+            s.sort_by(f64::total_cmp);
+            s[s.len() / 2]
+        };
+        // few distinct values (counted), in every order, odd and even counts
+        let few: Vec<f64> = (0..1001)
+            .map(|i| [0.002, 0.0020000001, 0.0019999999][i % 7 % 3])
+            .collect();
+        for v in [&few[..], &few[..1000], &few[..2]] {
+            assert_eq!(median_interval(|| v.iter().copied()), Some(by_sorting(v)));
+        }
+        // many distinct values (selected)
+        let many: Vec<f64> = (0..999)
+            .map(|i| 0.001 + ((i * 7919) % 1000) as f64 * 1e-9)
+            .collect();
+        assert_eq!(
+            median_interval(|| many.iter().copied()),
+            Some(by_sorting(&many))
+        );
+        assert_eq!(median_interval(|| std::iter::empty()), None);
+    }
+
+    #[test]
+    fn first_out_of_range_names_the_first_bad_sample() {
+        let mut col = vec![1.0; 5000];
+        assert_eq!(first_out_of_range(&col, 10.0), None);
+        col[3000] = 11.0;
+        col[4000] = f64::NAN;
+        assert_eq!(first_out_of_range(&col, 10.0), Some(3000));
+        col[2047] = f64::NEG_INFINITY;
+        assert_eq!(first_out_of_range(&col, 10.0), Some(2047));
+        assert_eq!(first_out_of_range(&[f64::NAN], 1e300), Some(0));
     }
 
     #[test]

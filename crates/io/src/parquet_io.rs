@@ -281,6 +281,32 @@ impl ColumnDecoder<'_> {
                 }};
             }
             match column_reader {
+                // doubles in seconds go straight into the column, without a
+                // batch buffer and its copy (issue 82)
+                ColumnReader::DoubleColumnReader(mut r) if per_s.is_none() => loop {
+                    defs.clear();
+                    let before = out.len();
+                    let (n_rec, _, _) = r
+                        .read_records(BATCH, Some(&mut defs), None, &mut out)
+                        .map_err(pq_err)?;
+                    if n_rec == 0 {
+                        break;
+                    }
+                    if out.len() - before != n_rec {
+                        let missing = defs.iter().position(|d| *d == 0).unwrap_or(0);
+                        return Err(Error::NotANumber {
+                            path: path.to_path_buf(),
+                            row: before + missing + 1,
+                            column: name.to_string(),
+                            found: "null".into(),
+                        });
+                    }
+                    if out.len() as i64 > MAX_PARQUET_ROWS {
+                        return Err(fail(format!(
+                            "column {name}: more than {MAX_PARQUET_ROWS} rows"
+                        )));
+                    }
+                },
                 ColumnReader::DoubleColumnReader(r) => read_all!(r, f64),
                 ColumnReader::FloatColumnReader(r) => read_all!(r, f32),
                 ColumnReader::Int32ColumnReader(r) => read_all!(r, i32),

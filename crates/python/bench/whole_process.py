@@ -26,7 +26,8 @@ def main(path, runs):
     for _ in range(runs):
         for name, cmd in (("numpy/scipy", peer), ("limpid", ours)):
             t0 = time.perf_counter()
-            subprocess.run(cmd, stdout=subprocess.DEVNULL, check=True)
+            with open(os.devnull, "w") as sink:  # write-only: see the note in main.rs on stdout_was_closed
+                subprocess.run(cmd, stdout=sink, check=True)
             times[name].append(time.perf_counter() - t0)
     for name, t in times.items():
         print(f"{name}: " + " ".join(f"{x:.3f}" for x in t) + f" s (median {statistics.median(t):.3f})")

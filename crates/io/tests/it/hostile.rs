@@ -76,6 +76,68 @@ fn write_parquet(path: &Path, rec: &Recording, compression: Compression) {
     w.close().unwrap();
 }
 
+/// A null in an optional column is refused naming its row (rows count
+/// from 1, as the recording's other messages for Parquet do) and column, in a later row group too, whether the
+/// column is decoded straight into place (double) or through a batch (float).
+#[test]
+fn a_parquet_null_is_refused_by_row_and_column() {
+    use parquet::data_type::FloatType;
+    let d = tmp();
+    for (physical, null_row) in [(Physical::DOUBLE, 7), (Physical::FLOAT, 130)] {
+        let p = d.path().join(format!("null-{physical}.parquet"));
+        let field = |name: &str, kind, repetition| {
+            Arc::new(
+                Type::primitive_type_builder(name, kind)
+                    .with_repetition(repetition)
+                    .build()
+                    .unwrap(),
+            )
+        };
+        let schema = Arc::new(
+            Type::group_type_builder("r")
+                .with_fields(vec![
+                    field("t", Physical::DOUBLE, Repetition::REQUIRED),
+                    field("x", physical, Repetition::OPTIONAL),
+                ])
+                .build()
+                .unwrap(),
+        );
+        let props = Arc::new(WriterProperties::builder().build());
+        let mut w =
+            SerializedFileWriter::new(std::fs::File::create(&p).unwrap(), schema, props).unwrap();
+        // two row groups of 100 rows; the null at 0-based sample null_row - 1
+        for group in 0..2 {
+            let mut g = w.next_row_group().unwrap();
+            let t: Vec<f64> = (0..100).map(|i| (group * 100 + i) as f64 * 0.002).collect();
+            let mut c = g.next_column().unwrap().unwrap();
+            c.typed::<DoubleType>().write_batch(&t, None, None).unwrap();
+            c.close().unwrap();
+            let defs: Vec<i16> = (0..100)
+                .map(|i| i16::from(group * 100 + i + 1 != null_row))
+                .collect();
+            let present = defs.iter().filter(|d| **d == 1).count();
+            let mut c = g.next_column().unwrap().unwrap();
+            if physical == Physical::DOUBLE {
+                c.typed::<DoubleType>()
+                    .write_batch(&vec![0.5; present], Some(&defs), None)
+                    .unwrap();
+            } else {
+                c.typed::<FloatType>()
+                    .write_batch(&vec![0.5; present], Some(&defs), None)
+                    .unwrap();
+            }
+            c.close().unwrap();
+            g.close().unwrap();
+        }
+        w.close().unwrap();
+        let e = limpid_io::read_recording(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("row {null_row}")) && e.contains("column x") && e.contains("null"),
+            "{physical}: {e}"
+        );
+    }
+}
+
 #[test]
 fn parquet_with_every_common_compression_reads_as_written() {
     let d = tmp();
