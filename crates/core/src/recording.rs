@@ -438,10 +438,11 @@ fn median_interval<I: Iterator<Item = f64>>(intervals: impl Fn() -> I) -> Option
 /// columns of 1.8 M samples in 3 ms instead of 12, issue 82).
 fn first_out_of_range(col: &[f64], limit: f64) -> Option<usize> {
     const BLOCK: usize = 1024;
+    // NaN compares false: not within holds for NaN, ±inf and too large
+    let within = |v: &f64| v.abs() <= limit;
     col.chunks(BLOCK).enumerate().find_map(|(b, block)| {
-        // NaN compares false: `!(|v| <= limit)` holds for NaN, ±inf and too large
-        let any = block.iter().fold(false, |bad, v| bad | !(v.abs() <= limit));
-        any.then(|| b * BLOCK + block.iter().position(|v| !(v.abs() <= limit)).unwrap_or(0))
+        let all = block.iter().fold(true, |ok, v| ok & within(v));
+        (!all).then(|| b * BLOCK + block.iter().position(|v| !within(v)).unwrap_or(0))
     })
 }
 
@@ -496,7 +497,7 @@ mod tests {
             median_interval(|| many.iter().copied()),
             Some(by_sorting(&many))
         );
-        assert_eq!(median_interval(|| std::iter::empty()), None);
+        assert_eq!(median_interval(std::iter::empty), None);
     }
 
     #[test]
