@@ -1,0 +1,274 @@
+//! The speed guard `.ci/run` runs (issue 82): three hot paths timed against
+//! reference work timed in the same run, their ratios compared with a stored
+//! baseline; a ratio more than the baseline's threshold (15 %) above its
+//! baseline fails, with the numbers.
+//!
+//!     perf_guard BASELINE.json            check (exit 1 when slower)
+//!     perf_guard BASELINE.json --update   measure and write the baseline
+//!
+//! The paths: the 60-minute pipeline (`estimate linear` on 1.8 M samples of
+//! Parquet, read to JSON, in-process) over a bare Parquet decode of the same
+//! file into buffers kept between runs; the parallel-cascade reflex estimate of 60 s of the virtual ankle at
+//! 1 kHz, and the Welch spectral matrix of 9 channels x 50 s at 1 kHz, each
+//! over a fixed arithmetic kernel. Ratios, not seconds, so that a slower or
+//! busier machine moves both sides; each side is the best of several
+//! interleaved runs, and a ratio over the threshold is measured once more
+//! with more runs before the guard fails (a shared 2-core machine has
+//! seconds when another process takes a core).
+
+use limpid_ident::{fit_linear_plan, plan, LinearParams, PrepareParams};
+use rayon::prelude::*;
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+type Timed = Box<dyn Fn() -> Result<(), Box<dyn std::error::Error>>>;
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("perf_guard: {e}");
+        std::process::exit(2);
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let baseline_path = args
+        .first()
+        .ok_or("usage: perf_guard BASELINE.json [--update]")?
+        .clone();
+    let update = args.iter().any(|a| a == "--update");
+    let dir = tempfile::tempdir()?;
+    let long = dir.path().join("long.parquet");
+    write_long_recording(&long)?;
+    let ankle = limpid_lab::ankle::simulate_ankle(
+        &limpid_lab::ankle::AnkleSubject::default(),
+        &limpid_lab::ankle::AnkleExperiment {
+            duration_s: 60.0,
+            ..Default::default()
+        },
+        1,
+    )?;
+    let channels = noise_channels(9, 50_000);
+    let long_for_decode = long.clone();
+    let decoded = std::sync::Mutex::new(Vec::new());
+    let paths: Vec<(&str, Timed, Timed, usize)> = vec![
+        (
+            "linear_60min_pipeline / parquet_decode",
+            Box::new(move || linear_pipeline(&long)),
+            Box::new(move || bare_decode(&long_for_decode, &decoded)),
+            9,
+        ),
+        (
+            "reflex_60s_1kHz / kernel",
+            Box::new(move || {
+                limpid_ident::reflex::estimate_reflex(
+                    &ankle,
+                    &limpid_ident::reflex::ReflexParams::default(),
+                )?;
+                Ok(())
+            }),
+            Box::new(kernel),
+            9,
+        ),
+        (
+            "welch_9ch_50s_1kHz / kernel",
+            Box::new(move || {
+                let signals: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
+                let welch = limpid_ident::stochastic::default_welch(50_000, 1000.0);
+                black_box(limpid_dsp::spectral::SegmentSpectra::new(&signals, &welch)?.matrix());
+                Ok(())
+            }),
+            Box::new(kernel),
+            15,
+        ),
+    ];
+    let baseline: serde_json::Value = if update {
+        serde_json::Value::Null
+    } else {
+        serde_json::from_str(&std::fs::read_to_string(&baseline_path).map_err(|e| {
+            format!("{baseline_path}: {e} (make it with perf_guard {baseline_path} --update)")
+        })?)
+        .map_err(|e| format!("{baseline_path}: {e}"))?
+    };
+    let threshold = baseline["threshold"].as_f64().unwrap_or(1.15);
+    let mut measured = serde_json::Map::new();
+    let mut slower = Vec::new();
+    for (name, path, reference, runs) in &paths {
+        let mut ratio = measure(path, reference, *runs)?;
+        let stored = baseline["ratios"][name].as_f64();
+        if let Some(stored) = stored {
+            if ratio.0 > stored * threshold {
+                // once more, with more runs: a busy second is not a slower build
+                ratio = measure(path, reference, 3 * runs)?;
+            }
+        }
+        let (r, path_s, reference_s) = ratio;
+        let verdict = match stored {
+            Some(stored) if r > stored * threshold => {
+                slower.push(format!(
+                    "{name}: {r:.3} against the baseline's {stored:.3} (+{:.0} %, threshold +{:.0} %)",
+                    100.0 * (r / stored - 1.0),
+                    100.0 * (threshold - 1.0)
+                ));
+                "SLOWER"
+            }
+            Some(stored) if r < stored / threshold => "faster: update the baseline",
+            Some(_) => "ok",
+            None => "no baseline",
+        };
+        println!(
+            "perf_guard: {name}: {:.1} ms / {:.1} ms = {r:.3} (baseline {}) {verdict}",
+            path_s * 1e3,
+            reference_s * 1e3,
+            stored.map_or("none".into(), |s| format!("{s:.3}"))
+        );
+        measured.insert(name.to_string(), serde_json::json!((r * 1e3).round() / 1e3));
+    }
+    if update {
+        let doc = serde_json::json!({
+            "about": "perf_guard's baseline (crates/cli/examples/perf_guard.rs): each hot path's best time over its reference's best time in the same run, on the ci profile; made with --update",
+            "threshold": threshold,
+            "ratios": measured,
+        });
+        std::fs::write(&baseline_path, serde_json::to_string_pretty(&doc)? + "\n")?;
+        println!("perf_guard: wrote {baseline_path}");
+        return Ok(());
+    }
+    if !slower.is_empty() {
+        eprintln!(
+            "perf_guard: slower than the baseline ({baseline_path}):\n  {}",
+            slower.join("\n  ")
+        );
+        std::process::exit(1);
+    }
+    Ok(())
+}
+
+/// The best times of `path` and `reference` over `runs` interleaved runs, and their ratio.
+fn measure(path: &Timed, reference: &Timed, runs: usize) -> Result<(f64, f64, f64), String> {
+    let time = |f: &Timed| -> Result<Duration, String> {
+        let t0 = Instant::now();
+        f().map_err(|e| e.to_string())?;
+        Ok(t0.elapsed())
+    };
+    // a first run of each warms the page cache and the thread pool
+    time(path)?;
+    time(reference)?;
+    let (mut best_path, mut best_reference) = (Duration::MAX, Duration::MAX);
+    for _ in 0..runs {
+        best_reference = best_reference.min(time(reference)?);
+        best_path = best_path.min(time(path)?);
+    }
+    let (p, r) = (best_path.as_secs_f64(), best_reference.as_secs_f64());
+    Ok((p / r, p, r))
+}
+
+/// `limpid estimate linear FILE --json` in-process: read, windows, fit, result, JSON.
+fn linear_pipeline(path: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    let rec = limpid_io::read_recording(path)?;
+    let plan = plan(&rec, &PrepareParams::default())?;
+    let est = fit_linear_plan(&plan, &LinearParams::default())?;
+    let result = limpid_analysis::linear::linear_result(&est, &plan.meta);
+    let json =
+        limpid_analysis::result::Document::new(limpid_analysis::result::Estimate::Linear(result))
+            .to_json_pretty();
+    black_box(json);
+    Ok(())
+}
+
+/// Every column of a Parquet file of doubles decoded into `buffers`, one
+/// per column, kept between runs (so that the reference has no page faults
+/// to vary with), columns in parallel, with nothing checked: the least any
+/// reader must do.
+fn bare_decode(
+    path: &std::path::Path,
+    buffers: &std::sync::Mutex<Vec<Vec<f64>>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use parquet::column::reader::ColumnReader;
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    let open = || SerializedFileReader::new(std::fs::File::open(path)?);
+    let meta = open()?.metadata().clone();
+    let (columns, rows) = (
+        meta.file_metadata().schema_descr().num_columns(),
+        meta.file_metadata().num_rows() as usize,
+    );
+    let mut buffers = buffers.lock().map_err(|_| "poisoned")?;
+    buffers.resize_with(columns, || Vec::with_capacity(rows));
+    buffers
+        .par_iter_mut()
+        .enumerate()
+        .map(|(c, values)| -> Result<(), String> {
+            values.clear();
+            // a file of its own per task: a shared one shares its cursor
+            let reader = open().map_err(|e| e.to_string())?;
+            for g in 0..reader.num_row_groups() {
+                let group = reader.get_row_group(g).map_err(|e| e.to_string())?;
+                let column = group.get_column_reader(c).map_err(|e| e.to_string())?;
+                let ColumnReader::DoubleColumnReader(mut r) = column else {
+                    return Err("not a double column".into());
+                };
+                while r
+                    .read_records(1 << 16, None, None, values)
+                    .map_err(|e| e.to_string())?
+                    .0
+                    > 0
+                {}
+            }
+            Ok(())
+        })
+        .collect::<Result<(), _>>()?;
+    black_box(&*buffers);
+    Ok(())
+}
+
+/// Fixed arithmetic: a second-order recursive filter over 2 M samples,
+/// twice (a chain of dependent multiply-adds, as filters and fits have).
+fn kernel() -> Result<(), Box<dyn std::error::Error>> {
+    let mut x: Vec<f64> = (0..2_000_000).map(|i| ((i * 7919) % 1000) as f64).collect();
+    for _ in 0..2 {
+        let (mut y1, mut y2) = (0.0, 0.0);
+        for v in x.iter_mut() {
+            let y = 0.02 * *v + 1.6 * y1 - 0.64 * y2;
+            (y2, y1) = (y1, y);
+            *v = y;
+        }
+    }
+    black_box(x);
+    Ok(())
+}
+
+/// `count` channels of `n` pseudo-random samples (a fixed linear congruential sequence).
+fn noise_channels(count: usize, n: usize) -> Vec<Vec<f64>> {
+    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+    (0..count)
+        .map(|_| {
+            (0..n)
+                .map(|_| {
+                    state = state
+                        .wrapping_mul(6_364_136_223_846_793_005)
+                        .wrapping_add(1_442_695_040_888_963_407);
+                    (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The 60-minute recording of the performance page (`long_recording 60`).
+fn write_long_recording(path: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    use limpid_lab::{
+        seed000_subject1, simulate_centre_out, sphere, CentreOut, NoiseModel, Profile,
+    };
+    let mut protocol = CentreOut::seed000(Profile::Cubic);
+    let trials = (3600.0 / (protocol.rest_s + protocol.motion_s)).ceil() as usize;
+    let dirs = sphere::even_directions(16);
+    protocol.directions = (0..trials).map(|i| dirs[i % dirs.len()]).collect();
+    let rec = simulate_centre_out(
+        &seed000_subject1()[0],
+        &protocol,
+        &NoiseModel::default(),
+        42,
+    )?;
+    limpid_io::write_recording(&rec, path)?;
+    Ok(())
+}
