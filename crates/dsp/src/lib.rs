@@ -500,14 +500,14 @@ fn lanes<const L: usize>(
 ) {
     let total = layout.total();
     let mut buf = vec![[0.0f64; L]; total];
+    // the window itself is copied; only the extensions and pads are computed
+    let middle = layout.pad + layout.e..layout.pad + layout.e + layout.n;
     for (l, x) in group.iter().enumerate() {
-        let (lo, hi) = (layout.pad, layout.pad + layout.e + layout.n + layout.e);
-        for (i, v) in buf.iter_mut().enumerate() {
-            v[l] = if i >= lo + layout.e && i < hi - layout.e {
-                x[i - lo - layout.e]
-            } else {
-                layout.padded(x, i)
-            };
+        for (v, xi) in buf[middle.clone()].iter_mut().zip(x.iter()) {
+            v[l] = *xi;
+        }
+        for i in (0..middle.start).chain(middle.end..total) {
+            buf[i][l] = layout.padded(x, i);
         }
     }
     let first = buf[0];

@@ -127,7 +127,9 @@ fn warn_about(py: Python<'_>, rec: &Recording) -> PyResult<()> {
 
 fn recording_unwarned(source: &Bound<'_, PyAny>) -> PyResult<Recording> {
     if let Ok(path) = source.extract::<std::path::PathBuf>() {
-        return limpid_io::read_recording(&path).map_err(err);
+        // on the package's pool: the Parquet reader decodes columns in
+        // parallel, and rayon's global pool hangs a forked child
+        return detached(source.py(), || limpid_io::read_recording(&path)).map_err(err);
     }
     let dict = source.cast::<PyDict>().map_err(|_| {
         PyValueError::new_err("a recording is a path or a dict of 1-D float arrays")

@@ -73,6 +73,30 @@ def test_a_forked_child_finishes_after_the_parent_estimated(result):
     np.testing.assert_allclose(queue.get(timeout=5), result.stiffness, rtol=1e-12)
 
 
+def test_a_forked_child_reads_parquet_after_the_parent_did(tmp_path):
+    # the Parquet reader decodes columns in parallel: in the package's pool,
+    # never in rayon's global one, which a forked child inherits without threads
+    import os
+    import subprocess
+    cli = os.environ.get("LIMPID_CLI")
+    if not cli:
+        pytest.skip("LIMPID_CLI is not set (scripts/test.sh sets it)")
+    parquet = tmp_path / "cubic.parquet"
+    subprocess.run([cli, "convert", str(LINEAR), "-o", str(parquet)], check=True,
+                   stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    expected = limpid.estimate_linear(str(parquet)).stiffness
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    child = ctx.Process(target=_child, args=(parquet, queue))
+    child.start()
+    child.join(timeout=60)
+    alive = child.is_alive()
+    if alive:
+        child.kill()
+    assert not alive, "the forked child hung"
+    np.testing.assert_allclose(queue.get(timeout=5), expected, rtol=1e-12)
+
+
 @pytest.mark.parametrize("kwargs", [
     {"order": 4.5}, {"order": "4"}, {"order": True}, {"order": 0},
     {"cutoff_hz": "10"}, {"cutoff_hz": float("nan")}, {"negate_force": 1},
