@@ -4,15 +4,16 @@
 //! baseline fails, with the numbers.
 //!
 //!     perf_guard BASELINE.json            check (exit 1 when slower)
-//!     perf_guard BASELINE.json --update   measure and write the baseline
+//!     perf_guard BASELINE.json --update   measure three times, write the medians
 //!
 //! The paths: the 60-minute pipeline (`estimate linear` on 1.8 M samples of
-//! Parquet, read to JSON, in-process) over a bare Parquet decode of the same
-//! file into buffers kept between runs; the parallel-cascade reflex estimate of 60 s of the virtual ankle at
-//! 1 kHz, and the Welch spectral matrix of 9 channels x 50 s at 1 kHz, each
-//! over a fixed arithmetic kernel. Ratios, not seconds, so that a slower or
-//! busier machine moves both sides; each side is the best of several
-//! interleaved runs, and a ratio over the threshold is measured once more
+//! Parquet, read to JSON, in-process), the parallel-cascade reflex estimate
+//! of 60 s of the virtual ankle at 1 kHz, and the Welch spectral matrix of 9
+//! channels x 50 s at 1 kHz, each over a fixed arithmetic kernel (the
+//! pipeline over a bare Parquet decode of the same file is printed too, not
+//! guarded: the decode's best varies three times as much as the kernel's).
+//! Ratios, not seconds, so that a slower or busier machine moves both
+//! sides; each side is the best of several interleaved runs, and a ratio over the threshold is measured once more
 //! with more runs before the guard fails (a shared 2-core machine has
 //! seconds when another process takes a core).
 
@@ -37,6 +38,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: perf_guard BASELINE.json [--update]")?
         .clone();
     let update = args.iter().any(|a| a == "--update");
+    // 4 kB pages only: transparent huge pages make a run 15 ms faster or,
+    // when the kernel must compact memory for them, 100-300 ms slower, for
+    // whole minutes at a time (the pipeline's best of 9 moved by 24 %)
+    #[cfg(target_os = "linux")]
+    // SAFETY: prctl with PR_SET_THP_DISABLE only sets a flag of this process.
+    unsafe {
+        libc::prctl(libc::PR_SET_THP_DISABLE, 1, 0, 0, 0);
+    }
     let dir = tempfile::tempdir()?;
     let long = dir.path().join("long.parquet");
     write_long_recording(&long)?;
@@ -51,11 +60,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let channels = noise_channels(9, 50_000);
     let long_for_decode = long.clone();
     let decoded = std::sync::Mutex::new(Vec::new());
+    let decode: Timed = Box::new(move || bare_decode(&long_for_decode, &decoded));
     let paths: Vec<(&str, Timed, Timed, usize)> = vec![
         (
-            "linear_60min_pipeline / parquet_decode",
+            "linear_60min_pipeline / kernel",
             Box::new(move || linear_pipeline(&long)),
-            Box::new(move || bare_decode(&long_for_decode, &decoded)),
+            Box::new(kernel),
             9,
         ),
         (
@@ -94,7 +104,18 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut measured = serde_json::Map::new();
     let mut slower = Vec::new();
     for (name, path, reference, runs) in &paths {
-        let mut ratio = measure(path, reference, *runs)?;
+        let mut ratio = if update {
+            // the baseline: the median of three measurements
+            let mut three = [
+                measure(path, reference, *runs)?,
+                measure(path, reference, *runs)?,
+                measure(path, reference, *runs)?,
+            ];
+            three.sort_by(|a, b| a.0.total_cmp(&b.0));
+            three[1]
+        } else {
+            measure(path, reference, *runs)?
+        };
         let stored = baseline["ratios"][name].as_f64();
         if let Some(stored) = stored {
             if ratio.0 > stored * threshold {
@@ -124,6 +145,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         );
         measured.insert(name.to_string(), serde_json::json!((r * 1e3).round() / 1e3));
     }
+    // issue 82's other measure, printed, not guarded: a bare decode's best
+    // varies by 10 % from run to run, the kernel's by 3 %
+    let (r, pipeline_s, decode_s) = measure(&paths[0].1, &decode, 5)?;
+    println!(
+        "perf_guard: (not guarded) linear_60min_pipeline / parquet_decode: {:.1} ms / {:.1} ms = {r:.2}",
+        pipeline_s * 1e3,
+        decode_s * 1e3
+    );
     if update {
         let doc = serde_json::json!({
             "about": "perf_guard's baseline (crates/cli/examples/perf_guard.rs): each hot path's best time over its reference's best time in the same run, on the ci profile; made with --update",
@@ -221,19 +250,29 @@ fn bare_decode(
     Ok(())
 }
 
-/// Fixed arithmetic: a second-order recursive filter over 2 M samples,
-/// twice (a chain of dependent multiply-adds, as filters and fits have).
+/// Fixed arithmetic on every core, as the hot paths run: a second-order
+/// recursive filter over 8 blocks of 500 000 samples, twice (a chain of
+/// dependent multiply-adds, as filters and fits have). On the thread pool,
+/// so that a core taken by another process slows it as it slows the paths.
 fn kernel() -> Result<(), Box<dyn std::error::Error>> {
-    let mut x: Vec<f64> = (0..2_000_000).map(|i| ((i * 7919) % 1000) as f64).collect();
-    for _ in 0..2 {
-        let (mut y1, mut y2) = (0.0, 0.0);
-        for v in x.iter_mut() {
-            let y = 0.02 * *v + 1.6 * y1 - 0.64 * y2;
-            (y2, y1) = (y1, y);
-            *v = y;
-        }
-    }
-    black_box(x);
+    let sums: Vec<f64> = (0..8)
+        .into_par_iter()
+        .map(|block| {
+            let mut x: Vec<f64> = (0..500_000)
+                .map(|i| (((block * 500_000 + i) * 7919) % 1000) as f64)
+                .collect();
+            for _ in 0..2 {
+                let (mut y1, mut y2) = (0.0, 0.0);
+                for v in x.iter_mut() {
+                    let y = 0.02 * *v + 1.6 * y1 - 0.64 * y2;
+                    (y2, y1) = (y1, y);
+                    *v = y;
+                }
+            }
+            x.iter().sum()
+        })
+        .collect();
+    black_box(sums);
     Ok(())
 }
 

@@ -42,10 +42,7 @@ pub fn noise_sigma(x: &[f64]) -> f64 {
     if x.len() < 3 {
         return 0.0;
     }
-    let med = f64::from_bits(median_bits(x.len() - 2, || {
-        x.windows(3)
-            .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs().to_bits())
-    }));
+    let med = f64::from_bits(median_bits(x.len() - 2, &SecondDifferences(x)));
     // second difference of white noise has variance 6 sigma^2; MAD -> sigma factor 0.6745
     med / (0.6745 * 6f64.sqrt())
 }
@@ -226,17 +223,45 @@ pub fn native_noise_sigma(x: &[f64]) -> (f64, Option<Resampled>) {
     }
 }
 
+/// Values given to a visitor, as often as asked (each pass computes them anew).
+trait Visit {
+    fn visit(&self, each: impl FnMut(u64));
+}
+
+/// |x[i+2] - 2 x[i+1] + x[i]| of a signal, as bits. Computed in blocks of 64
+/// (which vectorise) before each is visited: the per-sample form kept the
+/// noise estimate's two passes scalar (issue 82).
+struct SecondDifferences<'a>(&'a [f64]);
+
+impl Visit for SecondDifferences<'_> {
+    fn visit(&self, mut each: impl FnMut(u64)) {
+        const BLOCK: usize = 64;
+        let x = self.0;
+        let mut bits = [0u64; BLOCK];
+        let mut blocks = x.windows(BLOCK + 2).step_by(BLOCK);
+        let mut done = 0;
+        for w in &mut blocks {
+            for (k, b) in bits.iter_mut().enumerate() {
+                *b = (w[k + 2] - 2.0 * w[k + 1] + w[k]).abs().to_bits();
+            }
+            bits.iter().for_each(|b| each(*b));
+            done += BLOCK;
+        }
+        for w in x[done..].windows(3) {
+            each((w[2] - 2.0 * w[1] + w[0]).abs().to_bits());
+        }
+    }
+}
+
 /// The element of rank `count / 2` of `count` non-negative floats given as
 /// bits (which sort as the floats do), by radix selection: a histogram of
 /// the top 16 bits, then a selection among the values of the median's
-/// bucket only. Two passes of the generator and no copy of the whole
+/// bucket only. Two passes of the visitor and no copy of the whole
 /// signal (a sort-based selection of 1.8 M values took 20 ms, issue 16).
-fn median_bits<I: Iterator<Item = u64>>(count: usize, values: impl Fn() -> I) -> u64 {
+fn median_bits(count: usize, values: &impl Visit) -> u64 {
     let mid = count / 2;
     let mut histogram = vec![0usize; 1 << 16];
-    for v in values() {
-        histogram[(v >> 48) as usize] += 1;
-    }
+    values.visit(|v| histogram[(v >> 48) as usize] += 1);
     let mut below = 0;
     let mut bucket = 0;
     for (b, c) in histogram.iter().enumerate() {
@@ -246,14 +271,20 @@ fn median_bits<I: Iterator<Item = u64>>(count: usize, values: impl Fn() -> I) ->
         }
         below += c;
     }
-    let mut inside: Vec<u64> = values().filter(|v| v >> 48 == bucket).collect();
+    let mut inside: Vec<u64> = Vec::new();
+    values.visit(|v| {
+        if v >> 48 == bucket {
+            inside.push(v)
+        }
+    });
     *inside.select_nth_unstable(mid - below).1
 }
 
-/// The smallest and largest of a recording's (finite) samples; eight lanes
-/// of plain comparisons, which vectorise where `f64::min`'s NaN rule does
-/// not (a 1.8 M-sample column in 1 ms instead of 4, issue 82).
-fn extremes(x: &[f64]) -> (f64, f64) {
+/// The smallest and largest of `x`, NaN left out ((inf, -inf) when
+/// nothing is left); eight lanes of plain comparisons, which vectorise where
+/// `f64::min`'s NaN rule does not (a 1.8 M-sample column in 1 ms instead of
+/// 4, issue 82).
+pub fn extremes(x: &[f64]) -> (f64, f64) {
     const LANES: usize = 8;
     let mut lo = [f64::INFINITY; LANES];
     let mut hi = [f64::NEG_INFINITY; LANES];
@@ -632,7 +663,7 @@ mod tests {
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
-        for len in [3, 4, 5, 101, 10_000, 100_001] {
+        for len in [3, 4, 5, 65, 66, 67, 101, 130, 10_000, 100_001] {
             let noisy: Vec<f64> = (0..len)
                 .map(|i| (i as f64 * 1e-3).sin() + 1e-4 * uniform())
                 .collect();

@@ -152,12 +152,16 @@ pub fn implausible_motion(
 
 /// `(min, max)` of the finite values (`(0, 0)` when there are none).
 pub fn range(values: &[f64]) -> (f64, f64) {
-    let (lo, hi) = values
-        .iter()
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-            (lo.min(v), hi.max(v))
-        });
+    // the vectorised pass (NaN left out); an infinity found: again, finite values only
+    let (lo, hi) = match limpid_core::trial::extremes(values) {
+        (lo, hi) if lo == f64::NEG_INFINITY || hi == f64::INFINITY => values
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            }),
+        found => found,
+    };
     if hi >= lo {
         (lo, hi)
     } else {
@@ -168,6 +172,19 @@ pub fn range(values: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn range_leaves_out_what_is_not_finite() {
+        assert_eq!(range(&[1.0, f64::NAN, -2.0, 3.0]), (-2.0, 3.0));
+        assert_eq!(range(&[1.0, f64::INFINITY, -2.0]), (-2.0, 1.0));
+        assert_eq!(range(&[f64::NEG_INFINITY, 5.0, 4.0]), (4.0, 5.0));
+        assert_eq!(range(&[f64::NAN, f64::INFINITY]), (0.0, 0.0));
+        assert_eq!(range(&[]), (0.0, 0.0));
+        let long: Vec<f64> = (0..1001).map(|i| (i as f64 * 0.37).sin()).collect();
+        let lo = long.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = long.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(range(&long), (lo, hi));
+    }
 
     #[test]
     fn canonical_names_have_a_quantity_and_others_none() {
