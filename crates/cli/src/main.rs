@@ -226,9 +226,41 @@ fn main() -> ExitCode {
     }
 }
 
+/// Whether descriptor 1 was closed when the process started, recorded by
+/// [`RECORD_STDOUT_AT_START`] before Rust's start-up code reopens a closed
+/// descriptor on /dev/null.
+#[cfg(target_os = "linux")]
+static STDOUT_CLOSED_AT_START: std::sync::atomic::AtomicBool =
+    std::sync::atomic::AtomicBool::new(false);
+
+/// Run by the loader with the program's other constructors, before `main`
+/// and before the Rust runtime's own start-up (which is called from the C
+/// `main`): the state of descriptor 1 as the process was given it.
+#[cfg(target_os = "linux")]
+#[used]
+#[link_section = ".init_array"]
+static RECORD_STDOUT_AT_START: extern "C" fn() = {
+    extern "C" fn record() {
+        // SAFETY: F_GETFD only reads the descriptor table.
+        let closed = unsafe { libc::fcntl(libc::STDOUT_FILENO, libc::F_GETFD) } == -1;
+        STDOUT_CLOSED_AT_START.store(closed, std::sync::atomic::Ordering::Relaxed);
+    }
+    record
+};
+
+/// Descriptor 1 was closed when the process started. On Linux as recorded
+/// before the runtime's start-up: /dev/null opened read-write is also what
+/// Python's `subprocess.DEVNULL` gives, a request to discard the output,
+/// which the guess below refused.
+#[cfg(target_os = "linux")]
+fn stdout_was_closed() -> bool {
+    STDOUT_CLOSED_AT_START.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// Descriptor 1 is /dev/null opened read-write: how Rust's start-up code
-/// fills a descriptor that was closed when the process started.
-#[cfg(unix)]
+/// fills a descriptor that was closed when the process started (elsewhere
+/// than on Linux, a guess: a caller may open /dev/null so too).
+#[cfg(all(unix, not(target_os = "linux")))]
 fn stdout_was_closed() -> bool {
     // SAFETY: fcntl and fstat only read the descriptor's state into local
     // values; the path is a valid C string.

@@ -26,7 +26,7 @@ def main(path, runs):
     for _ in range(runs):
         for name, cmd in (("numpy/scipy", peer), ("limpid", ours)):
             t0 = time.perf_counter()
-            with open(os.devnull, "w") as sink:  # write-only: see the note in main.rs on stdout_was_closed
+            with open(os.devnull, "w") as sink:  # write-only: read-write is refused off Linux (main.rs)
                 subprocess.run(cmd, stdout=sink, check=True)
             times[name].append(time.perf_counter() - t0)
     for name, t in times.items():

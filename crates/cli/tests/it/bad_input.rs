@@ -372,6 +372,24 @@ fn output_paths_that_are_not_plain_files_or_folders() {
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("standard output is closed"), "{stderr}");
+
+    // /dev/null opened read-write, as Python's subprocess.DEVNULL gives it:
+    // the output is discarded on purpose, the command succeeds (on Linux,
+    // where the closed descriptor is recorded before the runtime reopens it)
+    if cfg!(target_os = "linux") {
+        let null = std::fs::File::options()
+            .read(true)
+            .write(true)
+            .open("/dev/null")
+            .unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_limpid"))
+            .args(["estimate", "linear", rec.to_str().unwrap(), "--json"])
+            .stdout(null)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{stderr}");
+    }
 }
 
 #[test]

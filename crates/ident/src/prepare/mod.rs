@@ -678,6 +678,10 @@ impl Plan<'_> {
             let sign = self.sign;
             shifted.push(f[r.clone()].iter().map(|v| sign * v - offset).collect());
         }
+        let keep = self.meta.trim..r.len() - self.end_trim;
+        if self.derivative == Derivative::Central && keep.start >= 1 && keep.end < r.len() {
+            return self.fill_central(&shifted, (left, right, extra), keep, dest);
+        }
         let signals = filter_and_differentiate(
             &shifted,
             self.derivative,
@@ -686,7 +690,6 @@ impl Plan<'_> {
             self.sg_window,
             dt,
         )?;
-        let keep = self.meta.trim..r.len() - self.end_trim;
         for (k, per_coordinate) in signals.iter().enumerate() {
             for (kind, src) in per_coordinate.iter().enumerate() {
                 let part = &src[keep.clone()];
@@ -694,6 +697,48 @@ impl Plan<'_> {
                 for (o, v) in dest[kind * n + k].iter_mut().zip(part) {
                     *o = v - m;
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Plan::fill_window`] with central differences, when the kept samples
+    /// have a neighbour on each side: the filtered signals go straight into
+    /// `dest` and the derivatives are taken over the kept samples only (the
+    /// same arithmetic as `central_first` and `central_second` there, without
+    /// four window-long vectors per coordinate, issue 82).
+    fn fill_central(
+        &self,
+        shifted: &[Vec<f64>],
+        (left, right, extra): (limpid_dsp::Edge, limpid_dsp::Edge, usize),
+        keep: Range<usize>,
+        dest: &mut [&mut [f64]],
+    ) -> Result<()> {
+        let n = shifted.len() / 2;
+        let dt = 1.0 / self.meta.fs;
+        let (two_dt, h2) = (2.0 * dt, dt * dt);
+        let refs: Vec<&[f64]> = shifted.iter().map(Vec::as_slice).collect();
+        let filtered = self
+            .lowpass
+            .filtfilt_edges_many(&refs, left, right, extra)?;
+        for k in 0..n {
+            let x = &filtered[k];
+            let out = |kind: usize| kind * n + k;
+            for (o, i) in dest[out(0)].iter_mut().zip(keep.clone()) {
+                *o = x[i];
+            }
+            for (o, i) in dest[out(1)].iter_mut().zip(keep.clone()) {
+                *o = (x[i + 1] - x[i - 1]) / two_dt;
+            }
+            for (o, i) in dest[out(2)].iter_mut().zip(keep.clone()) {
+                *o = (x[i + 1] - 2.0 * x[i] + x[i - 1]) / h2;
+            }
+            dest[out(3)].copy_from_slice(&filtered[n + k][keep.clone()]);
+        }
+        if self.meta.demeaned {
+            for column in dest.iter_mut().take(4 * n) {
+                let m = mean(column);
+                column.iter_mut().for_each(|v| *v -= m);
             }
         }
         Ok(())
