@@ -8,21 +8,10 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use limpid_ident::{fit_linear, fit_linear_plan, plan, prepare, LinearParams, PrepareParams};
-use limpid_lab::{seed000_subject1, simulate_centre_out, sphere, CentreOut, NoiseModel, Profile};
 
 /// A recording of `minutes` of 3.2 s cubic trials at 500 Hz.
 pub fn long_recording(minutes: f64) -> limpid_core::Recording {
-    let mut protocol = CentreOut::seed000(Profile::Cubic);
-    let trials = (minutes * 60.0 / (protocol.rest_s + protocol.motion_s)).ceil() as usize;
-    let dirs = sphere::even_directions(16);
-    protocol.directions = (0..trials).map(|i| dirs[i % dirs.len()]).collect();
-    simulate_centre_out(
-        &seed000_subject1()[0],
-        &protocol,
-        &NoiseModel::default(),
-        42,
-    )
-    .expect("simulation")
+    limpid_lab::back_to_back_cubic_trials(minutes).expect("simulation")
 }
 
 fn bench(c: &mut Criterion) {

@@ -295,19 +295,7 @@ fn noise_channels(count: usize, n: usize) -> Vec<Vec<f64>> {
 
 /// The 60-minute recording of the performance page (`long_recording 60`).
 fn write_long_recording(path: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
-    use limpid_lab::{
-        seed000_subject1, simulate_centre_out, sphere, CentreOut, NoiseModel, Profile,
-    };
-    let mut protocol = CentreOut::seed000(Profile::Cubic);
-    let trials = (3600.0 / (protocol.rest_s + protocol.motion_s)).ceil() as usize;
-    let dirs = sphere::even_directions(16);
-    protocol.directions = (0..trials).map(|i| dirs[i % dirs.len()]).collect();
-    let rec = simulate_centre_out(
-        &seed000_subject1()[0],
-        &protocol,
-        &NoiseModel::default(),
-        42,
-    )?;
+    let rec = limpid_lab::back_to_back_cubic_trials(60.0)?;
     limpid_io::write_recording(&rec, path)?;
     Ok(())
 }

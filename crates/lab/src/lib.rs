@@ -29,5 +29,5 @@ pub mod validate;
 pub mod varying;
 
 pub use profile::Profile;
-pub use simulate::{simulate_centre_out, CentreOut, NoiseModel};
+pub use simulate::{back_to_back_cubic_trials, simulate_centre_out, CentreOut, NoiseModel};
 pub use subject::{seed000_subject1, Posture};

@@ -335,6 +335,22 @@ impl CentreOut {
     }
 }
 
+/// `minutes` of seed 000's cubic trials back to back at 500 Hz (3-D,
+/// subject 1, 16 directions in turn, seed 42): the long recording of the
+/// performance page, its benchmarks and the speed guard (issue 16, 82).
+pub fn back_to_back_cubic_trials(minutes: f64) -> Result<Recording> {
+    let mut protocol = CentreOut::seed000(crate::Profile::Cubic);
+    let trials = (minutes * 60.0 / (protocol.rest_s + protocol.motion_s)).ceil() as usize;
+    let dirs = crate::sphere::even_directions(16);
+    protocol.directions = (0..trials).map(|i| dirs[i % dirs.len()]).collect();
+    simulate_centre_out(
+        &crate::seed000_subject1()[0],
+        &protocol,
+        &NoiseModel::default(),
+        42,
+    )
+}
+
 /// Simulate one posture's centre-out trials. Returns the recording (columns
 /// `t,x,y,z,fx,fy,fz,trial`) and the applied per-trial force offsets.
 pub fn simulate_centre_out(

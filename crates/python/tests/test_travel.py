@@ -58,11 +58,11 @@ def _child(path, queue):
     queue.put(limpid.estimate_linear(str(path)).stiffness.tolist())
 
 
-def test_a_forked_child_finishes_after_the_parent_estimated(result):
-    # the parent has used the thread pool (fixture); a forked child that uses it must not hang
+def _forked_stiffness(path):
+    """The stiffness a forked child estimates from `path` (it must not hang)."""
     ctx = multiprocessing.get_context("fork")
     queue = ctx.Queue()
-    child = ctx.Process(target=_child, args=(LINEAR, queue))
+    child = ctx.Process(target=_child, args=(path, queue))
     child.start()
     child.join(timeout=60)
     alive = child.is_alive()
@@ -70,7 +70,12 @@ def test_a_forked_child_finishes_after_the_parent_estimated(result):
         child.kill()
     assert not alive, "the forked child hung"
     assert child.exitcode == 0
-    np.testing.assert_allclose(queue.get(timeout=5), result.stiffness, rtol=1e-12)
+    return queue.get(timeout=5)
+
+
+def test_a_forked_child_finishes_after_the_parent_estimated(result):
+    # the parent has used the thread pool (fixture); a forked child that uses it must not hang
+    np.testing.assert_allclose(_forked_stiffness(LINEAR), result.stiffness, rtol=1e-12)
 
 
 def test_a_forked_child_reads_parquet_after_the_parent_did(tmp_path):
@@ -85,16 +90,7 @@ def test_a_forked_child_reads_parquet_after_the_parent_did(tmp_path):
     subprocess.run([cli, "convert", str(LINEAR), "-o", str(parquet)], check=True,
                    stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     expected = limpid.estimate_linear(str(parquet)).stiffness
-    ctx = multiprocessing.get_context("fork")
-    queue = ctx.Queue()
-    child = ctx.Process(target=_child, args=(parquet, queue))
-    child.start()
-    child.join(timeout=60)
-    alive = child.is_alive()
-    if alive:
-        child.kill()
-    assert not alive, "the forked child hung"
-    np.testing.assert_allclose(queue.get(timeout=5), expected, rtol=1e-12)
+    np.testing.assert_allclose(_forked_stiffness(parquet), expected, rtol=1e-12)
 
 
 @pytest.mark.parametrize("kwargs", [
