@@ -13,9 +13,10 @@
 //! pipeline over a bare Parquet decode of the same file is printed too, not
 //! guarded: the decode's best varies three times as much as the kernel's).
 //! Ratios, not seconds, so that a slower or busier machine moves both
-//! sides; each side is the best of several interleaved runs, and a ratio over the threshold is measured once more
-//! with more runs before the guard fails (a shared 2-core machine has
-//! seconds when another process takes a core).
+//! sides; each side is the best of several interleaved runs, and a ratio
+//! over the threshold is measured once more with more runs before the guard
+//! fails (a shared 2-core machine has seconds when another process takes a
+//! core).
 
 use limpid_ident::{fit_linear_plan, plan, LinearParams, PrepareParams};
 use rayon::prelude::*;

@@ -223,17 +223,13 @@ pub fn native_noise_sigma(x: &[f64]) -> (f64, Option<Resampled>) {
     }
 }
 
-/// Values given to a visitor, as often as asked (each pass computes them anew).
-trait Visit {
-    fn visit(&self, each: impl FnMut(u64));
-}
-
-/// |x[i+2] - 2 x[i+1] + x[i]| of a signal, as bits. Computed in blocks of 64
+/// |x[i+2] - 2 x[i+1] + x[i]| of a signal, as bits, given to a visitor as
+/// often as asked (each pass computes them anew). Computed in blocks of 64
 /// (which vectorise) before each is visited: the per-sample form kept the
 /// noise estimate's two passes scalar (issue 82).
 struct SecondDifferences<'a>(&'a [f64]);
 
-impl Visit for SecondDifferences<'_> {
+impl SecondDifferences<'_> {
     fn visit(&self, mut each: impl FnMut(u64)) {
         const BLOCK: usize = 64;
         let x = self.0;
@@ -258,7 +254,7 @@ impl Visit for SecondDifferences<'_> {
 /// the top 16 bits, then a selection among the values of the median's
 /// bucket only. Two passes of the visitor and no copy of the whole
 /// signal (a sort-based selection of 1.8 M values took 20 ms, issue 16).
-fn median_bits(count: usize, values: &impl Visit) -> u64 {
+fn median_bits(count: usize, values: &SecondDifferences) -> u64 {
     let mid = count / 2;
     let mut histogram = vec![0usize; 1 << 16];
     values.visit(|v| histogram[(v >> 48) as usize] += 1);
