@@ -42,8 +42,8 @@ pub fn magnitude_limit(name: &str) -> (f64, &'static str) {
         .is_some_and(|(m, a)| !m.is_empty() && matches!(a, "x" | "y" | "z"));
     match name {
         "t" => (1e10, "s"),
-        "x" | "y" | "z" => (100.0, "m"),
-        "theta" => (1e4, "rad"),
+        "x" | "y" | "z" | "rx" | "ry" | "rz" => (100.0, "m"),
+        "theta" | "rtheta" => (1e4, "rad"),
         "fx" | "fy" | "fz" | "ux" | "uy" | "uz" => (1e6, "N"),
         "sensor_fx" | "sensor_fy" | "sensor_fz" => (1e6, "N"),
         "taux" | "tauy" | "tauz" | "utheta" | "sensor_tx" | "sensor_ty" | "sensor_tz" => {
@@ -52,6 +52,7 @@ pub fn magnitude_limit(name: &str) -> (f64, &'static str) {
         _ if marker_axis => (100.0, "m"),
         _ if name.strip_prefix("robot_q").is_some_and(digits) => (1e4, "rad"),
         _ if name.strip_prefix('q').is_some_and(digits) => (1e4, "rad"),
+        _ if name.strip_prefix('r').is_some_and(digits) => (1e4, "rad"),
         _ if name.strip_prefix("tau").is_some_and(digits) => (1e6, "N m"),
         "trial" | "level" => (1e12, ""),
         _ if name.starts_with("emg_") || name.starts_with("env_") => (1e6, "V"),

@@ -52,6 +52,10 @@ pub enum WarningCode {
     /// A position column moves further than a limb can (a hand by metres, a
     /// joint by turns): it is probably in other units (cm, mm, degrees).
     ImplausibleUnits,
+    /// The robot did not impose the motion (a commanded reference was
+    /// recorded): the estimate used the reference as its instrument, or the
+    /// reference drives too little of the motion to pin it down.
+    ClosedLoop,
 }
 
 /// A warning attached to a result.

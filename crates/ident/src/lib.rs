@@ -8,12 +8,14 @@
 //! - [`stochastic`]: Z(f) = T R^-1 from Welch spectra (seed 004).
 //! - [`reflex`]: intrinsic and reflex stiffness, parallel cascade (Kearney et al. 1997).
 //! - [`online`]: per-perturbation impedance for the live display.
+//! - [`closed_loop`]: the commanded reference as an instrument (issue 79).
 //! - [`request`]: one typed request per method, shared by every front-end.
 //! - [`units`]: units from what a column is (joint angle or displacement).
 //! - [`estimator`]: the one shape they share (settings -> check -> fit -> result).
 
 #![warn(missing_docs)]
 
+pub mod closed_loop;
 pub mod estimator;
 pub mod linear;
 pub mod lsq;

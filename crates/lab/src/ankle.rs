@@ -252,6 +252,206 @@ fn integrate(
     )
 }
 
+/// A robot of finite impedance (issue 79): a position servo that pulls the
+/// joint towards its commanded reference `r` with `tau_robot = K_e (r - q) +
+/// B_e (r' - q')`, while the subject's own torque fluctuations (white noise
+/// band-passed to `subject_band_hz`) move the joint too. With `K_e` many
+/// times the joint's K the robot imposes the motion (open loop); near K the
+/// motion is correlated with the subject's torque and least squares on it is
+/// biased (Westwick & Perreault 2011).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Servo {
+    /// K_e (N m/rad).
+    pub stiffness: f64,
+    /// B_e (N m s/rad).
+    pub damping: f64,
+    /// Standard deviation of the subject's own torque (N m).
+    pub subject_torque_nm: f64,
+    /// Band of the subject's torque (Hz): a first-order high-pass at the
+    /// first, a second-order (damping 0.7) low-pass at the second.
+    pub subject_band_hz: (f64, f64),
+}
+
+impl Servo {
+    /// A servo `ratio` times as stiff as `subject`, damped to a closed-loop
+    /// damping ratio of 0.6, with a 0.9 N m subject torque in 0.3-5 Hz.
+    pub fn relative_to(subject: &AnkleSubject, ratio: f64) -> Servo {
+        let k = subject.stiffness * (1.0 + ratio);
+        let damping = (2.0 * 0.6 * (k * subject.inertia).sqrt() - subject.damping).max(0.0);
+        Servo {
+            stiffness: ratio * subject.stiffness,
+            damping,
+            subject_torque_nm: 0.9,
+            subject_band_hz: (0.3, 5.0),
+        }
+    }
+}
+
+/// Simulate the ankle on a servo of finite impedance: the PRBS of `e`
+/// through its actuator filter is the commanded reference, recorded as `r1`
+/// (rad) beside `t`, `q1` and `tau1` (the robot's torque on the joint, with
+/// `e.torque_noise_nm` of sensor noise).
+pub fn simulate_ankle_servo(
+    s: &AnkleSubject,
+    e: &AnkleExperiment,
+    servo: &Servo,
+    seed: u64,
+) -> Result<Recording> {
+    let ok = |v: f64| v.is_finite() && v > 0.0;
+    let (lo, hi) = servo.subject_band_hz;
+    if !(ok(e.amplitude_rad)
+        && ok(e.switch_s)
+        && ok(e.actuator_hz)
+        && ok(e.duration_s)
+        && ok(e.rate_hz)
+        && ok(servo.stiffness)
+        && servo.damping.is_finite()
+        && servo.damping >= 0.0
+        && servo.subject_torque_nm.is_finite()
+        && servo.subject_torque_nm >= 0.0
+        && ok(lo)
+        && hi > lo
+        && hi.is_finite())
+    {
+        return Err(Error::invalid(
+            "servo experiment",
+            "amplitude, switching interval, bandwidth, duration, rate and servo stiffness must be positive, the subject's band increasing",
+        ));
+    }
+    crate::validate::check_size(e.duration_s * e.rate_hz, "ankle recording")?;
+    let n = (e.duration_s * e.rate_hz).round() as usize;
+    let sub = SUBSTEPS;
+    let h = 1.0 / (e.rate_hz * sub as f64);
+    let mut rng = StdRng::seed_from_u64(seed);
+    let subject = subject_torque(servo, n * sub, h, &mut rng);
+    let sensor = Normal::new(0.0, e.torque_noise_nm.max(f64::MIN_POSITIVE))
+        .map_err(|err| Error::invalid("torque noise", err.to_string()))?;
+    let switch_every = (e.switch_s / h).round().max(1.0) as usize;
+    let wa = 2.0 * std::f64::consts::PI * e.actuator_hz;
+    let mut u = e.amplitude_rad;
+    let (mut r, mut rd) = (0.0f64, 0.0f64);
+    let (mut q, mut qd) = (0.0f64, 0.0f64);
+    let mut reflex = ReflexState::new(s.reflex, h);
+    let mut sums = [0.0f64; 3];
+    let mut cols: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(n));
+    for (k, n_subject) in subject.iter().enumerate() {
+        if k % switch_every == 0 && rng.random::<bool>() {
+            u = -u;
+        }
+        let robot = servo.stiffness * (r - q) + servo.damping * (rd - qd);
+        let elastic = (s.stiffness + (s.quadratic + s.cubic * q) * q) * q;
+        let qdd = (robot + n_subject - s.damping * qd - elastic - reflex.torque()) / s.inertia;
+        for (sum, v) in sums.iter_mut().zip([q, robot, r]) {
+            *sum += v;
+        }
+        if k % sub == sub - 1 {
+            cols[0].push((k / sub) as f64 / e.rate_hz);
+            cols[1].push(sums[0] / sub as f64);
+            let eps = if e.torque_noise_nm > 0.0 {
+                sensor.sample(&mut rng)
+            } else {
+                0.0
+            };
+            cols[2].push(sums[1] / sub as f64 + eps);
+            cols[3].push(sums[2] / sub as f64);
+            sums = [0.0; 3];
+        }
+        reflex.step(qd);
+        let rdd = wa * wa * (u - r) - 2.0 * 0.7 * wa * rd;
+        rd += h * rdd;
+        r += h * rd;
+        qd += h * qdd;
+        q += h * qd;
+    }
+    Recording::new(
+        "virtual ankle on a servo",
+        ["t", "q1", "tau1", "r1"].map(String::from).to_vec(),
+        cols.to_vec(),
+        2,
+    )
+}
+
+/// The subject's own torque on the fine grid: white noise through a
+/// first-order high-pass and a second-order low-pass, scaled to its
+/// standard deviation.
+fn subject_torque(servo: &Servo, len: usize, h: f64, rng: &mut StdRng) -> Vec<f64> {
+    let (lo, hi) = servo.subject_band_hz;
+    let a = (-2.0 * std::f64::consts::PI * lo * h).exp();
+    let w = 2.0 * std::f64::consts::PI * hi;
+    let (mut slow, mut y, mut yd) = (0.0f64, 0.0f64, 0.0f64);
+    let mut out: Vec<f64> = (0..len)
+        .map(|_| {
+            let white: f64 = rng.sample(rand_distr::StandardNormal);
+            let ydd = w * w * (white - y) - 2.0 * 0.7 * w * yd;
+            yd += h * ydd;
+            y += h * yd;
+            slow = a * slow + (1.0 - a) * y;
+            y - slow
+        })
+        .collect();
+    let sd = (out.iter().map(|v| v * v).sum::<f64>() / len.max(1) as f64).sqrt();
+    let scale = if sd > 0.0 {
+        servo.subject_torque_nm / sd
+    } else {
+        0.0
+    };
+    out.iter_mut().for_each(|v| *v *= scale);
+    out
+}
+
+/// The reflex pathway's state on the fine grid: the delayed rectified
+/// velocity through the unit-DC second-order low-pass, times the gain.
+struct ReflexState {
+    reflex: Option<AnkleReflex>,
+    history: Vec<f64>,
+    at: usize,
+    h: f64,
+    z: f64,
+    zd: f64,
+}
+
+impl ReflexState {
+    fn new(reflex: Option<AnkleReflex>, h: f64) -> ReflexState {
+        let delay = reflex.map_or(0, |r| (r.delay_s / h).round() as usize);
+        ReflexState {
+            reflex,
+            history: vec![0.0; delay + 1],
+            at: 0,
+            h,
+            z: 0.0,
+            zd: 0.0,
+        }
+    }
+
+    fn torque(&self) -> f64 {
+        if self.reflex.is_some() {
+            self.z
+        } else {
+            0.0
+        }
+    }
+
+    /// Record the velocity of this step and advance the low-pass.
+    fn step(&mut self, qd: f64) {
+        let Some(r) = self.reflex else { return };
+        let len = self.history.len();
+        self.history[self.at % len] = qd;
+        self.at += 1;
+        // the oldest entry is the velocity `delay` steps ago (0 before that)
+        let v = self.history[self.at % len];
+        let rect = if r.positive {
+            v.max(0.0)
+        } else {
+            (-v).max(0.0)
+        };
+        let wr = 2.0 * std::f64::consts::PI * r.natural_hz;
+        let zdd = wr * wr * (r.gain * rect - self.z) - 2.0 * r.damping_ratio * wr * self.zd;
+        self.zd += self.h * zdd;
+        self.z += self.h * self.zd;
+    }
+}
+
 /// Short segments of a long recording, as an experiment that keeps only
 /// stretches of a session (Ludvig & Perreault 2012): stretches of
 /// `shortest_s..longest_s` (uniform) separated by gaps of 0.2-2 s, each its

@@ -11,6 +11,7 @@ use super::{
     ReflexFreeFit, ReflexParams, ReflexPathway, ReflexTraces, VafSplit, DELAY_INTERVAL_MAX_S,
     GRID_ERROR_FLOOR, MODEL_ERROR_FLOOR, REFLEX_PRESENT_VAF,
 };
+use crate::closed_loop::ClosedLoopFit;
 use limpid_core::{Error, Recording, Result, Warning, WarningCode};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -43,12 +44,26 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     )?;
     let rec = rec.as_ref();
     let (q, tq) = position_and_torque(rec, p)?;
+    // a closed-loop rig: the motion the commanded reference drives (issue 79)
+    let closed = crate::closed_loop::predicted_motion(
+        rec,
+        std::slice::from_ref(&p.position),
+        (p.open_loop, ClosedLoopFit::InstrumentalVariables),
+    )?;
+    let (predicted, closed_loop) = closed.unzip();
     let fs = rec.sample_rate();
     let mut warnings: Vec<Warning> = measured_rate.iter().map(|m| m.warning()).collect();
+    warnings.extend(closed_loop.iter().flat_map(|c| c.warnings()));
     // a trial change is a cut, even where the time runs on
     let cuts = limpid_core::trial::segment_ranges(rec)?;
     let shortened: Option<ReflexParams>;
     let (layout, [d, other_decimation], segment_use) = if cuts.len() > 1 {
+        if closed_loop.is_some() {
+            return Err(Error::invalid(
+                rec.path().display().to_string(),
+                "a closed-loop recording (with a commanded reference column) of several segments is not estimated yet: pass one continuous record, or --open-loop if the robot imposed the motion",
+            ));
+        }
         check_rate(rec, p)?;
         let (layout, d, used, short) = segments::prepare(rec, (q, tq), p, &cuts, &mut warnings)?;
         shortened = short;
@@ -67,8 +82,17 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     for (name, raw) in [(&p.position, q), (&p.torque, tq)] {
         check_varies(rec, name, raw)?;
     }
+    // closed loop: the decimated predicted motion instruments the joint
+    // parametric fit; the nonparametric pathways (least squares) are fitted
+    // on it (the plug-in: consistent for the intrinsic IRF, approximate for
+    // the reflex's)
+    let instrument = match predicted.as_ref().and_then(|m| m.first()) {
+        Some(m) => Some(decimate(m, tq, fs, p)?),
+        None => None,
+    };
+    let dc = instrument.as_ref().map_or(&d, |i| &i[0]);
     let skip = n_reflex;
-    let cascades = both_polarities(&d, (half, n_reflex, skip));
+    let cascades = both_polarities(dc, (half, n_reflex, skip));
     let (best, polarity) = if cascades[0].vaf_total >= cascades[1].vaf_total {
         (0, Polarity::Positive)
     } else {
@@ -78,7 +102,13 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
 
     let dt = 1.0 / d.fs;
     // the fully parametric model, fitted jointly (I-B-K, delay, gain, low-pass)
-    let Some(mut param) = reflex_parametric(&d, best, fit_skip, p, fs) else {
+    let Some(mut param) = reflex_parametric(
+        &d,
+        best,
+        fit_skip,
+        p,
+        (fs, instrument.as_ref().map(|i| &i[0])),
+    ) else {
         return Err(Error::invalid(
             rec.path().display().to_string(),
             "position, velocity and acceleration are collinear: I, B and K cannot be separated",
@@ -89,7 +119,13 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     // with Kearney et al.'s order (after anti-aliasing) the difference is
     // that order's error, and it goes into the standard errors and the
     // delay interval.
-    let other_order = reflex_parametric(&other_decimation, best, fit_skip, p, fs);
+    let other_order = reflex_parametric(
+        &other_decimation,
+        best,
+        fit_skip,
+        p,
+        (fs, instrument.as_ref().map(|i| &i[1])),
+    );
     let order_warning = other_order
         .as_ref()
         .filter(|_| !p.rectify_first)
@@ -107,7 +143,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             &d.segments,
         ),
     };
-    let cross_validated_vaf = cross_validated_vaf(&d, best, half, n_reflex);
+    let cross_validated_vaf = cross_validated_vaf(dc, best, half, n_reflex);
 
     // intrinsic I-B-K from the joint parametric model; for comparison, the
     // fit of the torque the nonparametric reflex leaves, and the reflex-free fit
@@ -117,9 +153,9 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         .zip(&c.reflex_torque)
         .map(|(t, r)| t - r)
         .collect();
-    let (irf_fit, _, _) = ibk_fit_in(&d, &intrinsic_target, skip);
+    let (irf_fit, _, _) = ibk_fit_in(dc, &intrinsic_target, skip);
     let ibk = param.intrinsic;
-    let (plain, _, plain_vaf) = ibk_fit_in(&d, &d.torque, skip);
+    let (plain, _, plain_vaf) = ibk_fit_in(dc, &d.torque, skip);
     warnings.extend(order_warning);
     let delay_identifiable = delay_warnings(&param, fs, &mut warnings);
     let reflex_gain_points = param.total_vaf - param.intrinsic_only_vaf;
@@ -174,7 +210,8 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             gain: o.gain,
             delay_s: o.delay_s,
         }),
-        traces: traces(&d, c, skip),
+        traces: traces(dc, c, skip),
+        closed_loop,
         segments: segment_use.map(|u| SegmentUse {
             start_left_out_s: start_left_out as f64 / d.fs,
             ..u

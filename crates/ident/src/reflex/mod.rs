@@ -50,6 +50,7 @@ use serde::{Deserialize, Serialize};
 
 mod cascade;
 mod estimate;
+mod instrumental;
 mod parametric;
 mod segments;
 mod settings;
@@ -234,6 +235,10 @@ pub struct ReflexEstimate {
     pub other_rectifier_order: Option<OtherOrder>,
     /// Torque traces.
     pub traces: ReflexTraces,
+    /// How a closed-loop recording (one with a commanded reference column)
+    /// was estimated; absent in open loop.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub closed_loop: Option<crate::closed_loop::ClosedLoop>,
     /// How a recording of short segments (several `trial` windows) was
     /// used; absent for one continuous record.
     #[serde(default, skip_serializing_if = "Option::is_none")]

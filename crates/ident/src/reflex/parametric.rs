@@ -1,6 +1,7 @@
 //! The parametric models of the pathways: intrinsic I, B, K by least squares, the reflex (rectified velocity, delay, gain, second-order low-pass) fitted jointly over delays, with jackknife standard errors inflated for autocorrelated residuals.
 
 use super::cascade::{centre, correlation, mean, vaf, variance};
+use super::instrumental::{fixed_iv, joint_fit_iv, joint_jackknife_iv, residual_iv, FixedIv};
 use super::segments::{gather, groups};
 use super::transients::{GroupSums, SegmentRows};
 use super::{Decimated, Ibk, ReflexParams};
@@ -309,14 +310,23 @@ pub(crate) fn low_pass_in(
 /// rectified velocity -> delay -> gain -> unit-DC second-order low-pass. For
 /// a given delay and low-pass the model is linear in I, B, K, G; delay and
 /// low-pass are scanned (delays on the recorded rate's grid).
+///
+/// With `instrument` (the decimated motion a commanded reference predicts,
+/// closed loop, one continuous record) the fits are instrumental-variable
+/// ones ([`super::instrumental`]).
 pub(crate) fn reflex_parametric(
     d: &Decimated,
     polarity: usize,
     skip: usize,
     p: &ReflexParams,
-    fs: f64,
+    (fs, instrument): (f64, Option<&Decimated>),
 ) -> Option<Parametric> {
     let f = fixed_fit(d, skip)?;
+    let iv = match instrument {
+        Some(di) => Some(fixed_iv(d, di, skip)?),
+        None => None,
+    };
+    let full_z = instrument.map(|di| &di.rectified_full[polarity][..]);
     let n = d.torque.len();
     let full = &d.rectified_full[polarity];
     let full_segments = match d.segments.as_slice() {
@@ -332,6 +342,7 @@ pub(crate) fn reflex_parametric(
         d,
         (&f, rows.as_ref().zip(sums.as_deref())),
         (full, &full_segments),
+        iv.as_ref().zip(full_z),
         max_delay,
         (skip, fs),
     )?;
@@ -353,9 +364,14 @@ pub(crate) fn reflex_parametric(
     let free = rows
         .as_ref()
         .map(|_| SegmentRows::free_phases(d, (w, z, fs), &full_segments));
-    let resid = match rows.as_ref().zip(free.as_ref()) {
-        None => joint_residual(&f, &x, at_best),
-        Some((rows, free)) => {
+    let z_best = full_z.map(|zf| {
+        let ph = phases(&low_pass_in(zf, (w, z, fs), &full_segments), d.ratio, n);
+        delayed(&ph, d.ratio, delay, skip, &d.segments).into_owned()
+    });
+    let resid = match (rows.as_ref().zip(free.as_ref()), iv.as_ref()) {
+        (_, Some(iv)) => residual_iv(iv, &x, at_best),
+        (None, None) => joint_residual(&f, &x, at_best),
+        (Some((rows, free)), None) => {
             let (g, x) = rows.fit(d, (&ph, free), delay)?;
             joint_residual(&g, &x, at_best)
         }
@@ -365,9 +381,10 @@ pub(crate) fn reflex_parametric(
     let n_eff = (m / inflation).max(5.0);
     let threshold = rss_min * (1.0 + 3.84 / n_eff);
     let (lo, hi, contiguous) = delay_interval(&profile, threshold, delay);
-    let (params, mut se, start_left_out) = match &free {
-        None => (at_best, joint_jackknife(&f, &x), skip),
-        Some(free) => {
+    let (params, mut se, start_left_out) = match (&free, iv.as_ref().zip(z_best.as_deref())) {
+        (_, Some((iv, zb))) => (at_best, joint_jackknife_iv(iv, &x, zb), skip),
+        (None, None) => (at_best, joint_jackknife(&f, &x), skip),
+        (Some(free), None) => {
             // the scan left out every segment's start up to the longest
             // delay scanned; the fit at the optimum needs it left out only
             // up to the delay interval's end
@@ -401,7 +418,7 @@ pub(crate) fn reflex_parametric(
         natural_hz: w,
         damping_ratio: z,
         total_vaf: 100.0 * (1.0 - rss_min / f.total_ss),
-        intrinsic_only_vaf: 100.0 * (1.0 - f.rss / f.total_ss),
+        intrinsic_only_vaf: 100.0 * (1.0 - iv.as_ref().map_or(f.rss, |iv| iv.rss) / f.total_ss),
         scan_delays_s: (0..delays).map(|i| i as f64 / fs).collect(),
         scan_vaf: profile
             .iter()
@@ -461,6 +478,7 @@ fn scan_low_pass_and_delay(
     d: &Decimated,
     (f, rows): (&Fixed, Option<(&SegmentRows, &[GroupSums])>),
     (full, full_segments): (&[f64], &[Range<usize>]),
+    iv: Option<(&FixedIv, &[f64])>,
     max_delay: usize,
     (skip, fs): (usize, f64),
 ) -> Option<Scan> {
@@ -475,9 +493,21 @@ fn scan_low_pass_and_delay(
             .map(|&(w, z)| {
                 let ph = phases(&low_pass_in(full, (w, z, fs), full_segments), d.ratio, n);
                 let free = rows.map(|_| SegmentRows::free_phases(d, (w, z, fs), full_segments));
+                let instrument = iv.map(|(iv, zf)| {
+                    let ph = phases(&low_pass_in(zf, (w, z, fs), full_segments), d.ratio, n);
+                    (iv, ph)
+                });
                 (0..delays)
                     .map(|dl| match (near.contains(&dl), rows.zip(free.as_ref())) {
                         (false, _) => (f64::INFINITY, [0.0; 4]),
+                        (true, _) if instrument.is_some() => {
+                            let (iv, phz) = instrument.as_ref().expect("checked");
+                            joint_fit_iv(
+                                iv,
+                                &delayed(&ph, d.ratio, dl, skip, &d.segments),
+                                &delayed(phz, d.ratio, dl, skip, &d.segments),
+                            )
+                        }
                         (true, None) => joint_fit(f, &delayed(&ph, d.ratio, dl, skip, &d.segments)),
                         (true, Some(((rows, sums), free))) => {
                             rows.scan_fit(sums, d, (&ph, free), dl)

@@ -56,6 +56,9 @@ pub struct ReflexRequest {
         )
     )]
     pub rectify_first: bool,
+    /// Regress on the measured motion even when a commanded reference column (`r1` for `q1`) is recorded: right only when the robot imposed the motion (a stiff servo); by default a reference makes the estimate closed-loop (the reference as instrument).
+    #[cfg_attr(feature = "clap", arg(long = "open-loop"))]
+    pub open_loop: bool,
 }
 
 impl Default for ReflexRequest {
@@ -69,6 +72,7 @@ impl Default for ReflexRequest {
             reflex_lags_s: 1.0,
             max_delay_s: 0.15,
             rectify_first: true,
+            open_loop: false,
         }
     }
 }
