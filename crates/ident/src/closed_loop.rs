@@ -39,6 +39,7 @@ use std::borrow::Cow;
 use std::ops::Range;
 
 use limpid_core::{Error, Recording, Result, Warning, WarningCode};
+use limpid_dsp::LowPass;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use schemars::JsonSchema;
@@ -69,6 +70,13 @@ pub struct ClosedLoop {
     pub lags_s: [f64; 2],
     /// How the predicted motion entered the fit.
     pub fit: ClosedLoopFit,
+    /// With [`ClosedLoopFit::PredictedMotion`]: the share (%) of each
+    /// position's velocity and acceleration (low-passed as the estimator
+    /// prepares them) that the predicted motion's holds. A derivative the
+    /// reference barely drives (sensor noise, the subject's own motion)
+    /// cannot pin its parameter down: the estimator says so.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub derivative_percent: Option<Vec<[f64; 2]>>,
 }
 
 /// How the motion a reference predicts enters a closed-loop fit.
@@ -98,22 +106,85 @@ pub fn reference_column(position: &str) -> Option<String> {
 
 /// The recording with its position columns replaced by the motion the
 /// commanded reference predicts, when it has a reference column for any of
-/// them and `open_loop` is false; else the recording as it is.
+/// them and `open_loop` is false; else the recording as it is. With a
+/// `lowpass`, the shares of the velocity and acceleration (filtered by it)
+/// the predicted motion holds are measured too.
 pub fn instrumented<'r>(
     rec: Cow<'r, Recording>,
     positions: &[String],
-    open_loop: bool,
+    (open_loop, lowpass): (bool, Option<&LowPass>),
 ) -> Result<(Cow<'r, Recording>, Option<ClosedLoop>)> {
-    let Some((predicted, closed)) =
+    let Some((predicted, mut closed)) =
         predicted_motion(&rec, positions, (open_loop, ClosedLoopFit::PredictedMotion))?
     else {
         return Ok((rec, None));
     };
+    if let Some(lp) = lowpass {
+        let segments = limpid_core::trial::segment_ranges(&rec)?;
+        let dt = 1.0 / rec.sample_rate();
+        closed.derivative_percent = Some(
+            positions
+                .par_iter()
+                .zip(&predicted)
+                .map(|(name, p)| {
+                    let measured = rec.column(name).unwrap_or(&[]);
+                    derivative_shares(measured, p, &segments, (lp, dt))
+                })
+                .collect(),
+        );
+    }
     let mut out = rec.into_owned();
     for (name, column) in positions.iter().zip(predicted) {
         out.set_column(name, column)?;
     }
     Ok((Cow::Owned(out), Some(closed)))
+}
+
+/// The share (%) of the measured velocity's and acceleration's variance
+/// (each segment low-passed and differentiated) that the predicted
+/// motion's holds: `100 (1 - |d - d^|^2 / |d - mean|^2)`. Segments too short
+/// for the filter are left out.
+fn derivative_shares(
+    measured: &[f64],
+    predicted: &[f64],
+    segments: &[Range<usize>],
+    (lp, dt): (&LowPass, f64),
+) -> [f64; 2] {
+    let mut sums = [[0.0f64; 3]; 2];
+    for seg in segments {
+        let (Ok(m), Ok(p)) = (
+            lp.filtfilt(&measured[seg.clone()]),
+            lp.filtfilt(&predicted[seg.clone()]),
+        ) else {
+            continue;
+        };
+        let derivatives = [
+            (
+                limpid_dsp::central_first(&m, dt),
+                limpid_dsp::central_first(&p, dt),
+            ),
+            (
+                limpid_dsp::central_second(&m, dt),
+                limpid_dsp::central_second(&p, dt),
+            ),
+        ];
+        for (s, (dm, dp)) in sums.iter_mut().zip(&derivatives) {
+            for (a, b) in dm.iter().zip(dp) {
+                s[0] += (a - b) * (a - b);
+                s[1] += a * a;
+                s[2] += a;
+            }
+        }
+    }
+    let count: usize = segments.iter().map(|s| s.len()).sum::<usize>().max(1);
+    sums.map(|[left, squares, sum]| {
+        let total = squares - sum * sum / count as f64;
+        if total > 0.0 {
+            100.0 * (1.0 - left / total)
+        } else {
+            0.0
+        }
+    })
 }
 
 /// The motion each position column's commanded references predict (in the
@@ -172,6 +243,7 @@ pub fn predicted_motion(
                 lags.offsets.last().copied().unwrap_or(0) as f64 / fs,
             ],
             fit,
+            derivative_percent: None,
         },
     )))
 }

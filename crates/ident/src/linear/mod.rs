@@ -144,6 +144,10 @@ pub struct LinearEstimate {
     pub regressor_reliability: Vec<[f64; 3]>,
     /// How the standard errors were obtained.
     pub standard_error_method: String,
+    /// How a closed-loop recording (with commanded reference columns) was
+    /// estimated; absent in open loop.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub closed_loop: Option<crate::closed_loop::ClosedLoop>,
     /// What the reader should know about this estimate.
     pub warnings: Vec<Warning>,
 }
@@ -456,6 +460,8 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
     };
     // positions cut back to their measured samples first (issue 58)
     warnings.extend(data.measured_rate.as_ref().map(|m| m.warning()));
+    warnings.extend(data.closed_loop.iter().flat_map(|c| c.warnings()));
+    distrust_derivatives_the_reference_does_not_drive(data, &mut identifiable, &mut warnings);
     distrust_derivatives_of_resampled_positions(data, &mut identifiable, &mut warnings);
     for (k, c) in data.coordinates.iter().enumerate() {
         if let Some(kind) = crate::units::Coordinate::of_name(c) {
@@ -489,6 +495,7 @@ fn fit_rows(rows: Rows<'_>, params: &LinearParams) -> Result<LinearEstimate> {
         variance_inflation: (!inflation.is_empty()).then_some(inflation),
         regressor_reliability: reg.reliability,
         standard_error_method: se_method,
+        closed_loop: data.closed_loop.clone(),
         warnings,
     })
 }
@@ -530,6 +537,59 @@ pub fn units(coords: &[String]) -> (&'static str, &'static str, &'static str) {
 /// of the logging, not the limb's, and B and M came out 13-55 % low at tens
 /// of standard errors while "trusted". Damping and inertia are then not
 /// identifiable, and a warning says why; the noise was read at the measured rate.
+/// Below this share (%) of a velocity's or acceleration's variance driven by
+/// the commanded reference, a closed-loop fit on the predicted motion cannot
+/// pin damping or inertia down. Chosen on the outside end point on a servo
+/// (`ex_endpoint_servo`): its acceleration is 5-6 % reference-driven and M
+/// came out 10-40 % low at up to 9 SE; its velocity 29-42 %, and B was within
+/// 7 % (the predicted motion's error does not bias a linear fit, it only
+/// costs precision, until it swamps the derivative).
+pub const MIN_REFERENCE_DRIVEN_DERIVATIVE: f64 = 20.0;
+
+/// In closed loop, damping and inertia are judged by how much of the
+/// velocity and acceleration the reference drives: the fit on the predicted
+/// motion misses the rest, and the jackknife cannot see what it misses.
+fn distrust_derivatives_the_reference_does_not_drive(
+    data: &Prepared,
+    identifiable: &mut Identifiable,
+    warnings: &mut Vec<Warning>,
+) {
+    let Some(shares) = data
+        .closed_loop
+        .as_ref()
+        .and_then(|c| c.derivative_percent.as_ref())
+    else {
+        return;
+    };
+    for (k, (what, flag)) in [
+        ("velocity", &mut identifiable.damping),
+        ("acceleration", &mut identifiable.inertia),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let low: Vec<String> = data
+            .coordinates
+            .iter()
+            .zip(shares)
+            .filter(|(_, s)| s[k] < MIN_REFERENCE_DRIVEN_DERIVATIVE)
+            .map(|(c, s)| format!("{c} {:.0} %", s[k]))
+            .collect();
+        if low.is_empty() {
+            continue;
+        }
+        *flag = false;
+        let matrix = if k == 0 { "damping" } else { "inertia" };
+        warnings.push(Warning::new(
+            WarningCode::ClosedLoop,
+            format!(
+                "closed loop: the reference drives too little of the {what} ({}; below {MIN_REFERENCE_DRIVEN_DERIVATIVE:.0} %), so {matrix} is not identifiable from the motion it predicts: the rest is sensor noise or the subject's own motion",
+                low.join(", ")
+            ),
+        ));
+    }
+}
+
 fn distrust_derivatives_of_resampled_positions(
     data: &Prepared,
     identifiable: &mut Identifiable,

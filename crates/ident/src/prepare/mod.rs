@@ -134,6 +134,9 @@ pub struct PrepareParams {
     pub trial_column: String,
     /// Keep only windows whose samples all carry this `level` (condition label).
     pub level: Option<f64>,
+    /// Use the measured motion even when commanded reference columns are
+    /// recorded (else the motion they predict: [`crate::closed_loop`]).
+    pub open_loop: bool,
 }
 
 impl Default for PrepareParams {
@@ -149,6 +152,7 @@ impl Default for PrepareParams {
             min_rest_s: 0.02,
             trial_column: "trial".into(),
             level: None,
+            open_loop: false,
         }
     }
 }
@@ -244,6 +248,9 @@ pub struct Prepared {
     /// Every position was logged faster than it was measured, alike: the
     /// recording was cut to the measured samples first (issue 58).
     pub measured_rate: Option<MeasuredRate>,
+    /// A closed-loop recording: the positions are the motion the commanded
+    /// references predict ([`crate::closed_loop`]).
+    pub closed_loop: Option<crate::closed_loop::ClosedLoop>,
     /// Variance that the position noise contributes to the prepared
     /// displacement, velocity and acceleration of each coordinate, and the
     /// displacement-acceleration noise covariance (`[disp, vel, acc, disp_acc]`;
@@ -362,6 +369,9 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
     let fs = rec.sample_rate();
     let cutoff = params.cutoff_hz.unwrap_or_else(|| default_cutoff(fs));
     let lowpass = LowPass::butterworth(params.filter_order, cutoff, fs)?;
+    // a closed-loop rig: the motion the commanded references drive (issue 79)
+    let (rec, closed_loop) =
+        crate::closed_loop::instrumented(rec, &coords, (params.open_loop, Some(&lowpass)))?;
     let pos = columns(&rec, &coords);
     let frc = columns(&rec, &force_cols);
     // a coordinate that never moves: its filtered copy varies by rounding
@@ -462,6 +472,7 @@ pub fn plan<'r>(rec: &'r Recording, params: &PrepareParams) -> Result<Plan<'r>> 
         position_noise,
         resampled,
         measured_rate,
+        closed_loop,
         regressor_noise_var,
     };
     Ok(Plan {

@@ -157,6 +157,9 @@ pub struct PrepareRequest {
     /// Use only windows of this condition level (the `level` column).
     #[cfg_attr(feature = "clap", arg(long, allow_hyphen_values = true))]
     pub level: Option<f64>,
+    /// Regress on the measured motion even when commanded reference columns (`rx, ry, rz` for `x, y, z`; `r1` for `q1`) are recorded: right only when the robot imposed the motion; by default a reference makes the estimate closed-loop (fitted on the motion the reference predicts).
+    #[cfg_attr(feature = "clap", arg(long = "open-loop"))]
+    pub open_loop: bool,
 }
 
 impl Default for PrepareRequest {
@@ -174,6 +177,7 @@ impl Default for PrepareRequest {
             robot: None,
             robot_base: None,
             level: p.level,
+            open_loop: p.open_loop,
         }
     }
 }
@@ -207,6 +211,7 @@ impl PrepareRequest {
             negate_force: self.negate_force,
             transform,
             level: self.level,
+            open_loop: self.open_loop,
             ..PrepareParams::default()
         })
     }

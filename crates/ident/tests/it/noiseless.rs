@@ -111,6 +111,7 @@ proptest! {
             position_noise: vec![0.0; n],
             resampled: vec![None; n],
             measured_rate: None,
+            closed_loop: None,
             regressor_noise_var: vec![[0.0; 4]; n],
         };
         let est = fit_linear(&data, &LinearParams::default()).unwrap();
