@@ -65,6 +65,11 @@ pub struct AnkleSubject {
     /// odd nonlinearity (a joint stiffening with the angle); 0 by default.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub cubic: f64,
+    /// The rig, when it is a position servo of finite stiffness rather than
+    /// an actuator that imposes the motion (issue 79): `limpid simulate`
+    /// then records the servo's reference `r1` ([`simulate_ankle_servo_following`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub servo: Option<Servo>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -86,6 +91,7 @@ impl Default for AnkleSubject {
             }),
             quadratic: 0.0,
             cubic: 0.0,
+            servo: None,
         }
     }
 }
@@ -259,7 +265,7 @@ fn integrate(
 /// times the joint's K the robot imposes the motion (open loop); near K the
 /// motion is correlated with the subject's torque and least squares on it is
 /// biased (Westwick & Perreault 2011).
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Servo {
     /// K_e (N m/rad).
@@ -267,13 +273,23 @@ pub struct Servo {
     /// B_e (N m s/rad).
     pub damping: f64,
     /// Standard deviation of the subject's own torque (N m).
+    #[serde(default = "Servo::default_subject_torque")]
     pub subject_torque_nm: f64,
     /// Band of the subject's torque (Hz): a first-order high-pass at the
     /// first, a second-order (damping 0.7) low-pass at the second.
+    #[serde(default = "Servo::default_band")]
     pub subject_band_hz: (f64, f64),
 }
 
 impl Servo {
+    fn default_subject_torque() -> f64 {
+        0.9
+    }
+
+    fn default_band() -> (f64, f64) {
+        (0.3, 5.0)
+    }
+
     /// A servo `ratio` times as stiff as `subject`, damped to a closed-loop
     /// damping ratio of 0.6, with a 0.9 N m subject torque in 0.3-5 Hz.
     pub fn relative_to(subject: &AnkleSubject, ratio: f64) -> Servo {
@@ -282,8 +298,8 @@ impl Servo {
         Servo {
             stiffness: ratio * subject.stiffness,
             damping,
-            subject_torque_nm: 0.9,
-            subject_band_hz: (0.3, 5.0),
+            subject_torque_nm: Servo::default_subject_torque(),
+            subject_band_hz: Servo::default_band(),
         }
     }
 }
@@ -298,6 +314,45 @@ pub fn simulate_ankle_servo(
     servo: &Servo,
     seed: u64,
 ) -> Result<Recording> {
+    check_servo(e, servo)?;
+    let h = 1.0 / (e.rate_hz * SUBSTEPS as f64);
+    let switch_every = (e.switch_s / h).round().max(1.0) as usize;
+    let mut u = e.amplitude_rad;
+    integrate_servo(s, e, servo, seed, |k, rng| {
+        if k % switch_every == 0 && rng.random::<bool>() {
+            u = -u;
+        }
+        u
+    })
+}
+
+/// [`simulate_ankle_servo`] with the servo's command a position `command`
+/// (rad, one value per sample at `e.rate_hz`, linearly interpolated), as
+/// [`simulate_ankle_following`]: a designed protocol on a compliant rig.
+pub fn simulate_ankle_servo_following(
+    s: &AnkleSubject,
+    e: &AnkleExperiment,
+    servo: &Servo,
+    command: &[f64],
+    seed: u64,
+) -> Result<Recording> {
+    if command.iter().any(|v| !v.is_finite()) || command.is_empty() {
+        return Err(Error::invalid("command", "expected finite angles"));
+    }
+    let e = AnkleExperiment {
+        duration_s: command.len() as f64 / e.rate_hz,
+        ..*e
+    };
+    check_servo(&e, servo)?;
+    let n = command.len();
+    integrate_servo(s, &e, servo, seed, |k, _| {
+        let (i, f) = (k / SUBSTEPS, (k % SUBSTEPS) as f64 / SUBSTEPS as f64);
+        let next = command[(i + 1).min(n - 1)];
+        command[i] * (1.0 - f) + next * f
+    })
+}
+
+fn check_servo(e: &AnkleExperiment, servo: &Servo) -> Result<()> {
     let ok = |v: f64| v.is_finite() && v > 0.0;
     let (lo, hi) = servo.subject_band_hz;
     if !(ok(e.amplitude_rad)
@@ -310,16 +365,32 @@ pub fn simulate_ankle_servo(
         && servo.damping >= 0.0
         && servo.subject_torque_nm.is_finite()
         && servo.subject_torque_nm >= 0.0
+        && e.torque_noise_nm.is_finite()
+        && e.torque_noise_nm >= 0.0
         && ok(lo)
         && hi > lo
-        && hi.is_finite())
+        && hi < 0.5 * e.rate_hz)
     {
         return Err(Error::invalid(
-            "servo experiment",
-            "amplitude, switching interval, bandwidth, duration, rate and servo stiffness must be positive, the subject's band increasing",
+            "servo",
+            "amplitude, switching interval, bandwidth, duration, rate and servo stiffness must be positive, the servo damping and the noises not negative, the subject's band increasing and below half the sample rate",
         ));
     }
-    crate::validate::check_size(e.duration_s * e.rate_hz, "ankle recording")?;
+    crate::validate::check_size(e.duration_s * e.rate_hz, "ankle recording")
+}
+
+/// A joint angle beyond this (rad) on a servo: the loop is unstable.
+pub const UNSTABLE_RAD: f64 = 10.0;
+
+/// The ankle on the servo, its command `command(step, rng)` through the
+/// actuator's second-order filter being the reference.
+fn integrate_servo(
+    s: &AnkleSubject,
+    e: &AnkleExperiment,
+    servo: &Servo,
+    seed: u64,
+    mut command: impl FnMut(usize, &mut StdRng) -> f64,
+) -> Result<Recording> {
     let n = (e.duration_s * e.rate_hz).round() as usize;
     let sub = SUBSTEPS;
     let h = 1.0 / (e.rate_hz * sub as f64);
@@ -327,21 +398,26 @@ pub fn simulate_ankle_servo(
     let subject = subject_torque(servo, n * sub, h, &mut rng);
     let sensor = Normal::new(0.0, e.torque_noise_nm.max(f64::MIN_POSITIVE))
         .map_err(|err| Error::invalid("torque noise", err.to_string()))?;
-    let switch_every = (e.switch_s / h).round().max(1.0) as usize;
     let wa = 2.0 * std::f64::consts::PI * e.actuator_hz;
-    let mut u = e.amplitude_rad;
     let (mut r, mut rd) = (0.0f64, 0.0f64);
     let (mut q, mut qd) = (0.0f64, 0.0f64);
     let mut reflex = ReflexState::new(s.reflex, h);
     let mut sums = [0.0f64; 3];
     let mut cols: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(n));
     for (k, n_subject) in subject.iter().enumerate() {
-        if k % switch_every == 0 && rng.random::<bool>() {
-            u = -u;
-        }
+        let u = command(k, &mut rng);
         let robot = servo.stiffness * (r - q) + servo.damping * (rd - qd);
         let elastic = (s.stiffness + (s.quadratic + s.cubic * q) * q) * q;
         let qdd = (robot + n_subject - s.damping * qd - elastic - reflex.torque()) / s.inertia;
+        if q.is_nan() || q.abs() > UNSTABLE_RAD {
+            return Err(Error::invalid(
+                "servo",
+                format!(
+                    "the joint on this servo is unstable (it passed {UNSTABLE_RAD} rad {:.2} s in): the reflex's delayed feedback through a servo this compliant oscillates and grows; make the servo stiffer or the reflex weaker",
+                    k as f64 * h
+                ),
+            ));
+        }
         for (sum, v) in sums.iter_mut().zip([q, robot, r]) {
             *sum += v;
         }

@@ -519,32 +519,48 @@ fn periodic_ankle(
         duration_s: command.t.len() as f64 / p.sample_rate_hz,
         ..AnkleExperiment::default()
     };
-    let ankle = simulate_ankle_following(&s, &experiment, &command.values[0], seed)?;
-    let q = ankle.column("q1").expect("the ankle records q1").to_vec();
-    let tau = ankle
-        .column("tau1")
-        .expect("the ankle records tau1")
-        .to_vec();
+    let ankle = match &s.servo {
+        Some(servo) => crate::ankle::simulate_ankle_servo_following(
+            &s,
+            &experiment,
+            servo,
+            &command.values[0],
+            seed,
+        )?,
+        None => simulate_ankle_following(&s, &experiment, &command.values[0], seed)?,
+    };
+    // the servo's reference too, when the rig is one (issue 79)
+    let recorded: Vec<&str> = ["q1", "tau1", "r1"]
+        .into_iter()
+        .filter(|c| ankle.has(c))
+        .collect();
     let period: Vec<f64> = command.period.iter().map(|&i| i as f64).collect();
-    let recording = Recording::new(
-        "virtual ankle",
-        vec!["t".into(), "q1".into(), "tau1".into(), "period".into()],
-        vec![command.t.clone(), q, tau, period],
-        2,
-    )?;
+    let mut names = vec!["t".to_string()];
+    let mut columns = vec![command.t.clone()];
+    for c in recorded {
+        names.push(c.to_string());
+        columns.push(ankle.column(c).unwrap_or_default().to_vec());
+    }
+    names.push("period".into());
+    columns.push(period);
+    let recording = Recording::new("virtual ankle", names, columns, 2)?;
     let one = |v: f64| Matrix::from_rows(&[vec![v]]).expect("1 x 1");
     let truth = Truth::Reflex(limpid_core::truth::ReflexTruth {
         about: About {
             sample_rate: Some(p.sample_rate_hz),
             seed: Some(seed),
             notes: vec![format!(
-                "the virtual ankle (intrinsic I, B, K{}) following {}",
+                "the virtual ankle (intrinsic I, B, K{}) following {}{}",
                 if s.reflex.is_some() {
                     " and a stretch reflex"
                 } else {
                     ""
                 },
-                p.name
+                p.name,
+                s.servo.map_or(String::new(), |v| format!(
+                    " on a position servo of finite stiffness (K_e {} N m/rad, B_e {} N m s/rad; the subject's own torque {} N m in {}-{} Hz moves the joint too); r1 is the servo's reference",
+                    v.stiffness, v.damping, v.subject_torque_nm, v.subject_band_hz.0, v.subject_band_hz.1
+                ))
             )],
             ..About::default()
         },
@@ -562,6 +578,10 @@ fn periodic_ankle(
             ("cubic", json!([s.cubic])),
         ]),
     });
+    let mut truth = truth;
+    if let (Some(servo), Truth::Reflex(t)) = (&s.servo, &mut truth) {
+        t.other.insert("robot".into(), to_value(servo));
+    }
     Ok(Simulated {
         label: None,
         recording,

@@ -32,7 +32,7 @@ mod subjects;
 mod sweeps;
 use methods::{
     centre_out, cocontraction, ensemble, planar, planar_session, reflex, reflex_segments,
-    scheduled, scheduled_segments, stochastic, walking,
+    reflex_servo, scheduled, scheduled_segments, stochastic, walking,
 };
 use subjects::{planar_subject, random_matrix2, random_matrix3, sensors, uniform, PLANAR_NOISE};
 use sweeps::{sweep, sweep_session, SweepOutcome};
@@ -207,7 +207,7 @@ pub(crate) fn cocontraction_subject(seed: u64) -> CocontractionSubject {
 }
 
 /// Methods of the study (each `recordings` virtual recordings).
-pub const METHODS: usize = 12;
+pub const METHODS: usize = 13;
 
 /// Sets of window sweeps: seed 003's session, and the varied subjects.
 pub const SWEEP_SETS: usize = 2;
@@ -281,6 +281,11 @@ pub fn calibrate(
             "ankle with reflex, short segments of 0.3-1.5 s (Ludvig & Perreault 2012)",
             &reflex_segments,
             11,
+        ),
+        run(
+            "ankle with reflex on a compliant servo, closed loop (K_e/K 0.5-10; the reference as instrument)",
+            &reflex_servo,
+            13,
         ),
         run(
             "parameter-varying ankle with --reflex, short segments of 0.3-1.5 s (per operating angle)",

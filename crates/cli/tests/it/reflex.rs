@@ -340,3 +340,73 @@ fn reflex_on_short_segments_says_how_they_were_used() {
         out.stderr
     );
 }
+
+/// Issue 79 end to end: `simulate` of the PRBS preset on a subject sitting
+/// in a compliant servo writes the servo's reference `r1` and says so in
+/// the truth; `estimate reflex` then uses it as the instrument (and says
+/// so), `--open-loop` does not and is biased.
+#[test]
+fn a_compliant_servo_is_simulated_with_its_reference_and_estimated_closed_loop() {
+    let d = tempfile::tempdir().unwrap();
+    let protocol = d.path().join("prbs.toml");
+    let out = limpid(&[
+        "protocol",
+        "new",
+        "--preset",
+        "ankle-prbs",
+        "-o",
+        protocol.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let subject = d.path().join("subject.toml");
+    std::fs::write(
+        &subject,
+        "inertia = 0.015\ndamping = 0.8\nstiffness = 80.0\n\n[servo]\nstiffness = 40.0\ndamping = 0.3\nsubject_torque_nm = 1.2\n",
+    )
+    .unwrap();
+    let rec = d.path().join("servo.csv");
+    let out = limpid(&[
+        "simulate",
+        protocol.to_str().unwrap(),
+        "--subject",
+        subject.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let header = std::fs::read_to_string(&rec).unwrap();
+    assert!(header.starts_with("t,q1,tau1,r1,"), "{}", &header[..40]);
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("servo.truth.json")).unwrap())
+            .unwrap();
+    assert_eq!(truth["robot"]["stiffness"], 40.0);
+    let k = |r: &serde_json::Value| r["intrinsic"]["stiffness"].as_f64().unwrap();
+    let closed = json(&["estimate", "reflex", rec.to_str().unwrap(), "--json"]);
+    assert_eq!(closed["closed_loop"]["references"][0], "r1");
+    assert_eq!(closed["closed_loop"]["fit"], "instrumental_variables");
+    let se = closed["intrinsic"]["standard_errors"]["stiffness"]
+        .as_f64()
+        .unwrap();
+    assert!((k(&closed) - 80.0).abs() < 0.05 * 80.0, "{closed}");
+    assert!(
+        (k(&closed) - 80.0).abs() < 2.5 * se,
+        "{} ± {se}",
+        k(&closed)
+    );
+    let open = json(&[
+        "estimate",
+        "reflex",
+        rec.to_str().unwrap(),
+        "--json",
+        "--open-loop",
+    ]);
+    assert!(open.get("closed_loop").is_none());
+    assert!(k(&open) < 0.9 * 80.0, "open loop K {}", k(&open));
+    let text = limpid(&["estimate", "reflex", rec.to_str().unwrap()]);
+    assert!(
+        text.stdout
+            .contains("closed loop: the commanded reference (r1)"),
+        "{}",
+        text.stdout
+    );
+}

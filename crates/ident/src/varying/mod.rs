@@ -312,6 +312,9 @@ pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<Varyi
     // positions logged faster than they were measured: their measured samples (issue 58)
     let (rec, measured_rate) =
         crate::prepare::at_measured_rate(std::borrow::Cow::Borrowed(rec), &coords)?;
+    // a closed-loop rig: the motion the commanded references drive (issue 79)
+    let (rec, closed_loop) =
+        crate::closed_loop::instrumented(rec, &coords, (params.open_loop, None))?;
     let rec = rec.as_ref();
     let cutoff = params
         .cutoff_hz
@@ -336,6 +339,16 @@ pub fn estimate_varying(rec: &Recording, params: &VaryingParams) -> Result<Varyi
     estimate
         .warnings
         .extend(measured_rate.map(|m| m.warning().message));
+    if let Some(closed) = closed_loop {
+        estimate
+            .warnings
+            .extend(closed.warnings().into_iter().map(|w| w.message));
+        if params.reflex {
+            estimate.warnings.push(
+                "closed loop: the reflex pathway was fitted on the predicted motion, which a nonlinear pathway makes only approximate (on the virtual ankle on servos of 10, 1.5 and 0.5 x its K a plug-in parallel cascade gave 90, 55 and 21 % of the reflex gain); estimate reflex fits it by instrumental variables".to_string(),
+            );
+        }
+    }
     Ok(estimate)
 }
 

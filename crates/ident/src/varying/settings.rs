@@ -113,6 +113,9 @@ pub struct VaryingRequest {
     /// Largest reflex delay scanned (s).
     #[cfg_attr(feature = "clap", arg(long = "max-delay", default_value_t = VaryingRequest::default().max_delay_s, value_name = "S"))]
     pub max_delay_s: f64,
+    /// Regress on the measured motion even when commanded reference columns (`r1` for `q1`; `rx, ry, rz`) are recorded: right only when the robot imposed the motion; by default a reference makes the fit closed-loop (on the motion the reference predicts).
+    #[cfg_attr(feature = "clap", arg(long = "open-loop"))]
+    pub open_loop: bool,
 }
 
 impl Default for VaryingRequest {
@@ -140,6 +143,7 @@ impl Default for VaryingRequest {
             reflex: false,
             schedule_angle: ScheduleAngle::Auto,
             max_delay_s: 0.1,
+            open_loop: false,
         }
     }
 }
