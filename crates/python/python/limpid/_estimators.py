@@ -22,6 +22,7 @@ def estimate_linear(
         level: Optional[float] = None,
         negate_force: bool = False,
         offsets: Literal['rest', 'fit', 'auto'] = 'auto',
+        open_loop: bool = False,
         order: int = 4,
         robot: Optional[str] = None,
         robot_base: Optional[Sequence[float]] = None,
@@ -53,6 +54,11 @@ def estimate_linear(
         The force columns hold the hand's force on the sensor: negate them.
     offsets : {'rest', 'fit', 'auto'}, default 'auto'
         How per-trial force offsets are handled.
+    open_loop : bool, default False
+        Regress on the measured motion even when commanded reference columns (`rx, ry, rz`
+        for `x, y, z`; `r1` for `q1`) are recorded: right only when the robot imposed the
+        motion; by default a reference makes the estimate closed-loop (fitted on the motion
+        the reference predicts).
     order : int, default 4
         Butterworth order per pass.
     robot : str or None, default None
@@ -84,7 +90,7 @@ def estimate_linear(
         ``antisymmetric``, ``ellipsoids``, ``table_ii``, ``fit`` (VAF %, r, RMSE and traces),
         ``criteria`` (condition number, identifiability, verdicts), ``warnings``.
     """
-    options = {"equilibrium": equilibrium, "cutoff_hz": cutoff_hz, "derivative": derivative, "frame": frame, "level": level, "negate_force": negate_force, "offsets": offsets, "order": order, "robot": robot, "robot_base": robot_base, "transform": transform, "window": window, "shoulder": shoulder, "vertical": vertical}
+    options = {"equilibrium": equilibrium, "cutoff_hz": cutoff_hz, "derivative": derivative, "frame": frame, "level": level, "negate_force": negate_force, "offsets": offsets, "open_loop": open_loop, "order": order, "robot": robot, "robot_base": robot_base, "transform": transform, "window": window, "shoulder": shoulder, "vertical": vertical}
     return _estimate("linear", [recording], options)
 
 
@@ -249,6 +255,7 @@ def estimate_reflex(
         coordinate: Optional[Literal['angle', 'displacement']] = None,
         intrinsic_lags_s: float = 0.04,
         max_delay_s: float = 0.15,
+        open_loop: bool = False,
         position: str = 'q1',
         rate_hz: float = 100.0,
         rectify_first: bool = True,
@@ -276,6 +283,10 @@ def estimate_reflex(
         Intrinsic IRF half-width (s): it spans ± this.
     max_delay_s : float, default 0.15
         Largest reflex delay scanned (s).
+    open_loop : bool, default False
+        Regress on the measured motion even when a commanded reference column (`r1` for
+        `q1`) is recorded: right only when the robot imposed the motion (a stiff servo); by
+        default a reference makes the estimate closed-loop (the reference as instrument).
     position : str, default 'q1'
         Position column (rad, or m for end-point data), e.g. `q1`.
     rate_hz : float, default 100.0
@@ -296,7 +307,7 @@ def estimate_reflex(
         gain, delay_s, delay_interval_s, IRF), ``fit`` (VAF %), ``cross_validated_vaf``,
         ``warnings``.
     """
-    options = {"coordinate": coordinate, "intrinsic_lags_s": intrinsic_lags_s, "max_delay_s": max_delay_s, "position": position, "rate_hz": rate_hz, "rectify_first": rectify_first, "reflex_lags_s": reflex_lags_s, "torque": torque}
+    options = {"coordinate": coordinate, "intrinsic_lags_s": intrinsic_lags_s, "max_delay_s": max_delay_s, "open_loop": open_loop, "position": position, "rate_hz": rate_hz, "rectify_first": rectify_first, "reflex_lags_s": reflex_lags_s, "torque": torque}
     return _estimate("reflex", [recording], options)
 
 
@@ -315,6 +326,7 @@ def estimate_varying(
         min_pulses: int = 5,
         min_repetitions: int = 10,
         neighbours: Optional[int] = None,
+        open_loop: bool = False,
         pulse_window_ms: Optional[float] = None,
         rate_hz: float = 200.0,
         reflex: bool = False,
@@ -374,6 +386,10 @@ def estimate_varying(
     neighbours : int or None, default None
         Walking: strides in each baseline [default: 10 unperturbed strides (pulses), 20
         strides (ensemble)].
+    open_loop : bool, default False
+        Regress on the measured motion even when commanded reference columns (`r1` for `q1`;
+        `rx, ry, rz`) are recorded: right only when the robot imposed the motion; by default
+        a reference makes the fit closed-loop (on the motion the reference predicts).
     pulse_window_ms : float or None, default None
         Walking, pulses: longest fit window after an onset (ms) [default: until 50 ms after
         the trigger falls, at most 400].
@@ -413,7 +429,7 @@ def estimate_varying(
         ``vaf``, ``reason`` when not identifiable), ``fit``, ``warnings``; walking adds
         ``gait`` (strides used, flawed ones by number).
     """
-    options = {"basis_order": basis_order, "bin": bin, "cutoff_hz": cutoff_hz, "event": event, "gait_method": gait_method, "grid_points": grid_points, "hysteresis": hysteresis, "max_delay_s": max_delay_s, "min_pulses": min_pulses, "min_repetitions": min_repetitions, "neighbours": neighbours, "pulse_window_ms": pulse_window_ms, "rate_hz": rate_hz, "reflex": reflex, "refractory_ms": refractory_ms, "schedule_angle": schedule_angle, "slow_hz": slow_hz, "stance_end": stance_end, "step_ms": step_ms, "trigger": trigger, "window_ms": window_ms}
+    options = {"basis_order": basis_order, "bin": bin, "cutoff_hz": cutoff_hz, "event": event, "gait_method": gait_method, "grid_points": grid_points, "hysteresis": hysteresis, "max_delay_s": max_delay_s, "min_pulses": min_pulses, "min_repetitions": min_repetitions, "neighbours": neighbours, "open_loop": open_loop, "pulse_window_ms": pulse_window_ms, "rate_hz": rate_hz, "reflex": reflex, "refractory_ms": refractory_ms, "schedule_angle": schedule_angle, "slow_hz": slow_hz, "stance_end": stance_end, "step_ms": step_ms, "trigger": trigger, "window_ms": window_ms}
     return _estimate("varying", [recording], dict(options, schedule=schedule))
 
 
@@ -427,6 +443,7 @@ def estimate_cocontraction(
         level: Optional[float] = None,
         negate_force: bool = False,
         offsets: Literal['rest', 'fit', 'auto'] = 'auto',
+        open_loop: bool = False,
         order: int = 4,
         robot: Optional[str] = None,
         robot_base: Optional[Sequence[float]] = None,
@@ -456,6 +473,11 @@ def estimate_cocontraction(
         The force columns hold the hand's force on the sensor: negate them.
     offsets : {'rest', 'fit', 'auto'}, default 'auto'
         How per-trial force offsets are handled.
+    open_loop : bool, default False
+        Regress on the measured motion even when commanded reference columns (`rx, ry, rz`
+        for `x, y, z`; `r1` for `q1`) are recorded: right only when the robot imposed the
+        motion; by default a reference makes the estimate closed-loop (fitted on the motion
+        the reference predicts).
     order : int, default 4
         Butterworth order per pass.
     robot : str or None, default None
@@ -478,7 +500,7 @@ def estimate_cocontraction(
         kind ``cocontraction``: ``muscles``, ``levels`` (per level: ``cocontraction_index`` with
         its sd, the linear ``estimate``, the stiffness ``ellipsoid``), ``warnings``.
     """
-    options = {"cutoff_hz": cutoff_hz, "derivative": derivative, "frame": frame, "level": level, "negate_force": negate_force, "offsets": offsets, "order": order, "robot": robot, "robot_base": robot_base, "transform": transform, "window": window, "tolerance": tolerance}
+    options = {"cutoff_hz": cutoff_hz, "derivative": derivative, "frame": frame, "level": level, "negate_force": negate_force, "offsets": offsets, "open_loop": open_loop, "order": order, "robot": robot, "robot_base": robot_base, "transform": transform, "window": window, "tolerance": tolerance}
     return _estimate("cocontraction", [recording, mvc], options)
 
 
