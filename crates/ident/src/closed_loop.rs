@@ -284,6 +284,9 @@ impl ClosedLoop {
     }
 }
 
+/// Samples per block when the FIR is applied (in parallel).
+const APPLY_BLOCK: usize = 8192;
+
 /// The FIR's lags in samples (negative: the reference leads the motion).
 struct Lags {
     /// Lags, increasing, evenly spaced by `stride`.
@@ -347,11 +350,18 @@ fn gram_block(pi: &[f64], pj: &[f64], n: usize, lags: &Lags) -> DMatrix<f64> {
     let col = |p: &[f64], a: usize| p[start(lags, a)..start(lags, a) + n].to_vec();
     let first_i = col(pi, 0);
     let first_j = col(pj, 0);
-    for b in 0..l {
-        g[(0, b)] = dot(&first_i, &pj[start(lags, b)..start(lags, b) + n]);
-    }
-    for a in 1..l {
-        g[(a, 0)] = dot(&pi[start(lags, a)..start(lags, a) + n], &first_j);
+    // the first row and column: 2 l inner products of the segment's length
+    // (most of the work; in parallel)
+    let (row, column): (Vec<f64>, Vec<f64>) = (0..l)
+        .into_par_iter()
+        .map(|a| {
+            let s = start(lags, a);
+            (dot(&first_i, &pj[s..s + n]), dot(&pi[s..s + n], &first_j))
+        })
+        .unzip();
+    for a in 0..l {
+        g[(0, a)] = row[a];
+        g[(a, 0)] = column[a];
     }
     let s = lags.stride;
     for a in 1..l {
@@ -405,11 +415,15 @@ fn project(
             let mut c = DMatrix::zeros(dim, outputs.len());
             for (k, (o, mu)) in outputs.iter().zip(&out_means).enumerate() {
                 let centred: Vec<f64> = o[seg.clone()].iter().map(|v| v - mu).collect();
-                for i in 0..m {
-                    for a in 0..l {
-                        let s = start(lags, a);
-                        c[(i * l + a, k)] = dot(&pads[i][s..s + n], &centred);
-                    }
+                let products: Vec<f64> = (0..dim)
+                    .into_par_iter()
+                    .map(|ia| {
+                        let s = start(lags, ia % l);
+                        dot(&pads[ia / l][s..s + n], &centred)
+                    })
+                    .collect();
+                for (ia, v) in products.into_iter().enumerate() {
+                    c[(ia, k)] = v;
                 }
             }
             (g, c)
@@ -436,17 +450,27 @@ fn project(
             let h = DVector::from_iterator(dim, coef.column(k).iter().copied());
             let mut predicted = vec![out_means[k]; outputs[k].len()];
             for seg in segments.iter().filter(|s| !s.is_empty()) {
-                let dest = &mut predicted[seg.clone()];
-                for (i, (r, mu)) in refs.iter().zip(&ref_means).enumerate() {
-                    let pad = padded(r, *mu, seg, lags);
-                    for a in 0..l {
-                        let w = h[i * l + a];
-                        let s = start(lags, a);
-                        for (d, v) in dest.iter_mut().zip(&pad[s..s + seg.len()]) {
-                            *d += w * v;
+                let pads: Vec<Vec<f64>> = refs
+                    .iter()
+                    .zip(&ref_means)
+                    .map(|(r, mu)| padded(r, *mu, seg, lags))
+                    .collect();
+                // the FIR applied in blocks of samples, in parallel
+                predicted[seg.clone()]
+                    .par_chunks_mut(APPLY_BLOCK)
+                    .enumerate()
+                    .for_each(|(b, dest)| {
+                        let (at, len) = (b * APPLY_BLOCK, dest.len());
+                        for (i, pad) in pads.iter().enumerate() {
+                            for a in 0..l {
+                                let w = h[i * l + a];
+                                let s = start(lags, a) + at;
+                                for (d, v) in dest.iter_mut().zip(&pad[s..s + len]) {
+                                    *d += w * v;
+                                }
+                            }
                         }
-                    }
-                }
+                    });
             }
             let o = outputs[k];
             let total: f64 = o.iter().map(|v| (v - out_means[k]).powi(2)).sum();
