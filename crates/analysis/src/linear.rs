@@ -233,7 +233,9 @@ fn judge(est: &LinearEstimate, c: &MatrixCriteria, kind: MatrixKind) -> MatrixVe
             est.identifiable.stiffness,
         ),
     };
-    let fit_ok = est.fit.vaf.iter().all(|v| *v >= VAF_FLOOR_PERCENT);
+    // in closed loop the force the subject adds is left in the residual of
+    // a consistent fit: the VAF is reported, the standard errors judge (issue 79)
+    let fit_ok = est.closed_loop.is_some() || est.fit.vaf.iter().all(|v| *v >= VAF_FLOOR_PERCENT);
     matrix_verdict(kind, value, se, fit_ok, identified, c.positive_definite)
 }
 

@@ -144,17 +144,32 @@ pub fn simulate_ankle(s: &AnkleSubject, e: &AnkleExperiment, seed: u64) -> Resul
     }
     crate::validate::check_size(e.duration_s * e.rate_hz, "ankle recording")?;
     let n = (e.duration_s * e.rate_hz).round() as usize;
+    integrate(s, e, n, seed, prbs(e))
+}
+
+/// The PRBS command of `e` on the integration grid: it switches with
+/// probability 1/2 on its own grid (the draw comes first in each step, as
+/// the torque noise's come after it).
+fn prbs(e: &AnkleExperiment) -> impl FnMut(usize, &mut StdRng) -> f64 {
     let h = 1.0 / (e.rate_hz * SUBSTEPS as f64);
     let switch_every = (e.switch_s / h).round().max(1.0) as usize;
     let mut u = e.amplitude_rad;
-    // the PRBS switches with probability 1/2 on its grid (the draw comes
-    // first in each step, as the torque noise's come after it)
-    integrate(s, e, n, seed, |k, rng| {
+    move |k, rng| {
         if k % switch_every == 0 && rng.random::<bool>() {
             u = -u;
         }
         u
-    })
+    }
+}
+
+/// A command given per sample, linearly interpolated on the integration grid.
+fn interpolated(command: &[f64]) -> impl FnMut(usize, &mut StdRng) -> f64 + '_ {
+    let n = command.len();
+    move |k, _| {
+        let (i, f) = (k / SUBSTEPS, (k % SUBSTEPS) as f64 / SUBSTEPS as f64);
+        let next = command[(i + 1).min(n - 1)];
+        command[i] * (1.0 - f) + next * f
+    }
 }
 
 /// Simulate the ankle following a position `command` (rad, one value per
@@ -170,12 +185,7 @@ pub fn simulate_ankle_following(
     if command.iter().any(|v| !v.is_finite()) || command.is_empty() {
         return Err(Error::invalid("command", "expected finite angles"));
     }
-    let n = command.len();
-    integrate(s, e, n, seed, |k, _| {
-        let (i, f) = (k / SUBSTEPS, (k % SUBSTEPS) as f64 / SUBSTEPS as f64);
-        let next = command[(i + 1).min(n - 1)];
-        command[i] * (1.0 - f) + next * f
-    })
+    integrate(s, e, command.len(), seed, interpolated(command))
 }
 
 /// Integration steps per sample.
@@ -315,15 +325,7 @@ pub fn simulate_ankle_servo(
     seed: u64,
 ) -> Result<Recording> {
     check_servo(e, servo)?;
-    let h = 1.0 / (e.rate_hz * SUBSTEPS as f64);
-    let switch_every = (e.switch_s / h).round().max(1.0) as usize;
-    let mut u = e.amplitude_rad;
-    integrate_servo(s, e, servo, seed, |k, rng| {
-        if k % switch_every == 0 && rng.random::<bool>() {
-            u = -u;
-        }
-        u
-    })
+    integrate_servo(s, e, servo, seed, prbs(e))
 }
 
 /// [`simulate_ankle_servo`] with the servo's command a position `command`
@@ -344,12 +346,7 @@ pub fn simulate_ankle_servo_following(
         ..*e
     };
     check_servo(&e, servo)?;
-    let n = command.len();
-    integrate_servo(s, &e, servo, seed, |k, _| {
-        let (i, f) = (k / SUBSTEPS, (k % SUBSTEPS) as f64 / SUBSTEPS as f64);
-        let next = command[(i + 1).min(n - 1)];
-        command[i] * (1.0 - f) + next * f
-    })
+    integrate_servo(s, &e, servo, seed, interpolated(command))
 }
 
 fn check_servo(e: &AnkleExperiment, servo: &Servo) -> Result<()> {

@@ -410,3 +410,59 @@ fn a_compliant_servo_is_simulated_with_its_reference_and_estimated_closed_loop()
         text.stdout
     );
 }
+
+/// Issue 79: in closed loop the VAF does not veto a verdict (a consistent
+/// fit leaves the subject's own torque in its residual); a reference that
+/// drives little of the motion is called a weak instrument, and damping and
+/// inertia not identifiable when it drives too little of their derivative.
+#[test]
+fn a_closed_loop_linear_estimate_is_judged_by_its_errors_not_its_vaf() {
+    let d = tempfile::tempdir().unwrap();
+    let protocol = d.path().join("prbs.toml");
+    let p = protocol.to_str().unwrap();
+    assert_eq!(
+        limpid(&["protocol", "new", "--preset", "ankle-prbs", "-o", p]).code,
+        0
+    );
+    let subject = d.path().join("loud.toml");
+    std::fs::write(
+        &subject,
+        "inertia = 0.015\ndamping = 0.8\nstiffness = 80.0\n\n[servo]\nstiffness = 40.0\ndamping = 0.3\nsubject_torque_nm = 4.0\n",
+    )
+    .unwrap();
+    let rec = d.path().join("loud.csv");
+    let out = limpid(&[
+        "simulate",
+        p,
+        "--subject",
+        subject.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let r = json(&["estimate", "linear", rec.to_str().unwrap(), "--json"]);
+    let vaf = r["fit"]["vaf"][0].as_f64().unwrap();
+    // measured: VAF 14 %, K 'imprecise' (79 ± 13 against 80), B and M not identifiable
+    assert!(vaf < 50.0, "{vaf}");
+    let verdicts = &r["criteria"]["verdicts"];
+    assert_ne!(verdicts["stiffness"], "poor_fit", "{verdicts}");
+    assert_eq!(verdicts["damping"], "not_identifiable", "{verdicts}");
+    let said = |what: &str| {
+        r["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w["message"].as_str().unwrap().contains(what))
+    };
+    assert!(said("weak instrument"), "{}", r["warnings"]);
+    assert!(said("too little of the velocity"), "{}", r["warnings"]);
+    let k = r["stiffness"]["values"][0][0]
+        .as_f64()
+        .or_else(|| r["stiffness"][0][0].as_f64())
+        .unwrap();
+    let se = r["standard_errors"]["stiffness"]["values"][0][0]
+        .as_f64()
+        .or_else(|| r["standard_errors"]["stiffness"][0][0].as_f64())
+        .unwrap();
+    assert!((k - 80.0).abs() < 2.5 * se, "K {k} ± {se}");
+}

@@ -21,7 +21,7 @@
 //! delay); standard errors by the 10-block jackknife of the IV estimate.
 
 use super::cascade::centre;
-use super::parametric::dot;
+use super::parametric::{delete_one_jackknife, dot};
 use super::Decimated;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
@@ -195,24 +195,5 @@ pub(crate) fn joint_jackknife_iv(f: &FixedIv, x: &[f64], z: &[f64]) -> [f64; 4] 
             *r += zr * f.torque[t];
         }
     }
-    let reps: Vec<[f64; 4]> = (0..blocks)
-        .map(|skip| {
-            let (mut g, mut r): Pair = (SMatrix::zeros(), SVector::zeros());
-            for (b, (gb, rb)) in sums.iter().enumerate() {
-                if b != skip {
-                    g += gb;
-                    r += rb;
-                }
-            }
-            match g.lu().solve(&r) {
-                Some(th) => [0, 1, 2, 3].map(|k| th[k] / sx[k]),
-                None => [f64::NAN; 4],
-            }
-        })
-        .collect();
-    [0, 1, 2, 3].map(|k| {
-        let mk = reps.iter().map(|r| r[k]).sum::<f64>() / blocks as f64;
-        let ss: f64 = reps.iter().map(|r| (r[k] - mk).powi(2)).sum();
-        (ss * (blocks - 1) as f64 / blocks as f64).sqrt()
-    })
+    delete_one_jackknife(&sums, &sx)
 }

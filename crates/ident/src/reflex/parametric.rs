@@ -646,11 +646,22 @@ pub(crate) fn joint_jackknife(f: &Fixed, x: &[f64]) -> [f64; 4] {
             *r += v * y[t];
         }
     }
-    let reps: Vec<[f64; 4]> = (0..blocks)
+    delete_one_jackknife(&grams, &scale)
+}
+
+/// Normal equations (or their IV form `Z'X`, `Z'y`) per block, of columns
+/// scaled by `scale`: the delete-one jackknife standard errors of the first
+/// four parameters (I, B, K, G) in their own units.
+pub(crate) fn delete_one_jackknife(
+    blocks: &[(nalgebra::SMatrix<f64, 5, 5>, nalgebra::SVector<f64, 5>)],
+    scale: &[f64],
+) -> [f64; 4] {
+    let count = blocks.len();
+    let reps: Vec<[f64; 4]> = (0..count)
         .map(|skip| {
             let mut g = nalgebra::SMatrix::<f64, 5, 5>::zeros();
             let mut r = nalgebra::SVector::<f64, 5>::zeros();
-            for (b, (gb, rb)) in grams.iter().enumerate() {
+            for (b, (gb, rb)) in blocks.iter().enumerate() {
                 if b != skip {
                     g += gb;
                     r += rb;
@@ -663,9 +674,9 @@ pub(crate) fn joint_jackknife(f: &Fixed, x: &[f64]) -> [f64; 4] {
         })
         .collect();
     [0, 1, 2, 3].map(|k| {
-        let mk = reps.iter().map(|r| r[k]).sum::<f64>() / blocks as f64;
+        let mk = reps.iter().map(|r| r[k]).sum::<f64>() / count as f64;
         let ss: f64 = reps.iter().map(|r| (r[k] - mk).powi(2)).sum();
-        (ss * (blocks - 1) as f64 / blocks as f64).sqrt()
+        (ss * (count - 1) as f64 / count as f64).sqrt()
     })
 }
 
