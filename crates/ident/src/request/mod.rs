@@ -245,7 +245,7 @@ mod tests {
         assert_eq!(s.arm.link_lengths, [0.3, 0.35]);
         assert_eq!(
             boolean_options("linear").unwrap(),
-            ["equilibrium", "negate_force"]
+            ["equilibrium", "negate_force", "open_loop"]
         );
         assert_eq!((s.from_ms, s.to_ms), (60.0, DEFAULT_SWEEP_MS[1]));
     }
