@@ -151,6 +151,7 @@ fn derivative_shares(
     (lp, dt): (&LowPass, f64),
 ) -> [f64; 2] {
     let mut sums = [[0.0f64; 3]; 2];
+    let mut count = 0usize;
     for seg in segments {
         let (Ok(m), Ok(p)) = (
             lp.filtfilt(&measured[seg.clone()]),
@@ -158,6 +159,7 @@ fn derivative_shares(
         ) else {
             continue;
         };
+        count += seg.len();
         let derivatives = [
             (
                 limpid_dsp::central_first(&m, dt),
@@ -176,9 +178,9 @@ fn derivative_shares(
             }
         }
     }
-    let count: usize = segments.iter().map(|s| s.len()).sum::<usize>().max(1);
+    let count = count.max(1) as f64;
     sums.map(|[left, squares, sum]| {
-        let total = squares - sum * sum / count as f64;
+        let total = squares - sum * sum / count;
         if total > 0.0 {
             100.0 * (1.0 - left / total)
         } else {
@@ -259,7 +261,7 @@ impl ClosedLoop {
             .map(|(p, s)| format!("{s:.0} % of {p}'s"))
             .collect();
         let how = match self.fit {
-            ClosedLoopFit::InstrumentalVariables => "the motion it predicts instruments the measured motion (instrumental variables); the VAF is that of the measured motion's fit, which leaves the subject's own torque in the residual",
+            ClosedLoopFit::InstrumentalVariables => "the motion it predicts instruments the measured motion in the joint parametric fit (instrumental variables), whose VAF is the measured motion's and leaves the subject's own torque in the residual; the nonparametric pathways and their VAF are fitted on the predicted motion",
             ClosedLoopFit::PredictedMotion => "the model was fitted on the motion it predicts (two-stage least squares); the VAF is that of the force the reference-driven motion explains",
         };
         let mut out = vec![Warning::new(
