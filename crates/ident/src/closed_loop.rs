@@ -224,6 +224,19 @@ pub fn predicted_motion(
         .iter()
         .map(|p| rec.require(p, "position"))
         .collect::<Result<_>>()?;
+    // a measured position written as the reference instruments nothing: it
+    // would silently be least squares again
+    for (p, q) in positions.iter().zip(&outputs) {
+        let same = reference_column(p)
+            .and_then(|r| rec.column(&r).map(|c| (r, c)))
+            .filter(|(_, c)| c == q);
+        if let Some((r, _)) = same {
+            return Err(Error::invalid(
+                path,
+                format!("the reference column {r} holds the same values as {p}: it must be the position the robot was commanded to, not the one it measured (or pass --open-loop)"),
+            ));
+        }
+    }
     let segments = limpid_core::trial::segment_ranges(rec)?;
     let lags = Lags::at(rec.sample_rate());
     let projection = project(&refs, &outputs, &segments, &lags).ok_or_else(|| {

@@ -128,6 +128,15 @@ fn a_reference_that_never_moves_is_refused_and_segments_are_not_estimated_yet() 
         e.contains("reference column r1 never changes") && e.contains("--open-loop"),
         "{e}"
     );
+    // the measured angle written as the reference: refused, not least squares in disguise
+    let mut copied = rec.clone();
+    copied
+        .set_column("r1", rec.column("q1").unwrap().to_vec())
+        .unwrap();
+    let e = estimate_reflex(&copied, &ReflexParams::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("r1 holds the same values as q1"), "{e}");
     let cut = limpid_lab::ankle::cut_into_segments(&rec, (2.0, 4.0), 1).unwrap();
     let e = estimate_reflex(&cut, &ReflexParams::default())
         .unwrap_err()
