@@ -348,32 +348,7 @@ fn reflex_on_short_segments_says_how_they_were_used() {
 #[test]
 fn a_compliant_servo_is_simulated_with_its_reference_and_estimated_closed_loop() {
     let d = tempfile::tempdir().unwrap();
-    let protocol = d.path().join("prbs.toml");
-    let out = limpid(&[
-        "protocol",
-        "new",
-        "--preset",
-        "ankle-prbs",
-        "-o",
-        protocol.to_str().unwrap(),
-    ]);
-    assert_eq!(out.code, 0, "{}", out.stderr);
-    let subject = d.path().join("subject.toml");
-    std::fs::write(
-        &subject,
-        "inertia = 0.015\ndamping = 0.8\nstiffness = 80.0\n\n[servo]\nstiffness = 40.0\ndamping = 0.3\nsubject_torque_nm = 1.2\n",
-    )
-    .unwrap();
-    let rec = d.path().join("servo.csv");
-    let out = limpid(&[
-        "simulate",
-        protocol.to_str().unwrap(),
-        "--subject",
-        subject.to_str().unwrap(),
-        "-o",
-        rec.to_str().unwrap(),
-    ]);
-    assert_eq!(out.code, 0, "{}", out.stderr);
+    let rec = servo_prbs(d.path(), 1.2);
     let header = std::fs::read_to_string(&rec).unwrap();
     assert!(header.starts_with("t,q1,tau1,r1,"), "{}", &header[..40]);
     let truth: serde_json::Value =
@@ -418,28 +393,7 @@ fn a_compliant_servo_is_simulated_with_its_reference_and_estimated_closed_loop()
 #[test]
 fn a_closed_loop_linear_estimate_is_judged_by_its_errors_not_its_vaf() {
     let d = tempfile::tempdir().unwrap();
-    let protocol = d.path().join("prbs.toml");
-    let p = protocol.to_str().unwrap();
-    assert_eq!(
-        limpid(&["protocol", "new", "--preset", "ankle-prbs", "-o", p]).code,
-        0
-    );
-    let subject = d.path().join("loud.toml");
-    std::fs::write(
-        &subject,
-        "inertia = 0.015\ndamping = 0.8\nstiffness = 80.0\n\n[servo]\nstiffness = 40.0\ndamping = 0.3\nsubject_torque_nm = 4.0\n",
-    )
-    .unwrap();
-    let rec = d.path().join("loud.csv");
-    let out = limpid(&[
-        "simulate",
-        p,
-        "--subject",
-        subject.to_str().unwrap(),
-        "-o",
-        rec.to_str().unwrap(),
-    ]);
-    assert_eq!(out.code, 0, "{}", out.stderr);
+    let rec = servo_prbs(d.path(), 4.0);
     let r = json(&["estimate", "linear", rec.to_str().unwrap(), "--json"]);
     let vaf = r["fit"]["vaf"][0].as_f64().unwrap();
     // measured: VAF 14 %, K 'imprecise' (79 ± 13 against 80), B and M not identifiable
@@ -465,4 +419,31 @@ fn a_closed_loop_linear_estimate_is_judged_by_its_errors_not_its_vaf() {
         .or_else(|| r["standard_errors"]["stiffness"][0][0].as_f64())
         .unwrap();
     assert!((k - 80.0).abs() < 2.5 * se, "K {k} ± {se}");
+}
+
+/// The PRBS preset simulated in `dir` on the virtual ankle (K 80, B 0.8)
+/// sitting in a servo of 0.5 K, the subject's own torque `subject_nm`:
+/// the recording's path.
+fn servo_prbs(dir: &std::path::Path, subject_nm: f64) -> std::path::PathBuf {
+    let protocol = dir.join("prbs.toml");
+    let p = protocol.to_str().unwrap();
+    let out = limpid(&["protocol", "new", "--preset", "ankle-prbs", "-o", p]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let subject = dir.join("subject.toml");
+    std::fs::write(
+        &subject,
+        format!("inertia = 0.015\ndamping = 0.8\nstiffness = 80.0\n\n[servo]\nstiffness = 40.0\ndamping = 0.3\nsubject_torque_nm = {subject_nm}\n"),
+    )
+    .unwrap();
+    let rec = dir.join("servo.csv");
+    let out = limpid(&[
+        "simulate",
+        p,
+        "--subject",
+        subject.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    rec
 }
