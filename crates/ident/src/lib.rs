@@ -34,3 +34,18 @@ pub mod varying;
 pub use estimator::{Estimator, PlanarParams};
 pub use linear::{fit_linear, fit_linear_plan, LinearEstimate, LinearParams};
 pub use prepare::{plan, prepare, Derivative, Offsets, Plan, PrepareParams, Prepared, Windowing};
+
+/// `n` uniform numbers in [-0.5, 0.5) from a fixed linear congruential
+/// sequence seeded by `seed`: test signals without a random-number crate.
+#[cfg(test)]
+pub(crate) fn uniform_noise(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect()
+}

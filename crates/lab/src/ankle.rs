@@ -162,14 +162,18 @@ fn prbs(e: &AnkleExperiment) -> impl FnMut(usize, &mut StdRng) -> f64 {
     }
 }
 
-/// A command given per sample, linearly interpolated on the integration grid.
-fn interpolated(command: &[f64]) -> impl FnMut(usize, &mut StdRng) -> f64 + '_ {
+/// A command given per sample, linearly interpolated on the integration
+/// grid; refused unless it holds finite angles.
+fn interpolated(command: &[f64]) -> Result<impl FnMut(usize, &mut StdRng) -> f64 + '_> {
+    if command.iter().any(|v| !v.is_finite()) || command.is_empty() {
+        return Err(Error::invalid("command", "expected finite angles"));
+    }
     let n = command.len();
-    move |k, _| {
+    Ok(move |k: usize, _: &mut StdRng| {
         let (i, f) = (k / SUBSTEPS, (k % SUBSTEPS) as f64 / SUBSTEPS as f64);
         let next = command[(i + 1).min(n - 1)];
         command[i] * (1.0 - f) + next * f
-    }
+    })
 }
 
 /// Simulate the ankle following a position `command` (rad, one value per
@@ -182,10 +186,8 @@ pub fn simulate_ankle_following(
     command: &[f64],
     seed: u64,
 ) -> Result<Recording> {
-    if command.iter().any(|v| !v.is_finite()) || command.is_empty() {
-        return Err(Error::invalid("command", "expected finite angles"));
-    }
-    integrate(s, e, command.len(), seed, interpolated(command))
+    let follow = interpolated(command)?;
+    integrate(s, e, command.len(), seed, follow)
 }
 
 /// Integration steps per sample.
@@ -338,15 +340,13 @@ pub fn simulate_ankle_servo_following(
     command: &[f64],
     seed: u64,
 ) -> Result<Recording> {
-    if command.iter().any(|v| !v.is_finite()) || command.is_empty() {
-        return Err(Error::invalid("command", "expected finite angles"));
-    }
+    let follow = interpolated(command)?;
     let e = AnkleExperiment {
         duration_s: command.len() as f64 / e.rate_hz,
         ..*e
     };
     check_servo(&e, servo)?;
-    integrate_servo(s, &e, servo, seed, interpolated(command))
+    integrate_servo(s, &e, servo, seed, follow)
 }
 
 fn check_servo(e: &AnkleExperiment, servo: &Servo) -> Result<()> {

@@ -532,11 +532,6 @@ pub fn units(coords: &[String]) -> (&'static str, &'static str, &'static str) {
     }
 }
 
-/// Positions logged faster than they were measured (held or interpolated
-/// samples, issue 56): their velocity and acceleration are steps and spikes
-/// of the logging, not the limb's, and B and M came out 13-55 % low at tens
-/// of standard errors while "trusted". Damping and inertia are then not
-/// identifiable, and a warning says why; the noise was read at the measured rate.
 /// Below this share (%) of a velocity's or acceleration's variance driven by
 /// the commanded reference, a closed-loop fit on the predicted motion cannot
 /// pin damping or inertia down. Chosen on the outside end point on a servo
@@ -590,6 +585,11 @@ fn distrust_derivatives_the_reference_does_not_drive(
     }
 }
 
+/// Positions logged faster than they were measured (held or interpolated
+/// samples, issue 56): their velocity and acceleration are steps and spikes
+/// of the logging, not the limb's, and B and M came out 13-55 % low at tens
+/// of standard errors while "trusted". Damping and inertia are then not
+/// identifiable, and a warning says why; the noise was read at the measured rate.
 fn distrust_derivatives_of_resampled_positions(
     data: &Prepared,
     identifiable: &mut Identifiable,

@@ -21,14 +21,15 @@
 //! delay); standard errors by the 10-block jackknife of the IV estimate.
 
 use super::cascade::centre;
-use super::parametric::{delete_one_jackknife, dot};
+use super::parametric::{delete_one_jackknife, dot, Fixed};
 use super::Decimated;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
-/// The intrinsic columns, measured and instrumented, centred over the
-/// fitted rows (one continuous record), with the intrinsic-only IV fit.
-pub(crate) struct FixedIv {
-    pub(crate) measured: [Vec<f64>; 3],
+/// The intrinsic columns, measured (the least-squares fit's) and
+/// instrumented, centred over the fitted rows (one continuous record), with
+/// the intrinsic-only IV fit.
+pub(crate) struct FixedIv<'a> {
+    pub(crate) measured: &'a [Vec<f64>; 3],
     pub(crate) instruments: [Vec<f64>; 3],
     pub(crate) torque: Vec<f64>,
     /// `(Zi' Xi)^-1`.
@@ -43,17 +44,19 @@ pub(crate) struct FixedIv {
     pub(crate) rss: f64,
 }
 
-pub(crate) fn fixed_iv(d: &Decimated, di: &Decimated, skip: usize) -> Option<FixedIv> {
+/// [`FixedIv`] of the least-squares fit `ls` of `d` (its centred columns
+/// are the measured ones) instrumented by `di`.
+pub(crate) fn fixed_iv<'a>(
+    ls: &'a Fixed,
+    (d, di): (&Decimated, &Decimated),
+    skip: usize,
+) -> Option<FixedIv<'a>> {
     let centred = |x: &[f64]| {
         let mut c = x[skip.min(x.len())..].to_vec();
         centre(&mut c);
         c
     };
-    let measured = [
-        centred(&d.acceleration),
-        centred(&d.velocity),
-        centred(&d.position),
-    ];
+    let measured = &ls.columns;
     let instruments = [
         centred(&di.acceleration),
         centred(&di.velocity),
@@ -89,7 +92,7 @@ pub(crate) fn fixed_iv(d: &Decimated, di: &Decimated, skip: usize) -> Option<Fix
 
 /// Residual sum of squares (measured torque) and `[I, B, K, G]` of the IV
 /// fit with the reflex column `x` (measured) instrumented by `z`.
-pub(crate) fn joint_fit_iv(f: &FixedIv, x: &[f64], z: &[f64]) -> (f64, [f64; 4]) {
+pub(crate) fn joint_fit_iv(f: &FixedIv<'_>, x: &[f64], z: &[f64]) -> (f64, [f64; 4]) {
     let m = x.len() as f64;
     let [x0, x1, x2] = &f.measured;
     let [z0, z1, z2] = &f.instruments;
@@ -143,7 +146,7 @@ pub(crate) fn joint_fit_iv(f: &FixedIv, x: &[f64], z: &[f64]) -> (f64, [f64; 4])
 }
 
 /// The measured torque's residual at `[I, B, K, G]` (the constant refitted).
-pub(crate) fn residual_iv(f: &FixedIv, x: &[f64], [i, b, k, gain]: [f64; 4]) -> Vec<f64> {
+pub(crate) fn residual_iv(f: &FixedIv<'_>, x: &[f64], [i, b, k, gain]: [f64; 4]) -> Vec<f64> {
     let xm = x.iter().sum::<f64>() / x.len().max(1) as f64;
     (0..x.len())
         .map(|t| {
@@ -157,7 +160,7 @@ pub(crate) fn residual_iv(f: &FixedIv, x: &[f64], [i, b, k, gain]: [f64; 4]) -> 
 }
 
 /// 10-block delete-one jackknife standard errors of the IV estimate of (I, B, K, G).
-pub(crate) fn joint_jackknife_iv(f: &FixedIv, x: &[f64], z: &[f64]) -> [f64; 4] {
+pub(crate) fn joint_jackknife_iv(f: &FixedIv<'_>, x: &[f64], z: &[f64]) -> [f64; 4] {
     let blocks = 10;
     let m = x.len();
     let scale = |c: &[f64]| (dot(c, c) / m as f64).sqrt().max(f64::MIN_POSITIVE);

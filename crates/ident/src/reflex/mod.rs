@@ -306,15 +306,7 @@ mod tests {
     #[test]
     fn pseudo_inverse_recovers_a_known_irf_from_white_input() {
         // y = 2 u[t] - 1 u[t-1] + 0.5 u[t+1]
-        let mut s = 12345u64;
-        let u: Vec<f64> = (0..5000)
-            .map(|_| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
+        let u = crate::uniform_noise(5000, 12345);
         let y = apply(&[0.5, 2.0, -1.0], -1, &u);
         let whole: Vec<_> = std::iter::once(0..u.len()).collect();
         let (h, order) = irf_pinv(&u, &y, (-2, 5), &whole);

@@ -323,7 +323,8 @@ pub(crate) fn reflex_parametric(
 ) -> Option<Parametric> {
     let f = fixed_fit(d, skip)?;
     let iv = match instrument {
-        Some(di) => Some(fixed_iv(d, di, skip)?),
+        // (one continuous record: the least-squares fit's centred columns are the measured ones)
+        Some(di) => Some(fixed_iv(&f, (d, di), skip)?),
         None => None,
     };
     let full_z = instrument.map(|di| &di.rectified_full[polarity][..]);
@@ -478,7 +479,7 @@ fn scan_low_pass_and_delay(
     d: &Decimated,
     (f, rows): (&Fixed, Option<(&SegmentRows, &[GroupSums])>),
     (full, full_segments): (&[f64], &[Range<usize>]),
-    iv: Option<(&FixedIv, &[f64])>,
+    iv: Option<(&FixedIv<'_>, &[f64])>,
     max_delay: usize,
     (skip, fs): (usize, f64),
 ) -> Option<Scan> {
