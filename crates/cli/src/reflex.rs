@@ -1,6 +1,7 @@
 //! `limpid estimate reflex`: intrinsic and reflex stiffness by the parallel
 //! cascade (Kearney et al. 1997), on joint (`q1`, `tau1`) or end-point data.
 
+use limpid_ident::reflex::CurveStructure;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -79,10 +80,17 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
         u.stiffness,
         num(e.reflex_free.vaf)
     );
-    println!(
-        "reflex pathway: {:?} velocity rectified -> delay -> gain -> 2nd-order low-pass",
-        r.polarity
-    );
+    match &r.curve {
+        Some(c) if c.structure == CurveStructure::PiecewiseLinear => println!(
+            "reflex pathway: velocity -> delay -> piecewise-linear static curve ({} knots, estimated) -> 2nd-order low-pass; gain = the closest {:?} rectifier's slope",
+            c.knots_rad_s.len(),
+            r.polarity
+        ),
+        _ => println!(
+            "reflex pathway: {:?} velocity rectified -> delay -> gain -> 2nd-order low-pass",
+            r.polarity
+        ),
+    }
     let delay = if r.delay_identifiable {
         format!(
             "{} ms (95 % interval {}-{} ms)",
@@ -106,6 +114,9 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
         num(r.natural_frequency_hz),
         num(r.damping_ratio)
     );
+    if let Some(c) = &r.curve {
+        print_curve(c, u);
+    }
     println!(
         "VAF: total {} %  intrinsic {} %  reflex {} %  joint parametric {} %  cross-validated {} %",
         num(e.fit.vaf_total),
@@ -118,4 +129,51 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
         println!("warning: {w}");
     }
     Ok(())
+}
+
+/// The static curve's choice: each structure's held-out VAF and K, and the
+/// curve at a few velocities with its standard error.
+fn print_curve(c: &limpid_ident::reflex::StaticCurve, u: &limpid_ident::units::Units) {
+    println!("  static curve, structures tried (10-fold cross-validated VAF of the joint model; * = within one SE of the best):");
+    for k in &c.candidates {
+        let name = match k.structure {
+            CurveStructure::Rectifier => "rectifier".to_string(),
+            CurveStructure::PiecewiseLinear => format!(
+                "piecewise linear, {} knot{}",
+                k.knots_rad_s.len(),
+                if k.knots_rad_s.len() == 1 { "" } else { "s" }
+            ),
+        };
+        let chosen = k.structure == c.structure && k.knots_rad_s == c.knots_rad_s;
+        println!(
+            "    {}{name:<28} {} %  K = {} {}{}",
+            if k.within_one_se { "* " } else { "  " },
+            num(k.cross_validated_vaf),
+            num(k.intrinsic.stiffness),
+            u.stiffness,
+            if chosen {
+                "   <- chosen (simplest within one SE)"
+            } else {
+                ""
+            }
+        );
+    }
+    let n = c.velocity_rad_s.len();
+    let points: Vec<String> = [0, n / 4, n / 2, 3 * n / 4, n - 1]
+        .iter()
+        .filter(|&&i| i < n)
+        .map(|&i| {
+            format!(
+                "{} -> {} +- {}",
+                num(c.velocity_rad_s[i]),
+                num(c.torque[i]),
+                num(c.torque_se[i])
+            )
+        })
+        .collect();
+    println!(
+        "  curve (velocity -> torque {}): {}",
+        u.force,
+        points.join(", ")
+    );
 }

@@ -8,12 +8,13 @@
 //! `switch_s`, and the actuator follows it as a second-order system. The
 //! torque applied to the joint is
 //!
-//! `tau = I q'' + B q' + K q + k2 q^2 + k3 q^3 + G LP2(rect(q'(t - d))) + noise`,
+//! `tau = I q'' + B q' + K q + k2 q^2 + k3 q^3 + LP2(f(q'(t - d))) + noise`,
 //!
 //! the intrinsic pathway (k2 and k3 are 0 unless a subject sets `quadratic`
-//! or `cubic`) plus a reflex pathway: half-wave rectified velocity,
-//! delayed by `d`, scaled by the gain `G` (N m s/rad) and low-passed by a
-//! unit-DC second-order system. Defaults are of the order of the real ankle:
+//! or `cubic`) plus a reflex pathway: velocity delayed by `d` through a
+//! static curve `f` (by default the half-wave rectifier times the gain `G`,
+//! N m s/rad; [`ReflexCurve`] adds a threshold, saturation or a smooth
+//! ceiling) and low-passed by a unit-DC second-order system. Defaults are of the order of the real ankle:
 //! I 0.015 kg m^2, B 0.8 N m s/rad, K 80 N m/rad, reflex delay 45 ms,
 //! G 30 N m s/rad, low-pass 2 Hz / 0.7. States are integrated on a 10x finer
 //! grid so the delay and derivatives are exact to 0.1 ms at 1 kHz. Each
@@ -43,6 +44,65 @@ pub struct AnkleReflex {
     pub damping_ratio: f64,
     /// True: the reflex answers positive velocity (`max(q', 0)`); false: negative.
     pub positive: bool,
+    /// The static curve from the answered half of the velocity to torque
+    /// (before the low-pass); the plain rectifier by default (issue 78).
+    #[serde(default, skip_serializing_if = "ReflexCurve::is_rectifier")]
+    pub curve: ReflexCurve,
+}
+
+/// The reflex's static nonlinearity: how the answered half of the delayed
+/// velocity `v+` (rad/s, `max(q', 0)` or `max(-q', 0)`) becomes torque
+/// before the unit-DC low-pass. Real stretch reflexes have thresholds and
+/// saturate (issue 78).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "shape", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ReflexCurve {
+    /// `G v+`.
+    #[default]
+    Rectifier,
+    /// `G max(v+ - threshold, 0)`: no answer below a velocity threshold.
+    Threshold {
+        /// Velocity threshold (rad/s).
+        threshold_rad_s: f64,
+    },
+    /// `min(G max(v+ - threshold, 0), saturation)`: a threshold and a hard ceiling.
+    Clipped {
+        /// Velocity threshold (rad/s).
+        threshold_rad_s: f64,
+        /// Largest torque (N m).
+        saturation_nm: f64,
+    },
+    /// `S tanh(G v+ / S)`: slope G at rest, saturating smoothly at S.
+    Tanh {
+        /// Saturation torque S (N m).
+        saturation_nm: f64,
+    },
+}
+
+impl ReflexCurve {
+    fn is_rectifier(&self) -> bool {
+        *self == ReflexCurve::Rectifier
+    }
+}
+
+impl AnkleReflex {
+    /// The static torque (N m, before the low-pass) for a velocity `v` (rad/s):
+    /// the curve of the answered half; zero for the other half.
+    pub fn static_torque(&self, v: f64) -> f64 {
+        let half = if self.positive { v } else { -v }.max(0.0);
+        let g = self.gain;
+        match self.curve {
+            ReflexCurve::Rectifier => g * half,
+            ReflexCurve::Threshold { threshold_rad_s } => g * (half - threshold_rad_s).max(0.0),
+            ReflexCurve::Clipped {
+                threshold_rad_s,
+                saturation_nm,
+            } => (g * (half - threshold_rad_s).max(0.0)).min(saturation_nm),
+            ReflexCurve::Tanh { saturation_nm } => {
+                saturation_nm * (g * half / saturation_nm).tanh()
+            }
+        }
+    }
 }
 
 /// A virtual ankle (joint space).
@@ -88,6 +148,7 @@ impl Default for AnkleSubject {
                 natural_hz: 2.0,
                 damping_ratio: 0.7,
                 positive: true,
+                curve: ReflexCurve::Rectifier,
             }),
             quadratic: 0.0,
             cubic: 0.0,
@@ -248,13 +309,8 @@ fn integrate(
             } else {
                 0.0
             };
-            let rect = if r.positive {
-                v.max(0.0)
-            } else {
-                (-v).max(0.0)
-            };
             let wr = 2.0 * std::f64::consts::PI * r.natural_hz;
-            let zdd = wr * wr * (r.gain * rect - z) - 2.0 * r.damping_ratio * wr * zd;
+            let zdd = wr * wr * (r.static_torque(v) - z) - 2.0 * r.damping_ratio * wr * zd;
             zd += h * zdd;
             z += h * zd;
         }
@@ -513,13 +569,8 @@ impl ReflexState {
         self.at += 1;
         // the oldest entry is the velocity `delay` steps ago (0 before that)
         let v = self.history[self.at % len];
-        let rect = if r.positive {
-            v.max(0.0)
-        } else {
-            (-v).max(0.0)
-        };
         let wr = 2.0 * std::f64::consts::PI * r.natural_hz;
-        let zdd = wr * wr * (r.gain * rect - self.z) - 2.0 * r.damping_ratio * wr * self.zd;
+        let zdd = wr * wr * (r.static_torque(v) - self.z) - 2.0 * r.damping_ratio * wr * self.zd;
         self.zd += self.h * zdd;
         self.z += self.h * self.zd;
     }

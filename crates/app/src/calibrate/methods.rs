@@ -244,6 +244,7 @@ fn reflex_subject(rng: &mut StdRng) -> limpid_lab::ankle::AnkleSubject {
             natural_hz: uniform(rng, 1.5, 4.0),
             damping_ratio: uniform(rng, 0.5, 1.0),
             positive: rng.random::<bool>(),
+            curve: limpid_lab::ankle::ReflexCurve::Rectifier,
         }),
         quadratic: 0.0,
         cubic: 0.0,

@@ -67,11 +67,18 @@ fn reflex_text_and_report() {
     assert_eq!(out.code, 0, "{}", out.stderr);
     assert!(out.stdout.contains("N m/rad") && out.stdout.contains("cross-validated"));
     assert!(!out.stdout.contains("NaN"));
+    // the static curve's structures and the one chosen
+    assert!(
+        out.stdout.contains("structures tried") && out.stdout.contains("<- chosen"),
+        "{}",
+        out.stdout
+    );
     let page = std::fs::read_to_string(&html).unwrap();
     for want in [
         "Intrinsic IRF",
         "Reflex IRF",
-        "half-wave rectifier",
+        "Reflex static curve",
+        "velocities recorded",
         "Measured and predicted torque",
     ] {
         assert!(page.contains(want), "report lacks {want}");

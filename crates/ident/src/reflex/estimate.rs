@@ -3,9 +3,14 @@
 //! other rectifier order), add the model-error floors to the standard
 //! errors, cross-validate, and say what cannot be trusted.
 
-use super::cascade::{apply_in, cascade, decimate, decimation_ratio, vaf_in, variance, Cascade};
+use super::cascade::{
+    anti_alias, apply_in, cascade, centre, decimate, decimation_ratio, vaf_in, variance, Cascade,
+};
+use super::nonlinearity::{estimate_curve, Choice, CurveFit, CurveInput};
+use super::parametric::fixed_fit;
 use super::parametric::{ibk_fit, parametric_intrinsic, reflex_parametric, Parametric};
 use super::segments::{self, gather, Layout, SegmentUse};
+use super::{CurveStructure, Nonlinearity};
 use super::{
     Decimated, DelayScan, Ibk, IntrinsicPathway, Irf, OtherOrder, Polarity, ReflexEstimate,
     ReflexFreeFit, ReflexParams, ReflexPathway, ReflexTraces, VafSplit, DELAY_INTERVAL_MAX_S,
@@ -98,7 +103,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     } else {
         (1, Polarity::Negative)
     };
-    let c = &cascades[best];
+    let mut c = &cascades[best];
 
     let dt = 1.0 / d.fs;
     // the fully parametric model, fitted jointly (I-B-K, delay, gain, low-pass)
@@ -114,6 +119,35 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             "position, velocity and acceleration are collinear: I, B and K cannot be separated",
         ));
     };
+    // the reflex's static curve, estimated (issue 78): one continuous open-loop record
+    let curve_fit = if cuts.len() == 1 && instrument.is_none() {
+        static_curve(q, (fs, &d, fit_skip), p, &param, best == 0)?
+    } else if p.nonlinearity == Nonlinearity::PiecewiseLinear {
+        return Err(Error::invalid(
+            "nonlinearity",
+            "a piecewise-linear reflex curve is estimated only from one continuous open-loop record (this one has several segments or a commanded reference): use auto or rectifier",
+        ));
+    } else {
+        None
+    };
+    let curve_input = curve_fit
+        .as_ref()
+        .filter(|cf| cf.curve.structure != CurveStructure::Rectifier)
+        .map(|cf| decimated_curve(&cf.applied, fs, d.ratio))
+        .transpose()?;
+    let curve_cascade = curve_input.as_ref().map(|u| {
+        cascade(
+            [&dc.position, u, &dc.torque],
+            (half, n_reflex, skip),
+            &dc.segments,
+        )
+    });
+    if let Some(cc) = &curve_cascade {
+        c = cc;
+    }
+    let curve_warning = curve_fit
+        .as_ref()
+        .and_then(|cf| adopt_curve(&mut param, cf));
     // The fit with the other rectifier order is reported. A reflex answers
     // the limb's own velocity, so rectifying first is the physical order;
     // with Kearney et al.'s order (after anti-aliasing) the difference is
@@ -143,7 +177,8 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             &d.segments,
         ),
     };
-    let cross_validated_vaf = cross_validated_vaf(dc, best, half, n_reflex);
+    let reflex_input = curve_input.as_deref().unwrap_or(&dc.rectified[best]);
+    let cross_validated_vaf = cross_validated_vaf(dc, reflex_input, half, n_reflex);
 
     // intrinsic I-B-K from the joint parametric model; for comparison, the
     // fit of the torque the nonparametric reflex leaves, and the reflex-free fit
@@ -157,6 +192,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
     let ibk = param.intrinsic;
     let (plain, _, plain_vaf) = ibk_fit_in(dc, &d.torque, skip);
     warnings.extend(order_warning);
+    warnings.extend(curve_warning);
     let delay_identifiable = delay_warnings(&param, fs, &mut warnings);
     let reflex_gain_points = param.total_vaf - param.intrinsic_only_vaf;
     warnings.extend(ambiguous_polarity(&cascades, reflex_gain_points));
@@ -164,7 +200,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
 
     let other_polarity_vaf = cascades[1 - best].vaf_total;
     let start_left_out = param.start_left_out;
-    let (intrinsic, reflex) = pathways(
+    let (intrinsic, mut reflex) = pathways(
         c,
         param,
         irf_fit,
@@ -173,6 +209,12 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         half,
         dt,
     );
+    reflex.curve = curve_fit.map(|cf| cf.curve);
+    if let Some(curve) = &reflex.curve {
+        if curve.structure != CurveStructure::Rectifier {
+            reflex.model = "velocity -> delay -> piecewise-linear static curve (estimated) -> second-order low-pass (unit DC gain)".into();
+        }
+    }
     let (coordinate, assumed) = p.coordinate();
     if assumed {
         warnings.push(Warning::new(
@@ -267,6 +309,7 @@ fn pathways(
         natural_frequency_hz: param.natural_hz,
         damping_ratio: param.damping_ratio,
         irf: irf(&c.reflex, 0, c.reflex_order),
+        curve: None,
         delay_scan: DelayScan {
             delays_s: param.scan_delays_s,
             vaf: param.scan_vaf,
@@ -396,6 +439,98 @@ fn widen_by_other_order(param: &mut Parametric, o: &Parametric) -> Option<Warnin
     warning
 }
 
+/// The reflex's static curve of a continuous open-loop record, at the
+/// scan's low-pass and near its delay ([`super::nonlinearity`]).
+fn static_curve(
+    q: &[f64],
+    (fs, d, skip): (f64, &Decimated, usize),
+    p: &ReflexParams,
+    param: &Parametric,
+    positive: bool,
+) -> Result<Option<CurveFit>> {
+    let Some(fixed) = fixed_fit(d, skip) else {
+        return Ok(None);
+    };
+    let velocity = limpid_dsp::central_first(q, 1.0 / fs);
+    let anti = if d.ratio > 1 {
+        Some(anti_alias(fs, d.ratio)?)
+    } else {
+        None
+    };
+    let input = CurveInput {
+        velocity: &velocity,
+        anti_alias: anti.as_ref(),
+        rectify_first: p.rectify_first,
+        fs,
+        ratio: d.ratio,
+        low_pass: (param.natural_hz, param.damping_ratio),
+        delay: (param.delay_s * fs).round() as usize,
+        skip,
+        n: d.torque.len(),
+    };
+    let choice = match p.nonlinearity {
+        Nonlinearity::Auto => Choice::Auto,
+        Nonlinearity::Rectifier => Choice::Rectifier,
+        Nonlinearity::PiecewiseLinear => Choice::PiecewiseLinear,
+    };
+    Ok(estimate_curve(&fixed, &input, positive, choice))
+}
+
+/// The chosen curve applied to the recorded velocity, anti-aliased,
+/// decimated and centred: the nonparametric reflex pathway's input.
+fn decimated_curve(applied: &[f64], fs: f64, ratio: usize) -> Result<Vec<f64>> {
+    let filtered = if ratio > 1 {
+        anti_alias(fs, ratio)?.filtfilt(applied)?
+    } else {
+        applied.to_vec()
+    };
+    let mut u: Vec<f64> = filtered.iter().step_by(ratio).copied().collect();
+    centre(&mut u);
+    Ok(u)
+}
+
+/// The parametric results follow the chosen curve: with a piecewise-linear
+/// one, its I, B, K, gain and VAF replace the rectifier's (standard
+/// errors: its jackknife and the delay/low-pass profile shift); either way
+/// the spread over the structures the data cannot tell apart is added to
+/// the standard errors, with a warning when it exceeds them.
+fn adopt_curve(param: &mut Parametric, cf: &CurveFit) -> Option<Warning> {
+    let shift = param.profile_shift;
+    if cf.curve.structure != CurveStructure::Rectifier {
+        param.intrinsic = cf.intrinsic;
+        param.intrinsic_se = Ibk {
+            inertia: cf.intrinsic_se.inertia.hypot(shift[0]),
+            damping: cf.intrinsic_se.damping.hypot(shift[1]),
+            stiffness: cf.intrinsic_se.stiffness.hypot(shift[2]),
+        };
+        let scale = if param.gain != 0.0 {
+            (cf.gain / param.gain).abs()
+        } else {
+            1.0
+        };
+        param.gain = cf.gain;
+        param.gain_se = cf.gain_se.hypot(shift[3] * scale);
+        param.total_vaf = cf.vaf;
+    }
+    let se = param.intrinsic_se;
+    let warning = (cf.spread.stiffness > se.stiffness).then(|| {
+        Warning::new(
+            WarningCode::NotIdentifiable,
+            format!(
+                "the reflex's static curve: structures the data cannot tell apart (held-out error within one standard error) give intrinsic K up to {} apart, more than its standard error ({}): the standard errors include the difference",
+                limpid_core::short_number(cf.spread.stiffness),
+                limpid_core::short_number(se.stiffness)
+            ),
+        )
+    });
+    param.intrinsic_se = Ibk {
+        inertia: se.inertia.hypot(cf.spread.inertia),
+        damping: se.damping.hypot(cf.spread.damping),
+        stiffness: se.stiffness.hypot(cf.spread.stiffness),
+    };
+    warning
+}
+
 /// Model error the resampling cannot see ([`MODEL_ERROR_FLOOR`],
 /// [`GRID_ERROR_FLOOR`]), added in quadrature.
 fn add_error_floors(param: &mut Parametric) {
@@ -421,7 +556,7 @@ fn add_error_floors(param: &mut Parametric) {
 
 /// The cascade fitted on the first two thirds, its VAF on the last third
 /// (split between segments when there are several).
-fn cross_validated_vaf(d: &Decimated, best: usize, half: usize, n_reflex: usize) -> f64 {
+fn cross_validated_vaf(d: &Decimated, reflex_input: &[f64], half: usize, n_reflex: usize) -> f64 {
     let (fitted, held_out): (Vec<Range<usize>>, Vec<Range<usize>>) = match d.segments.as_slice() {
         [whole] => {
             let split = 2 * whole.len() / 3;
@@ -436,13 +571,13 @@ fn cross_validated_vaf(d: &Decimated, best: usize, half: usize, n_reflex: usize)
         }
     };
     let cv = cascade(
-        [&d.position, &d.rectified[best], &d.torque],
+        [&d.position, reflex_input, &d.torque],
         (half, n_reflex, n_reflex),
         &fitted,
     );
     let predicted: Vec<f64> = apply_in(&cv.intrinsic, -(half as isize), &d.position, &d.segments)
         .iter()
-        .zip(apply_in(&cv.reflex, 0, &d.rectified[best], &d.segments))
+        .zip(apply_in(&cv.reflex, 0, reflex_input, &d.segments))
         .map(|(a, b)| a + b)
         .collect();
     // a continuous record's held-out third continues its fitted part: no start left out

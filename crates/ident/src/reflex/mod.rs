@@ -51,6 +51,7 @@ use serde::{Deserialize, Serialize};
 mod cascade;
 mod estimate;
 mod instrumental;
+mod nonlinearity;
 mod parametric;
 mod segments;
 mod settings;
@@ -60,7 +61,7 @@ pub use cascade::vaf;
 pub use estimate::estimate_reflex;
 pub(crate) use parametric::low_pass;
 pub use segments::SegmentUse;
-pub use settings::{ReflexParams, ReflexRequest, MAX_ITERATIONS, TOLERANCE_VAF};
+pub use settings::{Nonlinearity, ReflexParams, ReflexRequest, MAX_ITERATIONS, TOLERANCE_VAF};
 pub(crate) use transients::{free_responses, orthonormal};
 
 /// A discrete impulse response: `torque(t) = sum values[i] * input(t - lags_s[i]) * dt`.
@@ -135,10 +136,68 @@ pub struct ReflexPathway {
     pub natural_frequency_hz: f64,
     /// Damping ratio of the low-pass.
     pub damping_ratio: f64,
-    /// The one-sided IRF from rectified velocity (nonparametric pathway).
+    /// The one-sided IRF from rectified velocity, or from the estimated
+    /// static curve's output when one was chosen (nonparametric pathway).
     pub irf: Irf,
+    /// The static curve from velocity to torque, estimated from the data
+    /// (issue 78): the structure chosen by cross-validation and the others
+    /// tried. Absent when it was not estimated (short segments, closed loop,
+    /// older results).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curve: Option<StaticCurve>,
     /// Total VAF (%) with the parametric reflex against delay (the scan).
     pub delay_scan: DelayScan,
+}
+
+/// The structure of the reflex's static curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CurveStructure {
+    /// `G max(v, 0)` (or of `-v`): Kearney et al.'s half-wave rectifier.
+    Rectifier,
+    /// Continuous and piecewise linear in the velocity, knots at 0 and at
+    /// quantiles of each half of the recorded velocity.
+    PiecewiseLinear,
+}
+
+/// The reflex pathway's static curve: the torque the reflex settles to
+/// (the low-pass has unit DC gain) for a velocity held at `v`, zero at rest.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct StaticCurve {
+    /// The structure chosen.
+    pub structure: CurveStructure,
+    /// Its knots (rad/s, or m/s).
+    pub knots_rad_s: Vec<f64>,
+    /// Velocities of the grid, 0.5th to 99.5th percentile of the recorded velocity.
+    pub velocity_rad_s: Vec<f64>,
+    /// The curve at the grid (N m, or N).
+    pub torque: Vec<f64>,
+    /// Its standard error at the grid (10-block jackknife).
+    pub torque_se: Vec<f64>,
+    /// Decimated samples between consecutive grid points (where the data are).
+    pub histogram: Vec<u64>,
+    /// Every structure tried, the chosen one included, simplest first.
+    pub candidates: Vec<CurveCandidate>,
+}
+
+/// One structure tried for the static curve.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+pub struct CurveCandidate {
+    /// The structure.
+    pub structure: CurveStructure,
+    /// Its knots (rad/s).
+    pub knots_rad_s: Vec<f64>,
+    /// The curve's coefficients.
+    pub parameters: usize,
+    /// VAF (%) of the joint model on held-out data (10 blocked folds).
+    pub cross_validated_vaf: f64,
+    /// In-sample VAF (%) of the joint model.
+    pub vaf: f64,
+    /// Intrinsic I, B, K with this structure.
+    pub intrinsic: Ibk,
+    /// True: its held-out error is within one standard error of the best
+    /// structure's (the data cannot tell it from the best).
+    pub within_one_se: bool,
 }
 
 /// The parametric fit's VAF against delay.

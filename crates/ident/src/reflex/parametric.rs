@@ -141,6 +141,9 @@ pub(crate) struct Parametric {
     pub(crate) scan_vaf: Vec<f64>,
     /// Decimated samples left out at each segment's start by the fit of I, B, K, G.
     pub(crate) start_left_out: usize,
+    /// What the delay and low-pass inside their 95 % profile region move
+    /// I, B, K, G by (already in the standard errors).
+    pub(crate) profile_shift: [f64; 4],
 }
 
 /// The I-B-K regressors over the fitted rows, centred (per segment), with
@@ -400,6 +403,7 @@ pub(crate) fn reflex_parametric(
         *e = e.hypot(s);
     }
     Some(Parametric {
+        profile_shift: shift,
         intrinsic: Ibk {
             inertia: params[0],
             damping: params[1],

@@ -59,6 +59,23 @@ pub struct ReflexRequest {
     /// Regress on the measured motion even when a commanded reference column (`r1` for `q1`) is recorded: right only when the robot imposed the motion (a stiff servo); by default a reference makes the estimate closed-loop (the reference as instrument).
     #[cfg_attr(feature = "clap", arg(long = "open-loop"))]
     pub open_loop: bool,
+    /// The reflex's static curve: `auto` (chosen by cross-validation among the rectifier and piecewise-linear curves), `rectifier` (Kearney et al.'s) or `piecewise-linear`.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = Nonlinearity::Auto, value_name = "CURVE"))]
+    pub nonlinearity: Nonlinearity,
+}
+
+/// Which static curves the reflex pathway may take (issue 78).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "snake_case")]
+pub enum Nonlinearity {
+    /// Chosen by 10-fold cross-validated VAF (one-standard-error rule).
+    #[default]
+    Auto,
+    /// The half-wave rectifier only.
+    Rectifier,
+    /// A piecewise-linear curve, its knots chosen by cross-validation.
+    PiecewiseLinear,
 }
 
 impl Default for ReflexRequest {
@@ -73,6 +90,7 @@ impl Default for ReflexRequest {
             max_delay_s: 0.15,
             rectify_first: true,
             open_loop: false,
+            nonlinearity: Nonlinearity::Auto,
         }
     }
 }

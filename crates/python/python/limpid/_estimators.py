@@ -255,6 +255,7 @@ def estimate_reflex(
         coordinate: Optional[Literal['angle', 'displacement']] = None,
         intrinsic_lags_s: float = 0.04,
         max_delay_s: float = 0.15,
+        nonlinearity: Literal['auto', 'rectifier', 'piecewise_linear'] = 'auto',
         open_loop: bool = False,
         position: str = 'q1',
         rate_hz: float = 100.0,
@@ -283,6 +284,9 @@ def estimate_reflex(
         Intrinsic IRF half-width (s): it spans ± this.
     max_delay_s : float, default 0.15
         Largest reflex delay scanned (s).
+    nonlinearity : {'auto', 'rectifier', 'piecewise_linear'}, default 'auto'
+        The reflex's static curve: `auto` (chosen by cross-validation among the rectifier
+        and piecewise-linear curves), `rectifier` (Kearney et al.'s) or `piecewise-linear`.
     open_loop : bool, default False
         Regress on the measured motion even when a commanded reference column (`r1` for
         `q1`) is recorded: right only when the robot imposed the motion (a stiff servo); by
@@ -307,7 +311,7 @@ def estimate_reflex(
         gain, delay_s, delay_interval_s, IRF), ``fit`` (VAF %), ``cross_validated_vaf``,
         ``warnings``.
     """
-    options = {"coordinate": coordinate, "intrinsic_lags_s": intrinsic_lags_s, "max_delay_s": max_delay_s, "open_loop": open_loop, "position": position, "rate_hz": rate_hz, "rectify_first": rectify_first, "reflex_lags_s": reflex_lags_s, "torque": torque}
+    options = {"coordinate": coordinate, "intrinsic_lags_s": intrinsic_lags_s, "max_delay_s": max_delay_s, "nonlinearity": nonlinearity, "open_loop": open_loop, "position": position, "rate_hz": rate_hz, "rectify_first": rectify_first, "reflex_lags_s": reflex_lags_s, "torque": torque}
     return _estimate("reflex", [recording], options)
 
 

@@ -115,7 +115,77 @@ fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
     [parameters, vafs]
 }
 
-/// The IRFs, the rectifier, the delay scan and the torque traces.
+/// The estimated static curve with its ±2 SE band over where the
+/// recorded velocities are (their histogram, scaled to the curve's range).
+fn curve_figure(c: &limpid_ident::reflex::StaticCurve, u: &limpid_ident::units::Units) -> Figure {
+    let band = |sign: f64| -> Vec<f64> {
+        c.torque
+            .iter()
+            .zip(&c.torque_se)
+            .map(|(t, e)| t + sign * 2.0 * e)
+            .collect()
+    };
+    let (lo, hi) = c
+        .torque
+        .iter()
+        .fold((0.0f64, 0.0f64), |(a, b), &t| (a.min(t), b.max(t)));
+    let most = c.histogram.iter().copied().max().unwrap_or(0).max(1) as f64;
+    let mids: Vec<f64> = c
+        .velocity_rad_s
+        .windows(2)
+        .map(|w| 0.5 * (w[0] + w[1]))
+        .collect();
+    let density: Vec<f64> = c
+        .histogram
+        .iter()
+        .map(|&n| lo + (hi - lo) * n as f64 / most)
+        .collect();
+    let velocity = u.position.replace("rad", "rad/s").replace('m', "m/s");
+    let what = match c.structure {
+        limpid_ident::reflex::CurveStructure::Rectifier => {
+            "half-wave rectifier (chosen by cross-validation)"
+        }
+        limpid_ident::reflex::CurveStructure::PiecewiseLinear => "piecewise linear (estimated)",
+    };
+    let series = |name: &str, y: Vec<f64>, x: &[f64], stroke: Stroke, k: usize| Series {
+        name: name.into(),
+        x: x.to_vec(),
+        y,
+        stroke,
+        color: PALETTE[k].into(),
+    };
+    Figure {
+        id: "reflex-nonlinearity".into(),
+        chart: Chart {
+            title: format!("Reflex static curve: {what}"),
+            x_label: format!("velocity ({velocity})"),
+            y_label: format!("torque ({})", u.force),
+            x_log: false,
+            y_log: false,
+            y_range: None,
+            series: vec![
+                series(
+                    "curve",
+                    c.torque.clone(),
+                    &c.velocity_rad_s,
+                    Stroke::Solid,
+                    0,
+                ),
+                series("+2 SE", band(1.0), &c.velocity_rad_s, Stroke::Dashed, 0),
+                series("-2 SE", band(-1.0), &c.velocity_rad_s, Stroke::Dashed, 0),
+                series(
+                    "velocities recorded (scaled)",
+                    density,
+                    &mids,
+                    Stroke::Dotted,
+                    3,
+                ),
+            ],
+        },
+    }
+}
+
+/// The IRFs, the static curve, the delay scan and the torque traces.
 fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
     let (r, i, u) = (&v.reflex, &v.intrinsic, &v.units);
     let line = |id: &str, title: &str, x_label: &str, y_label: &str, series: Vec<Series>| Figure {
@@ -169,13 +239,16 @@ fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
             &format!("{}/s", u.damping),
             vec![s("reflex IRF", &ms(&r.irf.lags_s), r.irf.values.clone(), 1)],
         ),
-        line(
-            "reflex-nonlinearity",
-            "Static nonlinearity: half-wave rectifier",
-            "velocity (relative)",
-            "rectified (relative)",
-            vec![s("rectifier", &rect_in, rect_out, 2)],
-        ),
+        match &r.curve {
+            Some(c) => curve_figure(c, u),
+            None => line(
+                "reflex-nonlinearity",
+                "Static nonlinearity: half-wave rectifier",
+                "velocity (relative)",
+                "rectified (relative)",
+                vec![s("rectifier", &rect_in, rect_out, 2)],
+            ),
+        },
         line(
             "reflex-delay-scan",
             "Joint parametric fit against reflex delay",
