@@ -49,7 +49,7 @@ const BLOCKS: usize = 10;
 /// Knots per half of the velocity, at most.
 pub(crate) const MAX_KNOTS_PER_HALF: usize = 8;
 /// Points of the reported curve.
-const GRID: usize = 41;
+const GRID: usize = 81;
 
 /// One basis function of the curve.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -75,6 +75,7 @@ pub enum Nonlinearity {
     /// The half-wave rectifier only.
     Rectifier,
     /// A piecewise-linear curve, its knots chosen by cross-validation.
+    #[cfg_attr(feature = "clap", value(alias = "piecewise_linear"))]
     PiecewiseLinear,
 }
 
