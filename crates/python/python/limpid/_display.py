@@ -424,6 +424,9 @@ def summary(d: Dict[str, Any]) -> str:
             g = next(r for r in recs if r["quantity"] == "reflex_gain")
             body = (f"intrinsic K = {with_se(k['value'], k['se'])} {k['unit']}, "
                     f"reflex gain = {with_se(g['value'], g['se'])} {g['unit']}")
+            curve = d["reflex"].get("curve")
+            if curve:
+                body += f", static curve {curve['structure'].replace('_', '-')} ({len(curve['knots_rad_s'])} knots)"
         elif kind == "varying":
             n = sum(1 for p in d["points"] if p["identifiable"])
             body = f"{d['method']}, {n} of {len(d['points'])} points identifiable"

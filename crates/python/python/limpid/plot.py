@@ -478,8 +478,8 @@ def sweep(result: Any, ax: Any = None) -> Plot:
 def reflex(result: Any, ax: Any = None) -> Plot:
     """Parallel cascade: the intrinsic IRF (position to torque), the reflex
     IRF (rectified velocity to torque), both per second of lag (the result's
-    own values) against lag in ms, and the reflex pathway's static nonlinearity (half-wave rectifier
-    times the gain). ``ax``: 1 x 3 Axes or None."""
+    own values) against lag in ms, and the reflex pathway's static curve (estimated, with
+    its ±2 SE band; older results: the half-wave rectifier times the gain). ``ax``: 1 x 3 Axes or None."""
     d = _data(result)
     _kind(d, "reflex")
     fig, a, _ = _panels(ax, 1, 3, "plot.reflex", panel=(3.0, 2.6))
@@ -502,12 +502,24 @@ def reflex(result: Any, ax: Any = None) -> Plot:
     a[0, 1].set_ylabel(f"reflex IRF ({tu} s/{pu}/s)")
     a[0, 1].set_title("Reflex pathway (linear part)", fontsize="medium")
     r = d["reflex"]
-    v = np.linspace(-1.0, 1.0, 201)
-    sign = 1.0 if r.get("polarity") == "positive" else -1.0
-    a[0, 2].plot(v, r["gain"] * np.maximum(sign * v, 0.0), color="#D55E00", linewidth=1.2)
+    curve = r.get("curve")
+    if curve:
+        # the estimated static curve (issue 78) with its ±2 SE band
+        v = np.asarray(curve["velocity_rad_s"], dtype=float)
+        f = np.asarray(curve["torque"], dtype=float)
+        se = np.asarray(curve["torque_se"], dtype=float)
+        a[0, 2].fill_between(v, f - 2 * se, f + 2 * se, color="#D55E00", alpha=0.25, linewidth=0)
+        a[0, 2].plot(v, f, color="#D55E00", linewidth=1.2)
+        shape = curve["structure"].replace("_", "-")
+        title = f"static curve: {shape}"
+    else:
+        v = np.linspace(-1.0, 1.0, 201)
+        sign = 1.0 if r.get("polarity") == "positive" else -1.0
+        a[0, 2].plot(v, r["gain"] * np.maximum(sign * v, 0.0), color="#D55E00", linewidth=1.2)
+        title = f"{r.get('polarity', '?')} half-wave, gain {r['gain']:.3g}"
     a[0, 2].set_xlabel(f"velocity ({pu}/s)")
     a[0, 2].set_ylabel(f"reflex torque at DC ({tu})")
-    a[0, 2].set_title(f"{r.get('polarity', '?')} half-wave, gain {r['gain']:.3g}", fontsize="medium")
+    a[0, 2].set_title(title, fontsize="medium")
     return Plot(fig, a)
 
 
