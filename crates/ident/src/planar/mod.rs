@@ -38,6 +38,7 @@ pub use fit::{
 };
 pub use noise::AngleNoise;
 pub use prepare::{prepare_planar, PlanarData, MAX_ONSET_LEAD_S, ONSET_LEAD_S};
+pub(crate) use sweep::jackknife_sd;
 pub use sweep::{
     impedance_change, interpolation_interval_s, interval_sweep, window_sweep, ImpedanceChange,
     IntervalRow, Sweep, SweepRow, CHANGE_P, MAX_SWEEP_WINDOWS, MIN_TRIALS_FOR_CHANGE_TEST,

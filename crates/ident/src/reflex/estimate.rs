@@ -473,7 +473,7 @@ fn static_curve(
         Nonlinearity::Rectifier => Choice::Rectifier,
         Nonlinearity::PiecewiseLinear => Choice::PiecewiseLinear,
     };
-    Ok(estimate_curve(&fixed, &input, positive, choice))
+    estimate_curve(&fixed, &input, positive, choice)
 }
 
 /// The chosen curve applied to the recorded velocity, anti-aliased,

@@ -40,6 +40,8 @@
 use super::cascade::{centre, mean};
 use super::parametric::{delayed, low_pass, phases, Fixed};
 use super::{CurveCandidate, CurveStructure, Ibk, StaticCurve};
+use crate::planar::jackknife_sd;
+use limpid_core::Result;
 use limpid_dsp::LowPass;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -81,17 +83,15 @@ struct Candidate {
 
 /// The candidates: the rectifier of the scan's polarity, then piecewise
 /// linear curves with 0..=4 knots per half (by increasing parameter count).
-fn candidates(velocity: &[f64], positive: bool) -> Vec<Candidate> {
-    let half_quantiles = |sign: f64| -> Vec<f64> {
-        let mut h: Vec<f64> = velocity
-            .iter()
-            .map(|v| sign * v)
-            .filter(|v| *v > 0.0)
-            .collect();
-        h.sort_by(f64::total_cmp);
-        h
-    };
-    let (pos, neg) = (half_quantiles(1.0), half_quantiles(-1.0));
+fn candidates(sorted: &[f64], positive: bool) -> Vec<Candidate> {
+    // each half of the velocity, ascending in its own magnitude
+    let rest = sorted.partition_point(|v| *v <= 0.0);
+    let pos = &sorted[rest..];
+    let neg: Vec<f64> = sorted[..sorted.partition_point(|v| *v < 0.0)]
+        .iter()
+        .rev()
+        .map(|v| -v)
+        .collect();
     let at = |h: &[f64], q: f64| {
         h.get(((h.len() as f64 - 1.0) * q).round() as usize)
             .copied()
@@ -107,7 +107,7 @@ fn candidates(velocity: &[f64], positive: bool) -> Vec<Candidate> {
     }];
     for m in 0..=MAX_KNOTS_PER_HALF {
         let levels: Vec<f64> = (1..=m).map(|j| j as f64 / (m + 1) as f64).collect();
-        let right: Vec<f64> = levels.iter().filter_map(|&q| at(&pos, q)).collect();
+        let right: Vec<f64> = levels.iter().filter_map(|&q| at(pos, q)).collect();
         let left: Vec<f64> = levels.iter().filter_map(|&q| at(&neg, q)).collect();
         let mut basis = vec![Basis::Linear, Basis::Right(0.0)];
         basis.extend(right.iter().map(|&k| Basis::Right(k)));
@@ -157,22 +157,32 @@ struct StructureFit {
 
 /// The decimated phases of each basis function of `input`'s velocity,
 /// low-passed (one per distinct basis function of all candidates).
-fn basis_phases(input: &CurveInput, basis: &[Basis]) -> Vec<Vec<Vec<f64>>> {
+fn basis_phases(input: &CurveInput, basis: &[Basis]) -> Result<Vec<Vec<Vec<f64>>>> {
     let (w, z) = input.low_pass;
+    // Kearney et al.'s order applies the nonlinearity after anti-aliasing:
+    // the velocity is filtered once for every basis function
+    let after = match (input.anti_alias, input.rectify_first) {
+        (Some(lp), false) => Some(lp.filtfilt(input.velocity)?),
+        _ => None,
+    };
     basis
         .par_iter()
         .map(|&b| {
-            let raw: Vec<f64> = input.velocity.iter().map(|&v| b.eval(v)).collect();
-            let filtered = match (input.anti_alias, input.rectify_first) {
-                (None, _) => raw,
-                (Some(lp), true) => lp.filtfilt(&raw).unwrap_or(raw),
-                // Kearney et al.'s order: the nonlinearity after anti-aliasing
-                (Some(lp), false) => match lp.filtfilt(input.velocity) {
-                    Ok(v) => v.iter().map(|&v| b.eval(v)).collect(),
-                    Err(_) => raw,
-                },
+            let filtered: Vec<f64> = match (&after, input.anti_alias) {
+                (Some(v), _) => v.iter().map(|&v| b.eval(v)).collect(),
+                (None, lp) => {
+                    let raw: Vec<f64> = input.velocity.iter().map(|&v| b.eval(v)).collect();
+                    match lp {
+                        Some(lp) => lp.filtfilt(&raw)?,
+                        None => raw,
+                    }
+                }
             };
-            phases(&low_pass(&filtered, w, z, input.fs), input.ratio, input.n)
+            Ok(phases(
+                &low_pass(&filtered, w, z, input.fs),
+                input.ratio,
+                input.n,
+            ))
         })
         .collect()
 }
@@ -243,13 +253,6 @@ fn fit_blocks(f: &Fixed, y: &[f64], x: &[Vec<f64>]) -> Option<StructureFit> {
     })
 }
 
-/// Delete-one jackknife standard error of a statistic of the replicates.
-fn jackknife_se(values: &[f64]) -> f64 {
-    let b = values.len() as f64;
-    let m = mean(values);
-    (values.iter().map(|v| (v - m).powi(2)).sum::<f64>() * (b - 1.0) / b).sqrt()
-}
-
 /// The estimated curve and, for the chosen structure, the I-B-K, gain and
 /// their standard errors (jackknife, plus the spread over structures the
 /// data cannot tell apart) and the in-sample VAF.
@@ -281,8 +284,10 @@ pub(crate) fn estimate_curve(
     input: &CurveInput,
     positive: bool,
     choice: Choice,
-) -> Option<CurveFit> {
-    let cands = candidates(input.velocity, positive);
+) -> Result<Option<CurveFit>> {
+    let mut sorted = input.velocity.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let cands = candidates(&sorted, positive);
     let mut distinct: Vec<Basis> = Vec::new();
     for c in &cands {
         for b in &c.basis {
@@ -291,10 +296,8 @@ pub(crate) fn estimate_curve(
             }
         }
     }
-    let ph = basis_phases(input, &distinct);
-    let y: Vec<f64> = (0..f.residual.len())
-        .map(|t| f.residual[t] + (0..3).map(|j| f.theta[j] * f.columns[j][t]).sum::<f64>())
-        .collect();
+    let ph = basis_phases(input, &distinct)?;
+    let y = f.torque();
     let segments: Vec<std::ops::Range<usize>> = std::iter::once(0..input.n).collect();
     let columns_at = |c: &Candidate, delay: usize| -> Vec<Vec<f64>> {
         c.basis
@@ -318,12 +321,13 @@ pub(crate) fn estimate_curve(
         Choice::Rectifier => c.structure == CurveStructure::Rectifier,
         Choice::PiecewiseLinear => c.structure == CurveStructure::PiecewiseLinear,
     };
-    let best = (0..cands.len())
+    let Some((best, best_fit)) = (0..cands.len())
         .filter(|&i| allowed(&cands[i]))
-        .filter_map(|i| fits[i].as_ref().map(|fit| (i, cv_error(fit))))
-        .min_by(|a, b| a.1.total_cmp(&b.1))?
-        .0;
-    let best_fit = fits[best].as_ref()?;
+        .filter_map(|i| fits[i].as_ref().map(|fit| (i, fit)))
+        .min_by(|a, b| cv_error(a.1).total_cmp(&cv_error(b.1)))
+    else {
+        return Ok(None);
+    };
     // the one-standard-error band: paired per-fold differences to the best
     let within: Vec<bool> = fits
         .iter()
@@ -342,11 +346,12 @@ pub(crate) fn estimate_curve(
     let chosen = (0..cands.len())
         .find(|&i| allowed(&cands[i]) && within[i])
         .unwrap_or(best);
-    let fit = fits[chosen].as_ref()?;
+    // (inside the band only when fitted)
+    let Some(fit) = fits[chosen].as_ref() else {
+        return Ok(None);
+    };
     let cand = &cands[chosen];
     // the curve on a grid over the recorded velocities
-    let mut sorted = input.velocity.to_vec();
-    sorted.sort_by(f64::total_cmp);
     let at = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
     let (lo, hi) = (at(0.005), at(0.995));
     let grid: Vec<f64> = (0..GRID)
@@ -364,7 +369,7 @@ pub(crate) fn estimate_curve(
         .iter()
         .map(|&v| {
             let reps: Vec<f64> = fit.replicates.iter().map(|r| curve_of(r, v)).collect();
-            jackknife_se(&reps)
+            jackknife_sd(&reps)
         })
         .collect();
     let mut histogram = vec![0u64; GRID - 1];
@@ -398,7 +403,7 @@ pub(crate) fn estimate_curve(
     let gain_reps: Vec<f64> = fit.replicates.iter().map(|r| gain_of(r)).collect();
     let se_of = |j: usize| {
         let reps: Vec<f64> = fit.replicates.iter().map(|r| r[j]).collect();
-        jackknife_se(&reps)
+        jackknife_sd(&reps)
     };
     let mut spread = [0.0f64; 3];
     for (i, other) in fits.iter().enumerate() {
@@ -436,7 +441,7 @@ pub(crate) fn estimate_curve(
         .iter()
         .map(|&v| curve_of(&fit.theta, v))
         .collect();
-    Some(CurveFit {
+    Ok(Some(CurveFit {
         curve: StaticCurve {
             structure: cand.structure,
             knots_rad_s: cand.knots.clone(),
@@ -450,8 +455,8 @@ pub(crate) fn estimate_curve(
         intrinsic_se: ibk([se_of(0), se_of(1), se_of(2)]),
         spread: ibk(spread),
         gain: gain_of(&fit.theta),
-        gain_se: jackknife_se(&gain_reps),
+        gain_se: jackknife_sd(&gain_reps),
         vaf: vaf_of(fit.rss),
         applied,
-    })
+    }))
 }

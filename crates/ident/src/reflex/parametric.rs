@@ -159,6 +159,22 @@ pub(crate) struct Fixed {
     pub(crate) total_ss: f64,
 }
 
+impl Fixed {
+    /// The centred torque over the fitted rows: the I-B-K fit plus its residual.
+    pub(crate) fn torque(&self) -> Vec<f64> {
+        (0..self.residual.len())
+            .map(|t| {
+                self.residual[t]
+                    + self.theta.dot(&nalgebra::Vector3::new(
+                        self.columns[0][t],
+                        self.columns[1][t],
+                        self.columns[2][t],
+                    ))
+            })
+            .collect()
+    }
+}
+
 pub(crate) fn fixed_fit(d: &Decimated, skip: usize) -> Option<Fixed> {
     let groups = groups(&d.segments, skip);
     let centred = |x: &[f64]| {
@@ -610,16 +626,7 @@ fn jackknife_blocks(groups: &[Range<usize>], m: usize, blocks: usize) -> Vec<Ran
 pub(crate) fn joint_jackknife(f: &Fixed, x: &[f64]) -> [f64; 4] {
     let blocks = 10;
     let m = x.len();
-    let y: Vec<f64> = (0..m)
-        .map(|t| {
-            f.residual[t]
-                + f.theta.dot(&nalgebra::Vector3::new(
-                    f.columns[0][t],
-                    f.columns[1][t],
-                    f.columns[2][t],
-                ))
-        })
-        .collect();
+    let y = f.torque();
     let scale: Vec<f64> = f
         .columns
         .iter()
