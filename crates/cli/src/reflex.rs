@@ -11,6 +11,7 @@ use limpid_ident::reflex::ReflexEstimate;
 
 use crate::context::{CliResult, Context};
 use crate::table::num;
+use limpid_core::with_standard_error;
 
 #[derive(Args)]
 pub struct ReflexArgs {
@@ -61,18 +62,19 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
             num(s.reflex_irf_s)
         );
     }
-    println!("intrinsic pathway (joint parametric model, +- standard error):");
+    let vd = &e.verdicts;
+    println!("intrinsic pathway (joint parametric model, ± standard error) [verdict]:");
     println!(
-        "  I = {} +- {} {}   B = {} +- {} {}   K = {} +- {} {}",
-        num(i.inertia),
-        num(i.standard_errors.inertia),
+        "  I = {} {} [{}]   B = {} {} [{}]   K = {} {} [{}]",
+        with_standard_error(i.inertia, i.standard_errors.inertia),
         u.inertia,
-        num(i.damping),
-        num(i.standard_errors.damping),
+        vd.inertia.words(),
+        with_standard_error(i.damping, i.standard_errors.damping),
         u.damping,
-        num(i.stiffness),
-        num(i.standard_errors.stiffness),
-        u.stiffness
+        vd.damping.words(),
+        with_standard_error(i.stiffness, i.standard_errors.stiffness),
+        u.stiffness,
+        vd.stiffness.words()
     );
     println!(
         "  reflex-free I-B-K fit: K = {} {} (VAF {} %)",
@@ -91,40 +93,46 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
             r.polarity
         ),
     }
-    let delay = if r.delay_identifiable {
-        format!(
-            "{} ms (95 % interval {}-{} ms)",
-            num(r.delay_s * 1e3),
-            num(r.delay_interval_s[0] * 1e3),
-            num(r.delay_interval_s[1] * 1e3)
-        )
-    } else {
-        format!(
-            "not identifiable (best {} ms, as good {}-{} ms)",
-            num(r.delay_s * 1e3),
-            num(r.delay_interval_s[0] * 1e3),
-            num(r.delay_interval_s[1] * 1e3)
-        )
-    };
     println!(
-        "  delay {delay}   gain {} +- {} {}   low-pass {} Hz, damping ratio {}",
-        num(r.gain),
-        num(r.gain_se),
+        "  gain {} {} [{}]",
+        with_standard_error(r.gain, r.gain_se),
         u.damping,
-        num(r.natural_frequency_hz),
-        num(r.damping_ratio)
+        vd.gain.words()
     );
+    if vd.delay.has_value() {
+        println!(
+            "  delay {} ms (95 % interval {}-{} ms) [{}]   low-pass {} Hz, damping ratio {} [{}]",
+            num(r.delay_s * 1e3),
+            num(r.delay_interval_s[0] * 1e3),
+            num(r.delay_interval_s[1] * 1e3),
+            vd.delay.words(),
+            num(r.natural_frequency_hz),
+            num(r.damping_ratio),
+            vd.low_pass.words()
+        );
+    } else {
+        println!(
+            "  delay and low-pass [{}]: the fit is as good for delays {:.0}-{:.0} ms (best {:.0} ms; see the warnings)",
+            vd.delay.words(),
+            r.delay_interval_s[0] * 1e3,
+            r.delay_interval_s[1] * 1e3,
+            r.delay_s * 1e3
+        );
+    }
     if let Some(c) = &r.curve {
         print_curve(c, u);
     }
     println!(
-        "VAF: total {} %  intrinsic {} %  reflex {} %  joint parametric {} %  cross-validated {} %",
+        "VAF: total {} %  intrinsic alone {} %  reflex alone {} %  joint parametric {} %  cross-validated {} %",
         num(e.fit.vaf_total),
         num(e.fit.vaf_intrinsic),
         num(e.fit.vaf_reflex),
         num(e.fit.vaf_parametric),
         num(e.cross_validated_vaf)
     );
+    if let Some(why) = e.fit.shares_note() {
+        println!("  {why}");
+    }
     for w in &e.warnings {
         println!("warning: {w}");
     }

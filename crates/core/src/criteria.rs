@@ -182,6 +182,97 @@ pub fn matrix_verdict_within(
     }
 }
 
+/// One scalar parameter's verdict (the reflex estimator's I, B, K, gain
+/// and delay): the matrix rules of [`matrix_verdict`] on a 1x1 matrix, and
+/// "not distinguishable from zero" for a gain whose absence is a finding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ParameterVerdict {
+    /// Identified, of the physical sign, 2 SE within the tolerance, from a
+    /// fit that explains the torque.
+    Trusted,
+    /// The model explains less than [`VAF_FLOOR_PERCENT`] of the torque.
+    PoorFit,
+    /// The data do not pin it down (within 2 SE of zero, or a delay whose
+    /// profile interval is wide, split or at the scan's edge).
+    NotIdentifiable,
+    /// A gain within 2 SE of zero: no evidence of the pathway.
+    NotDistinguishableFromZero,
+    /// Identified, but negative: not a passive joint.
+    NotPassive,
+    /// Identified, but 2 SE exceed the tolerance.
+    Imprecise,
+    /// Identified, but without a standard error to judge its precision by
+    /// (the reflex's low-pass).
+    NoStandardError,
+}
+
+impl ParameterVerdict {
+    /// Whether the value may be used.
+    pub fn trusted(self) -> bool {
+        self == ParameterVerdict::Trusted
+    }
+
+    /// Whether the value means anything at all (false: report it as missing).
+    pub fn has_value(self) -> bool {
+        !matches!(
+            self,
+            ParameterVerdict::NotIdentifiable | ParameterVerdict::PoorFit
+        )
+    }
+
+    /// The verdict in words, as the text and the report print it.
+    pub fn words(self) -> &'static str {
+        match self {
+            ParameterVerdict::Trusted => "trusted",
+            ParameterVerdict::PoorFit => "poor fit",
+            ParameterVerdict::NotIdentifiable => "not identifiable",
+            ParameterVerdict::NotDistinguishableFromZero => "not distinguishable from zero",
+            ParameterVerdict::NotPassive => "not passive",
+            ParameterVerdict::Imprecise => "imprecise",
+            ParameterVerdict::NoStandardError => "no standard error",
+        }
+    }
+}
+
+/// [`ParameterVerdict`] of a value and its standard error, in the order the
+/// rules are checked: the fit, identifiability (`|value| >= 2 SE`; a gain
+/// failing it is [`ParameterVerdict::NotDistinguishableFromZero`]), the sign
+/// (`passive`: a negative value is not passive) and 2 SE within `tolerance`
+/// (relative). NaN fails every test.
+pub fn parameter_verdict(
+    tolerance: f64,
+    value: f64,
+    se: f64,
+    fit_ok: bool,
+    role: ParameterRole,
+) -> ParameterVerdict {
+    let distinguishable = value.abs() >= 2.0 * se;
+    if !fit_ok {
+        ParameterVerdict::PoorFit
+    } else if !distinguishable {
+        match role {
+            ParameterRole::Passive => ParameterVerdict::NotIdentifiable,
+            ParameterRole::Gain => ParameterVerdict::NotDistinguishableFromZero,
+        }
+    } else if role == ParameterRole::Passive && value < 0.0 {
+        ParameterVerdict::NotPassive
+    } else if 2.0 * se / value.abs() <= tolerance {
+        ParameterVerdict::Trusted
+    } else {
+        ParameterVerdict::Imprecise
+    }
+}
+
+/// What a scalar parameter is, for [`parameter_verdict`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParameterRole {
+    /// A passive element (I, B, K): must be positive.
+    Passive,
+    /// A gain whose absence is a finding (the reflex gain): either sign.
+    Gain,
+}
+
 /// The three matrices of the linear model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MatrixKind {
@@ -251,6 +342,53 @@ pub fn judge_matrix(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scalar_verdicts_follow_the_rules_in_order() {
+        use ParameterRole::{Gain, Passive};
+        use ParameterVerdict::*;
+        assert_eq!(parameter_verdict(0.1, 100.0, 4.0, true, Passive), Trusted);
+        assert_eq!(parameter_verdict(0.1, 100.0, 6.0, true, Passive), Imprecise);
+        assert_eq!(parameter_verdict(0.1, 100.0, 4.0, false, Passive), PoorFit);
+        assert_eq!(
+            parameter_verdict(0.1, 5.0, 3.0, true, Passive),
+            NotIdentifiable
+        );
+        assert_eq!(
+            parameter_verdict(0.25, 4.99, 2.99, true, Gain),
+            NotDistinguishableFromZero
+        );
+        assert_eq!(
+            parameter_verdict(0.1, -100.0, 4.0, true, Passive),
+            NotPassive
+        );
+        assert_eq!(parameter_verdict(0.25, -10.0, 1.0, true, Gain), Trusted);
+        assert_eq!(
+            parameter_verdict(0.1, f64::NAN, 1.0, true, Passive),
+            NotIdentifiable
+        );
+        assert_eq!(
+            parameter_verdict(0.1, 100.0, f64::NAN, true, Passive),
+            NotIdentifiable
+        );
+    }
+
+    #[test]
+    fn a_verdict_s_words_are_its_json_tag_spelt_out() {
+        use ParameterVerdict::*;
+        for v in [
+            Trusted,
+            PoorFit,
+            NotIdentifiable,
+            NotDistinguishableFromZero,
+            NotPassive,
+            Imprecise,
+            NoStandardError,
+        ] {
+            let tag = serde_json::to_value(v).unwrap();
+            assert_eq!(tag.as_str().unwrap().replace('_', " "), v.words());
+        }
+    }
 
     #[test]
     fn ratio_and_definiteness_of_a_known_matrix() {

@@ -359,6 +359,32 @@ def test_reflex_on_the_real_ankle_recording():
     assert d["intrinsic"]["stiffness"] < d["reflex_free"]["parameters"]["stiffness"]
 
 
+def test_five_real_ankles_table_carries_verdicts_and_nan_for_what_is_not_identifiable():
+    """Issue 81, item 1: a five-recording table must not average a 0 s delay
+    nobody identified, and df2's gain (about 5 +- 3) is not distinguishable from zero."""
+    pd = pytest.importorskip("pandas")
+    folder = real_data("reklab_ankle")
+    rows = []
+    for name in ("df", "df2", "df3", "pf", "pf2"):
+        t = limpid.estimate_reflex(folder / f"{name}.csv").to_pandas()
+        t["recording"] = name
+        rows.append(t)
+    table = pd.concat(rows).set_index(["recording", "quantity"])
+    assert table["verdict"].notna().all(), table[table["verdict"].isna()]
+    for name in ("df", "df2", "df3"):
+        delay = table.loc[(name, "reflex_delay")]
+        assert delay["verdict"] == "not_identifiable"
+        assert np.isnan(delay["value"]) and np.isnan(delay["se"])
+        assert np.isnan(table.loc[(name, "reflex_natural_frequency_hz"), "value"])
+    assert table.loc[("df2", "reflex_gain"), "verdict"] == "not_distinguishable_from_zero"
+    assert table.loc[("pf", "reflex_gain"), "verdict"] in ("trusted", "imprecise")
+    # the mean delay over the five takes only the identified ones, if any
+    delays = table.xs("reflex_delay", level="quantity")["value"]
+    assert delays.notna().sum() <= 2
+    k = table.xs("intrinsic_stiffness", level="quantity")
+    assert (k["value"] > 2 * k["se"]).all()
+
+
 def test_a_text_column_is_named_with_its_row():
     rec = FakeFrame({"t": np.arange(4) / 100, "x": [0.0, 0.1, "slip", 0.2], "fx": np.zeros(4)})
     with pytest.raises(ValueError, match=r"column x, row 3: expected a number, found 'slip'"):

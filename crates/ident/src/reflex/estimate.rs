@@ -13,8 +13,8 @@ use super::segments::{self, gather, Layout, SegmentUse};
 use super::{CurveStructure, Nonlinearity};
 use super::{
     Decimated, DelayScan, Ibk, IntrinsicPathway, Irf, OtherOrder, Polarity, ReflexEstimate,
-    ReflexFreeFit, ReflexParams, ReflexPathway, ReflexTraces, VafSplit, DELAY_INTERVAL_MAX_S,
-    GRID_ERROR_FLOOR, MODEL_ERROR_FLOOR, REFLEX_PRESENT_VAF,
+    ReflexFreeFit, ReflexParams, ReflexPathway, ReflexTraces, ReflexVerdicts, VafSplit,
+    DELAY_INTERVAL_MAX_S, GRID_ERROR_FLOOR, MODEL_ERROR_FLOOR, REFLEX_PRESENT_VAF,
 };
 use crate::closed_loop::ClosedLoopFit;
 use limpid_core::{Error, Recording, Result, Warning, WarningCode};
@@ -230,6 +230,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         coordinate,
         crate::units::range(q),
     ));
+    let verdicts = ReflexVerdicts::judge(&intrinsic, &reflex, fit.vaf_total);
     let est = ReflexEstimate {
         position: p.position.clone(),
         torque: p.torque.clone(),
@@ -253,6 +254,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
             delay_s: o.delay_s,
         }),
         traces: traces(dc, c, skip),
+        verdicts,
         closed_loop,
         segments: segment_use.map(|u| SegmentUse {
             start_left_out_s: start_left_out as f64 / d.fs,

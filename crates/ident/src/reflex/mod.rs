@@ -44,6 +44,7 @@
 //!   95 % profile-likelihood interval, with the residual's autocorrelation
 //!   reducing the effective sample count.
 
+use limpid_core::criteria::ParameterVerdict;
 use limpid_core::Warning;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -224,6 +225,29 @@ pub struct VafSplit {
     pub vaf_parametric_intrinsic: f64,
 }
 
+impl VafSplit {
+    /// Why the two pathways' VAFs alone do not add up to the total, when
+    /// they differ from it by more than a point; `None` when they add up.
+    pub fn shares_note(&self) -> Option<String> {
+        let sum = self.vaf_intrinsic + self.vaf_reflex;
+        let gap = sum - self.vaf_total;
+        if !gap.is_finite() || gap.abs() <= 1.0 {
+            return None;
+        }
+        Some(if gap > 0.0 {
+            format!(
+                "the pathways' VAFs alone add to {sum:.1} %, more than the total {:.1} %: their torques overlap (both follow the same motion), so each alone also explains part of the other's; the total is what the two explain together",
+                self.vaf_total
+            )
+        } else {
+            format!(
+                "the pathways' VAFs alone add to {sum:.1} %, less than the total {:.1} %: their torques partly cancel, so together they explain more than each alone",
+                self.vaf_total
+            )
+        })
+    }
+}
+
 /// The plain I-B-K fit without a reflex pathway, for comparison.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema)]
 pub struct ReflexFreeFit {
@@ -294,6 +318,9 @@ pub struct ReflexEstimate {
     pub other_rectifier_order: Option<OtherOrder>,
     /// Torque traces.
     pub traces: ReflexTraces,
+    /// The verdict on each parameter (issue 81), by the rules every
+    /// estimator shares ([`limpid_core::criteria::parameter_verdict`]).
+    pub verdicts: ReflexVerdicts,
     /// How a closed-loop recording (one with a commanded reference column)
     /// was estimated; absent in open loop.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -304,6 +331,74 @@ pub struct ReflexEstimate {
     pub segments: Option<SegmentUse>,
     /// What the reader should know.
     pub warnings: Vec<Warning>,
+}
+
+/// The verdicts on a parallel-cascade estimate's parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub struct ReflexVerdicts {
+    /// Intrinsic I (tolerance 25 %).
+    pub inertia: ParameterVerdict,
+    /// Intrinsic B (25 %).
+    pub damping: ParameterVerdict,
+    /// Intrinsic K (10 %).
+    pub stiffness: ParameterVerdict,
+    /// Reflex gain G (25 %, as B, whose units it has); either sign.
+    pub gain: ParameterVerdict,
+    /// Reflex delay: trusted when its 95 % profile interval is contiguous,
+    /// inside the scan and at most [`DELAY_INTERVAL_MAX_S`] wide, and the
+    /// gain is distinguishable from zero; otherwise not identifiable.
+    pub delay: ParameterVerdict,
+    /// The reflex's low-pass (natural frequency, damping ratio): no standard
+    /// error ([`ParameterVerdict::NoStandardError`]) when the delay is trusted, not
+    /// identifiable when the delay is not (the two trade off).
+    pub low_pass: ParameterVerdict,
+}
+
+impl ReflexVerdicts {
+    /// Judge the estimate's parameters: `vaf_total` against
+    /// [`limpid_core::criteria::VAF_FLOOR_PERCENT`], each value against its
+    /// standard error and tolerance.
+    pub fn judge(
+        intrinsic: &IntrinsicPathway,
+        reflex: &ReflexPathway,
+        vaf_total: f64,
+    ) -> ReflexVerdicts {
+        use limpid_core::criteria::{parameter_verdict, tolerance, MatrixKind, ParameterRole};
+        let fit_ok = vaf_total >= limpid_core::criteria::VAF_FLOOR_PERCENT;
+        let se = &intrinsic.standard_errors;
+        let passive = |kind: MatrixKind, value: f64, se: f64| {
+            parameter_verdict(tolerance(kind), value, se, fit_ok, ParameterRole::Passive)
+        };
+        let gain = parameter_verdict(
+            tolerance(MatrixKind::Damping),
+            reflex.gain,
+            reflex.gain_se,
+            fit_ok,
+            ParameterRole::Gain,
+        );
+        let delay = if !fit_ok {
+            ParameterVerdict::PoorFit
+        } else if reflex.delay_identifiable
+            && gain.has_value()
+            && gain != ParameterVerdict::NotDistinguishableFromZero
+        {
+            ParameterVerdict::Trusted
+        } else {
+            ParameterVerdict::NotIdentifiable
+        };
+        let low_pass = match delay {
+            ParameterVerdict::Trusted => ParameterVerdict::NoStandardError,
+            other => other,
+        };
+        ReflexVerdicts {
+            inertia: passive(MatrixKind::Inertia, intrinsic.inertia, se.inertia),
+            damping: passive(MatrixKind::Damping, intrinsic.damping, se.damping),
+            stiffness: passive(MatrixKind::Stiffness, intrinsic.stiffness, se.stiffness),
+            gain,
+            delay,
+            low_pass,
+        }
+    }
 }
 
 /// A reflex pathway that raises the total VAF by less than this (points) is called absent.

@@ -299,23 +299,36 @@ def _periodic_html(d: Dict[str, Any]) -> List[str]:
 
 
 def _reflex(d: Dict[str, Any]) -> List[Record]:
+    """The pathway parameters with the verdicts the estimate carries; a value
+    that is not identifiable (or comes from a poor fit) is NaN, not its best
+    guess, so that averages over recordings do not take it in silently."""
     pos = d["position"]
     intr = d["intrinsic"]
+    v = d.get("verdicts") or {}
+    nan = float("nan")
+
+    def kept(value: Any, verdict: Optional[str]) -> float:
+        return nan if verdict in ("not_identifiable", "poor_fit") else _float(value)
+
     out: List[Record] = []
     for kind in MATRICES:
         out.append(dict(quantity=f"intrinsic_{kind}", element="intrinsic " + SYMBOL[kind], row=None, column=None,
-                        value=_float(intr[kind]), se=_float(intr["standard_errors"].get(kind)),
-                        unit=_scalar_unit(d, kind, pos), verdict=None))
+                        value=kept(intr[kind], v.get(kind)), se=_float(intr["standard_errors"].get(kind)),
+                        unit=_scalar_unit(d, kind, pos), verdict=v.get(kind)))
     r = d["reflex"]
-    out.append(dict(quantity="reflex_gain", element="reflex gain G", row=None, column=None, value=_float(r["gain"]),
-                    se=_float(r.get("gain_se")), unit=_scalar_unit(d, "damping", pos), verdict=None))
+    out.append(dict(quantity="reflex_gain", element="reflex gain G", row=None, column=None,
+                    value=kept(r["gain"], v.get("gain")), se=_float(r.get("gain_se")),
+                    unit=_scalar_unit(d, "damping", pos), verdict=v.get("gain")))
+    delay = v.get("delay") or (None if r.get("delay_identifiable") else "not_identifiable")
+    lo, hi = r.get("delay_interval_s") or (nan, nan)
+    # the 95 % profile interval's half-width over 1.96, as an SE
     out.append(dict(quantity="reflex_delay", element="reflex delay", row=None, column=None,
-                    value=_float(r["delay_s"]), se=float("nan"), unit="s",
-                    verdict=None if r.get("delay_identifiable") else "not identifiable"))
+                    value=kept(r["delay_s"], delay), se=kept((hi - lo) / 3.92, delay), unit="s", verdict=delay))
+    low_pass = v.get("low_pass") or (None if delay != "not_identifiable" else delay)
     for q, name, unit in (("natural_frequency_hz", "reflex low-pass natural frequency", "Hz"),
                           ("damping_ratio", "reflex low-pass damping ratio", "")):
-        out.append(dict(quantity=f"reflex_{q}", element=name, row=None, column=None, value=_float(r[q]),
-                        se=float("nan"), unit=unit, verdict=None))
+        out.append(dict(quantity=f"reflex_{q}", element=name, row=None, column=None, value=kept(r[q], low_pass),
+                        se=nan, unit=unit, verdict=low_pass))
     return out
 
 
@@ -422,11 +435,14 @@ def summary(d: Dict[str, Any]) -> str:
             recs = records(d)
             k = next(r for r in recs if r["quantity"] == "intrinsic_stiffness")
             g = next(r for r in recs if r["quantity"] == "reflex_gain")
-            body = (f"intrinsic K = {with_se(k['value'], k['se'])} {k['unit']}, "
-                    f"reflex gain = {with_se(g['value'], g['se'])} {g['unit']}")
+            dl = next(r for r in recs if r["quantity"] == "reflex_delay")
+            body = (f"intrinsic K = {with_se(k['value'], k['se'])} {k['unit']} ({_words(k['verdict'])}), "
+                    f"reflex gain = {with_se(g['value'], g['se'])} {g['unit']} ({_words(g['verdict'])}), "
+                    + ("delay not identifiable" if math.isnan(dl["value"]) else f"delay {dl['value'] * 1e3:.0f} ms"))
             curve = d["reflex"].get("curve")
             if curve:
-                body += f", static curve {curve['structure'].replace('_', '-')} ({len(curve['knots_rad_s'])} knots)"
+                body += (", static curve rectifier" if curve["structure"] == "rectifier" else
+                         f", static curve {curve['structure'].replace('_', '-')} ({len(curve['knots_rad_s'])} knots)")
         elif kind == "varying":
             n = sum(1 for p in d["points"] if p["identifiable"])
             body = f"{d['method']}, {n} of {len(d['points'])} points identifiable"
@@ -720,8 +736,8 @@ def to_html(d: Dict[str, Any]) -> str:
             parts.append(f"<p>{_html.escape(line)}</p>")
     elif kind == "reflex":
         recs = records(d)
-        parts.append(_list_table(["quantity", "value ± SE", "unit", "note"],
-                                 [[r["element"], with_se(r["value"], r["se"]), r["unit"], r["verdict"] or ""]
+        parts.append(_list_table(["quantity", "value ± SE", "unit", "verdict"],
+                                 [[r["element"], with_se(r["value"], r["se"]), r["unit"], _words(r["verdict"])]
                                   for r in recs], "Intrinsic and reflex pathways (parallel cascade)"))
         parts.append(_fit_line(d))
     elif kind == "varying":

@@ -4,15 +4,20 @@ use crate::{fmt, Chart, Figure, Section, Series, Stroke, Table, PALETTE};
 
 pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimate) -> Section {
     let r = &v.reflex;
-    let verdict = if r.delay_identifiable {
+    let vd = &v.verdicts;
+    let verdict = if vd.delay.has_value() {
         format!(
-            "reflex identified: delay {} ms (95 % interval {}-{} ms), gain {} ± {} {}; total VAF {} % (cross-validated {} %)",
+            "intrinsic K {} ({}); reflex gain {} {} ({}), delay {} ms (95 % interval {}-{} ms); total VAF {} % (cross-validated {} %)",
+            limpid_core::with_standard_error(v.intrinsic.stiffness, v.intrinsic.standard_errors.stiffness), vd.stiffness.words(),
+            limpid_core::with_standard_error(r.gain, r.gain_se), v.units.damping, vd.gain.words(),
             fmt(r.delay_s * 1e3), fmt(r.delay_interval_s[0] * 1e3), fmt(r.delay_interval_s[1] * 1e3),
-            fmt(r.gain), fmt(r.gain_se), v.units.damping, fmt(v.fit.vaf_total), fmt(v.cross_validated_vaf)
+            fmt(v.fit.vaf_total), fmt(v.cross_validated_vaf)
         )
     } else {
         format!(
-            "reflex delay NOT identifiable; total VAF {} % (cross-validated {} %)",
+            "intrinsic K {} ({}); reflex gain {} {} ({}), delay NOT identifiable; total VAF {} % (cross-validated {} %)",
+            limpid_core::with_standard_error(v.intrinsic.stiffness, v.intrinsic.standard_errors.stiffness), vd.stiffness.words(),
+            limpid_core::with_standard_error(r.gain, r.gain_se), v.units.damping, vd.gain.words(),
             fmt(v.fit.vaf_total),
             fmt(v.cross_validated_vaf)
         )
@@ -41,17 +46,22 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
     }
 }
 
-/// The pathway parameters with their standard errors, and the VAF of each model.
+/// The pathway parameters with their standard errors and verdicts, and the VAF of each model.
 fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
-    let (r, i, u) = (&v.reflex, &v.intrinsic, &v.units);
-    let row = |what: &str, value: f64, se: Option<f64>, unit: &str| {
-        vec![
-            what.to_string(),
-            fmt(value),
-            se.map_or_else(|| "".into(), fmt),
-            unit.to_string(),
-        ]
-    };
+    use limpid_core::criteria::ParameterVerdict;
+    let (r, i, u, vd) = (&v.reflex, &v.intrinsic, &v.units, &v.verdicts);
+    // a value that is not identifiable is not printed: its verdict says why
+    let row =
+        |what: &str, value: f64, se: Option<f64>, unit: &str, verdict: Option<ParameterVerdict>| {
+            let shown = verdict.is_none_or(|v| v.has_value());
+            vec![
+                what.to_string(),
+                if shown { fmt(value) } else { "—".into() },
+                se.filter(|_| shown).map_or_else(|| "".into(), fmt),
+                unit.to_string(),
+                verdict.map_or_else(String::new, |v| v.words().to_string()),
+            ]
+        };
     let parameters = Table {
         caption: "Parallel-cascade model (Kearney et al. 1997)".into(),
         header: vec![
@@ -59,6 +69,7 @@ fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
             "value".into(),
             "standard error".into(),
             "unit".into(),
+            "verdict".into(),
         ],
         rows: vec![
             row(
@@ -66,39 +77,58 @@ fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
                 i.inertia,
                 Some(i.standard_errors.inertia),
                 &u.inertia,
+                Some(vd.inertia),
             ),
             row(
                 "intrinsic damping B",
                 i.damping,
                 Some(i.standard_errors.damping),
                 &u.damping,
+                Some(vd.damping),
             ),
             row(
                 "intrinsic stiffness K",
                 i.stiffness,
                 Some(i.standard_errors.stiffness),
                 &u.stiffness,
+                Some(vd.stiffness),
             ),
             row(
                 "reflex-free fit: K",
                 v.reflex_free.parameters.stiffness,
                 None,
                 &u.stiffness,
+                None,
             ),
-            row("reflex gain G", r.gain, Some(r.gain_se), &u.damping),
-            row("reflex delay", r.delay_s * 1e3, None, "ms"),
+            row(
+                "reflex gain G",
+                r.gain,
+                Some(r.gain_se),
+                &u.damping,
+                Some(vd.gain),
+            ),
+            row("reflex delay", r.delay_s * 1e3, None, "ms", Some(vd.delay)),
             row(
                 "reflex low-pass natural frequency",
                 r.natural_frequency_hz,
                 None,
                 "Hz",
+                Some(vd.low_pass),
             ),
-            row("reflex low-pass damping ratio", r.damping_ratio, None, ""),
+            row(
+                "reflex low-pass damping ratio",
+                r.damping_ratio,
+                None,
+                "",
+                Some(vd.low_pass),
+            ),
         ],
     };
     let vafs = Table {
-        caption: "Variance accounted for (decimated torque, first reflex-IRF length left out)"
-            .into(),
+        caption: match v.fit.shares_note() {
+            Some(why) => format!("Variance accounted for (decimated torque, first reflex-IRF length left out); {why}"),
+            None => "Variance accounted for (decimated torque, first reflex-IRF length left out)".into(),
+        },
         header: vec!["model".into(), "VAF (%)".into()],
         rows: vec![
             vec!["intrinsic + reflex pathways".into(), fmt(v.fit.vaf_total)],
