@@ -29,6 +29,18 @@ RECORDING_DOC = ("recording : str, os.PathLike, dict of arrays or pandas.DataFra
                  "    A recording in limpid's format (docs/src/format.md): a CSV, Parquet or MAT path,\n"
                  "    a dict of 1-D arrays or a DataFrame (time ``t`` as a column or its index).")
 
+# how the recording files are read, the same for every estimator (issue 81)
+READING_PARAMS = ["map: MapLike = None", "columns: Optional[Mapping[str, str]] = None"]
+READING_DOCS = [
+    "map : str, os.PathLike, dict or None, default None\n"
+    "    Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path\n"
+    "    of its file or a dict of the same shape, reading a lab file's channels as the\n"
+    "    recording's columns (docs/src/reference/lab-files.md).",
+    "columns : dict of str to str or None, default None\n"
+    "    Name a column of the recording by its channel in the file (the CLI's ``--column``),\n"
+    "    e.g. ``{\"t\": \"time_s\", \"q1\": \"angle_rad\"}``; the other columns keep their names.",
+]
+
 # name, method, positional parameters (source, doc), leading request fields they fill,
 # summary, returns, the call of _estimate
 FUNCTIONS: List[Dict[str, Any]] = [
@@ -286,6 +298,7 @@ def function_source(spec: Dict[str, Any]) -> str:
     params += [f"{o['name']}: {o['annotation']} = {literal(o['default'])}" for o in lead]
     params.append("*")
     params += [f"{o['name']}: {o['annotation']} = {literal(o['default'])}" for o in rest]
+    params += READING_PARAMS
     head = f"def {spec['name']}("
     sig = head + ", ".join(params) + ") -> Result:"
     if len(sig) > 116:
@@ -295,10 +308,11 @@ def function_source(spec: Dict[str, Any]) -> str:
         text = o["description"] or "(no description)"
         body = textwrap.fill(text, 88, initial_indent="    ", subsequent_indent="    ")
         docs.append(f"{o['name']} : {o['doc_type']}, default {literal(o['default'])}\n{body}")
+    docs += READING_DOCS
     doc = (spec["summary"].strip() + "\n\nParameters\n----------\n" + "\n".join(docs)
            + "\n\nReturns\n-------\n" + spec["returns"].strip())
     doc = textwrap.indent(doc, "    ").replace("\\", "\\\\")
-    names = [o["name"] for o in rest]
+    names = [o["name"] for o in rest] + ["map", "columns"]
     lines = [sig, f'    """{doc.lstrip()}\n    """']
     if spec.get("check"):
         lines.append(textwrap.indent(spec["check"], "    "))
@@ -315,9 +329,9 @@ doc comment (or the script's summaries) and run the script."""
 
 from __future__ import annotations
 
-from typing import Literal, Optional, Sequence, Union
+from typing import Literal, Mapping, Optional, Sequence, Union
 
-from . import Result, RecordingLike, _estimate
+from . import MapLike, Result, RecordingLike, _estimate
 
 __all__ = [''' + ", ".join(f'"{f["name"]}"' for f in FUNCTIONS) + "]\n"]
     for spec in FUNCTIONS:

@@ -15,6 +15,8 @@ pub type CliResult<T = ()> = std::result::Result<T, Box<dyn std::error::Error + 
 #[derive(Debug)]
 pub struct Context {
     map: Option<ChannelMap>,
+    /// `--column NAME=CHANNEL` pairs.
+    columns: Vec<(String, String)>,
     /// The command line's definition: errors name a setting by its flag.
     commands: clap::Command,
 }
@@ -24,6 +26,7 @@ impl Context {
     pub fn new(commands: clap::Command) -> Self {
         Context {
             map: None,
+            columns: Vec::new(),
             commands,
         }
     }
@@ -32,13 +35,19 @@ impl Context {
     pub fn with_map(&self, path: &Path) -> Result<Self> {
         Ok(Context {
             map: Some(ChannelMap::read(path)?),
+            columns: self.columns.clone(),
             commands: self.commands.clone(),
         })
     }
 
+    /// The same, with columns named on the command line (`--column`).
+    pub fn with_columns(self, columns: Vec<(String, String)>) -> Self {
+        Context { columns, ..self }
+    }
+
     /// The same, reading recordings as they are.
     pub fn without_map(&self) -> Self {
-        Context::new(self.commands.clone())
+        Context::new(self.commands.clone()).with_columns(self.columns.clone())
     }
 
     /// A library error about a setting, the setting named by the flag that
@@ -66,6 +75,11 @@ impl Context {
         Error::InvalidParameter { name, message }
     }
 
+    /// The columns named on the command line (`--column`).
+    pub fn columns(&self) -> &[(String, String)] {
+        &self.columns
+    }
+
     /// The channel map recordings are read through, if any.
     pub fn channel_map(&self) -> Option<&ChannelMap> {
         self.map.as_ref()
@@ -78,7 +92,9 @@ impl Context {
 
     /// Read a recording and say on stderr what was accepted but looks wrong.
     pub fn read_recording(&self, path: impl AsRef<Path>) -> Result<Recording> {
-        let rec = limpid_io::read_recording_mapped(path, self.channel_map())?;
+        let rec = limpid_io::convert_with_columns(path, self.channel_map(), &self.columns)
+            .map_err(with_the_fix)?
+            .recording;
         warn_about(&rec);
         Ok(rec)
     }
@@ -103,6 +119,27 @@ impl Context {
             all.push((map, "the channel map (--map)"));
         }
         limpid_core::files::refuse_overwriting_inputs(outputs, &all)
+    }
+}
+
+/// A missing column's error with the fix: the flag that names it by one of
+/// the file's own columns, and the command that proposes a whole map.
+fn with_the_fix(e: Error) -> Error {
+    match e {
+        Error::MissingColumn {
+            path,
+            column,
+            why,
+            found,
+        } => {
+            let example = found.split(',').next().unwrap_or("...").to_string();
+            let message = format!(
+                "missing required column {column} ({why}); found columns: {found}; name it with --column {column}={example} (a column of the file), or save the map `limpid inspect {} --map-template` proposes and pass --map",
+                path.display()
+            );
+            Error::Format { path, message }
+        }
+        e => e,
     }
 }
 

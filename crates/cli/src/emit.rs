@@ -93,6 +93,7 @@ pub fn estimate(cx: &Context, request: Request, paths: &[PathBuf], out: Output<'
     let run = Run::of_this_process(&inputs)
         .with_request(checked.request())
         .with_channel_map(cx.map_path())
+        .with_columns(cx.columns())
         .with_recordings(&recordings);
     let mut estimated = limpid_app::estimate::run(&checked, recordings)
         .map_err(|e| cx.with_flag_names(request_command, e))?;

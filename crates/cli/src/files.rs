@@ -14,8 +14,11 @@ pub struct InspectArgs {
     /// The file (XDF, C3D, TDMS, MAT, a ROS 2 bag: .mcap, .db3 or a rosbag2 folder, CSV, Parquet).
     pub file: PathBuf,
     /// Print JSON instead of text.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "map_template")]
     pub json: bool,
+    /// Print only the proposed channel map (TOML), to save and pass with --map: `limpid inspect lab.csv --map-template > rig.toml`.
+    #[arg(long)]
+    pub map_template: bool,
 }
 
 /// `limpid convert`.
@@ -38,6 +41,19 @@ pub fn run_inspect(args: InspectArgs) -> CliResult {
     if args.json {
         println!("{}", serde_json::to_string(&found)?);
         return Ok(());
+    }
+    if args.map_template {
+        return match &found.proposed_map {
+            Some(map) => {
+                print!("{map}");
+                Ok(())
+            }
+            None => Err(format!(
+                "{}: no channel name says what it is; write the map by hand (docs: reference/lab-files.md) or name the columns with --column t=<time column> --column q1=<angle column> ...",
+                args.file.display()
+            )
+            .into()),
+        };
     }
     let mut out = format!("{} ({})\n", found.file, found.format);
     for s in &found.streams {
@@ -128,8 +144,8 @@ pub fn run_inspect(args: InspectArgs) -> CliResult {
         out.push_str(&format!("\nnote: {n}"));
     }
     match &found.proposed_map {
-        Some(map) => out.push_str(&format!("\n\nproposed channel map (save as rig.toml, check it, pass --map rig.toml):\n\n{map}")),
-        None => out.push_str("\n\nno channel name says what it is: write a channel map by hand (docs: recording formats)\n"),
+        Some(map) => out.push_str(&format!("\n\nproposed channel map (check it; `limpid inspect {0} --map-template > rig.toml` saves it; then pass --map rig.toml):\n\n{map}", args.file.display())),
+        None => out.push_str("\n\nno channel name says what it is: name the columns on the command line (--column t=<time column> --column q1=<angle column> ...) or write a channel map by hand (docs: reference/lab-files.md)\n"),
     }
     print!("{out}");
     Ok(())

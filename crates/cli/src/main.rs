@@ -41,6 +41,9 @@ struct Cli {
     /// Channel map (TOML) for commands that read recordings: which channel of a lab file (XDF, C3D, TDMS, MAT, ROS 2 bag, CSV) is which column, in which unit and sign.
     #[arg(long, global = true, value_name = "MAP.toml")]
     map: Option<std::path::PathBuf>,
+    /// Name a column of the recording by its channel in the file, e.g. --column t=time_s --column q1=angle_rad (repeat it; the other columns keep their names; with --map, added to the map).
+    #[arg(long = "column", global = true, value_name = "NAME=CHANNEL")]
+    columns: Vec<String>,
     /// Threads the estimators run on [default: one a core, or RAYON_NUM_THREADS].
     #[arg(long, global = true, value_name = "N")]
     threads: Option<std::num::NonZeroUsize>,
@@ -74,7 +77,7 @@ enum Command {
     Spectra(stochastic::SpectraArgs),
     /// Check that standard errors cover the truth and verdicts hold, by Monte Carlo over virtual subjects of every method.
     Calibrate(calibrate::CalibrateArgs),
-    /// Run a seed's experiment on the virtual lab and print its tables beside the paper's (000, 001, 003, 004 or all).
+    /// Run a paper's experiment on the virtual lab and print its tables beside the paper's (artemiadis2010, patel2013, lakatos2011, park2011 or all).
     Reproduce(reproduce::ReproduceArgs),
     /// Run the request recorded in a result's run block again, on the same input files.
     Rerun(rerun::RerunArgs),
@@ -299,7 +302,12 @@ fn in_thread_pool(cli: Cli) -> CliResult {
 }
 
 fn run(cli: Cli) -> CliResult {
-    if cli.map.is_some() {
+    if cli.map.is_some() || !cli.columns.is_empty() {
+        let flag = if cli.map.is_some() {
+            "--map"
+        } else {
+            "--column"
+        };
         let reads_recordings = matches!(
             cli.command,
             Command::Estimate { .. }
@@ -315,7 +323,7 @@ fn run(cli: Cli) -> CliResult {
                 Command::Rerun(_) => "`rerun` reads the map its result was made with (the run block's channel_map), not --map",
                 _ => "it applies to the commands that read recordings (estimate, window-sweep, spectra, gravity-compensate, live, convert); this one reads none",
             };
-            return Err(format!("--map: {why}").into());
+            return Err(format!("{flag}: {why}").into());
         }
     }
     let cx = Context::new(command_accepting_negative_numbers(Cli::command()));
@@ -323,6 +331,7 @@ fn run(cli: Cli) -> CliResult {
         Some(path) => cx.with_map(path)?,
         None => cx,
     };
+    let cx = cx.with_columns(limpid_io::parse_columns(&cli.columns)?);
     match cli.command {
         Command::Inspect(args) => files::run_inspect(args),
         Command::Convert(args) => files::run_convert(args, &cx),

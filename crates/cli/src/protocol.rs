@@ -13,9 +13,10 @@ use crate::table::num;
 
 #[derive(Subcommand)]
 pub enum ProtocolCommand {
-    /// Print a preset protocol as TOML: artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold).
+    /// Print a preset protocol as TOML (seed 000's artemiadis-3d, seed 001's patel-cocontraction, seed 003's lakatos-planar, seed 004's park-stochastic; ensembles, ramp-and-hold, multisines, PRBS and walking).
     New {
-        #[arg(long)]
+        /// The preset.
+        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(limpid_lab::design::PRESET_NAMES))]
         preset: String,
         /// Write to this file instead of standard output.
         #[arg(short, long)]
@@ -61,7 +62,7 @@ pub struct DesignArgs {
     /// Take the limits, workspace and sample rate of this protocol (TOML): centre-out (linear;
     /// stochastic too, its displacement limit kept in the workspace), an end-point periodic
     /// one (stochastic), a PRBS (reflex), a planar one (planar: its links, posture and waits
-    /// too; default lakatos-planar's).
+    /// too; default lakatos-planar's), or a preset's name (e.g. ankle-prbs).
     #[arg(long, value_name = "P.toml")]
     pub limits_from: Option<PathBuf>,
     /// The designed protocol's whole length (s): rests, motions, holds, returns and relaxation
@@ -528,7 +529,19 @@ impl DesignTexts {
             } else {
                 read(Path::new(&args.prior))?
             },
-            limits: args.limits_from.as_deref().map(read).transpose()?,
+            // a preset's name as Python accepts it (issue 81), unless a file has that name
+            limits: args
+                .limits_from
+                .as_deref()
+                .map(|p| match p.to_str() {
+                    Some(name)
+                        if !p.exists() && limpid_lab::design::PRESET_NAMES.contains(&name) =>
+                    {
+                        limpid_lab::design::Design::preset(name).map(|d| d.to_toml())
+                    }
+                    _ => read(p),
+                })
+                .transpose()?,
             baseline: args.baseline.as_deref().map(read).transpose()?,
         })
     }

@@ -101,10 +101,10 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
     );
     if vd.delay.has_value() {
         println!(
-            "  delay {} ms (95 % interval {}-{} ms) [{}]   low-pass {} Hz, damping ratio {} [{}]",
-            num(r.delay_s * 1e3),
-            num(r.delay_interval_s[0] * 1e3),
-            num(r.delay_interval_s[1] * 1e3),
+            "  delay {:.1} ms (95 % interval {:.1}-{:.1} ms) [{}]   low-pass {} Hz, damping ratio {} [{}]",
+            r.delay_s * 1e3,
+            r.delay_interval_s[0] * 1e3,
+            r.delay_interval_s[1] * 1e3,
             vd.delay.words(),
             num(r.natural_frequency_hz),
             num(r.damping_ratio),

@@ -60,6 +60,7 @@ pub fn run(args: RerunArgs, cx: &Context) -> CliResult {
         }
         None => cx.without_map(),
     };
+    let cx = cx.with_columns(run.columns.clone().into_iter().collect());
     let paths: Vec<PathBuf> = run
         .inputs
         .iter()

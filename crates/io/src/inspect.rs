@@ -148,13 +148,61 @@ fn summary(s: &Stream) -> StreamSummary {
     }
 }
 
-/// The FORMAT.md column a channel's name suggests, if any.
-fn suggest(stream: &Stream, channel: &str) -> Option<String> {
+/// A unit written as the last word of a channel's name (`time_ms`,
+/// `angle_deg`, `torque_Nm`): the channel's name without it, and the unit
+/// as a map spells it (None for the SI unit the format wants anyway).
+fn unit_suffix(tokens: &[&str]) -> Option<(usize, Option<&'static str>)> {
+    let (&last, rest) = tokens.split_last()?;
+    if rest.is_empty() {
+        return None;
+    }
+    let unit = match last {
+        "s" | "sec" | "rad" | "m" | "n" | "nm" | "v" => None,
+        "ms" | "msec" => Some("ms"),
+        "us" => Some("us"),
+        "deg" | "degree" | "degrees" => Some("deg"),
+        "mrad" => Some("mrad"),
+        "mm" => Some("mm"),
+        "cm" => Some("cm"),
+        "kn" => Some("kN"),
+        "nmm" => Some("N mm"),
+        "mv" => Some("mV"),
+        "uv" => Some("uV"),
+        _ => return None,
+    };
+    Some((rest.len(), unit))
+}
+
+/// The FORMAT.md column a channel's name suggests, if any, with the unit
+/// its name declares (`time_ms` -> `t` in ms).
+fn suggest(stream: &Stream, channel: &str) -> Option<(String, Option<&'static str>)> {
     let lower = channel.to_lowercase();
-    let tokens: Vec<&str> = lower
+    let all: Vec<&str> = lower
         .split(|c: char| !c.is_ascii_alphanumeric())
         .filter(|t| !t.is_empty())
         .collect();
+    // a MAT struct's fields: the path before the last dot says little
+    let all = match channel.rsplit_once('.') {
+        Some((_, leaf)) if !leaf.is_empty() && stream.name.is_empty() => {
+            let skip = all.len()
+                - leaf
+                    .to_lowercase()
+                    .split(|c: char| !c.is_ascii_alphanumeric())
+                    .filter(|t| !t.is_empty())
+                    .count();
+            all[skip..].to_vec()
+        }
+        _ => all,
+    };
+    let (tokens, unit) = match unit_suffix(&all) {
+        Some((n, unit)) => (&all[..n], unit),
+        None => (&all[..], None),
+    };
+    let column = suggest_name(stream, tokens)?;
+    Some((column, unit))
+}
+
+fn suggest_name(stream: &Stream, tokens: &[&str]) -> Option<String> {
     let last = *tokens.last()?;
     let joined = tokens.join("_");
     let marker_axis = tokens.len() > 1 && matches!(last, "x" | "y" | "z");
@@ -195,8 +243,17 @@ fn suggest(stream: &Stream, channel: &str) -> Option<String> {
             }
         }
     }
+    // a single joint: its angle and torque (an ankle, an elbow)
+    let joint_angle = ["angle", "ang", "theta", "joint", "q", "jointangle"];
+    let joint_torque = ["torque", "tau", "moment", "trq", "tq"];
+    if tokens.iter().any(|t| joint_torque.contains(t)) {
+        return Some("tau1".into());
+    }
+    if tokens.iter().any(|t| joint_angle.contains(t)) && !has(&["velocity", "vel"]) {
+        return Some("q1".into());
+    }
     match last {
-        "time" | "timestamp" | "t" if stream.stamps.is_none() => Some("t".into()),
+        "time" | "timestamp" | "t" | "times" if stream.stamps.is_none() => Some("t".into()),
         "trial" | "trialno" | "trialnumber" | "trialnum" => Some("trial".into()),
         "level" => Some("level".into()),
         "x" | "y" | "z" if has(&["force", "ft", "load"]) => Some(format!("f{last}")),
@@ -229,34 +286,43 @@ fn quote(text: &str) -> String {
     out
 }
 
-/// A proposed map: the recognisable channels, their declared units, the
-/// time base the stream holding most of them, and a trial rule when a
-/// marker stream exists.
+/// A proposed map: the recognisable channels, their declared units (or the
+/// unit their name ends in), the time base the stream holding most of them,
+/// a trial rule when a marker stream exists, and the other channels as
+/// comments to fill in. Saved as it is, it reads the file
+/// (`limpid inspect FILE --map-template > rig.toml`).
 pub fn propose(source: &Source) -> Option<String> {
     let mut lines: Vec<(String, String)> = Vec::new();
+    let mut unknown: Vec<String> = Vec::new();
     let mut per_stream: Vec<(usize, &str)> = Vec::new();
     for s in &source.streams {
         let mut n = 0;
         for c in &s.channels {
-            if let Some(col) = suggest(s, &c.name) {
-                if lines.iter().any(|(k, _)| *k == col) {
-                    continue;
+            let mut fields = vec![format!("channel = {}", quote(&c.name))];
+            if source.streams.len() > 1 {
+                fields.push(format!("stream = {}", quote(&s.name)));
+            }
+            let guess = suggest(s, &c.name).filter(|(col, named_unit)| {
+                if lines.iter().any(|(k, _)| k == col) {
+                    return false;
                 }
                 // a declared unit of another quantity means the guess is wrong
-                if let Some(u) = &c.unit {
-                    if crate::map::unit_factor(&col, u).is_err() && !u.trim().is_empty() {
-                        continue;
+                let declared = c.unit.as_deref().filter(|u| !u.trim().is_empty());
+                declared
+                    .or(*named_unit)
+                    .is_none_or(|u| crate::map::unit_factor(col, u).is_ok())
+            });
+            match guess {
+                Some((col, named_unit)) => {
+                    n += 1;
+                    if let Some(u) = c.unit.as_deref().filter(|u| !u.trim().is_empty()) {
+                        fields.push(format!("unit = {}", quote(u)));
+                    } else if let Some(u) = named_unit {
+                        fields.push(format!("unit = {}", quote(u)));
                     }
+                    lines.push((col, format!("{{ {} }}", fields.join(", "))));
                 }
-                n += 1;
-                let mut fields = vec![format!("channel = {}", quote(&c.name))];
-                if source.streams.len() > 1 {
-                    fields.push(format!("stream = {}", quote(&s.name)));
-                }
-                if let Some(u) = &c.unit {
-                    fields.push(format!("unit = {}", quote(u)));
-                }
-                lines.push((col, format!("{{ {} }}", fields.join(", "))));
+                None => unknown.push(format!("{{ {} }}", fields.join(", "))),
             }
         }
         per_stream.push((n, s.name.as_str()));
@@ -276,6 +342,11 @@ pub fn propose(source: &Source) -> Option<String> {
     text.push_str("[columns]\n");
     for (col, spec) in &lines {
         text.push_str(&format!("{col} = {spec}\n"));
+    }
+    for spec in &unknown {
+        text.push_str(&format!(
+            "# ? = {spec}   # not recognised: name its column or leave it out\n"
+        ));
     }
     let marker_texts: Vec<(&str, usize)> = {
         let mut counts: std::collections::BTreeMap<&str, usize> = Default::default();

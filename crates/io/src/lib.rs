@@ -93,10 +93,63 @@ pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     } else if is_parquet(path) {
         read_parquet(path)
     } else if is_mat(path) {
-        read_mat(path)
+        read_mat(path).or_else(|e| read_mat_struct(path, e))
     } else {
         read_csv(path)
     }
+}
+
+/// A MAT-file without top-level vectors whose struct fields are named like
+/// FORMAT.md columns (`rec.t`, `rec.q1`, `rec.tau1`): read through the map
+/// that names each column by its field (issue 81). Fields named otherwise
+/// get an error that says how to name them; a file without struct fields
+/// keeps `vectors_error`.
+fn read_mat_struct(path: &Path, vectors_error: Error) -> Result<Recording> {
+    let Ok(source) = sources::read_source(path) else {
+        return Err(vectors_error);
+    };
+    let fields: Vec<&str> = source
+        .streams
+        .iter()
+        .flat_map(|s| &s.channels)
+        .map(|c| c.name.as_str())
+        .filter(|n| n.contains('.'))
+        .collect();
+    if fields.is_empty() {
+        return Err(vectors_error);
+    }
+    let mut columns: Vec<(String, String)> = Vec::new();
+    for field in &fields {
+        let leaf = field.rsplit('.').next().unwrap_or(field);
+        if limpid_core::recording::is_format_column(leaf) && !columns.iter().any(|(c, _)| c == leaf)
+        {
+            columns.push((leaf.to_string(), field.to_string()));
+        }
+    }
+    if columns.is_empty() {
+        let shown: Vec<&str> = fields.iter().take(4).copied().collect();
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "its columns are struct fields ({}{}) not named like FORMAT.md columns: name them with --column t={} --column q1=... (Python: columns={{'t': '{}', ...}}), or save a channel map with `limpid inspect {} --map-template > rig.toml` and pass --map rig.toml",
+                shown.join(", "),
+                if fields.len() > shown.len() { ", ..." } else { "" },
+                shown[0],
+                shown[0],
+                path.display()
+            ),
+        });
+    }
+    let map = map::ChannelMap {
+        time: map::TimeSpec::default(),
+        columns: columns
+            .into_iter()
+            .map(|(c, f)| (c, map::ColumnSpec::Channel(f)))
+            .collect(),
+        streams: Default::default(),
+        path: None,
+    };
+    Ok(map::apply(&source, &map)?.recording)
 }
 
 /// Read a recording through a channel map, or as [`read_recording`] does
@@ -122,6 +175,46 @@ pub fn convert(path: impl AsRef<Path>, map: Option<&map::ChannelMap>) -> Result<
             notes: Vec::new(),
         }),
     }
+}
+
+/// `NAME=CHANNEL` pairs (`--column t=time_s`), checked: a usable FORMAT.md
+/// or free column name, a non-empty channel, each name once.
+pub fn parse_columns(pairs: &[String]) -> Result<Vec<(String, String)>> {
+    let mut out: Vec<(String, String)> = Vec::new();
+    for pair in pairs {
+        let bad = |why: &str| Error::InvalidParameter {
+            name: "--column".into(),
+            message: format!("{pair:?}: {why}"),
+        };
+        let (name, channel) = pair
+            .split_once('=')
+            .ok_or_else(|| bad("expected NAME=CHANNEL, e.g. --column t=time_s"))?;
+        let (name, channel) = (name.trim(), channel.trim());
+        if name.is_empty() || channel.is_empty() {
+            return Err(bad("expected NAME=CHANNEL, e.g. --column t=time_s"));
+        }
+        if out.iter().any(|(n, _)| n == name) {
+            return Err(bad(&format!("column {name} is named twice")));
+        }
+        out.push((name.to_string(), channel.to_string()));
+    }
+    Ok(out)
+}
+
+/// A recording with some of its columns named on the command line
+/// (`--column NAME=CHANNEL`, [`map::ChannelMap::with_columns`]), through
+/// `map` when one is given; as [`convert`] without columns.
+pub fn convert_with_columns(
+    path: impl AsRef<Path>,
+    map: Option<&map::ChannelMap>,
+    columns: &[(String, String)],
+) -> Result<map::Converted> {
+    if columns.is_empty() {
+        return convert(path, map);
+    }
+    let source = sources::read_source(path.as_ref())?;
+    let map = map::ChannelMap::with_columns(map, &source, columns)?;
+    map::apply(&source, &map)
 }
 
 /// [`read_recording_mapped`] for a file beside the main recording (an MVC

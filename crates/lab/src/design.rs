@@ -41,6 +41,23 @@ pub enum Design {
     Walking(crate::varying::WalkingExperiment),
 }
 
+/// Every preset's name, in the order of [`PRESETS`] (`limpid protocol new
+/// --help` lists them from here).
+pub const PRESET_NAMES: [&str; 12] = [
+    "artemiadis-3d",
+    "patel-cocontraction",
+    "lakatos-planar",
+    "park-stochastic",
+    "ensemble",
+    "ankle-ramp-and-hold",
+    "ankle-multisine",
+    "planar-multisine",
+    "endpoint-multisine",
+    "ankle-prbs",
+    "walking-pulses",
+    "walking-continuous",
+];
+
 /// The preset names, by kind.
 pub const PRESETS: &str = "artemiadis-3d, patel-cocontraction (centre-out), lakatos-planar (planar), park-stochastic (stochastic), ensemble (ensemble), ankle-ramp-and-hold (ramp-and-hold), ankle-multisine, planar-multisine, endpoint-multisine (multisine), ankle-prbs (prbs), walking-pulses, walking-continuous (walking)";
 
@@ -780,12 +797,8 @@ mod tests {
 
     #[test]
     fn every_preset_round_trips_through_toml_and_passes_its_check() {
-        for name in [
-            "artemiadis-3d",
-            "patel-cocontraction",
-            "lakatos-planar",
-            "park-stochastic",
-        ] {
+        for name in PRESET_NAMES {
+            assert!(PRESETS.contains(name), "{name} is not listed in PRESETS");
             let d = Design::preset(name).unwrap();
             let text = d.to_toml();
             let back = Design::from_toml(&text, std::path::Path::new("p.toml")).unwrap();

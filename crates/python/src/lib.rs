@@ -126,10 +126,39 @@ fn warn_about(py: Python<'_>, rec: &Recording) -> PyResult<()> {
 }
 
 fn recording_unwarned(source: &Bound<'_, PyAny>) -> PyResult<Recording> {
+    recording_through(source, &Reading::default())
+}
+
+/// How the files of a call are read: `map=` and `columns=` (issue 81: every
+/// estimator takes them, as every CLI command takes --map and --column).
+#[derive(Default)]
+struct Reading {
+    map: Option<limpid_io::map::ChannelMap>,
+    columns: Vec<(String, String)>,
+}
+
+impl Reading {
+    fn new(
+        map: Option<&Bound<'_, PyAny>>,
+        columns: Option<std::collections::BTreeMap<String, String>>,
+    ) -> PyResult<Reading> {
+        Ok(Reading {
+            map: map.map(channel_map).transpose()?,
+            columns: columns.unwrap_or_default().into_iter().collect(),
+        })
+    }
+}
+
+/// A recording from a path (through `reading`'s map and columns) or a dict of arrays.
+fn recording_through(source: &Bound<'_, PyAny>, reading: &Reading) -> PyResult<Recording> {
     if let Ok(path) = source.extract::<std::path::PathBuf>() {
         // on the package's pool: the Parquet reader decodes columns in
         // parallel, and rayon's global pool hangs a forked child
-        return detached(source.py(), || limpid_io::read_recording(&path)).map_err(err);
+        return detached(source.py(), || {
+            limpid_io::convert_with_columns(&path, reading.map.as_ref(), &reading.columns)
+                .map(|c| c.recording)
+        })
+        .map_err(err);
     }
     let dict = source.cast::<PyDict>().map_err(|_| {
         PyValueError::new_err("a recording is a path or a dict of 1-D float arrays")
@@ -210,19 +239,21 @@ fn channel_map(map: &Bound<'_, PyAny>) -> PyResult<limpid_io::map::ChannelMap> {
 /// A recording file as a dict of numpy arrays (column order kept); lab
 /// files (XDF, C3D, TDMS, MAT structs, ROS 2 bags) through a channel map.
 #[pyfunction]
-#[pyo3(signature = (path, map=None, partial=false))]
+#[pyo3(signature = (path, map=None, partial=false, columns=None))]
 fn read_recording<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
     map: Option<Bound<'py, PyAny>>,
     partial: bool,
+    columns: Option<std::collections::BTreeMap<String, String>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let map = map.as_ref().map(channel_map).transpose()?;
+    let reading = Reading::new(map.as_ref(), columns)?;
     let rec = detached(py, || {
         if partial {
-            limpid_io::read_supporting_recording(&path, map.as_ref())
+            limpid_io::read_supporting_recording(&path, reading.map.as_ref())
         } else {
-            limpid_io::read_recording_mapped(&path, map.as_ref())
+            limpid_io::convert_with_columns(&path, reading.map.as_ref(), &reading.columns)
+                .map(|c| c.recording)
         }
     })
     .map_err(err)?;
@@ -341,13 +372,17 @@ fn request_schema(method: &str) -> PyResult<String> {
 /// stochastic, reflex, varying, spectra) on its recordings, with keyword options as
 /// `limpid estimate METHOD`'s (or `limpid spectra`'s) flags; JSON text of the result.
 #[pyfunction]
+#[pyo3(signature = (method, recordings, options, map=None, columns=None))]
 fn estimate(
     py: Python<'_>,
     method: &str,
     recordings: Vec<Bound<'_, PyAny>>,
     options: &Bound<'_, PyDict>,
+    map: Option<Bound<'_, PyAny>>,
+    columns: Option<std::collections::BTreeMap<String, String>>,
 ) -> PyResult<String> {
     let checked = build_request(method, options)?.check().map_err(err)?;
+    let reading = Reading::new(map.as_ref(), columns)?;
     // files by their path, arrays as "<arrays>": the run block says which
     let names: Vec<std::path::PathBuf> = recordings
         .iter()
@@ -358,7 +393,11 @@ fn estimate(
         .collect();
     let recordings = recordings
         .iter()
-        .map(recording)
+        .map(|r| {
+            let rec = recording_through(r, &reading)?;
+            warn_about(py, &rec)?;
+            Ok(rec)
+        })
         .collect::<PyResult<Vec<_>>>()?;
     let inputs: Vec<&Path> = names.iter().map(|p| p.as_path()).collect();
     // what was read, before the recordings go to the estimator
@@ -367,6 +406,8 @@ fn estimate(
         &inputs,
     )
     .with_request(checked.request())
+    .with_channel_map(reading.map.as_ref().and_then(|m| m.path.as_deref()))
+    .with_columns(&reading.columns)
     .with_recordings(&recordings);
     let mut document = detached(py, || limpid_app::estimate::run(&checked, recordings))
         .map_err(err)?

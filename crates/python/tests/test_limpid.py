@@ -385,6 +385,48 @@ def test_five_real_ankles_table_carries_verdicts_and_nan_for_what_is_not_identif
     assert (k["value"] > 2 * k["se"]).all()
 
 
+def _lab_ankle(tmp_path):
+    """The ankle PRBS recording with a lab's own column names, as CSV and as a MAT struct."""
+    cols, _ = limpid.simulate("ankle-prbs")[0]
+    lab = {"time_s": cols["t"], "angle_rad": cols["q1"], "torque_Nm": cols["tau1"]}
+    csv = tmp_path / "lab.csv"
+    np.savetxt(csv, np.c_[lab["time_s"], lab["angle_rad"], lab["torque_Nm"]], delimiter=",",
+               header="time_s,angle_rad,torque_Nm", comments="")
+    return csv, lab
+
+
+def test_every_estimator_reads_a_lab_s_own_names_by_keyword(tmp_path):
+    """Issue 81, item 2: map= and columns= wherever a recording is read, and a
+    missing column's error that names the keyword."""
+    csv, lab = _lab_ankle(tmp_path)
+    with pytest.raises(ValueError, match=r"missing required column t .*columns=\{'t': 'time_s'\}"):
+        limpid.estimate_reflex(csv, position="angle_rad", torque="torque_Nm")
+    named = limpid.estimate_reflex(csv, columns={"t": "time_s"}, position="angle_rad", torque="torque_Nm")
+    assert abs(named.intrinsic.stiffness - 80.0) < 4.0
+    assert named.to_dict()["run"]["columns"] == {"t": "time_s"}
+    mapped = limpid.estimate_reflex(csv, map={"columns": {"t": "time_s", "q1": "angle_rad", "tau1": "torque_Nm"}})
+    assert mapped.intrinsic.stiffness == named.intrinsic.stiffness
+    # inspect's proposed map, used as it is
+    proposed = limpid.inspect(csv)["proposed_map"]
+    (tmp_path / "rig.toml").write_text(proposed)
+    again = limpid.estimate_reflex(csv, map=tmp_path / "rig.toml")
+    assert again.intrinsic.stiffness == named.intrinsic.stiffness
+    rec = limpid.read_recording(csv, columns={"t": "time_s"})
+    assert set(rec) == {"t", "angle_rad", "torque_Nm"}
+    with pytest.raises(ValueError, match="columns is a dict"):
+        limpid.estimate_reflex(csv, columns=["t=time_s"])
+    # a MAT struct whose fields carry the format's names is read as it is
+    sio = pytest.importorskip("scipy.io")
+    mat = tmp_path / "rec.mat"
+    sio.savemat(mat, {"rec": {"t": lab["time_s"], "q1": lab["angle_rad"], "tau1": lab["torque_Nm"]}})
+    assert limpid.estimate_reflex(mat).intrinsic.stiffness == named.intrinsic.stiffness
+    sio.savemat(mat, {"rec": lab})
+    with pytest.raises(ValueError, match=r"struct fields .*--column t=rec.time_s"):
+        limpid.estimate_reflex(mat)
+    fields = {"t": "rec.time_s", "q1": "rec.angle_rad", "tau1": "rec.torque_Nm"}
+    assert limpid.estimate_reflex(mat, columns=fields).intrinsic.stiffness == named.intrinsic.stiffness
+
+
 def test_a_text_column_is_named_with_its_row():
     rec = FakeFrame({"t": np.arange(4) / 100, "x": [0.0, 0.1, "slip", 0.2], "fx": np.zeros(4)})
     with pytest.raises(ValueError, match=r"column x, row 3: expected a number, found 'slip'"):

@@ -119,6 +119,10 @@ pub struct Run {
     /// The channel map (`--map`) the input files were read through, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub channel_map: Option<InputFile>,
+    /// Columns named on the command line (`--column NAME=CHANNEL`, Python
+    /// `columns=`): column -> the file's channel.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub columns: std::collections::BTreeMap<String, String>,
 }
 
 /// One file a result was made from.
@@ -166,6 +170,7 @@ impl Run {
             inputs: inputs.iter().map(|p| InputFile::of(p)).collect(),
             request: None,
             channel_map: None,
+            columns: Default::default(),
         }
     }
 
@@ -190,6 +195,14 @@ impl Run {
             })
             .collect();
         self
+    }
+
+    /// The run with the columns named on the command line.
+    pub fn with_columns(self, columns: &[(String, String)]) -> Run {
+        Run {
+            columns: columns.iter().cloned().collect(),
+            ..self
+        }
     }
 
     /// The run with the channel map its inputs were read through.

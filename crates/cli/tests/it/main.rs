@@ -7,6 +7,7 @@ mod common;
 mod coverage;
 mod design;
 mod examples;
+mod first_hour;
 mod gravity;
 mod hostile;
 mod lab_files;

@@ -65,9 +65,14 @@ fn over_fast_protocol_is_refused() {
     );
     let unknown = limpid(&["protocol", "new", "--preset", "nope"]);
     assert_eq!(unknown.code, 2);
-    assert!(unknown
-        .stderr
-        .contains("presets: artemiadis-3d, patel-cocontraction"));
+    // every preset is named (issue 81: --help listed 6 of the 12)
+    for name in limpid_lab::design::PRESET_NAMES {
+        assert!(unknown.stderr.contains(name), "{name}: {}", unknown.stderr);
+    }
+    let help = limpid(&["protocol", "new", "--help"]);
+    for name in limpid_lab::design::PRESET_NAMES {
+        assert!(help.stdout.contains(name), "{name}: {}", help.stdout);
+    }
 }
 
 #[test]

@@ -358,7 +358,24 @@ fn lengths(rec: &Recording, p: &ReflexParams, samples: usize) -> Result<Layout> 
 /// Refuses a decimated rate above the recording's.
 fn check_rate(rec: &Recording, p: &ReflexParams) -> Result<()> {
     let fs = rec.sample_rate();
-    if p.rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE) {
+    let too_slow = p.rate_hz > fs * (1.0 + limpid_core::recording::SAMPLING_TOLERANCE);
+    if too_slow && p.rate_hz == super::ReflexRequest::default().rate_hz {
+        // the default rate: the recording is at fault, not a flag nobody gave
+        return Err(Error::Format {
+            path: rec.path().to_path_buf(),
+            message: format!(
+                "sampled at {} Hz, below the {} Hz the parallel cascade works at{}",
+                limpid_core::short_number(fs),
+                limpid_core::short_number(p.rate_hz),
+                if fs < 20.0 {
+                    ": is t in seconds? (a rate this low usually means milliseconds: divide t by 1000, or read it through a channel map with unit = \"ms\", which `limpid inspect FILE --map-template` proposes for a column named like time_ms)"
+                } else {
+                    "; a slower rate can be asked for with --rate"
+                }
+            ),
+        });
+    }
+    if too_slow {
         return Err(Error::invalid(
             "rate_hz",
             format!(

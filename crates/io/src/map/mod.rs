@@ -265,6 +265,62 @@ impl ChannelMap {
         Ok(())
     }
 
+    /// The map of `--column NAME=CHANNEL` (Python `columns={NAME: CHANNEL}`):
+    /// `base` (a map file) or, without one, every channel of a one-stream
+    /// file (a table, a MAT file) under its own name (of several streams:
+    /// those named like FORMAT.md columns), with each named column read from
+    /// its channel instead, a renamed channel no longer under its own name.
+    pub fn with_columns(
+        base: Option<&ChannelMap>,
+        source: &Source,
+        columns: &[(String, String)],
+    ) -> Result<ChannelMap> {
+        let mut map = match base {
+            Some(map) => map.clone(),
+            None => {
+                let numeric: Vec<&Stream> = source
+                    .streams
+                    .iter()
+                    .filter(|s| !s.channels.is_empty())
+                    .collect();
+                match numeric.as_slice() {
+                    [only] => ChannelMap {
+                        time: TimeSpec::default(),
+                        columns: only
+                            .channels
+                            .iter()
+                            .filter(|c| {
+                                !c.name.is_empty()
+                                    && !c.name.chars().any(|ch| ch.is_control() || ch == ',')
+                            })
+                            .map(|c| (c.name.clone(), ColumnSpec::Channel(c.name.clone())))
+                            .collect(),
+                        streams: BTreeMap::new(),
+                        path: None,
+                    },
+                    _ => ChannelMap::implicit(source).unwrap_or(ChannelMap {
+                        time: TimeSpec::default(),
+                        columns: BTreeMap::new(),
+                        streams: BTreeMap::new(),
+                        path: None,
+                    }),
+                }
+            }
+        };
+        for (_, channel) in columns {
+            // the channel is read once, under its new name
+            map.columns
+                .retain(|_, spec| spec.rule().channel.as_deref() != Some(channel.as_str()));
+        }
+        for (name, channel) in columns {
+            map.columns
+                .insert(name.clone(), ColumnSpec::Channel(channel.clone()));
+        }
+        map.check()
+            .map_err(|m| source.error(format!("--column: {m}")))?;
+        Ok(map)
+    }
+
     /// The map a file without one gets: every channel named like a FORMAT.md
     /// column, the time base the stream holding most of them.
     pub fn implicit(source: &Source) -> Result<ChannelMap> {

@@ -80,6 +80,8 @@ __all__ = [
 ]
 
 RecordingLike = Union[str, "os.PathLike[str]", Mapping[str, Any], Any]
+# a channel map: the path of its TOML file or a dict of the same shape
+MapLike = Union[None, str, "os.PathLike[str]", Mapping[str, Any]]
 
 
 def _arrayish(v: Any) -> Any:
@@ -435,8 +437,9 @@ def _recording(rec: RecordingLike) -> Any:
 
 
 def read_recording(path: Union[str, "os.PathLike[str]"],
-                   map: Union[None, str, "os.PathLike[str]", Mapping[str, Any]] = None,
-                   partial: bool = False) -> Dict[str, np.ndarray]:
+                   map: MapLike = None,
+                   partial: bool = False,
+                   columns: Optional[Mapping[str, str]] = None) -> Dict[str, np.ndarray]:
     """Read a recording (docs/src/format.md) into a dict of arrays.
 
     CSV, Parquet and MAT files whose columns carry FORMAT.md's names are read
@@ -446,11 +449,18 @@ def read_recording(path: Union[str, "os.PathLike[str]"],
     ``{"time": {"stream": "robot"}, "columns": {"x": {"channel": "EndEff.X", "unit": "mm"}}}``
     (docs/src/reference/lab-files.md). Conversion notes arrive as warnings.
     ``partial=True`` reads a file beside the main one (an MVC recording) with
-    the same map, leaving out the columns it does not record.
+    the same map, leaving out the columns it does not record. ``columns``
+    names columns by the file's own channels, e.g. ``{"t": "time_s"}`` (the
+    CLI's ``--column t=time_s``); the other columns keep their names.
     """
-    if map is not None and not isinstance(map, (str, os.PathLike)):
-        map = dict(map)
-    return _limpid.read_recording(path, map, partial)
+    checked_map, checked_columns = _reading(map, columns)
+    try:
+        return _limpid.read_recording(path, checked_map, partial, checked_columns)
+    except ValueError as e:
+        message = _name_the_column(str(e))
+        if message != str(e):
+            raise ValueError(message) from None
+        raise
 
 
 def inspect(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Any]:
@@ -603,12 +613,42 @@ def _function_name(method: str) -> str:
     return method if method in ("window_sweep", "spectra") else f"estimate_{method}"
 
 
+def _reading(map: Any, columns: Any) -> Tuple[Any, Optional[Dict[str, str]]]:
+    """``map=`` and ``columns=`` as the extension takes them, checked."""
+    if map is not None and not isinstance(map, (str, os.PathLike)):
+        if not isinstance(map, Mapping):
+            raise ValueError("map is the path of a channel map (TOML) or a dict like {'columns': {...}}")
+        map = dict(map)
+    if columns is not None:
+        if not isinstance(columns, Mapping) or not all(
+                isinstance(k, str) and isinstance(v, str) for k, v in columns.items()):
+            raise ValueError("columns is a dict of column name to the file's channel, e.g. {'t': 'time_s'}")
+        columns = dict(columns)
+    return map, columns
+
+
+def _name_the_column(message: str) -> str:
+    """A missing column's error with the keyword that names it (the CLI says --column)."""
+    missing = re.search(r"missing required column (\S+) .*found columns: ([^;,\s]+)", message)
+    if not missing or "columns=" in message:
+        return message
+    name, first = missing.groups()
+    return (message.split("; name it with --column")[0]
+            + f"; name it with columns={{{name!r}: {first!r}}} (a column of the file), "
+              f"or pass map= (limpid.inspect(path)['proposed_map'] proposes one)")
+
+
 def _estimate(method: str, recordings: Sequence[RecordingLike], options: Mapping[str, Any]) -> Result:
+    options = dict(options)
+    map, columns = _reading(options.pop("map", None), options.pop("columns", None))
     opts = {k: _plain(v) for k, v in options.items()}
     try:
-        return Result(json.loads(_limpid.estimate(method, [_recording(r) for r in recordings], opts)))
+        return Result(json.loads(_limpid.estimate(method, [_recording(r) for r in recordings], opts,
+                                                  map, columns)))
     except ValueError as e:
-        message = str(e)
+        message = _name_the_column(str(e))
+        if message != str(e):
+            raise ValueError(message) from None
         wrong = re.match(r"invalid (\w+): TypeError: (.*)", message)
         if wrong and wrong.group(1) in opts:
             value = opts[wrong.group(1)]

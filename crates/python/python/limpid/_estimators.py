@@ -5,9 +5,9 @@ doc comment (or the script's summaries) and run the script."""
 
 from __future__ import annotations
 
-from typing import Literal, Optional, Sequence, Union
+from typing import Literal, Mapping, Optional, Sequence, Union
 
-from . import Result, RecordingLike, _estimate
+from . import MapLike, Result, RecordingLike, _estimate
 
 __all__ = ["estimate_linear", "estimate_planar", "window_sweep", "estimate_stochastic", "estimate_reflex", "estimate_varying", "estimate_cocontraction", "spectra"]
 
@@ -30,6 +30,8 @@ def estimate_linear(
         window: Literal['auto', 'trials', 'onsets', 'continuous', 'continuous-trials'] = 'auto',
         shoulder: Optional[Sequence[float]] = None,
         vertical: Literal['x', 'y', 'z'] = 'z',
+        map: MapLike = None,
+        columns: Optional[Mapping[str, str]] = None,
 ) -> Result:
     """Artemiadis et al. (2010)'s linear estimator (M, B, K with standard errors, fit,
     criteria, ellipsoids), as ``limpid estimate linear``.
@@ -81,6 +83,13 @@ def estimate_linear(
     vertical : {'x', 'y', 'z'}, default 'z'
         The upward axis of the frame, for the arm configuration from `elbow_*`/`wrist_*`
         markers (Patel et al. 2013's frame has x up).
+    map : str, os.PathLike, dict or None, default None
+        Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path
+        of its file or a dict of the same shape, reading a lab file's channels as the
+        recording's columns (docs/src/reference/lab-files.md).
+    columns : dict of str to str or None, default None
+        Name a column of the recording by its channel in the file (the CLI's ``--column``),
+        e.g. ``{"t": "time_s", "q1": "angle_rad"}``; the other columns keep their names.
 
     Returns
     -------
@@ -90,7 +99,7 @@ def estimate_linear(
         ``antisymmetric``, ``ellipsoids``, ``table_ii``, ``fit`` (VAF %, r, RMSE and traces),
         ``criteria`` (condition number, identifiability, verdicts), ``warnings``.
     """
-    options = {"equilibrium": equilibrium, "cutoff_hz": cutoff_hz, "derivative": derivative, "frame": frame, "level": level, "negate_force": negate_force, "offsets": offsets, "open_loop": open_loop, "order": order, "robot": robot, "robot_base": robot_base, "transform": transform, "window": window, "shoulder": shoulder, "vertical": vertical}
+    options = {"equilibrium": equilibrium, "cutoff_hz": cutoff_hz, "derivative": derivative, "frame": frame, "level": level, "negate_force": negate_force, "offsets": offsets, "open_loop": open_loop, "order": order, "robot": robot, "robot_base": robot_base, "transform": transform, "window": window, "shoulder": shoulder, "vertical": vertical, "map": map, "columns": columns}
     return _estimate("linear", [recording], options)
 
 
@@ -103,6 +112,8 @@ def estimate_planar(
         inertial_parameters: Optional[Sequence[float]] = None,
         shoulder: Sequence[float] = (0.0, 0.0),
         window_ms: Optional[float] = None,
+        map: MapLike = None,
+        columns: Optional[Mapping[str, str]] = None,
 ) -> Result:
     """Lakatos, Petit & van der Smagt (2011)'s planar-arm estimator (joint K, D, inertial
     parameters, criteria), as ``limpid estimate planar``.
@@ -126,6 +137,13 @@ def estimate_planar(
     window_ms : float or None, default None
         Observation window after the perturbation onset (ms) [default: every sample of every
         trial].
+    map : str, os.PathLike, dict or None, default None
+        Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path
+        of its file or a dict of the same shape, reading a lab file's channels as the
+        recording's columns (docs/src/reference/lab-files.md).
+    columns : dict of str to str or None, default None
+        Name a column of the recording by its channel in the file (the CLI's ``--column``),
+        e.g. ``{"t": "time_s", "q1": "angle_rad"}``; the other columns keep their names.
 
     Returns
     -------
@@ -134,7 +152,7 @@ def estimate_planar(
         errors, ``inertial_parameters`` (kg m²), ``endpoint_stiffness`` (N/m), ``criteria``,
         ``fit``, ``warnings``.
     """
-    options = {"cutoff_hz": cutoff_hz, "elbow_negative": elbow_negative, "inertial_parameters": inertial_parameters, "shoulder": shoulder, "window_ms": window_ms}
+    options = {"cutoff_hz": cutoff_hz, "elbow_negative": elbow_negative, "inertial_parameters": inertial_parameters, "shoulder": shoulder, "window_ms": window_ms, "map": map, "columns": columns}
     return _estimate("planar", [recording], dict(options, link_lengths=link_lengths))
 
 
@@ -149,6 +167,8 @@ def window_sweep(
         from_ms: float = 50.0,
         step_ms: float = 10.0,
         to_ms: float = 400.0,
+        map: MapLike = None,
+        columns: Optional[Mapping[str, str]] = None,
 ) -> Result:
     """Lakatos, Petit & van der Smagt (2011)'s observation-window sweep, as ``limpid
     window-sweep --json``: one planar estimate with its criteria per window, and the
@@ -176,6 +196,13 @@ def window_sweep(
         Step (ms).
     to_ms : float, default 400.0
         Longest observation window (ms).
+    map : str, os.PathLike, dict or None, default None
+        Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path
+        of its file or a dict of the same shape, reading a lab file's channels as the
+        recording's columns (docs/src/reference/lab-files.md).
+    columns : dict of str to str or None, default None
+        Name a column of the recording by its channel in the file (the CLI's ``--column``),
+        e.g. ``{"t": "time_s", "q1": "angle_rad"}``; the other columns keep their names.
 
     Returns
     -------
@@ -183,7 +210,7 @@ def window_sweep(
         kind ``window_sweep``: ``rows`` (``observation_window_ms``, ``estimate``, ``trusted``,
         ``reasons``), ``shortest_trusted_ms``; ``to_xarray()`` gives them over the window.
     """
-    options = {"cutoff_hz": cutoff_hz, "elbow_negative": elbow_negative, "inertial_parameters": inertial_parameters, "shoulder": shoulder, "from_ms": from_ms, "step_ms": step_ms, "to_ms": to_ms}
+    options = {"cutoff_hz": cutoff_hz, "elbow_negative": elbow_negative, "inertial_parameters": inertial_parameters, "shoulder": shoulder, "from_ms": from_ms, "step_ms": step_ms, "to_ms": to_ms, "map": map, "columns": columns}
     return _estimate("window_sweep", [recording], dict(options, link_lengths=link_lengths))
 
 
@@ -197,6 +224,8 @@ def estimate_stochastic(
         period_s: Optional[float] = None,
         shoulder: Optional[Sequence[float]] = None,
         window: Literal['hann', 'hamming', 'boxcar'] = 'hann',
+        map: MapLike = None,
+        columns: Optional[Mapping[str, str]] = None,
 ) -> Result:
     """Park & Chang (2011)'s stochastic MIMO estimator: Z(f) = T R^-1, coherences,
     parametric fit, as ``limpid estimate stochastic``.
@@ -236,6 +265,13 @@ def estimate_stochastic(
         recording's mean X, Z is the hand at this posture.
     window : {'hann', 'hamming', 'boxcar'}, default 'hann'
         Segment window.
+    map : str, os.PathLike, dict or None, default None
+        Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path
+        of its file or a dict of the same shape, reading a lab file's channels as the
+        recording's columns (docs/src/reference/lab-files.md).
+    columns : dict of str to str or None, default None
+        Name a column of the recording by its channel in the file (the CLI's ``--column``),
+        e.g. ``{"t": "time_s", "q1": "angle_rad"}``; the other columns keep their names.
 
     Returns
     -------
@@ -245,7 +281,7 @@ def estimate_stochastic(
         ``damping``, ``stiffness`` with ``standard_errors``, ``criteria``, ``accuracy`` (with
         ``expected``), ``warnings``.
     """
-    options = {"band_hz": band_hz, "expected": expected, "noverlap": noverlap, "nperseg": nperseg, "period_s": period_s, "shoulder": shoulder, "window": window}
+    options = {"band_hz": band_hz, "expected": expected, "noverlap": noverlap, "nperseg": nperseg, "period_s": period_s, "shoulder": shoulder, "window": window, "map": map, "columns": columns}
     return _estimate("stochastic", list(recording) if isinstance(recording, (list, tuple)) else [recording], options)
 
 
@@ -262,6 +298,8 @@ def estimate_reflex(
         rectify_first: bool = True,
         reflex_lags_s: float = 1.0,
         torque: str = 'tau1',
+        map: MapLike = None,
+        columns: Optional[Mapping[str, str]] = None,
 ) -> Result:
     """Intrinsic and reflex joint stiffness by the parallel cascade (Kearney et al. 1997),
     as ``limpid estimate reflex --json``.
@@ -302,6 +340,13 @@ def estimate_reflex(
         Reflex IRF length (s); also left out of every VAF.
     torque : str, default 'tau1'
         Torque column applied to the limb (N m, or N), e.g. `tau1`.
+    map : str, os.PathLike, dict or None, default None
+        Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path
+        of its file or a dict of the same shape, reading a lab file's channels as the
+        recording's columns (docs/src/reference/lab-files.md).
+    columns : dict of str to str or None, default None
+        Name a column of the recording by its channel in the file (the CLI's ``--column``),
+        e.g. ``{"t": "time_s", "q1": "angle_rad"}``; the other columns keep their names.
 
     Returns
     -------
@@ -311,7 +356,7 @@ def estimate_reflex(
         gain, delay_s, delay_interval_s, IRF), ``fit`` (VAF %), ``cross_validated_vaf``,
         ``warnings``.
     """
-    options = {"coordinate": coordinate, "intrinsic_lags_s": intrinsic_lags_s, "max_delay_s": max_delay_s, "nonlinearity": nonlinearity, "open_loop": open_loop, "position": position, "rate_hz": rate_hz, "rectify_first": rectify_first, "reflex_lags_s": reflex_lags_s, "torque": torque}
+    options = {"coordinate": coordinate, "intrinsic_lags_s": intrinsic_lags_s, "max_delay_s": max_delay_s, "nonlinearity": nonlinearity, "open_loop": open_loop, "position": position, "rate_hz": rate_hz, "rectify_first": rectify_first, "reflex_lags_s": reflex_lags_s, "torque": torque, "map": map, "columns": columns}
     return _estimate("reflex", [recording], options)
 
 
@@ -341,6 +386,8 @@ def estimate_varying(
         step_ms: Optional[float] = None,
         trigger: Optional[str] = None,
         window_ms: float = 30.0,
+        map: MapLike = None,
+        columns: Optional[Mapping[str, str]] = None,
 ) -> Result:
     """Impedance that varies, as ``limpid estimate varying --json``.
 
@@ -424,6 +471,13 @@ def estimate_varying(
         `perturbation` when present].
     window_ms : float, default 30.0
         Ensemble: the window pooled around each instant (ms), the time resolution.
+    map : str, os.PathLike, dict or None, default None
+        Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path
+        of its file or a dict of the same shape, reading a lab file's channels as the
+        recording's columns (docs/src/reference/lab-files.md).
+    columns : dict of str to str or None, default None
+        Name a column of the recording by its channel in the file (the CLI's ``--column``),
+        e.g. ``{"t": "time_s", "q1": "angle_rad"}``; the other columns keep their names.
 
     Returns
     -------
@@ -433,7 +487,7 @@ def estimate_varying(
         ``vaf``, ``reason`` when not identifiable), ``fit``, ``warnings``; walking adds
         ``gait`` (strides used, flawed ones by number).
     """
-    options = {"basis_order": basis_order, "bin": bin, "cutoff_hz": cutoff_hz, "event": event, "gait_method": gait_method, "grid_points": grid_points, "hysteresis": hysteresis, "max_delay_s": max_delay_s, "min_pulses": min_pulses, "min_repetitions": min_repetitions, "neighbours": neighbours, "open_loop": open_loop, "pulse_window_ms": pulse_window_ms, "rate_hz": rate_hz, "reflex": reflex, "refractory_ms": refractory_ms, "schedule_angle": schedule_angle, "slow_hz": slow_hz, "stance_end": stance_end, "step_ms": step_ms, "trigger": trigger, "window_ms": window_ms}
+    options = {"basis_order": basis_order, "bin": bin, "cutoff_hz": cutoff_hz, "event": event, "gait_method": gait_method, "grid_points": grid_points, "hysteresis": hysteresis, "max_delay_s": max_delay_s, "min_pulses": min_pulses, "min_repetitions": min_repetitions, "neighbours": neighbours, "open_loop": open_loop, "pulse_window_ms": pulse_window_ms, "rate_hz": rate_hz, "reflex": reflex, "refractory_ms": refractory_ms, "schedule_angle": schedule_angle, "slow_hz": slow_hz, "stance_end": stance_end, "step_ms": step_ms, "trigger": trigger, "window_ms": window_ms, "map": map, "columns": columns}
     return _estimate("varying", [recording], dict(options, schedule=schedule))
 
 
@@ -454,6 +508,8 @@ def estimate_cocontraction(
         transform: Optional[Sequence[float]] = None,
         window: Literal['auto', 'trials', 'onsets', 'continuous', 'continuous-trials'] = 'auto',
         tolerance: float = 0.1,
+        map: MapLike = None,
+        columns: Optional[Mapping[str, str]] = None,
 ) -> Result:
     """Patel, O'Neill & Artemiadis (2013)'s co-contraction analysis: the co-contraction
     index and the stiffness per level, as ``limpid estimate cocontraction``.
@@ -497,6 +553,13 @@ def estimate_cocontraction(
         How the recording is cut into windows.
     tolerance : float, default 0.1
         Half-width of the band around the target level counted as "on target".
+    map : str, os.PathLike, dict or None, default None
+        Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path
+        of its file or a dict of the same shape, reading a lab file's channels as the
+        recording's columns (docs/src/reference/lab-files.md).
+    columns : dict of str to str or None, default None
+        Name a column of the recording by its channel in the file (the CLI's ``--column``),
+        e.g. ``{"t": "time_s", "q1": "angle_rad"}``; the other columns keep their names.
 
     Returns
     -------
@@ -504,7 +567,7 @@ def estimate_cocontraction(
         kind ``cocontraction``: ``muscles``, ``levels`` (per level: ``cocontraction_index`` with
         its sd, the linear ``estimate``, the stiffness ``ellipsoid``), ``warnings``.
     """
-    options = {"cutoff_hz": cutoff_hz, "derivative": derivative, "frame": frame, "level": level, "negate_force": negate_force, "offsets": offsets, "open_loop": open_loop, "order": order, "robot": robot, "robot_base": robot_base, "transform": transform, "window": window, "tolerance": tolerance}
+    options = {"cutoff_hz": cutoff_hz, "derivative": derivative, "frame": frame, "level": level, "negate_force": negate_force, "offsets": offsets, "open_loop": open_loop, "order": order, "robot": robot, "robot_base": robot_base, "transform": transform, "window": window, "tolerance": tolerance, "map": map, "columns": columns}
     return _estimate("cocontraction", [recording, mvc], options)
 
 
@@ -517,6 +580,8 @@ def spectra(
         nperseg: Optional[int] = None,
         period_s: Optional[float] = None,
         window: Literal['hann', 'hamming', 'boxcar'] = 'hann',
+        map: MapLike = None,
+        columns: Optional[Mapping[str, str]] = None,
 ) -> Result:
     """Welch spectra of a recording's named columns and, per output, its ordinary
     coherence with each input, its multiple coherence on all inputs and its partial
@@ -544,6 +609,13 @@ def spectra(
         come from the period-to-period scatter.
     window : {'hann', 'hamming', 'boxcar'}, default 'hann'
         Segment window.
+    map : str, os.PathLike, dict or None, default None
+        Channel map (TOML) for commands that read recordings (the CLI's ``--map``): the path
+        of its file or a dict of the same shape, reading a lab file's channels as the
+        recording's columns (docs/src/reference/lab-files.md).
+    columns : dict of str to str or None, default None
+        Name a column of the recording by its channel in the file (the CLI's ``--column``),
+        e.g. ``{"t": "time_s", "q1": "angle_rad"}``; the other columns keep their names.
 
     Returns
     -------
@@ -555,5 +627,5 @@ def spectra(
     """
     if isinstance(inputs, str) or isinstance(outputs, str):
         raise ValueError("inputs and outputs: expected lists of column names, e.g. inputs=['ux', 'uz']")
-    options = {"noverlap": noverlap, "nperseg": nperseg, "period_s": period_s, "window": window}
+    options = {"noverlap": noverlap, "nperseg": nperseg, "period_s": period_s, "window": window, "map": map, "columns": columns}
     return _estimate("spectra", [recording], dict(options, inputs=list(inputs), outputs=list(outputs)))

@@ -1,0 +1,185 @@
+//! Issue 81: a researcher's first hour. The README's command block runs top
+//! to bottom in an empty folder, and each friction of the issue is replayed:
+//! a lab's own column names, a MAT struct, time in milliseconds.
+
+use std::path::Path;
+use std::process::Command;
+
+/// The lines of the README's first `sh` block under "From the command line".
+fn readme_commands() -> Vec<String> {
+    let readme = include_str!("../../../../README.md");
+    let section = &readme[readme
+        .find("## From the command line")
+        .expect("the README has its command-line section")..];
+    let block = &section[section.find("```sh\n").expect("a sh block") + 6..];
+    let block = &block[..block.find("```").expect("the block ends")];
+    block
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn the_readme_s_command_block_runs_top_to_bottom_in_an_empty_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let bin = Path::new(env!("CARGO_BIN_EXE_limpid")).parent().unwrap();
+    let path = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let commands = readme_commands();
+    assert!(commands.len() >= 20, "{commands:?}");
+    for line in &commands {
+        assert!(line.starts_with("limpid "), "{line}");
+        let out = Command::new("sh")
+            .arg("-c")
+            .arg(line)
+            .current_dir(dir.path())
+            .env("PATH", &path)
+            .env_remove("LIMPID_EXAMPLES")
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "README line failed: {line}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+/// The issue's ankle recording with a lab's own names.
+fn lab_csv(dir: &Path) -> std::path::PathBuf {
+    let protocol = crate::common::preset(dir, "ankle-prbs");
+    let rec = dir.join("ankle.csv");
+    let out = crate::common::limpid(&[
+        "simulate",
+        protocol.to_str().unwrap(),
+        "-o",
+        rec.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let at = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (t, q, tq) = (at("t"), at("q1"), at("tau1"));
+    let mut lab = String::from("time_s,angle_rad,torque_Nm\n");
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        lab.push_str(&format!("{},{},{}\n", f[t], f[q], f[tq]));
+    }
+    let path = dir.join("lab.csv");
+    std::fs::write(&path, lab).unwrap();
+    path
+}
+
+#[test]
+fn a_lab_s_own_column_names_are_read_in_one_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let lab = lab_csv(dir.path());
+    let lab = lab.to_str().unwrap();
+    // the issue's first attempt: the error names the fix
+    let out = crate::common::limpid(&[
+        "estimate",
+        "reflex",
+        lab,
+        "--position",
+        "angle_rad",
+        "--torque",
+        "torque_Nm",
+    ]);
+    let err = &out.stderr;
+    assert_eq!(out.code, 2, "{err}");
+    assert!(err.contains("missing required column t"), "{err}");
+    assert!(err.contains("--column t=time_s"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    // ... which works, with the other columns named by the estimator's flags
+    let named = crate::common::json(&[
+        "estimate",
+        "reflex",
+        lab,
+        "--column",
+        "t=time_s",
+        "--position",
+        "angle_rad",
+        "--torque",
+        "torque_Nm",
+        "--json",
+    ]);
+    let k = named["intrinsic"]["stiffness"].as_f64().unwrap();
+    assert!((k - 80.0).abs() < 4.0, "K {k}");
+    // the run block keeps the names, so that `rerun` reads the file again
+    assert_eq!(named["run"]["columns"]["t"], "time_s");
+    // or all three by flag
+    let all = crate::common::json(&[
+        "estimate",
+        "reflex",
+        lab,
+        "--column",
+        "t=time_s",
+        "--column",
+        "q1=angle_rad",
+        "--column",
+        "tau1=torque_Nm",
+        "--json",
+    ]);
+    assert_eq!(
+        all["intrinsic"]["stiffness"],
+        named["intrinsic"]["stiffness"]
+    );
+    // inspect's template, saved as it is, reads the file
+    let out = crate::common::limpid(&["inspect", lab, "--map-template"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let template = out.stdout.clone();
+    for line in [
+        "t = { channel = \"time_s\" }",
+        "q1 = { channel = \"angle_rad\" }",
+        "tau1 = { channel = \"torque_Nm\" }",
+    ] {
+        assert!(template.contains(line), "{template}");
+    }
+    let map = dir.path().join("rig.toml");
+    std::fs::write(&map, template).unwrap();
+    let mapped = crate::common::json(&[
+        "--map",
+        map.to_str().unwrap(),
+        "estimate",
+        "reflex",
+        lab,
+        "--json",
+    ]);
+    assert_eq!(
+        mapped["intrinsic"]["stiffness"],
+        named["intrinsic"]["stiffness"]
+    );
+    // a bad pair is one line naming the flag
+    let out = crate::common::limpid(&["estimate", "reflex", lab, "--column", "t"]);
+    let err = &out.stderr;
+    assert_eq!(out.code, 2);
+    assert!(
+        err.contains("--column") && err.contains("NAME=CHANNEL"),
+        "{err}"
+    );
+}
+
+#[test]
+fn time_in_milliseconds_is_blamed_on_the_file_not_on_a_flag_nobody_gave() {
+    let dir = tempfile::tempdir().unwrap();
+    let lab = lab_csv(dir.path());
+    let text = std::fs::read_to_string(&lab).unwrap();
+    let mut ms = String::from("t,q1,tau1\n");
+    for l in text.lines().skip(1) {
+        let (t, rest) = l.split_once(',').unwrap();
+        ms.push_str(&format!("{},{rest}\n", t.parse::<f64>().unwrap() * 1000.0));
+    }
+    let path = dir.path().join("ms.csv");
+    std::fs::write(&path, ms).unwrap();
+    let out = crate::common::limpid(&["estimate", "reflex", path.to_str().unwrap()]);
+    let err = &out.stderr;
+    assert_eq!(out.code, 2, "{err}");
+    assert!(!err.contains("--rate"), "{err}");
+    assert!(err.contains("milliseconds"), "{err}");
+}
