@@ -44,8 +44,8 @@ fn m2(m: &Matrix, se: &Matrix) -> String {
         let _ = writeln!(
             s,
             "    {:>20}{:>20}",
-            format!("{} ± {}", num(m[(i, 0)]), num(se[(i, 0)])),
-            format!("{} ± {}", num(m[(i, 1)]), num(se[(i, 1)]))
+            limpid_core::with_standard_error(m[(i, 0)], se[(i, 0)]),
+            limpid_core::with_standard_error(m[(i, 1)], se[(i, 1)])
         );
     }
     s

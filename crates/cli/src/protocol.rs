@@ -615,11 +615,10 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         baseline: baseline_text,
     } = DesignTexts::read(&args, demo)?;
     let named = |e| design_error(cx, &args, e);
-    if !args.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-        eprintln!(
-            "designing: every candidate is simulated and estimated on the prior (seconds) ..."
-        );
-    }
+    let spinner = working(
+        !args.json,
+        "designing: every candidate is simulated and estimated on the prior",
+    );
     let inputs_read = limpid_app::design::DesignInputs {
         prior: (prior_text.as_str(), prior_path.as_path()),
         limits_from: limits_text.as_deref().zip(args.limits_from.as_deref()),
@@ -631,8 +630,11 @@ fn run_design(args: DesignArgs, cx: &Context) -> CliResult {
         verify: args.verify,
         seed: args.seed,
     };
-    let (toml, result) =
-        limpid_app::design::design_from_texts(&args.method, &inputs_read).map_err(named)?;
+    let designed = limpid_app::design::design_from_texts(&args.method, &inputs_read);
+    if let Some(s) = spinner {
+        s.finish_and_clear();
+    }
+    let (toml, result) = designed.map_err(named)?;
     // the result is read back before anything is written
     let document = limpid_analysis::result::Document::new(result).with_run(
         limpid_analysis::result::Run::of_this_process(
@@ -887,7 +889,15 @@ fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     )
     .map_err(|e| design_error(cx, args, e))?;
 
-    let designed = design_reflex(&request).map_err(|e| design_error(cx, args, e))?;
+    let spinner = working(
+        !args.json,
+        "designing: every candidate PRBS is simulated and estimated on the prior ankle",
+    );
+    let designed = design_reflex(&request);
+    if let Some(s) = spinner {
+        s.finish_and_clear();
+    }
+    let designed = designed.map_err(|e| design_error(cx, args, e))?;
     let json = limpid_analysis::result::Document::new(
         limpid_analysis::result::Estimate::ReflexDesign(designed.result.clone()),
     )
@@ -941,6 +951,9 @@ fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
     if let Some(ratio) = r.gain_spread_ratio {
         println!("  the design's gain spread is {ratio:.2} of the baseline's");
     }
+    println!(
+        "  (the s.d. is the gain's spread over recordings of this one virtual ankle, noise alone: designs are compared by it; the SE is what `estimate reflex` will report, which adds what no simulated noise shows, the model's error floors and the spread over rectifier orders, so it is the larger)"
+    );
     println!("margins to the limits:");
     for m in &r.limits {
         println!(
@@ -953,8 +966,25 @@ fn run_reflex_design(args: &DesignArgs, demo: bool, cx: &Context) -> CliResult {
         );
     }
     match &args.output {
-        Some(out) => println!("wrote {}", out.display()),
+        Some(out) => println!(
+            "wrote {0} (next: limpid simulate {0} -o prbs.csv && limpid estimate reflex prbs.csv; on the rig: limpid protocol export {0} -o command.csv)",
+            out.display()
+        ),
         None => println!("protocol not written: add -o D.toml"),
     }
     Ok(())
+}
+
+/// A spinner with the elapsed time on standard error while a command works
+/// for seconds, on a terminal only (silent when piped or with `--json`).
+fn working(shown: bool, message: &'static str) -> Option<indicatif::ProgressBar> {
+    if !(shown && std::io::IsTerminal::is_terminal(&std::io::stderr())) {
+        return None;
+    }
+    let spinner = indicatif::ProgressBar::new_spinner().with_message(message);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})") {
+        spinner.set_style(style);
+    }
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    Some(spinner)
 }

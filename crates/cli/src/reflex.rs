@@ -133,6 +133,9 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
     if let Some(why) = e.fit.shares_note() {
         println!("  {why}");
     }
+    if let Some(z) = &e.frequency_response {
+        print_frequency_response(z, u);
+    }
     for w in &e.warnings {
         println!("warning: {w}");
     }
@@ -172,10 +175,9 @@ fn print_curve(c: &limpid_ident::reflex::StaticCurve, u: &limpid_ident::units::U
         .filter(|&&i| i < n)
         .map(|&i| {
             format!(
-                "{} -> {} +- {}",
+                "{} -> {}",
                 num(c.velocity_rad_s[i]),
-                num(c.torque[i]),
-                num(c.torque_se[i])
+                with_standard_error(c.torque[i], c.torque_se[i])
             )
         })
         .collect();
@@ -183,5 +185,52 @@ fn print_curve(c: &limpid_ident::reflex::StaticCurve, u: &limpid_ident::units::U
         "  curve (velocity -> torque {}): {}",
         u.force,
         points.join(", ")
+    );
+}
+
+/// The position-to-torque response at a few frequencies beside the
+/// intrinsic model, and where the coherence is high.
+fn print_frequency_response(
+    z: &limpid_ident::reflex::JointFrequencyResponse,
+    u: &limpid_ident::units::Units,
+) {
+    let at: Vec<String> = [1.0, 3.0, 10.0]
+        .iter()
+        .filter_map(|&f| {
+            let k = z
+                .frequency_hz
+                .iter()
+                .enumerate()
+                .min_by(|a, b| (a.1 - f).abs().total_cmp(&(b.1 - f).abs()))?
+                .0;
+            Some(format!(
+                "{:.1} Hz {} (model {})",
+                z.frequency_hz[k],
+                with_standard_error(z.magnitude[k], z.magnitude_se[k]),
+                num(z.intrinsic_model_magnitude[k])
+            ))
+        })
+        .collect();
+    let coherent: Vec<f64> = z
+        .frequency_hz
+        .iter()
+        .zip(&z.coherence)
+        .filter(|(_, c)| **c >= 0.9)
+        .map(|(f, _)| *f)
+        .collect();
+    let band = match (coherent.first(), coherent.last()) {
+        (Some(a), Some(b)) => format!(
+            "coherence >= 0.9 at {} of {} frequencies between {:.1} and {:.1} Hz",
+            coherent.len(),
+            z.frequency_hz.len(),
+            a,
+            b
+        ),
+        _ => "coherence below 0.9 everywhere: the position explains the torque poorly as a linear system".into(),
+    };
+    println!(
+        "frequency response, position to torque (|Z| in {}, ± SE; model: the intrinsic I-B-K alone, the reflex adds the rest): {}; {band}",
+        u.stiffness,
+        at.join(", ")
     );
 }

@@ -137,7 +137,7 @@ pub fn stochastic_text(
                 .map(|j| {
                     format!(
                         "{:>24}",
-                        format!("{} ± {}", num(m[(i, j)]), num(se[(i, j)]))
+                        limpid_core::with_standard_error(m[(i, j)], se[(i, j)])
                     )
                 })
                 .collect();

@@ -29,7 +29,8 @@ fn matrix_block(out: &mut String, title: &str, m: &Matrix, se: &Matrix, coords: 
     for i in 0..m.nrows() {
         let _ = write!(out, "  {:<4}", coords[i]);
         for j in 0..m.ncols() {
-            let cell = format!("{} ± {}", num(m[(i, j)]), num(se[(i, j)]));
+            // rounded to the standard error, as the report and Python print it
+            let cell = limpid_core::with_standard_error(m[(i, j)], se[(i, j)]);
             let _ = write!(out, "{cell:>22}");
         }
         out.push('\n');
@@ -228,15 +229,25 @@ pub fn cocontraction_text(r: &CocontractionResult) -> String {
     out.push('\n');
     let _ = writeln!(
         out,
-        "{:>6} {:>16} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  quality",
-        "level", "C (mean ± sd)", "on band", "Kxx", "Kyy", "Kzz", "K_maxA", "K1", "K2", "K3",
+        "{:>6} {:>16} {:>8} {:>13} {:>13} {:>13} {:>9} {:>9} {:>9} {:>9}  quality",
+        "level",
+        "C (mean ± sd)",
+        "on band",
+        "Kxx ± SE",
+        "Kyy ± SE",
+        "Kzz ± SE",
+        "K_maxA",
+        "K1",
+        "K2",
+        "K3",
     );
     for l in &r.levels {
         let k = &l.stiffness;
+        let se = &l.estimate.standard_errors.stiffness;
         let n = k.nrows();
         let get = |i: usize, j: usize| {
             if i < n && j < n {
-                num(k[(i, j)])
+                limpid_core::with_standard_error(k[(i, j)], se[(i, j)])
             } else {
                 "-".into()
             }
@@ -248,7 +259,8 @@ pub fn cocontraction_text(r: &CocontractionResult) -> String {
         let p = |i: usize| principal.get(i).cloned().unwrap_or_else(|| "-".into());
         let e = &l.estimate;
         let quality = format!(
-            "VAF {}%",
+            "K {}, VAF {}%",
+            e.criteria.verdicts.stiffness.words(),
             e.fit
                 .vaf
                 .iter()
@@ -258,7 +270,7 @@ pub fn cocontraction_text(r: &CocontractionResult) -> String {
         );
         let _ = writeln!(
             out,
-            "{:>6} {:>16} {:>7.0}% {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {}",
+            "{:>6} {:>16} {:>7.0}% {:>13} {:>13} {:>13} {:>9} {:>9} {:>9} {:>9}  {}",
             num(l.level),
             format!("{:.3} ± {:.3}", l.cocontraction_index, l.cocontraction_sd),
             100.0 * l.cocontraction_within_band,

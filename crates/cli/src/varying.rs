@@ -132,6 +132,9 @@ pub fn varying_text(e: &VaryingEstimate, paths: &[PathBuf]) -> CliResult {
                 if let Some(r) = &p.reflex {
                     line.push_str(&format!("  G {}", with_standard_error(r.gain, r.gain_se)));
                 }
+                if let Some(v) = &p.verdicts {
+                    line.push_str(&point_verdict(v));
+                }
             }
             _ => line.push_str(&format!(
                 "  not identifiable: {}",
@@ -139,6 +142,23 @@ pub fn varying_text(e: &VaryingEstimate, paths: &[PathBuf]) -> CliResult {
             )),
         }
         println!("{line}");
+    }
+    let judged: Vec<&limpid_ident::varying::PointVerdicts> = e
+        .points
+        .iter()
+        .filter_map(|p| p.verdicts.as_ref())
+        .collect();
+    if !judged.is_empty() {
+        let trusted = |f: fn(&limpid_ident::varying::PointVerdicts) -> bool| {
+            judged.iter().filter(|v| f(v)).count()
+        };
+        println!(
+            "verdicts: K trusted at {} of {} points, B at {}, M at {} (the rest marked on their line)",
+            trusted(|v| v.stiffness.trusted()),
+            e.points.len(),
+            trusted(|v| v.damping.trusted()),
+            trusted(|v| v.inertia.trusted())
+        );
     }
     println!(
         "VAF {} % (cross-validated {} %)",
@@ -161,4 +181,18 @@ pub fn varying_text(e: &VaryingEstimate, paths: &[PathBuf]) -> CliResult {
         println!("warning: {w}");
     }
     Ok(())
+}
+
+/// A point's verdicts after its values: `[trusted]`, or what is not.
+fn point_verdict(v: &limpid_ident::varying::PointVerdicts) -> String {
+    let not: Vec<String> = [("K", v.stiffness), ("B", v.damping), ("M", v.inertia)]
+        .iter()
+        .filter(|(_, verdict)| !verdict.trusted())
+        .map(|(symbol, verdict)| format!("{symbol} {}", verdict.words()))
+        .collect();
+    if not.is_empty() {
+        "  [trusted]".into()
+    } else {
+        format!("  [{}]", not.join(", "))
+    }
 }

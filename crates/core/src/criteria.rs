@@ -135,6 +135,17 @@ impl MatrixVerdict {
     pub fn trusted(self) -> bool {
         self == MatrixVerdict::Trusted
     }
+
+    /// The verdict in words: its JSON tag spelt out.
+    pub fn words(self) -> &'static str {
+        match self {
+            MatrixVerdict::Trusted => "trusted",
+            MatrixVerdict::PoorFit => "poor fit",
+            MatrixVerdict::NotIdentifiable => "not identifiable",
+            MatrixVerdict::NotPassive => "not passive",
+            MatrixVerdict::Imprecise => "imprecise",
+        }
+    }
 }
 
 /// The verdict rules, in the order they are checked, for any estimator's
@@ -384,6 +395,16 @@ mod tests {
             NotPassive,
             Imprecise,
             NoStandardError,
+        ] {
+            let tag = serde_json::to_value(v).unwrap();
+            assert_eq!(tag.as_str().unwrap().replace('_', " "), v.words());
+        }
+        for v in [
+            MatrixVerdict::Trusted,
+            MatrixVerdict::PoorFit,
+            MatrixVerdict::NotIdentifiable,
+            MatrixVerdict::NotPassive,
+            MatrixVerdict::Imprecise,
         ] {
             let tag = serde_json::to_value(v).unwrap();
             assert_eq!(tag.as_str().unwrap().replace('_', " "), v.words());

@@ -174,6 +174,21 @@ def _labelled(drawn):
             assert label and "(" in label and label.endswith(")"), (ax.get_title(), labels)
 
 
+def _inside(drawn, name):
+    """No text leaves the figure (issue 81: plot.reflex cut its own y-label to "ntrinsic IRF"):
+    each Axes' tight box (the tick labels drawn, axis labels, title, legend) lies in the figure."""
+    figure = drawn.figure
+    if any(hasattr(ax, "get_zlim") for ax in figure.axes):
+        return  # a 3-D Axes' tick texts report extents in their own projection
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    box = figure.bbox
+    for ax in figure.axes:
+        b = ax.get_tightbbox(renderer)
+        assert b.x0 >= box.x0 - 1 and b.y0 >= box.y0 - 1 and b.x1 <= box.x1 + 1 and b.y1 <= box.y1 + 1, \
+            (name, ax.get_title(), ax.get_ylabel(), b, box.bounds)
+
+
 def test_every_plot_runs_on_its_kind_with_units_on_the_axes(results, tmp_path):
     from limpid import plot
 
@@ -190,6 +205,7 @@ def test_every_plot_runs_on_its_kind_with_units_on_the_axes(results, tmp_path):
     }
     for name, fig in figures.items():
         _labelled(fig)
+        _inside(fig, name)
         path = tmp_path / f"{name}.png"
         fig.savefig(path, dpi=60)
         assert path.stat().st_size > 5000, name
@@ -282,7 +298,7 @@ def _plain_tick_labels(drawn):
 # (function, result kind, panels: rows, cols); the one ax= convention, issue 63 item 5
 PLOTS = [("ellipsoids", "linear", 1, 1), ("ellipses", "planar", 1, 1), ("fit", "linear", 3, 1),
          ("fit", "reflex", 1, 1), ("bode", "stochastic", 6, 3), ("coherence", "stochastic", 6, 1),
-         ("sweep", "window_sweep", 2, 1), ("reflex", "reflex", 1, 3), ("varying", "varying", 1, 3),
+         ("sweep", "window_sweep", 2, 1), ("reflex", "reflex", 1, 4), ("varying", "varying", 1, 3),
          ("study", "study", 1, 3)]
 
 

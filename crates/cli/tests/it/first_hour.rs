@@ -183,3 +183,110 @@ fn time_in_milliseconds_is_blamed_on_the_file_not_on_a_flag_nobody_gave() {
     assert!(!err.contains("--rate"), "{err}");
     assert!(err.contains("milliseconds"), "{err}");
 }
+
+/// Run a tutorial as a newcomer would, in an empty folder: every `sh` block's
+/// lines in order (each must succeed), and every output block that follows
+/// one (plain or `text`) checked line by line against what those commands
+/// printed (lines with `...` are elisions). Python blocks are left to the
+/// notebook tests.
+fn run_tutorial(name: &str) {
+    let path = format!(
+        "{}/../../docs/src/tutorials/{name}.md",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let bin = Path::new(env!("CARGO_BIN_EXE_limpid")).parent().unwrap();
+    let path_var = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let mut lines = text.lines();
+    let mut printed = String::new();
+    let mut blocks = 0;
+    while let Some(line) = lines.next() {
+        let fence = line.trim_end();
+        if !fence.starts_with("```") {
+            continue;
+        }
+        let language = fence.trim_start_matches('`');
+        let body: Vec<&str> = lines
+            .by_ref()
+            .take_while(|l| !l.starts_with("```"))
+            .collect();
+        match language {
+            "sh" => {
+                printed.clear();
+                for command in body
+                    .iter()
+                    .map(|l| l.trim())
+                    .filter(|l| !l.is_empty() && !l.starts_with('#'))
+                {
+                    let out = Command::new("sh")
+                        .arg("-c")
+                        .arg(command)
+                        .current_dir(dir.path())
+                        .env("PATH", &path_var)
+                        .output()
+                        .unwrap();
+                    let (stdout, stderr) = (
+                        String::from_utf8_lossy(&out.stdout),
+                        String::from_utf8_lossy(&out.stderr),
+                    );
+                    assert!(
+                        out.status.success(),
+                        "{name}.md: `{command}` failed: {stderr}"
+                    );
+                    printed.push_str(&stdout);
+                    printed.push_str(&stderr);
+                }
+                blocks += 1;
+            }
+            "" | "text" => {
+                for expected in body
+                    .iter()
+                    .map(|l| l.trim())
+                    .filter(|l| !l.is_empty() && !l.contains("..."))
+                {
+                    assert!(
+                        printed.lines().any(|l| l.trim() == expected),
+                        "{name}.md quotes a line its commands do not print:\n  {expected}\nthey printed:\n{printed}"
+                    );
+                }
+            }
+            _ => {}
+        }
+    }
+    assert!(blocks > 0, "{name}.md has no sh block");
+}
+
+#[test]
+fn the_reflex_tutorial_runs_and_prints_what_it_says() {
+    run_tutorial("reflex");
+}
+
+#[test]
+fn the_stochastic_tutorial_runs_and_prints_what_it_says() {
+    run_tutorial("stochastic");
+}
+
+#[test]
+fn the_cocontraction_tutorial_runs_and_prints_what_it_says() {
+    run_tutorial("cocontraction");
+}
+
+#[test]
+fn the_endpoint_3d_tutorial_runs_and_prints_what_it_says() {
+    run_tutorial("endpoint-3d");
+}
+
+#[test]
+fn the_planar_tutorial_runs_and_prints_what_it_says() {
+    run_tutorial("planar");
+}
+
+#[test]
+fn the_walking_tutorial_runs_and_prints_what_it_says() {
+    run_tutorial("walking");
+}

@@ -231,6 +231,10 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         crate::units::range(q),
     ));
     let verdicts = ReflexVerdicts::judge(&intrinsic, &reflex, fit.vaf_total);
+    // H1 from the measured position: open loop and one continuous record only
+    let frequency_response = (closed_loop.is_none() && d.segments.len() == 1)
+        .then(|| super::frequency::joint_frequency_response(&d.position, &d.torque, d.fs, &ibk))
+        .flatten();
     let est = ReflexEstimate {
         position: p.position.clone(),
         torque: p.torque.clone(),
@@ -255,6 +259,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         }),
         traces: traces(dc, c, skip),
         verdicts,
+        frequency_response,
         closed_loop,
         segments: segment_use.map(|u| SegmentUse {
             start_left_out_s: start_left_out as f64 / d.fs,

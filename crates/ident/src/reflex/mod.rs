@@ -51,6 +51,7 @@ use serde::{Deserialize, Serialize};
 
 mod cascade;
 mod estimate;
+mod frequency;
 mod instrumental;
 mod nonlinearity;
 mod parametric;
@@ -60,6 +61,7 @@ mod transients;
 
 pub use cascade::vaf;
 pub use estimate::estimate_reflex;
+pub use frequency::JointFrequencyResponse;
 pub(crate) use parametric::low_pass;
 pub use segments::SegmentUse;
 pub use settings::{Nonlinearity, ReflexParams, ReflexRequest, MAX_ITERATIONS, TOLERANCE_VAF};
@@ -318,6 +320,11 @@ pub struct ReflexEstimate {
     pub other_rectifier_order: Option<OtherOrder>,
     /// Torque traces.
     pub traces: ReflexTraces,
+    /// The frequency response from position to torque with its coherence
+    /// and the intrinsic model over it (issue 81); absent for closed-loop
+    /// and segmented recordings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frequency_response: Option<JointFrequencyResponse>,
     /// The verdict on each parameter (issue 81), by the rules every
     /// estimator shares ([`limpid_core::criteria::parameter_verdict`]).
     pub verdicts: ReflexVerdicts,

@@ -74,9 +74,10 @@ fn repetitions(
         return Err(Error::invalid(
             "trial",
             format!(
-                "{}: an ensemble needs at least 3 repetitions of the task, found {}",
+                "{}: an ensemble needs at least 3 repetitions of the task, found {}{}",
                 rec.path().display(),
-                windows.len()
+                windows.len(),
+                schedule_hint(rec)
             ),
         ));
     }
@@ -644,4 +645,32 @@ fn leave_one_out(e: &Ensemble, pre: &Prefix, w: &std::ops::Range<usize>) -> Opti
         press,
         press_tss,
     })
+}
+
+/// A recording without repetitions may be a parameter-varying one: its
+/// columns that could be a schedule (neither time, trial, motion nor force),
+/// named with the flag that takes them.
+fn schedule_hint(rec: &Recording) -> String {
+    // env_ columns (EMG envelopes) are schedules of their own; the other
+    // format columns are time, trials, motion and force
+    let motion_or_force = |n: &str| {
+        (limpid_core::recording::is_format_column(n) && !n.starts_with("env_")) || n == "period"
+    };
+    let candidates: Vec<&str> = rec
+        .names()
+        .iter()
+        .map(String::as_str)
+        .filter(|n| !motion_or_force(n))
+        .collect();
+    match candidates.as_slice() {
+        [] => String::new(),
+        [one] => format!(
+            "; for impedance against an operating point the file's column {one} can be the schedule: --schedule {one}"
+        ),
+        many => format!(
+            "; for impedance against an operating point name a schedule column: --schedule {} (or {})",
+            many[0],
+            many[1..].join(", ")
+        ),
+    }
 }

@@ -479,10 +479,15 @@ def reflex(result: Any, ax: Any = None) -> Plot:
     """Parallel cascade: the intrinsic IRF (position to torque), the reflex
     IRF (rectified velocity to torque), both per second of lag (the result's
     own values) against lag in ms, and the reflex pathway's static curve (estimated, with
-    its ±2 SE band; older results: the half-wave rectifier times the gain). ``ax``: 1 x 3 Axes or None."""
+    its ±2 SE band; older results: the half-wave rectifier times the gain), and, when the
+    result has it, the joint's |Z| from position to torque with ±2 SE and the intrinsic
+    I-B-K model over it. ``ax``: 1 x 4 Axes (1 x 3 without the |Z| panel) or None."""
     d = _data(result)
     _kind(d, "reflex")
-    fig, a, _ = _panels(ax, 1, 3, "plot.reflex", panel=(3.0, 2.6))
+    z: Dict[str, Any] = d.get("frequency_response") or {}
+    # the frequency response as a fourth panel when the result has one (and ax= asks for 4)
+    panels = 4 if z and (ax is None or np.asarray(ax, dtype=object).size != 3) else 3
+    fig, a, _ = _panels(ax, 1, panels, "plot.reflex", panel=(3.0, 2.6))
     tu = _display._force_unit(d, d["position"])
     pu = _display._position_unit(d, d["position"])
     ii, ri = d["intrinsic"]["irf"], d["reflex"]["irf"]
@@ -495,6 +500,9 @@ def reflex(result: Any, ax: Any = None) -> Plot:
     a[0, 0].plot(lag, h, color="#000000", linewidth=1, marker="o" if lag.size < 30 else None, markersize=3)
     a[0, 0].set_xlabel("lag (ms)")
     a[0, 0].set_ylabel(f"intrinsic IRF ({tu}/{pu}/s)")
+    for panel in (a[0, 0], a[0, 1]):
+        # IRF weights run to 1e4: short tick labels, so the axis label stays in the figure
+        panel.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3))
     a[0, 0].set_title("Intrinsic pathway", fontsize="medium")
     lag, h = in_ms(ri)
     a[0, 1].plot(lag, h, color="#D55E00", linewidth=1)
@@ -520,6 +528,21 @@ def reflex(result: Any, ax: Any = None) -> Plot:
     a[0, 2].set_xlabel(f"velocity ({pu}/s)")
     a[0, 2].set_ylabel(f"reflex torque at DC ({tu})")
     a[0, 2].set_title(title, fontsize="medium")
+    if panels == 4:
+        f = np.asarray(z["frequency_hz"], dtype=float)
+        m = np.asarray(z["magnitude"], dtype=float)
+        se = np.asarray(z["magnitude_se"], dtype=float)
+        a[0, 3].fill_between(f, np.maximum(m - 2 * se, m * 1e-3), m + 2 * se, color="#000000", alpha=0.2,
+                             linewidth=0, label="measured ±2 SE")
+        a[0, 3].loglog(f, m, color="#000000", linewidth=1)
+        a[0, 3].loglog(f, np.asarray(z["intrinsic_model_magnitude"], dtype=float), color="#0072B2",
+                       linewidth=1.2, label="intrinsic I-B-K")
+        _log_ticks(a[0, 3].xaxis, f)
+        _log_ticks(a[0, 3].yaxis, np.r_[m, z["intrinsic_model_magnitude"]])
+        a[0, 3].set_xlabel("frequency (Hz)")
+        a[0, 3].set_ylabel(f"|Z| ({tu}/{pu})")
+        a[0, 3].set_title("position to torque", fontsize="medium")
+        a[0, 3].legend(fontsize="small", frameon=False)
     return Plot(fig, a)
 
 

@@ -249,7 +249,7 @@ fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
         })
         .unzip();
     let t = &v.traces.t_s;
-    vec![
+    let mut out = vec![
         line(
             "reflex-intrinsic-irf",
             "Intrinsic IRF (position to torque)",
@@ -312,6 +312,81 @@ fn figures(v: &limpid_ident::reflex::ReflexEstimate) -> Vec<Figure> {
                 s("intrinsic", t, v.traces.intrinsic.clone(), 2),
                 s("reflex", t, v.traces.reflex.clone(), 3),
             ],
+        ),
+    ];
+    if let Some(z) = &v.frequency_response {
+        out.extend(frequency_figures(z, u));
+    }
+    out
+}
+
+/// The joint's frequency response (position to torque) with ±2 SE and the
+/// intrinsic I-B-K model over it; its phase; the coherence.
+fn frequency_figures(
+    z: &limpid_ident::reflex::JointFrequencyResponse,
+    u: &limpid_ident::units::Units,
+) -> Vec<Figure> {
+    let f = &z.frequency_hz;
+    let series = |name: &str, y: Vec<f64>, stroke: Stroke, k: usize| Series {
+        name: name.into(),
+        x: f.clone(),
+        y,
+        stroke,
+        color: PALETTE[k].into(),
+    };
+    let band = |v: &[f64], se: &[f64], sign: f64| -> Vec<f64> {
+        v.iter()
+            .zip(se)
+            .map(|(a, e)| (a + sign * 2.0 * e).max(a * 1e-3))
+            .collect()
+    };
+    let chart = |id: &str, title: String, y_label: String, y_log: bool, y_range, series| Figure {
+        id: id.into(),
+        chart: Chart {
+            title,
+            x_label: "frequency (Hz)".into(),
+            y_label,
+            x_log: true,
+            y_log,
+            y_range,
+            series,
+        },
+    };
+    vec![
+        chart(
+            "reflex-frequency-magnitude",
+            format!(
+                "Joint impedance |Z|, position to torque (H1, {} Welch segments), and the intrinsic I-B-K model",
+                z.segments
+            ),
+            format!("|Z| ({})", u.stiffness),
+            true,
+            None,
+            vec![
+                series("measured |Z|", z.magnitude.clone(), Stroke::Solid, 0),
+                series("+2 SE", band(&z.magnitude, &z.magnitude_se, 1.0), Stroke::Dashed, 0),
+                series("-2 SE", band(&z.magnitude, &z.magnitude_se, -1.0), Stroke::Dashed, 0),
+                series("intrinsic model", z.intrinsic_model_magnitude.clone(), Stroke::Solid, 1),
+            ],
+        ),
+        chart(
+            "reflex-frequency-phase",
+            "Phase of Z (torque leads position by it)".into(),
+            "phase (deg)".into(),
+            false,
+            Some((-180.0, 180.0)),
+            vec![
+                series("measured", z.phase_deg.clone(), Stroke::Solid, 0),
+                series("intrinsic model", z.intrinsic_model_phase_deg.clone(), Stroke::Solid, 1),
+            ],
+        ),
+        chart(
+            "reflex-frequency-coherence",
+            "Coherence of position and torque (below 1: noise, nonlinearity or the reflex's rectifier)".into(),
+            "coherence".into(),
+            false,
+            Some((0.0, 1.0)),
+            vec![series("coherence", z.coherence.clone(), Stroke::Solid, 2)],
         ),
     ]
 }
