@@ -284,6 +284,47 @@ pub enum ParameterRole {
     Gain,
 }
 
+/// One scalar parameter as every front-end presents it (issue 77's first
+/// presentation rows): the text, the report's table and Python's
+/// `to_pandas()` read the same rows, so a value that is not identifiable
+/// is missing everywhere, never its best guess.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParameterRow {
+    /// Machine name (`to_pandas()`'s `quantity`), e.g. `intrinsic_stiffness`.
+    pub quantity: String,
+    /// Name for people, e.g. `intrinsic stiffness K`.
+    pub label: String,
+    /// The value; `None` when its verdict says it has none.
+    pub value: Option<f64>,
+    /// Its standard error, where there is one.
+    pub se: Option<f64>,
+    /// Unit, e.g. `N m/rad` (empty for a pure number).
+    pub unit: String,
+    /// The verdict, for judged parameters.
+    pub verdict: Option<ParameterVerdict>,
+}
+
+impl ParameterRow {
+    /// A row: `value` and `se` are dropped when `verdict` says the value means nothing.
+    pub fn new(
+        quantity: &str,
+        label: &str,
+        (value, se): (f64, Option<f64>),
+        unit: &str,
+        verdict: Option<ParameterVerdict>,
+    ) -> Self {
+        let kept = verdict.is_none_or(|v| v.has_value());
+        ParameterRow {
+            quantity: quantity.into(),
+            label: label.into(),
+            value: kept.then_some(value),
+            se: se.filter(|_| kept),
+            unit: unit.into(),
+            verdict,
+        }
+    }
+}
+
 /// The three matrices of the linear model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MatrixKind {

@@ -502,6 +502,19 @@ fn finish_study(
     Ok(document(Estimate::Study(result)))
 }
 
+/// The parameter rows of a result document (JSON text) as JSON text: the
+/// rows the report's table shows (issue 77), for `to_pandas()`. Reflex
+/// results only, for now.
+#[pyfunction]
+fn parameter_rows(document: &str) -> PyResult<String> {
+    let d = limpid_analysis::result::Document::from_json("result", document).map_err(value_err)?;
+    let rows = match &d.estimate {
+        limpid_analysis::result::Estimate::Reflex(e) => e.parameters(),
+        _ => return Err(value_err("parameter rows are made for reflex results")),
+    };
+    serde_json::to_string(&rows).map_err(value_err)
+}
+
 /// `value ± se` rounded to the standard error, as the report and the CLI
 /// print it (limpid_core::with_standard_error).
 #[pyfunction]
@@ -774,6 +787,7 @@ fn _limpid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(report, m)?)?;
     m.add_function(wrap_pyfunction!(check_result, m)?)?;
     m.add_function(wrap_pyfunction!(with_standard_error, m)?)?;
+    m.add_function(wrap_pyfunction!(parameter_rows, m)?)?;
     m.add_function(wrap_pyfunction!(matrix_element_unit, m)?)?;
     m.add_function(wrap_pyfunction!(set_threads, m)?)?;
     Ok(())

@@ -339,6 +339,38 @@ fn a_reflex_design_writes_a_prbs_that_its_check_accepts() {
     assert!(v["chosen"]["duration_s"].as_f64().unwrap() <= 30.0);
     let check = limpid(&["protocol", "check", &s(&d)]);
     assert_eq!(check.code, 0, "{}", check.stderr);
+    // issue 81: the preset's name as Python takes it; the text explains its
+    // two spreads and names the next command; no spinner when piped
+    let d2 = dir.path().join("d2.toml");
+    let text = limpid(&[
+        "protocol",
+        "design",
+        "--method",
+        "reflex",
+        "--prior",
+        "demo:ankle",
+        "--limits-from",
+        "ankle-prbs",
+        "--duration",
+        "30",
+        "--runs",
+        "3",
+        "-o",
+        &s(&d2),
+    ]);
+    assert_eq!(text.code, 0, "{}", text.stderr);
+    assert!(
+        text.stdout.contains("the s.d. is the gain's spread"),
+        "{}",
+        text.stdout
+    );
+    assert!(
+        text.stdout
+            .contains(&format!("next: limpid simulate {}", d2.display())),
+        "{}",
+        text.stdout
+    );
+    assert!(!text.stderr.contains("designing"), "{}", text.stderr);
     let verify = limpid(&[
         "protocol",
         "design",

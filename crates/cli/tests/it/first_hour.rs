@@ -113,6 +113,13 @@ fn a_lab_s_own_column_names_are_read_in_one_step() {
     assert!((k - 80.0).abs() < 4.0, "K {k}");
     // the run block keeps the names, so that `rerun` reads the file again
     assert_eq!(named["run"]["columns"]["t"], "time_s");
+    let saved = dir.path().join("named.json");
+    std::fs::write(&saved, named.to_string()).unwrap();
+    let again = crate::common::json(&["rerun", saved.to_str().unwrap(), "--json"]);
+    assert_eq!(
+        again["intrinsic"]["stiffness"],
+        named["intrinsic"]["stiffness"]
+    );
     // or all three by flag
     let all = crate::common::json(&[
         "estimate",
@@ -289,4 +296,33 @@ fn the_planar_tutorial_runs_and_prints_what_it_says() {
 #[test]
 fn the_walking_tutorial_runs_and_prints_what_it_says() {
     run_tutorial("walking");
+}
+
+#[test]
+fn help_names_what_the_readme_names() {
+    // the README says `reproduce artemiadis2010`; --help said 000, 001, 003, 004
+    let help = crate::common::limpid(&["reproduce", "--help"]);
+    for name in ["artemiadis2010", "patel2013", "lakatos2011", "park2011"] {
+        assert!(help.stdout.contains(name), "{name}: {}", help.stdout);
+    }
+    let top = crate::common::limpid(&["--help"]);
+    assert!(top.stdout.contains("artemiadis2010"), "{}", top.stdout);
+}
+
+#[test]
+fn a_parameter_varying_file_sent_to_the_ensemble_names_its_schedule() {
+    // one repetition with an operating-point column: the error says --schedule sv
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("t,q1,tau1,sv,trial\n");
+    for i in 0..3000 {
+        let t = i as f64 / 1000.0;
+        let q = 0.01 * (7.0 * t).sin() + 0.003 * (31.0 * t).sin();
+        text.push_str(&format!("{t},{q},{},{},1\n", 50.0 * q, 0.1 * t));
+    }
+    let path = dir.path().join("pv.csv");
+    std::fs::write(&path, text).unwrap();
+    let out = crate::common::limpid(&["estimate", "varying", path.to_str().unwrap()]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("--schedule sv"), "{}", out.stderr);
+    assert_eq!(out.stderr.trim().lines().count(), 1, "{}", out.stderr);
 }

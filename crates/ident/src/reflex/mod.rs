@@ -408,6 +408,76 @@ impl ReflexVerdicts {
     }
 }
 
+impl ReflexEstimate {
+    /// The pathway parameters with their standard errors and verdicts, as
+    /// the report's table and Python's `to_pandas()` present them. The
+    /// delay's SE is its 95 % profile interval's half-width / 1.96.
+    pub fn parameters(&self) -> Vec<limpid_core::criteria::ParameterRow> {
+        use limpid_core::criteria::ParameterRow;
+        let (i, r, u, v) = (&self.intrinsic, &self.reflex, &self.units, &self.verdicts);
+        let se = &i.standard_errors;
+        let delay_se = (r.delay_interval_s[1] - r.delay_interval_s[0]) / (2.0 * 1.96);
+        vec![
+            ParameterRow::new(
+                "intrinsic_stiffness",
+                "intrinsic stiffness K",
+                (i.stiffness, Some(se.stiffness)),
+                &u.stiffness,
+                Some(v.stiffness),
+            ),
+            ParameterRow::new(
+                "intrinsic_damping",
+                "intrinsic damping B",
+                (i.damping, Some(se.damping)),
+                &u.damping,
+                Some(v.damping),
+            ),
+            ParameterRow::new(
+                "intrinsic_inertia",
+                "intrinsic inertia I",
+                (i.inertia, Some(se.inertia)),
+                &u.inertia,
+                Some(v.inertia),
+            ),
+            ParameterRow::new(
+                "reflex_free_stiffness",
+                "reflex-free fit: K",
+                (self.reflex_free.parameters.stiffness, None),
+                &u.stiffness,
+                None,
+            ),
+            ParameterRow::new(
+                "reflex_gain",
+                "reflex gain G",
+                (r.gain, Some(r.gain_se)),
+                &u.damping,
+                Some(v.gain),
+            ),
+            ParameterRow::new(
+                "reflex_delay",
+                "reflex delay",
+                (r.delay_s, Some(delay_se)),
+                "s",
+                Some(v.delay),
+            ),
+            ParameterRow::new(
+                "reflex_natural_frequency_hz",
+                "reflex low-pass natural frequency",
+                (r.natural_frequency_hz, None),
+                "Hz",
+                Some(v.low_pass),
+            ),
+            ParameterRow::new(
+                "reflex_damping_ratio",
+                "reflex low-pass damping ratio",
+                (r.damping_ratio, None),
+                "",
+                Some(v.low_pass),
+            ),
+        ]
+    }
+}
+
 /// A reflex pathway that raises the total VAF by less than this (points) is called absent.
 pub const REFLEX_PRESENT_VAF: f64 = 1.0;
 /// A delay interval wider than this (s) is "not identifiable".

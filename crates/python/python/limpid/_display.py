@@ -10,6 +10,7 @@ and units come from the library too (``_limpid.matrix_element_unit``).
 from __future__ import annotations
 
 import html as _html
+import json
 import math
 import os
 from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
@@ -299,37 +300,16 @@ def _periodic_html(d: Dict[str, Any]) -> List[str]:
 
 
 def _reflex(d: Dict[str, Any]) -> List[Record]:
-    """The pathway parameters with the verdicts the estimate carries; a value
-    that is not identifiable (or comes from a poor fit) is NaN, not its best
+    """The rows the report's table shows (``ReflexEstimate::parameters`` in
+    Rust, one place): a value that is not identifiable is NaN, not its best
     guess, so that averages over recordings do not take it in silently."""
-    pos = d["position"]
-    intr = d["intrinsic"]
-    v = d.get("verdicts") or {}
     nan = float("nan")
-
-    def kept(value: Any, verdict: Optional[str]) -> float:
-        return nan if verdict in ("not_identifiable", "poor_fit") else _float(value)
-
-    out: List[Record] = []
-    for kind in MATRICES:
-        out.append(dict(quantity=f"intrinsic_{kind}", element="intrinsic " + SYMBOL[kind], row=None, column=None,
-                        value=kept(intr[kind], v.get(kind)), se=_float(intr["standard_errors"].get(kind)),
-                        unit=_scalar_unit(d, kind, pos), verdict=v.get(kind)))
-    r = d["reflex"]
-    out.append(dict(quantity="reflex_gain", element="reflex gain G", row=None, column=None,
-                    value=kept(r["gain"], v.get("gain")), se=_float(r.get("gain_se")),
-                    unit=_scalar_unit(d, "damping", pos), verdict=v.get("gain")))
-    delay = v.get("delay") or (None if r.get("delay_identifiable") else "not_identifiable")
-    lo, hi = r.get("delay_interval_s") or (nan, nan)
-    # the 95 % profile interval's half-width over 1.96, as an SE
-    out.append(dict(quantity="reflex_delay", element="reflex delay", row=None, column=None,
-                    value=kept(r["delay_s"], delay), se=kept((hi - lo) / 3.92, delay), unit="s", verdict=delay))
-    low_pass = v.get("low_pass") or (None if delay != "not_identifiable" else delay)
-    for q, name, unit in (("natural_frequency_hz", "reflex low-pass natural frequency", "Hz"),
-                          ("damping_ratio", "reflex low-pass damping ratio", "")):
-        out.append(dict(quantity=f"reflex_{q}", element=name, row=None, column=None, value=kept(r[q], low_pass),
-                        se=nan, unit=unit, verdict=low_pass))
-    return out
+    rows = json.loads(_limpid.parameter_rows(json.dumps(d)))
+    return [dict(quantity=r["quantity"], element=r["label"], row=None, column=None,
+                 value=nan if r["value"] is None else _float(r["value"]),
+                 se=nan if r["se"] is None else _float(r["se"]),
+                 unit=r["unit"], verdict=r["verdict"])
+            for r in rows]
 
 
 def _impedance(d: Dict[str, Any]) -> List[Record]:

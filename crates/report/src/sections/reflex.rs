@@ -48,20 +48,7 @@ pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimat
 
 /// The pathway parameters with their standard errors and verdicts, and the VAF of each model.
 fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
-    use limpid_core::criteria::ParameterVerdict;
-    let (r, i, u, vd) = (&v.reflex, &v.intrinsic, &v.units, &v.verdicts);
-    // a value that is not identifiable is not printed: its verdict says why
-    let row =
-        |what: &str, value: f64, se: Option<f64>, unit: &str, verdict: Option<ParameterVerdict>| {
-            let shown = verdict.is_none_or(|v| v.has_value());
-            vec![
-                what.to_string(),
-                if shown { fmt(value) } else { "—".into() },
-                se.filter(|_| shown).map_or_else(|| "".into(), fmt),
-                unit.to_string(),
-                verdict.map_or_else(String::new, |v| v.words().to_string()),
-            ]
-        };
+    // the rows every front-end presents (ReflexEstimate::parameters)
     let parameters = Table {
         caption: "Parallel-cascade model (Kearney et al. 1997)".into(),
         header: vec![
@@ -71,58 +58,20 @@ fn parameter_tables(v: &limpid_ident::reflex::ReflexEstimate) -> [Table; 2] {
             "unit".into(),
             "verdict".into(),
         ],
-        rows: vec![
-            row(
-                "intrinsic inertia I",
-                i.inertia,
-                Some(i.standard_errors.inertia),
-                &u.inertia,
-                Some(vd.inertia),
-            ),
-            row(
-                "intrinsic damping B",
-                i.damping,
-                Some(i.standard_errors.damping),
-                &u.damping,
-                Some(vd.damping),
-            ),
-            row(
-                "intrinsic stiffness K",
-                i.stiffness,
-                Some(i.standard_errors.stiffness),
-                &u.stiffness,
-                Some(vd.stiffness),
-            ),
-            row(
-                "reflex-free fit: K",
-                v.reflex_free.parameters.stiffness,
-                None,
-                &u.stiffness,
-                None,
-            ),
-            row(
-                "reflex gain G",
-                r.gain,
-                Some(r.gain_se),
-                &u.damping,
-                Some(vd.gain),
-            ),
-            row("reflex delay", r.delay_s * 1e3, None, "ms", Some(vd.delay)),
-            row(
-                "reflex low-pass natural frequency",
-                r.natural_frequency_hz,
-                None,
-                "Hz",
-                Some(vd.low_pass),
-            ),
-            row(
-                "reflex low-pass damping ratio",
-                r.damping_ratio,
-                None,
-                "",
-                Some(vd.low_pass),
-            ),
-        ],
+        rows: v
+            .parameters()
+            .iter()
+            .map(|p| {
+                vec![
+                    p.label.clone(),
+                    p.value.map_or_else(|| "—".into(), fmt),
+                    p.se.map_or_else(String::new, fmt),
+                    p.unit.clone(),
+                    p.verdict
+                        .map_or_else(String::new, |v| v.words().to_string()),
+                ]
+            })
+            .collect(),
     };
     let vafs = Table {
         caption: match v.fit.shares_note() {
@@ -334,10 +283,19 @@ fn frequency_figures(
         stroke,
         color: PALETTE[k].into(),
     };
+    // the plotted range: the measured |Z| and the model, a factor 2 beyond;
+    // a band whose 2 SE exceed |Z| ends at the range's floor
+    let (lo, hi) = z
+        .magnitude
+        .iter()
+        .chain(&z.intrinsic_model_magnitude)
+        .filter(|v| v.is_finite() && **v > 0.0)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+    let (lo, hi) = (lo / 2.0, hi * 2.0);
     let band = |v: &[f64], se: &[f64], sign: f64| -> Vec<f64> {
         v.iter()
             .zip(se)
-            .map(|(a, e)| (a + sign * 2.0 * e).max(a * 1e-3))
+            .map(|(a, e)| (a + sign * 2.0 * e).clamp(lo, hi))
             .collect()
     };
     let chart = |id: &str, title: String, y_label: String, y_log: bool, y_range, series| Figure {
@@ -355,13 +313,10 @@ fn frequency_figures(
     vec![
         chart(
             "reflex-frequency-magnitude",
-            format!(
-                "Joint impedance |Z|, position to torque (H1, {} Welch segments), and the intrinsic I-B-K model",
-                z.segments
-            ),
+            format!("Joint |Z|, position to torque ({} segments)", z.segments),
             format!("|Z| ({})", u.stiffness),
             true,
-            None,
+            (lo.is_finite() && hi > lo).then_some((lo, hi)),
             vec![
                 series("measured |Z|", z.magnitude.clone(), Stroke::Solid, 0),
                 series("+2 SE", band(&z.magnitude, &z.magnitude_se, 1.0), Stroke::Dashed, 0),
