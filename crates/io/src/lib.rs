@@ -121,10 +121,21 @@ fn read_mat_struct(path: &Path, vectors_error: Error) -> Result<Recording> {
     let mut columns: Vec<(String, String)> = Vec::new();
     for field in &fields {
         let leaf = field.rsplit('.').next().unwrap_or(field);
-        if limpid_core::recording::is_format_column(leaf) && !columns.iter().any(|(c, _)| c == leaf)
-        {
-            columns.push((leaf.to_string(), field.to_string()));
+        if !limpid_core::recording::is_format_column(leaf) {
+            continue;
         }
+        // two structs with the same field names (rec1.t, rec2.t): which is
+        // the recording is the user's to say, never the first one silently
+        if let Some((_, other)) = columns.iter().find(|(c, _)| c == leaf) {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                message: format!(
+                    "fields {other} and {field} could both be column {leaf}: name the columns with --column {leaf}={other} ... (Python: columns={{'{leaf}': '{other}', ...}}), or save a channel map with `limpid inspect {} --map-template > rig.toml`",
+                    path.display()
+                ),
+            });
+        }
+        columns.push((leaf.to_string(), field.to_string()));
     }
     if columns.is_empty() {
         let shown: Vec<&str> = fields.iter().take(4).copied().collect();

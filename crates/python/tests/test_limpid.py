@@ -426,6 +426,13 @@ def test_every_estimator_reads_a_lab_s_own_names_by_keyword(tmp_path):
         limpid.estimate_reflex(mat)
     fields = {"t": "rec.time_s", "q1": "rec.angle_rad", "tau1": "rec.torque_Nm"}
     assert limpid.estimate_reflex(mat, columns=fields).intrinsic.stiffness == named.intrinsic.stiffness
+    # two structs with the format's names: which one is the user's to say
+    both = {"t": lab["time_s"], "q1": lab["angle_rad"], "tau1": lab["torque_Nm"]}
+    sio.savemat(mat, {"a": both, "b": both})
+    with pytest.raises(ValueError, match=r"fields a.t and b.t could both be column t"):
+        limpid.estimate_reflex(mat)
+    fields = {"t": "b.t", "q1": "b.q1", "tau1": "b.tau1"}
+    assert limpid.estimate_reflex(mat, columns=fields).intrinsic.stiffness == named.intrinsic.stiffness
 
 
 def test_a_text_column_is_named_with_its_row():
