@@ -62,7 +62,7 @@ pub fn reflex_text(e: &ReflexEstimate, paths: &[PathBuf]) -> CliResult {
             num(s.reflex_irf_s)
         );
     }
-    let vd = &e.verdicts;
+    let vd = &e.verdicts();
     println!("intrinsic pathway (joint parametric model, ± standard error) [verdict]:");
     println!(
         "  I = {} {} [{}]   B = {} {} [{}]   K = {} {} [{}]",

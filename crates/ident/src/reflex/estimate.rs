@@ -230,7 +230,7 @@ pub fn estimate_reflex(rec: &Recording, p: &ReflexParams) -> Result<ReflexEstima
         coordinate,
         crate::units::range(q),
     ));
-    let verdicts = ReflexVerdicts::judge(&intrinsic, &reflex, fit.vaf_total);
+    let verdicts = Some(ReflexVerdicts::judge(&intrinsic, &reflex, fit.vaf_total));
     // H1 from the measured position: open loop and one continuous record only
     let frequency_response = (closed_loop.is_none() && d.segments.len() == 1)
         .then(|| super::frequency::joint_frequency_response(&d.position, &d.torque, d.fs, &ibk))

@@ -326,8 +326,11 @@ pub struct ReflexEstimate {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frequency_response: Option<JointFrequencyResponse>,
     /// The verdict on each parameter (issue 81), by the rules every
-    /// estimator shares ([`limpid_core::criteria::parameter_verdict`]).
-    pub verdicts: ReflexVerdicts,
+    /// estimator shares ([`limpid_core::criteria::parameter_verdict`]);
+    /// absent in results made before them, which [`ReflexEstimate::verdicts`]
+    /// judges on reading.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verdicts: Option<ReflexVerdicts>,
     /// How a closed-loop recording (one with a commanded reference column)
     /// was estimated; absent in open loop.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -409,12 +412,20 @@ impl ReflexVerdicts {
 }
 
 impl ReflexEstimate {
+    /// The verdicts: the ones the estimate carries, or for an older result
+    /// without them, the same rules applied to its fields.
+    pub fn verdicts(&self) -> ReflexVerdicts {
+        self.verdicts.unwrap_or_else(|| {
+            ReflexVerdicts::judge(&self.intrinsic, &self.reflex, self.fit.vaf_total)
+        })
+    }
+
     /// The pathway parameters with their standard errors and verdicts, as
     /// the report's table and Python's `to_pandas()` present them. The
     /// delay's SE is its 95 % profile interval's half-width / 1.96.
     pub fn parameters(&self) -> Vec<limpid_core::criteria::ParameterRow> {
         use limpid_core::criteria::ParameterRow;
-        let (i, r, u, v) = (&self.intrinsic, &self.reflex, &self.units, &self.verdicts);
+        let (i, r, u, v) = (&self.intrinsic, &self.reflex, &self.units, &self.verdicts());
         let se = &i.standard_errors;
         let delay_se = (r.delay_interval_s[1] - r.delay_interval_s[0]) / (2.0 * 1.96);
         vec![

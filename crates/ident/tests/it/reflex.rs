@@ -42,7 +42,7 @@ fn virtual_ankle_reflex_delay_and_gains_are_recovered() {
         assert!(r.delay_identifiable, "{:?}", e.warnings);
         // a clear reflex on a clean virtual ankle: every parameter trusted
         // (its error within 2 SE is checked below), the low-pass without an SE
-        let v = e.verdicts;
+        let v = e.verdicts();
         for (name, got) in [
             ("K", v.stiffness),
             ("B", v.damping),
@@ -136,7 +136,7 @@ fn without_a_reflex_the_delay_is_not_identifiable_and_k_is_right() {
     assert!(!e.reflex.delay_identifiable);
     // no reflex: a gain not distinguishable from zero, no delay or low-pass
     // to speak of, and an intrinsic pathway still trusted
-    let v = e.verdicts;
+    let v = e.verdicts();
     assert_eq!(
         v.gain,
         ParameterVerdict::NotDistinguishableFromZero,
@@ -145,6 +145,12 @@ fn without_a_reflex_the_delay_is_not_identifiable_and_k_is_right() {
     assert_eq!(v.delay, ParameterVerdict::NotIdentifiable);
     assert_eq!(v.low_pass, ParameterVerdict::NotIdentifiable);
     assert_eq!(v.stiffness, ParameterVerdict::Trusted, "{e:?}");
+    // a result saved before verdicts existed is judged by the same rules on reading
+    let mut saved = serde_json::to_value(&e).unwrap();
+    saved.as_object_mut().unwrap().remove("verdicts");
+    let older: limpid_ident::reflex::ReflexEstimate = serde_json::from_value(saved).unwrap();
+    assert!(older.verdicts.is_none());
+    assert_eq!(older.verdicts(), v);
     assert!(e
         .warnings
         .iter()
@@ -191,7 +197,7 @@ fn real_ankle_recordings_match_the_method_s_known_behaviour() {
         // issue 81: the dorsiflexed ankles' delay sits at the scan's edge
         // (best 0 ms): judged not identifiable, never a 0 ms delay; df2's gain
         // (about 5 +- 3) is not distinguishable from zero
-        let v = e.verdicts;
+        let v = e.verdicts();
         if name.starts_with("df") {
             assert_eq!(v.delay, ParameterVerdict::NotIdentifiable, "{name}");
             assert_eq!(v.low_pass, ParameterVerdict::NotIdentifiable, "{name}");

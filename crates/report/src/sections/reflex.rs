@@ -4,7 +4,7 @@ use crate::{fmt, Chart, Figure, Section, Series, Stroke, Table, PALETTE};
 
 pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimate) -> Section {
     let r = &v.reflex;
-    let vd = &v.verdicts;
+    let vd = &v.verdicts();
     let verdict = if vd.delay.has_value() {
         format!(
             "intrinsic K {} ({}); reflex gain {} {} ({}), delay {} ms (95 % interval {}-{} ms); total VAF {} % (cross-validated {} %)",
