@@ -5,23 +5,26 @@ use crate::{fmt, Chart, Figure, Section, Series, Stroke, Table, PALETTE};
 pub(crate) fn reflex_section(name: &str, v: &limpid_ident::reflex::ReflexEstimate) -> Section {
     let r = &v.reflex;
     let vd = &v.verdicts();
-    let verdict = if vd.delay.has_value() {
+    let delay = if vd.delay.has_value() {
         format!(
-            "intrinsic K {} ({}); reflex gain {} {} ({}), delay {} ms (95 % interval {}-{} ms); total VAF {} % (cross-validated {} %)",
-            limpid_core::with_standard_error(v.intrinsic.stiffness, v.intrinsic.standard_errors.stiffness), vd.stiffness.words(),
-            limpid_core::with_standard_error(r.gain, r.gain_se), v.units.damping, vd.gain.words(),
-            fmt(r.delay_s * 1e3), fmt(r.delay_interval_s[0] * 1e3), fmt(r.delay_interval_s[1] * 1e3),
-            fmt(v.fit.vaf_total), fmt(v.cross_validated_vaf)
+            "delay {} ms (95 % interval {}-{} ms)",
+            fmt(r.delay_s * 1e3),
+            fmt(r.delay_interval_s[0] * 1e3),
+            fmt(r.delay_interval_s[1] * 1e3)
         )
     } else {
-        format!(
-            "intrinsic K {} ({}); reflex gain {} {} ({}), delay NOT identifiable; total VAF {} % (cross-validated {} %)",
-            limpid_core::with_standard_error(v.intrinsic.stiffness, v.intrinsic.standard_errors.stiffness), vd.stiffness.words(),
-            limpid_core::with_standard_error(r.gain, r.gain_se), v.units.damping, vd.gain.words(),
-            fmt(v.fit.vaf_total),
-            fmt(v.cross_validated_vaf)
-        )
+        "delay NOT identifiable".to_string()
     };
+    let verdict = format!(
+        "intrinsic K {} ({}); reflex gain {} {} ({}), {delay}; total VAF {} % (cross-validated {} %)",
+        limpid_core::with_standard_error(v.intrinsic.stiffness, v.intrinsic.standard_errors.stiffness),
+        vd.stiffness.words(),
+        limpid_core::with_standard_error(r.gain, r.gain_se),
+        v.units.damping,
+        vd.gain.words(),
+        fmt(v.fit.vaf_total),
+        fmt(v.cross_validated_vaf)
+    );
     // short segments (issue 80): said where the verdict is read
     let verdict = match &v.segments {
         Some(s) => format!(
